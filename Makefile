@@ -1,0 +1,98 @@
+# indoorloc: the README's two commands, and the developer targets around them.
+#
+#   make demo        set up (Debian + Python dependencies), build, run `indoorloc demo`
+#   make test        set up, build once, run ctest + pytest + the outside C++ app
+#   make test-asan   ctest suite under AddressSanitizer + UndefinedBehaviorSanitizer
+#   make bench       speed benchmarks against peers (writes benchmarks/results/)
+#
+# Runs as root on a fresh Debian 12 machine (apt-get installs what is missing); as another
+# user it only checks and names the missing packages. Python packages go into .venv/.
+
+SHELL := /bin/bash
+.SHELLFLAGS := -eu -o pipefail -c
+.DEFAULT_GOAL := test
+
+PYTHON ?= python3
+JOBS ?= 2
+VENV := .venv
+PY := $(VENV)/bin/python
+PIP := $(PY) -m pip --disable-pip-version-check -q
+BUILD_DIR := build/py
+STAGE_DIR := build/stage
+ASAN_DIR := build/asan
+export CMAKE_BUILD_PARALLEL_LEVEL := $(JOBS)
+
+# Debian packages: compilers, C++ libraries (Eigen, CGAL + GMP/MPFR/Boost, Ceres + glog/gflags +
+# SuiteSparse, GoogleTest) and Python headers/venv for the system interpreter.
+DEBIAN_PACKAGES := g++ make cmake python3-dev python3-venv \
+  libeigen3-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev \
+  libceres-dev libgoogle-glog-dev libgflags-dev libsuitesparse-dev libgtest-dev
+# Build requirements (installed into the venv because the build runs without isolation, so
+# that one persistent build folder serves the wheel, ctest and the C++ install).
+BUILD_REQUIREMENTS := "scikit-build-core>=0.10" "pybind11>=2.10" "cmake>=3.20" ninja
+
+.PHONY: all demo test test-cpp test-python test-cpp-app test-asan bench deps deps-debian \
+        deps-python install clean
+
+all: test
+
+deps: deps-debian deps-python
+
+deps-debian:
+	@missing=$$(for p in $(DEBIAN_PACKAGES); do dpkg -s $$p >/dev/null 2>&1 || echo $$p; done); \
+	if [ -n "$$missing" ]; then \
+	  if [ "$$(id -u)" != 0 ]; then echo "missing Debian packages (run as root or apt-get install): $$missing"; exit 1; fi; \
+	  echo "apt-get install: $$missing"; \
+	  apt-get update -qq; \
+	  DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $$missing >/dev/null; \
+	fi
+
+$(PY):
+	$(PYTHON) -m venv $(VENV)
+
+deps-python: $(PY)
+	$(PIP) install $(BUILD_REQUIREMENTS)
+
+# One CMake configure (build/py) serves the wheel, ctest and the installed C++ package.
+install: deps
+	$(PIP) install --no-build-isolation \
+	  -Cbuild-dir=$(BUILD_DIR) -Ccmake.define.INDOORLOC_BUILD_TESTS=ON \
+	  ".[test]"
+
+test-cpp: install
+	ctest --test-dir $(BUILD_DIR) -j$(JOBS) --output-on-failure
+
+test-python: install
+	cd tests/python && ../../$(PY) -m pytest -q -c ../../pyproject.toml --rootdir ../.. .
+
+# The outside app: install headers + library + CMake package to a staging prefix, then build
+# examples/cpp_app with nothing but find_package(indoorloc) and run it.
+test-cpp-app: install
+	rm -rf $(STAGE_DIR) build/cpp_app
+	$(VENV)/bin/cmake --install $(BUILD_DIR) --component indoorloc_dev --prefix $(STAGE_DIR)
+	$(VENV)/bin/cmake -S examples/cpp_app -B build/cpp_app -G Ninja \
+	  -DCMAKE_PREFIX_PATH=$(abspath $(STAGE_DIR)) >/dev/null
+	$(VENV)/bin/cmake --build build/cpp_app
+	./build/cpp_app/cpp_app
+
+test: install
+	$(MAKE) --no-print-directory test-cpp test-python test-cpp-app
+
+demo: install
+	$(VENV)/bin/indoorloc demo --out reports/demo
+
+# ctest built with AddressSanitizer + UndefinedBehaviorSanitizer (no Python module: ASan in a
+# dlopen()ed extension needs LD_PRELOAD of the runtime into the interpreter).
+test-asan: deps
+	$(VENV)/bin/cmake -S . -B $(ASAN_DIR) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+	  -DINDOORLOC_SANITIZE=address,undefined -DINDOORLOC_BUILD_PYTHON=OFF >/dev/null
+	$(VENV)/bin/cmake --build $(ASAN_DIR)
+	ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+	  ctest --test-dir $(ASAN_DIR) -j$(JOBS) --output-on-failure
+
+bench: install
+	$(PIP) install ".[bench]" --no-build-isolation -Cbuild-dir=$(BUILD_DIR) -Ccmake.define.INDOORLOC_BUILD_TESTS=ON
+	$(PY) benchmarks/run.py
+
+clean:
+	rm -rf build reports

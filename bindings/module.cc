@@ -1,0 +1,28 @@
+// The pybind11 module indoorloc._core: one submodule per subsystem. Each subsystem's bindings
+// live in bind_<subsystem>.cc and are registered here. C++ exceptions map to Python as
+// std::invalid_argument -> ValueError, std::out_of_range -> IndexError,
+// std::runtime_error (and others) -> RuntimeError (pybind11's standard translation).
+#include <pybind11/pybind11.h>
+
+#include "indoorloc/core/version.h"
+
+namespace py = pybind11;
+
+namespace indoorloc::bindings {
+void BindCore(py::module_& m);
+}  // namespace indoorloc::bindings
+
+PYBIND11_MODULE(_core, m) {
+  m.doc() = "indoorloc compiled core (C++17). Use the facades in the indoorloc package.";
+  m.attr("__version__") = indoorloc::kVersion;
+
+  py::module_ core = m.def_submodule("core", "Random streams, log-space weights, resampling.");
+  indoorloc::bindings::BindCore(core);
+
+  // Subsystems register their bindings below as they are implemented (see docs/architecture.md).
+  m.def_submodule("mapmatch", "Circular particle filter on a road network (paper 000).");
+  m.def_submodule("analog", "Exemplar-based (analog) hidden Markov model (paper 001).");
+  m.def_submodule("pdr", "Pedestrian dead reckoning with a foot-mounted IMU (paper 002).");
+  m.def_submodule("network", "INS/GPS network adjustment (paper 003).");
+  m.def_submodule("wifi", "RSS signal maps, Delaunay interpolation, gradient tracker (paper 004).");
+}

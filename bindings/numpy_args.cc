@@ -1,0 +1,79 @@
+#include "numpy_args.h"
+
+#include <cmath>
+
+namespace indoorloc::bindings {
+namespace {
+
+void CheckValues(const double* data, Eigen::Index size, Eigen::Index cols, const char* name,
+                 Finiteness finiteness) {
+  if (finiteness == Finiteness::kAny) return;
+  for (Eigen::Index k = 0; k < size; ++k) {
+    const double v = data[k];
+    const bool ok = std::isfinite(v) ||
+                    (finiteness == Finiteness::kAllowMinusInf && v == -INFINITY);
+    if (!ok) {
+      const std::string where = cols < 0 ? DescribeEntry(k, 0, true)
+                                         : DescribeEntry(k / cols, k % cols, false);
+      ThrowInvalidArgument(name, where + (std::isnan(v) ? " is NaN" : " is infinite"));
+    }
+  }
+}
+
+}  // namespace
+
+DoubleArray ToDoubleArray(const py::handle& obj, const char* name) {
+  if (obj.is_none()) ThrowInvalidArgument(name, "is None, expected an array of numbers");
+  DoubleArray array = DoubleArray::ensure(obj);
+  if (!array) {
+    PyErr_Clear();
+    ThrowInvalidArgument(name, "cannot be converted to a float64 array");
+  }
+  return array;
+}
+
+VectorArg ToVector(const py::handle& obj, const char* name, Eigen::Index size,
+                   Finiteness finiteness) {
+  VectorArg arg;
+  arg.array = ToDoubleArray(obj, name);
+  if (arg.array.ndim() != 1) {
+    ThrowInvalidArgument(name, "expected a 1-D array, got " + std::to_string(arg.array.ndim()) +
+                                   "-D");
+  }
+  const Eigen::Index n = static_cast<Eigen::Index>(arg.array.shape(0));
+  if (size >= 0 && n != size) {
+    ThrowInvalidArgument(name, "expected length " + std::to_string(size) + ", got " +
+                                   std::to_string(n));
+  }
+  CheckValues(arg.array.data(), n, -1, name, finiteness);
+  new (&arg.map) Eigen::Map<const Eigen::VectorXd>(arg.array.data(), n);
+  return arg;
+}
+
+MatrixArg ToMatrix(const py::handle& obj, const char* name, Eigen::Index rows, Eigen::Index cols,
+                   Finiteness finiteness) {
+  MatrixArg arg;
+  arg.array = ToDoubleArray(obj, name);
+  if (arg.array.ndim() != 2) {
+    ThrowInvalidArgument(name, "expected a 2-D array, got " + std::to_string(arg.array.ndim()) +
+                                   "-D");
+  }
+  const Eigen::Index r = static_cast<Eigen::Index>(arg.array.shape(0));
+  const Eigen::Index c = static_cast<Eigen::Index>(arg.array.shape(1));
+  if ((rows >= 0 && r != rows) || (cols >= 0 && c != cols)) {
+    auto dim = [](Eigen::Index n) { return n < 0 ? std::string("any") : std::to_string(n); };
+    ThrowInvalidArgument(name, "expected shape (" + dim(rows) + ", " + dim(cols) + "), got (" +
+                                   std::to_string(r) + ", " + std::to_string(c) + ")");
+  }
+  CheckValues(arg.array.data(), r * c, c, name, finiteness);
+  new (&arg.map) Eigen::Map<const RowMatrixXd>(arg.array.data(), r, c);
+  return arg;
+}
+
+py::array_t<double> ToNumpy(const Eigen::Ref<const Eigen::VectorXd>& v) {
+  py::array_t<double> out(v.size());
+  std::copy(v.data(), v.data() + v.size(), out.mutable_data());
+  return out;
+}
+
+}  // namespace indoorloc::bindings

@@ -1,0 +1,53 @@
+// Conversion of Python arguments to Eigen views, with indoorloc's argument checks.
+//
+// Every binding takes array arguments as py::object and converts them here, so that a wrong
+// dimension, a non-numeric object, or NaN gives a ValueError naming the argument (pybind11's own
+// Eigen caster would give a TypeError without the name). The converted arrays are C-contiguous
+// float64 (copied only when the input is not); the user's array is never modified.
+#pragma once
+
+#include <string>
+
+#include <Eigen/Core>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include "indoorloc/core/check.h"
+
+namespace indoorloc::bindings {
+
+namespace py = pybind11;
+
+using RowMatrixXd = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+/// What to accept besides finite numbers.
+enum class Finiteness { kFinite, kAllowMinusInf, kAny };
+
+/// A 1-D float64 view of a Python argument; `array` keeps the data alive.
+struct VectorArg {
+  DoubleArray array;
+  Eigen::Map<const Eigen::VectorXd> map{nullptr, 0};
+};
+
+/// A 2-D row-major float64 view of a Python argument; `array` keeps the data alive.
+struct MatrixArg {
+  DoubleArray array;
+  Eigen::Map<const RowMatrixXd> map{nullptr, 0, 0};
+};
+
+/// Converts `obj` to a float64 array or throws ValueError naming `name`.
+DoubleArray ToDoubleArray(const py::handle& obj, const char* name);
+
+/// 1-D argument of length `size` (-1: any). kAllowMinusInf is for log-weights.
+VectorArg ToVector(const py::handle& obj, const char* name, Eigen::Index size = -1,
+                   Finiteness finiteness = Finiteness::kFinite);
+
+/// 2-D argument of shape (rows, cols) (-1: any).
+MatrixArg ToMatrix(const py::handle& obj, const char* name, Eigen::Index rows = -1,
+                   Eigen::Index cols = -1, Finiteness finiteness = Finiteness::kFinite);
+
+/// Copies an Eigen vector into a new numpy array.
+py::array_t<double> ToNumpy(const Eigen::Ref<const Eigen::VectorXd>& v);
+
+}  // namespace indoorloc::bindings

@@ -1,0 +1,58 @@
+#include "indoorloc/core/parallel.h"
+
+#include <algorithm>
+#include <atomic>
+#include <exception>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include "indoorloc/core/check.h"
+
+namespace indoorloc {
+
+int ResolveThreadCount(int requested) {
+  if (requested > 0) return requested;
+  const unsigned hw = std::thread::hardware_concurrency();
+  return hw == 0 ? 1 : static_cast<int>(hw);
+}
+
+void ParallelForRuns(int n_runs, int n_threads, std::uint64_t seed,
+                     const std::function<void(int run, RandomStream& rng)>& fn) {
+  CheckArgument(n_runs >= 0, "n_runs", "must be >= 0, got " + std::to_string(n_runs));
+  if (n_runs == 0) return;
+  const int threads = std::min(ResolveThreadCount(n_threads), n_runs);
+
+  std::atomic<int> next_run{0};
+  std::atomic<bool> failed{false};
+  std::exception_ptr first_error;
+  std::mutex error_mutex;
+
+  auto worker = [&]() {
+    while (!failed.load(std::memory_order_relaxed)) {
+      const int run = next_run.fetch_add(1);
+      if (run >= n_runs) return;
+      // The stream depends on (seed, run) only: the thread that runs it does not matter.
+      RandomStream rng(seed, static_cast<std::uint64_t>(run));
+      try {
+        fn(run, rng);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(error_mutex);
+        if (!first_error) first_error = std::current_exception();
+        failed.store(true);
+      }
+    }
+  };
+
+  if (threads == 1) {
+    worker();
+  } else {
+    std::vector<std::thread> pool;
+    pool.reserve(static_cast<size_t>(threads));
+    for (int t = 0; t < threads; ++t) pool.emplace_back(worker);
+    for (std::thread& t : pool) t.join();
+  }
+  if (first_error) std::rethrow_exception(first_error);
+}
+
+}  // namespace indoorloc

@@ -1,0 +1,20 @@
+"""indoorloc: indoor localization and inertial estimation.
+
+A C++17 core (``indoorloc._core``) with Python facades, one per subsystem:
+
+- ``indoorloc.core``: seeded random streams, log-space weights, resampling.
+- ``mapmatch``, ``analog``, ``pdr``, ``network``, ``wifi``: the five methods of the papers in
+  ``docs/`` (added as they are implemented).
+
+Only the computational API is re-exported here; plots, file formats and the CLI live in
+``indoorloc.plots``, ``indoorloc.io`` and ``indoorloc.cli`` and are imported on demand.
+"""
+
+from indoorloc import _core
+from indoorloc import core
+from indoorloc import metrics
+
+# One source of truth: project(VERSION) in CMakeLists.txt, compiled into _core.
+__version__: str = _core.__version__
+
+__all__ = ["__version__", "core", "metrics"]

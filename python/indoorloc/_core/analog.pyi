@@ -1,0 +1,1 @@
+# Stubs of indoorloc._core.analog (no bindings yet).

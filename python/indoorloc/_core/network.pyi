@@ -1,0 +1,1 @@
+# Stubs of indoorloc._core.network (no bindings yet).

@@ -1,0 +1,1 @@
+# Stubs of indoorloc._core.wifi (no bindings yet).

@@ -1,0 +1,111 @@
+"""The ``indoorloc`` command line.
+
+    indoorloc --version
+    indoorloc demo [--out DIR] [--only NAME ...] [--seed N] [--quiet]
+    indoorloc core resample-bench [--n N] [--repeat R]
+
+Subsystems add a subcommand each through ``_SUBCOMMANDS`` as they are implemented.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Callable, List, Optional
+
+import indoorloc
+from indoorloc import progress
+
+
+def _cmd_demo(args: argparse.Namespace) -> int:
+    from indoorloc.demo import run_demos
+
+    out = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="indoorloc-demo-"))
+    report = run_demos(out, names=args.only, seed=args.seed)
+    print(f"indoorloc demo report: {report}")
+    return 0
+
+
+def _cmd_core_resample_bench(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from indoorloc import core
+
+    lw = core.RandomStream(args.seed).normal(args.n)
+    stream = core.RandomStream(args.seed)
+    results = {}
+    for scheme in core.RESAMPLING_SCHEMES:
+        core.resample(lw, scheme, stream)
+        times = []
+        for _ in progress.progress(range(args.repeat), desc=scheme):
+            start = time.perf_counter()
+            core.resample(lw, scheme, stream)
+            times.append(time.perf_counter() - start)
+        results[scheme] = {"median_ms": 1e3 * float(np.median(times)), "n": args.n}
+    print(json.dumps(results, indent=2))
+    return 0
+
+
+def quiet_parent() -> argparse.ArgumentParser:
+    """Parent parser giving every subcommand a --quiet flag (also accepted before it)."""
+    parent = argparse.ArgumentParser(add_help=False)
+    parent.add_argument(
+        "--quiet", action="store_true", default=argparse.SUPPRESS, help="no progress bars"
+    )
+    return parent
+
+
+def _add_core(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("core", help="shared core utilities")
+    core_sub = p.add_subparsers(dest="core_command", required=True)
+    b = core_sub.add_parser(
+        "resample-bench", help="time each resampling scheme", parents=[quiet_parent()]
+    )
+    b.add_argument("--n", type=int, default=1_000_000, help="number of log-weights")
+    b.add_argument("--repeat", type=int, default=20)
+    b.add_argument("--seed", type=int, default=0)
+    b.set_defaults(func=_cmd_core_resample_bench)
+
+
+# Subsystems register `add(subparsers)` functions here.
+_SUBCOMMANDS: List[Callable[[argparse._SubParsersAction], None]] = [_add_core]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="indoorloc",
+        description="Indoor localization and inertial estimation (indoorloc).",
+    )
+    parser.add_argument("--version", action="version", version=f"indoorloc {indoorloc.__version__}")
+    parser.add_argument("--quiet", action="store_true", help="no progress bars")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    demo = sub.add_parser(
+        "demo", help="run every subsystem's quick experiment, write a report", parents=[quiet_parent()]
+    )
+    demo.add_argument("--out", help="report folder (default: a new temporary folder)")
+    demo.add_argument("--only", nargs="+", help="run only these demos")
+    demo.add_argument("--seed", type=int, default=0)
+    demo.set_defaults(func=_cmd_demo)
+
+    for add in _SUBCOMMANDS:
+        add(sub)
+    return parser
+
+
+def main(argv: Optional[List[str]] = None) -> int:
+    args = build_parser().parse_args(argv)
+    progress.set_quiet(args.quiet)
+    try:
+        return int(args.func(args) or 0)
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())
