@@ -10,6 +10,7 @@ namespace py = pybind11;
 
 namespace indoorloc::bindings {
 void BindCore(py::module_& m);
+void BindWifi(py::module_& m);
 }  // namespace indoorloc::bindings
 
 PYBIND11_MODULE(_core, m) {
@@ -24,5 +25,6 @@ PYBIND11_MODULE(_core, m) {
   m.def_submodule("analog", "Exemplar-based (analog) hidden Markov model (paper 001).");
   m.def_submodule("pdr", "Pedestrian dead reckoning with a foot-mounted IMU (paper 002).");
   m.def_submodule("network", "INS/GPS network adjustment (paper 003).");
-  m.def_submodule("wifi", "RSS signal maps, Delaunay interpolation, gradient tracker (paper 004).");
+  py::module_ wifi = m.def_submodule("wifi", "RSS signal maps, Delaunay interpolation, gradient tracker (paper 004).");
+  indoorloc::bindings::BindWifi(wifi);
 }

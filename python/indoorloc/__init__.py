@@ -13,8 +13,9 @@ Only the computational API is re-exported here; plots, file formats and the CLI 
 from indoorloc import _core
 from indoorloc import core
 from indoorloc import metrics
+from indoorloc import wifi
 
 # One source of truth: project(VERSION) in CMakeLists.txt, compiled into _core.
 __version__: str = _core.__version__
 
-__all__ = ["__version__", "core", "metrics"]
+__all__ = ["__version__", "core", "metrics", "wifi"]
