@@ -48,7 +48,7 @@ py::dict FixesToDict(const std::vector<WifiFix>& fixes) {
   const py::ssize_t n = static_cast<py::ssize_t>(fixes.size());
   py::array_t<double> pos({n, py::ssize_t{2}}), cov({n, py::ssize_t{2}, py::ssize_t{2}}), nll(n);
   py::array_t<std::int64_t> floors(n), iterations(n), fallbacks(n);
-  py::array_t<bool> inside(n);
+  py::array_t<bool> inside(n), relocalized(n);
   auto p = pos.mutable_unchecked<2>();
   auto c = cov.mutable_unchecked<3>();
   for (py::ssize_t i = 0; i < n; ++i) {
@@ -62,6 +62,7 @@ py::dict FixesToDict(const std::vector<WifiFix>& fixes) {
     iterations.mutable_data()[i] = f.iterations;
     fallbacks.mutable_data()[i] = f.fallback_steps;
     inside.mutable_data()[i] = f.inside;
+    relocalized.mutable_data()[i] = f.relocalized;
   }
   py::dict d;
   d["positions_m"] = pos;
@@ -71,6 +72,7 @@ py::dict FixesToDict(const std::vector<WifiFix>& fixes) {
   d["inside"] = inside;
   d["iterations"] = iterations;
   d["fallback_steps"] = fallbacks;
+  d["relocalized"] = relocalized;
   return d;
 }
 
@@ -305,6 +307,7 @@ interpolated model, (Q, K) [dBm]. Stream `seed` of indoorloc's generator.)doc");
       .def_readwrite("num_starts", &GradientTrackerOptions::num_starts)
       .def_readwrite("start_iterations", &GradientTrackerOptions::start_iterations)
       .def_readwrite("tolerance_m", &GradientTrackerOptions::tolerance_m)
+      .def_readwrite("relocalize_threshold_nats", &GradientTrackerOptions::relocalize_threshold_nats)
       .def("validate", [](const GradientTrackerOptions& o) { ValidateOptions(o); });
 
   py::class_<GradientTracker>(m, "GradientTracker", R"doc(

@@ -11,6 +11,7 @@ namespace py = pybind11;
 namespace indoorloc::bindings {
 void BindCore(py::module_& m);
 void BindWifi(py::module_& m);
+void BindWifiBaselines(py::module_& m);
 }  // namespace indoorloc::bindings
 
 PYBIND11_MODULE(_core, m) {
@@ -27,4 +28,5 @@ PYBIND11_MODULE(_core, m) {
   m.def_submodule("network", "INS/GPS network adjustment (paper 003).");
   py::module_ wifi = m.def_submodule("wifi", "RSS signal maps, Delaunay interpolation, gradient tracker (paper 004).");
   indoorloc::bindings::BindWifi(wifi);
+  indoorloc::bindings::BindWifiBaselines(wifi);
 }

@@ -3,6 +3,8 @@
     indoorloc --version
     indoorloc demo [--out DIR] [--only NAME ...] [--seed N] [--quiet]
     indoorloc core resample-bench [--n N] [--repeat R]
+    indoorloc wifi evaluate [--dataset uji office ...] [--scans 1 10]
+    indoorloc wifi simulate [--runs R] [--noise-db S]
 
 Subsystems add a subcommand each through ``_SUBCOMMANDS`` as they are implemented.
 """
@@ -25,7 +27,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     from indoorloc.demo import run_demos
 
     out = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="indoorloc-demo-"))
-    report = run_demos(out, names=args.only, seed=args.seed)
+    report = run_demos(out, names=args.only, seed=args.seed, quick=args.quick)
     print(f"indoorloc demo report: {report}")
     return 0
 
@@ -71,8 +73,14 @@ def _add_core(sub: argparse._SubParsersAction) -> None:
     b.set_defaults(func=_cmd_core_resample_bench)
 
 
+def _add_wifi(sub: argparse._SubParsersAction) -> None:
+    from indoorloc import cli_wifi
+
+    cli_wifi.add_parser(sub, quiet_parent)
+
+
 # Subsystems register `add(subparsers)` functions here.
-_SUBCOMMANDS: List[Callable[[argparse._SubParsersAction], None]] = [_add_core]
+_SUBCOMMANDS: List[Callable[[argparse._SubParsersAction], None]] = [_add_core, _add_wifi]
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -90,6 +98,7 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--out", help="report folder (default: a new temporary folder)")
     demo.add_argument("--only", nargs="+", help="run only these demos")
     demo.add_argument("--seed", type=int, default=0)
+    demo.add_argument("--quick", action="store_true", help="fewer Monte Carlo runs (smoke test)")
     demo.set_defaults(func=_cmd_demo)
 
     for add in _SUBCOMMANDS:

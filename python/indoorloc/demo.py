@@ -24,6 +24,8 @@ class DemoContext:
 
     out_dir: Path
     seed: int = 0
+    #: Fewer Monte Carlo runs and cross-validation folds (tests, smoke runs); same code paths.
+    quick: bool = False
 
     def figure_path(self, name: str) -> Path:
         """Path of a PNG figure named ``name`` inside the report folder."""
@@ -63,6 +65,7 @@ def register_demo(name: str, title: str):
 def _load_builtin_demos() -> None:
     # Importing the experiment modules registers their demos.
     from indoorloc.experiments import core_resampling  # noqa: F401
+    from indoorloc.experiments import wifi_simulation  # noqa: F401
 
 
 def available_demos() -> List[str]:
@@ -71,7 +74,7 @@ def available_demos() -> List[str]:
     return list(_REGISTRY)
 
 
-def run_demos(out_dir: Path, names: Optional[Sequence[str]] = None, seed: int = 0) -> Path:
+def run_demos(out_dir: Path, names: Optional[Sequence[str]] = None, seed: int = 0, quick: bool = False) -> Path:
     """Run the demos ``names`` (default: all) and write ``out_dir/report.md``; return its path."""
     _load_builtin_demos()
     selected = list(_REGISTRY) if not names else list(names)
@@ -82,12 +85,13 @@ def run_demos(out_dir: Path, names: Optional[Sequence[str]] = None, seed: int = 
         )
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    ctx = DemoContext(out_dir=out_dir, seed=seed)
+    ctx = DemoContext(out_dir=out_dir, seed=seed, quick=quick)
     parts = [
         "# indoorloc demo report",
         "",
         f"indoorloc {__version__}, Python {platform.python_version()}, "
-        f"{platform.machine()}, {_dt.datetime.now().isoformat(timespec='seconds')}, seed {seed}.",
+        f"{platform.machine()}, {_dt.datetime.now().isoformat(timespec='seconds')}, seed {seed}"
+        + (" (quick mode: fewer Monte Carlo runs)." if quick else "."),
         "",
     ]
     for name in selected:

@@ -24,3 +24,54 @@ def resampling_variance(stats: Mapping[str, object], path: Path) -> Path:
     fig.savefig(path)
     plt.close(fig)
     return Path(path)
+
+
+def wifi_path_result(model, result, path: Path) -> Path:
+    """True vs estimated path (first run) on the map, and cumulative error E_t (median, 5-95 %)."""
+    import numpy as np
+
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9, 5), dpi=120, gridspec_kw={"width_ratios": [1, 2]})
+    pts = model.map.positions_m
+    ax1.plot(pts[:, 0], pts[:, 1], ".", color="#bbb", label="reference points")
+    ax1.plot(result.path_m[:, 0], result.path_m[:, 1], "k-o", ms=3, label="true path")
+    for name, est in result.example_estimates_m.items():
+        ax1.plot(est[:, 0], est[:, 1], "-", lw=1, label=name)
+    ax1.set_xlabel("x [m]")
+    ax1.set_ylabel("y [m]")
+    ax1.set_aspect("equal")
+    ax1.set_ylim(-0.5, max(result.path_m[:, 1].max() + 1.0, 2.0))
+    ax1.legend(fontsize=6, loc="upper center", bbox_to_anchor=(0.5, -0.15))
+    ax1.set_title(result.name, fontsize=8)
+    t = np.arange(1, len(result.path_m))
+    for name in result.errors_m:
+        cum = result.cumulative(name)
+        ax2.plot(t, np.median(cum, axis=0), label=name)
+        ax2.fill_between(t, np.percentile(cum, 5, axis=0), np.percentile(cum, 95, axis=0), alpha=0.15)
+    ax2.plot(t, np.cumsum(result.crb_m), "k--", lw=1, label="Cramér-Rao (efficient fix)")
+    ax2.axhline(3.82, color="r", lw=0.8, ls=":", label="paper E_27 = 3.82 m")
+    ax2.set_xlabel("step")
+    ax2.set_ylabel("cumulative error E_t [m]")
+    ax2.legend(fontsize=6)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return Path(path)
+
+
+def error_cdfs(errors_by_method: Mapping[str, object], path: Path) -> Path:
+    """Empirical CDFs of position errors [m], one curve per method."""
+    from indoorloc.metrics import empirical_cdf
+
+    fig, ax = plt.subplots(figsize=(6, 4), dpi=120)
+    for name, errors in errors_by_method.items():
+        x, p = empirical_cdf(errors)
+        ax.plot(x, p, label=name, lw=1.2, ls="-" if "(1 " in name else "--")
+    ax.set_xlabel("error [m]")
+    ax.set_ylabel("fraction of estimates")
+    ax.set_xlim(0, 8)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=6, ncol=2)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return Path(path)

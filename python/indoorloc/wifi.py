@@ -6,6 +6,7 @@
   fields with gradients (and Sibson's natural-neighbour interpolant).
 - :class:`RssModel`: the interpolated Gaussian model: l(z, v), its gradient and Fisher
   information; simulated scans (the paper's simulated mode).
+- :class:`FingerprintLocator`: the baselines NNSS (RADAR), NNSS-AVG, weighted kNN, Horus.
 - :class:`GradientTracker` (Algorithm 1 with step control) and :func:`locate_ml` (global
   maximum-likelihood fixes, also from k scans at a static point).
 
@@ -21,6 +22,7 @@ from __future__ import annotations
 
 from indoorloc._core.wifi import (
     DelaunayInterpolator,
+    FingerprintLocator,
     GradientTracker,
     GradientTrackerOptions,
     RssModel,
@@ -44,6 +46,7 @@ def tracker_options(**settings) -> GradientTrackerOptions:
 
 __all__ = [
     "DelaunayInterpolator",
+    "FingerprintLocator",
     "GradientTracker",
     "GradientTrackerOptions",
     "RssModel",

@@ -21,12 +21,13 @@ def test_version_and_help(capsys):
 
 
 def test_demo_writes_report_with_figures(tmp_path, capsys):
-    assert cli.main(["demo", "--out", str(tmp_path), "--quiet"]) == 0
+    assert cli.main(["demo", "--out", str(tmp_path), "--quiet", "--quick"]) == 0
     out = capsys.readouterr().out
     report = tmp_path / "report.md"
     assert str(report) in out
     text = report.read_text()
     assert "## Core: resampling schemes" in text
+    assert "## WiFi: interpolated signal map" in text and "E_27 = 3.82 m" in text
     pngs = list(tmp_path.glob("*.png"))
     assert pngs and all(p.stat().st_size > 1000 for p in pngs)
     for p in pngs:

@@ -123,6 +123,7 @@ bool GradientTrackerOptions::IsValid(std::string* error) const {
   if (num_starts < 1) return fail("num_starts must be >= 1");
   if (start_iterations < 0) return fail("start_iterations must be >= 0");
   if (!(tolerance_m >= 0.0)) return fail("tolerance_m must be >= 0");
+  if (!(relocalize_threshold_nats > 0.0)) return fail("relocalize_threshold_nats must be > 0 (inf: off)");
   return true;
 }
 
@@ -212,6 +213,16 @@ WifiFix GradientTracker::Update(const Eigen::Ref<const Eigen::VectorXd>& rss_dbm
   fix.position_m = z;
   fix.neg_log_likelihood = here.neg_log_likelihood;
   fix.covariance_m2 = CovarianceFromFisher(here.fisher);
+  if (std::isfinite(options_.relocalize_threshold_nats)) {
+    WifiFix global = LocateMaximumLikelihood(*model_, scan_, options_);
+    if (fix.neg_log_likelihood - global.neg_log_likelihood > options_.relocalize_threshold_nats) {
+      global.relocalized = true;
+      global.iterations += fix.iterations;
+      fix = global;
+      floor_index_ = model_->FloorIndex(fix.floor);
+      hint_ = -1;
+    }
+  }
   last_ = fix;
   return fix;
 }

@@ -6,6 +6,7 @@ import numpy.typing as npt
 
 _ArrayLike = npt.ArrayLike
 _F64 = npt.NDArray[np.float64]
+_I64 = npt.NDArray[np.int64]
 
 class SignalMapOptions:
     not_heard_sentinel: float
@@ -103,6 +104,7 @@ class GradientTrackerOptions:
     num_starts: int
     start_iterations: int
     tolerance_m: float
+    relocalize_threshold_nats: float
     def __init__(self) -> None: ...
     def validate(self) -> None: ...
 
@@ -122,3 +124,33 @@ def locate_ml(
     options: GradientTrackerOptions = ...,
     num_threads: int = 1,
 ) -> Dict[str, np.ndarray]: ...
+
+class FingerprintLocator:
+    """Fingerprinting baselines: "nnss" (RADAR), "nnss_avg", "wknn", "horus"."""
+
+    def __init__(
+        self,
+        reference_rss_dbm: _ArrayLike,
+        reference_positions_m: _ArrayLike,
+        reference_floors: _ArrayLike,
+        reference_variance_db2: Optional[_ArrayLike] = None,
+        method: str = "wknn",
+        k: int = 4,
+        distance_epsilon_db: float = 1e-3,
+        variance_floor_db2: float = 4.0,
+    ) -> None: ...
+    def locate(self, scans_dbm: _ArrayLike, num_threads: int = 1) -> Tuple[_F64, _I64, _F64]:
+        """(positions_m (Q, 2), floors (Q,), score (Q,)) for scans_dbm (Q, K)."""
+        ...
+    @property
+    def method(self) -> str: ...
+    @property
+    def k(self) -> int: ...
+    @property
+    def effective_k(self) -> int: ...
+    @property
+    def num_references(self) -> int: ...
+    @property
+    def num_access_points(self) -> int: ...
+    @property
+    def has_variances(self) -> bool: ...

@@ -17,6 +17,7 @@
 // Each fix carries the 2x2 covariance I(z)^{-1} (Cramér-Rao bound of the fix) [m^2].
 #pragma once
 
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -46,6 +47,11 @@ struct GradientTrackerOptions {
   int start_iterations = 25;
   /// Stop refining when a step is shorter than this [m].
   double tolerance_m = 1e-4;
+  /// Re-localisation (beyond the paper): after each tracking step, also compute the global ML
+  /// fix of the scan; if l at the tracked estimate exceeds the global optimum's by more than
+  /// this many nats, jump to the global fix. A local Fisher step cannot leave a local minimum of
+  /// a bumpy (shadowed) field; this test can. +inf disables it (the paper's behaviour).
+  double relocalize_threshold_nats = std::numeric_limits<double>::infinity();
 
   bool IsValid(std::string* error) const;
 };
@@ -59,6 +65,7 @@ struct WifiFix {
   bool inside = true;           ///< the raw step landed inside the hull (before projection)
   int iterations = 0;
   int fallback_steps = 0;       ///< steps where I was too ill-conditioned for Fisher scoring
+  bool relocalized = false;     ///< the tracker jumped to the global fix at this scan
 };
 
 /// Global maximum-likelihood fix for scans (n x K, prepared) all taken at one position, over

@@ -1,0 +1,91 @@
+"""`indoorloc wifi ...` subcommands: evaluate on real data, simulate the paper's paths."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import os
+
+
+def default_data_root() -> Path:
+    """Where the real WiFi datasets are: $INDOORLOC_WIFI_DATA, else the first `shared/data/wifi`
+    found beside the working folder or one of its parents (a clone sits next to `shared/`)."""
+    env = os.environ.get("INDOORLOC_WIFI_DATA")
+    if env:
+        return Path(env)
+    here = Path.cwd().resolve()
+    for folder in (here, *here.parents):
+        candidate = folder / "shared" / "data" / "wifi"
+        if candidate.is_dir():
+            return candidate
+    return here / "shared" / "data" / "wifi"
+
+
+def load_dataset(name: str, data_root: Path):
+    """Dataset by CLI name: uji, lecture_theatre, office, corridor, surimi:<NAME>."""
+    from indoorloc.io import wifi_datasets as io
+
+    if name == "uji":
+        return io.load_uji_library(data_root / "uji_library_month01")
+    if name in io.RSS_RTT_ROOMS:
+        return io.load_rss_rtt_room(data_root / "rss_rtt_rooms", name)
+    if name.startswith("surimi:"):
+        return io.load_surimi(data_root / "surimi", name.split(":", 1)[1])
+    raise ValueError(
+        f"indoorloc: argument 'dataset': unknown dataset {name!r} "
+        f"(uji, {', '.join(io.RSS_RTT_ROOMS)}, surimi:<NAME>)"
+    )
+
+
+def cmd_evaluate(args: argparse.Namespace) -> int:
+    from indoorloc.experiments import wifi_evaluate as we
+
+    root = Path(args.data_root) if args.data_root else default_data_root()
+    if not root.is_dir():
+        raise ValueError(f"indoorloc: argument 'data_root': {root} is not a folder")
+    report = {}
+    for name in args.dataset:
+        ds = load_dataset(name, root)
+        for k in args.scans:
+            hyper = we.cross_validate(ds, k=k, max_points=args.cv_points, seed=args.seed, quiet_label=f"cv {name} k={k}")
+            results = we.evaluate(ds, scans_per_estimate=k, hyper=hyper, num_threads=args.threads)
+            title = f"{ds.name}, {k} scan(s) per estimate (CV: variance floor {hyper.variance_floor_db2}, cap {hyper.max_term}, k {hyper.k})"
+            print(we.markdown(results, title))
+            print()
+            report[f"{name}/k={k}"] = {"hyper": {"variance_floor_db2": hyper.variance_floor_db2, "max_term": hyper.max_term, "k": hyper.k},
+                                      "results": [r.row() for r in results.values()]}
+    if args.json:
+        Path(args.json).write_text(json.dumps(report, indent=2, default=float))
+    return 0
+
+
+def cmd_simulate(args: argparse.Namespace) -> int:
+    from indoorloc.experiments import wifi_simulation as ws
+
+    model = ws.paper_map(seed=args.seed, noise_db=args.noise_db, shadowing_db=args.shadowing_db)
+    results = {name: ws.run_path(model, name, path, n_runs=args.runs, seed=args.seed) for name, path in ws.paper_paths().items()}
+    print(ws.markdown_table(results))
+    print(f"\npaper (vertical path, 27 steps): E_27 = {ws.PAPER_E27_M} m")
+    return 0
+
+
+def add_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
+    p = sub.add_parser("wifi", help="WiFi RSS localization (paper 004)")
+    wsub = p.add_subparsers(dest="wifi_command", required=True)
+    e = wsub.add_parser("evaluate", help="every method on real datasets", parents=[quiet_parent()])
+    e.add_argument("--dataset", nargs="+", default=["uji", "lecture_theatre", "office", "corridor"])
+    e.add_argument("--scans", nargs="+", type=int, default=[1, 10], help="scans per estimate")
+    e.add_argument("--data-root", default=None, help="default: $INDOORLOC_WIFI_DATA or ../shared/data/wifi")
+    e.add_argument("--cv-points", type=int, default=24, help="held-out training points for CV")
+    e.add_argument("--threads", type=int, default=1)
+    e.add_argument("--seed", type=int, default=0)
+    e.add_argument("--json", help="also write the results as JSON")
+    e.set_defaults(func=cmd_evaluate)
+    s = wsub.add_parser("simulate", help="the paper's simulated paths (Monte Carlo)", parents=[quiet_parent()])
+    s.add_argument("--runs", type=int, default=200)
+    s.add_argument("--seed", type=int, default=0)
+    s.add_argument("--noise-db", type=float, default=0.5, help="RSS noise sd of the synthetic map [dB]")
+    s.add_argument("--shadowing-db", type=float, default=0.0, help="per-point shadowing sd [dB]")
+    s.set_defaults(func=cmd_simulate)

@@ -1,0 +1,215 @@
+"""Real-data evaluation of the wifi methods (`indoorloc wifi evaluate`).
+
+Every method runs on a dataset's train/test split:
+
+- ``ml``: the paper's interpolated Gaussian model (Delaunay-linear means and variances), global
+  maximum-likelihood fix (multi-start Fisher scoring);
+- ``nnss`` (RADAR), ``nnss_avg`` (mean of the k nearest points), ``horus`` (Gaussian likelihood
+  over reference points): on the signal map's per-point statistics;
+- ``wknn``: weighted k nearest neighbours on the raw training scans.
+
+Two protocols: one scan per estimate, and k consecutive scans at a static test point (the ML
+method multiplies the k likelihoods; the baselines match the averaged scan). Hyper-parameters
+(variance floor and per-AP cap of the model, k of the neighbour methods) are chosen by
+leave-one-reference-point-out cross-validation on the training data only; test files never
+influence them.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Dict, Iterable, List, Optional, Sequence
+
+import numpy as np
+
+from indoorloc import metrics, wifi
+from indoorloc.io.wifi_datasets import FingerprintDataset, FingerprintSplit
+from indoorloc.progress import progress
+
+NOT_HEARD_DBM = -105.0
+METHODS = ("ml", "nnss", "nnss_avg", "wknn", "horus")
+
+
+@dataclass
+class Hyper:
+    """Hyper-parameters of every method (chosen by cross-validation on training points)."""
+
+    variance_floor_db2: float = 4.0
+    max_term: float = np.inf
+    k: Dict[str, int] = field(default_factory=lambda: {"nnss_avg": 4, "wknn": 5, "horus": 4})
+
+
+@dataclass
+class MethodResult:
+    method: str
+    errors_m: np.ndarray  # (G,) 2-D error per estimate
+    floor_hit: np.ndarray  # (G,) bool
+    seconds: float
+
+    def row(self, seed: int = 0) -> dict:
+        s = metrics.error_stats(self.errors_m)
+        lo, hi = metrics.bootstrap_interval(self.errors_m, n_boot=1000, seed=seed)
+        return {
+            "method": self.method,
+            "n": s.count,
+            "mean_m": s.mean,
+            "mean_ci95_m": (lo, hi),
+            "median_m": s.median,
+            "p75_m": s.p75,
+            "p90_m": s.p90,
+            "floor_hit_rate": float(self.floor_hit.mean()),
+            "ms_per_estimate": 1e3 * self.seconds / max(1, s.count),
+        }
+
+
+def group_consecutive(split: FingerprintSplit, k: int) -> np.ndarray:
+    """Row indices (G, k): blocks of k consecutive scans (in file order) at one test location.
+
+    A location's scans may be spread over several files (UJI: the same route is walked in each
+    test set); they are taken in file order and cut into blocks of k, the remainder dropped.
+    """
+    blocks: List[np.ndarray] = []
+    for pid in np.unique(split.point_ids):
+        run = np.flatnonzero(split.point_ids == pid)
+        for b in range(len(run) // k):
+            blocks.append(run[b * k : (b + 1) * k])
+    return np.array(blocks, dtype=np.int64).reshape(-1, k)
+
+
+def build_map(train: FingerprintSplit, sentinel: float, hyper: Hyper, rows=None) -> wifi.SignalMap:
+    rows = slice(None) if rows is None else rows
+    return wifi.SignalMap.from_scans(
+        train.positions_m[rows],
+        train.floors[rows],
+        train.rss_dbm[rows],
+        wifi.SignalMapOptions(
+            not_heard_sentinel=sentinel, not_heard_dbm=NOT_HEARD_DBM, variance_floor_db2=hyper.variance_floor_db2
+        ),
+    )
+
+
+class MethodSet:
+    """Every method fitted on one training set (map + raw scans), ready to locate."""
+
+    def __init__(self, train: FingerprintSplit, sentinel: float, hyper: Hyper, rows=None, num_threads: int = 1):
+        self.sentinel = sentinel
+        self.hyper = hyper
+        self.num_threads = num_threads
+        self.map = build_map(train, sentinel, hyper, rows)
+        self.model = wifi.RssModel(
+            self.map, wifi.RssModelOptions(variance_floor_db2=hyper.variance_floor_db2, max_term=hyper.max_term)
+        )
+        rows = slice(None) if rows is None else rows
+        raw = self.map.prepare_scans(train.rss_dbm[rows], sentinel, NOT_HEARD_DBM)
+        means, var = self.map.mean_dbm, self.map.variance_db2
+        pos, floors = self.map.positions_m, self.map.floors.astype(np.float64)
+        self.locators = {
+            "nnss": wifi.FingerprintLocator(means, pos, floors, var, method="nnss", k=1),
+            "nnss_avg": wifi.FingerprintLocator(means, pos, floors, var, method="nnss_avg", k=hyper.k["nnss_avg"]),
+            "horus": wifi.FingerprintLocator(
+                means, pos, floors, var, method="horus", k=hyper.k["horus"], variance_floor_db2=hyper.variance_floor_db2
+            ),
+            "wknn": wifi.FingerprintLocator(
+                raw, train.positions_m[rows], train.floors[rows].astype(np.float64), None, method="wknn", k=hyper.k["wknn"]
+            ),
+        }
+        self.options = wifi.tracker_options(num_starts=5, start_iterations=25)
+
+    def prepare(self, rss_dbm: np.ndarray) -> np.ndarray:
+        return self.map.prepare_scans(rss_dbm, self.sentinel, NOT_HEARD_DBM)
+
+    def locate(self, method: str, prepared: np.ndarray, k: int) -> tuple:
+        """Positions (G, 2) and floors (G,) of blocks of k consecutive prepared scans."""
+        if method == "ml":
+            out = wifi.locate_ml(self.model, prepared, group_size=k, options=self.options, num_threads=self.num_threads)
+            return out["positions_m"], out["floors"]
+        averaged = prepared.reshape(-1, k, prepared.shape[1]).mean(axis=1) if k > 1 else prepared
+        pos, floors, _ = self.locators[method].locate(averaged, num_threads=self.num_threads)
+        return pos, floors
+
+
+def cross_validate(
+    dataset: FingerprintDataset, k: int, max_points: int = 24, seed: int = 0, quiet_label: str = "cv"
+) -> Hyper:
+    """Leave-one-reference-point-out over (a seeded subset of) the training points.
+
+    For each held-out point, every candidate setting is fitted on the other points' scans and
+    scored on the held-out point's scans (blocks of k). Returns the setting with the lowest mean
+    error per method.
+    """
+    train = dataset.train
+    points = np.unique(train.point_ids)
+    rng = np.random.default_rng(seed)
+    held_out = rng.choice(points, size=min(max_points, points.size), replace=False)
+    model_grid = [(vf, cap) for vf in (1.0, 4.0, 9.0, 16.0) for cap in (np.inf, 2.0, 5.0)]
+    k_grid = (1, 2, 3, 4, 5, 6, 8)
+    model_err = {g: [] for g in model_grid}
+    k_err = {m: {kk: [] for kk in k_grid} for m in ("nnss_avg", "wknn", "horus")}
+    for p in progress(held_out, total=len(held_out), desc=quiet_label):
+        rows = train.point_ids != p
+        test_rows = np.flatnonzero(~rows)
+        test_rows = test_rows[: (len(test_rows) // k) * k]
+        if test_rows.size == 0:
+            continue
+        truth = train.positions_m[test_rows].reshape(-1, k, 2)[:, 0]
+        for vf, cap in model_grid:
+            ms = MethodSet(train, dataset.not_heard_sentinel, Hyper(vf, cap), rows=rows)
+            pos, _ = ms.locate("ml", ms.prepare(train.rss_dbm[test_rows]), k)
+            model_err[(vf, cap)].append(np.linalg.norm(pos - truth, axis=1).mean())
+        for kk in k_grid:
+            ms = MethodSet(train, dataset.not_heard_sentinel, Hyper(4.0, np.inf, {"nnss_avg": kk, "wknn": kk, "horus": kk}), rows=rows)
+            prepared = ms.prepare(train.rss_dbm[test_rows])
+            for m in k_err:
+                pos, _ = ms.locate(m, prepared, k)
+                k_err[m][kk].append(np.linalg.norm(pos - truth, axis=1).mean())
+    vf, cap = min(model_grid, key=lambda g: np.mean(model_err[g]))
+    best_k = {m: min(k_grid, key=lambda kk: np.mean(k_err[m][kk])) for m in k_err}
+    return Hyper(variance_floor_db2=vf, max_term=cap, k=best_k)
+
+
+def evaluate(
+    dataset: FingerprintDataset,
+    scans_per_estimate: int = 1,
+    hyper: Optional[Hyper] = None,
+    methods: Sequence[str] = METHODS,
+    num_threads: int = 1,
+    max_estimates: Optional[int] = None,
+) -> Dict[str, MethodResult]:
+    """Run ``methods`` on the test split; blocks of ``scans_per_estimate`` consecutive scans."""
+    hyper = hyper or Hyper()
+    k = scans_per_estimate
+    ms = MethodSet(dataset.train, dataset.not_heard_sentinel, hyper, num_threads=num_threads)
+    blocks = group_consecutive(dataset.test, k)
+    if max_estimates is not None:
+        blocks = blocks[:max_estimates]
+    rows = blocks.ravel()
+    prepared = ms.prepare(dataset.test.rss_dbm[rows])
+    truth = dataset.test.positions_m[blocks[:, 0]]
+    truth_floor = dataset.test.floors[blocks[:, 0]]
+    results = {}
+    for method in methods:
+        start = time.perf_counter()
+        pos, floors = ms.locate(method, prepared, k)
+        elapsed = time.perf_counter() - start
+        results[method] = MethodResult(
+            method, np.linalg.norm(pos - truth, axis=1), np.asarray(floors) == truth_floor, elapsed
+        )
+    return results
+
+
+def markdown(results: Dict[str, MethodResult], title: str) -> str:
+    lines = [
+        f"**{title}**",
+        "",
+        "| method | n | mean [m] (95 % CI) | median | p75 | p90 | floor hit | ms/estimate |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for r in results.values():
+        row = r.row()
+        lo, hi = row["mean_ci95_m"]
+        lines.append(
+            f"| {row['method']} | {row['n']} | {row['mean_m']:.2f} ({lo:.2f}-{hi:.2f}) | {row['median_m']:.2f} | "
+            f"{row['p75_m']:.2f} | {row['p90_m']:.2f} | {100 * row['floor_hit_rate']:.1f} % | {row['ms_per_estimate']:.2f} |"
+        )
+    return "\n".join(lines)

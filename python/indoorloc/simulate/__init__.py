@@ -1,0 +1,1 @@
+"""Simulation scenarios: synthetic maps and trajectories for the subsystems' experiments."""
