@@ -13,6 +13,7 @@
 #include "indoorloc/core/random.h"
 #include "indoorloc/wifi/delaunay_interpolator.h"
 #include "indoorloc/wifi/gradient_tracker.h"
+#include "indoorloc/wifi/grid_posterior.h"
 #include "indoorloc/wifi/rss_model.h"
 #include "indoorloc/wifi/signal_map.h"
 #include "numpy_args.h"
@@ -338,6 +339,37 @@ Streaming tracker of paper 004 (Algorithm 1, Fisher-scoring steps, no motion mod
       .def("reset", &GradientTracker::Reset)
       .def("reset_to", &GradientTracker::ResetTo, py::arg("position_m"), py::arg("floor") = 0)
       .def_property_readonly("initialized", &GradientTracker::initialized);
+
+  py::class_<wifi::GridPosterior>(m, "GridPosterior", R"doc(
+Posterior mean and covariance of the position under the interpolated likelihood, on a grid
+over each floor's hull (uniform prior). ``spacing_m <= 0``: a third of the median reference spacing.)doc")
+      .def(py::init([](const std::shared_ptr<RssModel>& model, double spacing_m, int max_points_per_floor) {
+             wifi::GridPosteriorOptions o;
+             o.spacing_m = spacing_m;
+             o.max_points_per_floor = max_points_per_floor;
+             py::gil_scoped_release release;
+             return std::make_unique<wifi::GridPosterior>(model, o);
+           }),
+           py::arg("model"), py::arg("spacing_m") = 0.0, py::arg("max_points_per_floor") = 20000)
+      .def_property_readonly("spacing_m", &wifi::GridPosterior::spacing_m)
+      .def("grid", &wifi::GridPosterior::grid, py::arg("floor_index"), "Grid points (G, 2) [m] of a floor.")
+      .def("locate", [](const wifi::GridPosterior& gp, const py::object& rss_dbm, int group_size, int num_threads) {
+             MatrixArg scans = ToMatrix(rss_dbm, "rss_dbm");
+             CheckArgument(group_size >= 1, "group_size", "must be >= 1");
+             CheckArgument(scans.map.rows() % group_size == 0, "rss_dbm", "number of rows is not a multiple of group_size");
+             const int groups = static_cast<int>(scans.map.rows() / group_size);
+             std::vector<WifiFix> fixes(static_cast<size_t>(groups));
+             {
+               py::gil_scoped_release release;
+               ParallelForRuns(groups, num_threads, 0, [&](int g, RandomStream&) {
+                 fixes[static_cast<size_t>(g)] =
+                     gp.Locate(scans.map.middleRows(static_cast<Eigen::Index>(g) * group_size, group_size));
+               });
+             }
+             return FixesToDict(fixes);
+           },
+           py::arg("rss_dbm"), py::arg("group_size") = 1, py::arg("num_threads") = 1,
+           "Posterior-mean fixes of blocks of group_size scans (Q, K) [dBm, prepared]; dict as locate_ml.");
 
   m.def("locate_ml", [](const std::shared_ptr<RssModel>& model, const py::object& rss_dbm, int group_size,
                         const GradientTrackerOptions& options, int num_threads) {

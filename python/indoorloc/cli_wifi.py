@@ -49,12 +49,14 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     for name in args.dataset:
         ds = load_dataset(name, root)
         for k in args.scans:
-            hyper = we.cross_validate(ds, k=k, max_points=args.cv_points, seed=args.seed, quiet_label=f"cv {name} k={k}")
+            hyper = we.cross_validate(
+                ds, k=k, max_points=args.cv_points, seed=args.seed, quiet_label=f"cv {name} k={k}", num_threads=args.threads
+            )
             results = we.evaluate(ds, scans_per_estimate=k, hyper=hyper, num_threads=args.threads)
-            title = f"{ds.name}, {k} scan(s) per estimate (CV: variance floor {hyper.variance_floor_db2}, cap {hyper.max_term}, k {hyper.k})"
+            title = f"{ds.name}, {k} scan(s) per estimate (CV: model (variance floor, cap) {hyper.model}, k {hyper.k})"
             print(we.markdown(results, title))
             print()
-            report[f"{name}/k={k}"] = {"hyper": {"variance_floor_db2": hyper.variance_floor_db2, "max_term": hyper.max_term, "k": hyper.k},
+            report[f"{name}/k={k}"] = {"hyper": {"model": hyper.model, "k": hyper.k},
                                       "results": [r.row() for r in results.values()]}
     if args.json:
         Path(args.json).write_text(json.dumps(report, indent=2, default=float))
@@ -79,7 +81,7 @@ def add_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
     e.add_argument("--scans", nargs="+", type=int, default=[1, 10], help="scans per estimate")
     e.add_argument("--data-root", default=None, help="default: $INDOORLOC_WIFI_DATA or ../shared/data/wifi")
     e.add_argument("--cv-points", type=int, default=24, help="held-out training points for CV")
-    e.add_argument("--threads", type=int, default=1)
+    e.add_argument("--threads", type=int, default=0, help="0: all cores (results do not depend on it)")
     e.add_argument("--seed", type=int, default=0)
     e.add_argument("--json", help="also write the results as JSON")
     e.set_defaults(func=cmd_evaluate)

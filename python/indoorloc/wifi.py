@@ -6,6 +6,7 @@
   fields with gradients (and Sibson's natural-neighbour interpolant).
 - :class:`RssModel`: the interpolated Gaussian model: l(z, v), its gradient and Fisher
   information; simulated scans (the paper's simulated mode).
+- :class:`GridPosterior`: posterior-mean (MMSE) fixes of the same model on a grid (beyond the paper).
 - :class:`FingerprintLocator`: the baselines NNSS (RADAR), NNSS-AVG, weighted kNN, Horus.
 - :class:`GradientTracker` (Algorithm 1 with step control) and :func:`locate_ml` (global
   maximum-likelihood fixes, also from k scans at a static point).
@@ -25,6 +26,7 @@ from indoorloc._core.wifi import (
     FingerprintLocator,
     GradientTracker,
     GradientTrackerOptions,
+    GridPosterior,
     RssModel,
     RssModelOptions,
     SignalMap,
@@ -49,6 +51,7 @@ __all__ = [
     "FingerprintLocator",
     "GradientTracker",
     "GradientTrackerOptions",
+    "GridPosterior",
     "RssModel",
     "RssModelOptions",
     "SignalMap",

@@ -120,3 +120,19 @@ def test_simulated_scans_follow_the_model():
     np.testing.assert_allclose(scans.mean(axis=0), mu[0], atol=0.1)
     np.testing.assert_allclose(scans.var(axis=0), v[0], rtol=0.05)
     np.testing.assert_array_equal(scans, model.simulate_scans(pts, seed=9))  # seeded
+
+
+def test_grid_posterior_mean_is_near_truth_and_covariance_shrinks_with_scans():
+    pos, mean, var = lattice_map(variance_slope=0.0)
+    model = wifi.RssModel(wifi.SignalMap(pos, None, mean, var))
+    gp = wifi.GridPosterior(model, spacing_m=0.1)
+    truth = np.array([[4.4, 5.6]])
+    one = gp.locate(model.simulate_scans(truth, seed=1))
+    many = gp.locate(model.simulate_scans(np.repeat(truth, 20, axis=0), seed=2), group_size=20)
+    assert np.linalg.norm(many["positions_m"][0] - truth[0]) < 0.5
+    assert np.trace(many["covariances_m2"][0]) < np.trace(one["covariances_m2"][0])
+    # The noiseless mean scan: posterior mean close to the truth (symmetric likelihood).
+    mu, _ = model.mean_and_variance(truth)
+    np.testing.assert_allclose(gp.locate(np.repeat(mu, 50, axis=0), group_size=50)["positions_m"][0], truth[0], atol=0.05)
+    with pytest.raises(ValueError, match="group_size"):
+        gp.locate(mu, group_size=0)

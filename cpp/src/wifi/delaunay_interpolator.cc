@@ -177,22 +177,26 @@ struct DelaunayInterpolator::Impl {
     return false;
   }
 
-  void Evaluate(int t, const double b[3], double* values, double* gradients /* 2F or null */) const {
+  // Values and gradients of every field at barycentric coordinates b in triangle t. The
+  // gradient of field k goes to grad_x[k * stride] and grad_y[k * stride] (stride 2: the
+  // interleaved batch layout; stride 1 with two separate rows: the 2 x F layout).
+  void Evaluate(int t, const double b[3], double* values, double* grad_x, double* grad_y,
+                Eigen::Index stride) const {
     const Triangle& tri = triangles[static_cast<size_t>(t)];
     const Eigen::Index f = fields.cols();
     const double* f0 = fields.row(tri.vertex[0]).data();
     const double* f1 = fields.row(tri.vertex[1]).data();
     const double* f2 = fields.row(tri.vertex[2]).data();
     for (Eigen::Index k = 0; k < f; ++k) values[k] = b[0] * f0[k] + b[1] * f1[k] + b[2] * f2[k];
-    if (gradients == nullptr) return;
+    if (grad_x == nullptr) return;
     // grad b1 = row 0 of the inverse, grad b2 = row 1, grad b0 = -(grad b1 + grad b2):
     // grad f = (f1 - f0) grad b1 + (f2 - f0) grad b2.
     const double g1x = tri.inverse[0][0], g1y = tri.inverse[0][1];
     const double g2x = tri.inverse[1][0], g2y = tri.inverse[1][1];
     for (Eigen::Index k = 0; k < f; ++k) {
       const double d1 = f1[k] - f0[k], d2 = f2[k] - f0[k];
-      gradients[2 * k] = d1 * g1x + d2 * g2x;
-      gradients[2 * k + 1] = d1 * g1y + d2 * g2y;
+      grad_x[k * stride] = d1 * g1x + d2 * g2x;
+      grad_y[k * stride] = d1 * g1y + d2 * g2y;
     }
   }
 };
@@ -325,13 +329,7 @@ bool DelaunayInterpolator::Interpolate(const Eigen::Vector2d& z_m, Eigen::Ref<Ei
   double ex, ey, b[3];
   const bool inside = s.Locate(start, z_m[0], z_m[1], &t, &ex, &ey, b);
   if (hint != nullptr) *hint = t;
-  thread_local std::vector<double> grad;
-  grad.resize(static_cast<size_t>(2 * s.fields.cols()));
-  s.Evaluate(t, b, values.data(), grad.data());
-  for (Eigen::Index k = 0; k < s.fields.cols(); ++k) {
-    gradients(0, k) = grad[static_cast<size_t>(2 * k)];
-    gradients(1, k) = grad[static_cast<size_t>(2 * k + 1)];
-  }
+  s.Evaluate(t, b, values.data(), gradients.row(0).data(), gradients.row(1).data(), 1);
   return inside;
 }
 
@@ -379,7 +377,8 @@ void DelaunayInterpolator::InterpolateBatchInto(
       previous = t;
       evaluated_at_m(i, 0) = ex;
       evaluated_at_m(i, 1) = ey;
-      s.Evaluate(t, b, values.row(i).data(), gradients.row(i).data());
+      double* g = gradients.row(i).data();
+      s.Evaluate(t, b, values.row(i).data(), g, g + 1, 2);
     }
   };
   if (threads <= 1) {
@@ -423,7 +422,7 @@ RowMatrixXd DelaunayInterpolator::SibsonInterpolate(const Eigen::Ref<const RowMa
       int t;
       double ex, ey, b[3];
       s.Locate(s.GridStart(z[0], z[1]), z[0], z[1], &t, &ex, &ey, b);
-      s.Evaluate(t, b, out.row(i).data(), nullptr);
+      s.Evaluate(t, b, out.row(i).data(), nullptr, nullptr, 0);
       continue;
     }
     for (const Coordinate& c : coords) {

@@ -36,11 +36,16 @@ Step FisherStep(const RssModel& model, const Eigen::Ref<const RowMatrixXd>& scan
   Step out;
   const Eigen::Matrix2d& fisher = here.fisher;
   const Eigen::Vector2d& gradient = here.gradient;
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(fisher);
-  const double lmin = eig.eigenvalues()[0], lmax = eig.eigenvalues()[1];
+  // Eigenvalues of the symmetric 2x2 I in closed form (this runs at every tracker step).
+  const double half_trace = 0.5 * (fisher(0, 0) + fisher(1, 1));
+  const double det = fisher(0, 0) * fisher(1, 1) - fisher(0, 1) * fisher(1, 0);
+  const double spread = std::sqrt(std::max(0.0, half_trace * half_trace - det));
+  const double lmax = half_trace + spread, lmin = half_trace - spread;
   Eigen::Vector2d delta;
   if (lmax > 0.0 && lmin / lmax >= options.min_reciprocal_condition) {
-    delta = -fisher.ldlt().solve(gradient);
+    // -I^{-1} ∇l with the adjugate inverse of the 2x2 I.
+    delta << -(fisher(1, 1) * gradient[0] - fisher(0, 1) * gradient[1]) / det,
+        -(-fisher(1, 0) * gradient[0] + fisher(0, 0) * gradient[1]) / det;
   } else if (lmax > 0.0) {
     // Proposition 1: I is (nearly) singular when all field gradients are parallel; a ridge
     // keeps the step along the informative direction finite.
@@ -183,9 +188,10 @@ void GradientTracker::ResetTo(const Eigen::Vector2d& position_m, int floor) {
 }
 
 WifiFix GradientTracker::Update(const Eigen::Ref<const Eigen::VectorXd>& rss_dbm) {
-  CheckArgument(rss_dbm.size() == model_->num_access_points(), "rss_dbm",
-                "has " + std::to_string(rss_dbm.size()) + " values, the map has " +
-                    std::to_string(model_->num_access_points()) + " access points (K mismatch)");
+  if (rss_dbm.size() != model_->num_access_points()) {
+    ThrowInvalidArgument("rss_dbm", "has " + std::to_string(rss_dbm.size()) + " values, the map has " +
+                                        std::to_string(model_->num_access_points()) + " access points (K mismatch)");
+  }
   scan_.row(0) = rss_dbm.transpose();
   CheckFinite(scan_, "rss_dbm");
   if (!initialized_) {

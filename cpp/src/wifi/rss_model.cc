@@ -76,27 +76,33 @@ void RssModel::EvaluateFields(const Eigen::Vector2d& z_m, int floor_index, int* 
                               Eigen::Vector2d* at) const {
   const DelaunayInterpolator& interp = interpolator(floor_index);
   const Eigen::Index k = map_.num_access_points();
-  values_.resize(2 * k);
-  gradients_.resize(2, 2 * k);
-  *inside = interp.Interpolate(z_m, values_, gradients_, hint);
+  Eigen::VectorXd& values = values_;
+  RowMatrixXd& gradients = gradients_;
+  if (values.size() != 2 * k) values.resize(2 * k);
+  if (gradients.cols() != 2 * k) gradients.resize(2, 2 * k);
+  *inside = interp.Interpolate(z_m, values, gradients, hint);
   *at = *inside ? z_m : interp.ClampToHull(z_m);
 }
 
 RssLikelihood RssModel::Evaluate(const Eigen::Ref<const RowMatrixXd>& rss_dbm, const Eigen::Vector2d& z_m,
                                  int floor_index, int* hint) const {
   const Eigen::Index k = map_.num_access_points();
-  CheckArgument(rss_dbm.cols() == k, "rss_dbm",
-                "has " + std::to_string(rss_dbm.cols()) + " AP columns, the map has " + std::to_string(k) +
-                    " (K mismatch between map and scan)");
+  if (rss_dbm.cols() != k) {  // (messages built only on failure: this runs per tracker step)
+    ThrowInvalidArgument("rss_dbm", "has " + std::to_string(rss_dbm.cols()) + " AP columns, the map has " +
+                                        std::to_string(k) + " (K mismatch between map and scan)");
+  }
   CheckArgument(rss_dbm.rows() > 0, "rss_dbm", "no scan");
   RssLikelihood out;
   EvaluateFields(z_m, floor_index, hint, &out.inside, &out.evaluated_at_m);
+  // One thread-local lookup each, not one per access (global-dynamic TLS in a shared module).
+  const Eigen::VectorXd& values = values_;
+  const RowMatrixXd& gradients = gradients_;
   const double n = static_cast<double>(rss_dbm.rows());
   for (Eigen::Index i = 0; i < k; ++i) {
-    const double mean = values_[i];
-    double variance = values_[k + i];
-    Eigen::Vector2d grad_mean(gradients_(0, i), gradients_(1, i));
-    Eigen::Vector2d grad_variance(gradients_(0, k + i), gradients_(1, k + i));
+    const double mean = values[i];
+    double variance = values[k + i];
+    Eigen::Vector2d grad_mean(gradients(0, i), gradients(1, i));
+    Eigen::Vector2d grad_variance(gradients(0, k + i), gradients(1, k + i));
     if (variance < options_.variance_floor_db2) {  // floored: locally constant
       variance = options_.variance_floor_db2;
       grad_variance.setZero();

@@ -4,6 +4,7 @@ Every method runs on a dataset's train/test split:
 
 - ``ml``: the paper's interpolated Gaussian model (Delaunay-linear means and variances), global
   maximum-likelihood fix (multi-start Fisher scoring);
+- ``mmse``: the same likelihood, posterior mean over a grid of the mapped area (beyond the paper);
 - ``nnss`` (RADAR), ``nnss_avg`` (mean of the k nearest points), ``horus`` (Gaussian likelihood
   over reference points): on the signal map's per-point statistics;
 - ``wknn``: weighted k nearest neighbours on the raw training scans.
@@ -28,7 +29,7 @@ from indoorloc.io.wifi_datasets import FingerprintDataset, FingerprintSplit
 from indoorloc.progress import progress
 
 NOT_HEARD_DBM = -105.0
-METHODS = ("ml", "nnss", "nnss_avg", "wknn", "horus")
+METHODS = ("ml", "mmse", "nnss", "nnss_avg", "wknn", "horus")
 
 
 @dataclass
@@ -38,6 +39,15 @@ class Hyper:
     variance_floor_db2: float = 4.0
     max_term: float = np.inf
     k: Dict[str, int] = field(default_factory=lambda: {"nnss_avg": 4, "wknn": 5, "horus": 4})
+    #: Per model-based method ("ml", "mmse"): (variance floor, cap), when they differ.
+    model: Dict[str, tuple] = field(default_factory=dict)
+
+    def for_method(self, method: str) -> "Hyper":
+        """These settings with the model's (variance floor, cap) chosen for ``method``."""
+        if method not in self.model:
+            return self
+        vf, cap = self.model[method]
+        return Hyper(variance_floor_db2=vf, max_term=cap, k=self.k)
 
 
 @dataclass
@@ -115,6 +125,7 @@ class MethodSet:
             ),
         }
         self.options = wifi.tracker_options(num_starts=5, start_iterations=25)
+        self._posterior = None  # built on first use (grid over the hull)
 
     def prepare(self, rss_dbm: np.ndarray) -> np.ndarray:
         return self.map.prepare_scans(rss_dbm, self.sentinel, NOT_HEARD_DBM)
@@ -124,13 +135,24 @@ class MethodSet:
         if method == "ml":
             out = wifi.locate_ml(self.model, prepared, group_size=k, options=self.options, num_threads=self.num_threads)
             return out["positions_m"], out["floors"]
+        if method == "mmse":
+            if self._posterior is None:
+                self._posterior = wifi.GridPosterior(self.model)
+            out = self._posterior.locate(prepared, group_size=k, num_threads=self.num_threads)
+            return out["positions_m"], out["floors"]
         averaged = prepared.reshape(-1, k, prepared.shape[1]).mean(axis=1) if k > 1 else prepared
         pos, floors, _ = self.locators[method].locate(averaged, num_threads=self.num_threads)
         return pos, floors
 
 
 def cross_validate(
-    dataset: FingerprintDataset, k: int, max_points: int = 24, seed: int = 0, quiet_label: str = "cv"
+    dataset: FingerprintDataset,
+    k: int,
+    max_points: int = 24,
+    seed: int = 0,
+    quiet_label: str = "cv",
+    max_estimates_per_point: int = 24,
+    num_threads: int = 1,
 ) -> Hyper:
     """Leave-one-reference-point-out over (a seeded subset of) the training points.
 
@@ -144,28 +166,31 @@ def cross_validate(
     held_out = rng.choice(points, size=min(max_points, points.size), replace=False)
     model_grid = [(vf, cap) for vf in (1.0, 4.0, 9.0, 16.0) for cap in (np.inf, 2.0, 5.0)]
     k_grid = (1, 2, 3, 4, 5, 6, 8)
-    model_err = {g: [] for g in model_grid}
+    model_err = {m: {g: [] for g in model_grid} for m in ("ml", "mmse")}
     k_err = {m: {kk: [] for kk in k_grid} for m in ("nnss_avg", "wknn", "horus")}
     for p in progress(held_out, total=len(held_out), desc=quiet_label):
         rows = train.point_ids != p
         test_rows = np.flatnonzero(~rows)
-        test_rows = test_rows[: (len(test_rows) // k) * k]
+        test_rows = test_rows[: min(len(test_rows) // k, max_estimates_per_point) * k]
         if test_rows.size == 0:
             continue
         truth = train.positions_m[test_rows].reshape(-1, k, 2)[:, 0]
         for vf, cap in model_grid:
-            ms = MethodSet(train, dataset.not_heard_sentinel, Hyper(vf, cap), rows=rows)
-            pos, _ = ms.locate("ml", ms.prepare(train.rss_dbm[test_rows]), k)
-            model_err[(vf, cap)].append(np.linalg.norm(pos - truth, axis=1).mean())
+            ms = MethodSet(train, dataset.not_heard_sentinel, Hyper(vf, cap), rows=rows, num_threads=num_threads)
+            prepared = ms.prepare(train.rss_dbm[test_rows])
+            for m in model_err:
+                pos, _ = ms.locate(m, prepared, k)
+                model_err[m][(vf, cap)].append(np.linalg.norm(pos - truth, axis=1).mean())
         for kk in k_grid:
             ms = MethodSet(train, dataset.not_heard_sentinel, Hyper(4.0, np.inf, {"nnss_avg": kk, "wknn": kk, "horus": kk}), rows=rows)
             prepared = ms.prepare(train.rss_dbm[test_rows])
             for m in k_err:
                 pos, _ = ms.locate(m, prepared, k)
                 k_err[m][kk].append(np.linalg.norm(pos - truth, axis=1).mean())
-    vf, cap = min(model_grid, key=lambda g: np.mean(model_err[g]))
     best_k = {m: min(k_grid, key=lambda kk: np.mean(k_err[m][kk])) for m in k_err}
-    return Hyper(variance_floor_db2=vf, max_term=cap, k=best_k)
+    model_best = {m: min(model_grid, key=lambda g: np.mean(model_err[m][g])) for m in model_err}
+    return Hyper(variance_floor_db2=model_best["ml"][0], max_term=model_best["ml"][1], k=best_k,
+                 model={m: model_best[m] for m in model_best})
 
 
 def evaluate(
@@ -179,16 +204,21 @@ def evaluate(
     """Run ``methods`` on the test split; blocks of ``scans_per_estimate`` consecutive scans."""
     hyper = hyper or Hyper()
     k = scans_per_estimate
-    ms = MethodSet(dataset.train, dataset.not_heard_sentinel, hyper, num_threads=num_threads)
     blocks = group_consecutive(dataset.test, k)
     if max_estimates is not None:
         blocks = blocks[:max_estimates]
     rows = blocks.ravel()
-    prepared = ms.prepare(dataset.test.rss_dbm[rows])
     truth = dataset.test.positions_m[blocks[:, 0]]
     truth_floor = dataset.test.floors[blocks[:, 0]]
     results = {}
+    fitted: Dict[tuple, MethodSet] = {}
     for method in methods:
+        h = hyper.for_method(method)
+        key = (h.variance_floor_db2, h.max_term)
+        if key not in fitted:
+            fitted[key] = MethodSet(dataset.train, dataset.not_heard_sentinel, h, num_threads=num_threads)
+        ms = fitted[key]
+        prepared = ms.prepare(dataset.test.rss_dbm[rows])
         start = time.perf_counter()
         pos, floors = ms.locate(method, prepared, k)
         elapsed = time.perf_counter() - start
