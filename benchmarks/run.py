@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-BENCHMARKS = ["bench_resampling"]
+BENCHMARKS = ["bench_resampling", "bench_wifi"]
 
 
 def main() -> int:

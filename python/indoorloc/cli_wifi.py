@@ -66,8 +66,14 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 def cmd_simulate(args: argparse.Namespace) -> int:
     from indoorloc.experiments import wifi_simulation as ws
 
-    model = ws.paper_map(seed=args.seed, noise_db=args.noise_db, shadowing_db=args.shadowing_db)
-    results = {name: ws.run_path(model, name, path, n_runs=args.runs, seed=args.seed) for name, path in ws.paper_paths().items()}
+    if args.map == "paper":
+        model = ws.paper_map(seed=args.seed, noise_db=args.noise_db, shadowing_db=args.shadowing_db)
+        paths = ws.paper_paths()
+    else:
+        data_root = Path(args.data_root) if args.data_root else default_data_root()
+        model = ws.fitted_map(load_dataset(args.map, data_root))
+        paths = ws.paths_through(model)
+    results = {name: ws.run_path(model, name, path, n_runs=args.runs, seed=args.seed) for name, path in paths.items()}
     print(ws.markdown_table(results))
     print(f"\npaper (vertical path, 27 steps): E_27 = {ws.PAPER_E27_M} m")
     return 0
@@ -90,4 +96,6 @@ def add_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
     s.add_argument("--seed", type=int, default=0)
     s.add_argument("--noise-db", type=float, default=0.5, help="RSS noise sd of the synthetic map [dB]")
     s.add_argument("--shadowing-db", type=float, default=0.0, help="per-point shadowing sd [dB]")
+    s.add_argument("--map", default="paper", help="paper (synthetic corridor) or a dataset name: the map fitted to its training scans")
+    s.add_argument("--data-root", default=None)
     s.set_defaults(func=cmd_simulate)

@@ -4,6 +4,8 @@ Every method runs on a dataset's train/test split:
 
 - ``ml``: the paper's interpolated Gaussian model (Delaunay-linear means and variances), global
   maximum-likelihood fix (multi-start Fisher scoring);
+- ``tracker``: the paper's gradient tracker fed the k scans of a static point in turn (global
+  first fix, then Fisher steps): what the tracker converges to;
 - ``mmse``: the same likelihood, posterior mean over a grid of the mapped area (beyond the paper);
 - ``nnss`` (RADAR), ``nnss_avg`` (mean of the k nearest points), ``horus`` (Gaussian likelihood
   over reference points): on the signal map's per-point statistics;
@@ -29,7 +31,7 @@ from indoorloc.io.wifi_datasets import FingerprintDataset, FingerprintSplit
 from indoorloc.progress import progress
 
 NOT_HEARD_DBM = -105.0
-METHODS = ("ml", "mmse", "nnss", "nnss_avg", "wknn", "horus")
+METHODS = ("ml", "mmse", "tracker", "nnss", "nnss_avg", "wknn", "horus")
 
 
 @dataclass
@@ -135,6 +137,18 @@ class MethodSet:
         if method == "ml":
             out = wifi.locate_ml(self.model, prepared, group_size=k, options=self.options, num_threads=self.num_threads)
             return out["positions_m"], out["floors"]
+        if method == "tracker":
+            # What the tracker converges to at a static point: a global fix from the first
+            # scan, then one Fisher-scoring step per further scan.
+            tracker = wifi.GradientTracker(self.model, self.options)
+            blocks = prepared.reshape(-1, k, prepared.shape[1])
+            pos = np.empty((len(blocks), 2))
+            floors = np.empty(len(blocks), dtype=np.int64)
+            for b, block in enumerate(blocks):
+                tracker.reset()
+                out = tracker.track(block)
+                pos[b], floors[b] = out["positions_m"][-1], out["floors"][-1]
+            return pos, floors
         if method == "mmse":
             if self._posterior is None:
                 self._posterior = wifi.GridPosterior(self.model)
@@ -197,13 +211,15 @@ def evaluate(
     dataset: FingerprintDataset,
     scans_per_estimate: int = 1,
     hyper: Optional[Hyper] = None,
-    methods: Sequence[str] = METHODS,
+    methods: Optional[Sequence[str]] = None,
     num_threads: int = 1,
     max_estimates: Optional[int] = None,
 ) -> Dict[str, MethodResult]:
     """Run ``methods`` on the test split; blocks of ``scans_per_estimate`` consecutive scans."""
     hyper = hyper or Hyper()
     k = scans_per_estimate
+    if methods is None:  # the tracker equals the ML fix for a single scan
+        methods = [m for m in METHODS if k > 1 or m != "tracker"]
     blocks = group_consecutive(dataset.test, k)
     if max_estimates is not None:
         blocks = blocks[:max_estimates]

@@ -11,7 +11,7 @@ The paper reports E_27 = 3.82 m on its vertical path (§5.7.1).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Dict
+from typing import Dict, Optional
 
 import numpy as np
 
@@ -77,17 +77,21 @@ def methods() -> Dict[str, wifi.GradientTrackerOptions]:
     }
 
 
-def run_path(model: wifi.RssModel, name: str, path_m: np.ndarray, n_runs: int = 200, seed: int = 0) -> PathResult:
-    """Monte Carlo of every tracker variant plus per-scan ML fixes along ``path_m``."""
+def run_path(
+    model: wifi.RssModel, name: str, path_m: np.ndarray, n_runs: int = 200, seed: int = 0, floor: Optional[int] = None
+) -> PathResult:
+    """Monte Carlo of every tracker variant plus per-scan ML fixes along ``path_m`` on ``floor``
+    (default: the map's lowest floor)."""
+    floor = model.floors[0] if floor is None else floor
     result = PathResult(name=name, path_m=path_m)
-    result.crb_m = crb_mean_error(model, path_m[1:])
+    result.crb_m = crb_mean_error(model, path_m[1:], floor)
     variants = methods()
     errors = {k: np.zeros((n_runs, len(path_m) - 1)) for k in list(variants) + ["ML per scan"]}
     for r in progress(range(n_runs), total=n_runs, desc=f"wifi {name}"):
-        scans = model.simulate_scans(path_m[1:], seed=core.derive_seed(seed, r))
+        scans = model.simulate_scans(path_m[1:], floor=floor, seed=core.derive_seed(seed, r))
         for method, options in variants.items():
             tracker = wifi.GradientTracker(model, options)
-            tracker.reset_to(path_m[0])
+            tracker.reset_to(path_m[0], floor)
             est = tracker.track(scans)["positions_m"]
             errors[method][r] = np.linalg.norm(est - path_m[1:], axis=1)
             if r == 0:
@@ -100,13 +104,37 @@ def run_path(model: wifi.RssModel, name: str, path_m: np.ndarray, n_runs: int = 
     return result
 
 
-def crb_mean_error(model: wifi.RssModel, points_m: np.ndarray, samples: int = 20000) -> np.ndarray:
+def fitted_map(dataset, variance_floor_db2: float = 4.0) -> wifi.RssModel:
+    """RssModel fitted to a real dataset's training scans (simulated mode on a real map, §5.5)."""
+    m = wifi.SignalMap.from_scans(
+        dataset.train.positions_m,
+        dataset.train.floors,
+        dataset.train.rss_dbm,
+        wifi.SignalMapOptions(not_heard_sentinel=dataset.not_heard_sentinel, variance_floor_db2=variance_floor_db2),
+    )
+    return wifi.RssModel(m, wifi.RssModelOptions(variance_floor_db2=variance_floor_db2))
+
+
+def paths_through(model: wifi.RssModel, step_m: float = 0.18, steps: int = 27) -> Dict[str, np.ndarray]:
+    """The paper's vertical path and a circle, placed in the middle of a map's first floor."""
+    pts = model.map.positions_m[model.map.floors == model.floors[0]]
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    centre = 0.5 * (lo + hi)
+    length = step_m * steps
+    start = np.array([centre[0], max(lo[1], centre[1] - 0.5 * length)])
+    vertical = wifi_scenarios.vertical_path(start_m=tuple(start), step_m=step_m, steps=steps)
+    radius = 0.25 * float(min(hi - lo))
+    circle = wifi_scenarios.circle_path(center_m=tuple(centre), radius_m=radius, speed_m=step_m, laps=1.0)
+    return {"vertical": vertical, "circle": circle}
+
+
+def crb_mean_error(model: wifi.RssModel, points_m: np.ndarray, floor: int = 0, samples: int = 20000) -> np.ndarray:
     """Mean 2-D error E||e|| of an efficient single-scan fix, e ~ N(0, I(z)^{-1}), per point.
 
     (For an isotropic bound this is sqrt(pi/4) = 0.886 times the RMSE sqrt(tr I^{-1}).)
     Computed by sampling with a fixed stream, so it is reproducible.
     """
-    cov = np.linalg.inv(model.fisher_information(points_m))
+    cov = np.linalg.inv(model.fisher_information(points_m, floor))
     z = np.random.default_rng(12345).standard_normal((samples, 2))
     chol = np.linalg.cholesky(cov)  # (T, 2, 2)
     return np.linalg.norm(np.einsum("tij,sj->tsi", chol, z), axis=2).mean(axis=1)
