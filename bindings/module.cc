@@ -10,6 +10,7 @@ namespace py = pybind11;
 
 namespace indoorloc::bindings {
 void BindCore(py::module_& m);
+void BindMapmatch(py::module_& m);
 void BindWifi(py::module_& m);
 void BindWifiBaselines(py::module_& m);
 }  // namespace indoorloc::bindings
@@ -22,7 +23,8 @@ PYBIND11_MODULE(_core, m) {
   indoorloc::bindings::BindCore(core);
 
   // Subsystems register their bindings below as they are implemented (see docs/architecture.md).
-  m.def_submodule("mapmatch", "Circular particle filter on a road network (paper 000).");
+  py::module_ mapmatch = m.def_submodule("mapmatch", "Circular particle filter on a road network (paper 000).");
+  indoorloc::bindings::BindMapmatch(mapmatch);
   m.def_submodule("analog", "Exemplar-based (analog) hidden Markov model (paper 001).");
   m.def_submodule("pdr", "Pedestrian dead reckoning with a foot-mounted IMU (paper 002).");
   m.def_submodule("network", "INS/GPS network adjustment (paper 003).");

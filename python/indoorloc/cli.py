@@ -3,6 +3,7 @@
     indoorloc --version
     indoorloc demo [--out DIR] [--only NAME ...] [--seed N] [--quiet]
     indoorloc core resample-bench [--n N] [--repeat R]
+    indoorloc mapmatch reproduce [--runs 100] [--variant paper bias] [--ablation]
     indoorloc wifi evaluate [--dataset uji office ...] [--scans 1 10]
     indoorloc wifi simulate [--runs R] [--noise-db S]
 
@@ -73,6 +74,12 @@ def _add_core(sub: argparse._SubParsersAction) -> None:
     b.set_defaults(func=_cmd_core_resample_bench)
 
 
+def _add_mapmatch(sub: argparse._SubParsersAction) -> None:
+    from indoorloc import cli_mapmatch
+
+    cli_mapmatch.add_parser(sub, quiet_parent)
+
+
 def _add_wifi(sub: argparse._SubParsersAction) -> None:
     from indoorloc import cli_wifi
 
@@ -80,7 +87,7 @@ def _add_wifi(sub: argparse._SubParsersAction) -> None:
 
 
 # Subsystems register `add(subparsers)` functions here.
-_SUBCOMMANDS: List[Callable[[argparse._SubParsersAction], None]] = [_add_core, _add_wifi]
+_SUBCOMMANDS: List[Callable[[argparse._SubParsersAction], None]] = [_add_core, _add_mapmatch, _add_wifi]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -75,3 +75,49 @@ def error_cdfs(errors_by_method: Mapping[str, object], path: Path) -> Path:
     fig.savefig(path)
     plt.close(fig)
     return Path(path)
+
+
+def mapmatch_clouds(network, trajectory, clouds: Mapping[float, tuple], path: Path) -> Path:
+    """Particle clouds at several times over the road network (paper 000, Figs. 5-8)."""
+    import numpy as np
+
+    times = sorted(clouds)
+    fig, axes = plt.subplots(1, len(times), figsize=(4 * len(times), 3), dpi=110, squeeze=False)
+    segs = network.segments_m
+    dt = 0.1
+    for ax, t in zip(axes[0], times):
+        for s in segs:
+            ax.plot([s[0], s[2]], [s[1], s[3]], color="#999", lw=1)
+        pos, w = clouds[t]
+        ax.scatter(pos[:, 0], pos[:, 1], s=2 + 200 * w / max(w.max(), 1e-300), c="#2a6", alpha=0.4, lw=0)
+        k = max(0, int(round(t / dt)) - 1)
+        truth = trajectory["start_m"] if t == 0 else trajectory["positions_m"][k]
+        ax.plot(truth[0], truth[1], "r*", ms=12, label="vehicle")
+        ax.set_title(f"t = {t:g} s", fontsize=9)
+        ax.set_aspect("equal")
+        ax.set_xticks([])
+        ax.set_yticks([])
+    axes[0][0].legend(fontsize=7, loc="upper left")
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return Path(path)
+
+
+def mapmatch_curves(results: Mapping[float, object], path: Path) -> Path:
+    """Mean position error and P(correct segment) over time, one curve per κ_P (Figs. 3, 4)."""
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 3.6), dpi=110)
+    for kappa, r in results.items():
+        ax1.plot(r.times_s, r.error_m.mean(axis=0), lw=1, label=f"κ_P = {kappa:g}")
+        ax2.plot(r.times_s, r.correct.mean(axis=0), lw=1, label=f"κ_P = {kappa:g}")
+    ax1.axhline(2.0, color="k", lw=0.6, ls=":")
+    ax1.set_xlabel("time [s]")
+    ax1.set_ylabel("mean position error [m]")
+    ax2.set_xlabel("time [s]")
+    ax2.set_ylabel("P(correct segment)")
+    ax2.set_ylim(0, 1)
+    ax1.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return Path(path)

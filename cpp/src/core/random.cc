@@ -11,7 +11,6 @@ constexpr double kPi = 3.14159265358979323846;
 // GCC/Clang extension, marked so -Wpedantic accepts it: 64x64 -> 128-bit product.
 __extension__ typedef unsigned __int128 Uint128;
 
-inline std::uint64_t RotateLeft(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
 
 // Wraps an angle to (-pi, pi].
 inline double WrapAngle(double a) {
@@ -43,28 +42,7 @@ RandomStream::RandomStream(std::uint64_t seed, std::uint64_t stream) {
   }
 }
 
-RandomStream::result_type RandomStream::operator()() {
-  // xoshiro256++ (Blackman & Vigna, 2019).
-  const std::uint64_t result = RotateLeft(state_[0] + state_[3], 23) + state_[0];
-  const std::uint64_t t = state_[1] << 17;
-  state_[2] ^= state_[0];
-  state_[3] ^= state_[1];
-  state_[1] ^= state_[2];
-  state_[0] ^= state_[3];
-  state_[2] ^= t;
-  state_[3] = RotateLeft(state_[3], 45);
-  return result;
-}
-
 RandomStream RandomStream::Split(std::uint64_t child) { return RandomStream((*this)(), child); }
-
-double RandomStream::Uniform01() { return static_cast<double>((*this)() >> 11) * 0x1.0p-53; }
-
-double RandomStream::UniformOpen01() {
-  return (static_cast<double>((*this)() >> 11) + 0.5) * 0x1.0p-53;
-}
-
-double RandomStream::Uniform(double lo, double hi) { return lo + (hi - lo) * Uniform01(); }
 
 std::uint64_t RandomStream::UniformInt(std::uint64_t n) {
   if (n == 0) throw std::invalid_argument("indoorloc: argument 'n': must be > 0");

@@ -31,10 +31,18 @@ double LinearWeights(const Eigen::Ref<const Eigen::VectorXd>& log_weights,
 
 // Inverse-CDF walk: given sorted points u_0 <= ... <= u_{m-1} in [0, total), emits for each the
 // index i with cumsum_{i-1} <= u < cumsum_i. `point(k)` yields u_k. O(N + m).
+// A read-only view of n linear weights.
+struct Weights {
+  const double* data;
+  int n;
+  int size() const { return n; }
+  double operator[](size_t i) const { return data[i]; }
+};
+
 template <typename PointFn>
-void InverseCdfWalk(const std::vector<double>& weights, double total, int m, PointFn point,
+void InverseCdfWalk(const Weights& weights, double total, int m, PointFn point,
                     std::vector<int>* out) {
-  const int n = static_cast<int>(weights.size());
+  const int n = weights.size();
   const size_t first = out->size();
   out->resize(first + static_cast<size_t>(m));
   int* ancestor = out->data() + first;
@@ -49,7 +57,7 @@ void InverseCdfWalk(const std::vector<double>& weights, double total, int m, Poi
   }
 }
 
-void Multinomial(const std::vector<double>& w, double total, int m, RandomStream& rng,
+void Multinomial(const Weights& w, double total, int m, RandomStream& rng,
                  std::vector<int>* out) {
   // Sorted uniforms in O(m) from normalised cumulative exponential spacings
   // (Devroye 1986, ch. V.3): u_k = (E_1 + ... + E_{k+1}) / (E_1 + ... + E_{m+1}).
@@ -69,9 +77,9 @@ void Multinomial(const std::vector<double>& w, double total, int m, RandomStream
 // cumulative weight, ancestor[k] = #{i : upto_i <= k}. Branch-free, unlike a per-point search
 // whose mispredictions cost more than the exp() pass (10^6 particles: 19 ms -> 6 ms).
 template <typename UptoFn>
-void FillFromUpto(const std::vector<double>& w, double total, int m, UptoFn upto_of,
+void FillFromUpto(const Weights& w, double total, int m, UptoFn upto_of,
                   std::vector<int>* out) {
-  const int n = static_cast<int>(w.size());
+  const int n = w.size();
   const double scale = m / total;
   int last_positive = n - 1;
   while (last_positive > 0 && w[static_cast<size_t>(last_positive)] == 0.0) --last_positive;
@@ -93,7 +101,7 @@ void FillFromUpto(const std::vector<double>& w, double total, int m, UptoFn upto
   out->resize(static_cast<size_t>(m));
 }
 
-void Stratified(const std::vector<double>& w, double total, int m, RandomStream& rng,
+void Stratified(const Weights& w, double total, int m, RandomStream& rng,
                 std::vector<int>* out) {
   // Points (k + U_k) / m. On the scale S = C m / total, the points below S are all k < floor(S)
   // plus k = floor(S) if U_k < S - floor(S).
@@ -108,7 +116,7 @@ void Stratified(const std::vector<double>& w, double total, int m, RandomStream&
   }, out);
 }
 
-void Systematic(const std::vector<double>& w, double total, int m, RandomStream& rng,
+void Systematic(const Weights& w, double total, int m, RandomStream& rng,
                 std::vector<int>* out) {
   // Points (k + u0) / m: upto(S) = #{k : k + u0 < S} = ceil(S - u0), computed without a branch
   // as trunc(x) + (trunc(x) < x) for x = S - u0 > -1.
@@ -120,10 +128,12 @@ void Systematic(const std::vector<double>& w, double total, int m, RandomStream&
   }, out);
 }
 
-void Residual(std::vector<double>& w, double total, int m, RandomStream& rng,
+void Residual(const Weights& input, double total, int m, RandomStream& rng,
               std::vector<int>* out) {
   // Deterministic floor(m w_i) copies, then multinomial on the residuals m w_i - floor(m w_i).
-  const int n = static_cast<int>(w.size());
+  const int n = input.size();
+  thread_local std::vector<double> w;  // residual weights
+  w.assign(input.data, input.data + n);
   std::vector<int> copies(static_cast<size_t>(n));
   int assigned = 0;
   double residual_total = 0.0;
@@ -139,7 +149,7 @@ void Residual(std::vector<double>& w, double total, int m, RandomStream& rng,
   std::vector<int> extra;
   if (remaining > 0 && residual_total > 0.0) {
     extra.reserve(static_cast<size_t>(remaining));
-    Multinomial(w, residual_total, remaining, rng, &extra);
+    Multinomial(Weights{w.data(), n}, residual_total, remaining, rng, &extra);
   } else if (remaining > 0) {
     // All residuals are zero up to rounding: give the draws lost to rounding to the particle
     // with the most copies (it has positive weight; never a zero-weight particle).
@@ -181,13 +191,23 @@ void Resample(const Eigen::Ref<const Eigen::VectorXd>& log_weights, ResamplingSc
   const int m = num_out < 0 ? static_cast<int>(log_weights.size()) : num_out;
   thread_local std::vector<double> weights;  // reused buffer: no allocation in filter loops
   const double total = LinearWeights(log_weights, &weights);
+  ResampleLinear(weights.data(), static_cast<int>(weights.size()), total, scheme, rng, ancestors, m);
+}
+
+void ResampleLinear(const double* weights, int n, double total, ResamplingScheme scheme, RandomStream& rng,
+                    std::vector<int>* ancestors, int num_out) {
+  CheckArgument(ancestors != nullptr, "ancestors", "is null");
+  CheckArgument(n > 0, "weights", "is empty");
+  CheckArgument(std::isfinite(total) && total > 0.0, "weights", "must have a finite, positive sum");
+  const int m = num_out < 0 ? n : num_out;
   ancestors->clear();
   if (m == 0) return;
+  const Weights w{weights, n};
   switch (scheme) {
-    case ResamplingScheme::kMultinomial: Multinomial(weights, total, m, rng, ancestors); break;
-    case ResamplingScheme::kStratified: Stratified(weights, total, m, rng, ancestors); break;
-    case ResamplingScheme::kSystematic: Systematic(weights, total, m, rng, ancestors); break;
-    case ResamplingScheme::kResidual: Residual(weights, total, m, rng, ancestors); break;
+    case ResamplingScheme::kMultinomial: Multinomial(w, total, m, rng, ancestors); break;
+    case ResamplingScheme::kStratified: Stratified(w, total, m, rng, ancestors); break;
+    case ResamplingScheme::kSystematic: Systematic(w, total, m, rng, ancestors); break;
+    case ResamplingScheme::kResidual: Residual(w, total, m, rng, ancestors); break;
   }
 }
 

@@ -1,4 +1,4 @@
-"""File formats at the edge of indoorloc: dataset loaders."""
+"""File formats at the edge of indoorloc: dataset loaders and road-network files."""
 
 from indoorloc.io.wifi_datasets import (
     RSS_RTT_GRID_M,
@@ -11,6 +11,14 @@ from indoorloc.io.wifi_datasets import (
     load_surimi,
     load_uji_library,
 )
+from indoorloc.io.road_network import (
+    grid_with_diagonals_segments,
+    load_road_network,
+    read_csv_segments,
+    read_geojson_segments,
+    warehouse_segments,
+    write_geojson_segments,
+)
 
 __all__ = [
     "RSS_RTT_GRID_M",
@@ -19,7 +27,13 @@ __all__ = [
     "FingerprintDataset",
     "FingerprintSplit",
     "available_datasets",
+    "grid_with_diagonals_segments",
     "load_rss_rtt_room",
     "load_surimi",
+    "load_road_network",
     "load_uji_library",
+    "read_csv_segments",
+    "read_geojson_segments",
+    "warehouse_segments",
+    "write_geojson_segments",
 ]

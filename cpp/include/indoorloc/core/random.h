@@ -35,19 +35,30 @@ class RandomStream {
   static constexpr result_type min() { return 0; }
   static constexpr result_type max() { return std::numeric_limits<result_type>::max(); }
 
-  /// Next raw 64-bit output.
-  result_type operator()();
+  /// Next raw 64-bit output (inline: it sits in every particle filter's inner loop).
+  result_type operator()() {
+    // xoshiro256++ (Blackman & Vigna, 2019).
+    const std::uint64_t result = RotateLeft(state_[0] + state_[3], 23) + state_[0];
+    const std::uint64_t t = state_[1] << 17;
+    state_[2] ^= state_[0];
+    state_[3] ^= state_[1];
+    state_[1] ^= state_[2];
+    state_[0] ^= state_[3];
+    state_[2] ^= t;
+    state_[3] = RotateLeft(state_[3], 45);
+    return result;
+  }
 
   /// An independent child stream (e.g. one per particle block), derived deterministically from
   /// this stream's current state and `child`; this stream advances by one draw.
   RandomStream Split(std::uint64_t child);
 
   /// Uniform on [0, 1), 53 random bits.
-  double Uniform01();
+  double Uniform01() { return static_cast<double>((*this)() >> 11) * 0x1.0p-53; }
   /// Uniform on (0, 1): never returns 0, safe for log().
-  double UniformOpen01();
+  double UniformOpen01() { return (static_cast<double>((*this)() >> 11) + 0.5) * 0x1.0p-53; }
   /// Uniform on [lo, hi).
-  double Uniform(double lo, double hi);
+  double Uniform(double lo, double hi) { return lo + (hi - lo) * Uniform01(); }
   /// Uniform integer in [0, n), unbiased (Lemire's multiply-and-reject). Requires n > 0.
   std::uint64_t UniformInt(std::uint64_t n);
   /// Standard normal N(0, 1) (Marsaglia polar method; the spare draw is cached).
@@ -61,6 +72,8 @@ class RandomStream {
   double VonMises(double mu_rad, double kappa);
 
  private:
+  static std::uint64_t RotateLeft(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
+
   std::uint64_t state_[4];
   double spare_normal_ = 0.0;
   bool has_spare_normal_ = false;

@@ -33,6 +33,11 @@ ResamplingScheme ParseResamplingScheme(std::string_view name,
 void Resample(const Eigen::Ref<const Eigen::VectorXd>& log_weights, ResamplingScheme scheme,
               RandomStream& rng, std::vector<int>* ancestors, int num_out = -1);
 
+/// As Resample, from n linear weights (finite, >= 0) whose sum is `total` (> 0): for filters
+/// that keep linear weights rescaled every step, avoiding an exp() per particle.
+void ResampleLinear(const double* weights, int n, double total, ResamplingScheme scheme,
+                    RandomStream& rng, std::vector<int>* ancestors, int num_out = -1);
+
 /// Convenience overload returning the ancestors.
 std::vector<int> Resample(const Eigen::Ref<const Eigen::VectorXd>& log_weights,
                           ResamplingScheme scheme, RandomStream& rng, int num_out = -1);

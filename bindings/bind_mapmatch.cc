@@ -1,0 +1,339 @@
+// Python bindings of the mapmatch subsystem: road networks, trajectories, the circular particle
+// filter and the Monte Carlo runner of paper 000.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <pybind11/eigen.h>
+#include <pybind11/stl.h>
+
+#include "indoorloc/core/options.h"
+#include "indoorloc/mapmatch/monte_carlo.h"
+#include "indoorloc/mapmatch/particle_map_matcher.h"
+#include "indoorloc/mapmatch/road_network.h"
+#include "indoorloc/mapmatch/trajectory_simulator.h"
+#include "numpy_args.h"
+
+namespace indoorloc::bindings {
+
+using namespace indoorloc::mapmatch;  // NOLINT: binding file
+
+namespace {
+
+template <typename T>
+py::array_t<T> ToArray(const std::vector<T>& v) {
+  py::array_t<T> out(static_cast<py::ssize_t>(v.size()));
+  std::copy(v.begin(), v.end(), out.mutable_data());
+  return out;
+}
+
+JunctionPolicy ParsePolicy(const std::string& name) {
+  if (name == "uniform") return JunctionPolicy::kUniform;
+  if (name == "heading_aware") return JunctionPolicy::kHeadingAware;
+  ThrowInvalidArgument("junction_policy", "unknown policy '" + name + "' (uniform or heading_aware)");
+}
+
+py::dict TrajectoryToDict(const Trajectory& t) {
+  py::dict d;
+  d["positions_m"] = t.positions_m;
+  d["segments"] = t.segments;
+  d["heading_true_rad"] = t.heading_true_rad;
+  d["speed_mps"] = t.speed_mps;
+  d["heading_rad"] = t.heading_rad;
+  d["speed_bias_mps"] = t.speed_bias_mps;
+  d["start_m"] = t.start_m;
+  return d;
+}
+
+py::dict EstimatesToDict(const std::vector<StepEstimate>& e) {
+  const py::ssize_t n = static_cast<py::ssize_t>(e.size());
+  RowMatrixXd pos(n, 2), mean(n, 2), smoothed(n, 2);
+  std::vector<std::int64_t> segment(e.size());
+  std::vector<double> spread(e.size()), ess(e.size()), loglik(e.size());
+  std::vector<bool> tracking(e.size()), resampled(e.size()), recovered(e.size());
+  for (size_t k = 0; k < e.size(); ++k) {
+    pos.row(static_cast<Eigen::Index>(k)) = e[k].position_m.transpose();
+    mean.row(static_cast<Eigen::Index>(k)) = e[k].weighted_mean_m.transpose();
+    smoothed.row(static_cast<Eigen::Index>(k)) = e[k].smoothed_m.transpose();
+    segment[k] = e[k].segment;
+    spread[k] = e[k].spread_m;
+    ess[k] = e[k].ess;
+    loglik[k] = e[k].log_likelihood;
+    tracking[k] = e[k].tracking;
+    resampled[k] = e[k].resampled;
+    recovered[k] = e[k].recovered;
+  }
+  auto bools = [](const std::vector<bool>& v) {
+    py::array_t<bool> out(static_cast<py::ssize_t>(v.size()));
+    for (size_t k = 0; k < v.size(); ++k) out.mutable_data()[k] = v[k];
+    return out;
+  };
+  py::dict d;
+  d["positions_m"] = pos;
+  d["weighted_mean_m"] = mean;
+  d["smoothed_m"] = smoothed;
+  d["segments"] = ToArray(segment);
+  d["spread_m"] = ToArray(spread);
+  d["ess"] = ToArray(ess);
+  d["log_likelihood"] = ToArray(loglik);
+  d["tracking"] = bools(tracking);
+  d["resampled"] = bools(resampled);
+  d["recovered"] = bools(recovered);
+  return d;
+}
+
+}  // namespace
+
+void BindMapmatch(py::module_& m) {
+  py::class_<RoadNetwork, std::shared_ptr<RoadNetwork>>(m, "RoadNetwork", R"doc(
+Straight segments with connectivity at their ends (paper 000 §II.B) and a spatial index.
+
+Parameters
+----------
+segments_m : (M, 4) float array
+    x_A, y_A, x_B, y_B of each segment [m].
+ids : (M,) int array or None
+    Unique segment ids (default 1..M).
+snap_tolerance_m : float
+    Ends closer than this form one junction [m].
+split_at_intersections : bool
+    Split segments at crossings and T-junctions first.)doc")
+      .def(py::init([](const py::object& segments_m, const py::object& ids, double snap_tolerance_m,
+                       bool split_at_intersections) {
+             MatrixArg seg = ToMatrix(segments_m, "segments_m", -1, 4);
+             Eigen::VectorXi id;
+             if (!ids.is_none()) {
+               VectorArg v = ToVector(ids, "ids", seg.map.rows());
+               id = v.map.cast<int>();
+               for (Eigen::Index i = 0; i < v.map.size(); ++i) {
+                 if (v.map[i] != std::floor(v.map[i])) ThrowInvalidArgument("ids", DescribeEntry(i, 0, true) + " is not an integer");
+               }
+             }
+             RoadNetworkOptions o;
+             o.snap_tolerance_m = snap_tolerance_m;
+             o.split_at_intersections = split_at_intersections;
+             return std::make_shared<RoadNetwork>(seg.map, id, o);
+           }),
+           py::arg("segments_m"), py::arg("ids") = py::none(), py::arg("snap_tolerance_m") = 1e-6,
+           py::arg("split_at_intersections") = false)
+      .def_property_readonly("num_segments", &RoadNetwork::num_segments)
+      .def_property_readonly("segments_m", &RoadNetwork::segments_m)
+      .def_property_readonly("ids", &RoadNetwork::ids)
+      .def_property_readonly("headings_rad", &RoadNetwork::headings_rad)
+      .def_property_readonly("lengths_m", &RoadNetwork::lengths_m)
+      .def_property_readonly("total_length_m", &RoadNetwork::total_length_m)
+      .def_property_readonly("components", &RoadNetwork::components)
+      .def_property_readonly("num_components", &RoadNetwork::num_components)
+      .def_property_readonly("dangling_ends", [](const RoadNetwork& n) {
+        const auto d = n.dangling_ends();
+        py::array_t<std::int64_t> out({static_cast<py::ssize_t>(d.size()), py::ssize_t{2}});
+        for (size_t k = 0; k < d.size(); ++k) {
+          out.mutable_data()[2 * k] = d[k].first;
+          out.mutable_data()[2 * k + 1] = d[k].second;
+        }
+        return out;
+      }, "(n, 2) int array of (segment index, end) with only a U-turn (0 = A, 1 = B).")
+      .def("continuations", [](const RoadNetwork& n, int segment, int end) {
+             CheckArgument(segment >= 0 && segment < n.num_segments(), "segment", "out of range");
+             CheckArgument(end == 0 || end == 1, "end", "must be 0 (A) or 1 (B)");
+             std::vector<std::pair<int, int>> out;
+             for (const Continuation& c : n.continuations(segment, end)) out.emplace_back(c.segment, c.enter_end);
+             return out;
+           },
+           py::arg("segment"), py::arg("end"), "[(segment, enter_end), ...] reachable from an end.")
+      .def("nearest", [](const RoadNetwork& n, const py::object& points_m) {
+             MatrixArg p = ToMatrix(points_m, "points_m", -1, 2);
+             const Eigen::Index q = p.map.rows();
+             std::vector<std::int64_t> seg(static_cast<size_t>(q));
+             RowMatrixXd proj(q, 2);
+             Eigen::VectorXd dist(q), along(q);
+             {
+               py::gil_scoped_release release;
+               for (Eigen::Index i = 0; i < q; ++i) {
+                 const Projection pr = n.Nearest(p.map.row(i).transpose());
+                 seg[static_cast<size_t>(i)] = pr.segment;
+                 proj.row(i) = pr.point_m.transpose();
+                 dist[i] = pr.distance_m;
+                 along[i] = pr.along_m;
+               }
+             }
+             return py::make_tuple(ToArray(seg), proj, dist, along);
+           },
+           py::arg("points_m"), "Nearest segment of points (Q, 2): (segments, projections (Q, 2), distances, along_m).")
+      .def("point_at", [](const RoadNetwork& n, int segment, double along_m) {
+             CheckArgument(segment >= 0 && segment < n.num_segments(), "segment", "out of range");
+             return n.point_at(segment, along_m);
+           }, py::arg("segment"), py::arg("along_m"))
+      .def("report", &RoadNetwork::Report, "Validation report: sizes, components, dangling ends.")
+      .def("__repr__", [](const RoadNetwork& n) { return "<RoadNetwork " + n.Report() + ">"; });
+
+  py::class_<TrajectoryOptions>(m, "TrajectoryOptions", "Simulated vehicle runs (paper 000 §III).")
+      .def(py::init([](double duration_s, double dt_s, double speed_mps, double speed_noise_sd_mps,
+                       double speed_bias_halfwidth_mps, double heading_kappa, bool allow_straight) {
+             TrajectoryOptions o;
+             o.duration_s = duration_s;
+             o.dt_s = dt_s;
+             o.speed_mps = speed_mps;
+             o.speed_noise_sd_mps = speed_noise_sd_mps;
+             o.speed_bias_halfwidth_mps = speed_bias_halfwidth_mps;
+             o.heading_kappa = heading_kappa;
+             o.allow_straight = allow_straight;
+             ValidateOptions(o);
+             return o;
+           }),
+           py::arg("duration_s") = 200.0, py::arg("dt_s") = 0.5, py::arg("speed_mps") = 2.0,
+           py::arg("speed_noise_sd_mps") = 0.6, py::arg("speed_bias_halfwidth_mps") = 0.5,
+           py::arg("heading_kappa") = 2.0, py::arg("allow_straight") = false)
+      .def_readwrite("duration_s", &TrajectoryOptions::duration_s)
+      .def_readwrite("dt_s", &TrajectoryOptions::dt_s)
+      .def_readwrite("speed_mps", &TrajectoryOptions::speed_mps)
+      .def_readwrite("speed_noise_sd_mps", &TrajectoryOptions::speed_noise_sd_mps)
+      .def_readwrite("speed_bias_halfwidth_mps", &TrajectoryOptions::speed_bias_halfwidth_mps)
+      .def_readwrite("heading_kappa", &TrajectoryOptions::heading_kappa)
+      .def_readwrite("allow_straight", &TrajectoryOptions::allow_straight);
+
+  m.def("simulate_trajectory", [](const RoadNetwork& n, const TrajectoryOptions& o, std::uint64_t seed, std::uint64_t stream) {
+          RandomStream rng(seed, stream);
+          return TrajectoryToDict(SimulateTrajectory(n, o, rng));
+        },
+        py::arg("network"), py::arg("options") = TrajectoryOptions(), py::arg("seed") = 0, py::arg("stream") = 0, R"doc(
+One simulated run: dict with positions_m (T, 2), segments (T,), heading_true_rad, speed_mps
+(odometer), heading_rad (compass), speed_bias_mps, start_m. Sample k is at time (k + 1) dt.)doc");
+
+  py::class_<FilterOptions>(m, "FilterOptions", "Options of the circular particle filter (see docs/mapmatch.md).")
+      .def(py::init([](int num_particles, double kappa, double noise_halfwidth_m, const std::string& resampling,
+                       double ess_threshold, const std::string& junction_policy, double junction_kappa,
+                       bool estimate_speed_bias, double bias_halfwidth_mps, double bias_jitter_mps,
+                       double tracking_spread_m, double recovery_disagreement, double recovery_window_s,
+                       double recovery_fraction, int smoothing_lag_steps, std::uint64_t seed) {
+             FilterOptions o;
+             o.num_particles = num_particles;
+             o.kappa = kappa;
+             o.noise_halfwidth_m = noise_halfwidth_m;
+             o.resampling.scheme = ParseResamplingScheme(resampling, "resampling");
+             o.resampling.ess_threshold = ess_threshold;
+             o.junction_policy = ParsePolicy(junction_policy);
+             o.junction_kappa = junction_kappa;
+             o.estimate_speed_bias = estimate_speed_bias;
+             o.bias_halfwidth_mps = bias_halfwidth_mps;
+             o.bias_jitter_mps = bias_jitter_mps;
+             o.tracking_spread_m = tracking_spread_m;
+             o.recovery_disagreement = recovery_disagreement;
+             o.recovery_window_s = recovery_window_s;
+             o.recovery_fraction = recovery_fraction;
+             o.smoothing_lag_steps = smoothing_lag_steps;
+             o.seed = seed;
+             ValidateOptions(o);
+             return o;
+           }),
+           py::arg("num_particles") = 10000, py::arg("kappa") = 1.0, py::arg("noise_halfwidth_m") = 0.6,
+           py::arg("resampling") = "systematic", py::arg("ess_threshold") = 0.5, py::arg("junction_policy") = "uniform",
+           py::arg("junction_kappa") = 2.0, py::arg("estimate_speed_bias") = false, py::arg("bias_halfwidth_mps") = 0.5,
+           py::arg("bias_jitter_mps") = 0.02, py::arg("tracking_spread_m") = 2.0, py::arg("recovery_disagreement") = 0.9,
+           py::arg("recovery_window_s") = 20.0, py::arg("recovery_fraction") = 0.5, py::arg("smoothing_lag_steps") = 0,
+           py::arg("seed") = 0)
+      .def_readwrite("num_particles", &FilterOptions::num_particles)
+      .def_readwrite("kappa", &FilterOptions::kappa)
+      .def_readwrite("noise_halfwidth_m", &FilterOptions::noise_halfwidth_m)
+      .def_readwrite("estimate_speed_bias", &FilterOptions::estimate_speed_bias)
+      .def_readwrite("smoothing_lag_steps", &FilterOptions::smoothing_lag_steps)
+      .def_readwrite("recovery_disagreement", &FilterOptions::recovery_disagreement)
+      .def_readwrite("seed", &FilterOptions::seed)
+      .def_property("junction_policy",
+                    [](const FilterOptions& o) { return o.junction_policy == JunctionPolicy::kUniform ? "uniform" : "heading_aware"; },
+                    [](FilterOptions& o, const std::string& s) { o.junction_policy = ParsePolicy(s); })
+      .def("validate", [](const FilterOptions& o) { ValidateOptions(o); });
+
+  py::class_<ParticleMapMatcher>(m, "ParticleMapMatcher", R"doc(
+Circular particle filter on a road network (paper 000 Algorithm 1). Keeps a reference to the
+network.)doc")
+      .def(py::init<const RoadNetwork&, const FilterOptions&>(), py::arg("network"), py::arg("options") = FilterOptions(),
+           py::keep_alive<1, 2>())
+      .def("reset", &ParticleMapMatcher::Reset)
+      .def("step", [](ParticleMapMatcher& f, double speed_mps, double heading_rad, double dt_s) {
+             return EstimatesToDict({f.Step(speed_mps, heading_rad, dt_s)});
+           },
+           py::arg("speed_mps"), py::arg("heading_rad"), py::arg("dt_s"), "One step; dict of length-1 arrays.")
+      .def("run", [](ParticleMapMatcher& f, const py::object& speed_mps, const py::object& heading_rad, double dt_s) {
+             VectorArg v = ToVector(speed_mps, "speed_mps");
+             VectorArg h = ToVector(heading_rad, "heading_rad", v.map.size());
+             std::vector<StepEstimate> e;
+             {
+               py::gil_scoped_release release;
+               e = RunFilter(f, v.map, h.map, dt_s);
+             }
+             return EstimatesToDict(e);
+           },
+           py::arg("speed_mps"), py::arg("heading_rad"), py::arg("dt_s"), R"doc(
+Filter odometer speeds (T,) [m/s] and compass headings (T,) [rad] sampled every dt_s [s].
+Returns a dict of arrays: positions_m (T, 2) (projected estimate), weighted_mean_m, smoothed_m
+(fixed-lag, NaN when off), segments (T,), spread_m, ess, log_likelihood, tracking, resampled,
+recovered.)doc")
+      .def("set_particles", [](ParticleMapMatcher& f, const py::object& segments, const py::object& directions,
+                               const py::object& along_m) {
+             VectorArg s = ToVector(segments, "segments");
+             VectorArg d = ToVector(directions, "directions", s.map.size());
+             VectorArg u = ToVector(along_m, "along_m", s.map.size());
+             std::vector<int> seg(static_cast<size_t>(s.map.size()));
+             std::vector<signed char> dir(seg.size());
+             std::vector<double> along(seg.size());
+             for (size_t i = 0; i < seg.size(); ++i) {
+               seg[i] = static_cast<int>(s.map[static_cast<Eigen::Index>(i)]);
+               dir[i] = static_cast<signed char>(d.map[static_cast<Eigen::Index>(i)] > 0 ? 1 : -1);
+               along[i] = u.map[static_cast<Eigen::Index>(i)];
+             }
+             f.SetParticles(seg, dir, along);
+           },
+           py::arg("segments"), py::arg("directions"), py::arg("along_m"),
+           "Replace the particles (a prior): segment indices (N,), directions ±1 (N,), along_m (N,) [m].")
+      .def("segment_posterior", &ParticleMapMatcher::SegmentPosterior, "Probability of each segment (M,).")
+      .def("particle_positions", &ParticleMapMatcher::ParticlePositions, "(N, 2) [m].")
+      .def("particle_weights", &ParticleMapMatcher::ParticleWeights, "(N,) normalised.")
+      .def("particle_states", [](const ParticleMapMatcher& f) {
+        std::vector<std::int64_t> seg(f.particle_segments().begin(), f.particle_segments().end());
+        std::vector<std::int64_t> dir(f.particle_directions().begin(), f.particle_directions().end());
+        return py::make_tuple(ToArray(seg), ToArray(dir), ToArray(f.particle_along_m()));
+      }, "(segments (N,), directions (N,) ±1, along_m (N,)).")
+      .def_property_readonly("summary_report", [](const ParticleMapMatcher& f) { return f.summary().BriefReport(); })
+      .def_property_readonly("recoveries", [](const ParticleMapMatcher& f) { return f.summary().recoveries; });
+
+  m.def("monte_carlo", [](const RoadNetwork& n, const TrajectoryOptions& t, const FilterOptions& f, int n_runs,
+                          std::uint64_t seed, int n_threads) {
+          CheckArgument(n_runs >= 1, "n_runs", "must be >= 1");
+          std::vector<RunResult> r;
+          {
+            py::gil_scoped_release release;
+            r = RunMonteCarlo(n, t, f, n_runs, seed, n_threads);
+          }
+          const Eigen::Index steps = r[0].error_m.size();
+          RowMatrixXd err(n_runs, steps), smoothed(n_runs, steps);
+          Eigen::Matrix<std::int64_t, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> correct(n_runs, steps), tracking(n_runs, steps);
+          Eigen::VectorXd bias(n_runs), seconds(n_runs), recoveries(n_runs);
+          for (int i = 0; i < n_runs; ++i) {
+            err.row(i) = r[static_cast<size_t>(i)].error_m.transpose();
+            smoothed.row(i) = r[static_cast<size_t>(i)].smoothed_error_m.transpose();
+            correct.row(i) = r[static_cast<size_t>(i)].correct_segment.cast<std::int64_t>().transpose();
+            tracking.row(i) = r[static_cast<size_t>(i)].tracking.cast<std::int64_t>().transpose();
+            bias[i] = r[static_cast<size_t>(i)].speed_bias_mps;
+            seconds[i] = r[static_cast<size_t>(i)].summary.seconds;
+            recoveries[i] = r[static_cast<size_t>(i)].summary.recoveries;
+          }
+          py::dict d;
+          d["error_m"] = err;
+          d["smoothed_error_m"] = smoothed;
+          d["correct_segment"] = correct;
+          d["tracking"] = tracking;
+          d["speed_bias_mps"] = bias;
+          d["filter_seconds"] = seconds;
+          d["recoveries"] = recoveries;
+          return d;
+        },
+        py::arg("network"), py::arg("trajectory"), py::arg("filter"), py::arg("n_runs") = 100, py::arg("seed") = 0,
+        py::arg("n_threads") = 0, R"doc(
+Paper 000 §III Monte Carlo: n_runs simulated runs, each filtered; run r uses streams (seed, 2r)
+and (seed, 2r + 1), so results do not depend on n_threads (0 = all cores). Returns a dict of
+(R, T) arrays error_m, smoothed_error_m, correct_segment, tracking and (R,) speed_bias_mps,
+filter_seconds, recoveries.)doc");
+}
+
+}  // namespace indoorloc::bindings

@@ -1,0 +1,152 @@
+#include "indoorloc/mapmatch/particle_map_matcher.h"
+
+#include <cmath>
+#include <array>
+#include <set>
+
+#include <gtest/gtest.h>
+
+#include "indoorloc/mapmatch/monte_carlo.h"
+#include "indoorloc/mapmatch/trajectory_simulator.h"
+
+namespace indoorloc::mapmatch {
+namespace {
+
+// A 3 x 2 grid of 10 m cells, split at every node (17 segments), plus one diagonal.
+RoadNetwork Grid() {
+  std::vector<std::array<double, 4>> rows;
+  for (int y = 0; y <= 20; y += 10)
+    for (int x = 0; x < 30; x += 10) rows.push_back({double(x), double(y), double(x + 10), double(y)});
+  for (int x = 0; x <= 30; x += 10)
+    for (int y = 0; y < 20; y += 10) rows.push_back({double(x), double(y), double(x), double(y + 10)});
+  rows.push_back({10, 0, 20, 10});
+  RowMatrixXd m(static_cast<Eigen::Index>(rows.size()), 4);
+  for (size_t r = 0; r < rows.size(); ++r) m.row(static_cast<Eigen::Index>(r)) << rows[r][0], rows[r][1], rows[r][2], rows[r][3];
+  return RoadNetwork(m, Eigen::VectorXi());
+}
+
+bool OnNetwork(const RoadNetwork& net, const ParticleMapMatcher& pf) {
+  for (size_t i = 0; i < pf.particle_segments().size(); ++i) {
+    const int s = pf.particle_segments()[i];
+    const double u = pf.particle_along_m()[i];
+    if (s < 0 || s >= net.num_segments() || u < 0.0 || u > net.lengths_m()[s]) return false;
+  }
+  return true;
+}
+
+TEST(ParticleMapMatcher, PropagationKeepsParticlesOnTheNetwork) {
+  const RoadNetwork net = Grid();
+  FilterOptions options;
+  options.num_particles = 3000;
+  options.noise_halfwidth_m = 3.0;  // large moves cross several junctions
+  ParticleMapMatcher pf(net, options);
+  EXPECT_TRUE(OnNetwork(net, pf));
+  for (int k = 0; k < 100; ++k) {
+    pf.Step(7.0, 0.3 * k, 1.0);
+    ASSERT_TRUE(OnNetwork(net, pf)) << "step " << k;
+  }
+}
+
+TEST(ParticleMapMatcher, ConservesDistanceAcrossJunctionsAndUsesOnlyConnectedSegments) {
+  const RoadNetwork net = Grid();
+  FilterOptions options;
+  options.num_particles = 1;
+  options.noise_halfwidth_m = 0.0;
+  options.recovery_disagreement = 0.0;
+  std::set<int> reached;
+  for (std::uint64_t seed = 0; seed < 40; ++seed) {
+    options.seed = seed;
+    ParticleMapMatcher pf(net, options);
+    // Segment 0 = (0,0)-(10,0), forward, 2 m before its end B at (10, 0); move 5 m.
+    pf.SetParticles({0}, {1}, {8.0});
+    pf.Step(5.0, 0.0, 1.0);
+    const int s = pf.particle_segments()[0];
+    const double u = pf.particle_along_m()[0];
+    const int d = pf.particle_directions()[0];
+    bool connected = false;
+    for (const Continuation& c : net.continuations(0, 1)) connected |= c.segment == s;
+    ASSERT_TRUE(connected) << "moved onto segment " << s;
+    // 3 m travelled on the new segment from the junction end it entered.
+    const double from_entry = d > 0 ? u : net.lengths_m()[s] - u;
+    EXPECT_NEAR(from_entry, 3.0, 1e-12);
+    EXPECT_NEAR((net.point_at(s, u) - Eigen::Vector2d(10, 0)).norm(), 3.0, 1e-9);
+    reached.insert(s);
+  }
+  EXPECT_GE(reached.size(), 2u);  // several continuations were chosen
+}
+
+TEST(ParticleMapMatcher, WeightsNeverNaNWhenEveryLikelihoodUnderflows) {
+  const RoadNetwork net = Grid();
+  FilterOptions options;
+  options.num_particles = 500;
+  options.kappa = 300.0;  // exp(-600) per mismatching step
+  ParticleMapMatcher pf(net, options);
+  // Everyone moves east on an east-west corridor, but the compass says "north-west" forever.
+  for (int k = 0; k < 50; ++k) {
+    const StepEstimate e = pf.Step(1.0, 2.3, 0.5);
+    ASSERT_TRUE(std::isfinite(e.log_likelihood));
+    ASSERT_TRUE(e.position_m.allFinite());
+    const Eigen::VectorXd w = pf.ParticleWeights();
+    ASSERT_TRUE(w.allFinite());
+    ASSERT_NEAR(w.sum(), 1.0, 1e-9);
+  }
+  EXPECT_NEAR(pf.SegmentPosterior().sum(), 1.0, 1e-9);
+}
+
+TEST(ParticleMapMatcher, EstimateLiesOnTheNetworkAndTracksASimulatedRun) {
+  const RoadNetwork net = Grid();
+  TrajectoryOptions to;
+  to.duration_s = 120.0;
+  to.dt_s = 0.1;
+  to.heading_kappa = 5.0;
+  RandomStream rng(5);
+  const Trajectory t = SimulateTrajectory(net, to, rng);
+  FilterOptions options;
+  options.num_particles = 4000;
+  options.kappa = 2.0;
+  options.noise_halfwidth_m = 0.27;
+  options.estimate_speed_bias = true;
+  ParticleMapMatcher pf(net, options);
+  const std::vector<StepEstimate> e = RunFilter(pf, t.speed_mps, t.heading_rad, to.dt_s);
+  double late_error = 0.0;
+  int late = 0;
+  for (size_t k = 0; k < e.size(); ++k) {
+    ASSERT_LT(net.Nearest(e[k].position_m).distance_m, 1e-9);  // on a segment
+    if (k >= e.size() - 200) {
+      late_error += (e[k].position_m - t.positions_m.row(static_cast<Eigen::Index>(k)).transpose()).norm();
+      ++late;
+    }
+  }
+  EXPECT_LT(late_error / late, 3.0);
+}
+
+TEST(ParticleMapMatcher, BadInputGivesClearErrors) {
+  const RoadNetwork net = Grid();
+  FilterOptions options;
+  options.num_particles = 0;
+  EXPECT_THROW(ParticleMapMatcher(net, options), std::invalid_argument);
+  options.num_particles = 10;
+  ParticleMapMatcher pf(net, options);
+  EXPECT_THROW(pf.Step(std::nan(""), 0.0, 0.1), std::invalid_argument);
+  EXPECT_THROW(pf.Step(1.0, std::nan(""), 0.1), std::invalid_argument);
+  EXPECT_THROW(pf.Step(1.0, 0.0, -0.1), std::invalid_argument);
+  EXPECT_THROW(pf.SetParticles({0}, {1}, {0.0}), std::invalid_argument);  // wrong count
+}
+
+TEST(MonteCarlo, SameSeedSameResultsWhateverTheThreadCount) {
+  const RoadNetwork net = Grid();
+  TrajectoryOptions to;
+  to.duration_s = 20.0;
+  FilterOptions options;
+  options.num_particles = 300;
+  const auto one = RunMonteCarlo(net, to, options, 6, 11, 1);
+  const auto two = RunMonteCarlo(net, to, options, 6, 11, 2);
+  ASSERT_EQ(one.size(), two.size());
+  for (size_t r = 0; r < one.size(); ++r) {
+    EXPECT_EQ(one[r].error_m, two[r].error_m);
+    EXPECT_EQ(one[r].correct_segment, two[r].correct_segment);
+  }
+}
+
+}  // namespace
+}  // namespace indoorloc::mapmatch
