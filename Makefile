@@ -90,9 +90,15 @@ test-asan: deps
 	ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
 	  ctest --test-dir $(ASAN_DIR) -j$(JOBS) --output-on-failure
 
-bench: install
-	$(PIP) install ".[bench]" --no-build-isolation -Cbuild-dir=$(BUILD_DIR) -Ccmake.define.INDOORLOC_BUILD_TESTS=ON
-	$(PY) benchmarks/run.py
+# Peers (the `bench` extra: particles, which pins numpy < 2) go into their own venv so that the
+# test venv keeps the versions CI uses.
+BENCH_VENV := .venv-bench
+bench: deps-debian
+	test -x $(BENCH_VENV)/bin/python || $(PYTHON) -m venv $(BENCH_VENV)
+	$(BENCH_VENV)/bin/python -m pip --disable-pip-version-check -q install $(BUILD_REQUIREMENTS)
+	$(BENCH_VENV)/bin/python -m pip --disable-pip-version-check -q install --no-build-isolation \
+	  -Cbuild-dir=build/bench ".[bench]"
+	$(BENCH_VENV)/bin/python benchmarks/run.py
 
 clean:
 	rm -rf build reports

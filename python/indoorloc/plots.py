@@ -85,15 +85,19 @@ def mapmatch_clouds(network, trajectory, clouds: Mapping[float, tuple], path: Pa
     fig, axes = plt.subplots(1, len(times), figsize=(4 * len(times), 3), dpi=110, squeeze=False)
     segs = network.segments_m
     dt = 0.1
+    lo = segs[:, :2].min(axis=0).clip(max=segs[:, 2:].min(axis=0)) - 2.0
+    hi = segs[:, :2].max(axis=0).clip(min=segs[:, 2:].max(axis=0)) + 2.0
     for ax, t in zip(axes[0], times):
         for s in segs:
             ax.plot([s[0], s[2]], [s[1], s[3]], color="#999", lw=1)
         pos, w = clouds[t]
-        ax.scatter(pos[:, 0], pos[:, 1], s=2 + 200 * w / max(w.max(), 1e-300), c="#2a6", alpha=0.4, lw=0)
+        ax.scatter(pos[:, 0], pos[:, 1], s=1 + 30 * w / max(w.max(), 1e-300), c="#2a6", alpha=0.3, lw=0)
         k = max(0, int(round(t / dt)) - 1)
         truth = trajectory["start_m"] if t == 0 else trajectory["positions_m"][k]
         ax.plot(truth[0], truth[1], "r*", ms=12, label="vehicle")
         ax.set_title(f"t = {t:g} s", fontsize=9)
+        ax.set_xlim(lo[0], hi[0])
+        ax.set_ylim(lo[1], hi[1])
         ax.set_aspect("equal")
         ax.set_xticks([])
         ax.set_yticks([])
