@@ -9,6 +9,7 @@
 namespace py = pybind11;
 
 namespace indoorloc::bindings {
+void BindAnalog(py::module_& m);
 void BindCore(py::module_& m);
 void BindMapmatch(py::module_& m);
 void BindWifi(py::module_& m);
@@ -25,7 +26,8 @@ PYBIND11_MODULE(_core, m) {
   // Subsystems register their bindings below as they are implemented (see docs/architecture.md).
   py::module_ mapmatch = m.def_submodule("mapmatch", "Circular particle filter on a road network (paper 000).");
   indoorloc::bindings::BindMapmatch(mapmatch);
-  m.def_submodule("analog", "Exemplar-based (analog) hidden Markov model (paper 001).");
+  py::module_ analog = m.def_submodule("analog", "Exemplar-based (analog) hidden Markov model (paper 001).");
+  indoorloc::bindings::BindAnalog(analog);
   m.def_submodule("pdr", "Pedestrian dead reckoning with a foot-mounted IMU (paper 002).");
   m.def_submodule("network", "INS/GPS network adjustment (paper 003).");
   py::module_ wifi = m.def_submodule("wifi", "RSS signal maps, Delaunay interpolation, gradient tracker (paper 004).");

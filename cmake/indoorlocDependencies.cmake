@@ -4,6 +4,7 @@
 #   CGAL     libcgal-dev        private: 2-D Delaunay triangulation (wifi)
 #   Ceres    libceres-dev       private: sparse least squares (network, wifi refinement);
 #                               SuiteSparse (CHOLMOD, SPQR) comes through Ceres' link interface
+#   nanoflann libnanoflann-dev  private, header-only: exact kNN on kd-trees (analog)
 #   GTest    libgtest-dev       tests only
 #   pybind11 PyPI (>= 2.10)     bindings only
 find_package(Eigen3 3.3 REQUIRED NO_MODULE)
@@ -16,6 +17,7 @@ set(CGAL_DO_NOT_WARN_ABOUT_CMAKE_BUILD_TYPE TRUE)
 set(CMAKE_POLICY_DEFAULT_CMP0167 NEW)
 find_package(CGAL 5.0 REQUIRED)
 find_package(Ceres 2.0 REQUIRED)
+find_package(nanoflann REQUIRED)
 
 if(INDOORLOC_BUILD_TESTS)
   find_package(GTest REQUIRED)

@@ -11,6 +11,7 @@ Only the computational API is re-exported here; plots, file formats and the CLI 
 """
 
 from indoorloc import _core
+from indoorloc import analog
 from indoorloc import core
 from indoorloc import mapmatch
 from indoorloc import metrics
@@ -19,4 +20,4 @@ from indoorloc import wifi
 # One source of truth: project(VERSION) in CMakeLists.txt, compiled into _core.
 __version__: str = _core.__version__
 
-__all__ = ["__version__", "core", "mapmatch", "metrics", "wifi"]
+__all__ = ["__version__", "analog", "core", "mapmatch", "metrics", "wifi"]

@@ -1,0 +1,206 @@
+// Python bindings of the analog subsystem: catalogs, kNN transitions, the analog HMM and the
+// generic sparse forward-backward / Viterbi.
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include <pybind11/eigen.h>
+#include <pybind11/stl.h>
+
+#include "indoorloc/analog/analog_hmm.h"
+#include "indoorloc/analog/catalog.h"
+#include "indoorloc/analog/forward_backward.h"
+#include "indoorloc/core/options.h"
+#include "numpy_args.h"
+
+namespace indoorloc::bindings {
+
+using analog::AnalogHMM;
+using analog::AnalogHmmOptions;
+using analog::Catalog;
+using analog::CatalogOptions;
+using analog::SparseTransitions;
+
+namespace {
+
+SparseTransitions TransitionsFromNumpy(const py::object& next_idx, const py::object& prob) {
+  MatrixArg p = ToMatrix(prob, "prob");
+  MatrixArg n = ToMatrix(next_idx, "next_idx", p.map.rows(), p.map.cols());
+  SparseTransitions tr;
+  tr.num_states = static_cast<int>(p.map.rows());
+  tr.k = static_cast<int>(p.map.cols());
+  tr.next.resize(static_cast<size_t>(p.map.size()));
+  tr.prob.assign(p.map.data(), p.map.data() + p.map.size());
+  for (Eigen::Index i = 0; i < n.map.size(); ++i) tr.next[static_cast<size_t>(i)] = static_cast<int>(n.map.data()[i]);
+  return tr;
+}
+
+py::array_t<double> DensePosterior(const analog::SparsePosteriors& p, int m) {
+  const py::ssize_t steps = static_cast<py::ssize_t>(p.states.size());
+  py::array_t<double> out({steps, static_cast<py::ssize_t>(m)});
+  double* data = out.mutable_data();
+  std::fill(data, data + steps * m, 0.0);
+  for (size_t t = 0; t < p.states.size(); ++t)
+    for (size_t i = 0; i < p.states[t].size(); ++i) data[t * static_cast<size_t>(m) + static_cast<size_t>(p.states[t][i])] = p.probabilities[t][i];
+  return out;
+}
+
+}  // namespace
+
+void BindAnalog(py::module_& m) {
+  py::class_<Catalog, std::shared_ptr<Catalog>>(m, "Catalog", R"doc(
+Catalog of (analog, successor) pairs from historical trajectories (paper 001, eq. 2 and 6).
+
+Parameters
+----------
+trajectories : list of (T_i, d) float arrays
+lag : int
+    Time-lag embedding δ: a state is (x_t, x_{t-1}, ..., x_{t-δ+1}), dimension d·δ.
+stride : int
+    The successor of the state at t is the state at t + stride.)doc")
+      .def(py::init([](const py::list& trajectories, int lag, int stride) {
+             std::vector<analog::RowMatrixXd> trajs;
+             for (size_t i = 0; i < trajectories.size(); ++i) {
+               const std::string name = "trajectories[" + std::to_string(i) + "]";
+               MatrixArg a = ToMatrix(trajectories[i], name.c_str());
+               trajs.emplace_back(a.map);
+             }
+             CatalogOptions o;
+             o.lag = lag;
+             o.stride = stride;
+             py::gil_scoped_release release;
+             return std::make_shared<Catalog>(trajs, o);
+           }),
+           py::arg("trajectories"), py::arg("lag") = 1, py::arg("stride") = 1)
+      .def_property_readonly("states", &Catalog::states, "(M, D) every embedded state.")
+      .def_property_readonly("analogs", &Catalog::analogs, "Indices of the states that have a successor.")
+      .def_property_readonly("successors", &Catalog::successors, "Successor state index of each analog.")
+      .def_property_readonly("num_states", &Catalog::num_states)
+      .def_property_readonly("num_analogs", &Catalog::num_analogs)
+      .def_property_readonly("dim", &Catalog::dim)
+      .def_property_readonly("base_dim", &Catalog::base_dim)
+      .def("knn", [](const Catalog& c, const py::object& queries, int k) {
+             MatrixArg q = ToMatrix(queries, "queries", -1, c.dim());
+             Eigen::Matrix<int, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> idx;
+             analog::RowMatrixXd d2;
+             {
+               py::gil_scoped_release release;
+               analog::KnnAnalogs(c, q.map, k, &idx, &d2);
+             }
+             return py::make_tuple(idx, d2);
+           },
+           py::arg("queries"), py::arg("k"),
+           "Exact K nearest analogs of queries (Q, D): (indices into `analogs` (Q, K), squared distances (Q, K)).");
+
+  py::class_<AnalogHMM, std::shared_ptr<AnalogHMM>>(m, "AnalogHMM", R"doc(
+Analog HMM (paper 001 §2.2): kNN transitions (eq. 4, adaptive σ) and Gaussian observations of
+selected state components with covariance R (eq. 5).)doc")
+      .def(py::init([](const std::shared_ptr<Catalog>& catalog, int k, const std::vector<int>& observed, const py::object& R) {
+             AnalogHmmOptions o;
+             o.k = k;
+             o.observed = observed;
+             const Eigen::Index mdim = static_cast<Eigen::Index>(observed.empty() ? 1 : observed.size());
+             MatrixArg r = ToMatrix(R, "R", mdim, mdim);
+             o.R = r.map;
+             py::gil_scoped_release release;
+             return std::make_shared<AnalogHMM>(catalog, o);
+           }),
+           py::arg("catalog"), py::arg("k") = 10, py::arg("observed") = std::vector<int>{0}, py::arg("R"))
+      .def_property_readonly("transitions_next", [](const AnalogHMM& h) {
+        const auto& t = h.transitions();
+        return Eigen::Map<const Eigen::Matrix<int, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(t.next.data(), t.num_states, t.k);
+      })
+      .def_property_readonly("transitions_prob", [](const AnalogHMM& h) {
+        const auto& t = h.transitions();
+        return Eigen::Map<const analog::RowMatrixXd>(t.prob.data(), t.num_states, t.k);
+      })
+      .def("smooth", [](const AnalogHMM& h, const py::object& observations, const py::object& beam) {
+             MatrixArg obs = ToMatrix(observations, "observations", -1, -1, Finiteness::kAny);
+             const int n = beam.is_none() ? 0 : beam.cast<int>();
+             CheckArgument(n >= 0, "beam", "must be >= 0 or None");
+             analog::SmoothingOutput out;
+             {
+               py::gil_scoped_release release;
+               out = h.Smooth(obs.map, n);
+             }
+             py::dict d;
+             d["mean"] = out.mean;
+             d["mpm"] = out.mpm;
+             d["filtering_mean"] = out.filtering_mean;
+             d["log_likelihood"] = out.log_likelihood;
+             d["dropped_mass"] = out.dropped_mass;
+             d["support_size"] = out.support_size;
+             d["seconds"] = out.seconds;
+             return d;
+           },
+           py::arg("observations"), py::arg("beam") = py::none(), R"doc(
+Forward-backward on observations (T, m) (NaN = missing). beam=None: exact; beam=N: truncated
+(paper §2.3). Returns a dict: mean (T, D) posterior mean, mpm (T, D), filtering_mean (T, D),
+log_likelihood, dropped_mass (T,), support_size (T,), seconds.)doc")
+      .def("viterbi", [](const AnalogHMM& h, const py::object& observations, const py::object& beam) {
+             MatrixArg obs = ToMatrix(observations, "observations", -1, -1, Finiteness::kAny);
+             const int n = beam.is_none() ? 0 : beam.cast<int>();
+             analog::ViterbiResult v;
+             {
+               py::gil_scoped_release release;
+               v = h.MapSequence(obs.map, n);
+             }
+             analog::RowMatrixXd states(static_cast<Eigen::Index>(v.states.size()), h.catalog().dim());
+             for (size_t t = 0; t < v.states.size(); ++t) states.row(static_cast<Eigen::Index>(t)) = h.catalog().states().row(v.states[t]);
+             py::dict d;
+             d["indices"] = v.states;
+             d["states"] = states;
+             d["log_probability"] = v.log_probability;
+             return d;
+           },
+           py::arg("observations"), py::arg("beam") = py::none(), "MAP state sequence (Viterbi): dict indices (T,), states (T, D).");
+
+  m.def("forward_backward", [](const py::object& next_idx, const py::object& prob, const py::object& log_emission,
+                               const py::object& initial, const py::object& beam) {
+          const SparseTransitions tr = TransitionsFromNumpy(next_idx, prob);
+          MatrixArg le = ToMatrix(log_emission, "log_emission", -1, tr.num_states, Finiteness::kAllowMinusInf);
+          VectorArg init = ToVector(initial, "initial", tr.num_states);
+          analog::ForwardBackwardOptions o;
+          o.beam = beam.is_none() ? 0 : beam.cast<int>();
+          const analog::RowMatrixXd log_b = le.map;
+          const Eigen::VectorXd pi = init.map;
+          analog::ForwardBackwardResult r;
+          {
+            py::gil_scoped_release release;
+            r = analog::ForwardBackward(tr, pi, static_cast<int>(log_b.rows()),
+                                        [&log_b](int t, const int* s, int n, double* out) {
+                                          for (int i = 0; i < n; ++i) out[i] = log_b(t, s[i]);
+                                        }, o);
+          }
+          py::dict d;
+          d["posterior"] = DensePosterior(r.smoothing, tr.num_states);
+          d["filtering"] = DensePosterior(r.filtering, tr.num_states);
+          d["log_likelihood"] = r.log_likelihood;
+          d["dropped_mass"] = r.dropped_mass;
+          d["seconds"] = r.seconds;
+          return d;
+        },
+        py::arg("next_idx"), py::arg("prob"), py::arg("log_emission"), py::arg("initial"), py::arg("beam") = py::none(), R"doc(
+Forward-backward for any HMM with K successors per state: next_idx (M, K) int, prob (M, K)
+(rows sum to 1), log_emission (T, M) = log b_j(y_t), initial (M,) >= 0. Returns a dict with
+dense posterior (T, M), filtering (T, M), log_likelihood, dropped_mass (T,), seconds.)doc");
+
+  m.def("viterbi", [](const py::object& next_idx, const py::object& prob, const py::object& log_emission,
+                      const py::object& initial, const py::object& beam) {
+          const SparseTransitions tr = TransitionsFromNumpy(next_idx, prob);
+          MatrixArg le = ToMatrix(log_emission, "log_emission", -1, tr.num_states, Finiteness::kAllowMinusInf);
+          VectorArg init = ToVector(initial, "initial", tr.num_states);
+          analog::ForwardBackwardOptions o;
+          o.beam = beam.is_none() ? 0 : beam.cast<int>();
+          const analog::RowMatrixXd log_b = le.map;
+          const analog::ViterbiResult v = analog::Viterbi(tr, init.map, static_cast<int>(log_b.rows()),
+                                                          [&log_b](int t, const int* s, int n, double* out) {
+                                                            for (int i = 0; i < n; ++i) out[i] = log_b(t, s[i]);
+                                                          }, o);
+          return py::make_tuple(v.states, v.log_probability);
+        },
+        py::arg("next_idx"), py::arg("prob"), py::arg("log_emission"), py::arg("initial"), py::arg("beam") = py::none(),
+        "MAP path (T,) and its log-probability for an HMM given as in forward_backward.");
+}
+
+}  // namespace indoorloc::bindings

@@ -1,0 +1,227 @@
+#include "indoorloc/analog/analog_hmm.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <map>
+#include <utility>
+
+#include <Eigen/Cholesky>
+#include <nanoflann.hpp>
+
+#include "indoorloc/core/check.h"
+#include "indoorloc/core/options.h"
+
+namespace indoorloc::analog {
+namespace {
+
+constexpr double kLog2Pi = 1.8378770664093453;
+
+// nanoflann dataset adaptor over the analog rows of the catalog's state matrix.
+struct AnalogCloud {
+  const RowMatrixXd& states;
+  const std::vector<int>& rows;
+  size_t kdtree_get_point_count() const { return rows.size(); }
+  double kdtree_get_pt(size_t idx, size_t dim) const {
+    return states(rows[idx], static_cast<Eigen::Index>(dim));
+  }
+  template <class BBox>
+  bool kdtree_get_bbox(BBox&) const { return false; }
+};
+
+using KdTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, AnalogCloud>, AnalogCloud, -1, size_t>;
+
+}  // namespace
+
+void KnnAnalogs(const Catalog& catalog, const Eigen::Ref<const RowMatrixXd>& queries, int k,
+                Eigen::Matrix<int, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>* indices, RowMatrixXd* squared_distances) {
+  CheckArgument(k >= 1, "k", "must be >= 1, got " + std::to_string(k));
+  CheckArgument(catalog.num_analogs() >= k, "k",
+                "the catalog has " + std::to_string(catalog.num_analogs()) + " analogs, fewer than K = " + std::to_string(k));
+  CheckShape(queries, -1, catalog.dim(), "queries");
+  CheckFinite(queries, "queries");
+  const AnalogCloud cloud{catalog.states(), catalog.analogs()};
+  KdTree tree(static_cast<size_t>(catalog.dim()), cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  tree.buildIndex();
+  indices->resize(queries.rows(), k);
+  squared_distances->resize(queries.rows(), k);
+  std::vector<size_t> idx(static_cast<size_t>(k));
+  std::vector<double> dist(static_cast<size_t>(k));
+  for (Eigen::Index q = 0; q < queries.rows(); ++q) {
+    const size_t found = tree.knnSearch(queries.row(q).data(), static_cast<size_t>(k), idx.data(), dist.data());
+    CheckArgument(found == static_cast<size_t>(k), "queries", "kNN search returned too few neighbours");
+    for (int j = 0; j < k; ++j) {
+      (*indices)(q, j) = static_cast<int>(idx[static_cast<size_t>(j)]);
+      (*squared_distances)(q, j) = dist[static_cast<size_t>(j)];
+    }
+  }
+}
+
+SparseTransitions BuildKnnTransitions(const Catalog& catalog, int k) {
+  Eigen::Matrix<int, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> nn;
+  RowMatrixXd d2;
+  KnnAnalogs(catalog, catalog.states(), k, &nn, &d2);
+  SparseTransitions tr;
+  tr.num_states = catalog.num_states();
+  tr.k = k;
+  tr.next.resize(static_cast<size_t>(tr.num_states) * static_cast<size_t>(k));
+  tr.prob.resize(tr.next.size());
+  for (int i = 0; i < tr.num_states; ++i) {
+    // Eq. 4 with σ adapted per state: the standard deviation of its K distances (σ = 0: equal).
+    double mean = 0.0, mean_sq = 0.0;
+    for (int j = 0; j < k; ++j) {
+      const double d = std::sqrt(d2(i, j));
+      mean += d / k;
+      mean_sq += d * d / k;
+    }
+    const double sigma = std::sqrt(std::max(0.0, mean_sq - mean * mean));
+    double total = 0.0;
+    const size_t base = static_cast<size_t>(i) * static_cast<size_t>(k);
+    for (int j = 0; j < k; ++j) {
+      const double w = sigma > 1e-12 * std::max(1.0, mean) ? std::exp(-d2(i, j) / (2.0 * sigma * sigma)) : 1.0;
+      tr.next[base + static_cast<size_t>(j)] = catalog.successors()[static_cast<size_t>(nn(i, j))];
+      tr.prob[base + static_cast<size_t>(j)] = w;
+      total += w;
+    }
+    for (int j = 0; j < k; ++j) tr.prob[base + static_cast<size_t>(j)] /= total;
+  }
+  return tr;
+}
+
+bool AnalogHmmOptions::IsValid(std::string* error) const {
+  if (k < 1) {
+    *error = "k must be >= 1";
+    return false;
+  }
+  return true;
+}
+
+AnalogHMM::AnalogHMM(std::shared_ptr<const Catalog> catalog, const AnalogHmmOptions& options)
+    : catalog_(std::move(catalog)), options_(options) {
+  CheckArgument(catalog_ != nullptr, "catalog", "is null");
+  ValidateOptions(options_);
+  if (options_.observed.empty()) options_.observed = {0};
+  for (int c : options_.observed) {
+    CheckArgument(c >= 0 && c < catalog_->dim(), "observed",
+                  "component " + std::to_string(c) + " is outside the state dimension " + std::to_string(catalog_->dim()));
+  }
+  CheckArgument(options_.observed.size() <= 63, "observed", "at most 63 observed components");
+  const Eigen::Index m = static_cast<Eigen::Index>(options_.observed.size());
+  CheckArgument(options_.R.rows() == m && options_.R.cols() == m, "R",
+                "expected shape (" + std::to_string(m) + ", " + std::to_string(m) + "), got (" +
+                    std::to_string(options_.R.rows()) + ", " + std::to_string(options_.R.cols()) + ")");
+  CheckFinite(options_.R, "R");
+  CheckArgument((options_.R - options_.R.transpose()).cwiseAbs().maxCoeff() <= 1e-12 * std::max(1.0, options_.R.cwiseAbs().maxCoeff()),
+                "R", "is not symmetric");
+  Eigen::LLT<Eigen::MatrixXd> llt(options_.R);
+  CheckArgument(llt.info() == Eigen::Success, "R", "is not positive definite");
+  CheckArgument(catalog_->num_analogs() >= options_.k + 1, "catalog",
+                "has " + std::to_string(catalog_->num_analogs()) + " analogs: needs at least K + 1 = " + std::to_string(options_.k + 1));
+  transitions_ = BuildKnnTransitions(*catalog_, options_.k);
+}
+
+LogEmission AnalogHMM::Emission(const Eigen::Ref<const RowMatrixXd>& observations) const {
+  const Eigen::Index m = static_cast<Eigen::Index>(options_.observed.size());
+  CheckArgument(observations.cols() == m, "observations",
+                "has " + std::to_string(observations.cols()) + " columns, the model observes " + std::to_string(m) + " components");
+  for (Eigen::Index t = 0; t < observations.rows(); ++t) {
+    for (Eigen::Index c = 0; c < m; ++c) {
+      if (std::isinf(observations(t, c))) ThrowInvalidArgument("observations", DescribeEntry(t, c, false) + " is infinite");
+    }
+  }
+  // Per distinct missingness pattern: the observed sub-covariance's inverse and log-determinant.
+  struct Pattern {
+    std::vector<int> comps;      // indices into `observed`
+    Eigen::MatrixXd inverse;
+    double log_norm = 0.0;       // ½ log det(2π R_oo)
+  };
+  auto patterns = std::make_shared<std::map<std::uint64_t, Pattern>>();
+  auto mask_of = std::make_shared<std::vector<std::uint64_t>>(static_cast<size_t>(observations.rows()));
+  for (Eigen::Index t = 0; t < observations.rows(); ++t) {
+    std::uint64_t mask = 0;
+    for (Eigen::Index c = 0; c < m; ++c) {
+      if (!std::isnan(observations(t, c))) mask |= std::uint64_t{1} << c;
+    }
+    (*mask_of)[static_cast<size_t>(t)] = mask;
+    if (mask == 0 || patterns->count(mask)) continue;
+    Pattern p;
+    for (Eigen::Index c = 0; c < m; ++c) {
+      if (mask >> c & 1) p.comps.push_back(static_cast<int>(c));
+    }
+    Eigen::MatrixXd sub(p.comps.size(), p.comps.size());
+    for (size_t a = 0; a < p.comps.size(); ++a)
+      for (size_t b = 0; b < p.comps.size(); ++b) sub(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) = options_.R(p.comps[a], p.comps[b]);
+    Eigen::LLT<Eigen::MatrixXd> llt(sub);
+    p.inverse = llt.solve(Eigen::MatrixXd::Identity(sub.rows(), sub.cols()));
+    p.log_norm = 0.5 * static_cast<double>(p.comps.size()) * kLog2Pi +
+                 llt.matrixLLT().diagonal().array().log().sum();
+    patterns->emplace(mask, std::move(p));
+  }
+  const RowMatrixXd obs = observations;  // owned copy: the callback may outlive the caller's view
+  const std::vector<int> observed = options_.observed;
+  const Catalog* catalog = catalog_.get();
+  return [patterns, mask_of, obs, observed, catalog](int t, const int* states, int count, double* out) {
+    const std::uint64_t mask = (*mask_of)[static_cast<size_t>(t)];
+    if (mask == 0) {
+      std::fill(out, out + count, 0.0);
+      return;
+    }
+    const Pattern& p = patterns->at(mask);
+    const size_t n = p.comps.size();
+    Eigen::VectorXd r(static_cast<Eigen::Index>(n));
+    for (int s = 0; s < count; ++s) {
+      const auto row = catalog->states().row(states[s]);
+      for (size_t a = 0; a < n; ++a) {
+        const int c = p.comps[a];
+        r[static_cast<Eigen::Index>(a)] = obs(t, c) - row(observed[static_cast<size_t>(c)]);
+      }
+      out[s] = -0.5 * r.dot(p.inverse * r) - p.log_norm;
+    }
+  };
+}
+
+SmoothingOutput AnalogHMM::Smooth(const Eigen::Ref<const RowMatrixXd>& observations, int beam) const {
+  CheckArgument(observations.rows() >= 1, "observations", "has no time step");
+  const LogEmission emission = Emission(observations);
+  ForwardBackwardOptions fb;
+  fb.beam = beam;
+  const Eigen::VectorXd initial = Eigen::VectorXd::Ones(catalog_->num_states());
+  const ForwardBackwardResult r = ForwardBackward(transitions_, initial, static_cast<int>(observations.rows()), emission, fb);
+  const Eigen::Index steps = observations.rows();
+  const RowMatrixXd& states = catalog_->states();
+  SmoothingOutput out;
+  out.mean = RowMatrixXd::Zero(steps, catalog_->dim());
+  out.filtering_mean = RowMatrixXd::Zero(steps, catalog_->dim());
+  out.mpm.resize(steps, catalog_->dim());
+  out.support_size.resize(steps);
+  for (Eigen::Index t = 0; t < steps; ++t) {
+    const auto& s = r.smoothing.states[static_cast<size_t>(t)];
+    const auto& g = r.smoothing.probabilities[static_cast<size_t>(t)];
+    const auto& f = r.filtering.probabilities[static_cast<size_t>(t)];
+    size_t arg = 0;
+    int support = 0;
+    for (size_t i = 0; i < s.size(); ++i) {
+      out.mean.row(t) += g[i] * states.row(s[i]);
+      out.filtering_mean.row(t) += f[i] * states.row(s[i]);
+      if (g[i] > g[arg]) arg = i;
+      support += g[i] > 0.0;
+    }
+    out.mpm.row(t) = states.row(s[arg]);
+    out.support_size[t] = support;
+  }
+  out.log_likelihood = r.log_likelihood;
+  out.dropped_mass = r.dropped_mass;
+  out.seconds = r.seconds;
+  return out;
+}
+
+ViterbiResult AnalogHMM::MapSequence(const Eigen::Ref<const RowMatrixXd>& observations, int beam) const {
+  CheckArgument(observations.rows() >= 1, "observations", "has no time step");
+  const LogEmission emission = Emission(observations);
+  ForwardBackwardOptions fb;
+  fb.beam = beam;
+  return Viterbi(transitions_, Eigen::VectorXd::Ones(catalog_->num_states()), static_cast<int>(observations.rows()), emission, fb);
+}
+
+}  // namespace indoorloc::analog

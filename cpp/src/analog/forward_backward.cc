@@ -1,0 +1,315 @@
+#include "indoorloc/analog/forward_backward.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "indoorloc/core/check.h"
+#include "indoorloc/core/options.h"
+
+namespace indoorloc::analog {
+namespace {
+
+constexpr double kMinusInf = -std::numeric_limits<double>::infinity();
+
+// Keeps the `beam` largest entries of (states, values) (all when beam <= 0 or larger);
+// returns the mass removed (values are normalised probabilities).
+double Truncate(std::vector<int>* states, std::vector<double>* values, int beam) {
+  const size_t n = states->size();
+  if (beam <= 0 || n <= static_cast<size_t>(beam)) return 0.0;
+  std::vector<size_t> order(n);
+  std::iota(order.begin(), order.end(), 0);
+  std::nth_element(order.begin(), order.begin() + beam, order.end(),
+                   [&](size_t a, size_t b) { return (*values)[a] > (*values)[b] || ((*values)[a] == (*values)[b] && (*states)[a] < (*states)[b]); });
+  order.resize(static_cast<size_t>(beam));
+  std::sort(order.begin(), order.end());  // keep the original (deterministic) order
+  std::vector<int> s;
+  std::vector<double> v;
+  s.reserve(order.size());
+  v.reserve(order.size());
+  double kept = 0.0;
+  for (size_t i : order) {
+    s.push_back((*states)[i]);
+    v.push_back((*values)[i]);
+    kept += (*values)[i];
+  }
+  for (double& x : v) x /= kept;
+  states->swap(s);
+  values->swap(v);
+  return 1.0 - kept;
+}
+
+void CheckInputs(const SparseTransitions& transitions, const Eigen::VectorXd& initial, int num_steps) {
+  transitions.Validate();
+  CheckArgument(initial.size() == transitions.num_states, "initial",
+                "expected " + std::to_string(transitions.num_states) + " entries, got " + std::to_string(initial.size()));
+  CheckFinite(initial, "initial");
+  CheckArgument((initial.array() >= 0.0).all() && initial.sum() > 0.0, "initial",
+                "must be non-negative with a positive sum");
+  CheckArgument(num_steps >= 1, "num_steps", "must be >= 1");
+}
+
+// Exponentiates log-values shifted by their maximum into `out`, returns (sum, max).
+std::pair<double, double> ShiftedExp(const std::vector<double>& log_values, std::vector<double>* out) {
+  double max = kMinusInf;
+  for (double v : log_values) max = std::max(max, v);
+  out->resize(log_values.size());
+  if (max == kMinusInf) {
+    ThrowInvalidArgument("log_emission", "every candidate state has zero likelihood (-inf) at some step");
+  }
+  double sum = 0.0;
+  for (size_t i = 0; i < log_values.size(); ++i) sum += ((*out)[i] = std::exp(log_values[i] - max));
+  return {sum, max};
+}
+
+}  // namespace
+
+void SparseTransitions::Validate() const {
+  CheckArgument(num_states > 0, "transitions", "no states");
+  CheckArgument(k > 0, "transitions", "k must be >= 1");
+  const size_t size = static_cast<size_t>(num_states) * static_cast<size_t>(k);
+  CheckArgument(next.size() == size && prob.size() == size, "transitions", "next/prob must have num_states * k entries");
+  for (int i = 0; i < num_states; ++i) {
+    double row = 0.0;
+    for (int j = 0; j < k; ++j) {
+      const size_t e = static_cast<size_t>(i) * static_cast<size_t>(k) + static_cast<size_t>(j);
+      if (next[e] < 0 || next[e] >= num_states) ThrowInvalidArgument("transitions", "next index out of range in row " + std::to_string(i));
+      if (!(prob[e] >= 0.0) || !std::isfinite(prob[e])) ThrowInvalidArgument("transitions", "negative or non-finite probability in row " + std::to_string(i));
+      row += prob[e];
+    }
+    if (std::abs(row - 1.0) > 1e-9) ThrowInvalidArgument("transitions", "row " + std::to_string(i) + " does not sum to 1");
+  }
+}
+
+bool ForwardBackwardOptions::IsValid(std::string* error) const {
+  if (beam < 0) {
+    *error = "beam must be >= 0 (0: exact)";
+    return false;
+  }
+  return true;
+}
+
+ForwardBackwardResult ForwardBackward(const SparseTransitions& tr, const Eigen::VectorXd& initial, int num_steps,
+                                      const LogEmission& log_emission, const ForwardBackwardOptions& options) {
+  ValidateOptions(options);
+  CheckInputs(tr, initial, num_steps);
+  const auto start = std::chrono::steady_clock::now();
+  const int m = tr.num_states, k = tr.k;
+  const size_t steps = static_cast<size_t>(num_steps);
+  ForwardBackwardResult out;
+  out.filtering.states.resize(steps);
+  out.filtering.probabilities.resize(steps);
+  out.dropped_mass = Eigen::VectorXd::Zero(num_steps);
+  std::vector<std::vector<double>> emission(steps);  // linear b_j(y_t) / max, on the support
+  std::vector<double> log_b, lin;
+  std::vector<double> predicted(static_cast<size_t>(m), 0.0);
+  std::vector<char> touched(static_cast<size_t>(m), 0);
+
+  // Forward with scaling.
+  for (size_t t = 0; t < steps; ++t) {
+    std::vector<int> cand;
+    std::vector<double> prior;
+    if (t == 0) {
+      for (int j = 0; j < m; ++j) {
+        if (initial[j] > 0.0) {
+          cand.push_back(j);
+          prior.push_back(initial[j]);
+        }
+      }
+    } else {
+      const std::vector<int>& s = out.filtering.states[t - 1];
+      const std::vector<double>& a = out.filtering.probabilities[t - 1];
+      for (size_t i = 0; i < s.size(); ++i) {
+        const size_t base = static_cast<size_t>(s[i]) * static_cast<size_t>(k);
+        for (int j = 0; j < k; ++j) {
+          const int nxt = tr.next[base + static_cast<size_t>(j)];
+          if (!touched[static_cast<size_t>(nxt)]) {
+            touched[static_cast<size_t>(nxt)] = 1;
+            cand.push_back(nxt);
+          }
+          predicted[static_cast<size_t>(nxt)] += a[i] * tr.prob[base + static_cast<size_t>(j)];
+        }
+      }
+      prior.resize(cand.size());
+      for (size_t c = 0; c < cand.size(); ++c) {
+        prior[c] = predicted[static_cast<size_t>(cand[c])];
+        predicted[static_cast<size_t>(cand[c])] = 0.0;
+        touched[static_cast<size_t>(cand[c])] = 0;
+      }
+    }
+    log_b.resize(cand.size());
+    log_emission(static_cast<int>(t), cand.data(), static_cast<int>(cand.size()), log_b.data());
+    // α ∝ prior · b, with b shifted by its maximum.
+    std::vector<double> lp(cand.size());
+    for (size_t c = 0; c < cand.size(); ++c) lp[c] = prior[c] > 0.0 ? std::log(prior[c]) + log_b[c] : kMinusInf;
+    const auto [sum, max] = ShiftedExp(lp, &lin);
+    out.log_likelihood += max + std::log(sum) - (t == 0 ? std::log(initial.sum()) : 0.0);
+    for (double& v : lin) v /= sum;
+    // Keep the linear emission of each candidate (relative to its own maximum) for the backward pass.
+    double bmax = kMinusInf;
+    for (double v : log_b) bmax = std::max(bmax, v);
+    std::vector<double> b(cand.size());
+    for (size_t c = 0; c < cand.size(); ++c) b[c] = std::exp(log_b[c] - bmax);
+    // Truncate (carrying b along).
+    if (options.beam > 0 && cand.size() > static_cast<size_t>(options.beam)) {
+      std::vector<int> idx(cand.size());
+      std::iota(idx.begin(), idx.end(), 0);
+      std::vector<double> vals = lin;
+      std::vector<int> states = idx;
+      out.dropped_mass[static_cast<Eigen::Index>(t)] = Truncate(&states, &vals, options.beam);
+      std::vector<int> kept_states(states.size());
+      std::vector<double> kept_b(states.size());
+      for (size_t c = 0; c < states.size(); ++c) {
+        kept_states[c] = cand[static_cast<size_t>(states[c])];
+        kept_b[c] = b[static_cast<size_t>(states[c])];
+      }
+      out.filtering.states[t] = std::move(kept_states);
+      out.filtering.probabilities[t] = std::move(vals);
+      emission[t] = std::move(kept_b);
+    } else {
+      out.filtering.states[t] = std::move(cand);
+      out.filtering.probabilities[t] = std::move(lin);
+      emission[t] = std::move(b);
+    }
+  }
+
+  // Backward on the forward supports, rescaled every step.
+  out.smoothing.states = out.filtering.states;
+  out.smoothing.probabilities.resize(steps);
+  std::vector<double> beta_next;  // β_{t+1} · b_{t+1} on supp_{t+1}, scattered into a dense scratch
+  std::vector<double> weight(static_cast<size_t>(m), 0.0);
+  std::vector<double> beta(out.filtering.states[steps - 1].size(), 1.0);
+  for (size_t t = steps; t-- > 0;) {
+    const std::vector<int>& s = out.filtering.states[t];
+    const std::vector<double>& a = out.filtering.probabilities[t];
+    if (t + 1 < steps) {
+      const std::vector<int>& s1 = out.filtering.states[t + 1];
+      for (size_t j = 0; j < s1.size(); ++j) weight[static_cast<size_t>(s1[j])] = beta_next[j] * emission[t + 1][j];
+      beta.assign(s.size(), 0.0);
+      double bmax = 0.0;
+      for (size_t i = 0; i < s.size(); ++i) {
+        const size_t base = static_cast<size_t>(s[i]) * static_cast<size_t>(k);
+        double acc = 0.0;
+        for (int j = 0; j < k; ++j) acc += tr.prob[base + static_cast<size_t>(j)] * weight[static_cast<size_t>(tr.next[base + static_cast<size_t>(j)])];
+        beta[i] = acc;
+        bmax = std::max(bmax, acc);
+      }
+      for (size_t j = 0; j < s1.size(); ++j) weight[static_cast<size_t>(s1[j])] = 0.0;
+      if (bmax > 0.0) {
+        for (double& v : beta) v /= bmax;
+      }
+    }
+    std::vector<double> gamma(s.size());
+    double total = 0.0;
+    for (size_t i = 0; i < s.size(); ++i) total += (gamma[i] = a[i] * beta[i]);
+    if (total > 0.0) {
+      for (double& g : gamma) g /= total;
+    } else {
+      gamma = a;  // the truncated backward lost every path: fall back to filtering
+    }
+    out.smoothing.probabilities[t] = std::move(gamma);
+    beta_next = beta;
+  }
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+
+ViterbiResult Viterbi(const SparseTransitions& tr, const Eigen::VectorXd& initial, int num_steps,
+                      const LogEmission& log_emission, const ForwardBackwardOptions& options) {
+  ValidateOptions(options);
+  CheckInputs(tr, initial, num_steps);
+  const int m = tr.num_states, k = tr.k;
+  const size_t steps = static_cast<size_t>(num_steps);
+  std::vector<std::vector<int>> support(steps), back(steps);
+  std::vector<double> score;  // δ on the current support (log)
+  std::vector<double> best(static_cast<size_t>(m), kMinusInf);
+  std::vector<int> from(static_cast<size_t>(m), -1);
+  std::vector<double> log_b;
+  for (size_t t = 0; t < steps; ++t) {
+    std::vector<int> cand;
+    std::vector<double> val;
+    std::vector<int> bp;
+    if (t == 0) {
+      for (int j = 0; j < m; ++j) {
+        if (initial[j] > 0.0) {
+          cand.push_back(j);
+          val.push_back(std::log(initial[j] / initial.sum()));
+          bp.push_back(-1);
+        }
+      }
+    } else {
+      const std::vector<int>& s = support[t - 1];
+      for (size_t i = 0; i < s.size(); ++i) {
+        const size_t base = static_cast<size_t>(s[i]) * static_cast<size_t>(k);
+        for (int j = 0; j < k; ++j) {
+          const double p = tr.prob[base + static_cast<size_t>(j)];
+          if (p <= 0.0) continue;
+          const int nxt = tr.next[base + static_cast<size_t>(j)];
+          const double v = score[i] + std::log(p);
+          if (best[static_cast<size_t>(nxt)] == kMinusInf) cand.push_back(nxt);
+          // Ties go to the smaller predecessor index: deterministic and equal to exhaustive search.
+          if (v > best[static_cast<size_t>(nxt)] ||
+              (v == best[static_cast<size_t>(nxt)] && s[i] < from[static_cast<size_t>(nxt)])) {
+            best[static_cast<size_t>(nxt)] = v;
+            from[static_cast<size_t>(nxt)] = s[i];
+          }
+        }
+      }
+      val.resize(cand.size());
+      bp.resize(cand.size());
+      for (size_t c = 0; c < cand.size(); ++c) {
+        val[c] = best[static_cast<size_t>(cand[c])];
+        bp[c] = from[static_cast<size_t>(cand[c])];
+        best[static_cast<size_t>(cand[c])] = kMinusInf;
+        from[static_cast<size_t>(cand[c])] = -1;
+      }
+    }
+    log_b.resize(cand.size());
+    log_emission(static_cast<int>(t), cand.data(), static_cast<int>(cand.size()), log_b.data());
+    for (size_t c = 0; c < cand.size(); ++c) val[c] += log_b[c];
+    if (options.beam > 0 && cand.size() > static_cast<size_t>(options.beam)) {
+      std::vector<size_t> order(cand.size());
+      std::iota(order.begin(), order.end(), 0);
+      std::nth_element(order.begin(), order.begin() + options.beam, order.end(),
+                       [&](size_t a, size_t b) { return val[a] > val[b] || (val[a] == val[b] && cand[a] < cand[b]); });
+      order.resize(static_cast<size_t>(options.beam));
+      std::sort(order.begin(), order.end());
+      std::vector<int> c2, b2;
+      std::vector<double> v2;
+      for (size_t o : order) {
+        c2.push_back(cand[o]);
+        v2.push_back(val[o]);
+        b2.push_back(bp[o]);
+      }
+      cand.swap(c2);
+      val.swap(v2);
+      bp.swap(b2);
+    }
+    support[t] = std::move(cand);
+    back[t] = std::move(bp);
+    score = std::move(val);
+  }
+  // Backtrack from the best final state (ties: smallest index).
+  size_t arg = 0;
+  for (size_t i = 1; i < score.size(); ++i) {
+    if (score[i] > score[arg] || (score[i] == score[arg] && support[steps - 1][i] < support[steps - 1][arg])) arg = i;
+  }
+  ViterbiResult out;
+  out.log_probability = score[arg];
+  out.states.resize(steps);
+  int state = support[steps - 1][arg];
+  int pred = back[steps - 1][arg];
+  out.states[steps - 1] = state;
+  for (size_t t = steps - 1; t-- > 0;) {
+    state = pred;
+    out.states[t] = state;
+    const std::vector<int>& s = support[t];
+    const auto it = std::find(s.begin(), s.end(), state);
+    pred = back[t][static_cast<size_t>(it - s.begin())];
+  }
+  return out;
+}
+
+}  // namespace indoorloc::analog

@@ -1,0 +1,106 @@
+#include "indoorloc/analog/analog_hmm.h"
+
+#include <cmath>
+#include <memory>
+
+#include <Eigen/Dense>
+#include <gtest/gtest.h>
+
+#include "indoorloc/core/random.h"
+
+namespace indoorloc::analog {
+namespace {
+
+// A noisy circle, sampled on several laps: a simple deterministic dynamical system.
+RowMatrixXd Circle(int n, double phase, double noise, std::uint64_t seed) {
+  RandomStream rng(seed);
+  RowMatrixXd x(n, 2);
+  for (int t = 0; t < n; ++t) {
+    const double a = phase + 0.1 * t;
+    x.row(t) << std::cos(a) + noise * rng.Normal(), std::sin(a) + noise * rng.Normal();
+  }
+  return x;
+}
+
+TEST(Catalog, PairsLagAndStride) {
+  RowMatrixXd a(5, 1), b(3, 1);
+  a << 0, 1, 2, 3, 4;
+  b << 10, 11, 12;
+  CatalogOptions o;
+  o.lag = 2;
+  o.stride = 1;
+  const Catalog c({a, b}, o);
+  EXPECT_EQ(c.num_states(), 4 + 2);
+  EXPECT_EQ(c.dim(), 2);
+  EXPECT_EQ(c.states()(0, 0), 1);  // (x_1, x_0)
+  EXPECT_EQ(c.states()(0, 1), 0);
+  EXPECT_EQ(c.num_analogs(), 3 + 1);
+  EXPECT_EQ(c.successors()[0], 1);
+  EXPECT_EQ(c.analogs()[3], 4);  // first state of b
+  EXPECT_EQ(c.successors()[3], 5);
+  RowMatrixXd short_traj(1, 1);
+  short_traj << 1;
+  EXPECT_THROW(Catalog({short_traj}), std::invalid_argument);
+}
+
+TEST(KnnTransitions, MatchBruteForceAndRowsSumToOne) {
+  auto catalog = std::make_shared<Catalog>(std::vector<RowMatrixXd>{Circle(400, 0.0, 0.05, 1)});
+  const int k = 7;
+  const SparseTransitions tr = BuildKnnTransitions(*catalog, k);
+  EXPECT_NO_THROW(tr.Validate());
+  Eigen::Matrix<int, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> nn;
+  RowMatrixXd d2;
+  RandomStream rng(2);
+  RowMatrixXd q(50, 2);
+  for (int i = 0; i < 50; ++i) q.row(i) << rng.Uniform(-1.5, 1.5), rng.Uniform(-1.5, 1.5);
+  KnnAnalogs(*catalog, q, k, &nn, &d2);
+  for (int i = 0; i < 50; ++i) {
+    std::vector<double> all;
+    for (int a : catalog->analogs()) all.push_back((catalog->states().row(a) - q.row(i)).squaredNorm());
+    std::sort(all.begin(), all.end());
+    for (int j = 0; j < k; ++j) EXPECT_NEAR(d2(i, j), all[static_cast<size_t>(j)], 1e-12);
+  }
+}
+
+TEST(AnalogHMM, ReconstructsAHiddenComponentAndHandlesMissingValues) {
+  auto catalog = std::make_shared<Catalog>(std::vector<RowMatrixXd>{Circle(3000, 0.0, 0.01, 3)});
+  AnalogHmmOptions o;
+  o.k = 8;
+  o.observed = {0};
+  o.R = Eigen::MatrixXd::Constant(1, 1, 0.01);
+  const AnalogHMM hmm(catalog, o);
+  const RowMatrixXd truth = Circle(200, 0.35, 0.0, 4);
+  RowMatrixXd obs(200, 1);
+  RandomStream rng(5);
+  for (int t = 0; t < 200; ++t) obs(t, 0) = (t % 5 == 0) ? truth(t, 0) + 0.1 * rng.Normal() : std::nan("");
+  const SmoothingOutput exact = hmm.Smooth(obs, 0);
+  const SmoothingOutput beam = hmm.Smooth(obs, 300);
+  // The unobserved y = sin is recovered from the dynamics (up to the sign ambiguity the first
+  // observation resolves through the direction of motion).
+  EXPECT_LT((exact.mean.col(1) - truth.col(1)).norm() / std::sqrt(200.0), 0.2);
+  EXPECT_LT((beam.mean - exact.mean).cwiseAbs().maxCoeff(), 0.1);
+  EXPECT_TRUE(std::isfinite(exact.log_likelihood));
+  const ViterbiResult map = hmm.MapSequence(obs, 300);
+  EXPECT_EQ(map.states.size(), 200u);
+}
+
+TEST(AnalogHMM, BadInputGivesClearErrors) {
+  auto catalog = std::make_shared<Catalog>(std::vector<RowMatrixXd>{Circle(10, 0.0, 0.0, 1)});
+  AnalogHmmOptions o;
+  o.k = 20;  // more than the 9 analogs
+  o.observed = {0};
+  o.R = Eigen::MatrixXd::Identity(1, 1);
+  EXPECT_THROW(AnalogHMM(catalog, o), std::invalid_argument);
+  o.k = 3;
+  o.R(0, 0) = -1.0;
+  EXPECT_THROW(AnalogHMM(catalog, o), std::invalid_argument);  // R not positive definite
+  o.R(0, 0) = 1.0;
+  o.k = 0;
+  EXPECT_THROW(AnalogHMM(catalog, o), std::invalid_argument);
+  o.k = 3;
+  const AnalogHMM hmm(catalog, o);
+  EXPECT_THROW(hmm.Smooth(RowMatrixXd::Zero(5, 2), 0), std::invalid_argument);  // dimension mismatch
+}
+
+}  // namespace
+}  // namespace indoorloc::analog

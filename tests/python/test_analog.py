@@ -1,0 +1,82 @@
+"""Python side of the analog HMM: bindings, brute-force agreement, errors."""
+
+import itertools
+
+import numpy as np
+import pytest
+
+from indoorloc import analog
+
+
+def circle(n, phase=0.0, noise=0.0, seed=0):
+    rng = np.random.default_rng(seed)
+    a = phase + 0.1 * np.arange(n)
+    return np.c_[np.cos(a), np.sin(a)] + noise * rng.normal(size=(n, 2))
+
+
+def test_generic_forward_backward_matches_enumeration():
+    rng = np.random.default_rng(1)
+    m, k, T = 4, 2, 5
+    nxt = np.array([rng.choice(m, size=k, replace=False) for _ in range(m)])
+    prob = rng.uniform(0.2, 1, size=(m, k))
+    prob /= prob.sum(axis=1, keepdims=True)
+    A = np.zeros((m, m))
+    for i in range(m):
+        A[i, nxt[i]] += prob[i]
+    log_b = -rng.uniform(0, 10, size=(T, m))
+    init = np.ones(m)
+    post = np.zeros((T, m))
+    total = 0.0
+    best, best_path = -1.0, None
+    for path in itertools.product(range(m), repeat=T):
+        p = init[path[0]] / m * np.exp(log_b[0, path[0]])
+        for t in range(1, T):
+            p *= A[path[t - 1], path[t]] * np.exp(log_b[t, path[t]])
+        total += p
+        for t, s in enumerate(path):
+            post[t, s] += p
+        if p > best:
+            best, best_path = p, list(path)
+    out = analog.forward_backward(nxt, prob, log_b, init)
+    np.testing.assert_allclose(out["posterior"], post / total, atol=1e-10)
+    assert out["log_likelihood"] == pytest.approx(np.log(total), rel=1e-10)
+    np.testing.assert_allclose(out["posterior"].sum(axis=1), 1.0)
+    path, _ = analog.viterbi(nxt, prob, log_b, init)
+    assert list(path) == best_path
+    full_beam = analog.forward_backward(nxt, prob, log_b, init, beam=m)
+    np.testing.assert_allclose(full_beam["posterior"], out["posterior"], atol=1e-12)
+
+
+def test_catalog_knn_and_smoothing_with_missing_values():
+    cat = analog.Catalog([circle(2000, noise=0.01, seed=2)], lag=1)
+    idx, d2 = cat.knn(np.array([[1.0, 0.0]]), 5)
+    brute = np.sort(((cat.states[cat.analogs] - [1.0, 0.0]) ** 2).sum(axis=1))[:5]
+    np.testing.assert_allclose(d2[0], brute)
+    hmm = analog.AnalogHMM(cat, k=8, observed=[0], R=np.array([[0.01]]))
+    np.testing.assert_allclose(hmm.transitions_prob.sum(axis=1), 1.0)
+    truth = circle(150, phase=0.3)
+    obs = np.full((150, 1), np.nan)
+    obs[::5, 0] = truth[::5, 0]
+    out = hmm.smooth(obs, beam=300)
+    assert out["mean"].shape == (150, 2) and np.isfinite(out["log_likelihood"])
+    assert np.sqrt(np.mean((out["mean"][:, 1] - truth[:, 1]) ** 2)) < 0.25
+    v = hmm.viterbi(obs, beam=300)
+    assert v["states"].shape == (150, 2)
+
+
+def test_bad_input_gives_clear_errors():
+    short = analog.Catalog([circle(6)])
+    with pytest.raises(ValueError, match="needs at least K"):
+        analog.AnalogHMM(short, k=10, observed=[0], R=np.eye(1))
+    cat = analog.Catalog([circle(100)])
+    with pytest.raises(ValueError, match="positive definite"):
+        analog.AnalogHMM(cat, k=3, observed=[0], R=np.array([[-1.0]]))
+    with pytest.raises(ValueError, match="k must be >= 1"):
+        analog.AnalogHMM(cat, k=0, observed=[0], R=np.eye(1))
+    with pytest.raises(ValueError, match="R"):
+        analog.AnalogHMM(cat, k=3, observed=[0, 1], R=np.eye(1))
+    hmm = analog.AnalogHMM(cat, k=3, observed=[0], R=np.eye(1))
+    with pytest.raises(ValueError, match="observations"):
+        hmm.smooth(np.zeros((10, 2)))
+    with pytest.raises(ValueError, match="too short"):
+        analog.Catalog([np.zeros((1, 2))])
