@@ -114,14 +114,14 @@ selected state components with covariance R (eq. 5).)doc")
         const auto& t = h.transitions();
         return Eigen::Map<const analog::RowMatrixXd>(t.prob.data(), t.num_states, t.k);
       })
-      .def("smooth", [](const AnalogHMM& h, const py::object& observations, const py::object& beam) {
+      .def("smooth", [](const AnalogHMM& h, const py::object& observations, const py::object& beam, int beam_unobserved) {
              MatrixArg obs = ToMatrix(observations, "observations", -1, -1, Finiteness::kAny);
              const int n = beam.is_none() ? 0 : beam.cast<int>();
              CheckArgument(n >= 0, "beam", "must be >= 0 or None");
              analog::SmoothingOutput out;
              {
                py::gil_scoped_release release;
-               out = h.Smooth(obs.map, n);
+               out = h.Smooth(obs.map, n, beam_unobserved);
              }
              py::dict d;
              d["mean"] = out.mean;
@@ -133,9 +133,9 @@ selected state components with covariance R (eq. 5).)doc")
              d["seconds"] = out.seconds;
              return d;
            },
-           py::arg("observations"), py::arg("beam") = py::none(), R"doc(
+           py::arg("observations"), py::arg("beam") = py::none(), py::arg("beam_unobserved") = 0, R"doc(
 Forward-backward on observations (T, m) (NaN = missing). beam=None: exact; beam=N: truncated
-(paper §2.3). Returns a dict: mean (T, D) posterior mean, mpm (T, D), filtering_mean (T, D),
+(paper §2.3); beam_unobserved: a wider beam at steps with no observation (0: same as beam). Returns a dict: mean (T, D) posterior mean, mpm (T, D), filtering_mean (T, D),
 log_likelihood, dropped_mass (T,), support_size (T,), seconds.)doc")
       .def("viterbi", [](const AnalogHMM& h, const py::object& observations, const py::object& beam) {
              MatrixArg obs = ToMatrix(observations, "observations", -1, -1, Finiteness::kAny);

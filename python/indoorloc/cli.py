@@ -3,6 +3,7 @@
     indoorloc --version
     indoorloc demo [--out DIR] [--only NAME ...] [--seed N] [--quiet]
     indoorloc core resample-bench [--n N] [--repeat R]
+    indoorloc analog lorenz63 [--realisations 10] | analog imu
     indoorloc mapmatch reproduce [--runs 100] [--variant paper bias] [--ablation]
     indoorloc wifi evaluate [--dataset uji office ...] [--scans 1 10]
     indoorloc wifi simulate [--runs R] [--noise-db S]
@@ -74,6 +75,12 @@ def _add_core(sub: argparse._SubParsersAction) -> None:
     b.set_defaults(func=_cmd_core_resample_bench)
 
 
+def _add_analog(sub: argparse._SubParsersAction) -> None:
+    from indoorloc import cli_analog
+
+    cli_analog.add_parser(sub, quiet_parent)
+
+
 def _add_mapmatch(sub: argparse._SubParsersAction) -> None:
     from indoorloc import cli_mapmatch
 
@@ -87,7 +94,7 @@ def _add_wifi(sub: argparse._SubParsersAction) -> None:
 
 
 # Subsystems register `add(subparsers)` functions here.
-_SUBCOMMANDS: List[Callable[[argparse._SubParsersAction], None]] = [_add_core, _add_mapmatch, _add_wifi]
+_SUBCOMMANDS: List[Callable[[argparse._SubParsersAction], None]] = [_add_core, _add_analog, _add_mapmatch, _add_wifi]
 
 
 def build_parser() -> argparse.ArgumentParser:

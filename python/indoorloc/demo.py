@@ -64,6 +64,7 @@ def register_demo(name: str, title: str):
 
 def _load_builtin_demos() -> None:
     # Importing the experiment modules registers their demos.
+    from indoorloc.experiments import analog_demo  # noqa: F401
     from indoorloc.experiments import core_resampling  # noqa: F401
     from indoorloc.experiments import mapmatch_reproduce  # noqa: F401
     from indoorloc.experiments import wifi_simulation  # noqa: F401

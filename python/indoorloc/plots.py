@@ -125,3 +125,34 @@ def mapmatch_curves(results: Mapping[float, object], path: Path) -> Path:
     fig.savefig(path)
     plt.close(fig)
     return Path(path)
+
+
+def analog_lorenz(example: Mapping[str, object], path: Path) -> Path:
+    """Lorenz-63 truth and reconstructions: attractor (x-z plane) and x, y, z over time."""
+    import numpy as np
+
+    truth = np.asarray(example["truth"])
+    estimates = example["estimates"]
+    fig = plt.figure(figsize=(11, 4), dpi=110)
+    ax = fig.add_subplot(1, 2, 1)
+    ax.plot(truth[:, 0], truth[:, 2], "k-", lw=1, label="truth")
+    for name, est in estimates.items():
+        est = np.asarray(est)
+        ax.plot(est[:, 0], est[:, 2], lw=0.8, label=name)
+    ax.set_xlabel("x")
+    ax.set_ylabel("z")
+    ax.legend(fontsize=7)
+    t = np.arange(truth.shape[0])
+    for i, label in enumerate("xyz"):
+        a = fig.add_subplot(3, 2, 2 * (i + 1))
+        a.plot(t, truth[:, i], "k-", lw=1)
+        for name, est in estimates.items():
+            a.plot(t, np.asarray(est)[:, i], lw=0.8)
+        if i == 0:
+            obs = np.asarray(example["observations"])[:, 0]
+            a.plot(t, obs, "r.", ms=3)
+        a.set_ylabel(label)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return Path(path)

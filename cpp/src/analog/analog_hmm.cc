@@ -78,8 +78,11 @@ SparseTransitions BuildKnnTransitions(const Catalog& catalog, int k) {
     const double sigma = std::sqrt(std::max(0.0, mean_sq - mean * mean));
     double total = 0.0;
     const size_t base = static_cast<size_t>(i) * static_cast<size_t>(k);
+    // Shifted by the nearest distance (the weights are normalised anyway), so that the nearest
+    // neighbour has weight 1 and a tiny σ can never underflow every weight to 0/0.
+    const double d2_min = d2(i, 0);
     for (int j = 0; j < k; ++j) {
-      const double w = sigma > 1e-12 * std::max(1.0, mean) ? std::exp(-d2(i, j) / (2.0 * sigma * sigma)) : 1.0;
+      const double w = sigma > 1e-12 * std::max(1.0, mean) ? std::exp(-(d2(i, j) - d2_min) / (2.0 * sigma * sigma)) : 1.0;
       tr.next[base + static_cast<size_t>(j)] = catalog.successors()[static_cast<size_t>(nn(i, j))];
       tr.prob[base + static_cast<size_t>(j)] = w;
       total += w;
@@ -181,11 +184,19 @@ LogEmission AnalogHMM::Emission(const Eigen::Ref<const RowMatrixXd>& observation
   };
 }
 
-SmoothingOutput AnalogHMM::Smooth(const Eigen::Ref<const RowMatrixXd>& observations, int beam) const {
+SmoothingOutput AnalogHMM::Smooth(const Eigen::Ref<const RowMatrixXd>& observations, int beam, int beam_unobserved) const {
   CheckArgument(observations.rows() >= 1, "observations", "has no time step");
+  CheckArgument(beam_unobserved >= 0, "beam_unobserved", "must be >= 0");
   const LogEmission emission = Emission(observations);
   ForwardBackwardOptions fb;
   fb.beam = beam;
+  if (beam > 0 && beam_unobserved > 0) {
+    fb.beam_per_step.resize(static_cast<size_t>(observations.rows()));
+    for (Eigen::Index t = 0; t < observations.rows(); ++t) {
+      const bool observed = !observations.row(t).array().isNaN().all();
+      fb.beam_per_step[static_cast<size_t>(t)] = observed ? beam : beam_unobserved;
+    }
+  }
   const Eigen::VectorXd initial = Eigen::VectorXd::Ones(catalog_->num_states());
   const ForwardBackwardResult r = ForwardBackward(transitions_, initial, static_cast<int>(observations.rows()), emission, fb);
   const Eigen::Index steps = observations.rows();

@@ -88,6 +88,12 @@ bool ForwardBackwardOptions::IsValid(std::string* error) const {
     *error = "beam must be >= 0 (0: exact)";
     return false;
   }
+  for (int b : beam_per_step) {
+    if (b < 0) {
+      *error = "beam_per_step entries must be >= 0";
+      return false;
+    }
+  }
   return true;
 }
 
@@ -95,6 +101,8 @@ ForwardBackwardResult ForwardBackward(const SparseTransitions& tr, const Eigen::
                                       const LogEmission& log_emission, const ForwardBackwardOptions& options) {
   ValidateOptions(options);
   CheckInputs(tr, initial, num_steps);
+  CheckArgument(options.beam_per_step.empty() || options.beam_per_step.size() == static_cast<size_t>(num_steps),
+                "beam_per_step", "must be empty or have one entry per step");
   const auto start = std::chrono::steady_clock::now();
   const int m = tr.num_states, k = tr.k;
   const size_t steps = static_cast<size_t>(num_steps);
@@ -153,12 +161,13 @@ ForwardBackwardResult ForwardBackward(const SparseTransitions& tr, const Eigen::
     std::vector<double> b(cand.size());
     for (size_t c = 0; c < cand.size(); ++c) b[c] = std::exp(log_b[c] - bmax);
     // Truncate (carrying b along).
-    if (options.beam > 0 && cand.size() > static_cast<size_t>(options.beam)) {
+    const int beam = options.beam_per_step.empty() ? options.beam : options.beam_per_step[t];
+    if (beam > 0 && cand.size() > static_cast<size_t>(beam)) {
       std::vector<int> idx(cand.size());
       std::iota(idx.begin(), idx.end(), 0);
       std::vector<double> vals = lin;
       std::vector<int> states = idx;
-      out.dropped_mass[static_cast<Eigen::Index>(t)] = Truncate(&states, &vals, options.beam);
+      out.dropped_mass[static_cast<Eigen::Index>(t)] = Truncate(&states, &vals, beam);
       std::vector<int> kept_states(states.size());
       std::vector<double> kept_b(states.size());
       for (size_t c = 0; c < states.size(); ++c) {

@@ -51,8 +51,9 @@ class AnalogHMM {
   const AnalogHmmOptions& options() const { return options_; }
 
   /// observations: T x m (m = observed.size()), NaN = missing component, a row of NaN = no
-  /// observation. beam: 0 exact, else N of the truncated algorithm.
-  SmoothingOutput Smooth(const Eigen::Ref<const RowMatrixXd>& observations, int beam) const;
+  /// observation. beam: 0 exact, else N of the truncated algorithm; beam_unobserved: the beam at
+  /// steps without any observation (0: same as beam).
+  SmoothingOutput Smooth(const Eigen::Ref<const RowMatrixXd>& observations, int beam, int beam_unobserved = 0) const;
   /// MAP sequence (Viterbi): T x D states and their indices.
   ViterbiResult MapSequence(const Eigen::Ref<const RowMatrixXd>& observations, int beam) const;
 

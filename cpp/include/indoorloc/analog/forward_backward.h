@@ -37,6 +37,10 @@ using LogEmission = std::function<void(int t, const int* states, int count, doub
 struct ForwardBackwardOptions {
   /// N of the truncated algorithm; 0 = exact.
   int beam = 0;
+  /// Optional per-step beams (size T) overriding `beam`, e.g. a wider beam at steps without an
+  /// observation, where the predicted mass is spread evenly and a narrow cut drops states at
+  /// random (0 in an entry: no truncation at that step).
+  std::vector<int> beam_per_step;
   bool IsValid(std::string* error) const;
 };
 

@@ -1,0 +1,325 @@
+"""Table 1 of the analog HMM paper (Lguensat et al., EUSIPCO 2016, §3.1): Lorenz-63 from x alone.
+
+The experiment: a catalog of M (analog, successor) pairs from one long Lorenz-63 simulation
+(dt = 0.01), and independent test sequences of T = 1000 steps whose x component is observed
+every dt_obs = 40 steps with noise variance R = 2 (:mod:`indoorloc.simulate.lorenz63`). Every
+method reconstructs (x, y, z) at all T steps; the score is the RMSE over the 3 variables and the
+T steps, averaged over seeded realisations:
+
+- EnKS: 100 members, the true Lorenz-63 equations (:func:`analog_baselines.enks_lorenz63`);
+- AnEnKS: 100 members, analog forecasting on the catalog (:func:`analog_baselines.anenks`);
+- AnFB: posterior mean of the analog HMM, truncated forward-backward keeping N states
+  (``indoorloc.analog``, the C++ implementation; N = 1000 in the paper, K = 10 here).
+
+:func:`run_table1` returns the numbers and :func:`markdown_table` lays them out next to the
+paper's; :func:`reconstruction_example` returns one realisation for the paper's Fig. 2 (3-D
+attractor and time series). Everything is seeded: the catalog of size M is
+``catalog_trajectory(M, seed=seed)`` (so the 10^4 catalog is the start of the 10^5 one), test
+problem r is ``test_problem(seed + r)`` (independent streams, see the simulator), and every
+stochastic method of realisation r is seeded with ``seed + r``.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Dict, List, Optional, Sequence
+
+import numpy as np
+
+from indoorloc.experiments import analog_baselines
+from indoorloc.progress import progress
+from indoorloc.simulate import lorenz63
+
+#: Table 1 of the paper: RMSE and execution time (their Matlab/Python, their machine).
+PAPER_RMSE = {
+    ("EnKS", None): 3.7799,
+    ("AnEnKS", 10**4): 4.3279,
+    ("AnEnKS", 10**5): 3.2788,
+    ("AnFB", 10**4): 1.3183,
+    ("AnFB", 10**5): 0.5774,
+}
+PAPER_TIME = {
+    ("EnKS", None): "2 h",
+    ("AnEnKS", 10**4): "13 min",
+    ("AnEnKS", 10**5): "1.3 h",
+    ("AnFB", 10**4): "8 min",
+    ("AnFB", 10**5): "14 min",
+}
+PAPER_BEAM = 1000
+METHODS = ("enks", "anenks", "anfb")
+
+
+def analog_bindings():
+    """The ``indoorloc.analog`` module, or ImportError with the reason when it is not built."""
+    try:
+        from indoorloc import analog
+    except ImportError as exc:
+        raise ImportError(
+            "indoorloc: the AnFB needs the analog HMM bindings (indoorloc.analog over "
+            f"indoorloc._core.analog), which this installation does not have ({exc}). Rebuild and "
+            "reinstall indoorloc, or leave 'anfb' out of 'methods'."
+        ) from exc
+    if not hasattr(analog, "AnalogHMM"):
+        raise ImportError(
+            "indoorloc: indoorloc.analog exists but has no AnalogHMM: the analog bindings are not "
+            "built in this installation. Rebuild and reinstall indoorloc, or leave 'anfb' out of 'methods'."
+        )
+    return analog
+
+
+def analog_available() -> bool:
+    """True when ``indoorloc.analog`` provides the AnalogHMM bindings."""
+    try:
+        analog_bindings()
+    except ImportError:
+        return False
+    return True
+
+
+def rmse(estimate: np.ndarray, truth: np.ndarray) -> float:
+    """Root mean square error over every time step and every variable."""
+    estimate = np.asarray(estimate, dtype=float)
+    truth = np.asarray(truth, dtype=float)
+    if estimate.shape != truth.shape:
+        raise ValueError(f"indoorloc: estimate {estimate.shape} and truth {truth.shape} differ in shape")
+    return float(np.sqrt(np.mean((estimate - truth) ** 2)))
+
+
+def _check_methods(methods: Sequence[str]) -> List[str]:
+    methods = [m.lower() for m in methods]
+    unknown = [m for m in methods if m not in METHODS]
+    if unknown or not methods:
+        raise ValueError(f"indoorloc: argument 'methods': unknown {unknown}; choose among {list(METHODS)}")
+    return methods
+
+
+def _beam_label(beam: Optional[int]) -> str:
+    return "exact" if beam is None else str(int(beam))
+
+
+def build_anfb(catalog: np.ndarray, k: int, R: float):
+    """Analog HMM of a Lorenz-63 catalog trajectory (x observed); returns (hmm, seconds)."""
+    analog = analog_bindings()
+    start = time.perf_counter()
+    cat = analog.Catalog([np.ascontiguousarray(catalog)], lag=1, stride=1)
+    hmm = analog.AnalogHMM(cat, k=int(k), observed=[0], R=np.array([[float(R)]]))
+    return hmm, time.perf_counter() - start
+
+
+def run_anfb(hmm, observations: np.ndarray, beam: Optional[int]) -> Dict[str, object]:
+    """Posterior mean (T, 3) and diagnostics of one smoothing run."""
+    start = time.perf_counter()
+    out = hmm.smooth(observations, beam=None if beam is None else int(beam))
+    seconds = time.perf_counter() - start
+    mean = np.asarray(out["mean"])[:, :3]
+    dropped = np.asarray(out["dropped_mass"]) if "dropped_mass" in out else np.zeros(0)
+    return {
+        "mean": mean,
+        "seconds": seconds,
+        "log_likelihood": float(out["log_likelihood"]),
+        "max_dropped_mass": float(np.max(dropped)) if dropped.size else 0.0,
+    }
+
+
+def run_table1(
+    n_realisations: int = 3,
+    catalog_sizes: Sequence[int] = (10**4, 10**5),
+    beams: Sequence[Optional[int]] = (1000, 3000, 10000),
+    k: int = 10,
+    methods: Sequence[str] = METHODS,
+    T: int = 1000,
+    dt_obs: int = 40,
+    R: float = 2.0,
+    n_members: int = 100,
+    anenks_k: int = 50,
+    enks_Q: float = analog_baselines.DEFAULT_LORENZ_Q,
+    seed: int = 0,
+) -> Dict[str, object]:
+    """Run Table 1: RMSE and time of EnKS, AnEnKS and AnFB over seeded realisations.
+
+    Parameters
+    ----------
+    n_realisations : int
+        Test problems ``test_problem(seed + r)``, r = 0 .. n_realisations - 1.
+    catalog_sizes : ints
+        Catalog sizes M (number of pairs).
+    beams : ints or None
+        N of the truncated AnFB (None: exact forward-backward).
+    k : int
+        Successors per state of the analog HMM (K of eq. 4).
+    methods : subset of ("enks", "anenks", "anfb")
+    T, dt_obs, R : test problem (1000, 40, 2 in the paper).
+    n_members : int
+        Ensemble size of EnKS and AnEnKS.
+    anenks_k : int
+        Analogs of the AnEnKS local linear regression.
+    enks_Q : float
+        Model noise variance per step of the EnKS.
+    seed : int
+
+    Returns
+    -------
+    dict with "settings", "rows" (one per method / M / N: per-realisation "rmse" and
+    "seconds", their mean and std, the paper's RMSE and time) and "build_seconds" per M.
+    Raises ImportError (with the reason) if "anfb" is requested and the bindings are missing.
+    """
+    methods = _check_methods(methods)
+    if int(n_realisations) != n_realisations or n_realisations < 1:
+        raise ValueError(f"indoorloc: argument 'n_realisations': expected an integer >= 1, got {n_realisations}")
+    if "anfb" in methods:
+        analog_bindings()
+        if not beams:
+            raise ValueError("indoorloc: argument 'beams': give at least one N (or None for exact)")
+    sizes = [int(m) for m in catalog_sizes] if ("anenks" in methods or "anfb" in methods) else []
+
+    build: Dict[int, Dict[str, float]] = {}
+    forecasters, hmms = {}, {}
+    for M in sizes:
+        start = time.perf_counter()
+        catalog = lorenz63.catalog_trajectory(M, seed=seed)
+        build[M] = {"simulate_catalog": time.perf_counter() - start}
+        if "anenks" in methods:
+            start = time.perf_counter()
+            forecasters[M] = analog_baselines.AnalogForecaster(catalog[:-1], catalog[1:], k=anenks_k)
+            build[M]["anenks_kdtree"] = time.perf_counter() - start
+        if "anfb" in methods:
+            hmms[M], build[M]["anfb_hmm"] = build_anfb(catalog, k, R)
+
+    rows: Dict[tuple, Dict[str, object]] = {}
+
+    def record(method: str, M: Optional[int], beam: Optional[int], value: float, seconds: float, extra=None):
+        key = (method, M, _beam_label(beam) if method == "AnFB" else None)
+        row = rows.setdefault(
+            key,
+            {
+                "method": method,
+                "M": M,
+                "beam": key[2],
+                "rmse": [],
+                "seconds": [],
+                "paper_rmse": PAPER_RMSE.get((method, M)) if method != "AnFB" or beam == PAPER_BEAM else None,
+                "paper_time": PAPER_TIME.get((method, M)) if method != "AnFB" or beam == PAPER_BEAM else None,
+            },
+        )
+        row["rmse"].append(value)
+        row["seconds"].append(seconds)
+        for name, v in (extra or {}).items():
+            row.setdefault(name, []).append(v)
+
+    for r in progress(range(int(n_realisations)), total=int(n_realisations), desc="Lorenz-63 realisations"):
+        truth, observations = lorenz63.test_problem(seed + r, T=T, dt_obs=dt_obs, R=R)
+        if "enks" in methods:
+            start = time.perf_counter()
+            est = analog_baselines.enks_lorenz63(observations, n_members=n_members, seed=seed + r, R=R, Q=enks_Q)
+            record("EnKS", None, None, rmse(est, truth), time.perf_counter() - start)
+        for M in sizes:
+            if "anenks" in methods:
+                start = time.perf_counter()
+                est = analog_baselines.anenks(
+                    observations, None, None, observed=[0], R=R, n_members=n_members, seed=seed + r,
+                    forecaster=forecasters[M],
+                )
+                record("AnEnKS", M, None, rmse(est, truth), time.perf_counter() - start)
+            if "anfb" in methods:
+                for beam in beams:
+                    out = run_anfb(hmms[M], observations, beam)
+                    record(
+                        "AnFB", M, beam, rmse(out["mean"], truth), out["seconds"],
+                        {"max_dropped_mass": out["max_dropped_mass"]},
+                    )
+
+    out_rows = []
+    for row in rows.values():
+        values = np.asarray(row["rmse"])
+        row["rmse_mean"] = float(values.mean())
+        row["rmse_std"] = float(values.std(ddof=1)) if values.size > 1 else 0.0
+        row["seconds_mean"] = float(np.mean(row["seconds"]))
+        out_rows.append(row)
+    return {
+        "title": "Lorenz-63 reconstruction from noisy x every dt_obs steps (paper 001, Table 1)",
+        "settings": {
+            "n_realisations": int(n_realisations), "catalog_sizes": sizes, "beams": [_beam_label(b) for b in beams],
+            "k": int(k), "methods": methods, "T": int(T), "dt_obs": int(dt_obs), "R": float(R),
+            "n_members": int(n_members), "anenks_k": int(anenks_k), "enks_Q": float(enks_Q), "seed": int(seed),
+        },
+        "rows": out_rows,
+        "build_seconds": {str(M): v for M, v in build.items()},
+    }
+
+
+def markdown_table(result: Dict[str, object]) -> str:
+    """The rows of :func:`run_table1` as a markdown table next to the paper's Table 1."""
+    n = result["settings"]["n_realisations"]
+    lines = [
+        f"| method | M | N (beam) | RMSE (mean ± std, {n} runs) | paper RMSE | time per run [s] | paper time |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for row in result["rows"]:
+        M = _format_size(row["M"])
+        beam = row["beam"] or "-"
+        paper = "-" if row["paper_rmse"] is None else f"{row['paper_rmse']:.4g}"
+        paper_time = row["paper_time"] or "-"
+        lines.append(
+            f"| {row['method']} | {M} | {beam} | {row['rmse_mean']:.3f} ± {row['rmse_std']:.3f} | {paper} | "
+            f"{row['seconds_mean']:.2f} | {paper_time} |"
+        )
+    return "\n".join(lines)
+
+
+def _format_size(m: Optional[int]) -> str:
+    if m is None:
+        return "-"
+    exponent = int(round(np.log10(m)))
+    return f"10^{exponent}" if 10**exponent == m else str(m)
+
+
+def reconstruction_example(
+    seed: int = 0,
+    M: int = 10**5,
+    beam: Optional[int] = 1000,
+    k: int = 10,
+    methods: Sequence[str] = METHODS,
+    T: int = 1000,
+    dt_obs: int = 40,
+    R: float = 2.0,
+    n_members: int = 100,
+    anenks_k: int = 50,
+) -> Dict[str, object]:
+    """One realisation for the paper's Fig. 2: truth, observations and each reconstruction.
+
+    Returns
+    -------
+    dict with "truth" (T, 3), "observations" (T, 1) (NaN = not observed), "t_obs" (indices of
+    the observed steps), "estimates" {method: (T, 3)}, "rmse" {method: float}, "seconds".
+    """
+    methods = _check_methods(methods)
+    if "anfb" in methods:
+        analog_bindings()
+    truth, observations = lorenz63.test_problem(seed, T=T, dt_obs=dt_obs, R=R)
+    estimates, seconds = {}, {}
+    catalog = lorenz63.catalog_trajectory(int(M), seed=seed) if ("anfb" in methods or "anenks" in methods) else None
+    if "anfb" in methods:
+        hmm, build = build_anfb(catalog, k, R)
+        out = run_anfb(hmm, observations, beam)
+        estimates["AnFB"], seconds["AnFB"] = out["mean"], build + out["seconds"]
+    if "anenks" in methods:
+        start = time.perf_counter()
+        estimates["AnEnKS"] = analog_baselines.anenks(
+            observations, catalog[:-1], catalog[1:], observed=[0], R=R, n_members=n_members, k=anenks_k, seed=seed
+        )
+        seconds["AnEnKS"] = time.perf_counter() - start
+    if "enks" in methods:
+        start = time.perf_counter()
+        estimates["EnKS"] = analog_baselines.enks_lorenz63(observations, n_members=n_members, seed=seed, R=R)
+        seconds["EnKS"] = time.perf_counter() - start
+    return {
+        "truth": truth,
+        "observations": observations,
+        "t_obs": np.flatnonzero(np.isfinite(observations[:, 0])),
+        "estimates": estimates,
+        "rmse": {name: rmse(est, truth) for name, est in estimates.items()},
+        "seconds": seconds,
+        "settings": {
+            "seed": seed, "M": int(M), "beam": _beam_label(beam), "k": int(k), "T": T, "dt_obs": dt_obs, "R": R,
+        },
+    }
