@@ -51,19 +51,6 @@ void CheckInputs(const SparseTransitions& transitions, const Eigen::VectorXd& in
   CheckArgument(num_steps >= 1, "num_steps", "must be >= 1");
 }
 
-// Exponentiates log-values shifted by their maximum into `out`, returns (sum, max).
-std::pair<double, double> ShiftedExp(const std::vector<double>& log_values, std::vector<double>* out) {
-  double max = kMinusInf;
-  for (double v : log_values) max = std::max(max, v);
-  out->resize(log_values.size());
-  if (max == kMinusInf) {
-    ThrowInvalidArgument("log_emission", "every candidate state has zero likelihood (-inf) at some step");
-  }
-  double sum = 0.0;
-  for (size_t i = 0; i < log_values.size(); ++i) sum += ((*out)[i] = std::exp(log_values[i] - max));
-  return {sum, max};
-}
-
 }  // namespace
 
 void SparseTransitions::Validate() const {
@@ -111,19 +98,26 @@ ForwardBackwardResult ForwardBackward(const SparseTransitions& tr, const Eigen::
   out.filtering.probabilities.resize(steps);
   out.dropped_mass = Eigen::VectorXd::Zero(num_steps);
   std::vector<std::vector<double>> emission(steps);  // linear b_j(y_t) / max, on the support
-  std::vector<double> log_b, lin;
+  std::vector<double> log_b;
   std::vector<double> predicted(static_cast<size_t>(m), 0.0);
   std::vector<char> touched(static_cast<size_t>(m), 0);
 
-  // Forward with scaling.
+  // Forward with scaling. Per step: predicted prior p_j (scatter over the K successors of the
+  // support), emissions b_j = exp(log b_j - max log b) (one exp per candidate, no log), then
+  // α_j ∝ p_j b_j and log-likelihood increment max log b + log Σ p_j b_j.
+  std::vector<int> cand;
+  std::vector<double> prior;
+  cand.reserve(static_cast<size_t>(m));
+  prior.reserve(static_cast<size_t>(m));
   for (size_t t = 0; t < steps; ++t) {
-    std::vector<int> cand;
-    std::vector<double> prior;
+    cand.clear();
+    prior.clear();
     if (t == 0) {
+      const double total = initial.sum();
       for (int j = 0; j < m; ++j) {
         if (initial[j] > 0.0) {
           cand.push_back(j);
-          prior.push_back(initial[j]);
+          prior.push_back(initial[j] / total);
         }
       }
     } else {
@@ -131,43 +125,47 @@ ForwardBackwardResult ForwardBackward(const SparseTransitions& tr, const Eigen::
       const std::vector<double>& a = out.filtering.probabilities[t - 1];
       for (size_t i = 0; i < s.size(); ++i) {
         const size_t base = static_cast<size_t>(s[i]) * static_cast<size_t>(k);
+        const double ai = a[i];
         for (int j = 0; j < k; ++j) {
-          const int nxt = tr.next[base + static_cast<size_t>(j)];
-          if (!touched[static_cast<size_t>(nxt)]) {
-            touched[static_cast<size_t>(nxt)] = 1;
-            cand.push_back(nxt);
+          const size_t nxt = static_cast<size_t>(tr.next[base + static_cast<size_t>(j)]);
+          if (!touched[nxt]) {
+            touched[nxt] = 1;
+            cand.push_back(static_cast<int>(nxt));
           }
-          predicted[static_cast<size_t>(nxt)] += a[i] * tr.prob[base + static_cast<size_t>(j)];
+          predicted[nxt] += ai * tr.prob[base + static_cast<size_t>(j)];
         }
       }
       prior.resize(cand.size());
       for (size_t c = 0; c < cand.size(); ++c) {
-        prior[c] = predicted[static_cast<size_t>(cand[c])];
-        predicted[static_cast<size_t>(cand[c])] = 0.0;
-        touched[static_cast<size_t>(cand[c])] = 0;
+        const size_t j = static_cast<size_t>(cand[c]);
+        prior[c] = predicted[j];
+        predicted[j] = 0.0;
+        touched[j] = 0;
       }
     }
     log_b.resize(cand.size());
     log_emission(static_cast<int>(t), cand.data(), static_cast<int>(cand.size()), log_b.data());
-    // α ∝ prior · b, with b shifted by its maximum.
-    std::vector<double> lp(cand.size());
-    for (size_t c = 0; c < cand.size(); ++c) lp[c] = prior[c] > 0.0 ? std::log(prior[c]) + log_b[c] : kMinusInf;
-    const auto [sum, max] = ShiftedExp(lp, &lin);
-    out.log_likelihood += max + std::log(sum) - (t == 0 ? std::log(initial.sum()) : 0.0);
-    for (double& v : lin) v /= sum;
-    // Keep the linear emission of each candidate (relative to its own maximum) for the backward pass.
     double bmax = kMinusInf;
     for (double v : log_b) bmax = std::max(bmax, v);
+    if (bmax == kMinusInf) ThrowInvalidArgument("log_emission", "every candidate state has zero likelihood (-inf) at some step");
     std::vector<double> b(cand.size());
-    for (size_t c = 0; c < cand.size(); ++c) b[c] = std::exp(log_b[c] - bmax);
+    std::vector<double> alpha(cand.size());
+    double sum = 0.0;
+    for (size_t c = 0; c < cand.size(); ++c) {
+      b[c] = std::exp(log_b[c] - bmax);
+      sum += (alpha[c] = prior[c] * b[c]);
+    }
+    if (!(sum > 0.0)) ThrowInvalidArgument("log_emission", "the observations have zero likelihood under every predicted state at step " + std::to_string(t));
+    out.log_likelihood += bmax + std::log(sum);
+    const double inv = 1.0 / sum;
+    for (double& v : alpha) v *= inv;
     // Truncate (carrying b along).
     const int beam = options.beam_per_step.empty() ? options.beam : options.beam_per_step[t];
     if (beam > 0 && cand.size() > static_cast<size_t>(beam)) {
       std::vector<int> idx(cand.size());
       std::iota(idx.begin(), idx.end(), 0);
-      std::vector<double> vals = lin;
       std::vector<int> states = idx;
-      out.dropped_mass[static_cast<Eigen::Index>(t)] = Truncate(&states, &vals, beam);
+      out.dropped_mass[static_cast<Eigen::Index>(t)] = Truncate(&states, &alpha, beam);
       std::vector<int> kept_states(states.size());
       std::vector<double> kept_b(states.size());
       for (size_t c = 0; c < states.size(); ++c) {
@@ -175,11 +173,11 @@ ForwardBackwardResult ForwardBackward(const SparseTransitions& tr, const Eigen::
         kept_b[c] = b[static_cast<size_t>(states[c])];
       }
       out.filtering.states[t] = std::move(kept_states);
-      out.filtering.probabilities[t] = std::move(vals);
+      out.filtering.probabilities[t] = std::move(alpha);
       emission[t] = std::move(kept_b);
     } else {
-      out.filtering.states[t] = std::move(cand);
-      out.filtering.probabilities[t] = std::move(lin);
+      out.filtering.states[t] = cand;
+      out.filtering.probabilities[t] = std::move(alpha);
       emission[t] = std::move(b);
     }
   }
