@@ -35,6 +35,28 @@ SparseTransitions TransitionsFromNumpy(const py::object& next_idx, const py::obj
   return tr;
 }
 
+// The arguments of the generic forward_backward / viterbi bindings, converted and checked.
+struct GenericHmm {
+  SparseTransitions transitions;
+  analog::RowMatrixXd log_b;
+  Eigen::VectorXd initial;
+  analog::ForwardBackwardOptions options;
+
+  GenericHmm(const py::object& next_idx, const py::object& prob, const py::object& log_emission,
+             const py::object& initial_obj, const py::object& beam)
+      : transitions(TransitionsFromNumpy(next_idx, prob)) {
+    log_b = ToMatrix(log_emission, "log_emission", -1, transitions.num_states, Finiteness::kAllowMinusInf).map;
+    initial = ToVector(initial_obj, "initial", transitions.num_states).map;
+    options.beam = beam.is_none() ? 0 : beam.cast<int>();
+  }
+  int steps() const { return static_cast<int>(log_b.rows()); }
+  analog::LogEmission emission() const {
+    return [this](int t, const int* s, int n, double* out) {
+      for (int i = 0; i < n; ++i) out[i] = log_b(t, s[i]);
+    };
+  }
+};
+
 py::array_t<double> DensePosterior(const analog::SparsePosteriors& p, int m) {
   const py::ssize_t steps = static_cast<py::ssize_t>(p.states.size());
   py::array_t<double> out({steps, static_cast<py::ssize_t>(m)});
@@ -157,24 +179,16 @@ log_likelihood, dropped_mass (T,), support_size (T,), seconds.)doc")
 
   m.def("forward_backward", [](const py::object& next_idx, const py::object& prob, const py::object& log_emission,
                                const py::object& initial, const py::object& beam) {
-          const SparseTransitions tr = TransitionsFromNumpy(next_idx, prob);
-          MatrixArg le = ToMatrix(log_emission, "log_emission", -1, tr.num_states, Finiteness::kAllowMinusInf);
-          VectorArg init = ToVector(initial, "initial", tr.num_states);
-          analog::ForwardBackwardOptions o;
-          o.beam = beam.is_none() ? 0 : beam.cast<int>();
-          const analog::RowMatrixXd log_b = le.map;
-          const Eigen::VectorXd pi = init.map;
+          const GenericHmm h(next_idx, prob, log_emission, initial, beam);
           analog::ForwardBackwardResult r;
           {
             py::gil_scoped_release release;
-            r = analog::ForwardBackward(tr, pi, static_cast<int>(log_b.rows()),
-                                        [&log_b](int t, const int* s, int n, double* out) {
-                                          for (int i = 0; i < n; ++i) out[i] = log_b(t, s[i]);
-                                        }, o);
+            r = analog::ForwardBackward(h.transitions, h.initial, h.steps(), h.emission(), h.options);
           }
+          const int num_states = h.transitions.num_states;
           py::dict d;
-          d["posterior"] = DensePosterior(r.smoothing, tr.num_states);
-          d["filtering"] = DensePosterior(r.filtering, tr.num_states);
+          d["posterior"] = DensePosterior(r.smoothing, num_states);
+          d["filtering"] = DensePosterior(r.filtering, num_states);
           d["log_likelihood"] = r.log_likelihood;
           d["dropped_mass"] = r.dropped_mass;
           d["seconds"] = r.seconds;
@@ -187,16 +201,8 @@ dense posterior (T, M), filtering (T, M), log_likelihood, dropped_mass (T,), sec
 
   m.def("viterbi", [](const py::object& next_idx, const py::object& prob, const py::object& log_emission,
                       const py::object& initial, const py::object& beam) {
-          const SparseTransitions tr = TransitionsFromNumpy(next_idx, prob);
-          MatrixArg le = ToMatrix(log_emission, "log_emission", -1, tr.num_states, Finiteness::kAllowMinusInf);
-          VectorArg init = ToVector(initial, "initial", tr.num_states);
-          analog::ForwardBackwardOptions o;
-          o.beam = beam.is_none() ? 0 : beam.cast<int>();
-          const analog::RowMatrixXd log_b = le.map;
-          const analog::ViterbiResult v = analog::Viterbi(tr, init.map, static_cast<int>(log_b.rows()),
-                                                          [&log_b](int t, const int* s, int n, double* out) {
-                                                            for (int i = 0; i < n; ++i) out[i] = log_b(t, s[i]);
-                                                          }, o);
+          const GenericHmm h(next_idx, prob, log_emission, initial, beam);
+          const analog::ViterbiResult v = analog::Viterbi(h.transitions, h.initial, h.steps(), h.emission(), h.options);
           return py::make_tuple(v.states, v.log_probability);
         },
         py::arg("next_idx"), py::arg("prob"), py::arg("log_emission"), py::arg("initial"), py::arg("beam") = py::none(),
