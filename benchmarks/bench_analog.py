@@ -22,9 +22,11 @@ table says "not installed". Same process, interleaved repetitions, median times.
 from __future__ import annotations
 
 import time
-from typing import Callable, Dict, Optional, Tuple
+from typing import Dict, Optional, Tuple
 
 import numpy as np
+
+from timing import median_seconds
 
 from indoorloc.simulate import lorenz63
 
@@ -34,15 +36,6 @@ T = 1000
 K = 10
 BEAM = 1000
 R = 2.0
-
-
-def _median_seconds(fn: Callable[[], object], repeat: int) -> float:
-    times = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return float(np.median(times))
 
 
 def _sparse_transitions(hmm, states: np.ndarray, k: int) -> Tuple[np.ndarray, np.ndarray]:
@@ -126,7 +119,7 @@ def _lorenz_anfb(analog, repeat: int) -> Dict[str, object]:
         hmm = analog.AnalogHMM(cat, k=K, observed=[0], R=np.array([[R]]))
         build.append(time.perf_counter() - start)
     hmm.smooth(observations, beam=BEAM)
-    seconds = _median_seconds(lambda: hmm.smooth(observations, beam=BEAM), repeat)
+    seconds = median_seconds(lambda: hmm.smooth(observations, beam=BEAM), repeat)
     out = hmm.smooth(observations, beam=BEAM)
     rmse = float(np.sqrt(np.mean((np.asarray(out["mean"])[:, :3] - truth) ** 2)))
     return {"M": M_LORENZ, "T": T, "K": K, "beam": BEAM, "build_seconds": float(np.median(build)),
@@ -165,7 +158,7 @@ def run(quick: bool = False) -> dict:
 
     reference = fb()
     post_ref = np.asarray(reference["posterior"])
-    seconds = _median_seconds(fb, repeat)
+    seconds = median_seconds(fb, repeat)
     rows["indoorloc forward_backward (sparse, exact)"] = {
         "seconds": seconds, "state_steps_per_s": state_steps / seconds, "max_abs_posterior_diff": 0.0,
         "log_likelihood_diff": 0.0,

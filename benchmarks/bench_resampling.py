@@ -4,9 +4,10 @@ installed, `particles` itself. Single thread, same process, interleaved repetiti
 
 from __future__ import annotations
 
-import time
 
 import numpy as np
+
+from timing import median_seconds
 
 from indoorloc import core
 
@@ -19,15 +20,6 @@ def numpy_systematic(lw: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     w /= w.sum()
     u = (rng.random() + np.arange(lw.size)) / lw.size
     return np.searchsorted(np.cumsum(w), u)
-
-
-def _median_seconds(fn, repeat: int) -> float:
-    times = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return float(np.median(times))
 
 
 def run(quick: bool = False) -> dict:
@@ -45,10 +37,10 @@ def run(quick: bool = False) -> dict:
     rows = {}
     for scheme in core.RESAMPLING_SCHEMES:
         core.resample(lw, scheme, stream)
-        rows[f"indoorloc {scheme}"] = _median_seconds(lambda: core.resample(lw, scheme, stream), repeat)
+        rows[f"indoorloc {scheme}"] = median_seconds(lambda: core.resample(lw, scheme, stream), repeat)
     for name, fn in peers.items():
         fn()
-        rows[name] = _median_seconds(fn, repeat)
+        rows[name] = median_seconds(fn, repeat)
     base = rows["indoorloc systematic"]
     return {
         "title": f"Resampling {N:,} log-weights (median of {repeat})",

@@ -16,21 +16,14 @@ import time
 
 import numpy as np
 
+from timing import best_seconds
+
 from indoorloc import wifi
 
 N_MAP = 100_000
 N_FIELDS = 12
 N_QUERIES = 1_000_000
 N_PEER_QUERIES = 100_000
-
-
-def _best(fn, repeat: int) -> float:
-    best = float("inf")
-    for _ in range(repeat):
-        start = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - start)
-    return best
 
 
 def scipy_interpolate(tri, fields: np.ndarray, q: np.ndarray):
@@ -70,15 +63,15 @@ def run(quick: bool = False) -> dict:
     ok = inside & inside_sp
     max_diff = float(max(np.abs(v_ours[ok] - v_sp[ok]).max(), np.abs(g_ours[ok] - g_sp[ok]).max()))
 
-    t_ours = _best(lambda: interp.interpolate(q, num_threads=1), repeat)
-    t_scipy = _best(lambda: scipy_interpolate(tri, fields, q_peer), repeat)
+    t_ours = best_seconds(lambda: interp.interpolate(q, num_threads=1), repeat)
+    t_scipy = best_seconds(lambda: scipy_interpolate(tri, fields, q_peer), repeat)
 
     def mpl_run():
         for k in range(N_FIELDS):
             mpl_interps[k](q_peer[:, 0], q_peer[:, 1])
             mpl_interps[k].gradient(q_peer[:, 0], q_peer[:, 1])
 
-    t_mpl = _best(mpl_run, 1)
+    t_mpl = best_seconds(mpl_run, 1)
     rates = {
         "indoorloc DelaunayInterpolator": N_QUERIES / t_ours,
         "scipy Delaunay.find_simplex + numpy": N_PEER_QUERIES / t_scipy,
@@ -87,8 +80,8 @@ def run(quick: bool = False) -> dict:
 
     pos6 = rng.uniform(0, 1000, size=(1_000_000, 2))
     f6 = np.zeros((1_000_000, 1))
-    build_ours = _best(lambda: wifi.DelaunayInterpolator(pos6, f6), 1 if quick else 2)
-    build_scipy = _best(lambda: Delaunay(pos6), 1)
+    build_ours = best_seconds(lambda: wifi.DelaunayInterpolator(pos6, f6), 1 if quick else 2)
+    build_scipy = best_seconds(lambda: Delaunay(pos6), 1)
 
     from indoorloc.experiments import wifi_simulation as ws
 
@@ -102,7 +95,7 @@ def run(quick: bool = False) -> dict:
         tracker.reset_to(path[0])
         tracker.track(scans)
 
-    t_track = _best(track, repeat)
+    t_track = best_seconds(track, repeat)
     tracker.reset_to(path[0])
     n_calls = 50_000
     start = time.perf_counter()
