@@ -1,1 +1,37 @@
-# Stubs of indoorloc._core.pdr (no bindings yet).
+# Stubs of indoorloc._core.pdr: zero-velocity detection and the ZUPT-aided EKF.
+from typing import Dict
+
+import numpy as np
+import numpy.typing as npt
+
+_ArrayLike = npt.ArrayLike
+_F64 = npt.NDArray[np.float64]
+
+def shoe_statistic(
+    acc_mps2: _ArrayLike,
+    gyro_radps: _ArrayLike,
+    window: int = 5,
+    sigma_acc_mps2: float = 0.01,
+    sigma_gyro_radps: float = ...,
+    gravity_mps2: float = 9.81,
+) -> _F64: ...
+def shoe_detector(
+    acc_mps2: _ArrayLike,
+    gyro_radps: _ArrayLike,
+    window: int = 5,
+    threshold: float = 3e4,
+    sigma_acc_mps2: float = 0.01,
+    sigma_gyro_radps: float = ...,
+    gravity_mps2: float = 9.81,
+) -> npt.NDArray[np.bool_]: ...
+def zupt_ekf(
+    time_s: _ArrayLike,
+    acc_mps2: _ArrayLike,
+    gyro_radps: _ArrayLike,
+    stance: _ArrayLike,
+    sigma_acc_mps2: float = 0.5,
+    sigma_gyro_radps: float = ...,
+    sigma_zupt_mps: float = 0.01,
+    gravity_mps2: float = 9.81,
+    init_samples: int = 20,
+) -> Dict[str, np.ndarray]: ...

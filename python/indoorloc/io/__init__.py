@@ -1,4 +1,4 @@
-"""File formats at the edge of indoorloc: dataset loaders and road-network files."""
+"""File formats at the edge of indoorloc: dataset loaders (WiFi, foot IMU) and road-network files."""
 
 from indoorloc.io.wifi_datasets import (
     RSS_RTT_GRID_M,
@@ -11,6 +11,15 @@ from indoorloc.io.wifi_datasets import (
     load_surimi,
     load_uji_library,
 )
+from indoorloc.io.pdr_datasets import (
+    STANDARD_GRAVITY_MPS2,
+    ImuRecording,
+    check_imu_units,
+    list_pyshoe_trials,
+    load_openshoe,
+    load_pyshoe_trial,
+    load_xio,
+)
 from indoorloc.io.road_network import (
     grid_with_diagonals_segments,
     load_road_network,
@@ -21,6 +30,13 @@ from indoorloc.io.road_network import (
 )
 
 __all__ = [
+    "STANDARD_GRAVITY_MPS2",
+    "ImuRecording",
+    "check_imu_units",
+    "list_pyshoe_trials",
+    "load_openshoe",
+    "load_pyshoe_trial",
+    "load_xio",
     "RSS_RTT_GRID_M",
     "RSS_RTT_ROOMS",
     "SURIMI_NAMES",

@@ -1,0 +1,133 @@
+#include "indoorloc/pdr/zupt_ekf.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <vector>
+
+#include <Eigen/Dense>
+#include <Eigen/Geometry>
+
+#include "indoorloc/core/check.h"
+#include "indoorloc/core/options.h"
+
+namespace indoorloc::pdr {
+namespace {
+
+Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d s;
+  s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return s;
+}
+
+// Rotation vector -> quaternion.
+Eigen::Quaterniond Exp(const Eigen::Vector3d& phi) {
+  const double angle = phi.norm();
+  if (angle < 1e-12) return Eigen::Quaterniond(1.0, 0.5 * phi.x(), 0.5 * phi.y(), 0.5 * phi.z()).normalized();
+  return Eigen::Quaterniond(Eigen::AngleAxisd(angle, phi / angle));
+}
+
+// The rotation (body -> nav) that maps the measured mean specific force onto +z (level), yaw 0.
+Eigen::Quaterniond LevelAttitude(const Eigen::Vector3d& mean_f) {
+  const Eigen::Vector3d u = mean_f.normalized();
+  const Eigen::Vector3d z(0, 0, 1);
+  Eigen::Quaterniond q = Eigen::Quaterniond::FromTwoVectors(u, z);
+  // Remove the yaw this rotation happens to introduce, so that the initial heading is 0.
+  const Eigen::Matrix3d r = q.toRotationMatrix();
+  const double yaw = std::atan2(r(1, 0), r(0, 0));
+  return (Eigen::Quaterniond(Eigen::AngleAxisd(-yaw, z)) * q).normalized();
+}
+
+}  // namespace
+
+bool ZuptEkfOptions::IsValid(std::string* error) const {
+  auto fail = [&](const char* why) {
+    *error = why;
+    return false;
+  };
+  if (!(sigma_acc_mps2 > 0.0) || !(sigma_gyro_radps > 0.0) || !(sigma_zupt_mps > 0.0)) return fail("noise sds must be > 0");
+  if (!(gravity_mps2 > 0.0)) return fail("gravity_mps2 must be > 0");
+  if (init_samples < 1) return fail("init_samples must be >= 1");
+  return true;
+}
+
+ZuptEkfOutput RunZuptEkf(const Eigen::Ref<const Eigen::VectorXd>& time_s, const Eigen::Ref<const RowMatrixXd>& acc,
+                         const Eigen::Ref<const RowMatrixXd>& gyro, const BoolVector& stance, const ZuptEkfOptions& options) {
+  ValidateOptions(options);
+  const auto start = std::chrono::steady_clock::now();
+  const Eigen::Index n = acc.rows();
+  CheckShape(acc, -1, 3, "acc_mps2");
+  CheckShape(gyro, n, 3, "gyro_radps");
+  CheckArgument(time_s.size() == n, "time_s", "must have one entry per sample");
+  CheckArgument(stance.size() == n, "stance", "must have one entry per sample");
+  CheckArgument(n >= 2, "acc_mps2", "needs at least 2 samples");
+  CheckFinite(time_s, "time_s");
+  CheckFinite(acc, "acc_mps2");
+  CheckFinite(gyro, "gyro_radps");
+  // Median positive sample period, used where timestamps repeat or go backwards.
+  std::vector<double> dts;
+  for (Eigen::Index k = 1; k < n; ++k) {
+    if (time_s[k] > time_s[k - 1]) dts.push_back(time_s[k] - time_s[k - 1]);
+  }
+  CheckArgument(!dts.empty(), "time_s", "does not increase");
+  std::nth_element(dts.begin(), dts.begin() + static_cast<std::ptrdiff_t>(dts.size() / 2), dts.end());
+  const double median_dt = dts[dts.size() / 2];
+
+  const Eigen::Index init = std::min<Eigen::Index>(options.init_samples, n);
+  const Eigen::Vector3d mean_f = acc.topRows(init).colwise().mean().transpose();
+  CheckArgument(mean_f.norm() > 0.1 * options.gravity_mps2, "acc_mps2",
+                "the first samples do not measure gravity (is the unit g instead of m/s^2?)");
+  Eigen::Quaterniond q = LevelAttitude(mean_f);
+  Eigen::Vector3d p = Eigen::Vector3d::Zero(), v = Eigen::Vector3d::Zero();
+  const Eigen::Vector3d g(0, 0, -options.gravity_mps2);
+  using Mat9 = Eigen::Matrix<double, 9, 9>;
+  Mat9 P = Mat9::Zero();
+  P.block<3, 3>(6, 6) = (1e-4) * Eigen::Matrix3d::Identity();  // small initial attitude uncertainty
+  const double qa = options.sigma_acc_mps2 * options.sigma_acc_mps2;
+  const double qg = options.sigma_gyro_radps * options.sigma_gyro_radps;
+  const double rz = options.sigma_zupt_mps * options.sigma_zupt_mps;
+
+  ZuptEkfOutput out;
+  out.positions_m.resize(n, 3);
+  out.velocities_mps.resize(n, 3);
+  out.headings_rad.resize(n);
+  out.position_sd_m.resize(n, 3);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    if (k > 0) {
+      const double dt = time_s[k] > time_s[k - 1] ? time_s[k] - time_s[k - 1] : median_dt;
+      const Eigen::Vector3d w = gyro.row(k).transpose();
+      q = (q * Exp(w * dt)).normalized();
+      const Eigen::Matrix3d r = q.toRotationMatrix();
+      const Eigen::Vector3d f_n = r * acc.row(k).transpose();
+      v += (f_n + g) * dt;
+      p += v * dt;
+      Mat9 F = Mat9::Identity();
+      F.block<3, 3>(0, 3) = Eigen::Matrix3d::Identity() * dt;
+      F.block<3, 3>(3, 6) = -Skew(f_n) * dt;
+      P = F * P * F.transpose();
+      P.block<3, 3>(3, 3) += qa * dt * dt * Eigen::Matrix3d::Identity();
+      P.block<3, 3>(6, 6) += qg * dt * dt * Eigen::Matrix3d::Identity();
+    }
+    if (stance[k]) {
+      // Zero-velocity update: z = 0 - v̂, H = [0 I 0].
+      const Eigen::Matrix3d S = P.block<3, 3>(3, 3) + rz * Eigen::Matrix3d::Identity();
+      const Eigen::Matrix<double, 9, 3> K = P.block<9, 3>(0, 3) * S.inverse();
+      const Eigen::Matrix<double, 9, 1> dx = K * (-v);
+      p += dx.segment<3>(0);
+      v += dx.segment<3>(3);
+      q = (Exp(dx.segment<3>(6)) * q).normalized();  // R <- (I + [ε]×) R
+      Mat9 IKH = Mat9::Identity();
+      IKH.block<9, 3>(0, 3) -= K;
+      P = IKH * P * IKH.transpose() + rz * K * K.transpose();
+    }
+    out.positions_m.row(k) = p.transpose();
+    out.velocities_mps.row(k) = v.transpose();
+    const Eigen::Matrix3d r = q.toRotationMatrix();
+    out.headings_rad[k] = std::atan2(r(1, 0), r(0, 0));
+    out.position_sd_m.row(k) = P.diagonal().head<3>().cwiseMax(0.0).cwiseSqrt().transpose();
+  }
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+
+}  // namespace indoorloc::pdr

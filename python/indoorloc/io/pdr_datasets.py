@@ -1,0 +1,314 @@
+"""Loaders for public foot-mounted IMU recordings (numpy + scipy.io only).
+
+Three on-disk formats are read into one in-memory layout, :class:`ImuRecording`, always in SI
+units (specific force in m/s^2, angular rate in rad/s, time in s), in the *sensor* frame as
+recorded (no axis is flipped: the ZUPT filter estimates the initial attitude from the first still
+samples, so any mounting works):
+
+- x-io Gait-Tracking ``short_walk.csv`` / ``long_walk.csv`` (NGIMU on the shoe, ~400 Hz; file
+  units deg/s and g, converted here), :func:`load_xio`;
+- the OpenShoe figure-8 ``OpenShoeDataSet.txt`` (820 Hz, headerless, acc m/s^2, gyro rad/s, no
+  time column), :func:`load_openshoe`;
+- the PyShoe / University of Toronto Vicon trials as repackaged by LLIO-aided-iPyShoe
+  (``*_LLIO.mat``: ``imu_data``, ``timestamps_all``, ``gt``, ``strideIndex``; 200 Hz),
+  :func:`load_pyshoe_trial` and :func:`list_pyshoe_trials`.
+
+Every loader checks the units it declares with :func:`check_imu_units` and raises
+``ValueError("indoorloc: argument '<name>': ...")`` naming the argument and the unit the values
+most likely are in (e.g. a gyro in deg/s declared as rad/s, an accelerometer in g declared as
+m/s^2).
+
+Oddities of the files (found when writing these loaders)
+--------------------------------------------------------
+- x-io: 205 (short) / 252 (long) rows repeat the timestamp of the previous row, and every one of
+  them is an exact copy of the previous row (a re-sent packet; the step before it is usually two
+  or three sample periods long, i.e. a packet was lost and the last one repeated). We **remove
+  exact duplicate rows** (keep the first); nudging the time would invent a sample that was never
+  measured. A repeated timestamp whose data differ is not in these files and raises
+  ``ValueError``. After removal the time is strictly increasing with gaps of up to ~17 ms.
+- x-io: at rest the sensor is tilted (acc about (-0.49, 0.24, 0.83) g), the gravity constant used
+  for the conversion is the standard 9.80665 m/s^2.
+- PyShoe: the sensor z axis points down (acc z about -9.4 m/s^2 at rest); ``strideIndex`` is
+  0-based (``timestamps_all[strideIndex] == timestamps``) and its first entry is the rest before
+  the first step (Vicon position about (0, 0)), so a trial with S indices has S - 1 strides;
+  ``timestamps_all`` jitters (smallest step ~1.3 ms at a nominal 5 ms).
+- OpenShoe: no time column; the time is built as ``k / rate_hz``.
+
+Examples
+--------
+>>> from indoorloc.io import load_xio
+>>> rec = load_xio("../shared/data/pdr/xio_gait_tracking/short_walk.csv")  # doctest: +SKIP
+>>> rec.acc_mps2.shape, round(rec.rate_hz)  # doctest: +SKIP
+((16334, 3), 398)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import List, Optional, Union
+
+import numpy as np
+
+PathLike = Union[str, Path]
+
+#: Standard gravity [m/s^2] used to convert accelerations given in g.
+STANDARD_GRAVITY_MPS2 = 9.80665
+
+# Plausibility limits of the unit checks. A foot-mounted IMU peaks at ~17 rad/s (~1000 deg/s)
+# in the recordings here and common MEMS gyros saturate at 2000 deg/s (34.9 rad/s); a walking
+# foot's median rate is below 5 rad/s even when running. The median |specific force| of any
+# recording is near g (9.8-17 m/s^2 here, running included).
+_GYRO_P99_MAX_RADPS = 35.0
+_GYRO_MEDIAN_MAX_RADPS = 10.0
+_GYRO_P99_MIN_MOVING_RADPS = 0.2
+_ACC_MOVING_STD_MPS2 = 1.0
+_ACC_MEDIAN_RANGE_MPS2 = (4.0, 30.0)
+
+# Nominal distances walked [m] given by the sources (approximate: "about").
+_XIO_DISTANCE_M = {"short_walk": 25.0, "long_walk": 60.0}
+_OPENSHOE_DISTANCE_M = 81.0
+
+
+@dataclass
+class ImuRecording:
+    """One foot-mounted IMU recording in SI units, sensor frame.
+
+    Attributes
+    ----------
+    name : str
+        Recording name (file stem).
+    time_s : (N,) float
+        Sample times [s], strictly increasing.
+    acc_mps2 : (N, 3) float
+        Specific force [m/s^2] in the sensor frame (about +g along "up" at rest).
+    gyro_radps : (N, 3) float
+        Angular rate [rad/s] in the sensor frame.
+    rate_hz : float
+        Nominal sample rate [Hz] (1 / median time step, or as given).
+    truth_xy_m : (N, 2) float or None
+        Per-sample reference position [m] (Vicon for PyShoe), None when there is none.
+    stride_indices : (S,) int or None
+        0-based sample indices of annotated foot-rest points (stride ends), None when absent.
+    closed_loop : bool
+        True when the walk ends where it started (the final position error is the metric).
+    distance_m : float or None
+        Distance walked [m] (nominal from the source, or the truth's path length through the
+        stride points), None when unknown.
+    source_units : str
+        The units the file stores, for the record (e.g. ``"gyro deg/s, acc g"``).
+    sensor : str
+        Sensor / dataset family (``"xio"``, ``"openshoe"``, ``"pyshoe"``): methods may keep one
+        parameter set per sensor.
+    """
+
+    name: str
+    time_s: np.ndarray
+    acc_mps2: np.ndarray
+    gyro_radps: np.ndarray
+    rate_hz: float
+    truth_xy_m: Optional[np.ndarray]
+    stride_indices: Optional[np.ndarray]
+    closed_loop: bool
+    distance_m: Optional[float]
+    source_units: str
+    sensor: str = ""
+
+    @property
+    def n_samples(self) -> int:
+        """Number of samples N."""
+        return int(self.time_s.shape[0])
+
+    @property
+    def duration_s(self) -> float:
+        """Time between the first and last samples [s]."""
+        return float(self.time_s[-1] - self.time_s[0])
+
+
+def _err(argument: str, message: str) -> ValueError:
+    return ValueError(f"indoorloc: argument '{argument}': {message}")
+
+
+def check_imu_units(acc_mps2: np.ndarray, gyro_radps: np.ndarray, *, acc_name: str = "acc_mps2",
+                    gyro_name: str = "gyro_radps") -> None:
+    """Check that IMU samples are plausibly in m/s^2 and rad/s; raise ValueError if not.
+
+    Checks, on (N, 3) finite arrays:
+
+    - median |acc| must lie in [4, 30] m/s^2 (gravity dominates any recording). About 1 means
+      the values are in g; about 96 (9.8^2) means m/s^2 were multiplied by g again.
+    - |gyro|: the 99th percentile must be below 35 rad/s (2000 deg/s, a MEMS gyro's full scale)
+      and the median below 10 rad/s; larger values mean deg/s. When the accelerometer shows motion
+      (sd of |acc| above 1 m/s^2) a 99th percentile below 0.2 rad/s means rad/s converted from
+      deg/s twice (values ~57 times too small).
+
+    The error message names the argument (``acc_name`` / ``gyro_name``) and the likely unit.
+    """
+    acc = np.asarray(acc_mps2, dtype=float)
+    gyro = np.asarray(gyro_radps, dtype=float)
+    for name, a in ((acc_name, acc), (gyro_name, gyro)):
+        if a.ndim != 2 or a.shape[1] != 3 or a.shape[0] == 0:
+            raise _err(name, f"expected a non-empty (N, 3) array, got shape {a.shape}")
+        if not np.all(np.isfinite(a)):
+            raise _err(name, "contains NaN or inf")
+    if acc.shape[0] != gyro.shape[0]:
+        raise _err(gyro_name, f"has {gyro.shape[0]} rows but {acc_name} has {acc.shape[0]}")
+
+    acc_norm = np.linalg.norm(acc, axis=1)
+    acc_median = float(np.median(acc_norm))
+    lo, hi = _ACC_MEDIAN_RANGE_MPS2
+    if not lo <= acc_median <= hi:
+        if lo <= acc_median * STANDARD_GRAVITY_MPS2 <= hi:
+            likely = "g (multiply by 9.80665)"
+        elif lo <= acc_median / STANDARD_GRAVITY_MPS2 <= hi:
+            likely = "m/s^2 multiplied by g once too often"
+        else:
+            likely = "an unknown unit"
+        raise _err(acc_name, f"declared m/s^2 but median |acc| = {acc_median:.3g}, expected about "
+                             f"9.8 (between {lo} and {hi}): the values look like {likely}")
+
+    gyro_norm = np.linalg.norm(gyro, axis=1)
+    gyro_p99 = float(np.percentile(gyro_norm, 99))
+    gyro_median = float(np.median(gyro_norm))
+    if gyro_p99 > _GYRO_P99_MAX_RADPS or gyro_median > _GYRO_MEDIAN_MAX_RADPS:
+        raise _err(gyro_name, f"declared rad/s but median |gyro| = {gyro_median:.3g} and 99th "
+                              f"percentile = {gyro_p99:.3g} rad/s, beyond a foot's or a MEMS gyro's "
+                              f"range: the values look like deg/s (multiply by pi/180)")
+    if float(np.std(acc_norm)) > _ACC_MOVING_STD_MPS2 and gyro_p99 < _GYRO_P99_MIN_MOVING_RADPS:
+        raise _err(gyro_name, f"declared rad/s but the 99th percentile of |gyro| is only "
+                              f"{gyro_p99:.3g} rad/s while the accelerometer shows motion: the "
+                              f"values look like deg/s converted to rad/s twice (or a wrong scale)")
+
+
+def _rate_from_time(time_s: np.ndarray, argument: str) -> float:
+    dt = np.diff(time_s)
+    if dt.size == 0:
+        raise _err(argument, "needs at least two samples")
+    if np.any(dt <= 0):
+        k = int(np.argmax(dt <= 0))
+        raise _err(argument, f"time is not strictly increasing at row {k + 1} "
+                             f"({time_s[k]!r} then {time_s[k + 1]!r})")
+    return float(1.0 / np.median(dt))
+
+
+def _require_file(path: PathLike, argument: str = "path") -> Path:
+    p = Path(path)
+    if not p.is_file():
+        raise _err(argument, f"file not found: {p}")
+    return p
+
+
+def load_xio(path: PathLike, *, gravity_mps2: float = STANDARD_GRAVITY_MPS2) -> ImuRecording:
+    """Load an x-io Gait-Tracking csv (``short_walk.csv`` / ``long_walk.csv``).
+
+    The file has a header row and columns ``Time (s)``, gyroscope X/Y/Z in deg/s, accelerometer
+    X/Y/Z in g. Converted to rad/s and m/s^2 (``gravity_mps2`` per g). Rows that are exact copies
+    of the previous row (same timestamp and data: re-sent packets) are removed; a repeated
+    timestamp with different data raises ValueError. The walks are closed loops (start = end);
+    ``distance_m`` is the source's approximate length (25 m short, 60 m long) or None for other
+    file names.
+    """
+    p = _require_file(path)
+    with p.open("r", encoding="utf-8") as f:
+        header = f.readline().strip().split(",")
+    if len(header) != 7 or "deg/s" not in header[1] or "(g)" not in header[4]:
+        raise _err("path", f"{p}: expected the x-io header 'Time (s),Gyroscope X (deg/s),...,"
+                           f"Accelerometer Z (g)', got {','.join(header)!r}")
+    data = np.loadtxt(p, delimiter=",", skiprows=1, ndmin=2)
+    if data.shape[1] != 7:
+        raise _err("path", f"{p}: expected 7 columns, got {data.shape[1]}")
+    keep = np.ones(data.shape[0], dtype=bool)
+    keep[1:] = np.any(data[1:] != data[:-1], axis=1)  # drop exact repeats of the previous row
+    data = data[keep]
+    time_s = data[:, 0]
+    rate_hz = _rate_from_time(time_s, "path")
+    gyro = np.deg2rad(data[:, 1:4])
+    acc = data[:, 4:7] * float(gravity_mps2)
+    check_imu_units(acc, gyro, acc_name="path (accelerometer columns, converted from g)",
+                    gyro_name="path (gyroscope columns, converted from deg/s)")
+    return ImuRecording(name=p.stem, time_s=time_s, acc_mps2=acc, gyro_radps=gyro,
+                        rate_hz=rate_hz, truth_xy_m=None, stride_indices=None, closed_loop=True,
+                        distance_m=_XIO_DISTANCE_M.get(p.stem), source_units="gyro deg/s, acc g",
+                        sensor="xio")
+
+
+def load_openshoe(path: PathLike, rate_hz: float = 820.0) -> ImuRecording:
+    """Load the OpenShoe data set (``OpenShoeDataSet.txt``): headerless, 6 comma-separated
+    floats per row, acc x, y, z in m/s^2 then gyro x, y, z in rad/s, sampled at ``rate_hz``.
+
+    The time is ``k / rate_hz``. The recording is the closed figure-8 of about 81 m (the
+    ``distance_m`` given when the file is named ``OpenShoeDataSet.txt``).
+    """
+    p = _require_file(path)
+    if not (np.isfinite(rate_hz) and rate_hz > 0):
+        raise _err("rate_hz", f"must be a positive finite rate in Hz, got {rate_hz!r}")
+    data = np.loadtxt(p, delimiter=",", ndmin=2)
+    if data.shape[1] != 6:
+        raise _err("path", f"{p}: expected 6 columns (acc m/s^2, gyro rad/s), got {data.shape[1]}")
+    acc, gyro = data[:, 0:3], data[:, 3:6]
+    check_imu_units(acc, gyro, acc_name="path (columns 1-3, acc declared m/s^2)",
+                    gyro_name="path (columns 4-6, gyro declared rad/s)")
+    time_s = np.arange(data.shape[0], dtype=float) / float(rate_hz)
+    distance = _OPENSHOE_DISTANCE_M if p.name == "OpenShoeDataSet.txt" else None
+    return ImuRecording(name=p.stem, time_s=time_s, acc_mps2=acc, gyro_radps=gyro,
+                        rate_hz=float(rate_hz), truth_xy_m=None, stride_indices=None,
+                        closed_loop=True, distance_m=distance,
+                        source_units="acc m/s^2, gyro rad/s", sensor="openshoe")
+
+
+def load_pyshoe_trial(path: PathLike) -> ImuRecording:
+    """Load one PyShoe Vicon trial (``*_LLIO.mat`` of LLIO-aided-iPyShoe).
+
+    Reads ``imu_data`` (N x 6: acc m/s^2, gyro rad/s; sensor z points down, so acc z is about
+    -9.8 at rest), ``timestamps_all`` (N, s), ``gt`` (N x 2, Vicon x, y in m) and ``strideIndex``
+    (0-based sample indices of foot-rest points; the first is the rest before the first step).
+    ``distance_m`` is the truth's path length through the stride points. Not a closed loop.
+    """
+    from scipy.io import loadmat
+
+    p = _require_file(path)
+    try:
+        mat = loadmat(p)
+    except Exception as exc:  # scipy raises several types for a bad file
+        raise _err("path", f"{p}: not a readable MATLAB file ({exc})") from exc
+    for key in ("imu_data", "timestamps_all", "gt", "strideIndex"):
+        if key not in mat:
+            raise _err("path", f"{p}: variable '{key}' missing")
+    imu = np.asarray(mat["imu_data"], dtype=float)
+    time_s = np.asarray(mat["timestamps_all"], dtype=float).ravel()
+    gt = np.asarray(mat["gt"], dtype=float)
+    strides = np.asarray(mat["strideIndex"]).ravel().astype(np.int64)
+    n = imu.shape[0]
+    if imu.ndim != 2 or imu.shape[1] != 6:
+        raise _err("path", f"{p}: imu_data must be N x 6, got {imu.shape}")
+    if time_s.shape[0] != n or gt.shape != (n, 2):
+        raise _err("path", f"{p}: timestamps_all ({time_s.shape[0]}) and gt {gt.shape} must "
+                           f"have one row per imu_data row ({n})")
+    if strides.size and (strides.min() < 0 or strides.max() >= n):
+        raise _err("path", f"{p}: strideIndex outside [0, {n})")
+    if np.any(np.diff(strides) <= 0):
+        raise _err("path", f"{p}: strideIndex is not strictly increasing")
+    acc, gyro = imu[:, 0:3], imu[:, 3:6]
+    check_imu_units(acc, gyro, acc_name="path (imu_data columns 1-3, acc declared m/s^2)",
+                    gyro_name="path (imu_data columns 4-6, gyro declared rad/s)")
+    rate_hz = _rate_from_time(time_s, "path")
+    distance = (float(np.sum(np.linalg.norm(np.diff(gt[strides], axis=0), axis=1)))
+                if strides.size >= 2 else None)
+    name = p.stem[:-5] if p.stem.endswith("_LLIO") else p.stem
+    return ImuRecording(name=name, time_s=time_s, acc_mps2=acc, gyro_radps=gyro,
+                        rate_hz=rate_hz, truth_xy_m=gt, stride_indices=strides, closed_loop=False,
+                        distance_m=distance, source_units="acc m/s^2, gyro rad/s", sensor="pyshoe")
+
+
+def list_pyshoe_trials(root: PathLike) -> List[Path]:
+    """Sorted paths of the PyShoe trials (``*.mat``) in the folder ``root``.
+
+    Raises ValueError when ``root`` is not a folder or holds no ``.mat`` file.
+    """
+    r = Path(root)
+    if not r.is_dir():
+        raise _err("root", f"folder not found: {r}")
+    trials = sorted(r.glob("*.mat"))
+    if not trials:
+        raise _err("root", f"no PyShoe trial (*.mat) in {r}")
+    return trials
