@@ -5,6 +5,7 @@
     indoorloc core resample-bench [--n N] [--repeat R]
     indoorloc analog lorenz63 [--realisations 10] | analog imu
     indoorloc mapmatch reproduce [--runs 100] [--variant paper bias] [--ablation]
+    indoorloc pdr evaluate
     indoorloc wifi evaluate [--dataset uji office ...] [--scans 1 10]
     indoorloc wifi simulate [--runs R] [--noise-db S]
 
@@ -87,6 +88,12 @@ def _add_mapmatch(sub: argparse._SubParsersAction) -> None:
     cli_mapmatch.add_parser(sub, quiet_parent)
 
 
+def _add_pdr(sub: argparse._SubParsersAction) -> None:
+    from indoorloc import cli_pdr
+
+    cli_pdr.add_parser(sub, quiet_parent)
+
+
 def _add_wifi(sub: argparse._SubParsersAction) -> None:
     from indoorloc import cli_wifi
 
@@ -94,7 +101,7 @@ def _add_wifi(sub: argparse._SubParsersAction) -> None:
 
 
 # Subsystems register `add(subparsers)` functions here.
-_SUBCOMMANDS: List[Callable[[argparse._SubParsersAction], None]] = [_add_core, _add_analog, _add_mapmatch, _add_wifi]
+_SUBCOMMANDS: List[Callable[[argparse._SubParsersAction], None]] = [_add_core, _add_analog, _add_mapmatch, _add_pdr, _add_wifi]
 
 
 def build_parser() -> argparse.ArgumentParser:

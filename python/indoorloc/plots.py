@@ -156,3 +156,26 @@ def analog_lorenz(example: Mapping[str, object], path: Path) -> Path:
     fig.savefig(path)
     plt.close(fig)
     return Path(path)
+
+
+def pdr_paths(figure8_xy, trial_name: str, trial_xy, truth_xy, path: Path) -> Path:
+    """OpenShoe figure-8 estimate, and a PyShoe trial estimate over its Vicon reference."""
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4.5), dpi=110)
+    ax1.plot(figure8_xy[:, 0], figure8_xy[:, 1], lw=1)
+    ax1.plot(figure8_xy[0, 0], figure8_xy[0, 1], "go", label="start")
+    ax1.plot(figure8_xy[-1, 0], figure8_xy[-1, 1], "rx", label="end")
+    ax1.set_title("OpenShoe figure-8 (ZUPT EKF)", fontsize=9)
+    ax1.set_aspect("equal")
+    ax1.legend(fontsize=7)
+    ax2.plot(truth_xy[:, 0], truth_xy[:, 1], "k-", lw=1, label="Vicon")
+    ax2.plot(trial_xy[:, 0], trial_xy[:, 1], lw=1, label="ZUPT EKF")
+    ax2.set_title(f"PyShoe trial {trial_name}", fontsize=9)
+    ax2.set_aspect("equal")
+    ax2.legend(fontsize=7)
+    for ax in (ax1, ax2):
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return Path(path)

@@ -28,7 +28,7 @@ def test_demo_writes_report_with_figures(tmp_path, capsys):
     text = report.read_text()
     assert "## Core: resampling schemes" in text
     assert "## WiFi: interpolated signal map" in text and "E_27 = 3.82 m" in text
-    assert "## Map matching" in text and "## Analog HMM" in text
+    assert "## Map matching" in text and "## Analog HMM" in text and "## PDR" in text
     pngs = list(tmp_path.glob("*.png"))
     assert pngs and all(p.stat().st_size > 1000 for p in pngs)
     for p in pngs:

@@ -1,0 +1,32 @@
+"""`indoorloc pdr ...` subcommands."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+
+def default_pdr_root() -> Path:
+    from indoorloc.cli_wifi import default_data_root
+
+    return default_data_root().parent / "pdr"
+
+
+def cmd_evaluate(args: argparse.Namespace) -> int:
+    from indoorloc.experiments import pdr_evaluate as pe
+
+    root = Path(args.data_root) if args.data_root else default_pdr_root()
+    if not root.is_dir():
+        raise ValueError(f"indoorloc: argument 'data_root': {root} is not a folder")
+    pyshoe = pe.evaluate_pyshoe(root / "pyshoe_vicon", pe.zupt_ekf_method)
+    loops = pe.evaluate_closed_loops(root, pe.zupt_ekf_method)
+    print(pe.markdown(pyshoe=pyshoe, closed_loops=loops))
+    return 0
+
+
+def add_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
+    p = sub.add_parser("pdr", help="pedestrian dead reckoning, foot-mounted IMU (paper 002)")
+    psub = p.add_subparsers(dest="pdr_command", required=True)
+    e = psub.add_parser("evaluate", help="SHOE + ZUPT EKF on every recording in ../shared/data/pdr", parents=[quiet_parent()])
+    e.add_argument("--data-root", default=None, help="folder of the PDR datasets (default ../shared/data/pdr)")
+    e.set_defaults(func=cmd_evaluate)
