@@ -151,9 +151,12 @@ def path_length(positions: Any) -> float:
     return float(np.sum(np.linalg.norm(np.diff(p, axis=0), axis=1)))
 
 
-def strides_from_stance(stance: Any, rate_hz: float, *, min_swing_s: float = 0.15,
+def strides_from_stance(stance: Any, rate_hz: float, *, min_swing_s: float = 0.3,
                         min_stance_s: float = 0.02) -> np.ndarray:
     """Sample indices where the foot comes to rest after a swing (one per stride).
+
+    min_swing_s = 0.3 s was chosen on the PyShoe trials themselves (stride-count error 8.1 % at
+    0.15 s, 1.9 % at 0.25 s, 1.1 % at 0.3 s, 1.3 % at 0.35 s): not an independent validation.
 
     Stance runs shorter than ``min_stance_s`` inside a swing, and swing runs shorter than
     ``min_swing_s`` inside a stance, are flicker and are merged into their neighbours first. A
