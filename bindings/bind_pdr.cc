@@ -47,7 +47,7 @@ void BindPdr(py::module_& m) {
 Stance flags (N,) bool of the SHOE zero-velocity detector (Skog et al. 2010): statistic < threshold.
 acc_mps2, gyro_radps: (N, 3) in the sensor frame [m/s^2], [rad/s]; window in samples.)doc");
   m.def("zupt_ekf", [](const py::object& time_s, const py::object& acc, const py::object& gyro, const py::object& stance,
-                       double sigma_acc, double sigma_gyro, double sigma_zupt, double gravity, int init_samples) {
+                       double sigma_acc, double sigma_gyro, double sigma_zupt, double gravity, int init_samples, bool smooth) {
           MatrixArg a = ToMatrix(acc, "acc_mps2", -1, 3);
           MatrixArg g = ToMatrix(gyro, "gyro_radps", a.map.rows(), 3);
           VectorArg t = ToVector(time_s, "time_s", a.map.rows());
@@ -59,6 +59,7 @@ acc_mps2, gyro_radps: (N, 3) in the sensor frame [m/s^2], [rad/s]; window in sam
           o.sigma_zupt_mps = sigma_zupt;
           o.gravity_mps2 = gravity;
           o.init_samples = init_samples;
+          o.smooth = smooth;
           pdr::ZuptEkfOutput out;
           {
             py::gil_scoped_release release;
@@ -66,6 +67,7 @@ acc_mps2, gyro_radps: (N, 3) in the sensor frame [m/s^2], [rad/s]; window in sam
           }
           py::dict d;
           d["positions_m"] = out.positions_m;
+          d["filtered_positions_m"] = out.filtered_positions_m;
           d["velocities_mps"] = out.velocities_mps;
           d["headings_rad"] = out.headings_rad;
           d["position_sd_m"] = out.position_sd_m;
@@ -74,9 +76,10 @@ acc_mps2, gyro_radps: (N, 3) in the sensor frame [m/s^2], [rad/s]; window in sam
         },
         py::arg("time_s"), py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("stance"), py::arg("sigma_acc_mps2") = 0.5,
         py::arg("sigma_gyro_radps") = 0.5 * kDeg, py::arg("sigma_zupt_mps") = 0.01, py::arg("gravity_mps2") = 9.81,
-        py::arg("init_samples") = 20, R"doc(
+        py::arg("init_samples") = 20, py::arg("smooth") = false, R"doc(
 Zero-velocity-aided strapdown INS (9-state error-state EKF, OpenShoe/PyShoe style) over a
 recording: time_s (N,) [s], acc_mps2 and gyro_radps (N, 3) sensor frame, stance (N,) bool.
+smooth=True adds the RTS smoother (positions_m smoothed, filtered_positions_m the EKF's).
 Returns a dict: positions_m (N, 3) (z up, start at 0, initial yaw 0), velocities_mps (N, 3),
 headings_rad (N,), position_sd_m (N, 3), seconds.)doc");
 }

@@ -18,9 +18,12 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     root = Path(args.data_root) if args.data_root else default_pdr_root()
     if not root.is_dir():
         raise ValueError(f"indoorloc: argument 'data_root': {root} is not a folder")
-    pyshoe = pe.evaluate_pyshoe(root / "pyshoe_vicon", pe.zupt_ekf_method)
-    loops = pe.evaluate_closed_loops(root, pe.zupt_ekf_method)
-    print(pe.markdown(pyshoe=pyshoe, closed_loops=loops))
+    for title, method in (("ZUPT EKF", pe.zupt_ekf_method), ("ZUPT EKF + RTS smoother", pe.zupt_rts_method)):
+        pyshoe = pe.evaluate_pyshoe(root / "pyshoe_vicon", method)
+        loops = pe.evaluate_closed_loops(root, method)
+        print(f"## {title}\n")
+        print(pe.markdown(pyshoe=pyshoe, closed_loops=loops))
+        print()
     return 0
 
 

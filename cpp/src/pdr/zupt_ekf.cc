@@ -89,6 +89,16 @@ ZuptEkfOutput RunZuptEkf(const Eigen::Ref<const Eigen::VectorXd>& time_s, const 
 
   ZuptEkfOutput out;
   out.positions_m.resize(n, 3);
+  // Smoother storage: gain C_k (row k) and update u_k per sample; the nominal attitudes too.
+  std::vector<Eigen::Matrix<double, 9, 9>, Eigen::aligned_allocator<Eigen::Matrix<double, 9, 9>>> gains;
+  std::vector<Eigen::Matrix<double, 9, 1>, Eigen::aligned_allocator<Eigen::Matrix<double, 9, 1>>> updates;
+  std::vector<Eigen::Quaterniond, Eigen::aligned_allocator<Eigen::Quaterniond>> attitudes;
+  if (options.smooth) {
+    gains.resize(static_cast<size_t>(n));
+    updates.assign(static_cast<size_t>(n), Eigen::Matrix<double, 9, 1>::Zero());
+    attitudes.resize(static_cast<size_t>(n));
+  }
+  Mat9 P_post_prev = P;
   out.velocities_mps.resize(n, 3);
   out.headings_rad.resize(n);
   out.position_sd_m.resize(n, 3);
@@ -107,6 +117,13 @@ ZuptEkfOutput RunZuptEkf(const Eigen::Ref<const Eigen::VectorXd>& time_s, const 
       P = F * P * F.transpose();
       P.block<3, 3>(3, 3) += qa * dt * dt * Eigen::Matrix3d::Identity();
       P.block<3, 3>(6, 6) += qg * dt * dt * Eigen::Matrix3d::Identity();
+      if (options.smooth) {
+        // C_{k-1} = P⁺_{k-1} Fᵀ (P⁻_k)^{-1}. The position block of P⁻ is 0 until the first
+        // velocity uncertainty has propagated into it: a tiny jitter keeps the solve regular
+        // (those directions carry no correlation, so their gain is 0 either way).
+        const Mat9 prior = P + 1e-12 * Mat9::Identity();
+        gains[static_cast<size_t>(k - 1)] = (prior.ldlt().solve(F * P_post_prev)).transpose();
+      }
     }
     if (stance[k]) {
       // Zero-velocity update: z = 0 - v̂, H = [0 I 0].
@@ -119,12 +136,28 @@ ZuptEkfOutput RunZuptEkf(const Eigen::Ref<const Eigen::VectorXd>& time_s, const 
       Mat9 IKH = Mat9::Identity();
       IKH.block<9, 3>(0, 3) -= K;
       P = IKH * P * IKH.transpose() + rz * K * K.transpose();
+      if (options.smooth) updates[static_cast<size_t>(k)] = dx;
     }
+    P_post_prev = P;
+    if (options.smooth) attitudes[static_cast<size_t>(k)] = q;
     out.positions_m.row(k) = p.transpose();
     out.velocities_mps.row(k) = v.transpose();
     const Eigen::Matrix3d r = q.toRotationMatrix();
     out.headings_rad[k] = std::atan2(r(1, 0), r(0, 0));
     out.position_sd_m.row(k) = P.diagonal().head<3>().cwiseMax(0.0).cwiseSqrt().transpose();
+  }
+  out.filtered_positions_m = out.positions_m;
+  if (options.smooth) {
+    // Backward pass: δ_k = C_k (δ_{k+1} + u_{k+1}), δ_{N-1} = 0.
+    Eigen::Matrix<double, 9, 1> delta = Eigen::Matrix<double, 9, 1>::Zero();
+    for (Eigen::Index k = n - 2; k >= 0; --k) {
+      delta = gains[static_cast<size_t>(k)] * (delta + updates[static_cast<size_t>(k + 1)]);
+      out.positions_m.row(k) += delta.segment<3>(0).transpose();
+      out.velocities_mps.row(k) += delta.segment<3>(3).transpose();
+      const Eigen::Quaterniond qs = (Exp(delta.segment<3>(6)) * attitudes[static_cast<size_t>(k)]).normalized();
+      const Eigen::Matrix3d r = qs.toRotationMatrix();
+      out.headings_rad[k] = std::atan2(r(1, 0), r(0, 0));
+    }
   }
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;

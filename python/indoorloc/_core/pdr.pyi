@@ -34,4 +34,5 @@ def zupt_ekf(
     sigma_zupt_mps: float = 0.01,
     gravity_mps2: float = 9.81,
     init_samples: int = 20,
+    smooth: bool = False,
 ) -> Dict[str, np.ndarray]: ...

@@ -188,7 +188,7 @@ def default_threshold(recording: ImuRecording) -> float:
     return float(DEFAULT_SHOE_THRESHOLD.get(recording.sensor, _FALLBACK_THRESHOLD))
 
 
-def zupt_ekf_method(recording: ImuRecording, threshold: Optional[float] = None
+def zupt_ekf_method(recording: ImuRecording, threshold: Optional[float] = None, smooth: bool = False
                     ) -> Tuple[np.ndarray, np.ndarray]:
     """SHOE stance detection then the ZUPT-aided EKF (``indoorloc.pdr``).
 
@@ -204,9 +204,14 @@ def zupt_ekf_method(recording: ImuRecording, threshold: Optional[float] = None
                                           window=SHOE_WINDOW, threshold=gamma,
                                           sigma_acc_mps2=SHOE_SIGMA_ACC_MPS2,
                                           sigma_gyro_radps=SHOE_SIGMA_GYRO_RADPS), dtype=bool)
-    out = pdr.zupt_ekf(recording.time_s, recording.acc_mps2, recording.gyro_radps, stance)
+    out = pdr.zupt_ekf(recording.time_s, recording.acc_mps2, recording.gyro_radps, stance, smooth=smooth)
     positions = np.asarray(out["positions_m"], dtype=float)
     return positions, strides_from_stance(stance, recording.rate_hz)
+
+
+def zupt_rts_method(recording: ImuRecording, threshold: Optional[float] = None) -> Tuple[np.ndarray, np.ndarray]:
+    """:func:`zupt_ekf_method` followed by the RTS smoother."""
+    return zupt_ekf_method(recording, threshold, smooth=True)
 
 
 def with_threshold(method: Callable[..., MethodOutput], threshold: float) -> Method:

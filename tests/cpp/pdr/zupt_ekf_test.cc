@@ -118,6 +118,28 @@ TEST(ZuptEkf, NoisySensorsStayWithinAFewPercentOfTheDistance) {
   EXPECT_LT((out.positions_m.row(last) - g.position.row(last)).norm(), 0.03 * 20 * 1.4);
 }
 
+TEST(ZuptEkf, SmootherKeepsTheEndAndImprovesTheMiddle) {
+  const Gait g = MakeGait(20, 0.4, 0.02, 5);
+  ShoeOptions so;
+  so.sigma_acc_mps2 = 0.02;
+  so.sigma_gyro_radps = 0.002;
+  so.threshold = 30.0;
+  const BoolVector stance = ShoeDetector(g.acc, g.gyro, so);
+  ZuptEkfOptions o;
+  o.smooth = true;
+  const ZuptEkfOutput out = RunZuptEkf(g.time, g.acc, g.gyro, stance, o);
+  const Eigen::Index last = g.time.size() - 1;
+  // The last sample has no future: smoothed = filtered there.
+  EXPECT_LT((out.positions_m.row(last) - out.filtered_positions_m.row(last)).norm(), 1e-12);
+  double filtered = 0, smoothed = 0;
+  for (Eigen::Index k = 0; k <= last; ++k) {
+    filtered += (out.filtered_positions_m.row(k) - g.position.row(k)).squaredNorm();
+    smoothed += (out.positions_m.row(k) - g.position.row(k)).squaredNorm();
+  }
+  EXPECT_TRUE(out.positions_m.allFinite());
+  EXPECT_LE(smoothed, filtered * 1.05);
+}
+
 TEST(ZuptEkf, BadInputGivesClearErrors) {
   const Gait g = MakeGait(2, 0.0, 0.0, 4);
   const BoolVector stance = ShoeDetector(g.acc, g.gyro, ShoeOptions());

@@ -10,6 +10,12 @@
 // covariance σ_v² I corrects the state (Joseph-form covariance update). The initial attitude
 // levels the mean specific force of the first samples (roll, pitch); the yaw is 0.
 // Non-increasing timestamps (repeated rows in some loggers) get the median sample period.
+//
+// Smoother (optional): the linear RTS recursion written on the error states. With P⁺_k the
+// posterior covariance, F_{k+1} the transition and P⁻_{k+1} the prior covariance of the next
+// step, C_k = P⁺_k F_{k+1}ᵀ (P⁻_{k+1})^{-1}; the smoothed state minus the forward posterior is
+// δ_k = C_k (δ_{k+1} + u_{k+1}), where u_{k+1} is the correction the ZUPT update applied at k+1
+// (x⁺_{k+1} - x⁻_{k+1}), and δ_N = 0. Only C_k and u_k are stored (9 x 9 + 9 numbers per sample).
 #pragma once
 
 #include <string>
@@ -26,12 +32,16 @@ struct ZuptEkfOptions {
   double sigma_zupt_mps = 0.01;     ///< zero-velocity pseudo-measurement sd [m/s]
   double gravity_mps2 = 9.81;
   int init_samples = 20;            ///< samples averaged for the initial attitude
+  /// Also run the Rauch-Tung-Striebel smoother backwards over the error states (OpenShoe's
+  /// smoother): positions_m then holds the smoothed path and filtered_positions_m the EKF's.
+  bool smooth = false;
 
   bool IsValid(std::string* error) const;
 };
 
 struct ZuptEkfOutput {
-  RowMatrixXd positions_m;      ///< N x 3
+  RowMatrixXd positions_m;      ///< N x 3 (smoothed when options.smooth)
+  RowMatrixXd filtered_positions_m;  ///< N x 3 forward EKF positions
   RowMatrixXd velocities_mps;   ///< N x 3
   Eigen::VectorXd headings_rad; ///< N yaw
   RowMatrixXd position_sd_m;    ///< N x 3 square roots of the position covariance diagonal
