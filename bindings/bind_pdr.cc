@@ -1,7 +1,9 @@
 // Python bindings of the pdr subsystem: zero-velocity detection and the ZUPT-aided EKF.
 #include <pybind11/eigen.h>
+#include <pybind11/stl.h>
 
 #include "indoorloc/core/options.h"
+#include "indoorloc/pdr/step_detection.h"
 #include "indoorloc/pdr/zero_velocity.h"
 #include "indoorloc/pdr/zupt_ekf.h"
 #include "numpy_args.h"
@@ -46,6 +48,37 @@ void BindPdr(py::module_& m) {
         py::arg("sigma_acc_mps2") = 0.01, py::arg("sigma_gyro_radps") = 0.1 * kDeg, py::arg("gravity_mps2") = 9.81, R"doc(
 Stance flags (N,) bool of the SHOE zero-velocity detector (Skog et al. 2010): statistic < threshold.
 acc_mps2, gyro_radps: (N, 3) in the sensor frame [m/s^2], [rad/s]; window in samples.)doc");
+  m.def("steps_acceleration", [](const py::object& acc, double rate_hz, double window_s, bool adaptive, double swing_threshold,
+                                 double stance_threshold, double swing_fraction, double stance_fraction, double min_step_interval_s) {
+          MatrixArg a = ToMatrix(acc, "acc_mps2", -1, 3);
+          pdr::AccelerationStepOptions o;
+          o.window_s = window_s;
+          o.adaptive = adaptive;
+          o.swing_threshold_mps2 = swing_threshold;
+          o.stance_threshold_mps2 = stance_threshold;
+          o.swing_fraction = swing_fraction;
+          o.stance_fraction = stance_fraction;
+          o.min_step_interval_s = min_step_interval_s;
+          Eigen::VectorXd sigma;
+          const std::vector<int> steps = pdr::DetectStepsAcceleration(rate_hz, a.map, o, &sigma);
+          return py::make_tuple(steps, sigma);
+        },
+        py::arg("acc_mps2"), py::arg("rate_hz"), py::arg("window_s") = 0.1, py::arg("adaptive") = true,
+        py::arg("swing_threshold_mps2") = 2.0, py::arg("stance_threshold_mps2") = 1.0, py::arg("swing_fraction") = 0.35,
+        py::arg("stance_fraction") = 0.15, py::arg("min_step_interval_s") = 0.4, R"doc(
+Paper 002's acceleration-variance step detector (eq. 1-3). Returns (step sample indices, σ (N,)
+[m/s^2]). adaptive=True: thresholds = fractions of the 95th percentile of σ; False: the fixed
+T1, T2 [m/s^2] (paper: 2 and 1 at 100 Hz).)doc");
+  m.def("steps_gyro", [](const py::object& gyro, double rate_hz, double threshold, double median_window_s, double min_swing_s) {
+          MatrixArg g = ToMatrix(gyro, "gyro_radps", -1, 3);
+          pdr::GyroStepOptions o;
+          o.threshold_radps = threshold;
+          o.median_window_s = median_window_s;
+          o.min_swing_s = min_swing_s;
+          return pdr::DetectStepsGyro(rate_hz, g.map, o);
+        },
+        py::arg("gyro_radps"), py::arg("rate_hz"), py::arg("threshold_radps") = 1.0, py::arg("median_window_s") = 0.1,
+        py::arg("min_swing_s") = 0.2, "Gyroscope step detector (paper 002 §III.D): step sample indices.");
   m.def("zupt_ekf", [](const py::object& time_s, const py::object& acc, const py::object& gyro, const py::object& stance,
                        double sigma_acc, double sigma_gyro, double sigma_zupt, double gravity, int init_samples, bool smooth) {
           MatrixArg a = ToMatrix(acc, "acc_mps2", -1, 3);

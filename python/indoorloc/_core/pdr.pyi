@@ -1,5 +1,5 @@
 # Stubs of indoorloc._core.pdr: zero-velocity detection and the ZUPT-aided EKF.
-from typing import Dict
+from typing import Dict, List, Tuple
 
 import numpy as np
 import numpy.typing as npt
@@ -36,3 +36,21 @@ def zupt_ekf(
     init_samples: int = 20,
     smooth: bool = False,
 ) -> Dict[str, np.ndarray]: ...
+def steps_acceleration(
+    acc_mps2: _ArrayLike,
+    rate_hz: float,
+    window_s: float = 0.1,
+    adaptive: bool = True,
+    swing_threshold_mps2: float = 2.0,
+    stance_threshold_mps2: float = 1.0,
+    swing_fraction: float = 0.35,
+    stance_fraction: float = 0.15,
+    min_step_interval_s: float = 0.4,
+) -> Tuple[List[int], _F64]: ...
+def steps_gyro(
+    gyro_radps: _ArrayLike,
+    rate_hz: float,
+    threshold_radps: float = 1.0,
+    median_window_s: float = 0.1,
+    min_swing_s: float = 0.2,
+) -> List[int]: ...

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "indoorloc/core/random.h"
+#include "indoorloc/pdr/step_detection.h"
 #include "indoorloc/pdr/zero_velocity.h"
 
 namespace indoorloc::pdr {
@@ -89,6 +90,20 @@ TEST(ShoeDetector, FindsEveryStancePhaseOfASyntheticGait) {
   ShoeOptions o;
   const BoolVector stance = ShoeDetector(g.acc, g.gyro, o);
   EXPECT_EQ(CountStanceBlocks(stance), g.steps + 1);
+}
+
+TEST(StepDetection, AccelerationAndGyroDetectorsFindEveryStep) {
+  for (double noise : {0.0, 0.02}) {
+    const Gait g = MakeGait(15, 1.0, noise, 6);
+    const std::vector<int> acc_steps = DetectStepsAcceleration(200.0, g.acc, AccelerationStepOptions());
+    EXPECT_EQ(static_cast<int>(acc_steps.size()), g.steps) << "noise " << noise;
+    GyroStepOptions gyro_options;
+    gyro_options.threshold_radps = 0.5;  // the synthetic foot pitches at most ~1.6 rad/s
+    const std::vector<int> gyro_steps = DetectStepsGyro(200.0, g.gyro, gyro_options);
+    EXPECT_EQ(static_cast<int>(gyro_steps.size()), g.steps) << "noise " << noise;
+  }
+  EXPECT_THROW(DetectStepsAcceleration(200.0, RowMatrixXd::Zero(10, 3), AccelerationStepOptions()), std::invalid_argument);
+  EXPECT_THROW(DetectStepsGyro(-1.0, RowMatrixXd::Zero(100, 3), GyroStepOptions()), std::invalid_argument);
 }
 
 TEST(ZuptEkf, RecoversTheWalkedPathAndZeroesVelocityAtStance) {

@@ -1,0 +1,121 @@
+#include "indoorloc/pdr/step_detection.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "indoorloc/core/check.h"
+#include "indoorloc/core/options.h"
+
+namespace indoorloc::pdr {
+namespace {
+
+void CheckRate(double rate_hz) { CheckArgument(std::isfinite(rate_hz) && rate_hz > 0.0, "rate_hz", "must be finite and > 0"); }
+
+int Samples(double seconds, double rate_hz) { return std::max(1, static_cast<int>(std::lround(seconds * rate_hz))); }
+
+}  // namespace
+
+bool AccelerationStepOptions::IsValid(std::string* error) const {
+  if (!(window_s > 0.0)) return (*error = "window_s must be > 0", false);
+  if (!(swing_threshold_mps2 > stance_threshold_mps2 && stance_threshold_mps2 > 0.0)) {
+    return (*error = "need swing_threshold_mps2 > stance_threshold_mps2 > 0", false);
+  }
+  if (!(swing_fraction > stance_fraction && stance_fraction > 0.0 && swing_fraction < 1.0)) {
+    return (*error = "need 1 > swing_fraction > stance_fraction > 0", false);
+  }
+  if (!(min_step_interval_s >= 0.0)) return (*error = "min_step_interval_s must be >= 0", false);
+  return true;
+}
+
+bool GyroStepOptions::IsValid(std::string* error) const {
+  if (!(threshold_radps > 0.0)) return (*error = "threshold_radps must be > 0", false);
+  if (!(median_window_s > 0.0) || !(min_swing_s >= 0.0)) return (*error = "windows must be > 0", false);
+  return true;
+}
+
+std::vector<int> DetectStepsAcceleration(double rate_hz, const Eigen::Ref<const RowMatrixXd>& acc,
+                                         const AccelerationStepOptions& options, Eigen::VectorXd* sigma_out) {
+  ValidateOptions(options);
+  CheckRate(rate_hz);
+  CheckShape(acc, -1, 3, "acc_mps2");
+  CheckFinite(acc, "acc_mps2");
+  const Eigen::Index n = acc.rows();
+  const int w = Samples(options.window_s, rate_hz);
+  CheckArgument(n >= 2 * w + 1, "acc_mps2", "the recording is shorter than one window (" + std::to_string(2 * w + 1) + " samples)");
+  const Eigen::VectorXd a = acc.rowwise().norm();  // eq. 1
+  // eq. 2 with prefix sums: σ²_i = mean(a²) - mean(a)² over [i - w, i + w] (clamped at the ends).
+  Eigen::VectorXd s1(n + 1), s2(n + 1);
+  s1[0] = s2[0] = 0.0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    s1[i + 1] = s1[i] + a[i];
+    s2[i + 1] = s2[i] + a[i] * a[i];
+  }
+  Eigen::VectorXd sigma(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Eigen::Index lo = std::max<Eigen::Index>(0, i - w), hi = std::min<Eigen::Index>(n, i + w + 1);
+    const double m = static_cast<double>(hi - lo);
+    const double mean = (s1[hi] - s1[lo]) / m;
+    sigma[i] = std::sqrt(std::max(0.0, (s2[hi] - s2[lo]) / m - mean * mean));
+  }
+  double t1 = options.swing_threshold_mps2, t2 = options.stance_threshold_mps2;
+  if (options.adaptive) {
+    std::vector<double> sorted(sigma.data(), sigma.data() + n);
+    const size_t q = static_cast<size_t>(0.95 * static_cast<double>(n - 1));
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(q), sorted.end());
+    const double p95 = sorted[q];
+    t1 = options.swing_fraction * p95;
+    t2 = options.stance_fraction * p95;
+  }
+  // eq. 3 and step 4: a swing ends (σ falls below T1 after being above it) and σ < T2 follows
+  // within w samples.
+  const Eigen::Index min_interval = options.min_step_interval_s > 0 ? Samples(options.min_step_interval_s, rate_hz) : 0;
+  std::vector<int> steps;
+  for (Eigen::Index i = 1; i < n; ++i) {
+    const bool swing_end = sigma[i - 1] > t1 && !(sigma[i] > t1);
+    if (!swing_end) continue;
+    bool stance_ahead = false;
+    for (Eigen::Index j = i; j < std::min<Eigen::Index>(n, i + w + 1) && !stance_ahead; ++j) stance_ahead = sigma[j] < t2;
+    if (!stance_ahead) continue;
+    if (!steps.empty() && i - steps.back() < min_interval) continue;  // same stride
+    steps.push_back(static_cast<int>(i));
+  }
+  if (sigma_out != nullptr) *sigma_out = sigma;
+  return steps;
+}
+
+std::vector<int> DetectStepsGyro(double rate_hz, const Eigen::Ref<const RowMatrixXd>& gyro, const GyroStepOptions& options) {
+  ValidateOptions(options);
+  CheckRate(rate_hz);
+  CheckShape(gyro, -1, 3, "gyro_radps");
+  CheckFinite(gyro, "gyro_radps");
+  const Eigen::Index n = gyro.rows();
+  const int half = Samples(options.median_window_s, rate_hz) / 2;
+  CheckArgument(n >= 2 * half + 1, "gyro_radps", "the recording is shorter than one median window");
+  std::vector<char> moving(static_cast<size_t>(n));
+  for (Eigen::Index i = 0; i < n; ++i) moving[static_cast<size_t>(i)] = gyro.row(i).norm() > options.threshold_radps;
+  // Median filter of a binary signal = majority vote over the window.
+  std::vector<char> filtered(static_cast<size_t>(n));
+  int count = 0;
+  for (Eigen::Index i = 0; i < std::min<Eigen::Index>(n, half); ++i) count += moving[static_cast<size_t>(i)];
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (i + half < n) count += moving[static_cast<size_t>(i + half)];
+    if (i - half - 1 >= 0) count -= moving[static_cast<size_t>(i - half - 1)];
+    const Eigen::Index lo = std::max<Eigen::Index>(0, i - half), hi = std::min<Eigen::Index>(n - 1, i + half);
+    filtered[static_cast<size_t>(i)] = 2 * count > (hi - lo + 1);
+  }
+  // A step at each transition to motionless after a motion run of at least min_swing_s.
+  const int min_swing = Samples(options.min_swing_s, rate_hz);
+  std::vector<int> steps;
+  int run = 0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (filtered[static_cast<size_t>(i)]) {
+      ++run;
+    } else {
+      if (run >= min_swing && i > 0) steps.push_back(static_cast<int>(i));
+      run = 0;
+    }
+  }
+  return steps;
+}
+
+}  // namespace indoorloc::pdr
