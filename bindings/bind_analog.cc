@@ -116,10 +116,25 @@ stride : int
 
   py::class_<AnalogHMM, std::shared_ptr<AnalogHMM>>(m, "AnalogHMM", R"doc(
 Analog HMM (paper 001 §2.2): kNN transitions (eq. 4, adaptive σ) and Gaussian observations of
-selected state components with covariance R (eq. 5).)doc")
-      .def(py::init([](const std::shared_ptr<Catalog>& catalog, int k, const std::vector<int>& observed, const py::object& R) {
+selected state components with covariance R (eq. 5).
+
+Parameters
+----------
+catalog : Catalog
+k : int
+    Successors per state (K of eq. 4; the paper uses 5-15).
+observed : list of int
+    State components that are observed.
+R : (m, m) array
+    Observation covariance, symmetric positive definite, in the state's units squared.
+sigma_scale : float
+    Multiplier of the adaptive kernel width σ_i = std of state i's K distances (1 = the paper;
+    smaller values concentrate each transition on the nearest analog's successor).)doc")
+      .def(py::init([](const std::shared_ptr<Catalog>& catalog, int k, const std::vector<int>& observed, const py::object& R,
+                       double sigma_scale) {
              AnalogHmmOptions o;
              o.k = k;
+             o.sigma_scale = sigma_scale;
              o.observed = observed;
              const Eigen::Index mdim = static_cast<Eigen::Index>(observed.empty() ? 1 : observed.size());
              MatrixArg r = ToMatrix(R, "R", mdim, mdim);
@@ -127,7 +142,8 @@ selected state components with covariance R (eq. 5).)doc")
              py::gil_scoped_release release;
              return std::make_shared<AnalogHMM>(catalog, o);
            }),
-           py::arg("catalog"), py::arg("k") = 10, py::arg("observed") = std::vector<int>{0}, py::arg("R"))
+           py::arg("catalog"), py::arg("k") = 10, py::arg("observed") = std::vector<int>{0}, py::arg("R"),
+           py::arg("sigma_scale") = 1.0)
       .def_property_readonly("transitions_next", [](const AnalogHMM& h) {
         const auto& t = h.transitions();
         return Eigen::Map<const Eigen::Matrix<int, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(t.next.data(), t.num_states, t.k);
@@ -136,14 +152,23 @@ selected state components with covariance R (eq. 5).)doc")
         const auto& t = h.transitions();
         return Eigen::Map<const analog::RowMatrixXd>(t.prob.data(), t.num_states, t.k);
       })
-      .def("smooth", [](const AnalogHMM& h, const py::object& observations, const py::object& beam, int beam_unobserved) {
+      .def("smooth", [](const AnalogHMM& h, const py::object& observations, const py::object& beam, int beam_unobserved,
+                        double max_dropped_mass, int beam_max) {
              MatrixArg obs = ToMatrix(observations, "observations", -1, -1, Finiteness::kAny);
              const int n = beam.is_none() ? 0 : beam.cast<int>();
              CheckArgument(n >= 0, "beam", "must be >= 0 or None");
+             CheckArgument(beam_unobserved >= 0, "beam_unobserved", "must be >= 0");
+             CheckArgument(max_dropped_mass >= 0.0 && max_dropped_mass <= 1.0, "max_dropped_mass", "must be in [0, 1]");
+             CheckArgument(beam_max >= 0, "beam_max", "must be >= 0 (0: no cap)");
+             analog::SmoothOptions so;
+             so.beam = n;
+             so.beam_unobserved = beam_unobserved;
+             so.max_dropped_mass = max_dropped_mass;
+             so.beam_max = beam_max;
              analog::SmoothingOutput out;
              {
                py::gil_scoped_release release;
-               out = h.Smooth(obs.map, n, beam_unobserved);
+               out = h.Smooth(obs.map, so);
              }
              py::dict d;
              d["mean"] = out.mean;
@@ -155,9 +180,12 @@ selected state components with covariance R (eq. 5).)doc")
              d["seconds"] = out.seconds;
              return d;
            },
-           py::arg("observations"), py::arg("beam") = py::none(), py::arg("beam_unobserved") = 0, R"doc(
+           py::arg("observations"), py::arg("beam") = py::none(), py::arg("beam_unobserved") = 0,
+           py::arg("max_dropped_mass") = 1.0, py::arg("beam_max") = 0, R"doc(
 Forward-backward on observations (T, m) (NaN = missing). beam=None: exact; beam=N: truncated
-(paper §2.3); beam_unobserved: a wider beam at steps with no observation (0: same as beam). Returns a dict: mean (T, D) posterior mean, mpm (T, D), filtering_mean (T, D),
+(paper §2.3); beam_unobserved: a wider beam at steps with no observation (0: same as beam);
+max_dropped_mass: mass-adaptive beam, keep more than N states (most likely first) until at most
+this filtering mass is dropped per step (1: off), capped at beam_max states (0: no cap). Returns a dict: mean (T, D) posterior mean, mpm (T, D), filtering_mean (T, D),
 log_likelihood, dropped_mass (T,), support_size (T,), seconds.)doc")
       .def("viterbi", [](const AnalogHMM& h, const py::object& observations, const py::object& beam) {
              MatrixArg obs = ToMatrix(observations, "observations", -1, -1, Finiteness::kAny);

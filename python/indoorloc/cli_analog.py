@@ -11,16 +11,36 @@ def cmd_lorenz63(args: argparse.Namespace) -> int:
     from indoorloc.experiments import analog_lorenz63 as al
 
     result = al.run_table1(
+        k=al.DEFAULT_K if args.k is None else args.k,
         n_realisations=args.realisations,
         catalog_sizes=tuple(args.catalog_sizes),
-        beams=tuple(args.beams),
-        k=args.k,
+        beams=tuple(None if b == 0 else b for b in args.beams),
         seed=args.seed,
+        sigma_scale=al.DEFAULT_SIGMA_SCALE if args.sigma_scale is None else args.sigma_scale,
+        max_dropped_mass=args.max_dropped_mass,
+        methods=tuple(args.methods),
+        kernels=al.VALIDATED_KERNELS if (args.k is None and args.sigma_scale is None) else None,
     )
     text = al.markdown_table(result)
     print(text)
     if args.json:
         Path(args.json).write_text(json.dumps(result, indent=2, default=lambda o: getattr(o, "tolist", lambda: str(o))()))
+    return 0
+
+
+def cmd_lorenz63_tune(args: argparse.Namespace) -> int:
+    from indoorloc.experiments import analog_lorenz63 as al
+
+    print(f"| M | K | sigma_scale | validation RMSE (mean over {args.problems}) | per problem | time per run [s] |")
+    print("|---|---|---|---|---|---|")
+    for M in args.catalog_sizes:
+        rows = al.run_kernel_selection(
+            M, ks=tuple(args.ks), sigma_scales=tuple(args.sigma_scales), beam=None if args.beam == 0 else args.beam,
+            max_dropped_mass=args.max_dropped_mass, n_problems=args.problems, seed=args.seed,
+        )
+        for r in rows:
+            per = " ".join(f"{e:.2f}" for e in r["rmse"])
+            print(f"| {M} | {r['k']} | {r['sigma_scale']} | {r['rmse_mean']:.3f} | {per} | {r['seconds_mean']:.2f} |")
     return 0
 
 
@@ -40,11 +60,29 @@ def add_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
     l63 = asub.add_parser("lorenz63", help="paper 001 Table 1: EnKS, AnEnKS, AnFB on Lorenz-63", parents=[quiet_parent()])
     l63.add_argument("--realisations", type=int, default=10)
     l63.add_argument("--catalog-sizes", type=int, nargs="+", default=[10**4, 10**5])
-    l63.add_argument("--beams", type=int, nargs="+", default=[1000, 3000, 10000])
-    l63.add_argument("--k", type=int, default=5, help="neighbours per state (paper: 5-15)")
+    from indoorloc.experiments import analog_lorenz63 as al
+
+    l63.add_argument("--beams", type=int, nargs="+", default=[1000, 3000], help="N of the truncated AnFB (0: exact)")
+    l63.add_argument("--k", type=int, default=None,
+                     help="neighbours per state (paper: 5-15); default: the validated kernel per catalog size")
+    l63.add_argument("--sigma-scale", type=float, default=None,
+                     help="kernel width multiplier of eq. 4 (1 = the paper's adaptive sigma); default: validated")
+    l63.add_argument("--max-dropped-mass", type=float, default=al.DEFAULT_MAX_DROPPED_MASS,
+                     help="mass-adaptive beam tolerance (1 = the paper's fixed N)")
+    l63.add_argument("--methods", nargs="+", default=list(al.METHODS), choices=list(al.METHODS))
     l63.add_argument("--seed", type=int, default=0)
     l63.add_argument("--json")
     l63.set_defaults(func=cmd_lorenz63)
+    tune = asub.add_parser("lorenz63-tune", help="choose K and the kernel width on validation problems",
+                           parents=[quiet_parent()])
+    tune.add_argument("--catalog-sizes", type=int, nargs="+", default=[10**4, 10**5])
+    tune.add_argument("--ks", type=int, nargs="+", default=[5, 10, 15])
+    tune.add_argument("--sigma-scales", type=float, nargs="+", default=[0.35, 0.5, 0.7, 1.0])
+    tune.add_argument("--beam", type=int, default=1000, help="N (0: exact)")
+    tune.add_argument("--max-dropped-mass", type=float, default=al.DEFAULT_MAX_DROPPED_MASS)
+    tune.add_argument("--problems", type=int, default=6)
+    tune.add_argument("--seed", type=int, default=0)
+    tune.set_defaults(func=cmd_lorenz63_tune)
     imu = asub.add_parser("imu", help="missing-data interpolation on real walking IMU data", parents=[quiet_parent()])
     imu.add_argument("--data-root", default=None, help="folder of the PDR datasets (default ../shared/data/pdr)")
     imu.add_argument("--k", type=int, default=6)

@@ -80,3 +80,26 @@ def test_bad_input_gives_clear_errors():
         hmm.smooth(np.zeros((10, 2)))
     with pytest.raises(ValueError, match="too short"):
         analog.Catalog([np.zeros((1, 2))])
+    with pytest.raises(ValueError, match="sigma_scale"):
+        analog.AnalogHMM(cat, k=3, observed=[0], R=np.eye(1), sigma_scale=0.0)
+    with pytest.raises(ValueError, match="max_dropped_mass"):
+        hmm.smooth(np.zeros((10, 1)), beam=5, max_dropped_mass=2.0)
+    with pytest.raises(ValueError, match="beam_max"):
+        hmm.smooth(np.zeros((10, 1)), beam=5, beam_max=-1)
+
+
+def test_mass_adaptive_beam_bounds_the_dropped_mass_and_narrow_kernel_concentrates():
+    cat = analog.Catalog([circle(2000, noise=0.02, seed=1)])
+    wide = analog.AnalogHMM(cat, k=8, observed=[0], R=np.array([[0.01]]))
+    narrow = analog.AnalogHMM(cat, k=8, observed=[0], R=np.array([[0.01]]), sigma_scale=0.5)
+    first_wide = np.asarray(wide.transitions_prob)[:, 0]
+    first_narrow = np.asarray(narrow.transitions_prob)[:, 0]
+    assert np.all(first_narrow >= first_wide - 1e-12) and np.mean(first_narrow > first_wide) > 0.5
+    truth = circle(120, phase=0.3)
+    obs = np.full((120, 1), np.nan)
+    obs[::4, 0] = truth[::4, 0]
+    fixed = wide.smooth(obs, beam=3)
+    adaptive = wide.smooth(obs, beam=3, max_dropped_mass=1e-3)
+    assert np.max(adaptive["dropped_mass"]) <= 1e-3 + 1e-12
+    assert np.max(fixed["dropped_mass"]) > 1e-3
+    assert np.max(adaptive["support_size"]) > 3

@@ -256,6 +256,18 @@ def test_anfb_lorenz63_below_climatology():
     assert example["estimates"]["AnFB"].shape == (200, 3)
 
 
+@needs_analog
+def test_kernel_selection_uses_validation_problems_and_sorts():
+    rows = analog_lorenz63.run_kernel_selection(
+        2000, ks=(5,), sigma_scales=(0.5, 1.0), beam=200, n_problems=2, T=120, dt_obs=8
+    )
+    assert [r["k"] for r in rows] == [5, 5] and sorted(r["sigma_scale"] for r in rows) == [0.5, 1.0]
+    assert rows[0]["rmse_mean"] <= rows[1]["rmse_mean"]
+    assert all(len(r["rmse"]) == 2 and np.isfinite(r["rmse_mean"]) for r in rows)
+    # The validation streams are not the Table 1 test problems (seeds 0 .. 9).
+    assert analog_lorenz63.VALIDATION_SEED >= 1000
+
+
 def test_imu_runner_needs_the_data_root(tmp_path):
     with pytest.raises(ValueError, match="data_root"):
         analog_imu.prepare_split(tmp_path)

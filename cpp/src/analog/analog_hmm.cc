@@ -58,7 +58,8 @@ void KnnAnalogs(const Catalog& catalog, const Eigen::Ref<const RowMatrixXd>& que
   }
 }
 
-SparseTransitions BuildKnnTransitions(const Catalog& catalog, int k) {
+SparseTransitions BuildKnnTransitions(const Catalog& catalog, int k, double sigma_scale) {
+  CheckArgument(std::isfinite(sigma_scale) && sigma_scale > 0.0, "sigma_scale", "must be finite and > 0, got " + std::to_string(sigma_scale));
   Eigen::Matrix<int, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> nn;
   RowMatrixXd d2;
   KnnAnalogs(catalog, catalog.states(), k, &nn, &d2);
@@ -75,7 +76,7 @@ SparseTransitions BuildKnnTransitions(const Catalog& catalog, int k) {
       mean += d / k;
       mean_sq += d * d / k;
     }
-    const double sigma = std::sqrt(std::max(0.0, mean_sq - mean * mean));
+    const double sigma = sigma_scale * std::sqrt(std::max(0.0, mean_sq - mean * mean));
     double total = 0.0;
     const size_t base = static_cast<size_t>(i) * static_cast<size_t>(k);
     // Shifted by the nearest distance (the weights are normalised anyway), so that the nearest
@@ -95,6 +96,10 @@ SparseTransitions BuildKnnTransitions(const Catalog& catalog, int k) {
 bool AnalogHmmOptions::IsValid(std::string* error) const {
   if (k < 1) {
     *error = "k must be >= 1";
+    return false;
+  }
+  if (!(std::isfinite(sigma_scale) && sigma_scale > 0.0)) {
+    *error = "sigma_scale must be finite and > 0";
     return false;
   }
   return true;
@@ -121,7 +126,7 @@ AnalogHMM::AnalogHMM(std::shared_ptr<const Catalog> catalog, const AnalogHmmOpti
   CheckArgument(llt.info() == Eigen::Success, "R", "is not positive definite");
   CheckArgument(catalog_->num_analogs() >= options_.k + 1, "catalog",
                 "has " + std::to_string(catalog_->num_analogs()) + " analogs: needs at least K + 1 = " + std::to_string(options_.k + 1));
-  transitions_ = BuildKnnTransitions(*catalog_, options_.k);
+  transitions_ = BuildKnnTransitions(*catalog_, options_.k, options_.sigma_scale);
 }
 
 LogEmission AnalogHMM::Emission(const Eigen::Ref<const RowMatrixXd>& observations) const {
@@ -184,12 +189,27 @@ LogEmission AnalogHMM::Emission(const Eigen::Ref<const RowMatrixXd>& observation
   };
 }
 
-SmoothingOutput AnalogHMM::Smooth(const Eigen::Ref<const RowMatrixXd>& observations, int beam, int beam_unobserved) const {
+bool SmoothOptions::IsValid(std::string* error) const {
+  if (beam < 0 || beam_unobserved < 0 || beam_max < 0) {
+    *error = "beam, beam_unobserved and beam_max must be >= 0";
+    return false;
+  }
+  if (!(max_dropped_mass >= 0.0 && max_dropped_mass <= 1.0)) {
+    *error = "max_dropped_mass must be in [0, 1]";
+    return false;
+  }
+  return true;
+}
+
+SmoothingOutput AnalogHMM::Smooth(const Eigen::Ref<const RowMatrixXd>& observations, const SmoothOptions& options) const {
+  ValidateOptions(options);
   CheckArgument(observations.rows() >= 1, "observations", "has no time step");
-  CheckArgument(beam_unobserved >= 0, "beam_unobserved", "must be >= 0");
+  const int beam = options.beam, beam_unobserved = options.beam_unobserved;
   const LogEmission emission = Emission(observations);
   ForwardBackwardOptions fb;
   fb.beam = beam;
+  fb.max_dropped_mass = options.max_dropped_mass;
+  fb.beam_max = options.beam_max;
   if (beam > 0 && beam_unobserved > 0) {
     fb.beam_per_step.resize(static_cast<size_t>(observations.rows()));
     for (Eigen::Index t = 0; t < observations.rows(); ++t) {

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
+#include <functional>
 #include <limits>
 #include <numeric>
 
@@ -14,16 +16,34 @@ namespace {
 
 constexpr double kMinusInf = -std::numeric_limits<double>::infinity();
 
-// Keeps the `beam` largest entries of (states, values) (all when beam <= 0 or larger);
-// returns the mass removed (values are normalised probabilities).
-double Truncate(std::vector<int>* states, std::vector<double>* values, int beam) {
+// Number of states to keep: `beam`, or more (most likely first) until the dropped mass is at most
+// `max_dropped` (capped at `beam_max` when > 0). `values` are normalised probabilities.
+size_t KeptCount(const std::vector<double>& values, int beam, double max_dropped, int beam_max) {
+  const size_t n = values.size();
+  if (beam <= 0 || n <= static_cast<size_t>(beam)) return n;
+  if (!(max_dropped < 1.0)) return static_cast<size_t>(beam);
+  const size_t cap = beam_max > 0 ? std::min(n, static_cast<size_t>(std::max(beam_max, beam))) : n;
+  std::vector<double> sorted(values);
+  std::sort(sorted.begin(), sorted.end(), std::greater<double>());
+  double kept = 0.0;
+  size_t count = 0;
+  for (; count < cap; ++count) {
+    if (count >= static_cast<size_t>(beam) && 1.0 - kept <= max_dropped) break;
+    kept += sorted[count];
+  }
+  return count;
+}
+
+// Keeps the `count` largest entries of (states, values) (ties: smaller state index first);
+// returns the mass removed (values are normalised probabilities) and renormalises the rest.
+double Truncate(std::vector<int>* states, std::vector<double>* values, size_t count) {
   const size_t n = states->size();
-  if (beam <= 0 || n <= static_cast<size_t>(beam)) return 0.0;
+  if (n <= count) return 0.0;
   std::vector<size_t> order(n);
   std::iota(order.begin(), order.end(), 0);
-  std::nth_element(order.begin(), order.begin() + beam, order.end(),
+  std::nth_element(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(count), order.end(),
                    [&](size_t a, size_t b) { return (*values)[a] > (*values)[b] || ((*values)[a] == (*values)[b] && (*states)[a] < (*states)[b]); });
-  order.resize(static_cast<size_t>(beam));
+  order.resize(count);
   std::sort(order.begin(), order.end());  // keep the original (deterministic) order
   std::vector<int> s;
   std::vector<double> v;
@@ -80,6 +100,14 @@ bool ForwardBackwardOptions::IsValid(std::string* error) const {
       *error = "beam_per_step entries must be >= 0";
       return false;
     }
+  }
+  if (!(max_dropped_mass >= 0.0 && max_dropped_mass <= 1.0)) {
+    *error = "max_dropped_mass must be in [0, 1]";
+    return false;
+  }
+  if (beam_max < 0) {
+    *error = "beam_max must be >= 0 (0: no cap)";
+    return false;
   }
   return true;
 }
@@ -161,11 +189,11 @@ ForwardBackwardResult ForwardBackward(const SparseTransitions& tr, const Eigen::
     for (double& v : alpha) v *= inv;
     // Truncate (carrying b along).
     const int beam = options.beam_per_step.empty() ? options.beam : options.beam_per_step[t];
-    if (beam > 0 && cand.size() > static_cast<size_t>(beam)) {
-      std::vector<int> idx(cand.size());
-      std::iota(idx.begin(), idx.end(), 0);
-      std::vector<int> states = idx;
-      out.dropped_mass[static_cast<Eigen::Index>(t)] = Truncate(&states, &alpha, beam);
+    const size_t keep = KeptCount(alpha, beam, options.max_dropped_mass, options.beam_max);
+    if (keep < cand.size()) {
+      std::vector<int> states(cand.size());
+      std::iota(states.begin(), states.end(), 0);
+      out.dropped_mass[static_cast<Eigen::Index>(t)] = Truncate(&states, &alpha, keep);
       std::vector<int> kept_states(states.size());
       std::vector<double> kept_b(states.size());
       for (size_t c = 0; c < states.size(); ++c) {

@@ -22,7 +22,7 @@ stochastic method of realisation r is seeded with ``seed + r``.
 from __future__ import annotations
 
 import time
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -97,19 +97,43 @@ def _beam_label(beam: Optional[int]) -> str:
     return "exact" if beam is None else str(int(beam))
 
 
-def build_anfb(catalog: np.ndarray, k: int, R: float):
+#: Kernel width multiplier and mass-adaptive beam tolerance of the AnFB, chosen by
+#: :func:`run_kernel_selection` on validation problems (seeds 10000+) disjoint from the test
+#: problems (seeds 0 .. 9): see docs/analog.md. The paper's own σ is sigma_scale = 1.
+DEFAULT_SIGMA_SCALE = 0.5
+DEFAULT_MAX_DROPPED_MASS = 1e-3
+DEFAULT_K = 10
+#: (K, sigma_scale) per catalog size, chosen by `indoorloc analog lorenz63-tune` on the
+#: validation problems (docs/analog.md): a small catalog needs more and wider neighbours to let
+#: the chain jump between passes of the attractor, a large one a narrow kernel that keeps it on
+#: a pass. Sizes not listed use (k, sigma_scale) as given.
+VALIDATED_KERNELS: Dict[int, Tuple[int, float]] = {10**4: (15, 0.7), 10**5: (10, 0.5)}
+#: First seed of the validation problems used to choose the kernel (never used for the test).
+VALIDATION_SEED = 10_000
+
+
+def build_anfb(catalog: np.ndarray, k: int, R: float, sigma_scale: float = DEFAULT_SIGMA_SCALE):
     """Analog HMM of a Lorenz-63 catalog trajectory (x observed); returns (hmm, seconds)."""
     analog = analog_bindings()
     start = time.perf_counter()
     cat = analog.Catalog([np.ascontiguousarray(catalog)], lag=1, stride=1)
-    hmm = analog.AnalogHMM(cat, k=int(k), observed=[0], R=np.array([[float(R)]]))
+    hmm = analog.AnalogHMM(cat, k=int(k), observed=[0], R=np.array([[float(R)]]), sigma_scale=float(sigma_scale))
     return hmm, time.perf_counter() - start
 
 
-def run_anfb(hmm, observations: np.ndarray, beam: Optional[int]) -> Dict[str, object]:
-    """Posterior mean (T, 3) and diagnostics of one smoothing run."""
+def run_anfb(
+    hmm, observations: np.ndarray, beam: Optional[int], max_dropped_mass: float = DEFAULT_MAX_DROPPED_MASS
+) -> Dict[str, object]:
+    """Posterior mean (T, 3) and diagnostics of one smoothing run.
+
+    beam None is the exact forward-backward; otherwise N of the truncated one, widened where it
+    would drop more than ``max_dropped_mass`` of the filtering mass (1 = the paper's fixed N).
+    """
     start = time.perf_counter()
-    out = hmm.smooth(observations, beam=None if beam is None else int(beam))
+    if beam is None:
+        out = hmm.smooth(observations, beam=None)
+    else:
+        out = hmm.smooth(observations, beam=int(beam), max_dropped_mass=float(max_dropped_mass))
     seconds = time.perf_counter() - start
     mean = np.asarray(out["mean"])[:, :3]
     dropped = np.asarray(out["dropped_mass"]) if "dropped_mass" in out else np.zeros(0)
@@ -118,6 +142,7 @@ def run_anfb(hmm, observations: np.ndarray, beam: Optional[int]) -> Dict[str, ob
         "seconds": seconds,
         "log_likelihood": float(out["log_likelihood"]),
         "max_dropped_mass": float(np.max(dropped)) if dropped.size else 0.0,
+        "mean_support": float(np.mean(out["support_size"])),
     }
 
 
@@ -125,7 +150,7 @@ def run_table1(
     n_realisations: int = 3,
     catalog_sizes: Sequence[int] = (10**4, 10**5),
     beams: Sequence[Optional[int]] = (1000, 3000, 10000),
-    k: int = 10,
+    k: int = DEFAULT_K,
     methods: Sequence[str] = METHODS,
     T: int = 1000,
     dt_obs: int = 40,
@@ -134,6 +159,9 @@ def run_table1(
     anenks_k: int = 50,
     enks_Q: float = analog_baselines.DEFAULT_LORENZ_Q,
     seed: int = 0,
+    sigma_scale: float = DEFAULT_SIGMA_SCALE,
+    max_dropped_mass: float = DEFAULT_MAX_DROPPED_MASS,
+    kernels: Optional[Dict[int, Tuple[int, float]]] = None,
 ) -> Dict[str, object]:
     """Run Table 1: RMSE and time of EnKS, AnEnKS and AnFB over seeded realisations.
 
@@ -156,6 +184,12 @@ def run_table1(
     enks_Q : float
         Model noise variance per step of the EnKS.
     seed : int
+    sigma_scale : float
+        Kernel width multiplier of the AnFB transitions (1 = the paper's σ).
+    max_dropped_mass : float
+        Mass-adaptive beam of the truncated AnFB (1 = the paper's fixed N).
+    kernels : {M: (K, sigma_scale)} or None
+        Per-catalog-size kernel overriding (k, sigma_scale) (e.g. :data:`VALIDATED_KERNELS`).
 
     Returns
     -------
@@ -183,7 +217,9 @@ def run_table1(
             forecasters[M] = analog_baselines.AnalogForecaster(catalog[:-1], catalog[1:], k=anenks_k)
             build[M]["anenks_kdtree"] = time.perf_counter() - start
         if "anfb" in methods:
-            hmms[M], build[M]["anfb_hmm"] = build_anfb(catalog, k, R)
+            k_m, scale_m = (kernels or {}).get(M, (k, sigma_scale))
+            hmms[M], build[M]["anfb_hmm"] = build_anfb(catalog, k_m, R, scale_m)
+            build[M]["anfb_kernel"] = (int(k_m), float(scale_m))
 
     rows: Dict[tuple, Dict[str, object]] = {}
 
@@ -222,10 +258,10 @@ def run_table1(
                 record("AnEnKS", M, None, rmse(est, truth), time.perf_counter() - start)
             if "anfb" in methods:
                 for beam in beams:
-                    out = run_anfb(hmms[M], observations, beam)
+                    out = run_anfb(hmms[M], observations, beam, max_dropped_mass)
                     record(
                         "AnFB", M, beam, rmse(out["mean"], truth), out["seconds"],
-                        {"max_dropped_mass": out["max_dropped_mass"]},
+                        {"max_dropped_mass": out["max_dropped_mass"], "mean_support": out["mean_support"]},
                     )
 
     out_rows = []
@@ -241,6 +277,8 @@ def run_table1(
             "n_realisations": int(n_realisations), "catalog_sizes": sizes, "beams": [_beam_label(b) for b in beams],
             "k": int(k), "methods": methods, "T": int(T), "dt_obs": int(dt_obs), "R": float(R),
             "n_members": int(n_members), "anenks_k": int(anenks_k), "enks_Q": float(enks_Q), "seed": int(seed),
+            "sigma_scale": float(sigma_scale), "max_dropped_mass": float(max_dropped_mass),
+            "kernels": {str(M): list(v) for M, v in (kernels or {}).items()},
         },
         "rows": out_rows,
         "build_seconds": {str(M): v for M, v in build.items()},
@@ -251,17 +289,19 @@ def markdown_table(result: Dict[str, object]) -> str:
     """The rows of :func:`run_table1` as a markdown table next to the paper's Table 1."""
     n = result["settings"]["n_realisations"]
     lines = [
-        f"| method | M | N (beam) | RMSE (mean ± std, {n} runs) | paper RMSE | time per run [s] | paper time |",
-        "|---|---|---|---|---|---|---|",
+        f"| method | M | N (beam) | RMSE (mean ± std, {n} runs) | worst run | paper RMSE | time per run [s] | "
+        "mean support | paper time |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for row in result["rows"]:
         M = _format_size(row["M"])
         beam = row["beam"] or "-"
         paper = "-" if row["paper_rmse"] is None else f"{row['paper_rmse']:.4g}"
         paper_time = row["paper_time"] or "-"
+        support = f"{np.mean(row['mean_support']):.0f}" if "mean_support" in row else "-"
         lines.append(
-            f"| {row['method']} | {M} | {beam} | {row['rmse_mean']:.3f} ± {row['rmse_std']:.3f} | {paper} | "
-            f"{row['seconds_mean']:.2f} | {paper_time} |"
+            f"| {row['method']} | {M} | {beam} | {row['rmse_mean']:.3f} ± {row['rmse_std']:.3f} | "
+            f"{np.max(row['rmse']):.2f} | {paper} | {row['seconds_mean']:.2f} | {support} | {paper_time} |"
         )
     return "\n".join(lines)
 
@@ -277,15 +317,19 @@ def reconstruction_example(
     seed: int = 0,
     M: int = 10**5,
     beam: Optional[int] = 1000,
-    k: int = 10,
+    k: Optional[int] = None,
     methods: Sequence[str] = METHODS,
     T: int = 1000,
     dt_obs: int = 40,
     R: float = 2.0,
     n_members: int = 100,
     anenks_k: int = 50,
+    sigma_scale: Optional[float] = None,
+    max_dropped_mass: float = DEFAULT_MAX_DROPPED_MASS,
 ) -> Dict[str, object]:
     """One realisation for the paper's Fig. 2: truth, observations and each reconstruction.
+
+    k and sigma_scale default to :data:`VALIDATED_KERNELS` for M (else DEFAULT_K / DEFAULT_SIGMA_SCALE).
 
     Returns
     -------
@@ -295,12 +339,15 @@ def reconstruction_example(
     methods = _check_methods(methods)
     if "anfb" in methods:
         analog_bindings()
+    k_default, scale_default = VALIDATED_KERNELS.get(int(M), (DEFAULT_K, DEFAULT_SIGMA_SCALE))
+    k = k_default if k is None else int(k)
+    sigma_scale = scale_default if sigma_scale is None else float(sigma_scale)
     truth, observations = lorenz63.test_problem(seed, T=T, dt_obs=dt_obs, R=R)
     estimates, seconds = {}, {}
     catalog = lorenz63.catalog_trajectory(int(M), seed=seed) if ("anfb" in methods or "anenks" in methods) else None
     if "anfb" in methods:
-        hmm, build = build_anfb(catalog, k, R)
-        out = run_anfb(hmm, observations, beam)
+        hmm, build = build_anfb(catalog, k, R, sigma_scale)
+        out = run_anfb(hmm, observations, beam, max_dropped_mass)
         estimates["AnFB"], seconds["AnFB"] = out["mean"], build + out["seconds"]
     if "anenks" in methods:
         start = time.perf_counter()
@@ -321,5 +368,49 @@ def reconstruction_example(
         "seconds": seconds,
         "settings": {
             "seed": seed, "M": int(M), "beam": _beam_label(beam), "k": int(k), "T": T, "dt_obs": dt_obs, "R": R,
+            "sigma_scale": sigma_scale, "max_dropped_mass": max_dropped_mass,
         },
     }
+
+
+def run_kernel_selection(
+    M: int,
+    ks: Sequence[int] = (5, 10, 15),
+    sigma_scales: Sequence[float] = (0.35, 0.5, 0.7, 1.0),
+    beam: Optional[int] = 1000,
+    max_dropped_mass: float = DEFAULT_MAX_DROPPED_MASS,
+    n_problems: int = 6,
+    T: int = 1000,
+    dt_obs: int = 40,
+    R: float = 2.0,
+    seed: int = 0,
+) -> List[Dict[str, object]]:
+    """Choose K and the kernel width on validation problems, never on the test problems.
+
+    The paper leaves σ to cross-validation ("σ can be thought as a scale parameter"). The
+    validation problems are ``test_problem(VALIDATION_SEED + r)``, r < n_problems: streams
+    disjoint from the Table 1 test problems (seeds ``seed + r``, r < 10). The catalog is the one
+    of Table 1 (``catalog_trajectory(M, seed)``).
+
+    Returns
+    -------
+    list of dicts (one per (K, sigma_scale)): "k", "sigma_scale", "rmse" (per problem),
+    "rmse_mean", "seconds_mean"; sorted by rmse_mean, best first.
+    """
+    analog_bindings()
+    catalog = lorenz63.catalog_trajectory(int(M), seed=seed)
+    problems = [lorenz63.test_problem(VALIDATION_SEED + r, T=T, dt_obs=dt_obs, R=R) for r in range(int(n_problems))]
+    rows = []
+    for k in ks:
+        for scale in sigma_scales:
+            hmm, _ = build_anfb(catalog, int(k), R, float(scale))
+            errors, seconds = [], []
+            for truth, observations in problems:
+                out = run_anfb(hmm, observations, beam, max_dropped_mass)
+                errors.append(rmse(out["mean"], truth))
+                seconds.append(out["seconds"])
+            rows.append({
+                "k": int(k), "sigma_scale": float(scale), "rmse": errors,
+                "rmse_mean": float(np.mean(errors)), "seconds_mean": float(np.mean(seconds)),
+            })
+    return sorted(rows, key=lambda r: r["rmse_mean"])

@@ -62,6 +62,20 @@ TEST(KnnTransitions, MatchBruteForceAndRowsSumToOne) {
   }
 }
 
+TEST(KnnTransitions, NarrowerKernelFavoursTheNearestAnalogsSuccessor) {
+  auto catalog = std::make_shared<Catalog>(std::vector<RowMatrixXd>{Circle(400, 0.0, 0.05, 1)});
+  const SparseTransitions paper = BuildKnnTransitions(*catalog, 7);
+  const SparseTransitions narrow = BuildKnnTransitions(*catalog, 7, 0.5);
+  for (int i = 0; i < paper.num_states; ++i) {
+    const size_t first = static_cast<size_t>(i) * 7u;  // the nearest analog comes first
+    EXPECT_EQ(paper.next[first], narrow.next[first]);
+    EXPECT_GE(narrow.prob[first], paper.prob[first] - 1e-12) << "state " << i;
+  }
+  EXPECT_NO_THROW(narrow.Validate());
+  EXPECT_THROW(BuildKnnTransitions(*catalog, 7, 0.0), std::invalid_argument);
+  EXPECT_THROW(BuildKnnTransitions(*catalog, 7, std::nan("")), std::invalid_argument);
+}
+
 TEST(AnalogHMM, ReconstructsAHiddenComponentAndHandlesMissingValues) {
   auto catalog = std::make_shared<Catalog>(std::vector<RowMatrixXd>{Circle(3000, 0.0, 0.01, 3)});
   AnalogHmmOptions o;
@@ -100,6 +114,12 @@ TEST(AnalogHMM, BadInputGivesClearErrors) {
   o.k = 3;
   const AnalogHMM hmm(catalog, o);
   EXPECT_THROW(hmm.Smooth(RowMatrixXd::Zero(5, 2), 0), std::invalid_argument);  // dimension mismatch
+  SmoothOptions so;
+  so.beam = 2;
+  so.max_dropped_mass = -0.1;
+  EXPECT_THROW(hmm.Smooth(RowMatrixXd::Zero(5, 1), so), std::invalid_argument);
+  o.sigma_scale = -1.0;
+  EXPECT_THROW(AnalogHMM(catalog, o), std::invalid_argument);
 }
 
 }  // namespace

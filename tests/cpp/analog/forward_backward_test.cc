@@ -133,6 +133,42 @@ TEST(ForwardBackward, TruncationDropsMassAndStillNormalises) {
   EXPECT_GT(dropped, 0.0);
 }
 
+TEST(ForwardBackward, MassAdaptiveBeamBoundsTheDroppedMass) {
+  const TinyHmm h = MakeHmm(40, 4, 30, 9);
+  for (double tolerance : {0.2, 0.01}) {
+    ForwardBackwardOptions o;
+    o.beam = 2;
+    o.max_dropped_mass = tolerance;
+    const ForwardBackwardResult r = ForwardBackward(h.tr, h.initial, 30, FromMatrix(h.log_b), o);
+    bool widened = false;
+    for (int t = 0; t < 30; ++t) {
+      EXPECT_LE(r.dropped_mass[t], tolerance + 1e-12) << "t " << t;
+      widened = widened || r.filtering.states[t].size() > 2u;
+    }
+    EXPECT_TRUE(widened);
+  }
+  // Tolerance 0 keeps every state with non-zero mass: the exact posteriors.
+  ForwardBackwardOptions tight;
+  tight.beam = 1;
+  tight.max_dropped_mass = 0.0;
+  const ForwardBackwardResult exact = ForwardBackward(h.tr, h.initial, 30, FromMatrix(h.log_b));
+  const ForwardBackwardResult r = ForwardBackward(h.tr, h.initial, 30, FromMatrix(h.log_b), tight);
+  EXPECT_NEAR(r.log_likelihood, exact.log_likelihood, 1e-9);
+  for (int t = 0; t < 30; ++t) {
+    Eigen::VectorXd a = Eigen::VectorXd::Zero(40), b = Eigen::VectorXd::Zero(40);
+    for (size_t i = 0; i < exact.smoothing.states[t].size(); ++i) a[exact.smoothing.states[t][i]] = exact.smoothing.probabilities[t][i];
+    for (size_t i = 0; i < r.smoothing.states[t].size(); ++i) b[r.smoothing.states[t][i]] = r.smoothing.probabilities[t][i];
+    EXPECT_LT((a - b).cwiseAbs().maxCoeff(), 1e-10) << "t " << t;
+  }
+  // The cap wins over the tolerance.
+  ForwardBackwardOptions capped;
+  capped.beam = 2;
+  capped.max_dropped_mass = 0.0;
+  capped.beam_max = 3;
+  const ForwardBackwardResult c = ForwardBackward(h.tr, h.initial, 30, FromMatrix(h.log_b), capped);
+  for (int t = 0; t < 30; ++t) EXPECT_LE(c.filtering.states[t].size(), 3u);
+}
+
 TEST(ForwardBackward, ExtremeEmissionsDoNotUnderflow) {
   TinyHmm h = MakeHmm(6, 2, 5, 11);
   h.log_b.array() -= 5000.0;  // every likelihood underflows in linear space
@@ -150,6 +186,9 @@ TEST(ForwardBackward, BadInputGivesClearErrors) {
   EXPECT_THROW(ForwardBackward(h.tr, h.initial, 3, FromMatrix(h.log_b)), std::invalid_argument);
   ForwardBackwardOptions o;
   o.beam = -1;
+  EXPECT_THROW(ForwardBackward(MakeHmm(4, 2, 3, 1).tr, h.initial, 3, FromMatrix(h.log_b), o), std::invalid_argument);
+  o.beam = 2;
+  o.max_dropped_mass = 1.5;
   EXPECT_THROW(ForwardBackward(MakeHmm(4, 2, 3, 1).tr, h.initial, 3, FromMatrix(h.log_b), o), std::invalid_argument);
 }
 

@@ -17,8 +17,10 @@
 namespace indoorloc::analog {
 
 /// K nearest analogs of every catalog state (exact kNN on a kd-tree built once) and the
-/// transition probabilities of eq. 4.
-SparseTransitions BuildKnnTransitions(const Catalog& catalog, int k);
+/// transition probabilities of eq. 4 with σ_i = sigma_scale · std(K distances of state i).
+/// sigma_scale = 1 is the paper's adaptive σ; smaller values concentrate the transition on the
+/// nearest analogs' successors (see AnalogHmmOptions::sigma_scale).
+SparseTransitions BuildKnnTransitions(const Catalog& catalog, int k, double sigma_scale = 1.0);
 
 /// Exact kNN of arbitrary query points among the catalog's analogs: indices (into the analog
 /// list) and squared distances, K per query, nearest first.
@@ -29,6 +31,20 @@ struct AnalogHmmOptions {
   int k = 10;                      ///< neighbours per state (paper: 5-15)
   std::vector<int> observed;       ///< state components observed (default: the first one)
   Eigen::MatrixXd R;               ///< observation covariance (m x m, symmetric positive definite)
+  /// Multiplier of the adaptive kernel width of eq. 4 (σ_i = sigma_scale · std of the K
+  /// distances). 1 = the paper. The paper leaves σ to cross-validation ("a scale parameter");
+  /// on a catalog of consecutive states a narrower kernel keeps the chain from drifting in time
+  /// along its own trajectory (docs/analog.md). Must be > 0.
+  double sigma_scale = 1.0;
+  bool IsValid(std::string* error) const;
+};
+
+/// How the forward-backward of AnalogHMM::Smooth truncates (paper §2.3 and the options beyond it).
+struct SmoothOptions {
+  int beam = 0;                    ///< N of the truncated algorithm; 0 = exact
+  int beam_unobserved = 0;         ///< beam at steps without any observation (0: same as beam)
+  double max_dropped_mass = 1.0;   ///< mass-adaptive beam: widen until at most this mass is dropped (1: off)
+  int beam_max = 0;                ///< cap of the adaptive beam (0: none)
   bool IsValid(std::string* error) const;
 };
 
@@ -53,7 +69,13 @@ class AnalogHMM {
   /// observations: T x m (m = observed.size()), NaN = missing component, a row of NaN = no
   /// observation. beam: 0 exact, else N of the truncated algorithm; beam_unobserved: the beam at
   /// steps without any observation (0: same as beam).
-  SmoothingOutput Smooth(const Eigen::Ref<const RowMatrixXd>& observations, int beam, int beam_unobserved = 0) const;
+  SmoothingOutput Smooth(const Eigen::Ref<const RowMatrixXd>& observations, const SmoothOptions& options) const;
+  SmoothingOutput Smooth(const Eigen::Ref<const RowMatrixXd>& observations, int beam, int beam_unobserved = 0) const {
+    SmoothOptions o;
+    o.beam = beam;
+    o.beam_unobserved = beam_unobserved;
+    return Smooth(observations, o);
+  }
   /// MAP sequence (Viterbi): T x D states and their indices.
   ViterbiResult MapSequence(const Eigen::Ref<const RowMatrixXd>& observations, int beam) const;
 

@@ -7,7 +7,8 @@
 //
 // Truncation (beam N > 0): after each forward step only the N most likely states of the
 // filtering posterior P(X_t | y_1:t) are kept and renormalised; the mass dropped is reported per
-// step. The backward recursion runs on the forward supports (the smoothing posterior is
+// step; optionally the beam widens until the dropped mass is below a tolerance (mass-adaptive
+// beam, `max_dropped_mass`). The backward recursion runs on the forward supports (the smoothing posterior is
 // α_t β_t, so β is needed only where α_t > 0): with N >= M this is the exact algorithm.
 #pragma once
 
@@ -41,6 +42,14 @@ struct ForwardBackwardOptions {
   /// observation, where the predicted mass is spread evenly and a narrow cut drops states at
   /// random (0 in an entry: no truncation at that step).
   std::vector<int> beam_per_step;
+  /// Mass-adaptive beam (off at 1): when keeping the N most likely states would drop more than
+  /// this filtering mass, keep more states, most likely first, until the dropped mass is at most
+  /// `max_dropped_mass` or `beam_max` states are kept. It widens the beam exactly where a fixed
+  /// N cuts blindly: at the start, where a uniform prior and one scalar observation leave a wide
+  /// slab of equally likely states (docs/analog.md). In [0, 1].
+  double max_dropped_mass = 1.0;
+  /// Cap of the adaptive beam (0: no cap, up to every candidate).
+  int beam_max = 0;
   bool IsValid(std::string* error) const;
 };
 
