@@ -1,0 +1,171 @@
+// Bindings of the network subsystem's scale path: the streaming block-tridiagonal solver on the
+// linearised INS/GPS network (indoorloc/network/linear_ins_network.h), for the Table 2 benchmark.
+#include <string>
+
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include "indoorloc/core/check.h"
+#include "indoorloc/network/linear_ins_network.h"
+
+namespace py = pybind11;
+
+namespace indoorloc::bindings {
+
+namespace {
+
+network::LinearInsNetworkOptions MakeOptions(double imu_rate_hz, double duration_s, double gps_rate_hz,
+                                             const std::string& rule, int prior_epochs) {
+  network::LinearInsNetworkOptions o;
+  o.imu_rate_hz = imu_rate_hz;
+  o.duration_s = duration_s;
+  o.gps_rate_hz = gps_rate_hz;
+  CheckArgument(rule == "leapfrog" || rule == "trapezoidal", "rule", "must be 'leapfrog' or 'trapezoidal', got '" + rule + "'");
+  o.rule = rule == "leapfrog" ? network::Discretisation::kLeapFrog : network::Discretisation::kTrapezoidal;
+  o.prior_epochs = prior_epochs;
+  return o;
+}
+
+}  // namespace
+
+void BindNetworkScale(py::module_& m) {
+  m.def(
+      "linear_ins_equations",
+      [](double imu_rate_hz, double duration_s, double gps_rate_hz, const std::string& rule, int prior_epochs) {
+        const network::LinearInsNetworkOptions o = MakeOptions(imu_rate_hz, duration_s, gps_rate_hz, rule, prior_epochs);
+        CheckArgument(network::LinearInsNetworkSize(o).unknowns <= 20'000'000, "duration_s",
+                      "this export is meant for peers at moderate sizes (<= 2e7 unknowns)");
+        network::LinearInsEquations e;
+        {
+          py::gil_scoped_release release;
+          e = network::LinearInsNetworkEquations(o);
+        }
+        py::dict d;
+        d["offsets"] = e.offsets;
+        py::list J;
+        for (const auto& j : e.J) J.append(j);
+        d["J"] = J;
+        d["row_sigma"] = e.row_sigma;
+        d["centres"] = e.centres;
+        d["dynamic_l"] = e.dynamic_l;
+        d["gps_epochs"] = e.gps_epochs;
+        d["gps_l"] = e.gps_l;
+        d["prior_l"] = e.prior_l;
+        d["gupt_epochs"] = e.gupt_epochs;
+        d["gupt_l"] = e.gupt_l;
+        d["sigma_gps"] = e.sigma_gps;
+        d["sigma_prior"] = e.sigma_prior;
+        d["sigma_gupt"] = e.sigma_gupt;
+        d["imu_epochs"] = e.imu_epochs;
+        return d;
+      },
+      py::arg("imu_rate_hz") = 200.0, py::arg("duration_s") = 60.0, py::arg("gps_rate_hz") = 1.0,
+      py::arg("rule") = "leapfrog", py::arg("prior_epochs") = 2, R"doc(
+The observation equations of the linearised INS/GPS network (for building it in other solvers):
+dict with offsets, J (list of 18x18: equation centred at n reads sum_a J[a] x[n + offsets[a]] =
+dynamic_l[i]), row_sigma (18,), centres, dynamic_l, gps_epochs, gps_l (CUPT on δr), prior_l
+(every unknown of the first epochs), gupt_epochs, gupt_l (δg), sigma_gps, sigma_prior,
+sigma_gupt, imu_epochs. Unknowns per epoch: δr, δv, ψ, accelerometer bias, gyro bias, δg.)doc");
+
+  m.def(
+      "linear_ins_normal_blocks",
+      [](double imu_rate_hz, double duration_s, double gps_rate_hz, const std::string& rule, int prior_epochs) {
+        const network::LinearInsNetworkOptions o = MakeOptions(imu_rate_hz, duration_s, gps_rate_hz, rule, prior_epochs);
+        const network::NetworkSize size = network::LinearInsNetworkSize(o);
+        CheckArgument(size.unknowns <= 20'000'000, "duration_s", "this dense-block export is meant for peers at moderate sizes (<= 2e7 unknowns)");
+        const py::ssize_t n = size.num_blocks, b = size.block_size;
+        py::array_t<double> diagonal({n, b, b}), lower({n, b, b}), rhs({n, b});
+        {
+          double* pd = diagonal.mutable_data();
+          double* pl = lower.mutable_data();
+          double* pr = rhs.mutable_data();
+          py::gil_scoped_release release;
+          const network::BlockRowAssembler assemble = network::LinearInsAssembler(o);
+          Eigen::MatrixXd D(b, b), L(b, b);
+          Eigen::VectorXd r(b);
+          for (py::ssize_t j = 0; j < n; ++j) {
+            D.setZero();
+            L.setZero();
+            r.setZero();
+            assemble(static_cast<int>(j), &D, &L, &r);
+            // Row-major copies (numpy's layout).
+            for (py::ssize_t i = 0; i < b; ++i)
+              for (py::ssize_t k = 0; k < b; ++k) {
+                pd[(j * b + i) * b + k] = D(i, k);
+                pl[(j * b + i) * b + k] = L(i, k);
+              }
+            for (py::ssize_t i = 0; i < b; ++i) pr[j * b + i] = r[i];
+          }
+        }
+        return py::make_tuple(diagonal, lower, rhs);
+      },
+      py::arg("imu_rate_hz") = 200.0, py::arg("duration_s") = 60.0, py::arg("gps_rate_hz") = 1.0,
+      py::arg("rule") = "leapfrog", py::arg("prior_epochs") = 2, R"doc(
+The normal equations of the linearised INS/GPS network as dense blocks, for solving it with other
+libraries: diagonal (n, b, b) = A_ii, lower (n, b, b) = A_{i,i-1} (lower[0] is zero), rhs (n, b).)doc");
+
+  m.def(
+      "solve_linear_ins_network",
+      [](double imu_rate_hz, double duration_s, double gps_rate_hz, const std::string& rule, bool gravity_covariance,
+         int checkpoint_interval, int prior_epochs, bool keep_gravity_estimate) {
+        const network::LinearInsNetworkOptions o = MakeOptions(imu_rate_hz, duration_s, gps_rate_hz, rule, prior_epochs);
+        CheckArgument(checkpoint_interval >= 0, "checkpoint_interval", "must be >= 0");
+        network::LinearInsNetworkResult r;
+        {
+          py::gil_scoped_release release;
+          r = network::SolveLinearInsNetwork(o, gravity_covariance, checkpoint_interval, keep_gravity_estimate);
+        }
+        py::dict d;
+        d["imu_epochs"] = r.size.imu_epochs;
+        d["gps_epochs"] = r.size.gps_epochs;
+        d["unknowns"] = r.size.unknowns;
+        d["equations"] = r.size.equations;
+        d["block_size"] = r.size.block_size;
+        d["num_blocks"] = r.size.num_blocks;
+        d["factor_seconds"] = r.solver.factor_seconds;
+        d["backward_seconds"] = r.solver.backward_seconds;
+        d["total_seconds"] = r.total_seconds;
+        d["assembler_calls"] = r.solver.assembler_calls;
+        d["stored_factor_bytes"] = r.solver.stored_factor_bytes;
+        d["min_relative_pivot"] = r.solver.min_relative_pivot;
+        d["max_abs_error"] = r.max_abs_error;
+        d["gravity_rmse"] = r.gravity_rmse;
+        d["gravity_sigma"] = r.gravity_sigma;
+        d["gravity_estimate"] = r.gravity_estimate;
+        d["report"] = r.solver.BriefReport();
+        return d;
+      },
+      py::arg("imu_rate_hz") = 200.0, py::arg("duration_s") = 60.0, py::arg("gps_rate_hz") = 1.0,
+      py::arg("rule") = "leapfrog", py::arg("gravity_covariance") = true, py::arg("checkpoint_interval") = 0,
+      py::arg("prior_epochs") = 2, py::arg("keep_gravity_estimate") = false, R"doc(
+Builds the linearised strapdown INS/GPS network (18 unknowns per IMU epoch, leap-frog or
+trapezoidal dynamic equations, CUPT at the GPS epochs, alignment prior, GUPT at the end) block by
+block and solves it with the streaming block-tridiagonal Cholesky, with the covariances of every
+gravity-disturbance unknown (selected inversion).
+
+Parameters
+----------
+imu_rate_hz, duration_s, gps_rate_hz : float
+    Network size (paper Table 2 case 1: 200 Hz x 10,800 s).
+rule : "leapfrog" or "trapezoidal"
+gravity_covariance : bool
+    Also return sqrt(diag Σ_δg) per epoch [m/s²].
+checkpoint_interval : int
+    0 keeps the whole factor; k > 0 keeps one checkpoint every k blocks (memory independent of
+    the size, about 1.5x the time).
+prior_epochs : int
+    Epochs with an alignment prior (1 with leap-frog leaves the odd chain without datum:
+    RuntimeError naming the block).
+keep_gravity_estimate : bool
+    Return the δg estimate (E, 3) too.
+
+Returns
+-------
+dict: sizes (imu_epochs, gps_epochs, unknowns, equations, block_size, num_blocks), timings
+[s], stored_factor_bytes, min_relative_pivot, max_abs_error against the noise-free truth,
+gravity_rmse [m/s²], gravity_sigma (E, 3) [m/s²], gravity_estimate, report.)doc");
+}
+
+}  // namespace indoorloc::bindings

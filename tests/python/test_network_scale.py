@@ -1,0 +1,61 @@
+"""The network subsystem's scale path: streaming block-tridiagonal solver on the linearised
+INS/GPS network (indoorloc._core.network), checked against scipy on the same equations."""
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from indoorloc._core import network
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
+import network_peers  # noqa: E402
+
+
+@pytest.mark.parametrize("rule", ["leapfrog", "trapezoidal"])
+def test_solution_and_gravity_covariances_match_scipy_and_the_dense_inverse(rule):
+    eq = network.linear_ins_equations(50.0, 2.0, rule=rule)
+    E = int(eq["imu_epochs"])
+    ours = network.solve_linear_ins_network(50.0, 2.0, rule=rule, keep_gravity_estimate=True)
+    assert ours["imu_epochs"] == E and ours["unknowns"] == 18 * E
+    assert ours["max_abs_error"] < 1e-6  # noise-free observations: the truth comes back
+    A, b = network_peers.sparse_normal_system(eq)
+    dense = A.toarray()
+    x = np.linalg.solve(dense, b)
+    np.testing.assert_allclose(ours["gravity_estimate"], x.reshape(E, 18)[:, 15:], rtol=0, atol=1e-9)
+    inverse = np.linalg.inv(dense)
+    idx = np.arange(E)[:, None] * 18 + 15 + np.arange(3)[None, :]
+    np.testing.assert_allclose(ours["gravity_sigma"], np.sqrt(np.diag(inverse)[idx]), rtol=1e-6)
+    # Checkpointed: identical numbers, twice the assembler calls.
+    again = network.solve_linear_ins_network(50.0, 2.0, rule=rule, keep_gravity_estimate=True, checkpoint_interval=5)
+    np.testing.assert_array_equal(again["gravity_sigma"], ours["gravity_sigma"])
+    assert again["assembler_calls"] == 2 * ours["assembler_calls"]
+
+
+def test_normal_blocks_rebuild_the_sparse_matrix():
+    D, L, r = network.linear_ins_normal_blocks(50.0, 1.0)
+    A, b = network_peers.sparse_normal_system(network.linear_ins_equations(50.0, 1.0))
+    n, bs, _ = D.shape
+    dense = A.toarray()
+    for j in range(n):
+        np.testing.assert_allclose(D[j], dense[j * bs:(j + 1) * bs, j * bs:(j + 1) * bs], rtol=1e-12, atol=1e-6)
+        if j > 0:
+            np.testing.assert_allclose(L[j], dense[j * bs:(j + 1) * bs, (j - 1) * bs:j * bs], rtol=1e-12, atol=1e-6)
+    np.testing.assert_allclose(r.ravel(), b, rtol=1e-12, atol=1e-9)
+
+
+def test_leapfrog_without_a_datum_for_the_odd_chain_is_reported():
+    with pytest.raises(RuntimeError, match="rank-deficient"):
+        network.solve_linear_ins_network(50.0, 5.0, rule="leapfrog", prior_epochs=1)
+    out = network.solve_linear_ins_network(50.0, 5.0, rule="trapezoidal", prior_epochs=1)
+    assert out["max_abs_error"] < 1e-5
+
+
+def test_bad_arguments_name_the_argument():
+    with pytest.raises(ValueError, match="rule"):
+        network.solve_linear_ins_network(50.0, 5.0, rule="euler")
+    with pytest.raises(ValueError, match="checkpoint_interval"):
+        network.solve_linear_ins_network(50.0, 5.0, checkpoint_interval=-2)
+    with pytest.raises(ValueError, match="options"):
+        network.solve_linear_ins_network(50.0, -1.0)
