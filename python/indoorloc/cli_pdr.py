@@ -24,6 +24,11 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         print(f"## {title}\n")
         print(pe.markdown(pyshoe=pyshoe, closed_loops=loops))
         print()
+    if (root / "mobgap_lowerback").is_dir():
+        from indoorloc.experiments import pdr_stride_length as ps
+
+        print("## Weinberg stride length (paper 002 eq. 4)\n")
+        print(ps.markdown(ps.evaluate_weinberg_mobgap(root / "mobgap_lowerback")))
     return 0
 
 

@@ -1,5 +1,5 @@
 # Stubs of indoorloc._core.pdr: zero-velocity detection and the ZUPT-aided EKF.
-from typing import Dict, List, Tuple
+from typing import Any, Dict, List, Tuple
 
 import numpy as np
 import numpy.typing as npt
@@ -54,3 +54,25 @@ def steps_gyro(
     median_window_s: float = 0.1,
     min_swing_s: float = 0.2,
 ) -> List[int]: ...
+def butterworth_sos(order: int, cutoff_hz: float, rate_hz: float, highpass: bool = False) -> _F64: ...
+def sos_filter(sos: _ArrayLike, x: _ArrayLike, steady_state_start: bool = False) -> _F64: ...
+def weinberg_features(
+    acc_mps2: _ArrayLike,
+    rate_hz: float,
+    intervals: _ArrayLike,
+    filter_order: int = 4,
+    cutoff_hz: float = 3.0,
+    steady_state_start: bool = True,
+) -> _F64: ...
+def weinberg_stride_lengths(
+    acc_mps2: _ArrayLike,
+    rate_hz: float,
+    step_indices: _ArrayLike,
+    k: float = 0.364,
+    window_s: float = 0.15,
+    filter_order: int = 4,
+    cutoff_hz: float = 3.0,
+    steady_state_start: bool = True,
+) -> _F64: ...
+def calibrate_weinberg_k(features: _ArrayLike, lengths_m: _ArrayLike) -> Dict[str, Any]: ...
+def calibrate_weinberg_k_from_distance(features: _ArrayLike, distance_m: float) -> Dict[str, Any]: ...
