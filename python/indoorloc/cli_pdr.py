@@ -18,11 +18,14 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     root = Path(args.data_root) if args.data_root else default_pdr_root()
     if not root.is_dir():
         raise ValueError(f"indoorloc: argument 'data_root': {root} is not a folder")
-    for title, method in (("ZUPT EKF", pe.zupt_ekf_method), ("ZUPT EKF + RTS smoother", pe.zupt_rts_method)):
+    methods = (("ZUPT EKF", pe.zupt_ekf_method), ("ZUPT EKF + RTS smoother", pe.zupt_rts_method),
+               ("INS-ZUPT increments, Mahony attitude (paper eq. 5, 9)", pe.ins_zupt_steps_method),
+               ("ZUPT stride length + heading at stance, Mahony attitude (paper eq. 6-8)", pe.stride_heading_method))
+    for title, method in methods:
         pyshoe = pe.evaluate_pyshoe(root / "pyshoe_vicon", method)
         loops = pe.evaluate_closed_loops(root, method)
         print(f"## {title}\n")
-        print(pe.markdown(pyshoe=pyshoe, closed_loops=loops))
+        print(pe.markdown(pyshoe=pyshoe, closed_loops=loops, method_name=title))
         print()
     if (root / "mobgap_lowerback").is_dir():
         from indoorloc.experiments import pdr_stride_length as ps

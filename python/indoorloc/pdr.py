@@ -8,7 +8,13 @@
   (:func:`butterworth_sos`, :func:`sos_filter`, equal to scipy.signal's) and K calibrated on a walk
   of known length (:func:`calibrate_weinberg_k`, :func:`calibrate_weinberg_k_from_distance`);
 - the zero-velocity-aided strapdown INS, a 9-state error-state EKF with an optional RTS smoother
-  (:func:`zupt_ekf`).
+  (:func:`zupt_ekf`);
+- the magnetometer step detector (:func:`steps_magnetometer`) and the Mahony attitude filter
+  (:func:`attitude_mahony`) for recordings without the sensor orientation;
+- step-wise positioning (paper eq. 5-9): INS-ZUPT increments (:func:`ins_zupt_increments`),
+  headings at stance (:func:`stance_headings`), stride length + heading
+  (:func:`positions_from_strides`) and increments (:func:`positions_from_increments`), each step
+  with a 3 x 3 covariance of (x, y, heading error) for fusion with maps and WiFi.
 
 Loaders for the recordings in ../shared/data/pdr are in :mod:`indoorloc.io`.
 """
@@ -16,28 +22,40 @@ Loaders for the recordings in ../shared/data/pdr are in :mod:`indoorloc.io`.
 from __future__ import annotations
 
 from indoorloc._core.pdr import (
+    attitude_mahony,
     butterworth_sos,
     calibrate_weinberg_k,
     calibrate_weinberg_k_from_distance,
+    ins_zupt_increments,
+    positions_from_increments,
+    positions_from_strides,
     shoe_detector,
     shoe_statistic,
     sos_filter,
+    stance_headings,
     steps_acceleration,
     steps_gyro,
+    steps_magnetometer,
     weinberg_features,
     weinberg_stride_lengths,
     zupt_ekf,
 )
 
 __all__ = [
+    "attitude_mahony",
     "butterworth_sos",
     "calibrate_weinberg_k",
     "calibrate_weinberg_k_from_distance",
+    "ins_zupt_increments",
+    "positions_from_increments",
+    "positions_from_strides",
     "shoe_detector",
     "shoe_statistic",
     "sos_filter",
+    "stance_headings",
     "steps_acceleration",
     "steps_gyro",
+    "steps_magnetometer",
     "weinberg_features",
     "weinberg_stride_lengths",
     "zupt_ekf",

@@ -214,6 +214,84 @@ def zupt_rts_method(recording: ImuRecording, threshold: Optional[float] = None) 
     return zupt_ekf_method(recording, threshold, smooth=True)
 
 
+def stance_step_samples(stance: Any, rate_hz: float, *, min_swing_s: float = 0.3) -> np.ndarray:
+    """One sample per stance phase (its middle), the initial rest included: the step events of
+    the paper's step-wise positioning (eq. 5-9). The stance phases are those that follow the
+    stride onsets of :func:`strides_from_stance` (same flicker merging)."""
+    s = np.asarray(stance, dtype=bool).ravel()
+    onsets = strides_from_stance(s, rate_hz, min_swing_s=min_swing_s)
+    starts = ([0] if s.size and s[0] else []) + [int(o) for o in onsets]
+    out = []
+    for a in starts:
+        rest = np.flatnonzero(~s[a:])
+        b = a + (int(rest[0]) if rest.size else s.size - a)
+        out.append((a + b - 1) // 2)
+    return np.unique(np.asarray(out, dtype=np.int64))
+
+
+def _per_sample(step_samples: np.ndarray, step_xy: np.ndarray, n: int) -> np.ndarray:
+    """Positions (N, 3) from step positions: linear between step samples (the foot moves during
+    the swing), held before the first and after the last."""
+    k = np.arange(n)
+    x = np.interp(k, step_samples, step_xy[:, 0])
+    y = np.interp(k, step_samples, step_xy[:, 1])
+    return np.column_stack([x, y, np.zeros(n)])
+
+
+def step_positioning_method(recording: ImuRecording, threshold: Optional[float] = None, *,
+                            heading: str = "increments", attitude: str = "mahony"
+                            ) -> Tuple[np.ndarray, np.ndarray]:
+    """Paper 002's step-wise positioning on a foot-mounted recording.
+
+    SHOE stance detection (per-sensor threshold as :func:`zupt_ekf_method`), one step event per
+    stance phase (:func:`stance_step_samples`), the sensor attitude from the Mahony filter
+    (``attitude="mahony"``, no magnetometer in these recordings) or the ZUPT EKF
+    (``attitude="ekf"``), INS-ZUPT increments (§IV.B, eq. 5), then
+
+    - ``heading="increments"``: eq. 9, P_k = P_{k-1} + dP_k;
+    - ``heading="stance"``: eq. 6-8, SL_k = |dP_k| along the heading of the sensor x axis at
+      stance (eq. 7).
+
+    Returns ``(positions_m (N, 3), stride_indices)``: per-sample positions interpolated linearly
+    between the step events.
+    """
+    from indoorloc import pdr
+
+    gamma = default_threshold(recording) if threshold is None else float(threshold)
+    stance = np.asarray(pdr.shoe_detector(recording.acc_mps2, recording.gyro_radps,
+                                          window=SHOE_WINDOW, threshold=gamma,
+                                          sigma_acc_mps2=SHOE_SIGMA_ACC_MPS2,
+                                          sigma_gyro_radps=SHOE_SIGMA_GYRO_RADPS), dtype=bool)
+    steps = stance_step_samples(stance, recording.rate_hz)
+    if steps.size < 2:
+        raise ValueError(f"indoorloc: argument 'recording': {recording.name}: fewer than 2 stance phases")
+    if attitude == "mahony":
+        quats = pdr.attitude_mahony(recording.time_s, recording.acc_mps2, recording.gyro_radps)["quaternions_wxyz"]
+    elif attitude == "ekf":
+        quats = pdr.zupt_ekf(recording.time_s, recording.acc_mps2, recording.gyro_radps, stance)["quaternions_wxyz"]
+    else:
+        raise ValueError(f"indoorloc: argument 'attitude': must be 'mahony' or 'ekf', got {attitude!r}")
+    inc = pdr.ins_zupt_increments(recording.time_s, recording.acc_mps2, quats, steps)
+    if heading == "increments":
+        track = pdr.positions_from_increments(inc["increments_m"])
+    elif heading == "stance":
+        track = pdr.positions_from_strides(inc["stride_lengths_m"], pdr.stance_headings(quats, steps[1:]))
+    else:
+        raise ValueError(f"indoorloc: argument 'heading': must be 'increments' or 'stance', got {heading!r}")
+    xy = np.vstack([[0.0, 0.0], track["positions_m"]])
+    return _per_sample(steps, xy, recording.n_samples), strides_from_stance(stance, recording.rate_hz)
+
+
+def ins_zupt_steps_method(recording: ImuRecording, threshold: Optional[float] = None) -> Tuple[np.ndarray, np.ndarray]:
+    """Eq. 9 with the Mahony attitude (:func:`step_positioning_method`)."""
+    return step_positioning_method(recording, threshold, heading="increments", attitude="mahony")
+
+
+def stride_heading_method(recording: ImuRecording, threshold: Optional[float] = None) -> Tuple[np.ndarray, np.ndarray]:
+    """Eq. 6-8 (ZUPT stride length + heading at stance) with the Mahony attitude."""
+    return step_positioning_method(recording, threshold, heading="stance", attitude="mahony")
+
+
 def with_threshold(method: Callable[..., MethodOutput], threshold: float) -> Method:
     """``method`` with its ``threshold`` keyword fixed (for :func:`tune_threshold`)."""
     def bound(recording: ImuRecording) -> MethodOutput:
