@@ -19,6 +19,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if not root.is_dir():
         raise ValueError(f"indoorloc: argument 'data_root': {root} is not a folder")
     methods = (("ZUPT EKF", pe.zupt_ekf_method), ("ZUPT EKF + RTS smoother", pe.zupt_rts_method),
+               ("ZUPT EKF, per-recording SHOE threshold (PyShoe rule)", pe.zupt_adaptive_method),
+               ("ZUPT EKF + RTS, per-recording SHOE threshold (PyShoe rule)", pe.zupt_adaptive_rts_method),
                ("INS-ZUPT increments, Mahony attitude (paper eq. 5, 9)", pe.ins_zupt_steps_method),
                ("ZUPT stride length + heading at stance, Mahony attitude (paper eq. 6-8)", pe.stride_heading_method))
     for title, method in methods:

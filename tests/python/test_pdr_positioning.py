@@ -103,3 +103,23 @@ def test_ins_zupt_increments_of_a_straight_push():
 def test_stance_step_samples_take_the_middle_of_each_stance():
     stance = np.array([1] * 10 + [0] * 100 + [1] * 20 + [0] * 100 + [1] * 30, dtype=bool)
     np.testing.assert_array_equal(pe.stance_step_samples(stance, 100.0), [4, 119, 244])
+
+
+def test_adaptive_threshold_is_per_sensor_and_from_the_recording():
+    rng = np.random.default_rng(5)
+    n = 2000
+    t = np.arange(n) / 200.0
+    acc = np.tile([0.0, 0.0, 9.81], (n, 1)) + 0.01 * rng.normal(size=(n, 3))
+    gyro = 0.001 * rng.normal(size=(n, 3))
+    swing = np.mod(t, 1.0) > 0.6
+    acc[swing] += 20.0 * rng.normal(size=(int(swing.sum()), 3))
+    gyro[swing] += 5.0 * rng.normal(size=(int(swing.sum()), 3))
+    base = dict(name="x", time_s=t, acc_mps2=acc, gyro_radps=gyro, rate_hz=200.0, truth_xy_m=None,
+                stride_indices=None, closed_loop=False, distance_m=None, source_units="")
+    xio = pe.ImuRecording(sensor="xio", **base)
+    assert pe.adaptive_threshold(xio) == pe.default_threshold(xio) == 3e4
+    pyshoe = pe.ImuRecording(sensor="pyshoe", **base)
+    rule = pe.ADAPTIVE_SHOE["pyshoe"]
+    assert pe.adaptive_threshold(pyshoe) in (rule["low"], rule["high"])
+    pos, strides = pe.zupt_adaptive_method(pyshoe)
+    assert pos.shape == (n, 3) and strides.ndim == 1

@@ -117,8 +117,16 @@ ZuptEkfOutput RunZuptEkf(const Eigen::Ref<const Eigen::VectorXd>& time_s, const 
       p += v * dt;
       Mat9 F = Mat9::Identity();
       F.block<3, 3>(0, 3) = Eigen::Matrix3d::Identity() * dt;
-      F.block<3, 3>(3, 6) = -Skew(f_n) * dt;
-      P = F * P * F.transpose();
+      const Eigen::Matrix3d B = -Skew(f_n) * dt;
+      F.block<3, 3>(3, 6) = B;
+      // P <- F P Fᵀ using F's block structure (I + two off-diagonal blocks): M = F P by rows,
+      // then M Fᵀ by columns; about 4x fewer flops than two dense 9 x 9 products.
+      Mat9 M = P;
+      M.middleRows<3>(0) += dt * P.middleRows<3>(3);
+      M.middleRows<3>(3).noalias() += B * P.middleRows<3>(6);
+      P = M;
+      P.middleCols<3>(0) += dt * M.middleCols<3>(3);
+      P.middleCols<3>(3).noalias() += M.middleCols<3>(6) * B.transpose();
       P.block<3, 3>(3, 3) += qa * dt * dt * Eigen::Matrix3d::Identity();
       P.block<3, 3>(6, 6) += qg * dt * dt * Eigen::Matrix3d::Identity();
       if (options.smooth) {
