@@ -295,8 +295,8 @@ step sample; quaternions_wxyz (N, 4) body -> navigation (z up).)doc");
           return TrackDict(pdr::PositionsFromStrides(l.map, h.map, ToStart(start), MakeStepCov(sd_sl, sd_frac, sd_psi, sd_psi0)));
         },
         py::arg("stride_lengths_m"), py::arg("headings_rad"), py::arg("start_xy") = std::vector<double>{0.0, 0.0},
-        py::arg("sigma_stride_length_m") = 0.03, py::arg("stride_length_sd_fraction") = 0.03,
-        py::arg("sigma_heading_step_rad") = 0.5 * kDeg, py::arg("sigma_heading_initial_rad") = 0.0, R"doc(
+        py::arg("sigma_stride_length_m") = 0.1, py::arg("stride_length_sd_fraction") = 0.1,
+        py::arg("sigma_heading_step_rad") = 4.0 * kDeg, py::arg("sigma_heading_initial_rad") = 0.0, R"doc(
 Paper 002 eq. 8: P_k = P_{k-1} + SL_k (cos th_k, sin th_k) from stride lengths (M,) [m] and
 headings (M,) [rad], starting at start_xy [m]. Each step carries the 3 x 3 covariance of
 (x [m], y [m], heading error [rad]) under a heading random walk (sigma_heading_step_rad per step)
@@ -307,8 +307,8 @@ dict: positions_m (M, 2), covariances (M, 3, 3), stride_lengths_m, headings_rad.
           MatrixArg d = ToMatrix(inc, "increments_m");
           return TrackDict(pdr::PositionsFromIncrements(d.map, ToStart(start), MakeStepCov(sd_sl, sd_frac, sd_psi, sd_psi0)));
         },
-        py::arg("increments_m"), py::arg("start_xy") = std::vector<double>{0.0, 0.0}, py::arg("sigma_stride_length_m") = 0.03,
-        py::arg("stride_length_sd_fraction") = 0.03, py::arg("sigma_heading_step_rad") = 0.5 * kDeg,
+        py::arg("increments_m"), py::arg("start_xy") = std::vector<double>{0.0, 0.0}, py::arg("sigma_stride_length_m") = 0.1,
+        py::arg("stride_length_sd_fraction") = 0.1, py::arg("sigma_heading_step_rad") = 4.0 * kDeg,
         py::arg("sigma_heading_initial_rad") = 0.0, R"doc(
 Paper 002 eq. 9: P_k = P_{k-1} + dP_k(x, y) from INS-ZUPT increments (M, 2) or (M, 3) [m], with
 the per-step covariance of positions_from_strides (SL = |dP_xy|, heading = atan2(dP_y, dP_x)).)doc");

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+import numpy as np
+
 
 def default_pdr_root() -> Path:
     from indoorloc.cli_wifi import default_data_root
@@ -29,6 +31,14 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         print(f"## {title}\n")
         print(pe.markdown(pyshoe=pyshoe, closed_loops=loops, method_name=title))
         print()
+    from indoorloc.io import list_pyshoe_trials, load_pyshoe_trial
+
+    cov_rows = [pe.step_covariance_coverage(load_pyshoe_trial(p)) for p in list_pyshoe_trials(root / "pyshoe_vicon")]
+    inside = sum(r["inside_95_pct"] * r["n_steps"] for r in cov_rows) / max(1, sum(r["n_steps"] for r in cov_rows))
+    print("## Per-step covariance of eq. 9 (Mahony attitude, default covariance options), PyShoe trials\n")
+    print(f"Steps inside their 95 % ellipse: {inside:.1f} % (consistent: 95 %); median mean d^2 "
+          f"{np.median([r['mean_d2'] for r in cov_rows]):.2f} (consistent: 2); median final error / final sd: "
+          f"{np.median([r['final_error_m'] for r in cov_rows]):.2f} m / {np.median([r['final_sd_m'] for r in cov_rows]):.2f} m.\n")
     if (root / "mobgap_lowerback").is_dir():
         from indoorloc.experiments import pdr_stride_length as ps
 

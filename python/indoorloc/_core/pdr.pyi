@@ -106,16 +106,16 @@ def positions_from_strides(
     stride_lengths_m: _ArrayLike,
     headings_rad: _ArrayLike,
     start_xy: _ArrayLike = ...,
-    sigma_stride_length_m: float = 0.03,
-    stride_length_sd_fraction: float = 0.03,
+    sigma_stride_length_m: float = 0.1,
+    stride_length_sd_fraction: float = 0.1,
     sigma_heading_step_rad: float = ...,
     sigma_heading_initial_rad: float = 0.0,
 ) -> Dict[str, np.ndarray]: ...
 def positions_from_increments(
     increments_m: _ArrayLike,
     start_xy: _ArrayLike = ...,
-    sigma_stride_length_m: float = 0.03,
-    stride_length_sd_fraction: float = 0.03,
+    sigma_stride_length_m: float = 0.1,
+    stride_length_sd_fraction: float = 0.1,
     sigma_heading_step_rad: float = ...,
     sigma_heading_initial_rad: float = 0.0,
 ) -> Dict[str, np.ndarray]: ...

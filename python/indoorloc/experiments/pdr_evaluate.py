@@ -344,6 +344,53 @@ def stride_heading_method(recording: ImuRecording, threshold: Optional[float] = 
     return step_positioning_method(recording, threshold, heading="stance", attitude="mahony")
 
 
+def step_covariance_coverage(recording: ImuRecording, threshold: Optional[float] = None,
+                             n_align_strides: int = 2, **covariance: float) -> Dict[str, Any]:
+    """How well the per-step covariances of eq. 9 (:func:`step_positioning_method` with
+    ``heading="increments"``, Mahony attitude) describe the real error on a PyShoe trial.
+
+    The track is aligned as in :func:`score_pyshoe_trial` (mirror, start, initial heading), the
+    2 x 2 position covariance of each step rotated the same way, and the squared Mahalanobis
+    distance d² = eᵀ Σ⁻¹ e of the error at each step sample computed (steps after the alignment
+    window only). A consistent covariance has d² ~ chi²(2): 95 % of the steps inside d² < 5.99,
+    mean d² = 2. ``covariance`` keywords go to ``positions_from_increments``. Returns ``{"trial",
+    "n_steps", "inside_95_pct", "mean_d2", "final_error_m", "final_sd_m"}`` (final_sd_m =
+    sqrt(trace) of the last 2 x 2 covariance).
+    """
+    from indoorloc import pdr
+
+    if recording.truth_xy_m is None:
+        raise ValueError(f"indoorloc: argument 'recording': {recording.name} has no truth_xy_m")
+    gamma = default_threshold(recording) if threshold is None else float(threshold)
+    stance = np.asarray(pdr.shoe_detector(recording.acc_mps2, recording.gyro_radps, window=SHOE_WINDOW,
+                                          threshold=gamma, sigma_acc_mps2=SHOE_SIGMA_ACC_MPS2,
+                                          sigma_gyro_radps=SHOE_SIGMA_GYRO_RADPS), dtype=bool)
+    steps = stance_step_samples(stance, recording.rate_hz)
+    quats = pdr.attitude_mahony(recording.time_s, recording.acc_mps2, recording.gyro_radps)["quaternions_wxyz"]
+    inc = pdr.ins_zupt_increments(recording.time_s, recording.acc_mps2, quats, steps)
+    track = pdr.positions_from_increments(inc["increments_m"], **covariance)
+    xy = np.vstack([[0.0, 0.0], track["positions_m"]])
+    pos = _per_sample(steps, xy, recording.n_samples)[:, :2] * PYSHOE_TRUTH_FROM_Z_UP
+    n_align = pyshoe_alignment_samples(recording, n_align_strides)
+    aligned, theta = align_2d(pos, recording.truth_xy_m, n_align, return_angle=True)
+    c, s_ = math.cos(theta), math.sin(theta)
+    rot = np.array([[c, -s_], [s_, c]]) @ np.diag(PYSHOE_TRUTH_FROM_Z_UP)
+    d2 = []
+    for k, sample in enumerate(steps[1:]):
+        if sample < n_align:
+            continue
+        cov = rot @ track["covariances"][k][:2, :2] @ rot.T
+        e = aligned[sample] - recording.truth_xy_m[sample]
+        d2.append(float(e @ np.linalg.solve(cov + 1e-12 * np.eye(2), e)))
+    d2a = np.asarray(d2)
+    last = track["covariances"][-1][:2, :2]
+    return {"trial": recording.name, "n_steps": int(d2a.size),
+            "inside_95_pct": float(100.0 * np.mean(d2a < 5.991)) if d2a.size else float("nan"),
+            "mean_d2": float(np.mean(d2a)) if d2a.size else float("nan"),
+            "final_error_m": float(np.linalg.norm(aligned[steps[-1]] - recording.truth_xy_m[steps[-1]])),
+            "final_sd_m": float(np.sqrt(np.trace(last)))}
+
+
 def with_threshold(method: Callable[..., MethodOutput], threshold: float) -> Method:
     """``method`` with its ``threshold`` keyword fixed (for :func:`tune_threshold`)."""
     def bound(recording: ImuRecording) -> MethodOutput:
