@@ -90,3 +90,17 @@ def test_load_mobgap_converts_units_and_drops_unresolved_strides(tmp_path):
 def test_load_mobgap_rejects_a_missing_file(tmp_path):
     with pytest.raises(ValueError, match="path"):
         load_mobgap_trials(tmp_path / "nope.mat")
+
+
+def test_mobgap_evaluations_on_a_generated_subject(tmp_path):
+    from indoorloc.experiments import pdr_stride_length as ps
+
+    d = tmp_path / "HA" / "009"
+    d.mkdir(parents=True)
+    _mobgap_file(d / "data.mat")
+    det = ps.evaluate_step_detectors_mobgap(tmp_path)
+    assert det["reference_steps"] == 4 and det["n_bouts"] == 1
+    res = ps.evaluate_weinberg_mobgap(tmp_path, eval_test="Test5")
+    assert res["rows"][0]["n_strides"] == 2 and res["pooled_k"] > 0
+    with pytest.raises(ValueError, match="root"):
+        ps.evaluate_weinberg_mobgap(tmp_path / "nothing")

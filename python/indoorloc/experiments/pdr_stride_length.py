@@ -1,4 +1,6 @@
-"""Weinberg stride length (paper 002 eq. 4) on the Mobilise-D lower-back recordings (mobgap).
+"""Weinberg stride length (paper 002 eq. 4) and the magnetometer / gyroscope step detectors on
+the Mobilise-D lower-back recordings (mobgap): :func:`evaluate_weinberg_mobgap`,
+:func:`evaluate_step_detectors_mobgap`.
 
 Protocol (issue 6): K is calibrated on Test5 (a short straight walk) and tested on Test11
 (simulated daily life) against the INDIP reference stride lengths. The reference strides
@@ -124,3 +126,34 @@ def markdown(result: Dict[str, Any]) -> str:
     parts += ["", f"Pooled K = {result['pooled_k']:.3f}. Paper 002 (foot, straight walks, K = 0.364): "
               f"total-distance error {lo}-{hi} %.", ""]
     return "\n".join(parts)
+
+
+def evaluate_step_detectors_mobgap(root: PathLike, gyro_threshold_radps: float = 0.5) -> Dict[str, Any]:
+    """Step counts of the magnetometer and gyroscope detectors (paper 002 §III.D, default options
+    of :func:`indoorloc.pdr.steps_magnetometer` / :func:`indoorloc.pdr.steps_gyro` with a 0.5
+    rad/s threshold for the trunk) on the mobgap lower-back recordings, the only ones here with
+    a magnetometer: detected steps inside each INDIP walking bout [Start, End] against the bout's
+    reference initial contacts (both feet). Returns ``{"reference_steps", "magnetometer_abs_error",
+    "gyro_abs_error", "magnetometer_pct", "gyro_pct", "n_bouts"}`` (sums of per-bout absolute
+    count errors)."""
+    from indoorloc import pdr
+
+    ref = mag_err = gyro_err = bouts = 0
+    for f in list_mobgap_files(root):
+        for t in load_mobgap_trials(f):
+            rec = t.recording
+            if t.bout_bounds_s.shape[0] == 0 or rec.mag_uT is None:
+                continue
+            mag_steps = np.asarray(pdr.steps_magnetometer(rec.mag_uT, rec.rate_hz)[0])
+            gyro_steps = np.asarray(pdr.steps_gyro(rec.gyro_radps, rec.rate_hz, threshold_radps=gyro_threshold_radps))
+            for (a, b), contacts in zip(t.bout_bounds_s, t.bout_initial_contacts):
+                lo, hi = a * rec.rate_hz, b * rec.rate_hz
+                n_ref = int(len(contacts))
+                ref += n_ref
+                mag_err += abs(int(np.sum((mag_steps >= lo) & (mag_steps <= hi))) - n_ref)
+                gyro_err += abs(int(np.sum((gyro_steps >= lo) & (gyro_steps <= hi))) - n_ref)
+                bouts += 1
+    if ref == 0:
+        raise ValueError(f"indoorloc: argument 'root': no reference walking bout with a magnetometer under {root}")
+    return {"reference_steps": ref, "n_bouts": bouts, "magnetometer_abs_error": mag_err, "gyro_abs_error": gyro_err,
+            "magnetometer_pct": 100.0 * mag_err / ref, "gyro_pct": 100.0 * gyro_err / ref}
