@@ -1,9 +1,15 @@
 // Python bindings of the pdr subsystem: zero-velocity detection and the ZUPT-aided EKF.
+#include <cmath>
+#include <vector>
+
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
 
 #include "indoorloc/core/options.h"
+#include "indoorloc/pdr/attitude_filter.h"
 #include "indoorloc/pdr/step_detection.h"
+#include "indoorloc/pdr/step_positioning.h"
+#include "indoorloc/pdr/stride_length.h"
 #include "indoorloc/pdr/zero_velocity.h"
 #include "indoorloc/pdr/zupt_ekf.h"
 #include "numpy_args.h"
@@ -22,6 +28,80 @@ pdr::ShoeOptions MakeShoe(int window, double threshold, double sigma_acc, double
   return o;
 }
 constexpr double kDeg = 3.14159265358979323846 / 180.0;
+
+// An (M, 2) array of integer sample indices, given as any numeric array.
+Eigen::MatrixXi ToIndexPairs(const py::object& obj, const char* name) {
+  MatrixArg m = ToMatrix(obj, name, -1, 2);
+  Eigen::MatrixXi out(m.map.rows(), 2);
+  for (Eigen::Index i = 0; i < m.map.rows(); ++i) {
+    for (int j = 0; j < 2; ++j) {
+      const double v = m.map(i, j);
+      CheckArgument(v == std::floor(v) && std::abs(v) < 2e9, name, "entries must be integer sample indices");
+      out(i, j) = static_cast<int>(v);
+    }
+  }
+  return out;
+}
+
+std::vector<int> ToIndices(const py::object& obj, const char* name) {
+  VectorArg v = ToVector(obj, name);
+  std::vector<int> out(static_cast<size_t>(v.map.size()));
+  for (Eigen::Index i = 0; i < v.map.size(); ++i) {
+    const double x = v.map[i];
+    CheckArgument(x == std::floor(x) && std::abs(x) < 2e9, name, "entries must be integer sample indices");
+    out[static_cast<size_t>(i)] = static_cast<int>(x);
+  }
+  return out;
+}
+
+pdr::WeinbergOptions MakeWeinberg(double k, int order, double cutoff_hz, double window_s, bool steady) {
+  pdr::WeinbergOptions o;
+  o.k = k;
+  o.filter_order = order;
+  o.cutoff_hz = cutoff_hz;
+  o.window_s = window_s;
+  o.steady_state_start = steady;
+  return o;
+}
+
+pdr::StepCovarianceOptions MakeStepCov(double sd_sl, double sd_frac, double sd_psi, double sd_psi0) {
+  pdr::StepCovarianceOptions o;
+  o.sigma_stride_length_m = sd_sl;
+  o.stride_length_sd_fraction = sd_frac;
+  o.sigma_heading_step_rad = sd_psi;
+  o.sigma_heading_initial_rad = sd_psi0;
+  return o;
+}
+
+Eigen::Vector2d ToStart(const py::object& start) {
+  VectorArg v = ToVector(start, "start_xy", 2);
+  return Eigen::Vector2d(v.map[0], v.map[1]);
+}
+
+py::dict TrackDict(const pdr::StepTrack& t) {
+  py::dict d;
+  d["positions_m"] = t.positions_m;
+  py::array_t<double> cov({static_cast<py::ssize_t>(t.covariances.rows()), py::ssize_t{3}, py::ssize_t{3}});
+  auto c = cov.mutable_unchecked<3>();
+  for (Eigen::Index k = 0; k < t.covariances.rows(); ++k) {
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) c(k, i, j) = t.covariances(k, 3 * i + j);
+    }
+  }
+  d["covariances"] = cov;
+  d["stride_lengths_m"] = t.stride_lengths_m;
+  d["headings_rad"] = t.headings_rad;
+  return d;
+}
+
+py::dict CalibrationDict(const pdr::WeinbergCalibration& c) {
+  py::dict d;
+  d["k"] = c.k;
+  d["rms_residual_m"] = c.rms_residual_m;
+  d["n_strides"] = c.n_strides;
+  d["report"] = c.BriefReport();
+  return d;
+}
 }  // namespace
 
 void BindPdr(py::module_& m) {
@@ -79,8 +159,189 @@ T1, T2 [m/s^2] (paper: 2 and 1 at 100 Hz).)doc");
         },
         py::arg("gyro_radps"), py::arg("rate_hz"), py::arg("threshold_radps") = 1.0, py::arg("median_window_s") = 0.1,
         py::arg("min_swing_s") = 0.2, "Gyroscope step detector (paper 002 §III.D): step sample indices.");
+  m.def("butterworth_sos", &pdr::ButterworthSos, py::arg("order"), py::arg("cutoff_hz"), py::arg("rate_hz"),
+        py::arg("highpass") = false, R"doc(
+Butterworth filter as second-order sections, shape (ceil(order/2), 6), rows [b0 b1 b2 a0 a1 a2]
+(scipy's sos layout; the same transfer function as scipy.signal.butter(order, cutoff_hz,
+fs=rate_hz)). cutoff_hz and rate_hz in Hz, 0 < cutoff_hz < rate_hz / 2.)doc");
+  m.def("sos_filter", [](const py::object& sos, const py::object& x, bool steady_state_start) {
+          MatrixArg s = ToMatrix(sos, "sos", -1, 6);
+          VectorArg v = ToVector(x, "x");
+          return pdr::FilterSos(s.map, v.map, steady_state_start);
+        },
+        py::arg("sos"), py::arg("x"), py::arg("steady_state_start") = false, R"doc(
+Runs second-order sections (M, 6) over x (N,) (transposed direct form II). Equals
+scipy.signal.sosfilt(sos, x), or with steady_state_start=True sosfilt(sos, x,
+zi=sosfilt_zi(sos) * x[0]).)doc");
+  m.def("weinberg_features", [](const py::object& acc, double rate_hz, const py::object& intervals, int order, double cutoff_hz,
+                                bool steady) {
+          MatrixArg a = ToMatrix(acc, "acc_mps2", -1, 3);
+          const Eigen::MatrixXi iv = ToIndexPairs(intervals, "intervals");
+          const pdr::WeinbergOptions o = MakeWeinberg(1.0, order, cutoff_hz, 0.15, steady);
+          py::gil_scoped_release release;
+          return pdr::WeinbergFeatures(rate_hz, a.map, iv, o);
+        },
+        py::arg("acc_mps2"), py::arg("rate_hz"), py::arg("intervals"), py::arg("filter_order") = 4, py::arg("cutoff_hz") = 3.0,
+        py::arg("steady_state_start") = true, R"doc(
+Weinberg bounce feature (max a~ - min a~)^(1/4) [(m/s^2)^(1/4)] over each interval (M, 2) of
+inclusive sample indices [start, end], with a~ the Butterworth low-pass (order, cutoff_hz [Hz])
+of |acc_mps2| (N, 3) [m/s^2] sampled at rate_hz [Hz]. Stride length = K x feature (eq. 4).)doc");
+  m.def("weinberg_stride_lengths", [](const py::object& acc, double rate_hz, const py::object& step_indices, double k,
+                                      double window_s, int order, double cutoff_hz, bool steady) {
+          MatrixArg a = ToMatrix(acc, "acc_mps2", -1, 3);
+          const std::vector<int> steps = ToIndices(step_indices, "step_indices");
+          const pdr::WeinbergOptions o = MakeWeinberg(k, order, cutoff_hz, window_s, steady);
+          py::gil_scoped_release release;
+          return pdr::WeinbergStrideLengths(rate_hz, a.map, steps, o);
+        },
+        py::arg("acc_mps2"), py::arg("rate_hz"), py::arg("step_indices"), py::arg("k") = 0.364, py::arg("window_s") = 0.15,
+        py::arg("filter_order") = 4, py::arg("cutoff_hz") = 3.0, py::arg("steady_state_start") = true, R"doc(
+Weinberg stride lengths [m] (paper 002 eq. 4), one per step: K (max - min)^(1/4) of the 3 Hz
+low-passed |acc| [m/s^2] over +-window_s [s] around each step sample (strictly increasing
+indices into acc_mps2 (N, 3)). K [m/(m/s^2)^(1/4)]: 0.364 in the paper (foot); calibrate it with
+calibrate_weinberg_k.)doc");
+  m.def("calibrate_weinberg_k", [](const py::object& features, const py::object& lengths) {
+          VectorArg f = ToVector(features, "features");
+          VectorArg l = ToVector(lengths, "lengths_m", f.map.size());
+          return CalibrationDict(pdr::CalibrateWeinbergK(f.map, l.map));
+        },
+        py::arg("features"), py::arg("lengths_m"), R"doc(
+Least-squares Weinberg K = sum(f L) / sum(f^2) from bounce features f (M,) and known stride
+lengths L (M,) [m]. Returns a dict: k, rms_residual_m, n_strides, report.)doc");
+  m.def("calibrate_weinberg_k_from_distance", [](const py::object& features, double distance_m) {
+          VectorArg f = ToVector(features, "features");
+          return CalibrationDict(pdr::CalibrateWeinbergKFromDistance(f.map, distance_m));
+        },
+        py::arg("features"), py::arg("distance_m"), R"doc(
+Weinberg K = D / sum(f) from the bounce features (M,) of a walk of known length D [m].
+Returns a dict: k, rms_residual_m (0), n_strides, report.)doc");
+  m.def("steps_magnetometer", [](const py::object& mag, double rate_hz, int order, double highpass_hz, double fraction,
+                                 double median_window_s, double min_swing_s, double min_rest_s) {
+          MatrixArg g = ToMatrix(mag, "mag", -1, 3);
+          pdr::MagneticStepOptions o;
+          o.highpass_order = order;
+          o.highpass_hz = highpass_hz;
+          o.threshold_fraction = fraction;
+          o.median_window_s = median_window_s;
+          o.min_swing_s = min_swing_s;
+          o.min_rest_s = min_rest_s;
+          Eigen::VectorXd magnitude;
+          const std::vector<int> steps = pdr::DetectStepsMagnetometer(rate_hz, g.map, o, &magnitude);
+          return py::make_tuple(steps, magnitude);
+        },
+        py::arg("mag"), py::arg("rate_hz"), py::arg("highpass_order") = 2, py::arg("highpass_hz") = 0.5,
+        py::arg("threshold_fraction") = 0.3, py::arg("median_window_s") = 0.1, py::arg("min_swing_s") = 0.2,
+        py::arg("min_rest_s") = 0.15, R"doc(
+Magnetometer step detector (paper 002 §III.D): Butterworth high-pass (order, highpass_hz [Hz])
+per axis of mag (N, 3) (any unit, e.g. uT), |m_hp| thresholded at threshold_fraction x its 95th
+percentile, median filter (median_window_s [s]), rests shorter than min_rest_s [s] merged, a step at
+each transition to rest after at least min_swing_s [s] of motion. Returns (step sample indices,
+|m_hp| (N,) in the unit of mag).)doc");
+  m.def("attitude_mahony", [](const py::object& time_s, const py::object& acc, const py::object& gyro, const py::object& mag,
+                              double kp, double ki, double kp_mag, double gravity, double acc_gate, double norm_tol,
+                              double dip_tol, int init_samples) {
+          MatrixArg a = ToMatrix(acc, "acc_mps2", -1, 3);
+          MatrixArg g = ToMatrix(gyro, "gyro_radps", a.map.rows(), 3);
+          VectorArg t = ToVector(time_s, "time_s", a.map.rows());
+          RowMatrixXd m(0, 3);
+          if (!mag.is_none()) {
+            MatrixArg mm = ToMatrix(mag, "mag", a.map.rows(), 3);
+            m = mm.map;
+          }
+          pdr::MahonyOptions o;
+          o.kp = kp;
+          o.ki = ki;
+          o.kp_mag = kp_mag;
+          o.gravity_mps2 = gravity;
+          o.acc_gate_mps2 = acc_gate;
+          o.mag_norm_tolerance = norm_tol;
+          o.mag_dip_tolerance_rad = dip_tol;
+          o.init_samples = init_samples;
+          pdr::AttitudeOutput out;
+          {
+            py::gil_scoped_release release;
+            out = pdr::RunMahony(t.map, a.map, g.map, m, o);
+          }
+          py::dict d;
+          d["quaternions_wxyz"] = out.quaternions_wxyz;
+          d["gyro_bias_radps"] = out.gyro_bias_radps;
+          d["mag_used"] = out.mag_used;
+          d["mag_rejected"] = out.mag_rejected;
+          d["reference_field_norm"] = out.reference_field_norm;
+          d["reference_dip_rad"] = out.reference_dip_rad;
+          d["seconds"] = out.seconds;
+          return d;
+        },
+        py::arg("time_s"), py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("mag") = py::none(), py::arg("kp") = 1.0,
+        py::arg("ki") = 0.05, py::arg("kp_mag") = 0.5, py::arg("gravity_mps2") = 9.81, py::arg("acc_gate_mps2") = 2.0,
+        py::arg("mag_norm_tolerance") = 0.1, py::arg("mag_dip_tolerance_rad") = 10.0 * kDeg, py::arg("init_samples") = 20, R"doc(
+Mahony complementary attitude filter (gyro + gravity, magnetometer optional, heading-only and
+gated by a disturbance test on the field norm and dip). time_s (N,) [s], acc_mps2 (N, 3) [m/s^2],
+gyro_radps (N, 3) [rad/s], mag (N, 3) any unit or None. Gains kp, kp_mag [rad/s], ki [rad/s^2].
+Returns a dict: quaternions_wxyz (N, 4) body -> navigation (z up; x = initial heading, or
+magnetic north with mag), gyro_bias_radps (N, 3), mag_used (N,) bool, mag_rejected,
+reference_field_norm, reference_dip_rad, seconds.)doc");
+  m.def("stance_headings", [](const py::object& quaternions, const py::object& step_indices) {
+          MatrixArg q = ToMatrix(quaternions, "quaternions_wxyz", -1, 4);
+          return pdr::StanceHeadings(q.map, ToIndices(step_indices, "step_indices"));
+        },
+        py::arg("quaternions_wxyz"), py::arg("step_indices"), R"doc(
+Paper 002 eq. 7: heading [rad] of the sensor x axis, atan2(X_y, X_x) with X = R e_x, at each
+step sample; quaternions_wxyz (N, 4) body -> navigation (z up).)doc");
+  m.def("positions_from_strides", [](const py::object& sl, const py::object& headings, const py::object& start,
+                                     double sd_sl, double sd_frac, double sd_psi, double sd_psi0) {
+          VectorArg l = ToVector(sl, "stride_lengths_m");
+          VectorArg h = ToVector(headings, "headings_rad", l.map.size());
+          return TrackDict(pdr::PositionsFromStrides(l.map, h.map, ToStart(start), MakeStepCov(sd_sl, sd_frac, sd_psi, sd_psi0)));
+        },
+        py::arg("stride_lengths_m"), py::arg("headings_rad"), py::arg("start_xy") = std::vector<double>{0.0, 0.0},
+        py::arg("sigma_stride_length_m") = 0.1, py::arg("stride_length_sd_fraction") = 0.1,
+        py::arg("sigma_heading_step_rad") = 4.0 * kDeg, py::arg("sigma_heading_initial_rad") = 0.0, R"doc(
+Paper 002 eq. 8: P_k = P_{k-1} + SL_k (cos th_k, sin th_k) from stride lengths (M,) [m] and
+headings (M,) [rad], starting at start_xy [m]. Each step carries the 3 x 3 covariance of
+(x [m], y [m], heading error [rad]) under a heading random walk (sigma_heading_step_rad per step)
+and stride-length noise (sigma_stride_length_m + stride_length_sd_fraction x SL). Returns a
+dict: positions_m (M, 2), covariances (M, 3, 3), stride_lengths_m, headings_rad.)doc");
+  m.def("positions_from_increments", [](const py::object& inc, const py::object& start, double sd_sl, double sd_frac,
+                                        double sd_psi, double sd_psi0) {
+          MatrixArg d = ToMatrix(inc, "increments_m");
+          return TrackDict(pdr::PositionsFromIncrements(d.map, ToStart(start), MakeStepCov(sd_sl, sd_frac, sd_psi, sd_psi0)));
+        },
+        py::arg("increments_m"), py::arg("start_xy") = std::vector<double>{0.0, 0.0}, py::arg("sigma_stride_length_m") = 0.1,
+        py::arg("stride_length_sd_fraction") = 0.1, py::arg("sigma_heading_step_rad") = 4.0 * kDeg,
+        py::arg("sigma_heading_initial_rad") = 0.0, R"doc(
+Paper 002 eq. 9: P_k = P_{k-1} + dP_k(x, y) from INS-ZUPT increments (M, 2) or (M, 3) [m], with
+the per-step covariance of positions_from_strides (SL = |dP_xy|, heading = atan2(dP_y, dP_x)).)doc");
+  m.def("ins_zupt_increments", [](const py::object& time_s, const py::object& acc, const py::object& quaternions,
+                                  const py::object& step_indices, double window_s, double gravity) {
+          MatrixArg a = ToMatrix(acc, "acc_mps2", -1, 3);
+          VectorArg t = ToVector(time_s, "time_s", a.map.rows());
+          MatrixArg q = ToMatrix(quaternions, "quaternions_wxyz", a.map.rows(), 4);
+          const std::vector<int> steps = ToIndices(step_indices, "step_indices");
+          pdr::InsZuptOptions o;
+          o.window_s = window_s;
+          o.gravity_mps2 = gravity;
+          pdr::InsZuptIncrements out;
+          {
+            py::gil_scoped_release release;
+            out = pdr::ComputeInsZuptIncrements(t.map, a.map, q.map, steps, o);
+          }
+          py::dict d;
+          d["increments_m"] = out.increments_m;
+          d["stride_lengths_m"] = out.stride_lengths_m;
+          d["velocities_mps"] = out.velocities_mps;
+          return d;
+        },
+        py::arg("time_s"), py::arg("acc_mps2"), py::arg("quaternions_wxyz"), py::arg("step_indices"), py::arg("window_s") = 0.05,
+        py::arg("gravity_mps2") = 9.81, R"doc(
+Paper 002 §IV.B (steps 1-5, eq. 5-6): rotate acc_mps2 (N, 3) [m/s^2] by quaternions_wxyz (N, 4)
+(body -> navigation, z up), remove gravity, integrate from the first step, remove the drift by
+the mean velocity over +-window_s [s] around each step sample, linearly interpolated between
+steps, and sum each step. step_indices: M >= 2 strictly increasing stance samples. Returns a
+dict: increments_m (M-1, 3), stride_lengths_m (M-1,) (eq. 6), velocities_mps (N, 3).)doc");
   m.def("zupt_ekf", [](const py::object& time_s, const py::object& acc, const py::object& gyro, const py::object& stance,
-                       double sigma_acc, double sigma_gyro, double sigma_zupt, double gravity, int init_samples, bool smooth) {
+                       double sigma_acc, double sigma_gyro, double sigma_zupt, double gravity, int init_samples, bool smooth,
+                       double sigma_stance_heading) {
           MatrixArg a = ToMatrix(acc, "acc_mps2", -1, 3);
           MatrixArg g = ToMatrix(gyro, "gyro_radps", a.map.rows(), 3);
           VectorArg t = ToVector(time_s, "time_s", a.map.rows());
@@ -93,6 +354,7 @@ T1, T2 [m/s^2] (paper: 2 and 1 at 100 Hz).)doc");
           o.gravity_mps2 = gravity;
           o.init_samples = init_samples;
           o.smooth = smooth;
+          o.sigma_stance_heading_rad = sigma_stance_heading;
           pdr::ZuptEkfOutput out;
           {
             py::gil_scoped_release release;
@@ -103,18 +365,20 @@ T1, T2 [m/s^2] (paper: 2 and 1 at 100 Hz).)doc");
           d["filtered_positions_m"] = out.filtered_positions_m;
           d["velocities_mps"] = out.velocities_mps;
           d["headings_rad"] = out.headings_rad;
+          d["quaternions_wxyz"] = out.quaternions_wxyz;
           d["position_sd_m"] = out.position_sd_m;
           d["seconds"] = out.seconds;
           return d;
         },
         py::arg("time_s"), py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("stance"), py::arg("sigma_acc_mps2") = 0.5,
         py::arg("sigma_gyro_radps") = 0.5 * kDeg, py::arg("sigma_zupt_mps") = 0.01, py::arg("gravity_mps2") = 9.81,
-        py::arg("init_samples") = 20, py::arg("smooth") = false, R"doc(
+        py::arg("init_samples") = 20, py::arg("smooth") = false, py::arg("sigma_stance_heading_rad") = 0.0, R"doc(
 Zero-velocity-aided strapdown INS (9-state error-state EKF, OpenShoe/PyShoe style) over a
 recording: time_s (N,) [s], acc_mps2 and gyro_radps (N, 3) sensor frame, stance (N,) bool.
 smooth=True adds the RTS smoother (positions_m smoothed, filtered_positions_m the EKF's).
+sigma_stance_heading_rad > 0 adds a stance heading update (yaw held at its stance-onset value).
 Returns a dict: positions_m (N, 3) (z up, start at 0, initial yaw 0), velocities_mps (N, 3),
-headings_rad (N,), position_sd_m (N, 3), seconds.)doc");
+headings_rad (N,), quaternions_wxyz (N, 4) body -> nav, position_sd_m (N, 3), seconds.)doc");
 }
 
 }  // namespace indoorloc::bindings

@@ -1,14 +1,62 @@
 """Pedestrian dead reckoning with a foot-mounted IMU (paper 002, Jiménez et al., WISP 2009).
 
-Implemented so far (issue 6 is in progress): the paper's acceleration-variance and gyroscope
-step detectors (:func:`steps_acceleration`, :func:`steps_gyro`), the SHOE zero-velocity detector
-(:func:`shoe_detector`, :func:`shoe_statistic`) and the zero-velocity-aided strapdown INS, a
-9-state error-state EKF (:func:`zupt_ekf`). Loaders for the recordings in ../shared/data/pdr are in
-:mod:`indoorloc.io`.
+- step / stance detection: the paper's acceleration-variance and gyroscope step detectors
+  (:func:`steps_acceleration`, :func:`steps_gyro`), the SHOE zero-velocity detector
+  (:func:`shoe_detector`, :func:`shoe_statistic`);
+- stride length: Weinberg's rule (eq. 4; :func:`weinberg_stride_lengths`,
+  :func:`weinberg_features`) with its 4th-order 3 Hz Butterworth low-pass
+  (:func:`butterworth_sos`, :func:`sos_filter`, equal to scipy.signal's) and K calibrated on a walk
+  of known length (:func:`calibrate_weinberg_k`, :func:`calibrate_weinberg_k_from_distance`);
+- the zero-velocity-aided strapdown INS, a 9-state error-state EKF with an optional RTS smoother
+  (:func:`zupt_ekf`);
+- the magnetometer step detector (:func:`steps_magnetometer`) and the Mahony attitude filter
+  (:func:`attitude_mahony`) for recordings without the sensor orientation;
+- step-wise positioning (paper eq. 5-9): INS-ZUPT increments (:func:`ins_zupt_increments`),
+  headings at stance (:func:`stance_headings`), stride length + heading
+  (:func:`positions_from_strides`) and increments (:func:`positions_from_increments`), each step
+  with a 3 x 3 covariance of (x, y, heading error) for fusion with maps and WiFi.
+
+Loaders for the recordings in ../shared/data/pdr are in :mod:`indoorloc.io`.
 """
 
 from __future__ import annotations
 
-from indoorloc._core.pdr import shoe_detector, shoe_statistic, steps_acceleration, steps_gyro, zupt_ekf
+from indoorloc._core.pdr import (
+    attitude_mahony,
+    butterworth_sos,
+    calibrate_weinberg_k,
+    calibrate_weinberg_k_from_distance,
+    ins_zupt_increments,
+    positions_from_increments,
+    positions_from_strides,
+    shoe_detector,
+    shoe_statistic,
+    sos_filter,
+    stance_headings,
+    steps_acceleration,
+    steps_gyro,
+    steps_magnetometer,
+    weinberg_features,
+    weinberg_stride_lengths,
+    zupt_ekf,
+)
 
-__all__ = ["shoe_detector", "shoe_statistic", "steps_acceleration", "steps_gyro", "zupt_ekf"]
+__all__ = [
+    "attitude_mahony",
+    "butterworth_sos",
+    "calibrate_weinberg_k",
+    "calibrate_weinberg_k_from_distance",
+    "ins_zupt_increments",
+    "positions_from_increments",
+    "positions_from_strides",
+    "shoe_detector",
+    "shoe_statistic",
+    "sos_filter",
+    "stance_headings",
+    "steps_acceleration",
+    "steps_gyro",
+    "steps_magnetometer",
+    "weinberg_features",
+    "weinberg_stride_lengths",
+    "zupt_ekf",
+]

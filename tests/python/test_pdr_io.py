@@ -179,6 +179,18 @@ def test_strides_from_stance_merges_flicker():
     np.testing.assert_array_equal(pe.strides_from_stance(s, rate), [60, 120])
 
 
+def test_strides_from_stance_splits_a_swing_with_a_missed_stance():
+    rate = 100.0
+    s = np.ones(1000, dtype=bool)
+    for a in (100, 200, 300, 500, 600):  # 40-sample swings; 300-380 is a double swing (missed stance)
+        s[a:a + 40] = False
+    s[300:380] = False
+    np.testing.assert_array_equal(pe.strides_from_stance(s, rate, long_swing_factor=None), [140, 240, 380, 540, 640])
+    np.testing.assert_array_equal(pe.strides_from_stance(s, rate), [140, 240, 340, 380, 540, 640])
+    with pytest.raises(ValueError, match="long_swing_factor"):
+        pe.strides_from_stance(s, rate, long_swing_factor=0.5)
+
+
 def test_evaluations_with_a_fake_method(tmp_path):
     rng = np.random.default_rng(8)
     recs = []

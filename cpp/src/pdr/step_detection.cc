@@ -5,6 +5,7 @@
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "indoorloc/pdr/stride_length.h"
 
 namespace indoorloc::pdr {
 namespace {
@@ -12,6 +13,45 @@ namespace {
 void CheckRate(double rate_hz) { CheckArgument(std::isfinite(rate_hz) && rate_hz > 0.0, "rate_hz", "must be finite and > 0"); }
 
 int Samples(double seconds, double rate_hz) { return std::max(1, static_cast<int>(std::lround(seconds * rate_hz))); }
+
+// Median filter of binary motion flags (window 2 half + 1), then a step at each transition to
+// motionless after a motion run of at least min_swing samples. Rest gaps shorter than min_rest
+// samples between two motion runs are closed first (0: none).
+std::vector<int> StepsFromMotion(const std::vector<char>& moving, int half, int min_swing, int min_rest = 0) {
+  const Eigen::Index n = static_cast<Eigen::Index>(moving.size());
+  // Median filter of a binary signal = majority vote over the window.
+  std::vector<char> filtered(static_cast<size_t>(n));
+  int count = 0;
+  for (Eigen::Index i = 0; i < std::min<Eigen::Index>(n, half); ++i) count += moving[static_cast<size_t>(i)];
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (i + half < n) count += moving[static_cast<size_t>(i + half)];
+    if (i - half - 1 >= 0) count -= moving[static_cast<size_t>(i - half - 1)];
+    const Eigen::Index lo = std::max<Eigen::Index>(0, i - half), hi = std::min<Eigen::Index>(n - 1, i + half);
+    filtered[static_cast<size_t>(i)] = 2 * count > (hi - lo + 1);
+  }
+  if (min_rest > 0) {
+    Eigen::Index last_motion = -1;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      if (!filtered[static_cast<size_t>(i)]) continue;
+      if (last_motion >= 0 && i - last_motion - 1 > 0 && i - last_motion - 1 < min_rest) {
+        for (Eigen::Index j = last_motion + 1; j < i; ++j) filtered[static_cast<size_t>(j)] = 1;
+      }
+      last_motion = i;
+    }
+  }
+  // A step at each transition to motionless after a motion run of at least min_swing_s.
+  std::vector<int> steps;
+  int run = 0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (filtered[static_cast<size_t>(i)]) {
+      ++run;
+    } else {
+      if (run >= min_swing && i > 0) steps.push_back(static_cast<int>(i));
+      run = 0;
+    }
+  }
+  return steps;
+}
 
 }  // namespace
 
@@ -93,29 +133,43 @@ std::vector<int> DetectStepsGyro(double rate_hz, const Eigen::Ref<const RowMatri
   CheckArgument(n >= 2 * half + 1, "gyro_radps", "the recording is shorter than one median window");
   std::vector<char> moving(static_cast<size_t>(n));
   for (Eigen::Index i = 0; i < n; ++i) moving[static_cast<size_t>(i)] = gyro.row(i).norm() > options.threshold_radps;
-  // Median filter of a binary signal = majority vote over the window.
-  std::vector<char> filtered(static_cast<size_t>(n));
-  int count = 0;
-  for (Eigen::Index i = 0; i < std::min<Eigen::Index>(n, half); ++i) count += moving[static_cast<size_t>(i)];
-  for (Eigen::Index i = 0; i < n; ++i) {
-    if (i + half < n) count += moving[static_cast<size_t>(i + half)];
-    if (i - half - 1 >= 0) count -= moving[static_cast<size_t>(i - half - 1)];
-    const Eigen::Index lo = std::max<Eigen::Index>(0, i - half), hi = std::min<Eigen::Index>(n - 1, i + half);
-    filtered[static_cast<size_t>(i)] = 2 * count > (hi - lo + 1);
+  return StepsFromMotion(moving, half, Samples(options.min_swing_s, rate_hz));
+}
+
+bool MagneticStepOptions::IsValid(std::string* error) const {
+  if (highpass_order < 1 || highpass_order > 8) return (*error = "highpass_order must be in [1, 8]", false);
+  if (!(highpass_hz > 0.0)) return (*error = "highpass_hz must be > 0", false);
+  if (!(threshold_fraction > 0.0 && threshold_fraction < 1.0)) return (*error = "threshold_fraction must be in (0, 1)", false);
+  if (!(median_window_s > 0.0) || !(min_swing_s >= 0.0) || !(min_rest_s >= 0.0)) return (*error = "windows must be > 0", false);
+  return true;
+}
+
+std::vector<int> DetectStepsMagnetometer(double rate_hz, const Eigen::Ref<const RowMatrixXd>& mag, const MagneticStepOptions& options,
+                                         Eigen::VectorXd* magnitude) {
+  ValidateOptions(options);
+  CheckRate(rate_hz);
+  CheckShape(mag, -1, 3, "mag");
+  CheckFinite(mag, "mag");
+  CheckArgument(options.highpass_hz < 0.5 * rate_hz, "options", "highpass_hz must be below half of rate_hz");
+  const Eigen::Index n = mag.rows();
+  const int half = Samples(options.median_window_s, rate_hz) / 2;
+  CheckArgument(n >= std::max(2 * half + 1, 3), "mag", "the recording is shorter than one median window");
+  const RowMatrixXd sos = ButterworthSos(options.highpass_order, options.highpass_hz, rate_hz, true);
+  Eigen::VectorXd sq = Eigen::VectorXd::Zero(n);
+  for (int c = 0; c < 3; ++c) {
+    const Eigen::VectorXd hp = FilterSos(sos, mag.col(c), true);  // starts at 0: no DC transient
+    sq += hp.cwiseAbs2();
   }
-  // A step at each transition to motionless after a motion run of at least min_swing_s.
-  const int min_swing = Samples(options.min_swing_s, rate_hz);
-  std::vector<int> steps;
-  int run = 0;
-  for (Eigen::Index i = 0; i < n; ++i) {
-    if (filtered[static_cast<size_t>(i)]) {
-      ++run;
-    } else {
-      if (run >= min_swing && i > 0) steps.push_back(static_cast<int>(i));
-      run = 0;
-    }
-  }
-  return steps;
+  const Eigen::VectorXd m = sq.cwiseSqrt();
+  std::vector<double> sorted(m.data(), m.data() + n);
+  const size_t q = static_cast<size_t>(0.95 * static_cast<double>(n - 1));
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(q), sorted.end());
+  const double threshold = options.threshold_fraction * sorted[q];
+  std::vector<char> moving(static_cast<size_t>(n));
+  for (Eigen::Index i = 0; i < n; ++i) moving[static_cast<size_t>(i)] = m[i] > threshold && threshold > 0.0;
+  if (magnitude != nullptr) *magnitude = m;
+  const int min_rest = options.min_rest_s > 0.0 ? Samples(options.min_rest_s, rate_hz) : 0;
+  return StepsFromMotion(moving, half, Samples(options.min_swing_s, rate_hz), min_rest);
 }
 
 }  // namespace indoorloc::pdr

@@ -48,6 +48,7 @@ bool ZuptEkfOptions::IsValid(std::string* error) const {
   if (!(sigma_acc_mps2 > 0.0) || !(sigma_gyro_radps > 0.0) || !(sigma_zupt_mps > 0.0)) return fail("noise sds must be > 0");
   if (!(gravity_mps2 > 0.0)) return fail("gravity_mps2 must be > 0");
   if (init_samples < 1) return fail("init_samples must be >= 1");
+  if (!(sigma_stance_heading_rad >= 0.0) || !std::isfinite(sigma_stance_heading_rad)) return fail("sigma_stance_heading_rad must be >= 0");
   return true;
 }
 
@@ -86,6 +87,8 @@ ZuptEkfOutput RunZuptEkf(const Eigen::Ref<const Eigen::VectorXd>& time_s, const 
   const double qa = options.sigma_acc_mps2 * options.sigma_acc_mps2;
   const double qg = options.sigma_gyro_radps * options.sigma_gyro_radps;
   const double rz = options.sigma_zupt_mps * options.sigma_zupt_mps;
+  const double rh = options.sigma_stance_heading_rad * options.sigma_stance_heading_rad;
+  double stance_yaw = 0.0;
 
   ZuptEkfOutput out;
   out.positions_m.resize(n, 3);
@@ -101,6 +104,7 @@ ZuptEkfOutput RunZuptEkf(const Eigen::Ref<const Eigen::VectorXd>& time_s, const 
   Mat9 P_post_prev = P;
   out.velocities_mps.resize(n, 3);
   out.headings_rad.resize(n);
+  out.quaternions_wxyz.resize(n, 4);
   out.position_sd_m.resize(n, 3);
   for (Eigen::Index k = 0; k < n; ++k) {
     if (k > 0) {
@@ -113,8 +117,16 @@ ZuptEkfOutput RunZuptEkf(const Eigen::Ref<const Eigen::VectorXd>& time_s, const 
       p += v * dt;
       Mat9 F = Mat9::Identity();
       F.block<3, 3>(0, 3) = Eigen::Matrix3d::Identity() * dt;
-      F.block<3, 3>(3, 6) = -Skew(f_n) * dt;
-      P = F * P * F.transpose();
+      const Eigen::Matrix3d B = -Skew(f_n) * dt;
+      F.block<3, 3>(3, 6) = B;
+      // P <- F P Fᵀ using F's block structure (I + two off-diagonal blocks): M = F P by rows,
+      // then M Fᵀ by columns; about 4x fewer flops than two dense 9 x 9 products.
+      Mat9 M = P;
+      M.middleRows<3>(0) += dt * P.middleRows<3>(3);
+      M.middleRows<3>(3).noalias() += B * P.middleRows<3>(6);
+      P = M;
+      P.middleCols<3>(0) += dt * M.middleCols<3>(3);
+      P.middleCols<3>(3).noalias() += M.middleCols<3>(6) * B.transpose();
       P.block<3, 3>(3, 3) += qa * dt * dt * Eigen::Matrix3d::Identity();
       P.block<3, 3>(6, 6) += qg * dt * dt * Eigen::Matrix3d::Identity();
       if (options.smooth) {
@@ -137,6 +149,28 @@ ZuptEkfOutput RunZuptEkf(const Eigen::Ref<const Eigen::VectorXd>& time_s, const 
       IKH.block<9, 3>(0, 3) -= K;
       P = IKH * P * IKH.transpose() + rz * K * K.transpose();
       if (options.smooth) updates[static_cast<size_t>(k)] = dx;
+      // Stance heading update (heuristic drift elimination): the foot does not turn while it
+      // rests, so the yaw keeps its value from the stance onset. z = ψ_onset − ψ̂ with H = e_9ᵀ
+      // (the navigation-frame z attitude error is the yaw error for a level foot).
+      if (options.sigma_stance_heading_rad > 0.0) {
+        const Eigen::Matrix3d r_now = q.toRotationMatrix();
+        const double yaw = std::atan2(r_now(1, 0), r_now(0, 0));
+        if (k == 0 || !stance[k - 1]) {
+          stance_yaw = yaw;
+        } else {
+          const double innovation = std::remainder(stance_yaw - yaw, 2.0 * 3.14159265358979323846);
+          const double s_yaw = P(8, 8) + rh;
+          const Eigen::Matrix<double, 9, 1> K = P.col(8) / s_yaw;
+          const Eigen::Matrix<double, 9, 1> dy = K * innovation;
+          p += dy.segment<3>(0);
+          v += dy.segment<3>(3);
+          q = (Exp(dy.segment<3>(6)) * q).normalized();
+          Mat9 IKH = Mat9::Identity();
+          IKH.col(8) -= K;
+          P = IKH * P * IKH.transpose() + rh * K * K.transpose();
+          if (options.smooth) updates[static_cast<size_t>(k)] += dy;
+        }
+      }
     }
     P_post_prev = P;
     if (options.smooth) attitudes[static_cast<size_t>(k)] = q;
@@ -144,6 +178,7 @@ ZuptEkfOutput RunZuptEkf(const Eigen::Ref<const Eigen::VectorXd>& time_s, const 
     out.velocities_mps.row(k) = v.transpose();
     const Eigen::Matrix3d r = q.toRotationMatrix();
     out.headings_rad[k] = std::atan2(r(1, 0), r(0, 0));
+    out.quaternions_wxyz.row(k) << q.w(), q.x(), q.y(), q.z();
     out.position_sd_m.row(k) = P.diagonal().head<3>().cwiseMax(0.0).cwiseSqrt().transpose();
   }
   out.filtered_positions_m = out.positions_m;
@@ -157,6 +192,7 @@ ZuptEkfOutput RunZuptEkf(const Eigen::Ref<const Eigen::VectorXd>& time_s, const 
       const Eigen::Quaterniond qs = (Exp(delta.segment<3>(6)) * attitudes[static_cast<size_t>(k)]).normalized();
       const Eigen::Matrix3d r = qs.toRotationMatrix();
       out.headings_rad[k] = std::atan2(r(1, 0), r(0, 0));
+      out.quaternions_wxyz.row(k) << qs.w(), qs.x(), qs.y(), qs.z();
     }
   }
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

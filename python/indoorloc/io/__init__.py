@@ -14,8 +14,11 @@ from indoorloc.io.wifi_datasets import (
 from indoorloc.io.pdr_datasets import (
     STANDARD_GRAVITY_MPS2,
     ImuRecording,
+    MobgapTrial,
     check_imu_units,
+    list_mobgap_files,
     list_pyshoe_trials,
+    load_mobgap_trials,
     load_openshoe,
     load_pyshoe_trial,
     load_xio,
@@ -32,8 +35,11 @@ from indoorloc.io.road_network import (
 __all__ = [
     "STANDARD_GRAVITY_MPS2",
     "ImuRecording",
+    "MobgapTrial",
     "check_imu_units",
+    "list_mobgap_files",
     "list_pyshoe_trials",
+    "load_mobgap_trials",
     "load_openshoe",
     "load_pyshoe_trial",
     "load_xio",

@@ -33,6 +33,12 @@ Oddities of the files (found when writing these loaders)
   the first step (Vicon position about (0, 0)), so a trial with S indices has S - 1 strides;
   ``timestamps_all`` jitters (smallest step ~1.3 ms at a nominal 5 ms).
 - OpenShoe: no time column; the time is built as ``k / rate_hz``.
+- mobgap (Mobilise-D lower-back unit, 100 Hz): ``Acc`` in g, ``Gyr`` in deg/s, ``Mag`` in uT,
+  ``Timestamp`` in Unix seconds; ``Standards.INDIP.MicroWB`` is a struct when a test has one
+  walking bout and a struct array otherwise, and is empty for HA/002 Test5 (no reference).
+  ``Stride_InitialContacts`` are sample numbers at 100 Hz that equal ``InitialContact_Event``
+  [s] times 100 (505 <-> 5.05 s), used here as 0-based indices; strides with a NaN contact or
+  length (the INDIP could not resolve them) are dropped.
 
 Examples
 --------
@@ -98,8 +104,10 @@ class ImuRecording:
     source_units : str
         The units the file stores, for the record (e.g. ``"gyro deg/s, acc g"``).
     sensor : str
-        Sensor / dataset family (``"xio"``, ``"openshoe"``, ``"pyshoe"``): methods may keep one
-        parameter set per sensor.
+        Sensor / dataset family (``"xio"``, ``"openshoe"``, ``"pyshoe"``, ``"mobgap"``): methods
+        may keep one parameter set per sensor.
+    mag_uT : (N, 3) float or None
+        Magnetic field [uT] in the sensor frame when the recording has a magnetometer.
     """
 
     name: str
@@ -113,6 +121,7 @@ class ImuRecording:
     distance_m: Optional[float]
     source_units: str
     sensor: str = ""
+    mag_uT: Optional[np.ndarray] = None
 
     @property
     def n_samples(self) -> int:
@@ -312,3 +321,134 @@ def list_pyshoe_trials(root: PathLike) -> List[Path]:
     if not trials:
         raise _err("root", f"no PyShoe trial (*.mat) in {r}")
     return trials
+
+
+@dataclass
+class MobgapTrial:
+    """One Mobilise-D lower-back trial with its INDIP reference strides.
+
+    Attributes
+    ----------
+    recording : ImuRecording
+        The lower-back IMU in SI units (acc m/s^2, gyro rad/s, ``mag_uT``), time from 0 s.
+    subject : str
+        ``"HA/001"``-style subject folder.
+    test, trial : str
+        ``"Test5"`` / ``"Test11"`` and ``"Trial1"``...
+    stride_intervals : (S, 2) int
+        0-based sample indices [start, end] of the reference strides (initial contact to the
+        next initial contact of the same foot).
+    stride_lengths_m : (S,) float
+        INDIP stride lengths [m].
+    bout_bounds_s : (B, 2) float
+        Start and end [s] of the reference walking bouts (MicroWB).
+    bout_initial_contacts : list of (C,) int
+        Sample indices of every initial contact (both feet) per bout (NaN contacts dropped).
+    """
+
+    recording: ImuRecording
+    subject: str
+    test: str
+    trial: str
+    stride_intervals: np.ndarray
+    stride_lengths_m: np.ndarray
+    bout_bounds_s: np.ndarray
+    bout_initial_contacts: List[np.ndarray]
+
+    @property
+    def name(self) -> str:
+        """``"HA/001 Test5 Trial1"``."""
+        return f"{self.subject} {self.test} {self.trial}"
+
+
+def _as_bouts(micro_wb) -> list:
+    if isinstance(micro_wb, dict):
+        return [micro_wb]
+    if isinstance(micro_wb, (list, tuple)):
+        return [b for b in micro_wb if isinstance(b, dict)]
+    arr = np.asarray(micro_wb, dtype=object)
+    return [b for b in arr.ravel() if isinstance(b, dict)]
+
+
+def load_mobgap_trials(path: PathLike, *, gravity_mps2: float = STANDARD_GRAVITY_MPS2) -> List[MobgapTrial]:
+    """Load every trial of one mobgap ``data.mat`` (Mobilise-D lower-back example data).
+
+    ``path`` is a subject's ``data.mat`` (e.g. ``.../mobgap_lowerback/HA/001/data.mat``); the
+    subject name is the two folders above it. Reads
+    ``data.TimeMeasure1.<Test>.<Trial>.SU.LowerBack.{Acc [g], Gyr [deg/s], Mag [uT],
+    Timestamp [s]}`` and the INDIP ``MicroWB`` reference; converts to m/s^2 (``gravity_mps2``
+    per g) and rad/s and checks the units with :func:`check_imu_units`. Trials without a
+    reference walking bout are returned with empty stride arrays.
+    """
+    from scipy.io import loadmat
+
+    p = _require_file(path)
+    try:
+        mat = loadmat(p, simplify_cells=True)
+    except Exception as exc:
+        raise _err("path", f"{p}: not a readable MATLAB file ({exc})") from exc
+    try:
+        measure = mat["data"]["TimeMeasure1"]
+    except (KeyError, TypeError) as exc:
+        raise _err("path", f"{p}: no data.TimeMeasure1 struct") from exc
+    subject = f"{p.parent.parent.name}/{p.parent.name}"
+    out: List[MobgapTrial] = []
+    for test in sorted(measure, key=lambda t: int(t[4:]) if t[4:].isdigit() else 0):
+        for trial in sorted(measure[test]):
+            node = measure[test][trial]
+            try:
+                lb = node["SU"]["LowerBack"]
+                acc = np.asarray(lb["Acc"], dtype=float) * float(gravity_mps2)
+                gyro = np.deg2rad(np.asarray(lb["Gyr"], dtype=float))
+                mag = np.asarray(lb["Mag"], dtype=float) if "Mag" in lb else None
+                stamps = np.asarray(lb["Timestamp"], dtype=float).ravel()
+                fs = lb.get("Fs", {})
+                rate = float(fs.get("Acc", 100.0)) if isinstance(fs, dict) else 100.0
+            except (KeyError, TypeError) as exc:
+                raise _err("path", f"{p}: {test}.{trial}.SU.LowerBack lacks Acc/Gyr/Timestamp") from exc
+            where = f"path ({test}.{trial})"
+            check_imu_units(acc, gyro, acc_name=f"{where} Acc, converted from g",
+                            gyro_name=f"{where} Gyr, converted from deg/s")
+            if stamps.shape[0] != acc.shape[0]:
+                raise _err("path", f"{p}: {test}.{trial}: Timestamp has {stamps.shape[0]} rows, Acc {acc.shape[0]}")
+            time_s = stamps - stamps[0]
+            _rate_from_time(time_s, where)  # strictly increasing
+            intervals, lengths, bounds, contacts = [], [], [], []
+            std = node.get("Standards", {}).get("INDIP", {})
+            for wb in _as_bouts(std.get("MicroWB", [])):
+                bounds.append((float(wb["Start"]), float(wb["End"])))
+                ic = np.atleast_1d(np.asarray(wb.get("InitialContact_Event", []), dtype=float))
+                ic = ic[np.isfinite(ic)]
+                contacts.append(np.round(ic * rate).astype(np.int64))
+                sic = np.asarray(wb.get("Stride_InitialContacts", np.zeros((0, 2))), dtype=float).reshape(-1, 2)
+                sl = np.atleast_1d(np.asarray(wb.get("Stride_Length", []), dtype=float))
+                if sl.shape[0] != sic.shape[0]:
+                    raise _err("path", f"{p}: {test}.{trial}: {sic.shape[0]} strides but {sl.shape[0]} lengths")
+                ok = np.all(np.isfinite(sic), axis=1) & np.isfinite(sl) & (sl > 0)
+                for (a, b), length in zip(sic[ok], sl[ok]):
+                    a, b = int(round(a)), int(round(b))
+                    if 0 <= a < b < acc.shape[0]:
+                        intervals.append((a, b))
+                        lengths.append(float(length))
+            rec = ImuRecording(name=f"{subject} {test} {trial}", time_s=time_s, acc_mps2=acc,
+                               gyro_radps=gyro, rate_hz=rate, truth_xy_m=None, stride_indices=None,
+                               closed_loop=False,
+                               distance_m=float(np.sum(lengths)) / 2.0 if lengths else None,
+                               source_units="acc g, gyro deg/s, mag uT", sensor="mobgap", mag_uT=mag)
+            out.append(MobgapTrial(recording=rec, subject=subject, test=test, trial=trial,
+                                   stride_intervals=np.asarray(intervals, dtype=np.int64).reshape(-1, 2),
+                                   stride_lengths_m=np.asarray(lengths, dtype=float),
+                                   bout_bounds_s=np.asarray(bounds, dtype=float).reshape(-1, 2),
+                                   bout_initial_contacts=contacts))
+    return out
+
+
+def list_mobgap_files(root: PathLike) -> List[Path]:
+    """Sorted ``data.mat`` files under the mobgap folder ``root`` (``.../mobgap_lowerback``)."""
+    r = Path(root)
+    if not r.is_dir():
+        raise _err("root", f"folder not found: {r}")
+    files = sorted(r.glob("*/*/data.mat"))
+    if not files:
+        raise _err("root", f"no mobgap <group>/<subject>/data.mat under {r}")
+    return files

@@ -8,76 +8,14 @@
 #include "indoorloc/core/random.h"
 #include "indoorloc/pdr/step_detection.h"
 #include "indoorloc/pdr/zero_velocity.h"
+#include "synthetic_gait.h"
 
 namespace indoorloc::pdr {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-// A synthetic gait at 200 Hz: 0.5 s stance, then a 0.6 s swing that moves the foot 1.4 m along
-// the heading with a raised-cosine speed profile, a 10 cm lift and a pitch of the foot of up to
-// 30° (the rotation a detector sees in real swings), repeated `steps` times, ending with a stance.
-// The sensor is mounted upside down (body z down), as on PyShoe's foot.
-struct Gait {
-  Eigen::VectorXd time;
-  RowMatrixXd acc, gyro, position;
-  int steps;
-};
-
-Gait MakeGait(int steps, double heading_rad, double noise, std::uint64_t seed) {
-  const double rate = 200.0, stance = 0.5, swing = 0.6, stride = 1.4, lift = 0.1;
-  const int n_stance = static_cast<int>(stance * rate), n_swing = static_cast<int>(swing * rate);
-  const int n = steps * (n_stance + n_swing) + n_stance;
-  Gait g;
-  g.steps = steps;
-  g.time.resize(n);
-  g.acc.resize(n, 3);
-  g.gyro = RowMatrixXd::Zero(n, 3);
-  g.position.resize(n, 3);
-  // body_to_nav(t) = Rz(heading) Ry(pitch(t)) Rx(π); the body rate is then pitch'(t) Rx(π)ᵀ e_y.
-  auto body_to_nav = [&](double pitch) {
-    return (Eigen::AngleAxisd(heading_rad, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
-            Eigen::AngleAxisd(kPi, Eigen::Vector3d::UnitX())).toRotationMatrix();
-  };
-  const double max_pitch = 30.0 * kPi / 180.0;
-  const Eigen::Vector3d dir(std::cos(heading_rad), std::sin(heading_rad), 0.0);
-  RandomStream rng(seed);
-  int k = 0;
-  Eigen::Vector3d base = Eigen::Vector3d::Zero();
-  auto emit = [&](const Eigen::Vector3d& pos, const Eigen::Vector3d& a_nav, double pitch, double pitch_rate) {
-    g.time[k] = k / rate;
-    g.position.row(k) = pos.transpose();
-    const Eigen::Vector3d f_nav = a_nav + Eigen::Vector3d(0, 0, 9.81);
-    g.acc.row(k) = (body_to_nav(pitch).transpose() * f_nav).transpose();
-    g.gyro.row(k) = (pitch_rate * (Eigen::AngleAxisd(kPi, Eigen::Vector3d::UnitX()).toRotationMatrix().transpose() *
-                                   Eigen::Vector3d::UnitY())).transpose();
-    for (int c = 0; c < 3; ++c) {
-      g.acc(k, c) += noise * rng.Normal();
-      g.gyro(k, c) += 0.1 * noise * rng.Normal();
-    }
-    ++k;
-  };
-  for (int s = 0; s <= steps; ++s) {
-    for (int i = 0; i < n_stance; ++i) emit(base, Eigen::Vector3d::Zero(), 0.0, 0.0);
-    if (s == steps) break;
-    for (int i = 0; i < n_swing; ++i) {
-      const double u = (i + 1) / static_cast<double>(n_swing);  // 0..1
-      // Horizontal: s(u) = stride (u - sin(2πu)/(2π)); vertical: lift (1 - cos 2πu)/2.
-      const double horizontal = stride * (u - std::sin(2 * kPi * u) / (2 * kPi));
-      // Second derivatives in time (t = u * swing): d²s/dt² = stride * 2π sin(2πu) / swing²,
-      // d²z/dt² = lift * (2π)² cos(2πu) / (2 swing²).
-      const double acc_h = stride * 2 * kPi * std::sin(2 * kPi * u) / (swing * swing);
-      const double acc_z = lift * (2 * kPi) * (2 * kPi) * std::cos(2 * kPi * u) / (2 * swing * swing);
-      const Eigen::Vector3d pos = base + horizontal * dir + Eigen::Vector3d(0, 0, lift * (1 - std::cos(2 * kPi * u)) / 2);
-      // Pitch (1 - cos 2πu)/2 * max: zero with zero rate at both ends of the swing.
-      const double pitch = max_pitch * (1 - std::cos(2 * kPi * u)) / 2;
-      const double pitch_rate = max_pitch * kPi * std::sin(2 * kPi * u) / swing;
-      emit(pos, acc_h * dir + Eigen::Vector3d(0, 0, acc_z), pitch, pitch_rate);
-    }
-    base += stride * dir;
-  }
-  return g;
-}
+using synthetic::Gait;
+using synthetic::MakeGait;
 
 int CountStanceBlocks(const BoolVector& stance) {
   int blocks = 0;
@@ -106,6 +44,29 @@ TEST(StepDetection, AccelerationAndGyroDetectorsFindEveryStep) {
   EXPECT_THROW(DetectStepsGyro(-1.0, RowMatrixXd::Zero(100, 3), GyroStepOptions()), std::invalid_argument);
 }
 
+TEST(StepDetection, MagnetometerDetectorFindsEveryStep) {
+  // The field seen by the foot changes as the foot pitches in each swing.
+  for (double noise : {0.0, 0.3}) {
+    const Gait g = MakeGait(15, 1.0, 0.0, 8);
+    RandomStream rng(9);
+    RowMatrixXd mag(g.time.size(), 3);
+    const Eigen::Vector3d field(20.0, -5.0, -40.0);  // uT, navigation frame
+    for (Eigen::Index k = 0; k < g.time.size(); ++k) {
+      const Eigen::Quaterniond q(g.quaternions(k, 0), g.quaternions(k, 1), g.quaternions(k, 2), g.quaternions(k, 3));
+      mag.row(k) = (q.toRotationMatrix().transpose() * field).transpose() + Eigen::RowVector3d(3.0, -7.0, 11.0);  // hard iron
+      for (int c = 0; c < 3; ++c) mag(k, c) += noise * rng.Normal();
+    }
+    Eigen::VectorXd magnitude;
+    const std::vector<int> steps = DetectStepsMagnetometer(200.0, mag, MagneticStepOptions(), &magnitude);
+    EXPECT_EQ(static_cast<int>(steps.size()), g.steps) << "noise " << noise;
+    EXPECT_EQ(magnitude.size(), g.time.size());
+  }
+  EXPECT_THROW(DetectStepsMagnetometer(200.0, RowMatrixXd::Zero(5, 3), MagneticStepOptions()), std::invalid_argument);
+  RowMatrixXd nan_mag = RowMatrixXd::Ones(400, 3);
+  nan_mag(7, 0) = std::nan("");
+  EXPECT_THROW(DetectStepsMagnetometer(200.0, nan_mag, MagneticStepOptions()), std::invalid_argument);
+}
+
 TEST(ZuptEkf, RecoversTheWalkedPathAndZeroesVelocityAtStance) {
   const Gait g = MakeGait(12, 0.0, 0.0, 2);
   const BoolVector stance = ShoeDetector(g.acc, g.gyro, ShoeOptions());
@@ -117,6 +78,13 @@ TEST(ZuptEkf, RecoversTheWalkedPathAndZeroesVelocityAtStance) {
     if (stance[k]) {
       ASSERT_LT(out.velocities_mps.row(k).norm(), 0.05) << "sample " << k;
     }
+  }
+  // The attitude output is the truth (a yaw of 0 at the start here).
+  ASSERT_EQ(out.quaternions_wxyz.rows(), g.time.size());
+  for (Eigen::Index k = 0; k <= last; k += 50) {
+    const Eigen::Quaterniond qe(out.quaternions_wxyz(k, 0), out.quaternions_wxyz(k, 1), out.quaternions_wxyz(k, 2), out.quaternions_wxyz(k, 3));
+    const Eigen::Quaterniond qt(g.quaternions(k, 0), g.quaternions(k, 1), g.quaternions(k, 2), g.quaternions(k, 3));
+    ASSERT_LT(qe.angularDistance(qt), 0.01) << "sample " << k;
   }
 }
 
@@ -153,6 +121,25 @@ TEST(ZuptEkf, SmootherKeepsTheEndAndImprovesTheMiddle) {
   }
   EXPECT_TRUE(out.positions_m.allFinite());
   EXPECT_LE(smoothed, filtered * 1.05);
+}
+
+TEST(ZuptEkf, StanceHeadingUpdateRemovesTheYawDriftOfStance) {
+  // A gyro bias about the vertical turns the estimated heading during every stance; the stance
+  // heading update holds the yaw there, so the final heading error shrinks (stance is ~45 % of
+  // the gait cycle here: 0.22 rad -> 0.14 rad).
+  Gait g = MakeGait(20, 0.0, 0.0, 10);
+  for (Eigen::Index k = 0; k < g.gyro.rows(); ++k) g.gyro(k, 2) += 0.01;  // rad/s (body z = down here)
+  const BoolVector stance = ShoeDetector(g.acc, g.gyro, ShoeOptions());
+  ZuptEkfOptions plain, hde;
+  hde.sigma_stance_heading_rad = 0.001;
+  const ZuptEkfOutput a = RunZuptEkf(g.time, g.acc, g.gyro, stance, plain);
+  const ZuptEkfOutput b = RunZuptEkf(g.time, g.acc, g.gyro, stance, hde);
+  const Eigen::Index last = g.time.size() - 1;
+  EXPECT_LT(std::abs(b.headings_rad[last]), 0.75 * std::abs(a.headings_rad[last]))
+      << "with " << b.headings_rad[last] << " without " << a.headings_rad[last];
+  EXPECT_TRUE(b.positions_m.allFinite());
+  hde.sigma_stance_heading_rad = -1.0;
+  EXPECT_THROW(RunZuptEkf(g.time, g.acc, g.gyro, stance, hde), std::invalid_argument);
 }
 
 TEST(ZuptEkf, BadInputGivesClearErrors) {

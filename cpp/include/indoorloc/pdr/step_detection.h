@@ -11,6 +11,12 @@
 //
 // Gyroscope detector (§III.D, after Feliz et al. 2009): |ω| thresholded (default 1 rad/s),
 // median-filtered, a step at each transition to the motionless state.
+//
+// Magnetometer detector (§III.D, paper 002's own): a high-pass filter removes the DC field (the
+// Earth's field and hard-iron offsets), then the same processing as the gyroscope detector on
+// the magnitude of the high-passed field. The field's unit and strength vary between sensors
+// and places, so the threshold is a fraction of the recording's 95th percentile of that
+// magnitude (units cancel).
 #pragma once
 
 #include <string>
@@ -42,11 +48,27 @@ struct GyroStepOptions {
   bool IsValid(std::string* error) const;
 };
 
+struct MagneticStepOptions {
+  int highpass_order = 2;          ///< Butterworth high-pass order per axis
+  double highpass_hz = 0.5;        ///< high-pass cut-off [Hz] (below the step rate of ~1 Hz per foot)
+  double threshold_fraction = 0.3; ///< motion where |m_hp| > fraction x 95th percentile of |m_hp|
+  double median_window_s = 0.1;    ///< median filter length [s]
+  double min_swing_s = 0.2;        ///< motion shorter than this is not a step [s]
+  /// Beyond the paper: rest shorter than this between two motion runs is merged into one swing
+  /// (|m_hp| crosses zero inside a swing where the high-passed field changes sign) [s]; 0 disables.
+  double min_rest_s = 0.15;
+  bool IsValid(std::string* error) const;
+};
+
 /// Sample indices of the detected steps (stance onsets of one foot); optionally σ (N).
 std::vector<int> DetectStepsAcceleration(double rate_hz, const Eigen::Ref<const RowMatrixXd>& acc_mps2,
                                          const AccelerationStepOptions& options, Eigen::VectorXd* sigma = nullptr);
 
 std::vector<int> DetectStepsGyro(double rate_hz, const Eigen::Ref<const RowMatrixXd>& gyro_radps,
                                  const GyroStepOptions& options);
+
+/// Step sample indices from a magnetometer (N x 3, any unit); optionally |m_hp| (N).
+std::vector<int> DetectStepsMagnetometer(double rate_hz, const Eigen::Ref<const RowMatrixXd>& mag,
+                                         const MagneticStepOptions& options, Eigen::VectorXd* magnitude = nullptr);
 
 }  // namespace indoorloc::pdr

@@ -7,7 +7,9 @@
 // δx = (δp, δv, ε) with R_true = (I + [ε]×) R̂, so δv' = -[f_n]× ε:
 //   F = [[I, I Δt, 0], [0, I, -[f_n]× Δt], [0, 0, I]],  Q = diag(0, σ_a² Δt² I, σ_ω² Δt² I).
 // At every stance sample a zero-velocity pseudo-measurement z = 0 - v̂ with H = [0 I 0] and
-// covariance σ_v² I corrects the state (Joseph-form covariance update). The initial attitude
+// covariance σ_v² I corrects the state (Joseph-form covariance update). Optionally a stance
+// heading pseudo-measurement follows: the yaw keeps its stance-onset value (H = e_9ᵀ, sd
+// sigma_stance_heading_rad), a heuristic drift elimination for the unobservable yaw. The initial attitude
 // levels the mean specific force of the first samples (roll, pitch); the yaw is 0.
 // Non-increasing timestamps (repeated rows in some loggers) get the median sample period.
 //
@@ -32,6 +34,9 @@ struct ZuptEkfOptions {
   double sigma_zupt_mps = 0.01;     ///< zero-velocity pseudo-measurement sd [m/s]
   double gravity_mps2 = 9.81;
   int init_samples = 20;            ///< samples averaged for the initial attitude
+  /// Stance heading update (beyond OpenShoe): within a stance phase the yaw is observed equal to
+  /// its value at the stance onset, with this sd [rad]; 0 disables (heuristic drift elimination).
+  double sigma_stance_heading_rad = 0.0;
   /// Also run the Rauch-Tung-Striebel smoother backwards over the error states (OpenShoe's
   /// smoother): positions_m then holds the smoothed path and filtered_positions_m the EKF's.
   bool smooth = false;
@@ -44,6 +49,7 @@ struct ZuptEkfOutput {
   RowMatrixXd filtered_positions_m;  ///< N x 3 forward EKF positions
   RowMatrixXd velocities_mps;   ///< N x 3
   Eigen::VectorXd headings_rad; ///< N yaw
+  RowMatrixXd quaternions_wxyz; ///< N x 4 attitude body -> nav (w, x, y, z), smoothed when options.smooth
   RowMatrixXd position_sd_m;    ///< N x 3 square roots of the position covariance diagonal
   double seconds = 0.0;
 };

@@ -11,7 +11,7 @@ is solved
    10,800 s, 38.9 M unknowns) with the covariances of every δg (selected inversion), each case in
    a child process so that its peak memory (ru_maxrss) is its own.
 
-Usage: python benchmarks/bench_network.py [--quick]   (also run by benchmarks/run.py)
+Usage: python benchmarks/bench_network_scale.py [--quick]   (also run by benchmarks/run.py)
 """
 
 from __future__ import annotations
@@ -158,5 +158,5 @@ if __name__ == "__main__":
     res = run(quick=quick)
     out = HERE / "results"
     out.mkdir(exist_ok=True)
-    (out / "bench_network.json").write_text(json.dumps(res, indent=2))
+    (out / "bench_network_scale.json").write_text(json.dumps(res, indent=2))
     print(markdown(res))
