@@ -59,3 +59,12 @@ def test_bad_arguments_name_the_argument():
         network.solve_linear_ins_network(50.0, 5.0, checkpoint_interval=-2)
     with pytest.raises(ValueError, match="options"):
         network.solve_linear_ins_network(50.0, -1.0)
+
+
+def test_crossover_ties_are_solved_and_keep_the_truth():
+    out = network.solve_linear_ins_network_with_crossovers(50.0, 40.0, 2.0, lines=5, cross_lines=4)
+    assert out["crossings"] == 20 and out["ties"] == 60
+    assert out["pcg_converged"] and out["pcg_iterations"] > 0
+    assert out["gravity_rmse"] < 1e-8
+    with pytest.raises(ValueError, match="lines"):
+        network.solve_linear_ins_network_with_crossovers(50.0, 40.0, 2.0, lines=0, cross_lines=4)

@@ -39,6 +39,8 @@ class ForwardPass {
       : b_(block_size), assemble_(assemble), options_(options), summary_(summary),
         diagonal_(block_size, block_size), lower_(block_size, block_size), rhs_(block_size) {}
 
+  const VectorXd& last_rhs() const { return rhs_; }
+
   // Factors block i given the carry of block i-1; writes L_i, C_i, y_i.
   void Step(int i, const Carry& previous, MatrixXd* L, MatrixXd* C, VectorXd* y) {
     diagonal_.setZero();
@@ -243,6 +245,70 @@ BlockTridiagonalSolution SolveBlockTridiagonal(int num_blocks, int block_size, c
   }
   summary.backward_seconds = timer.ElapsedSeconds();
   return out;
+}
+
+BlockTridiagonalFactor::BlockTridiagonalFactor(int num_blocks, int block_size, const BlockRowAssembler& assemble,
+                                               double pivot_tolerance)
+    : n_(num_blocks), b_(block_size) {
+  CheckArgument(num_blocks >= 1, "num_blocks", "must be >= 1, got " + std::to_string(num_blocks));
+  CheckArgument(block_size >= 1, "block_size", "must be >= 1, got " + std::to_string(block_size));
+  CheckArgument(static_cast<bool>(assemble), "assemble", "is empty");
+  BlockTridiagonalOptions options;
+  options.pivot_tolerance = pivot_tolerance;
+  ValidateOptions(options);
+  BlockTridiagonalSummary summary;
+  summary.min_relative_pivot = 1.0;
+  ForwardPass forward(b_, assemble, options, &summary);
+  L_.resize(static_cast<size_t>(n_));
+  C_.resize(static_cast<size_t>(n_));
+  rhs_.resize(static_cast<Eigen::Index>(n_) * b_);
+  Carry carry;
+  VectorXd y;
+  for (int i = 0; i < n_; ++i) {
+    forward.Step(i, carry, &L_[static_cast<size_t>(i)], &C_[static_cast<size_t>(i)], &y);
+    rhs_.segment(static_cast<Eigen::Index>(i) * b_, b_) = forward.last_rhs();
+    carry.L = L_[static_cast<size_t>(i)];
+    carry.y = y;
+    carry.valid = true;
+  }
+}
+
+VectorXd BlockTridiagonalFactor::Solve(const VectorXd& rhs) const {
+  CheckArgument(rhs.size() == static_cast<Eigen::Index>(n_) * b_, "rhs", "must have num_blocks * block_size entries");
+  // In place, no allocation per block: forward L y = rhs, then back Lᵀ x = y.
+  VectorXd x = rhs;
+  VectorXd tmp(b_);
+  for (int i = 0; i < n_; ++i) {
+    auto xi = x.segment(static_cast<Eigen::Index>(i) * b_, b_);
+    if (i > 0) xi.noalias() -= C_[static_cast<size_t>(i)] * x.segment(static_cast<Eigen::Index>(i - 1) * b_, b_);
+    L_[static_cast<size_t>(i)].triangularView<Eigen::Lower>().solveInPlace(xi);
+  }
+  for (int i = n_ - 1; i >= 0; --i) {
+    auto xi = x.segment(static_cast<Eigen::Index>(i) * b_, b_);
+    if (i < n_ - 1) {
+      tmp.noalias() = C_[static_cast<size_t>(i + 1)].transpose() * x.segment(static_cast<Eigen::Index>(i + 1) * b_, b_);
+      xi -= tmp;
+    }
+    L_[static_cast<size_t>(i)].triangularView<Eigen::Lower>().transpose().solveInPlace(xi);
+  }
+  return x;
+}
+
+VectorXd BlockTridiagonalFactor::Multiply(const VectorXd& x) const {
+  CheckArgument(x.size() == static_cast<Eigen::Index>(n_) * b_, "x", "must have num_blocks * block_size entries");
+  // y = Lᵀ x: y_i = L_iᵀ x_i + C_{i+1}ᵀ x_{i+1};  z = L y: z_i = C_i y_{i-1} + L_i y_i.
+  VectorXd y(x.size()), z(x.size());
+  for (int i = 0; i < n_; ++i) {
+    auto yi = y.segment(static_cast<Eigen::Index>(i) * b_, b_);
+    yi.noalias() = L_[static_cast<size_t>(i)].triangularView<Eigen::Lower>().transpose() * x.segment(static_cast<Eigen::Index>(i) * b_, b_);
+    if (i < n_ - 1) yi.noalias() += C_[static_cast<size_t>(i + 1)].transpose() * x.segment(static_cast<Eigen::Index>(i + 1) * b_, b_);
+  }
+  for (int i = 0; i < n_; ++i) {
+    auto zi = z.segment(static_cast<Eigen::Index>(i) * b_, b_);
+    zi.noalias() = L_[static_cast<size_t>(i)].triangularView<Eigen::Lower>() * y.segment(static_cast<Eigen::Index>(i) * b_, b_);
+    if (i > 0) zi.noalias() += C_[static_cast<size_t>(i)] * y.segment(static_cast<Eigen::Index>(i - 1) * b_, b_);
+  }
+  return z;
 }
 
 }  // namespace indoorloc::network

@@ -67,6 +67,18 @@ long long GpsStep(const LinearInsNetworkOptions& o) {
   return std::max<long long>(1, std::llround(o.imu_rate_hz / o.gps_rate_hz));
 }
 
+// GPS epoch k. With an even step every k·step is even and the odd leap-frog chain would see no
+// position, so every other fix moves one epoch later (alternating parity); an odd step
+// alternates by itself.
+long long GpsEpoch(long long k, long long step) { return k * step + (step % 2 == 0 ? k % 2 : 0); }
+
+bool IsGpsEpoch(long long n, long long step) {
+  const long long k1 = n / step;
+  if (n == GpsEpoch(k1, step)) return true;
+  if (n < 1) return false;
+  return n == GpsEpoch((n - 1) / step, step);
+}
+
 }  // namespace
 
 Eigen::Matrix<double, 18, 1> LinearInsTruth(long long epoch, double imu_rate_hz) {
@@ -114,7 +126,7 @@ NetworkSize LinearInsNetworkSize(const LinearInsNetworkOptions& o) {
   s.num_blocks = static_cast<int>(epochs / g);
   const long long step = GpsStep(o);
   for (long long k = 0;; ++k) {
-    const long long n = k * step + (k % 2);
+    const long long n = GpsEpoch(k, step);
     if (n >= epochs) break;
     ++s.gps_epochs;
   }
@@ -160,15 +172,7 @@ BlockRowAssembler LinearInsAssembler(const LinearInsNetworkOptions& options) {
     const Stencil& st = M.st;
     const int g = M.g, m = static_cast<int>(st.offsets.size());
     const long long E = M.E;
-    // GPS epoch k sits at k·step + (k mod 2): alternating parity, so that both leap-frog chains
-    // (even and odd epochs) see positions (all-even GPS epochs leave the odd chain without them).
-    auto is_gps = [&](long long n) {
-      const long long k1 = n / M.gps_step;
-      if (n == k1 * M.gps_step + (k1 % 2)) return true;
-      if (n < 1) return false;
-      const long long k2 = (n - 1) / M.gps_step;
-      return n == k2 * M.gps_step + (k2 % 2);
-    };
+    auto is_gps = [&](long long n) { return IsGpsEpoch(n, M.gps_step); };
     const long long first_epoch = static_cast<long long>(g) * j;
     const int max_offset = st.offsets.back(), min_offset = st.offsets.front();
     // Dynamic equations whose stencil touches an epoch of block j.
@@ -233,7 +237,7 @@ LinearInsEquations LinearInsNetworkEquations(const LinearInsNetworkOptions& opti
   }
   const long long step = GpsStep(options);
   for (long long k = 0;; ++k) {
-    const long long n = k * step + (k % 2);
+    const long long n = GpsEpoch(k, step);
     if (n >= E) break;
     eq.gps_epochs.push_back(n);
   }
@@ -289,6 +293,58 @@ LinearInsNetworkResult SolveLinearInsNetwork(const LinearInsNetworkOptions& o, b
   result.gravity_rmse = std::sqrt(g_sq / (3.0 * static_cast<double>(E)));
   result.total_seconds = total.ElapsedSeconds();
   return result;
+}
+
+std::vector<Tie> LinearInsCrossoverTies(const LinearInsNetworkOptions& options, int lines, int cross_lines,
+                                        double sigma_xover_mps2) {
+  const NetworkSize size = LinearInsNetworkSize(options);
+  CheckArgument(lines >= 1 && cross_lines >= 1, "lines", "need at least one line and one cross line");
+  CheckArgument(std::isfinite(sigma_xover_mps2) && sigma_xover_mps2 > 0.0, "sigma_xover_mps2", "must be finite and > 0");
+  const long long E = size.imu_epochs;
+  const long long per_line = E / (lines + cross_lines);
+  CheckArgument(per_line >= 2 * std::max(lines, cross_lines), "lines",
+                "too many lines for the flight: each line needs at least two epochs per crossing");
+  const double w = 1.0 / (sigma_xover_mps2 * sigma_xover_mps2);
+  std::vector<Tie> ties;
+  ties.reserve(static_cast<size_t>(3LL * lines * cross_lines));
+  for (int i = 0; i < lines; ++i) {
+    for (int j = 0; j < cross_lines; ++j) {
+      // EW line i meets NS line j at the (j + ½)-th of its stretches, and vice versa.
+      const long long ew = i * per_line + static_cast<long long>((j + 0.5) * per_line / cross_lines);
+      const long long ns = (lines + j) * per_line + static_cast<long long>((i + 0.5) * per_line / lines);
+      const Vec18 xa = LinearInsTruth(ew, options.imu_rate_hz), xb = LinearInsTruth(ns, options.imu_rate_hz);
+      for (int c = 15; c < 18; ++c) ties.push_back(Tie{ew * kP + c, ns * kP + c, w, xa[c] - xb[c]});
+    }
+  }
+  return ties;
+}
+
+CrossoverNetworkResult SolveLinearInsNetworkWithCrossovers(const LinearInsNetworkOptions& options, int lines,
+                                                           int cross_lines, double sigma_xover_mps2,
+                                                           const TiedSolveOptions& pcg) {
+  WallTimer total;
+  CrossoverNetworkResult out;
+  out.size = LinearInsNetworkSize(options);
+  const std::vector<Tie> ties = LinearInsCrossoverTies(options, lines, cross_lines, sigma_xover_mps2);
+  out.crossings = static_cast<long long>(lines) * cross_lines;
+  out.ties = static_cast<long long>(ties.size());
+  WallTimer timer;
+  const BlockTridiagonalFactor factor(out.size.num_blocks, out.size.block_size, LinearInsAssembler(options));
+  out.factor_seconds = timer.ElapsedSeconds();
+  out.factor_bytes = factor.bytes();
+  const TiedSolution sol = SolveWithTies(factor, factor.rhs(), ties, pcg);
+  out.pcg = sol.summary;
+  double max_err = 0.0, g_sq = 0.0;
+  for (long long n = 0; n < out.size.imu_epochs; ++n) {
+    const Vec18 xs = LinearInsTruth(n, options.imu_rate_hz);
+    const auto x = sol.x.segment<kP>(n * kP);
+    max_err = std::max(max_err, (x - xs).cwiseAbs().maxCoeff());
+    g_sq += (x.tail<3>() - xs.tail<3>()).squaredNorm();
+  }
+  out.max_abs_error = max_err;
+  out.gravity_rmse = std::sqrt(g_sq / (3.0 * static_cast<double>(out.size.imu_epochs)));
+  out.total_seconds = total.ElapsedSeconds();
+  return out;
 }
 
 }  // namespace indoorloc::network

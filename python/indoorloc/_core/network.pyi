@@ -28,3 +28,14 @@ def linear_ins_equations(
     rule: str = "leapfrog",
     prior_epochs: int = 2,
 ) -> Dict[str, object]: ...
+def solve_linear_ins_network_with_crossovers(
+    imu_rate_hz: float = 50.0,
+    duration_s: float = 600.0,
+    gps_rate_hz: float = 2.0,
+    rule: str = "leapfrog",
+    lines: int = 10,
+    cross_lines: int = 10,
+    sigma_xover_mps2: float = 1e-5,
+    max_iterations: int = 1000,
+    relative_tolerance: float = 1e-10,
+) -> Dict[str, object]: ...

@@ -72,6 +72,18 @@ TEST(LinearInsNetwork, AWeakPriorIsReportedOrLosesDigitsNotSilentlyWrong) {
   EXPECT_THROW(SolveLinearInsNetwork(o, false, 0), std::runtime_error);
 }
 
+TEST(LinearInsNetwork, CrossoverTiesAreSolvedByPcgAndKeepTheTruth) {
+  LinearInsNetworkOptions o = Small(Discretisation::kLeapFrog);
+  o.duration_s = 40.0;
+  const CrossoverNetworkResult r = SolveLinearInsNetworkWithCrossovers(o, 6, 5, 1e-5);
+  EXPECT_EQ(r.crossings, 30);
+  EXPECT_EQ(r.ties, 90);
+  EXPECT_EQ(r.pcg.termination, Termination::kConverged) << r.pcg.BriefReport();
+  EXPECT_LT(r.gravity_rmse, 1e-8);
+  EXPECT_LT(r.max_abs_error, 1e-5);
+  EXPECT_THROW(LinearInsCrossoverTies(o, 500, 500, 1e-5), std::invalid_argument);  // too many lines
+}
+
 TEST(LinearInsNetwork, BadOptionsGiveClearErrors) {
   LinearInsNetworkOptions o = Small(Discretisation::kLeapFrog);
   o.sigma_gps_m = 0.0;

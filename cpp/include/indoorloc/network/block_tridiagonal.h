@@ -85,4 +85,29 @@ struct BlockTridiagonalSolution {
 BlockTridiagonalSolution SolveBlockTridiagonal(int num_blocks, int block_size, const BlockRowAssembler& assemble,
                                                const BlockTridiagonalOptions& options = BlockTridiagonalOptions());
 
+/// The whole factor A = L Lᵀ kept in memory (2 n b² doubles) for repeated solves, e.g. as the
+/// preconditioner of conjugate gradients when cross-over ties break the band
+/// (crossover_pcg.h). Same recursion and rank test as SolveBlockTridiagonal.
+class BlockTridiagonalFactor {
+ public:
+  /// Factors A (rows from `assemble`, whose right-hand side is ignored). Throws as
+  /// SolveBlockTridiagonal on a rank-deficient A.
+  BlockTridiagonalFactor(int num_blocks, int block_size, const BlockRowAssembler& assemble,
+                         double pivot_tolerance = 1e-12);
+  int num_blocks() const { return n_; }
+  int block_size() const { return b_; }
+  /// A^{-1} rhs (rhs of size n·b).
+  Eigen::VectorXd Solve(const Eigen::VectorXd& rhs) const;
+  /// A x = L (Lᵀ x), without A.
+  Eigen::VectorXd Multiply(const Eigen::VectorXd& x) const;
+  double bytes() const { return 8.0 * (2.0 * b_ * b_) * n_; }
+  /// The right-hand side b the assembler returned, gathered during the factorisation.
+  const Eigen::VectorXd& rhs() const { return rhs_; }
+
+ private:
+  int n_ = 0, b_ = 0;
+  std::vector<Eigen::MatrixXd> L_, C_;
+  Eigen::VectorXd rhs_;
+};
+
 }  // namespace indoorloc::network

@@ -30,6 +30,7 @@
 #include <Eigen/Core>
 
 #include "indoorloc/network/block_tridiagonal.h"
+#include "indoorloc/network/crossover_pcg.h"
 
 namespace indoorloc::network {
 
@@ -118,5 +119,32 @@ struct LinearInsNetworkResult {
 /// `gravity_covariance` is true). Throws std::runtime_error on a rank-deficient network.
 LinearInsNetworkResult SolveLinearInsNetwork(const LinearInsNetworkOptions& options, bool gravity_covariance,
                                              int checkpoint_interval, bool keep_gravity_estimate = false);
+
+/// Cross-over ties (XOVER) of a survey flown as `lines` East-West lines then `cross_lines`
+/// North-South lines of equal duration: every EW line crosses every NS line once, half-way
+/// between consecutive crossings, and the three δg unknowns of the two epochs are tied with
+/// standard deviation sigma_xover_mps2. The tie values are the truth's differences (the
+/// noise-free network stays consistent, so its solution is still the truth).
+std::vector<Tie> LinearInsCrossoverTies(const LinearInsNetworkOptions& options, int lines, int cross_lines,
+                                        double sigma_xover_mps2);
+
+struct CrossoverNetworkResult {
+  NetworkSize size;
+  long long crossings = 0;
+  long long ties = 0;
+  double factor_seconds = 0.0;
+  double factor_bytes = 0.0;
+  TiedSolveSummary pcg;
+  double max_abs_error = 0.0;   ///< over every unknown, against the truth
+  double gravity_rmse = 0.0;    ///< [m/s²]
+  double total_seconds = 0.0;
+};
+
+/// The network of `options` plus the cross-over ties above, solved by conjugate gradients
+/// preconditioned with the stored banded factor (crossover_pcg.h). Memory: the whole factor,
+/// 2 n b² doubles (leap-frog b = 36: 20.7 kB per pair of epochs).
+CrossoverNetworkResult SolveLinearInsNetworkWithCrossovers(const LinearInsNetworkOptions& options, int lines,
+                                                           int cross_lines, double sigma_xover_mps2,
+                                                           const TiedSolveOptions& pcg = TiedSolveOptions());
 
 }  // namespace indoorloc::network

@@ -1,0 +1,94 @@
+#include "indoorloc/network/crossover_pcg.h"
+
+#include <stdexcept>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Dense>
+#include <gtest/gtest.h>
+
+#include "indoorloc/core/random.h"
+
+namespace indoorloc::network {
+namespace {
+
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+void RandomBand(int n, int b, std::uint64_t seed, MatrixXd* A, VectorXd* rhs) {
+  RandomStream rng(seed);
+  MatrixXd J = MatrixXd::Zero(n * b, n * b);
+  for (int i = 0; i < n; ++i)
+    for (int r = 0; r < b; ++r)
+      for (int c = 0; c < b; ++c) {
+        J(i * b + r, i * b + c) = rng.Normal();
+        if (i > 0) J(i * b + r, (i - 1) * b + c) = rng.Normal();
+      }
+  *A = J.transpose() * J + 0.1 * MatrixXd::Identity(n * b, n * b);
+  rhs->resize(n * b);
+  for (int i = 0; i < n * b; ++i) (*rhs)[i] = rng.Normal();
+}
+
+BlockRowAssembler FromDense(const MatrixXd& A, const VectorXd& rhs, int b) {
+  return [A, rhs, b](int i, MatrixXd* diagonal, MatrixXd* lower, VectorXd* r) {
+    *diagonal = A.block(i * b, i * b, b, b);
+    if (i > 0) *lower = A.block(i * b, (i - 1) * b, b, b);
+    *r = rhs.segment(i * b, b);
+  };
+}
+
+TEST(BlockTridiagonalFactor, SolveAndMultiplyMatchDense) {
+  const int n = 8, b = 3;
+  MatrixXd A;
+  VectorXd rhs;
+  RandomBand(n, b, 4, &A, &rhs);
+  const BlockTridiagonalFactor f(n, b, FromDense(A, rhs, b));
+  EXPECT_LT((f.Solve(rhs) - A.llt().solve(rhs)).cwiseAbs().maxCoeff(), 1e-10);
+  EXPECT_LT((f.Multiply(rhs) - A * rhs).cwiseAbs().maxCoeff(), 1e-10);
+  EXPECT_EQ(f.rhs(), rhs);
+}
+
+TEST(CrossoverPcg, MatchesTheDenseTiedSolution) {
+  const int n = 30, b = 4;
+  MatrixXd A;
+  VectorXd rhs;
+  RandomBand(n, b, 9, &A, &rhs);
+  RandomStream rng(10);
+  std::vector<Tie> ties;
+  MatrixXd tied = A;
+  VectorXd tied_rhs = rhs;
+  for (int k = 0; k < 40; ++k) {  // far-apart ties, as cross-overs are
+    Tie t;
+    t.a = static_cast<long long>(rng.UniformInt(static_cast<std::uint64_t>(n * b / 2)));
+    t.b = n * b / 2 + static_cast<long long>(rng.UniformInt(static_cast<std::uint64_t>(n * b / 2)));
+    t.weight = 100.0 * rng.Uniform01() + 1.0;
+    t.value = rng.Normal();
+    ties.push_back(t);
+    tied(t.a, t.a) += t.weight;
+    tied(t.b, t.b) += t.weight;
+    tied(t.a, t.b) -= t.weight;
+    tied(t.b, t.a) -= t.weight;
+    tied_rhs[t.a] += t.weight * t.value;
+    tied_rhs[t.b] -= t.weight * t.value;
+  }
+  const BlockTridiagonalFactor f(n, b, FromDense(A, rhs, b));
+  const TiedSolution s = SolveWithTies(f, rhs, ties);
+  EXPECT_EQ(s.summary.termination, Termination::kConverged) << s.summary.BriefReport();
+  EXPECT_LE(s.summary.iterations, 81);  // CG: at most 1 + rank of the tie update, here 40
+  EXPECT_LT((s.x - tied.llt().solve(tied_rhs)).cwiseAbs().maxCoeff(), 1e-7);
+  // No ties: the band solution, zero iterations.
+  EXPECT_EQ(SolveWithTies(f, rhs, {}).summary.iterations, 0);
+}
+
+TEST(CrossoverPcg, BadTiesGiveClearErrors) {
+  MatrixXd A;
+  VectorXd rhs;
+  RandomBand(3, 2, 1, &A, &rhs);
+  const BlockTridiagonalFactor f(3, 2, FromDense(A, rhs, 2));
+  EXPECT_THROW(SolveWithTies(f, rhs, {Tie{0, 6, 1.0, 0.0}}), std::invalid_argument);  // outside
+  EXPECT_THROW(SolveWithTies(f, rhs, {Tie{1, 1, 1.0, 0.0}}), std::invalid_argument);  // a == b
+  EXPECT_THROW(SolveWithTies(f, rhs, {Tie{0, 1, -1.0, 0.0}}), std::invalid_argument);  // weight
+  EXPECT_THROW(SolveWithTies(f, VectorXd::Zero(5), {}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace indoorloc::network
