@@ -310,8 +310,9 @@ std::vector<Tie> LinearInsCrossoverTies(const LinearInsNetworkOptions& options, 
   for (int i = 0; i < lines; ++i) {
     for (int j = 0; j < cross_lines; ++j) {
       // EW line i meets NS line j at the (j + ½)-th of its stretches, and vice versa.
-      const long long ew = i * per_line + static_cast<long long>((j + 0.5) * per_line / cross_lines);
-      const long long ns = (lines + j) * per_line + static_cast<long long>((i + 0.5) * per_line / lines);
+      // Integer form of (j + ½) · per_line / cross_lines.
+      const long long ew = i * per_line + ((2LL * j + 1) * per_line) / (2LL * cross_lines);
+      const long long ns = (lines + j) * per_line + ((2LL * i + 1) * per_line) / (2LL * lines);
       const Vec18 xa = LinearInsTruth(ew, options.imu_rate_hz), xb = LinearInsTruth(ns, options.imu_rate_hz);
       for (int c = 15; c < 18; ++c) ties.push_back(Tie{ew * kP + c, ns * kP + c, w, xa[c] - xb[c]});
     }

@@ -160,14 +160,14 @@ ZuptEkfOutput RunZuptEkf(const Eigen::Ref<const Eigen::VectorXd>& time_s, const 
         } else {
           const double innovation = std::remainder(stance_yaw - yaw, 2.0 * 3.14159265358979323846);
           const double s_yaw = P(8, 8) + rh;
-          const Eigen::Matrix<double, 9, 1> K = P.col(8) / s_yaw;
-          const Eigen::Matrix<double, 9, 1> dy = K * innovation;
+          const Eigen::Matrix<double, 9, 1> K_yaw = P.col(8) / s_yaw;
+          const Eigen::Matrix<double, 9, 1> dy = K_yaw * innovation;
           p += dy.segment<3>(0);
           v += dy.segment<3>(3);
           q = (Exp(dy.segment<3>(6)) * q).normalized();
-          Mat9 IKH = Mat9::Identity();
-          IKH.col(8) -= K;
-          P = IKH * P * IKH.transpose() + rh * K * K.transpose();
+          Mat9 IKH_yaw = Mat9::Identity();
+          IKH_yaw.col(8) -= K_yaw;
+          P = IKH_yaw * P * IKH_yaw.transpose() + rh * K_yaw * K_yaw.transpose();
           if (options.smooth) updates[static_cast<size_t>(k)] += dy;
         }
       }
