@@ -12,6 +12,7 @@ namespace indoorloc::bindings {
 void BindAnalog(py::module_& m);
 void BindCore(py::module_& m);
 void BindMapmatch(py::module_& m);
+void BindNetwork(py::module_& m);
 void BindPdr(py::module_& m);
 void BindWifi(py::module_& m);
 void BindWifiBaselines(py::module_& m);
@@ -31,7 +32,8 @@ PYBIND11_MODULE(_core, m) {
   indoorloc::bindings::BindAnalog(analog);
   py::module_ pdr = m.def_submodule("pdr", "Pedestrian dead reckoning with a foot-mounted IMU (paper 002).");
   indoorloc::bindings::BindPdr(pdr);
-  m.def_submodule("network", "INS/GPS network adjustment (paper 003).");
+  py::module_ network = m.def_submodule("network", "INS/GPS network adjustment (paper 003).");
+  indoorloc::bindings::BindNetwork(network);
   py::module_ wifi = m.def_submodule("wifi", "RSS signal maps, Delaunay interpolation, gradient tracker (paper 004).");
   indoorloc::bindings::BindWifi(wifi);
   indoorloc::bindings::BindWifiBaselines(wifi);

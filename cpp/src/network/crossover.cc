@@ -50,17 +50,23 @@ RowMatrixX2i FindCrossovers(const Eigen::Ref<const Eigen::VectorXd>& time_s, con
         }
       }
   }
-  // One pair per crossing of two passes: the closest; others within min_separation_s of an
-  // accepted pair on both passes belong to the same crossing.
+  // One pair per crossing of two passes: the closest. A candidate belongs to an accepted crossing
+  // when, on both passes, its epoch is within min_separation_s (same pass) and within 2 radius_m
+  // horizontally (same place) of the accepted pair's epoch.
   std::sort(candidates.begin(), candidates.end(), [](const Candidate& x, const Candidate& y) {
     return x.d2 < y.d2 || (x.d2 == y.d2 && (x.a < y.a || (x.a == y.a && x.b < y.b)));
   });
   std::vector<std::pair<int, int>> accepted;
   const double window = std::max(options.min_separation_s, 1e-9);
+  const double near2 = 4.0 * r2;
+  auto close = [&](int i, int j) {
+    const double ex = position_m(i, 0) - position_m(j, 0), ey = position_m(i, 1) - position_m(j, 1);
+    return std::abs(time_s[i] - time_s[j]) < window && ex * ex + ey * ey < near2;
+  };
   for (const Candidate& c : candidates) {
     bool same = false;
     for (const auto& [a, b] : accepted)
-      if (std::abs(time_s[c.a] - time_s[a]) < window && std::abs(time_s[c.b] - time_s[b]) < window) {
+      if (close(c.a, a) && close(c.b, b)) {
         same = true;
         break;
       }

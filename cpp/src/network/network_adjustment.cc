@@ -126,7 +126,8 @@ bool NetworkOptions::IsValid(std::string* error) const {
       {"sigma_gps_m", sigma_gps_m},                       {"sigma_zupt_mps", sigma_zupt_mps},
       {"sigma_gupt_mps2", sigma_gupt_mps2},               {"sigma_xover_mps2", sigma_xover_mps2},
       {"function_tolerance", function_tolerance},         {"gradient_tolerance", gradient_tolerance},
-      {"parameter_tolerance", parameter_tolerance},       {"datum_pivot_tolerance", datum_pivot_tolerance}};
+      {"parameter_tolerance", parameter_tolerance},       {"datum_pivot_tolerance", datum_pivot_tolerance},
+      {"initial_trust_region_radius", initial_trust_region_radius}};
   for (const auto& [name, value] : positive)
     if (!Positive(value)) return fail(std::string(name) + " must be finite and > 0");
   if (!std::isfinite(gps_huber_threshold) || gps_huber_threshold < 0.0)
@@ -314,16 +315,15 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
     }
   } else {
     const double walk = std::sqrt(dt);
-    const double sqrt2 = std::sqrt(2.0);
     for (int i = 0; i + 1 < n; ++i) {
       problem.AddResidualBlock(Auto<internal::VelTrapezoidal, 3, 3, 3, 3, 3>({dt, 1.0 / options.sigma_vel_mps}),
                                nullptr, b.R(i), b.R(i + 1), b.V(i), b.V(i + 1));
       problem.AddResidualBlock(Auto<internal::FbTrapezoidal, 3, 3, 3, 4, 4, 3, 3, 3, 3, 1, 1>(
-                                   {model, f_at(i), f_at(i + 1), dt, sqrt2 / sigma_f}),
+                                   {model, f_at(i), f_at(i + 1), dt, 1.0 / sigma_f}),
                                nullptr, b.V(i), b.V(i + 1), b.Q(i), b.Q(i + 1), b.R(i), b.R(i + 1), b.A(i), b.A(i + 1),
                                b.G(i), b.G(i + 1));
       problem.AddResidualBlock(Auto<internal::WibTrapezoidal, 3, 4, 4, 3, 3>(
-                                   {model.earth_rate_enu, 0.5 * (w_at(i) + w_at(i + 1)), dt, sqrt2 / sigma_w}),
+                                   {model.earth_rate_enu, 0.5 * (w_at(i) + w_at(i + 1)), dt, 1.0 / sigma_w}),
                                nullptr, b.Q(i), b.Q(i + 1), b.O(i), b.O(i + 1));
       problem.AddResidualBlock(
           Auto<internal::RandomWalk<3>, 3, 3, 3>({1.0 / (options.acc_bias_walk_mps2_rts * walk)}), nullptr, b.A(i),
@@ -433,6 +433,8 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
   so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
   so.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
   so.max_num_iterations = options.max_iterations;
+  so.initial_trust_region_radius = options.initial_trust_region_radius;
+  so.max_trust_region_radius = std::max(1e16, options.initial_trust_region_radius);
   so.function_tolerance = options.function_tolerance;
   so.gradient_tolerance = options.gradient_tolerance;
   so.parameter_tolerance = options.parameter_tolerance;

@@ -89,7 +89,7 @@ struct FbLeapFrog {
 };
 
 /// FB, trapezoidal on [n, n+1] (ENU frame):
-/// (½ Σ_i R(q_i)(f_i - a_i) - (Λ(v) + ω_ie × (v0 + v1) - ½ (g0 + g1))) / (σ_f / √2).
+/// (½ Σ_i R(q_i)(f_i - a_i) - (Λ(v) + ω_ie × (v0 + v1) - ½ (g0 + g1))) / σ_f.
 struct FbTrapezoidal {
   ModelConstants model;
   Eigen::Vector3d f0_body, f1_body;
@@ -128,7 +128,7 @@ struct WibLeapFrog {
 };
 
 /// WIB, trapezoidal on [n, n+1]:
-/// (Log(q[n]⁻¹ q[n+1]) / δt + ½ (R0ᵀ + R1ᵀ) ω_ie + ½ (o0 + o1) - ½ (ω0 + ω1)) / (σ_ω / √2).
+/// (Log(q[n]⁻¹ q[n+1]) / δt + ½ (R0ᵀ + R1ᵀ) ω_ie + ½ (o0 + o1) - ½ (ω0 + ω1)) / σ_ω.
 struct WibTrapezoidal {
   Eigen::Vector3d earth_rate_enu, w_mean_body;
   double dt, inv_sigma;

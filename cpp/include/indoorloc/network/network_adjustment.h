@@ -72,6 +72,10 @@ struct NetworkOptions {
   double gps_huber_threshold = 0.0;
   // Solver.
   int max_iterations = 20;
+  /// Levenberg-Marquardt's initial trust region. Large: the network is nearly linear around
+  /// filter-quality initial values, so Gauss-Newton-like first steps converge in a few
+  /// iterations (Ceres' default 1e4 needs ~15 iterations to grow the region).
+  double initial_trust_region_radius = 1e12;
   double function_tolerance = 1e-12;
   double gradient_tolerance = 1e-14;
   double parameter_tolerance = 1e-12;
@@ -143,7 +147,9 @@ struct CrossoverOptions {
 
 /// Cross-overs of a trajectory: pairs (n, k), n < k, of epochs at most radius_m apart
 /// horizontally, |Δh| within bounds and at least min_separation_s apart in time; one pair (the
-/// closest) per crossing of two passes. Grid hashing, O(N + candidates).
+/// closest) per crossing of two passes (candidates within min_separation_s and 2 radius_m of an
+/// accepted pair on both passes are the same crossing; a line flown twice gives a tie every
+/// ~2 radius_m). Grid hashing, O(N + candidates x crossings).
 RowMatrixX2i FindCrossovers(const Eigen::Ref<const Eigen::VectorXd>& time_s,
                             const Eigen::Ref<const RowMatrixXd>& position_m, const CrossoverOptions& options);
 
