@@ -94,6 +94,7 @@ py::dict StateDict(const NetworkState& s) {
   d["acc_bias_mps2"] = s.acc_bias_mps2;
   d["gyro_bias_radps"] = s.gyro_bias_radps;
   d["gravity_disturbance_mps2"] = s.gravity_disturbance_mps2;
+  if (s.gravity_disturbance_sd_mps2.size() > 0) d["gravity_disturbance_sd_mps2"] = s.gravity_disturbance_sd_mps2;
   return d;
 }
 
@@ -147,6 +148,22 @@ sigmas of VEL, CUPT, ZUPT, GUPT, XOVER; solver tolerances; check_datum.)doc")
       .def_readwrite("num_threads", &network::NetworkOptions::num_threads)
       .def_readwrite("check_datum", &network::NetworkOptions::check_datum)
       .def_readwrite("datum_pivot_tolerance", &network::NetworkOptions::datum_pivot_tolerance)
+      .def_property(
+          "gravity_covariance",
+          [](const network::NetworkOptions& o) {
+            switch (o.gravity_covariance) {
+              case network::NetworkOptions::Covariance::kCeres: return std::string("ceres");
+              case network::NetworkOptions::Covariance::kDense: return std::string("dense");
+              default: return std::string("none");
+            }
+          },
+          [](network::NetworkOptions& o, const std::string& v) {
+            if (v == "none") o.gravity_covariance = network::NetworkOptions::Covariance::kNone;
+            else if (v == "ceres") o.gravity_covariance = network::NetworkOptions::Covariance::kCeres;
+            else if (v == "dense") o.gravity_covariance = network::NetworkOptions::Covariance::kDense;
+            else ThrowInvalidArgument("gravity_covariance", "expected 'none', 'ceres' or 'dense', got '" + v + "'");
+          },
+          "Standard deviations of every δg: 'none', 'ceres' (ceres::Covariance, SPARSE_QR) or 'dense' (reference, <= 20,000 unknowns).")
       .def("is_valid", [](const network::NetworkOptions& o) {
         std::string e;
         return o.IsValid(&e) ? std::string() : e;
@@ -192,6 +209,8 @@ sigmas of VEL, CUPT, ZUPT, GUPT, XOVER; solver tolerances; check_datum.)doc")
           summary["num_residuals"] = s.num_residuals;
           summary["num_xover"] = s.num_xover;
           summary["min_pivot_ratio"] = s.min_pivot_ratio;
+          summary["variance_factor"] = s.variance_factor;
+          summary["seconds_covariance"] = s.seconds_covariance;
           summary["message"] = s.message;
           summary["brief_report"] = s.BriefReport();
           return py::make_tuple(StateDict(out), summary);

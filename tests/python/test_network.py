@@ -143,3 +143,26 @@ def test_normal_gravity_grs80():
     assert network.normal_gravity(np.pi / 2, [0.0])[0] == pytest.approx(9.8321863685, abs=1e-8)
     g = network.normal_gravity(0.7, [0.0, 100.0])
     assert (g[1] - g[0]) / 100.0 == pytest.approx(-0.3086e-5, rel=2e-3)
+
+
+def test_selected_covariances_shrink_at_crossovers():
+    # 5 Hz keeps the problem small for ceres::Covariance (the dense reference is in the C++ tests).
+    config = small_config(line_length_m=400.0, turn_radius_m=100.0, cross_margin_m=100.0, imu_rate_hz=5.0,
+                          zupt_s=3.0, accel_s=5.0)
+    flight = simulate_flight(config, seed=1)
+    o = network.flight_options(config)
+    o.gravity_covariance = "ceres"
+    na, summary, _ = network.solve_flight(flight, o, xover=False)
+    nax, summary_x, pairs = network.solve_flight(flight, o, xover=True)
+    assert pairs.shape[0] >= 6
+    sd, sd_x = na["gravity_disturbance_sd_mps2"], nax["gravity_disturbance_sd_mps2"]
+    assert sd.shape == (flight.n_epochs,) and np.all(np.isfinite(sd)) and np.all(sd > 0)
+    # A tie between two epochs adds information to both: their δg sd can only go down.
+    at = pairs.ravel()
+    assert np.all(sd_x[at] <= sd[at] * (1 + 1e-9))
+    assert sd_x[at].mean() < 0.9 * sd[at].mean()
+    assert summary["seconds_covariance"] > 0 and summary["variance_factor"] > 0
+    o.gravity_covariance = "none"
+    assert "gravity_disturbance_sd_mps2" not in network.solve_flight(flight, o, xover=False)[0]
+    with pytest.raises(ValueError, match="'gravity_covariance'"):
+        o.gravity_covariance = "full"

@@ -11,6 +11,7 @@
 
 #include <ceres/ceres.h>
 #include <Eigen/SparseCholesky>
+#include <Eigen/Dense>
 #include <Eigen/SparseCore>
 
 #include "indoorloc/core/check.h"
@@ -134,6 +135,8 @@ bool NetworkOptions::IsValid(std::string* error) const {
     return fail("gps_huber_threshold must be >= 0 (0: no robust loss)");
   if (max_iterations < 0) return fail("max_iterations must be >= 0");
   if (num_threads < 1) return fail("num_threads must be >= 1");
+  if (!std::isfinite(initial_trust_region_radius) || initial_trust_region_radius <= 0.0)
+    return fail("initial_trust_region_radius must be finite and > 0");
   return true;
 }
 
@@ -158,7 +161,8 @@ std::string NetworkSummary::BriefReport() const {
   s << "network: " << ToString(termination) << ", " << iterations << " iterations, cost " << initial_cost << " -> "
     << final_cost << ", " << num_epochs << " epochs, " << num_parameters << " unknowns, " << num_residuals
     << " residuals, " << num_xover << " cross-overs, " << seconds_total << " s (solve " << seconds_solve
-    << " s, datum check " << seconds_datum_check << " s)";
+    << " s, datum check " << seconds_datum_check << " s, covariance " << seconds_covariance
+    << " s), variance factor " << variance_factor;
   return s.str();
 }
 
@@ -367,6 +371,9 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
   s.num_residuals = problem.NumResiduals();
   s.num_xover = static_cast<int>(obs.xover_epochs.rows());
 
+  if (options.gravity_covariance == NetworkOptions::Covariance::kDense && s.num_parameters > 20000)
+    ThrowInvalidArgument("options", "gravity_covariance = dense is limited to 20,000 unknowns (got " +
+                                        std::to_string(s.num_parameters) + "); use ceres");
   // Numerical datum check: LDLᵀ of JᵀJ at the initial values.
   if (options.check_datum) {
     WallTimer datum_timer;
@@ -458,9 +465,50 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
     case ceres::NO_CONVERGENCE: s.termination = Termination::kMaxIterations; break;
     default: s.termination = Termination::kFailure; break;
   }
+  const double redundancy = static_cast<double>(s.num_residuals) - static_cast<double>(s.num_parameters);
+  s.variance_factor = redundancy > 0.0 ? 2.0 * s.final_cost / redundancy : 0.0;
+  NetworkState out = ToState(b);
+  if (options.gravity_covariance != NetworkOptions::Covariance::kNone) {
+    WallTimer cov_timer;
+    out.gravity_disturbance_sd_mps2.resize(n);
+    if (options.gravity_covariance == NetworkOptions::Covariance::kDense) {
+      ceres::Problem::EvaluateOptions eo;
+      eo.parameter_blocks = ordered_blocks;
+      eo.apply_loss_function = false;
+      ceres::CRSMatrix crs;
+      double cost = 0.0;
+      if (!problem.Evaluate(eo, &cost, nullptr, nullptr, &crs))
+        throw std::runtime_error("indoorloc: network: evaluating the Jacobian at the solution failed");
+      Eigen::Map<const Eigen::SparseMatrix<double, Eigen::RowMajor, int>> jac(
+          crs.num_rows, crs.num_cols, static_cast<Eigen::Index>(crs.values.size()), crs.rows.data(),
+          crs.cols.data(), crs.values.data());
+      const Eigen::MatrixXd normal = Eigen::MatrixXd(Eigen::SparseMatrix<double>(jac.transpose()) * jac);
+      const Eigen::MatrixXd inverse = normal.ldlt().solve(Eigen::MatrixXd::Identity(normal.rows(), normal.cols()));
+      for (int i = 0; i < n; ++i) {
+        const double v = inverse(kParamsPerEpoch * i + 15, kParamsPerEpoch * i + 15);
+        out.gravity_disturbance_sd_mps2[i] = v > 0.0 ? std::sqrt(v) : std::numeric_limits<double>::quiet_NaN();
+      }
+    } else {
+      ceres::Covariance::Options co;
+      co.algorithm_type = ceres::SPARSE_QR;
+      co.num_threads = options.num_threads;
+      ceres::Covariance covariance(co);
+      std::vector<std::pair<const double*, const double*>> blocks;
+      blocks.reserve(static_cast<size_t>(n));
+      for (int i = 0; i < n; ++i) blocks.emplace_back(b.G(i), b.G(i));
+      if (!covariance.Compute(blocks, &problem))
+        throw std::runtime_error("indoorloc: network: ceres::Covariance failed (rank-deficient network?)");
+      for (int i = 0; i < n; ++i) {
+        double v = 0.0;
+        covariance.GetCovarianceBlock(b.G(i), b.G(i), &v);
+        out.gravity_disturbance_sd_mps2[i] = std::sqrt(std::max(v, 0.0));
+      }
+    }
+    s.seconds_covariance = cov_timer.ElapsedSeconds();
+  }
   s.seconds_total = total.ElapsedSeconds();
   if (summary) *summary = s;
-  return ToState(b);
+  return out;
 }
 
 }  // namespace indoorloc::network

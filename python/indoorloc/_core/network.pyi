@@ -33,6 +33,7 @@ class NetworkOptions:
     num_threads: int
     check_datum: bool
     datum_pivot_tolerance: float
+    gravity_covariance: str
     def __init__(self) -> None: ...
     def is_valid(self) -> str: ...
 

@@ -41,7 +41,8 @@ _NOISE_STREAM = 1
 
 @dataclass
 class FlightConfig:
-    """Flight pattern, sensors and gravity field. Defaults: a 6-minute flight at 50 Hz."""
+    """Flight pattern, sensors and gravity field. Defaults: a 9.5-minute flight at 50 Hz
+    (28,655 epochs, 9 cross-overs)."""
 
     imu_rate_hz: float = 50.0
     gps_rate_hz: float = 1.0
@@ -52,7 +53,7 @@ class FlightConfig:
     cross_margin_m: float = 600.0      #: cross lines extend this far beyond the outer lines
     ramp_s: float = 4.0                #: heading-rate ramps at the start and end of turns
     accel_s: float = 15.0              #: speed-up and slow-down duration
-    zupt_s: float = 10.0               #: hover at start and end
+    zupt_s: float = 30.0               #: hover at start and end
     altitude_m: float = 300.0
     height_wave_m: float = 3.0
     height_wave_period_s: float = 40.0
@@ -63,15 +64,15 @@ class FlightConfig:
     # uniform in [width_min, width_max] m, centres inside the survey block.
     n_anomalies: int = 6
     anomaly_amplitude_mgal: Tuple[float, float] = (10.0, 40.0)
-    anomaly_width_m: Tuple[float, float] = (500.0, 1500.0)
+    anomaly_width_m: Tuple[float, float] = (1000.0, 2500.0)
     # Sensors (same densities as NetworkOptions).
-    acc_noise_mps2_rthz: float = 5e-4
+    acc_noise_mps2_rthz: float = 1e-4   #: 10 mGal/√Hz (strapdown gravimetry grade)
     gyro_noise_radps_rthz: float = 1e-5
     acc_bias_walk_mps2_rts: float = 1e-6
     gyro_bias_walk_radps_rts: float = 1e-7
     acc_bias_initial_mps2: Tuple[float, float, float] = (2e-4, -1e-4, 3e-4)
     gyro_bias_initial_radps: Tuple[float, float, float] = (1e-6, -2e-6, 1.5e-6)
-    sigma_gps_m: float = 0.02
+    sigma_gps_m: float = 0.01
     sigma_gupt_mps2: float = 1e-5
 
     def validate(self) -> None:

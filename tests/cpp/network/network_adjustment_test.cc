@@ -206,3 +206,40 @@ TEST(KalmanSmoother, TracksANoiseFreeFlight) {
 
 }  // namespace
 }  // namespace indoorloc::network
+
+namespace indoorloc::network {
+namespace {
+
+// Selected covariances: ceres::Covariance on the δg diagonal blocks equals the corresponding
+// entries of the dense inverse of JᵀJ (the brute-force reference) on a small network.
+TEST(NetworkCovariance, CeresMatchesTheDenseInverse) {
+  NetworkOptions o;
+  o.discretization = Discretization::kTrapezoidal;
+  const auto fl = testing::MakeFlight(o, 120, 0.1, 10, 0);
+  o.gravity_covariance = NetworkOptions::Covariance::kDense;
+  const NetworkState dense = SolveNetwork(fl.obs, fl.truth, o);
+  o.gravity_covariance = NetworkOptions::Covariance::kCeres;
+  NetworkSummary s;
+  const NetworkState sparse = SolveNetwork(fl.obs, fl.truth, o, &s);
+  ASSERT_EQ(dense.gravity_disturbance_sd_mps2.size(), 120);
+  ASSERT_EQ(sparse.gravity_disturbance_sd_mps2.size(), 120);
+  for (int i = 0; i < 120; ++i) {
+    EXPECT_GT(dense.gravity_disturbance_sd_mps2[i], 0.0);
+    EXPECT_NEAR(sparse.gravity_disturbance_sd_mps2[i], dense.gravity_disturbance_sd_mps2[i],
+                1e-6 * dense.gravity_disturbance_sd_mps2[i])
+        << "epoch " << i;
+  }
+  // The GUPT pins δg at the middle epoch: its sd is close to sigma_gupt and the smallest.
+  const int mid = 60;
+  EXPECT_LT(dense.gravity_disturbance_sd_mps2[mid], 1.01 * o.sigma_gupt_mps2);
+  EXPECT_EQ(Eigen::Index(mid), [&] {
+    Eigen::Index k;
+    dense.gravity_disturbance_sd_mps2.minCoeff(&k);
+    return k;
+  }());
+  o.gravity_covariance = NetworkOptions::Covariance::kNone;
+  EXPECT_EQ(SolveNetwork(fl.obs, fl.truth, o).gravity_disturbance_sd_mps2.size(), 0);
+}
+
+}  // namespace
+}  // namespace indoorloc::network

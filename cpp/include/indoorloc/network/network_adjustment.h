@@ -83,6 +83,12 @@ struct NetworkOptions {
   /// Factorise JᵀJ at the initial values and reject rank-deficient networks (see above).
   bool check_datum = true;
   double datum_pivot_tolerance = 1e-12;  ///< on the Jacobi-scaled JᵀJ
+  /// Selected covariances (paper §3.5, small problems): the standard deviation of every δg[n]
+  /// from (JᵀJ)⁻¹ at the solution (whitened residuals: no variance factor applied).
+  enum class Covariance { kNone, kCeres, kDense };
+  /// kCeres: ceres::Covariance (SPARSE_QR, only the δg diagonal blocks); kDense: the full dense
+  /// inverse (the brute-force reference; refused above 20,000 unknowns).
+  Covariance gravity_covariance = Covariance::kNone;
 
   bool IsValid(std::string* error) const;
 };
@@ -108,6 +114,8 @@ struct NetworkState {
   RowMatrixXd acc_bias_mps2;         ///< N x 3 body
   RowMatrixXd gyro_bias_radps;       ///< N x 3 body
   Eigen::VectorXd gravity_disturbance_mps2;  ///< N vertical δg (positive: stronger gravity)
+  /// N standard deviations of δg (output only, when options.gravity_covariance != kNone).
+  Eigen::VectorXd gravity_disturbance_sd_mps2;
 };
 
 struct NetworkSummary {
@@ -123,6 +131,9 @@ struct NetworkSummary {
   long num_residuals = 0;
   int num_xover = 0;
   double min_pivot_ratio = 0.0;     ///< smallest LDLᵀ pivot / diagonal (datum check; 0 if off)
+  /// A-posteriori variance factor 2 F / (m - n): about 1 when the stated noise densities are right.
+  double variance_factor = 0.0;
+  double seconds_covariance = 0.0;
   std::string message;              ///< Ceres' message
 
   std::string BriefReport() const;
