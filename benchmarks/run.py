@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-BENCHMARKS = ["bench_resampling", "bench_wifi", "bench_mapmatch", "bench_analog"]
+BENCHMARKS = ["bench_resampling", "bench_wifi", "bench_mapmatch", "bench_analog", "bench_network"]
 
 
 def main() -> int:

@@ -243,3 +243,25 @@ TEST(NetworkCovariance, CeresMatchesTheDenseInverse) {
 
 }  // namespace
 }  // namespace indoorloc::network
+
+namespace indoorloc::network {
+namespace {
+
+// One GPS fix 5 m off: plain least squares bends the trajectory towards it; the Huber loss on
+// CUPT (threshold 3 sigma) keeps the noise-free solution.
+TEST(NetworkAdjustment, HuberLossResistsAGpsOutlier) {
+  NetworkOptions o;
+  o.discretization = Discretization::kTrapezoidal;
+  auto fl = testing::MakeFlight(o, 200, 0.1, 10, 0);
+  fl.obs.gps_position_m(10, 0) += 5.0;
+  const NetworkState plain = SolveNetwork(fl.obs, fl.truth, o);
+  o.gps_huber_threshold = 3.0;
+  const NetworkState robust = SolveNetwork(fl.obs, fl.truth, o);
+  const double err_plain = (plain.position_m - fl.truth.position_m).cwiseAbs().maxCoeff();
+  const double err_robust = (robust.position_m - fl.truth.position_m).cwiseAbs().maxCoeff();
+  EXPECT_GT(err_plain, 0.05);
+  EXPECT_LT(err_robust, 0.2 * err_plain);
+}
+
+}  // namespace
+}  // namespace indoorloc::network
