@@ -163,7 +163,9 @@ sigmas of VEL, CUPT, ZUPT, GUPT, XOVER; solver tolerances; check_datum.)doc")
             else if (v == "dense") o.gravity_covariance = network::NetworkOptions::Covariance::kDense;
             else ThrowInvalidArgument("gravity_covariance", "expected 'none', 'ceres' or 'dense', got '" + v + "'");
           },
-          "Standard deviations of every δg: 'none', 'ceres' (ceres::Covariance, SPARSE_QR) or 'dense' (reference, <= 20,000 unknowns).")
+          "Standard deviations of every δg: 'none', 'ceres' (ceres::Covariance, SPARSE_QR) or 'dense' (reference, <= 8,000 unknowns).")
+      .def_readwrite("variance_components", &network::NetworkOptions::variance_components,
+                     "Variance factors of the acc, gyro and GPS groups in the summary (dense: <= 8,000 unknowns).")
       .def("is_valid", [](const network::NetworkOptions& o) {
         std::string e;
         return o.IsValid(&e) ? std::string() : e;
@@ -210,6 +212,12 @@ sigmas of VEL, CUPT, ZUPT, GUPT, XOVER; solver tolerances; check_datum.)doc")
           summary["num_xover"] = s.num_xover;
           summary["min_pivot_ratio"] = s.min_pivot_ratio;
           summary["variance_factor"] = s.variance_factor;
+          summary["variance_factor_acc"] = s.variance_factor_acc;
+          summary["variance_factor_gyro"] = s.variance_factor_gyro;
+          summary["variance_factor_gps"] = s.variance_factor_gps;
+          summary["redundancy_acc"] = s.redundancy_acc;
+          summary["redundancy_gyro"] = s.redundancy_gyro;
+          summary["redundancy_gps"] = s.redundancy_gps;
           summary["seconds_covariance"] = s.seconds_covariance;
           summary["message"] = s.message;
           summary["brief_report"] = s.BriefReport();

@@ -109,6 +109,18 @@ void CheckEpochs(const Eigen::VectorXi& epochs, int n, const char* name) {
                       std::to_string(n) + ")");
 }
 
+/// (JᵀJ)⁻¹ as a dense matrix: sparse LDLᵀ (AMD) of JᵀJ, then n solves (O(n nnz(L)), n² memory).
+template <typename Jacobian>
+Eigen::MatrixXd DenseInverseOfNormal(const Jacobian& jac) {
+  const Eigen::SparseMatrix<double> normal = Eigen::SparseMatrix<double>(jac.transpose()) * jac;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt(normal);
+  if (ldlt.info() != Eigen::Success)
+    throw std::runtime_error("indoorloc: network: the normal matrix at the solution is singular");
+  return ldlt.solve(Eigen::MatrixXd::Identity(normal.rows(), normal.cols()));
+}
+
+constexpr long kMaxDenseUnknowns = 8000;  // n² doubles: 0.5 GB
+
 }  // namespace
 
 bool NetworkOptions::IsValid(std::string* error) const {
@@ -138,6 +150,33 @@ bool NetworkOptions::IsValid(std::string* error) const {
   if (!std::isfinite(initial_trust_region_radius) || initial_trust_region_radius <= 0.0)
     return fail("initial_trust_region_radius must be finite and > 0");
   return true;
+}
+
+NetworkState EstimateVarianceComponents(const NetworkObservations& observations, const NetworkState& initial,
+                                        const NetworkOptions& options, NetworkOptions* estimated,
+                                        NetworkSummary* summary, int iterations, double tolerance) {
+  CheckArgument(iterations >= 1, "iterations", "must be >= 1");
+  CheckArgument(std::isfinite(tolerance) && tolerance > 0.0, "tolerance", "must be finite and > 0");
+  NetworkOptions o = options;
+  o.variance_components = true;
+  o.gps_huber_threshold = 0.0;
+  NetworkState state = initial;
+  NetworkSummary s;
+  for (int k = 0; k < iterations; ++k) {
+    state = SolveNetwork(observations, state, o, &s);
+    o.check_datum = false;  // checked on the first solve; reweighting does not change the rank
+    if (s.variance_factor_acc > 0.0) o.acc_noise_mps2_rthz *= std::sqrt(s.variance_factor_acc);
+    if (s.variance_factor_gyro > 0.0) o.gyro_noise_radps_rthz *= std::sqrt(s.variance_factor_gyro);
+    if (s.variance_factor_gps > 0.0) o.sigma_gps_m *= std::sqrt(s.variance_factor_gps);
+    if (std::abs(s.variance_factor_acc - 1.0) < tolerance && std::abs(s.variance_factor_gyro - 1.0) < tolerance &&
+        std::abs(s.variance_factor_gps - 1.0) < tolerance)
+      break;
+  }
+  o.variance_components = options.variance_components;
+  o.check_datum = options.check_datum;
+  if (estimated) *estimated = o;
+  if (summary) *summary = s;
+  return state;
 }
 
 bool CrossoverOptions::IsValid(std::string* error) const {
@@ -291,6 +330,7 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
     for (double* p : {b.R(i), b.V(i), b.Q(i), b.A(i), b.O(i), b.G(i)}) ordered_blocks.push_back(p);
   }
 
+  std::vector<ceres::ResidualBlockId> acc_ids, gyro_ids, gps_ids;
   const double sigma_f = options.acc_noise_mps2_rthz / std::sqrt(dt);
   const double sigma_w = options.gyro_noise_radps_rthz / std::sqrt(dt);
   auto f_at = [&](int i) { return Eigen::Vector3d(obs.acc_body_mps2.row(i).transpose()); };
@@ -301,12 +341,12 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
     for (int i = 1; i + 1 < n; ++i) {
       problem.AddResidualBlock(Auto<internal::VelLeapFrog, 3, 3, 3, 3>({step, 1.0 / options.sigma_vel_mps}), nullptr,
                                b.R(i - 1), b.R(i + 1), b.V(i));
-      problem.AddResidualBlock(
+      acc_ids.push_back(problem.AddResidualBlock(
           Auto<internal::FbLeapFrog, 3, 3, 3, 3, 4, 3, 3, 1>({model, f_at(i), step, 1.0 / sigma_f}), nullptr,
-          b.V(i - 1), b.V(i + 1), b.V(i), b.Q(i), b.R(i), b.A(i), b.G(i));
-      problem.AddResidualBlock(
+          b.V(i - 1), b.V(i + 1), b.V(i), b.Q(i), b.R(i), b.A(i), b.G(i)));
+      gyro_ids.push_back(problem.AddResidualBlock(
           Auto<internal::WibLeapFrog, 3, 4, 4, 4, 3>({model.earth_rate_enu, w_at(i), step, 1.0 / sigma_w}), nullptr,
-          b.Q(i - 1), b.Q(i + 1), b.Q(i), b.O(i));
+          b.Q(i - 1), b.Q(i + 1), b.Q(i), b.O(i)));
       problem.AddResidualBlock(
           Auto<internal::RandomWalk<3>, 3, 3, 3>({1.0 / (options.acc_bias_walk_mps2_rts * walk)}), nullptr,
           b.A(i - 1), b.A(i + 1));
@@ -322,13 +362,14 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
     for (int i = 0; i + 1 < n; ++i) {
       problem.AddResidualBlock(Auto<internal::VelTrapezoidal, 3, 3, 3, 3, 3>({dt, 1.0 / options.sigma_vel_mps}),
                                nullptr, b.R(i), b.R(i + 1), b.V(i), b.V(i + 1));
-      problem.AddResidualBlock(Auto<internal::FbTrapezoidal, 3, 3, 3, 4, 4, 3, 3, 3, 3, 1, 1>(
-                                   {model, f_at(i), f_at(i + 1), dt, 1.0 / sigma_f}),
-                               nullptr, b.V(i), b.V(i + 1), b.Q(i), b.Q(i + 1), b.R(i), b.R(i + 1), b.A(i), b.A(i + 1),
-                               b.G(i), b.G(i + 1));
-      problem.AddResidualBlock(Auto<internal::WibTrapezoidal, 3, 4, 4, 3, 3>(
-                                   {model.earth_rate_enu, 0.5 * (w_at(i) + w_at(i + 1)), dt, 1.0 / sigma_w}),
-                               nullptr, b.Q(i), b.Q(i + 1), b.O(i), b.O(i + 1));
+      acc_ids.push_back(problem.AddResidualBlock(Auto<internal::FbTrapezoidal, 3, 3, 3, 4, 4, 3, 3, 3, 3, 1, 1>(
+                                                     {model, f_at(i), f_at(i + 1), dt, 1.0 / sigma_f}),
+                                                 nullptr, b.V(i), b.V(i + 1), b.Q(i), b.Q(i + 1), b.R(i), b.R(i + 1),
+                                                 b.A(i), b.A(i + 1), b.G(i), b.G(i + 1)));
+      gyro_ids.push_back(problem.AddResidualBlock(Auto<internal::WibTrapezoidal, 3, 4, 4, 3, 3>(
+                                                      {model.earth_rate_enu, 0.5 * (w_at(i) + w_at(i + 1)), dt,
+                                                       1.0 / sigma_w}),
+                                                  nullptr, b.Q(i), b.Q(i + 1), b.O(i), b.O(i + 1)));
       problem.AddResidualBlock(
           Auto<internal::RandomWalk<3>, 3, 3, 3>({1.0 / (options.acc_bias_walk_mps2_rts * walk)}), nullptr, b.A(i),
           b.A(i + 1));
@@ -347,10 +388,12 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
     const GpsTie& t = ties[static_cast<size_t>(i)];
     ceres::LossFunction* loss = huber ? new ceres::HuberLoss(options.gps_huber_threshold) : nullptr;
     if (t.alpha == 0.0)
-      problem.AddResidualBlock(Auto<internal::Cupt, 3, 3>({p, 1.0 / options.sigma_gps_m}), loss, b.R(t.a));
+      gps_ids.push_back(
+          problem.AddResidualBlock(Auto<internal::Cupt, 3, 3>({p, 1.0 / options.sigma_gps_m}), loss, b.R(t.a)));
     else
-      problem.AddResidualBlock(Auto<internal::CuptInterpolated, 3, 3, 3>({p, t.alpha, 1.0 / options.sigma_gps_m}),
-                               loss, b.R(t.a), b.R(t.a + 1));
+      gps_ids.push_back(problem.AddResidualBlock(
+          Auto<internal::CuptInterpolated, 3, 3, 3>({p, t.alpha, 1.0 / options.sigma_gps_m}), loss, b.R(t.a),
+          b.R(t.a + 1)));
   }
   for (Eigen::Index i = 0; i < obs.zupt_epochs.size(); ++i)
     problem.AddResidualBlock(Auto<internal::Zupt, 3, 3>({1.0 / options.sigma_zupt_mps}), nullptr,
@@ -371,8 +414,12 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
   s.num_residuals = problem.NumResiduals();
   s.num_xover = static_cast<int>(obs.xover_epochs.rows());
 
-  if (options.gravity_covariance == NetworkOptions::Covariance::kDense && s.num_parameters > 20000)
-    ThrowInvalidArgument("options", "gravity_covariance = dense is limited to 20,000 unknowns (got " +
+  CheckArgument(!options.variance_components || s.num_parameters <= kMaxDenseUnknowns, "options",
+                "variance_components is limited to " + std::to_string(kMaxDenseUnknowns) + " unknowns (got " +
+                    std::to_string(s.num_parameters) + ")");
+  if (options.gravity_covariance == NetworkOptions::Covariance::kDense && s.num_parameters > kMaxDenseUnknowns)
+    ThrowInvalidArgument("options", "gravity_covariance = dense is limited to " + std::to_string(kMaxDenseUnknowns) +
+                                        " unknowns (got " +
                                         std::to_string(s.num_parameters) + "); use ceres");
   // Numerical datum check: LDLᵀ of JᵀJ at the initial values.
   if (options.check_datum) {
@@ -468,6 +515,44 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
   const double redundancy = static_cast<double>(s.num_residuals) - static_cast<double>(s.num_parameters);
   s.variance_factor = redundancy > 0.0 ? 2.0 * s.final_cost / redundancy : 0.0;
   NetworkState out = ToState(b);
+  if (options.variance_components) {
+    WallTimer vc_timer;
+    ceres::Problem::EvaluateOptions eo;
+    eo.parameter_blocks = ordered_blocks;
+    eo.apply_loss_function = false;
+    ceres::CRSMatrix crs;
+    double cost = 0.0;
+    if (!problem.Evaluate(eo, &cost, nullptr, nullptr, &crs))
+      throw std::runtime_error("indoorloc: network: evaluating the Jacobian at the solution failed");
+    Eigen::Map<const Eigen::SparseMatrix<double, Eigen::RowMajor, int>> jac(
+        crs.num_rows, crs.num_cols, static_cast<Eigen::Index>(crs.values.size()), crs.rows.data(), crs.cols.data(),
+        crs.values.data());
+    const Eigen::MatrixXd inverse = DenseInverseOfNormal(jac);
+    auto group = [&](const std::vector<ceres::ResidualBlockId>& ids, double* factor, double* redundancy) {
+      if (ids.empty()) return;
+      ceres::Problem::EvaluateOptions ge = eo;
+      ge.residual_blocks = ids;
+      std::vector<double> v;
+      ceres::CRSMatrix jg;
+      double c = 0.0;
+      if (!problem.Evaluate(ge, &c, &v, nullptr, &jg))
+        throw std::runtime_error("indoorloc: network: evaluating a residual group failed");
+      // tr(N⁻¹ J_gᵀ J_g) = Σ_rows j_r N⁻¹ j_rᵀ over the few non-zeros of each row.
+      double trace = 0.0;
+      for (int r = 0; r < jg.num_rows; ++r)
+        for (int a = jg.rows[r]; a < jg.rows[r + 1]; ++a)
+          for (int bb = jg.rows[r]; bb < jg.rows[r + 1]; ++bb)
+            trace += jg.values[a] * jg.values[bb] * inverse(jg.cols[a], jg.cols[bb]);
+      double vtv = 0.0;
+      for (double x : v) vtv += x * x;
+      *redundancy = static_cast<double>(v.size()) - trace;
+      *factor = *redundancy > 0.0 ? vtv / *redundancy : 0.0;
+    };
+    group(acc_ids, &s.variance_factor_acc, &s.redundancy_acc);
+    group(gyro_ids, &s.variance_factor_gyro, &s.redundancy_gyro);
+    group(gps_ids, &s.variance_factor_gps, &s.redundancy_gps);
+    s.seconds_covariance += vc_timer.ElapsedSeconds();
+  }
   if (options.gravity_covariance != NetworkOptions::Covariance::kNone) {
     WallTimer cov_timer;
     out.gravity_disturbance_sd_mps2.resize(n);
@@ -482,8 +567,7 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
       Eigen::Map<const Eigen::SparseMatrix<double, Eigen::RowMajor, int>> jac(
           crs.num_rows, crs.num_cols, static_cast<Eigen::Index>(crs.values.size()), crs.rows.data(),
           crs.cols.data(), crs.values.data());
-      const Eigen::MatrixXd normal = Eigen::MatrixXd(Eigen::SparseMatrix<double>(jac.transpose()) * jac);
-      const Eigen::MatrixXd inverse = normal.ldlt().solve(Eigen::MatrixXd::Identity(normal.rows(), normal.cols()));
+      const Eigen::MatrixXd inverse = DenseInverseOfNormal(jac);
       for (int i = 0; i < n; ++i) {
         const double v = inverse(kParamsPerEpoch * i + 15, kParamsPerEpoch * i + 15);
         out.gravity_disturbance_sd_mps2[i] = v > 0.0 ? std::sqrt(v) : std::numeric_limits<double>::quiet_NaN();
@@ -504,7 +588,7 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
         out.gravity_disturbance_sd_mps2[i] = std::sqrt(std::max(v, 0.0));
       }
     }
-    s.seconds_covariance = cov_timer.ElapsedSeconds();
+    s.seconds_covariance += cov_timer.ElapsedSeconds();
   }
   s.seconds_total = total.ElapsedSeconds();
   if (summary) *summary = s;

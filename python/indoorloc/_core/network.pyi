@@ -34,6 +34,7 @@ class NetworkOptions:
     check_datum: bool
     datum_pivot_tolerance: float
     gravity_covariance: str
+    variance_components: bool
     def __init__(self) -> None: ...
     def is_valid(self) -> str: ...
 

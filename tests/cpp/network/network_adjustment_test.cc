@@ -265,3 +265,52 @@ TEST(NetworkAdjustment, HuberLossResistsAGpsOutlier) {
 
 }  // namespace
 }  // namespace indoorloc::network
+
+namespace indoorloc::network {
+namespace {
+
+// Variance component estimation: accelerometer, gyro and GPS noise simulated at 2x, 1x and 3x
+// the stated standard deviations; the iterated estimate recovers the accelerometer and GPS
+// factors 4 and 9. The gyro factor is NOT recovered (2.2 instead of 1 with a redundancy of ~29;
+// with a better gyro its redundancy drops below 1: the 15 s flight cannot test it) and is not
+// asserted: an open problem, see docs/network.md.
+TEST(NetworkVarianceComponents, RecoversKnownVarianceFactors) {
+  NetworkOptions o;
+  o.discretization = Discretization::kTrapezoidal;
+  // A noisy IMU against precise GPS, so that the GPS tests the IMU groups within 15 s (each
+  // group needs redundancy: with a navigation-grade IMU the GPS absorbs all of it).
+  o.acc_noise_mps2_rthz = 0.05;
+  o.gyro_noise_radps_rthz = 0.02;
+  o.sigma_gps_m = 0.002;
+  // With this IMU the accelerometer bias is weakly determined in 15 s (pivot ratio ~3e-13, below
+  // the conservative default tolerance), though not a defect.
+  o.check_datum = false;
+  const double dt = 0.1;
+  auto fl = testing::MakeFlight(o, 150, dt, 1, 0);
+  std::mt19937 rng(11);
+  std::normal_distribution<double> nd(0.0, 1.0);
+  const double sf = o.acc_noise_mps2_rthz / std::sqrt(dt), sw = o.gyro_noise_radps_rthz / std::sqrt(dt);
+  for (Eigen::Index i = 0; i < fl.obs.acc_body_mps2.rows(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      fl.obs.acc_body_mps2(i, c) += 2.0 * sf * nd(rng);
+      fl.obs.gyro_body_radps(i, c) += 1.0 * sw * nd(rng);
+    }
+  for (Eigen::Index i = 0; i < fl.obs.gps_position_m.rows(); ++i)
+    for (int c = 0; c < 3; ++c) fl.obs.gps_position_m(i, c) += 3.0 * o.sigma_gps_m * nd(rng);
+  NetworkOptions estimated;
+  NetworkSummary s;
+  EstimateVarianceComponents(fl.obs, fl.truth, o, &estimated, &s, 10, 1e-3);
+  const double f_acc = std::pow(estimated.acc_noise_mps2_rthz / o.acc_noise_mps2_rthz, 2);
+  const double f_gyro = std::pow(estimated.gyro_noise_radps_rthz / o.gyro_noise_radps_rthz, 2);
+  const double f_gps = std::pow(estimated.sigma_gps_m / o.sigma_gps_m, 2);
+  // Redundancies of 75 (acc) and 330 (GPS): relative sd sqrt(2 / r) of 16 % and 8 %.
+  EXPECT_NEAR(f_acc, 4.0, 0.25 * 4.0);
+  EXPECT_GT(f_gyro, 0.0);
+  EXPECT_NEAR(f_gps, 9.0, 0.25 * 9.0);
+  EXPECT_NEAR(s.variance_factor_acc, 1.0, 0.05);
+  EXPECT_GT(s.redundancy_acc, 50.0);
+  EXPECT_GT(s.redundancy_gps, 50.0);
+}
+
+}  // namespace
+}  // namespace indoorloc::network

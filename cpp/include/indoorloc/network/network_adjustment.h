@@ -62,7 +62,9 @@ struct NetworkOptions {
   double acc_bias_walk_mps2_rts = 1e-6;    ///< accelerometer bias random walk [m/s^2/√s]
   double gyro_bias_walk_radps_rts = 1e-7;  ///< gyro bias random walk [rad/s/√s]
   double gravity_walk_mps2_rts = 2e-5;     ///< GDT: δg random walk along time [m/s^2/√s]
-  double sigma_vel_mps = 1e-3;             ///< VEL pseudo-observation sd [m/s]
+  /// VEL pseudo-observation sd [m/s]: a kinematic identity, so tight; a loose VEL lets v absorb
+  /// the FB noise (the accelerometer group then has no redundancy, see variance components).
+  double sigma_vel_mps = 1e-5;
   double sigma_gps_m = 0.02;               ///< CUPT sd per axis [m]
   double sigma_zupt_mps = 1e-3;            ///< ZUPT sd per axis [m/s]
   double sigma_gupt_mps2 = 1e-5;           ///< GUPT sd [m/s^2] (1 mGal)
@@ -87,8 +89,12 @@ struct NetworkOptions {
   /// from (JᵀJ)⁻¹ at the solution (whitened residuals: no variance factor applied).
   enum class Covariance { kNone, kCeres, kDense };
   /// kCeres: ceres::Covariance (SPARSE_QR, only the δg diagonal blocks); kDense: the full dense
-  /// inverse (the brute-force reference; refused above 20,000 unknowns).
+  /// inverse (the brute-force reference; refused above 8,000 unknowns).
   Covariance gravity_covariance = Covariance::kNone;
+  /// Variance components of the accelerometer (FB), gyro (WIB) and GPS (CUPT) groups at the
+  /// solution (Förstner: σ̂²_g = v_gᵀ v_g / r_g, redundancy r_g = m_g - tr(N⁻¹ J_gᵀ J_g)), from
+  /// the dense inverse of N = JᵀJ: small problems only (refused above 8,000 unknowns).
+  bool variance_components = false;
 
   bool IsValid(std::string* error) const;
 };
@@ -134,6 +140,10 @@ struct NetworkSummary {
   /// A-posteriori variance factor 2 F / (m - n): about 1 when the stated noise densities are right.
   double variance_factor = 0.0;
   double seconds_covariance = 0.0;
+  /// Variance factors of the groups relative to the stated densities (options.variance_components;
+  /// 0 otherwise) and their redundancy numbers.
+  double variance_factor_acc = 0.0, variance_factor_gyro = 0.0, variance_factor_gps = 0.0;
+  double redundancy_acc = 0.0, redundancy_gyro = 0.0, redundancy_gps = 0.0;
   std::string message;              ///< Ceres' message
 
   std::string BriefReport() const;
@@ -144,6 +154,15 @@ struct NetworkSummary {
 /// IMU times, GPS times outside the IMU span, epoch indices out of range, and datum defects.
 NetworkState SolveNetwork(const NetworkObservations& observations, const NetworkState& initial,
                           const NetworkOptions& options, NetworkSummary* summary = nullptr);
+
+/// Iterated variance component estimation (small networks): solves, rescales
+/// acc_noise_mps2_rthz, gyro_noise_radps_rthz and sigma_gps_m by the square roots of their groups'
+/// variance factors, and repeats until every factor is within `tolerance` of 1 or `iterations`
+/// solves. `estimated` receives the rescaled options; `summary` the last solve's Summary.
+NetworkState EstimateVarianceComponents(const NetworkObservations& observations, const NetworkState& initial,
+                                        const NetworkOptions& options, NetworkOptions* estimated,
+                                        NetworkSummary* summary = nullptr, int iterations = 10,
+                                        double tolerance = 1e-3);
 
 /// Checks shapes and values of `observations` and `state` for N epochs (throws as SolveNetwork).
 void CheckNetworkInput(const NetworkObservations& observations, const NetworkState& state);
