@@ -21,11 +21,15 @@ RowMatrixX2i FindCrossovers(const Eigen::Ref<const Eigen::VectorXd>& time_s, con
     CheckArgument(time_s[i] > time_s[i - 1], "time_s", "not strictly increasing at entry " + std::to_string(i));
   // Grid hashing with cell size = radius: candidates lie in the 3 x 3 neighbouring cells.
   const double cell = options.radius_m;
-  auto key = [](int64_t ix, int64_t iy) { return (ix << 32) ^ (iy & 0xffffffffLL); };
+  auto key = [](int64_t ix, int64_t iy) {
+    return static_cast<int64_t>((static_cast<uint64_t>(ix) << 32) ^ (static_cast<uint64_t>(iy) & 0xffffffffULL));
+  };
   std::unordered_map<int64_t, std::vector<int>> grid;
   grid.reserve(static_cast<size_t>(n));
   std::vector<int64_t> cx(static_cast<size_t>(n)), cy(static_cast<size_t>(n));
   for (Eigen::Index i = 0; i < n; ++i) {
+    CheckArgument(std::abs(position_m(i, 0)) / cell < 1e15 && std::abs(position_m(i, 1)) / cell < 1e15, "position_m",
+                  "row " + std::to_string(i) + " is too far from the origin for radius_m");
     cx[static_cast<size_t>(i)] = static_cast<int64_t>(std::floor(position_m(i, 0) / cell));
     cy[static_cast<size_t>(i)] = static_cast<int64_t>(std::floor(position_m(i, 1) / cell));
     grid[key(cx[static_cast<size_t>(i)], cy[static_cast<size_t>(i)])].push_back(static_cast<int>(i));
