@@ -294,6 +294,6 @@ def simulate_flight(config: FlightConfig = FlightConfig(), seed: int = 0, noise:
 def small_config(**overrides) -> FlightConfig:
     """A flight of about two minutes at 50 Hz for tests and the demo (seconds to solve)."""
     base = dict(line_length_m=1200.0, n_lines=3, turn_radius_m=200.0, cross_margin_m=200.0, speed_mps=40.0,
-                accel_s=8.0, zupt_s=5.0, ramp_s=2.0, anomaly_width_m=(300.0, 700.0), height_wave_period_s=30.0)
+                accel_s=8.0, zupt_s=5.0, ramp_s=2.0, anomaly_width_m=(700.0, 1500.0), height_wave_period_s=30.0)
     base.update(overrides)
     return FlightConfig(**base)
