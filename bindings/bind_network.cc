@@ -134,6 +134,10 @@ sigmas of VEL, CUPT, ZUPT, GUPT, XOVER; solver tolerances; check_datum.)doc")
       .def_readwrite("acc_bias_walk_mps2_rts", &network::NetworkOptions::acc_bias_walk_mps2_rts)
       .def_readwrite("gyro_bias_walk_radps_rts", &network::NetworkOptions::gyro_bias_walk_radps_rts)
       .def_readwrite("gravity_walk_mps2_rts", &network::NetworkOptions::gravity_walk_mps2_rts)
+      .def_readwrite("acc_bias_correlation_time_s", &network::NetworkOptions::acc_bias_correlation_time_s,
+                     "0: random-walk accelerometer bias; > 0: first-order Gauss-Markov with this time [s].")
+      .def_readwrite("gyro_bias_correlation_time_s", &network::NetworkOptions::gyro_bias_correlation_time_s,
+                     "0: random-walk gyro bias; > 0: first-order Gauss-Markov with this time [s].")
       .def_readwrite("sigma_vel_mps", &network::NetworkOptions::sigma_vel_mps)
       .def_readwrite("sigma_gps_m", &network::NetworkOptions::sigma_gps_m)
       .def_readwrite("sigma_zupt_mps", &network::NetworkOptions::sigma_zupt_mps)

@@ -166,3 +166,23 @@ def test_selected_covariances_shrink_at_crossovers():
     assert "gravity_disturbance_sd_mps2" not in network.solve_flight(flight, o, xover=False)[0]
     with pytest.raises(ValueError, match="'gravity_covariance'"):
         o.gravity_covariance = "full"
+
+
+def test_gauss_markov_biases_na_agrees_with_the_smoother():
+    # The first-order Gauss-Markov bias option, in both approaches: NA without XOVER and the RTS
+    # smoother still solve the same problem (and differ from the random-walk solution).
+    flight = simulate_flight(_tiny(), seed=4)
+    rw = network.flight_options(flight.config)
+    gm = network.flight_options(flight.config, acc_bias_correlation_time_s=20.0, gyro_bias_correlation_time_s=20.0)
+    ssa, _, _ = network.smooth_flight(flight, gm, seed=4)
+    na, summary, _ = network.solve_flight(flight, gm, xover=False, initial=ssa)
+    na_rw, _, _ = network.solve_flight(flight, rw, xover=False, initial=ssa)
+    assert summary["termination"] == "converged"
+    t = flight.truth["gravity_disturbance_mps2"]
+    err = _rms(ssa["gravity_disturbance_mps2"] - t)
+    assert _rms(na["gravity_disturbance_mps2"] - ssa["gravity_disturbance_mps2"]) < 0.35 * err
+    assert _rms(na["acc_bias_mps2"] - na_rw["acc_bias_mps2"]) > 1e-7
+    bad = network.flight_options(flight.config, acc_bias_correlation_time_s=-1.0)
+    assert "acc_bias_correlation_time_s" in bad.is_valid()
+    with pytest.raises(ValueError, match="'options'.*acc_bias_correlation_time_s"):
+        network.solve_flight(flight, bad, xover=False, initial=ssa)

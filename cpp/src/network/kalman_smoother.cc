@@ -168,8 +168,21 @@ NetworkState RunKalmanSmoother(const NetworkObservations& obs, const NetworkStat
   Vec16 qd = Vec16::Zero();
   qd.segment<3>(kV).setConstant(model.acc_noise_mps2_rthz * model.acc_noise_mps2_rthz * dt);
   qd.segment<3>(kE).setConstant(model.gyro_noise_radps_rthz * model.gyro_noise_radps_rthz * dt);
-  qd.segment<3>(kA).setConstant(model.acc_bias_walk_mps2_rts * model.acc_bias_walk_mps2_rts * dt);
-  qd.segment<3>(kO).setConstant(model.gyro_bias_walk_radps_rts * model.gyro_bias_walk_radps_rts * dt);
+  // Bias models: random walk (τ = 0) or Gauss-Markov with φ = exp(-δt/τ), var = q² τ/2 (1 - φ²).
+  auto bias_model = [dt](double q, double tau, double* phi, double* var) {
+    if (tau <= 0.0) {
+      *phi = 1.0;
+      *var = q * q * dt;
+    } else {
+      *phi = std::exp(-dt / tau);
+      *var = q * q * 0.5 * tau * (1.0 - *phi * *phi);
+    }
+  };
+  double phi_a = 1.0, phi_o = 1.0, var_a = 0.0, var_o = 0.0;
+  bias_model(model.acc_bias_walk_mps2_rts, model.acc_bias_correlation_time_s, &phi_a, &var_a);
+  bias_model(model.gyro_bias_walk_radps_rts, model.gyro_bias_correlation_time_s, &phi_o, &var_o);
+  qd.segment<3>(kA).setConstant(var_a);
+  qd.segment<3>(kO).setConstant(var_o);
   qd[kG] = model.gravity_walk_mps2_rts * model.gravity_walk_mps2_rts * dt;
 
   NetworkState out = Allocate(n);
@@ -237,7 +250,10 @@ NetworkState RunKalmanSmoother(const NetworkObservations& obs, const NetworkStat
     fc.block<3, 3>(kE, kE) = -Skew(wie);
     fc.block<3, 3>(kE, kO) = -rot;
     const Mat16 fdt = fc * dt;
-    const Mat16 phi = Mat16::Identity() + fdt + 0.5 * fdt * fdt;
+    Mat16 phi = Mat16::Identity() + fdt + 0.5 * fdt * fdt;
+    // Gauss-Markov biases decay exactly: b[k+1] = φ b[k] (the bias rows have no other terms).
+    phi.block<3, 3>(kA, kA) = phi_a * Eigen::Matrix3d::Identity();
+    phi.block<3, 3>(kO, kO) = phi_o * Eigen::Matrix3d::Identity();
     // Nominal mechanisation (trapezoidal).
     const Eigen::Vector3d a0 = fn - 2.0 * wie.cross(x.v) + gravity(x.r.z(), x.dg);
     const Eigen::Quaterniond q1 =
@@ -249,6 +265,8 @@ NetworkState RunKalmanSmoother(const NetworkObservations& obs, const NetworkStat
     x.r += 0.5 * dt * (x.v + v1);
     x.v = v1;
     x.q = q1;
+    x.a *= phi_a;
+    x.o *= phi_o;
     const Mat16 p_prior = phi * p * phi.transpose() + Mat16(qd.asDiagonal());
     if (options.smooth) gains[static_cast<size_t>(k)] = p_prior.ldlt().solve(phi * p).transpose();
     p = 0.5 * (p_prior + p_prior.transpose());

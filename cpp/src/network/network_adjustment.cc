@@ -102,6 +102,17 @@ ceres::CostFunction* Auto(Functor f) {
   return new ceres::AutoDiffCostFunction<Functor, kRes, kSizes...>(new Functor(f));
 }
 
+/// AB / OB residual over a step dt: random walk (tau = 0) or Gauss-Markov.
+ceres::CostFunction* BiasModel(double q, double tau, double step) {
+  if (tau <= 0.0)
+    return new ceres::AutoDiffCostFunction<internal::RandomWalk<3>, 3, 3, 3>(
+        new internal::RandomWalk<3>{1.0 / (q * std::sqrt(step))});
+  const double phi = std::exp(-step / tau);
+  const double sigma = q * std::sqrt(0.5 * tau * (1.0 - phi * phi));
+  return new ceres::AutoDiffCostFunction<internal::GaussMarkov<3>, 3, 3, 3>(
+      new internal::GaussMarkov<3>{phi, 1.0 / sigma});
+}
+
 void CheckEpochs(const Eigen::VectorXi& epochs, int n, const char* name) {
   for (Eigen::Index i = 0; i < epochs.size(); ++i)
     CheckArgument(epochs[i] >= 0 && epochs[i] < n, name,
@@ -143,6 +154,10 @@ bool NetworkOptions::IsValid(std::string* error) const {
       {"initial_trust_region_radius", initial_trust_region_radius}};
   for (const auto& [name, value] : positive)
     if (!Positive(value)) return fail(std::string(name) + " must be finite and > 0");
+  if (!std::isfinite(acc_bias_correlation_time_s) || acc_bias_correlation_time_s < 0.0)
+    return fail("acc_bias_correlation_time_s must be >= 0 (0: random walk)");
+  if (!std::isfinite(gyro_bias_correlation_time_s) || gyro_bias_correlation_time_s < 0.0)
+    return fail("gyro_bias_correlation_time_s must be >= 0 (0: random walk)");
   if (!std::isfinite(gps_huber_threshold) || gps_huber_threshold < 0.0)
     return fail("gps_huber_threshold must be >= 0 (0: no robust loss)");
   if (max_iterations < 0) return fail("max_iterations must be >= 0");
@@ -347,11 +362,10 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
       gyro_ids.push_back(problem.AddResidualBlock(
           Auto<internal::WibLeapFrog, 3, 4, 4, 4, 3>({model.earth_rate_enu, w_at(i), step, 1.0 / sigma_w}), nullptr,
           b.Q(i - 1), b.Q(i + 1), b.Q(i), b.O(i)));
+      problem.AddResidualBlock(BiasModel(options.acc_bias_walk_mps2_rts, options.acc_bias_correlation_time_s, step),
+                               nullptr, b.A(i - 1), b.A(i + 1));
       problem.AddResidualBlock(
-          Auto<internal::RandomWalk<3>, 3, 3, 3>({1.0 / (options.acc_bias_walk_mps2_rts * walk)}), nullptr,
-          b.A(i - 1), b.A(i + 1));
-      problem.AddResidualBlock(
-          Auto<internal::RandomWalk<3>, 3, 3, 3>({1.0 / (options.gyro_bias_walk_radps_rts * walk)}), nullptr,
+          BiasModel(options.gyro_bias_walk_radps_rts, options.gyro_bias_correlation_time_s, step), nullptr,
           b.O(i - 1), b.O(i + 1));
       problem.AddResidualBlock(
           Auto<internal::RandomWalk<1>, 1, 1, 1>({1.0 / (options.gravity_walk_mps2_rts * walk)}), nullptr,
@@ -370,12 +384,10 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
                                                       {model.earth_rate_enu, 0.5 * (w_at(i) + w_at(i + 1)), dt,
                                                        1.0 / sigma_w}),
                                                   nullptr, b.Q(i), b.Q(i + 1), b.O(i), b.O(i + 1)));
-      problem.AddResidualBlock(
-          Auto<internal::RandomWalk<3>, 3, 3, 3>({1.0 / (options.acc_bias_walk_mps2_rts * walk)}), nullptr, b.A(i),
-          b.A(i + 1));
-      problem.AddResidualBlock(
-          Auto<internal::RandomWalk<3>, 3, 3, 3>({1.0 / (options.gyro_bias_walk_radps_rts * walk)}), nullptr,
-          b.O(i), b.O(i + 1));
+      problem.AddResidualBlock(BiasModel(options.acc_bias_walk_mps2_rts, options.acc_bias_correlation_time_s, dt),
+                               nullptr, b.A(i), b.A(i + 1));
+      problem.AddResidualBlock(BiasModel(options.gyro_bias_walk_radps_rts, options.gyro_bias_correlation_time_s, dt),
+                               nullptr, b.O(i), b.O(i + 1));
       problem.AddResidualBlock(
           Auto<internal::RandomWalk<1>, 1, 1, 1>({1.0 / (options.gravity_walk_mps2_rts * walk)}), nullptr, b.G(i),
           b.G(i + 1));

@@ -156,6 +156,17 @@ struct RandomWalk {
   }
 };
 
+/// AB, OB as first-order Gauss-Markov: (x_b - φ x_a) / σ, φ = exp(-Δt/τ).
+template <int kDim>
+struct GaussMarkov {
+  double phi, inv_sigma;
+  template <typename T>
+  bool operator()(const T* xa, const T* xb, T* res) const {
+    for (int i = 0; i < kDim; ++i) res[i] = (xb[i] - T(phi) * xa[i]) * T(inv_sigma);
+    return true;
+  }
+};
+
 /// CUPT between two epochs: ((1 - α) r[a] + α r[b] - p_gps) / σ.
 struct CuptInterpolated {
   Eigen::Vector3d p_gps;

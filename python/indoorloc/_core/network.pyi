@@ -19,6 +19,8 @@ class NetworkOptions:
     acc_bias_walk_mps2_rts: float
     gyro_bias_walk_radps_rts: float
     gravity_walk_mps2_rts: float
+    acc_bias_correlation_time_s: float
+    gyro_bias_correlation_time_s: float
     sigma_vel_mps: float
     sigma_gps_m: float
     sigma_zupt_mps: float

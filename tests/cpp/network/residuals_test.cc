@@ -125,6 +125,7 @@ TEST(NetworkResiduals, JacobiansMatchNumericalDifferentiation) {
   CheckFunctor<WibTrapezoidal, 3, 4, 4, 3, 3>({m.earth_rate_enu, w, 0.02, 100.0}, "WibTrapezoidal");
   CheckFunctor<RandomWalk<3>, 3, 3, 3>({1e3}, "RandomWalk<3>");
   CheckFunctor<RandomWalk<1>, 1, 1, 1>({1e3}, "RandomWalk<1>");
+  CheckFunctor<GaussMarkov<3>, 3, 3, 3>({0.99, 1e3}, "GaussMarkov<3>");
   CheckFunctor<Cupt, 3, 3>({Eigen::Vector3d(1, 2, 3), 50.0}, "Cupt");
   CheckFunctor<CuptInterpolated, 3, 3, 3>({Eigen::Vector3d(1, 2, 3), 0.3, 50.0}, "CuptInterpolated");
   CheckFunctor<Zupt, 3, 3>({1e3}, "Zupt");

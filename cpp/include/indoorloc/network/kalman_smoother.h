@@ -6,7 +6,8 @@
 // Mechanisation from epoch k to k+1 (trapezoidal, the same rule as the NA's trapezoidal option):
 //   R[k+1] = Exp(-ω_ie δt) R[k] Exp((ω[k] + ω[k+1]) / 2 - o) δt)
 //   a[k] = R[k] (f[k] - a) - 2 ω_ie × v[k] + g(h[k], δg),   v[k+1] = v[k] + δt (a[k] + a[k+1]) / 2
-//   r[k+1] = r[k] + δt (v[k] + v[k+1]) / 2;  biases and δg constant (random walks).
+//   r[k+1] = r[k] + δt (v[k] + v[k+1]) / 2;  δg constant, biases constant (random walks) or
+//   b[k+1] = φ b[k] (Gauss-Markov, NetworkOptions::*_correlation_time_s).
 // Error state δx = (δr, δv, ε, δa, δo, δδg) (16), R_true = Exp(ε) R̂:
 //   δṙ = δv,  δv̇ = -[R̂(f - a)]× ε - R̂ δa - 2 [ω_ie]× δv - e_up (γ'(h) δh + δδg),
 //   ε̇ = -ω_ie × ε - R̂ δo;  Φ = I + F δt + (F δt)² / 2,

@@ -13,7 +13,7 @@
 //   FB:   f[n] = R(q)ᵀ (Λ(v) + 2 ω_ie × v - g(r, δg)) + a
 //   WIB:  ω[n] = R(q)ᵀ ω_ie + Λ_q + o,   Λ_q = Log(q[n-1]⁻¹ q[n+1]) / 2δt  (leap-frog; this is the
 //               paper's 2 M_q(q)ᵀ Λ(q) written on the rotation manifold)
-//   AB, OB, GDT: 0 = Λ(a), Λ(o), Λ(δg)   (random walks)
+//   AB, OB, GDT: 0 = Λ(a), Λ(o), Λ(δg)   (random walks; biases optionally Gauss-Markov)
 // Leap-frog (paper): Λ(x, n) = (x[n+1] - x[n-1]) / 2δt, the other terms at epoch n, for
 // n = 1..N-2. It couples only epochs of the same parity: apart from the weak Coriolis and
 // normal-gravity-gradient terms, the network splits into two interleaved chains (the "weak
@@ -62,6 +62,11 @@ struct NetworkOptions {
   double acc_bias_walk_mps2_rts = 1e-6;    ///< accelerometer bias random walk [m/s^2/√s]
   double gyro_bias_walk_radps_rts = 1e-7;  ///< gyro bias random walk [rad/s/√s]
   double gravity_walk_mps2_rts = 2e-5;     ///< GDT: δg random walk along time [m/s^2/√s]
+  /// Bias models (F_acc, F_gyr of the paper): 0 = random walk (default); τ > 0 = first-order
+  /// Gauss-Markov ḃ = -b/τ + w with the same driving density q: b[k+1] = φ b[k] + w,
+  /// φ = exp(-Δt/τ), var(w) = q² τ/2 (1 - φ²) (steady-state sd q √(τ/2)).
+  double acc_bias_correlation_time_s = 0.0;
+  double gyro_bias_correlation_time_s = 0.0;
   /// VEL pseudo-observation sd [m/s]: a kinematic identity, so tight; a loose VEL lets v absorb
   /// the FB noise (the accelerometer group then has no redundancy, see variance components).
   double sigma_vel_mps = 1e-5;
