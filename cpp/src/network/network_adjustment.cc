@@ -540,7 +540,7 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
         crs.num_rows, crs.num_cols, static_cast<Eigen::Index>(crs.values.size()), crs.rows.data(), crs.cols.data(),
         crs.values.data());
     const Eigen::MatrixXd inverse = DenseInverseOfNormal(jac);
-    auto group = [&](const std::vector<ceres::ResidualBlockId>& ids, double* factor, double* redundancy) {
+    auto group = [&](const std::vector<ceres::ResidualBlockId>& ids, double* factor, double* group_redundancy) {
       if (ids.empty()) return;
       ceres::Problem::EvaluateOptions ge = eo;
       ge.residual_blocks = ids;
@@ -557,8 +557,8 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
             trace += jg.values[a] * jg.values[bb] * inverse(jg.cols[a], jg.cols[bb]);
       double vtv = 0.0;
       for (double x : v) vtv += x * x;
-      *redundancy = static_cast<double>(v.size()) - trace;
-      *factor = *redundancy > 0.0 ? vtv / *redundancy : 0.0;
+      *group_redundancy = static_cast<double>(v.size()) - trace;
+      *factor = *group_redundancy > 0.0 ? vtv / *group_redundancy : 0.0;
     };
     group(acc_ids, &s.variance_factor_acc, &s.redundancy_acc);
     group(gyro_ids, &s.variance_factor_gyro, &s.redundancy_gyro);
