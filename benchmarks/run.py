@@ -15,7 +15,8 @@ import sys
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-BENCHMARKS = ["bench_resampling", "bench_wifi", "bench_mapmatch", "bench_analog", "bench_pdr", "bench_network_scale"]
+BENCHMARKS = ["bench_resampling", "bench_wifi", "bench_mapmatch", "bench_analog", "bench_pdr", "bench_network",
+              "bench_network_scale"]
 
 
 def main() -> int:

@@ -66,7 +66,7 @@ void BindNetworkScale(py::module_& m) {
       },
       py::arg("imu_rate_hz") = 50.0, py::arg("duration_s") = 600.0, py::arg("gps_rate_hz") = 2.0,
       py::arg("rule") = "leapfrog", py::arg("lines") = 10, py::arg("cross_lines") = 10,
-      py::arg("sigma_xover_mps2") = 1e-5, py::arg("max_iterations") = 1000, py::arg("relative_tolerance") = 1e-10, R"doc(
+      py::arg("sigma_xover_mps2") = 1e-5, py::arg("max_iterations") = 1000, py::arg("relative_tolerance") = 1e-8, R"doc(
 The linearised INS/GPS network with cross-over ties of a grid survey (`lines` East-West lines,
 then `cross_lines` North-South lines; each crossing ties the three δg unknowns), solved by
 conjugate gradients preconditioned with the stored banded factor. Paper Table 2 case 4:

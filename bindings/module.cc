@@ -13,6 +13,7 @@ void BindAnalog(py::module_& m);
 void BindCore(py::module_& m);
 void BindMapmatch(py::module_& m);
 void BindNetworkScale(py::module_& m);
+void BindNetwork(py::module_& m);
 void BindPdr(py::module_& m);
 void BindWifi(py::module_& m);
 void BindWifiBaselines(py::module_& m);
@@ -34,6 +35,7 @@ PYBIND11_MODULE(_core, m) {
   indoorloc::bindings::BindPdr(pdr);
   py::module_ network = m.def_submodule("network", "INS/GPS network adjustment (paper 003).");
   indoorloc::bindings::BindNetworkScale(network);
+  indoorloc::bindings::BindNetwork(network);
   py::module_ wifi = m.def_submodule("wifi", "RSS signal maps, Delaunay interpolation, gradient tracker (paper 004).");
   indoorloc::bindings::BindWifi(wifi);
   indoorloc::bindings::BindWifiBaselines(wifi);

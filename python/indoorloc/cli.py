@@ -88,6 +88,12 @@ def _add_mapmatch(sub: argparse._SubParsersAction) -> None:
     cli_mapmatch.add_parser(sub, quiet_parent)
 
 
+def _add_network(sub: argparse._SubParsersAction) -> None:
+    from indoorloc import cli_network
+
+    cli_network.add_parser(sub, quiet_parent)
+
+
 def _add_pdr(sub: argparse._SubParsersAction) -> None:
     from indoorloc import cli_pdr
 
@@ -101,7 +107,7 @@ def _add_wifi(sub: argparse._SubParsersAction) -> None:
 
 
 # Subsystems register `add(subparsers)` functions here.
-_SUBCOMMANDS: List[Callable[[argparse._SubParsersAction], None]] = [_add_core, _add_analog, _add_mapmatch, _add_pdr, _add_wifi]
+_SUBCOMMANDS: List[Callable[[argparse._SubParsersAction], None]] = [_add_core, _add_analog, _add_mapmatch, _add_network, _add_pdr, _add_wifi]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -67,6 +67,7 @@ def _load_builtin_demos() -> None:
     from indoorloc.experiments import analog_demo  # noqa: F401
     from indoorloc.experiments import core_resampling  # noqa: F401
     from indoorloc.experiments import mapmatch_reproduce  # noqa: F401
+    from indoorloc.experiments import network_reproduce  # noqa: F401
     from indoorloc.experiments import pdr_demo  # noqa: F401
     from indoorloc.experiments import wifi_simulation  # noqa: F401
 

@@ -179,3 +179,19 @@ def pdr_paths(figure8_xy, trial_name: str, trial_xy, truth_xy, path: Path) -> Pa
     fig.savefig(path)
     plt.close(fig)
     return Path(path)
+
+
+def network_gravity_line(x_m, truth_mgal, series_mgal: Mapping[str, object], path: Path) -> Path:
+    """δg along one flight line: truth and each method's estimate [mGal] against East [m]."""
+    fig, ax = plt.subplots(figsize=(8, 4))
+    ax.plot(x_m, truth_mgal, "k-", lw=2.0, label="truth")
+    for name, values in series_mgal.items():
+        ax.plot(x_m, values, lw=1.0, label=name)
+    ax.set_xlabel("East [m]")
+    ax.set_ylabel("gravity disturbance [mGal]")
+    ax.grid(True, alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path

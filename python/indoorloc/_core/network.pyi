@@ -1,5 +1,7 @@
-# Stubs of indoorloc._core.network: the scale path (linearised INS/GPS network, block-tridiagonal solver).
-from typing import Dict, Tuple
+# Stubs of indoorloc._core.network: INS/GPS network adjustment, the Kalman smoother baseline,
+# the cross-over finder and normal gravity (paper 003); and the scale path (linearised INS/GPS
+# network, block-tridiagonal solver, cross-over PCG).
+from typing import Any, Dict, Optional, Tuple
 
 import numpy as np
 import numpy.typing as npt
@@ -37,5 +39,87 @@ def solve_linear_ins_network_with_crossovers(
     cross_lines: int = 10,
     sigma_xover_mps2: float = 1e-5,
     max_iterations: int = 1000,
-    relative_tolerance: float = 1e-10,
+    relative_tolerance: float = 1e-8,
 ) -> Dict[str, object]: ...
+_ArrayLike = npt.ArrayLike
+_F64 = npt.NDArray[np.float64]
+_State = Dict[str, _F64]
+
+class NetworkOptions:
+    discretization: str
+    latitude_rad: float
+    origin_height_m: float
+    earth_rate_radps: float
+    acc_noise_mps2_rthz: float
+    gyro_noise_radps_rthz: float
+    acc_bias_walk_mps2_rts: float
+    gyro_bias_walk_radps_rts: float
+    gravity_walk_mps2_rts: float
+    acc_bias_correlation_time_s: float
+    gyro_bias_correlation_time_s: float
+    sigma_vel_mps: float
+    sigma_gps_m: float
+    sigma_zupt_mps: float
+    sigma_gupt_mps2: float
+    sigma_xover_mps2: float
+    gps_huber_threshold: float
+    max_iterations: int
+    initial_trust_region_radius: float
+    function_tolerance: float
+    gradient_tolerance: float
+    parameter_tolerance: float
+    num_threads: int
+    check_datum: bool
+    datum_pivot_tolerance: float
+    gravity_covariance: str
+    variance_components: bool
+    def __init__(self) -> None: ...
+    def is_valid(self) -> str: ...
+
+class KalmanSmootherOptions:
+    init_sigma_position_m: float
+    init_sigma_velocity_mps: float
+    init_sigma_level_rad: float
+    init_sigma_heading_rad: float
+    init_sigma_acc_bias_mps2: float
+    init_sigma_gyro_bias_radps: float
+    init_sigma_gravity_mps2: float
+    smooth: bool
+    def __init__(self) -> None: ...
+
+def solve_network(
+    imu_time_s: _ArrayLike,
+    acc_body_mps2: _ArrayLike,
+    gyro_body_radps: _ArrayLike,
+    gps_time_s: _ArrayLike,
+    gps_position_m: _ArrayLike,
+    initial: Dict[str, _ArrayLike],
+    zupt_epochs: Optional[_ArrayLike] = None,
+    gupt_epochs: Optional[_ArrayLike] = None,
+    gupt_gravity_mps2: Optional[_ArrayLike] = None,
+    xover_epochs: Optional[_ArrayLike] = None,
+    options: NetworkOptions = ...,
+) -> Tuple[_State, Dict[str, Any]]: ...
+def kalman_smoother(
+    imu_time_s: _ArrayLike,
+    acc_body_mps2: _ArrayLike,
+    gyro_body_radps: _ArrayLike,
+    gps_time_s: _ArrayLike,
+    gps_position_m: _ArrayLike,
+    initial: Dict[str, _ArrayLike],
+    zupt_epochs: Optional[_ArrayLike] = None,
+    gupt_epochs: Optional[_ArrayLike] = None,
+    gupt_gravity_mps2: Optional[_ArrayLike] = None,
+    xover_epochs: Optional[_ArrayLike] = None,
+    model: NetworkOptions = ...,
+    options: KalmanSmootherOptions = ...,
+) -> Tuple[_State, _State, Dict[str, Any]]: ...
+def find_crossovers(
+    time_s: _ArrayLike,
+    position_m: _ArrayLike,
+    radius_m: float = 5.0,
+    max_height_difference_m: float = 50.0,
+    min_separation_s: float = 30.0,
+) -> npt.NDArray[np.int32]: ...
+def normal_gravity(latitude_rad: float, height_m: _ArrayLike) -> _F64: ...
+def earth_rate_enu(latitude_rad: float) -> _F64: ...

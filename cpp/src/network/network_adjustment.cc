@@ -1,0 +1,610 @@
+// INS/GPS network adjustment (paper 003 §3): builds the Ceres problem from the residuals of
+// residuals.h and solves it with SPARSE_NORMAL_CHOLESKY (SuiteSparse). See the header.
+#include "indoorloc/network/network_adjustment.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <sstream>
+#include <vector>
+
+#include <ceres/ceres.h>
+#include <Eigen/SparseCholesky>
+#include <Eigen/Dense>
+#include <Eigen/SparseCore>
+
+#include "indoorloc/core/check.h"
+#include "indoorloc/network/gravity.h"
+#include "residuals.h"
+
+namespace indoorloc::network {
+
+namespace {
+
+bool Positive(double x) { return std::isfinite(x) && x > 0.0; }
+
+constexpr int kParamsPerEpoch = 16;  // r 3, v 3, q 3 (tangent), a 3, o 3, δg 1
+const char* BlockName(int offset) {
+  if (offset < 3) return "position";
+  if (offset < 6) return "velocity";
+  if (offset < 9) return "attitude";
+  if (offset < 12) return "acc_bias";
+  if (offset < 15) return "gyro_bias";
+  return "gravity_disturbance";
+}
+
+/// Parameter storage of the whole network.
+struct Blocks {
+  int n = 0;
+  std::vector<double> r, v, q, a, o, dg;  // q in x, y, z, w
+  double* R(int i) { return &r[3 * i]; }
+  double* V(int i) { return &v[3 * i]; }
+  double* Q(int i) { return &q[4 * i]; }
+  double* A(int i) { return &a[3 * i]; }
+  double* O(int i) { return &o[3 * i]; }
+  double* G(int i) { return &dg[i]; }
+};
+
+Blocks FromState(const NetworkState& s) {
+  Blocks b;
+  b.n = static_cast<int>(s.position_m.rows());
+  b.r.resize(3 * b.n);
+  b.v.resize(3 * b.n);
+  b.q.resize(4 * b.n);
+  b.a.resize(3 * b.n);
+  b.o.resize(3 * b.n);
+  b.dg.resize(b.n);
+  for (int i = 0; i < b.n; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      b.r[3 * i + k] = s.position_m(i, k);
+      b.v[3 * i + k] = s.velocity_mps(i, k);
+      b.a[3 * i + k] = s.acc_bias_mps2(i, k);
+      b.o[3 * i + k] = s.gyro_bias_radps(i, k);
+    }
+    Eigen::Quaterniond q(s.attitude_wxyz(i, 0), s.attitude_wxyz(i, 1), s.attitude_wxyz(i, 2), s.attitude_wxyz(i, 3));
+    q.normalize();
+    b.q[4 * i + 0] = q.x();
+    b.q[4 * i + 1] = q.y();
+    b.q[4 * i + 2] = q.z();
+    b.q[4 * i + 3] = q.w();
+    b.dg[i] = s.gravity_disturbance_mps2[i];
+  }
+  return b;
+}
+
+NetworkState ToState(const Blocks& b) {
+  NetworkState s;
+  s.position_m.resize(b.n, 3);
+  s.velocity_mps.resize(b.n, 3);
+  s.attitude_wxyz.resize(b.n, 4);
+  s.acc_bias_mps2.resize(b.n, 3);
+  s.gyro_bias_radps.resize(b.n, 3);
+  s.gravity_disturbance_mps2.resize(b.n);
+  for (int i = 0; i < b.n; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      s.position_m(i, k) = b.r[3 * i + k];
+      s.velocity_mps(i, k) = b.v[3 * i + k];
+      s.acc_bias_mps2(i, k) = b.a[3 * i + k];
+      s.gyro_bias_radps(i, k) = b.o[3 * i + k];
+    }
+    s.attitude_wxyz(i, 0) = b.q[4 * i + 3];
+    s.attitude_wxyz(i, 1) = b.q[4 * i + 0];
+    s.attitude_wxyz(i, 2) = b.q[4 * i + 1];
+    s.attitude_wxyz(i, 3) = b.q[4 * i + 2];
+    s.gravity_disturbance_mps2[i] = b.dg[i];
+  }
+  return s;
+}
+
+template <typename Functor, int kRes, int... kSizes>
+ceres::CostFunction* Auto(Functor f) {
+  return new ceres::AutoDiffCostFunction<Functor, kRes, kSizes...>(new Functor(f));
+}
+
+/// AB / OB residual over a step dt: random walk (tau = 0) or Gauss-Markov.
+ceres::CostFunction* BiasModel(double q, double tau, double step) {
+  if (tau <= 0.0)
+    return new ceres::AutoDiffCostFunction<internal::RandomWalk<3>, 3, 3, 3>(
+        new internal::RandomWalk<3>{1.0 / (q * std::sqrt(step))});
+  const double phi = std::exp(-step / tau);
+  const double sigma = q * std::sqrt(0.5 * tau * (1.0 - phi * phi));
+  return new ceres::AutoDiffCostFunction<internal::GaussMarkov<3>, 3, 3, 3>(
+      new internal::GaussMarkov<3>{phi, 1.0 / sigma});
+}
+
+void CheckEpochs(const Eigen::VectorXi& epochs, int n, const char* name) {
+  for (Eigen::Index i = 0; i < epochs.size(); ++i)
+    CheckArgument(epochs[i] >= 0 && epochs[i] < n, name,
+                  "entry " + std::to_string(i) + " = " + std::to_string(epochs[i]) + " is not an epoch in [0, " +
+                      std::to_string(n) + ")");
+}
+
+/// (JᵀJ)⁻¹ as a dense matrix: sparse LDLᵀ (AMD) of JᵀJ, then n solves (O(n nnz(L)), n² memory).
+template <typename Jacobian>
+Eigen::MatrixXd DenseInverseOfNormal(const Jacobian& jac) {
+  const Eigen::SparseMatrix<double> normal = Eigen::SparseMatrix<double>(jac.transpose()) * jac;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt(normal);
+  if (ldlt.info() != Eigen::Success)
+    throw std::runtime_error("indoorloc: network: the normal matrix at the solution is singular");
+  return ldlt.solve(Eigen::MatrixXd::Identity(normal.rows(), normal.cols()));
+}
+
+constexpr long kMaxDenseUnknowns = 8000;  // n² doubles: 0.5 GB
+
+}  // namespace
+
+bool NetworkOptions::IsValid(std::string* error) const {
+  auto fail = [error](const std::string& m) {
+    if (error) *error = m;
+    return false;
+  };
+  if (!std::isfinite(latitude_rad) || std::abs(latitude_rad) > 1.5707963267948966)
+    return fail("latitude_rad must be in [-pi/2, pi/2]");
+  if (!std::isfinite(origin_height_m)) return fail("origin_height_m must be finite");
+  if (!std::isfinite(earth_rate_radps) || earth_rate_radps < 0.0) return fail("earth_rate_radps must be >= 0");
+  const std::pair<const char*, double> positive[] = {
+      {"acc_noise_mps2_rthz", acc_noise_mps2_rthz},       {"gyro_noise_radps_rthz", gyro_noise_radps_rthz},
+      {"acc_bias_walk_mps2_rts", acc_bias_walk_mps2_rts}, {"gyro_bias_walk_radps_rts", gyro_bias_walk_radps_rts},
+      {"gravity_walk_mps2_rts", gravity_walk_mps2_rts},   {"sigma_vel_mps", sigma_vel_mps},
+      {"sigma_gps_m", sigma_gps_m},                       {"sigma_zupt_mps", sigma_zupt_mps},
+      {"sigma_gupt_mps2", sigma_gupt_mps2},               {"sigma_xover_mps2", sigma_xover_mps2},
+      {"function_tolerance", function_tolerance},         {"gradient_tolerance", gradient_tolerance},
+      {"parameter_tolerance", parameter_tolerance},       {"datum_pivot_tolerance", datum_pivot_tolerance},
+      {"initial_trust_region_radius", initial_trust_region_radius}};
+  for (const auto& [name, value] : positive)
+    if (!Positive(value)) return fail(std::string(name) + " must be finite and > 0");
+  if (!std::isfinite(acc_bias_correlation_time_s) || acc_bias_correlation_time_s < 0.0)
+    return fail("acc_bias_correlation_time_s must be >= 0 (0: random walk)");
+  if (!std::isfinite(gyro_bias_correlation_time_s) || gyro_bias_correlation_time_s < 0.0)
+    return fail("gyro_bias_correlation_time_s must be >= 0 (0: random walk)");
+  if (!std::isfinite(gps_huber_threshold) || gps_huber_threshold < 0.0)
+    return fail("gps_huber_threshold must be >= 0 (0: no robust loss)");
+  if (max_iterations < 0) return fail("max_iterations must be >= 0");
+  if (num_threads < 1) return fail("num_threads must be >= 1");
+  if (!std::isfinite(initial_trust_region_radius) || initial_trust_region_radius <= 0.0)
+    return fail("initial_trust_region_radius must be finite and > 0");
+  return true;
+}
+
+NetworkState EstimateVarianceComponents(const NetworkObservations& observations, const NetworkState& initial,
+                                        const NetworkOptions& options, NetworkOptions* estimated,
+                                        NetworkSummary* summary, int iterations, double tolerance) {
+  CheckArgument(iterations >= 1, "iterations", "must be >= 1");
+  CheckArgument(std::isfinite(tolerance) && tolerance > 0.0, "tolerance", "must be finite and > 0");
+  NetworkOptions o = options;
+  o.variance_components = true;
+  o.gps_huber_threshold = 0.0;
+  NetworkState state = initial;
+  NetworkSummary s;
+  for (int k = 0; k < iterations; ++k) {
+    state = SolveNetwork(observations, state, o, &s);
+    o.check_datum = false;  // checked on the first solve; reweighting does not change the rank
+    if (s.variance_factor_acc > 0.0) o.acc_noise_mps2_rthz *= std::sqrt(s.variance_factor_acc);
+    if (s.variance_factor_gyro > 0.0) o.gyro_noise_radps_rthz *= std::sqrt(s.variance_factor_gyro);
+    if (s.variance_factor_gps > 0.0) o.sigma_gps_m *= std::sqrt(s.variance_factor_gps);
+    if (std::abs(s.variance_factor_acc - 1.0) < tolerance && std::abs(s.variance_factor_gyro - 1.0) < tolerance &&
+        std::abs(s.variance_factor_gps - 1.0) < tolerance)
+      break;
+  }
+  o.variance_components = options.variance_components;
+  o.check_datum = options.check_datum;
+  if (estimated) *estimated = o;
+  if (summary) *summary = s;
+  return state;
+}
+
+bool CrossoverOptions::IsValid(std::string* error) const {
+  if (!Positive(radius_m)) {
+    if (error) *error = "radius_m must be > 0";
+    return false;
+  }
+  if (!Positive(max_height_difference_m)) {
+    if (error) *error = "max_height_difference_m must be > 0";
+    return false;
+  }
+  if (!std::isfinite(min_separation_s) || min_separation_s < 0.0) {
+    if (error) *error = "min_separation_s must be >= 0";
+    return false;
+  }
+  return true;
+}
+
+std::string NetworkSummary::BriefReport() const {
+  std::ostringstream s;
+  s << "network: " << ToString(termination) << ", " << iterations << " iterations, cost " << initial_cost << " -> "
+    << final_cost << ", " << num_epochs << " epochs, " << num_parameters << " unknowns, " << num_residuals
+    << " residuals, " << num_xover << " cross-overs, " << seconds_total << " s (solve " << seconds_solve
+    << " s, datum check " << seconds_datum_check << " s, covariance " << seconds_covariance
+    << " s), variance factor " << variance_factor;
+  return s.str();
+}
+
+void CheckNetworkInput(const NetworkObservations& obs, const NetworkState& state) {
+  const Eigen::Index n = obs.imu_time_s.size();
+  CheckArgument(n >= 3, "imu_time_s", "needs at least 3 epochs, got " + std::to_string(n));
+  CheckFinite(obs.imu_time_s, "imu_time_s");
+  const double dt = (obs.imu_time_s[n - 1] - obs.imu_time_s[0]) / static_cast<double>(n - 1);
+  for (Eigen::Index i = 1; i < n; ++i) {
+    const double step = obs.imu_time_s[i] - obs.imu_time_s[i - 1];
+    CheckArgument(step > 0.0, "imu_time_s",
+                  "not strictly increasing at entry " + std::to_string(i));
+    CheckArgument(std::abs(step - dt) <= 1e-6 * dt + 1e-9, "imu_time_s",
+                  "not uniformly sampled at entry " + std::to_string(i) + " (step " + std::to_string(step) +
+                      " s, mean " + std::to_string(dt) + " s)");
+  }
+  CheckShape(obs.acc_body_mps2, n, 3, "acc_body_mps2");
+  CheckFinite(obs.acc_body_mps2, "acc_body_mps2");
+  CheckShape(obs.gyro_body_radps, n, 3, "gyro_body_radps");
+  CheckFinite(obs.gyro_body_radps, "gyro_body_radps");
+  const Eigen::Index m = obs.gps_time_s.size();
+  CheckShape(obs.gps_position_m, m, 3, "gps_position_m");
+  CheckFinite(obs.gps_time_s, "gps_time_s");
+  CheckFinite(obs.gps_position_m, "gps_position_m");
+  for (Eigen::Index i = 0; i < m; ++i) {
+    const double t = obs.gps_time_s[i];
+    CheckArgument(t >= obs.imu_time_s[0] - 1e-9 && t <= obs.imu_time_s[n - 1] + 1e-9, "gps_time_s",
+                  "entry " + std::to_string(i) + " = " + std::to_string(t) + " s is outside the IMU span [" +
+                      std::to_string(obs.imu_time_s[0]) + ", " + std::to_string(obs.imu_time_s[n - 1]) + "] s");
+    if (i > 0)
+      CheckArgument(t > obs.gps_time_s[i - 1], "gps_time_s", "not strictly increasing at entry " + std::to_string(i));
+  }
+  CheckEpochs(obs.zupt_epochs, static_cast<int>(n), "zupt_epochs");
+  CheckEpochs(obs.gupt_epochs, static_cast<int>(n), "gupt_epochs");
+  CheckShape(obs.gupt_gravity_mps2, obs.gupt_epochs.size(), 1, "gupt_gravity_mps2");
+  CheckFinite(obs.gupt_gravity_mps2, "gupt_gravity_mps2");
+  for (Eigen::Index i = 0; i < obs.xover_epochs.rows(); ++i) {
+    for (int k = 0; k < 2; ++k)
+      CheckArgument(obs.xover_epochs(i, k) >= 0 && obs.xover_epochs(i, k) < n, "xover_epochs",
+                    "row " + std::to_string(i) + " has an epoch outside [0, " + std::to_string(n) + ")");
+    CheckArgument(obs.xover_epochs(i, 0) != obs.xover_epochs(i, 1), "xover_epochs",
+                  "row " + std::to_string(i) + " ties an epoch to itself");
+  }
+  CheckShape(state.position_m, n, 3, "initial position_m");
+  CheckShape(state.velocity_mps, n, 3, "initial velocity_mps");
+  CheckShape(state.attitude_wxyz, n, 4, "initial attitude_wxyz");
+  CheckShape(state.acc_bias_mps2, n, 3, "initial acc_bias_mps2");
+  CheckShape(state.gyro_bias_radps, n, 3, "initial gyro_bias_radps");
+  CheckShape(state.gravity_disturbance_mps2, n, 1, "initial gravity_disturbance_mps2");
+  CheckFinite(state.position_m, "initial position_m");
+  CheckFinite(state.velocity_mps, "initial velocity_mps");
+  CheckFinite(state.attitude_wxyz, "initial attitude_wxyz");
+  CheckFinite(state.acc_bias_mps2, "initial acc_bias_mps2");
+  CheckFinite(state.gyro_bias_radps, "initial gyro_bias_radps");
+  CheckFinite(state.gravity_disturbance_mps2, "initial gravity_disturbance_mps2");
+  for (Eigen::Index i = 0; i < n; ++i)
+    CheckArgument(state.attitude_wxyz.row(i).norm() > 0.5, "initial attitude_wxyz",
+                  "row " + std::to_string(i) + " is not a unit quaternion");
+}
+
+NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& initial, const NetworkOptions& options,
+                          NetworkSummary* summary) {
+  WallTimer total;
+  ValidateOptions(options);
+  CheckNetworkInput(obs, initial);
+  const int n = static_cast<int>(obs.imu_time_s.size());
+  const double dt = (obs.imu_time_s[n - 1] - obs.imu_time_s[0]) / (n - 1);
+  const bool leap = options.discretization == Discretization::kLeapFrog;
+
+  // Structural datum checks (cheap, before any work).
+  CheckArgument(obs.gps_time_s.size() > 0, "gps_position_m",
+                "datum defect: no CUPT (GPS) observations, the position of the network is not determined");
+  struct GpsTie {
+    int a;
+    double alpha;
+  };
+  std::vector<GpsTie> ties;
+  bool parity_has_cupt[2] = {false, false};
+  for (Eigen::Index i = 0; i < obs.gps_time_s.size(); ++i) {
+    const double u = (obs.gps_time_s[i] - obs.imu_time_s[0]) / dt;
+    int a = std::clamp(static_cast<int>(std::floor(u)), 0, n - 2);
+    double alpha = u - a;
+    if (alpha < 1e-9) alpha = 0.0;
+    if (alpha > 1.0 - 1e-9) {
+      a += 1;
+      alpha = 0.0;
+      if (a == n - 1) {  // the last epoch: tie as (n-2, α = 1)
+        a = n - 2;
+        alpha = 1.0;
+      }
+    }
+    ties.push_back({a, alpha});
+    if (alpha < 1.0) parity_has_cupt[a % 2] = true;
+    if (alpha > 0.0) parity_has_cupt[(a + 1) % 2] = true;
+  }
+  if (leap)
+    CheckArgument(parity_has_cupt[0] && parity_has_cupt[1], "gps_time_s",
+                  std::string("datum defect of the leap-frog network: every CUPT falls on ") +
+                      (parity_has_cupt[0] ? "even" : "odd") + " epochs, so the " +
+                      (parity_has_cupt[0] ? "odd" : "even") +
+                      "-epoch chain has no position datum (leap-frog couples only epochs of equal parity); "
+                      "use the trapezoidal discretisation or GPS times on both parities");
+
+  Blocks b = FromState(initial);
+  internal::ModelConstants model;
+  model.earth_rate_enu = EarthRateEnu(options.latitude_rad) * (options.earth_rate_radps / kEarthRateRadps);
+  const Eigen::Vector3d gc = NormalGravityCoefficients(options.latitude_rad);
+  model.gamma0 = gc[0];
+  model.c1 = gc[1];
+  model.c2 = gc[2];
+  model.origin_height_m = options.origin_height_m;
+
+  ceres::Problem::Options popts;
+  popts.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::EigenQuaternionManifold quaternion_manifold;
+  ceres::Problem problem(popts);
+  std::vector<double*> ordered_blocks;
+  ordered_blocks.reserve(6 * n);
+  for (int i = 0; i < n; ++i) {
+    problem.AddParameterBlock(b.R(i), 3);
+    problem.AddParameterBlock(b.V(i), 3);
+    problem.AddParameterBlock(b.Q(i), 4, &quaternion_manifold);
+    problem.AddParameterBlock(b.A(i), 3);
+    problem.AddParameterBlock(b.O(i), 3);
+    problem.AddParameterBlock(b.G(i), 1);
+    for (double* p : {b.R(i), b.V(i), b.Q(i), b.A(i), b.O(i), b.G(i)}) ordered_blocks.push_back(p);
+  }
+
+  std::vector<ceres::ResidualBlockId> acc_ids, gyro_ids, gps_ids;
+  const double sigma_f = options.acc_noise_mps2_rthz / std::sqrt(dt);
+  const double sigma_w = options.gyro_noise_radps_rthz / std::sqrt(dt);
+  auto f_at = [&](int i) { return Eigen::Vector3d(obs.acc_body_mps2.row(i).transpose()); };
+  auto w_at = [&](int i) { return Eigen::Vector3d(obs.gyro_body_radps.row(i).transpose()); };
+  if (leap) {
+    const double step = 2.0 * dt;
+    const double walk = std::sqrt(step);
+    for (int i = 1; i + 1 < n; ++i) {
+      problem.AddResidualBlock(Auto<internal::VelLeapFrog, 3, 3, 3, 3>({step, 1.0 / options.sigma_vel_mps}), nullptr,
+                               b.R(i - 1), b.R(i + 1), b.V(i));
+      acc_ids.push_back(problem.AddResidualBlock(
+          Auto<internal::FbLeapFrog, 3, 3, 3, 3, 4, 3, 3, 1>({model, f_at(i), step, 1.0 / sigma_f}), nullptr,
+          b.V(i - 1), b.V(i + 1), b.V(i), b.Q(i), b.R(i), b.A(i), b.G(i)));
+      gyro_ids.push_back(problem.AddResidualBlock(
+          Auto<internal::WibLeapFrog, 3, 4, 4, 4, 3>({model.earth_rate_enu, w_at(i), step, 1.0 / sigma_w}), nullptr,
+          b.Q(i - 1), b.Q(i + 1), b.Q(i), b.O(i)));
+      problem.AddResidualBlock(BiasModel(options.acc_bias_walk_mps2_rts, options.acc_bias_correlation_time_s, step),
+                               nullptr, b.A(i - 1), b.A(i + 1));
+      problem.AddResidualBlock(
+          BiasModel(options.gyro_bias_walk_radps_rts, options.gyro_bias_correlation_time_s, step), nullptr,
+          b.O(i - 1), b.O(i + 1));
+      problem.AddResidualBlock(
+          Auto<internal::RandomWalk<1>, 1, 1, 1>({1.0 / (options.gravity_walk_mps2_rts * walk)}), nullptr,
+          b.G(i - 1), b.G(i + 1));
+    }
+  } else {
+    const double walk = std::sqrt(dt);
+    for (int i = 0; i + 1 < n; ++i) {
+      problem.AddResidualBlock(Auto<internal::VelTrapezoidal, 3, 3, 3, 3, 3>({dt, 1.0 / options.sigma_vel_mps}),
+                               nullptr, b.R(i), b.R(i + 1), b.V(i), b.V(i + 1));
+      acc_ids.push_back(problem.AddResidualBlock(Auto<internal::FbTrapezoidal, 3, 3, 3, 4, 4, 3, 3, 3, 3, 1, 1>(
+                                                     {model, f_at(i), f_at(i + 1), dt, 1.0 / sigma_f}),
+                                                 nullptr, b.V(i), b.V(i + 1), b.Q(i), b.Q(i + 1), b.R(i), b.R(i + 1),
+                                                 b.A(i), b.A(i + 1), b.G(i), b.G(i + 1)));
+      gyro_ids.push_back(problem.AddResidualBlock(Auto<internal::WibTrapezoidal, 3, 4, 4, 3, 3>(
+                                                      {model.earth_rate_enu, 0.5 * (w_at(i) + w_at(i + 1)), dt,
+                                                       1.0 / sigma_w}),
+                                                  nullptr, b.Q(i), b.Q(i + 1), b.O(i), b.O(i + 1)));
+      problem.AddResidualBlock(BiasModel(options.acc_bias_walk_mps2_rts, options.acc_bias_correlation_time_s, dt),
+                               nullptr, b.A(i), b.A(i + 1));
+      problem.AddResidualBlock(BiasModel(options.gyro_bias_walk_radps_rts, options.gyro_bias_correlation_time_s, dt),
+                               nullptr, b.O(i), b.O(i + 1));
+      problem.AddResidualBlock(
+          Auto<internal::RandomWalk<1>, 1, 1, 1>({1.0 / (options.gravity_walk_mps2_rts * walk)}), nullptr, b.G(i),
+          b.G(i + 1));
+    }
+  }
+  // Static observations.
+  const bool huber = options.gps_huber_threshold > 0.0;  // the Problem owns each loss
+  for (Eigen::Index i = 0; i < obs.gps_time_s.size(); ++i) {
+    const Eigen::Vector3d p = obs.gps_position_m.row(i).transpose();
+    const GpsTie& t = ties[static_cast<size_t>(i)];
+    ceres::LossFunction* loss = huber ? new ceres::HuberLoss(options.gps_huber_threshold) : nullptr;
+    if (t.alpha == 0.0)
+      gps_ids.push_back(
+          problem.AddResidualBlock(Auto<internal::Cupt, 3, 3>({p, 1.0 / options.sigma_gps_m}), loss, b.R(t.a)));
+    else
+      gps_ids.push_back(problem.AddResidualBlock(
+          Auto<internal::CuptInterpolated, 3, 3, 3>({p, t.alpha, 1.0 / options.sigma_gps_m}), loss, b.R(t.a),
+          b.R(t.a + 1)));
+  }
+  for (Eigen::Index i = 0; i < obs.zupt_epochs.size(); ++i)
+    problem.AddResidualBlock(Auto<internal::Zupt, 3, 3>({1.0 / options.sigma_zupt_mps}), nullptr,
+                             b.V(obs.zupt_epochs[i]));
+  for (Eigen::Index i = 0; i < obs.gupt_epochs.size(); ++i) {
+    const int e = obs.gupt_epochs[i];
+    problem.AddResidualBlock(
+        Auto<internal::Gupt, 1, 3, 1>({model, obs.gupt_gravity_mps2[i], 1.0 / options.sigma_gupt_mps2}), nullptr,
+        b.R(e), b.G(e));
+  }
+  for (Eigen::Index i = 0; i < obs.xover_epochs.rows(); ++i)
+    problem.AddResidualBlock(Auto<internal::Xover, 1, 1, 1>({1.0 / options.sigma_xover_mps2}), nullptr,
+                             b.G(obs.xover_epochs(i, 0)), b.G(obs.xover_epochs(i, 1)));
+
+  NetworkSummary s;
+  s.num_epochs = n;
+  s.num_parameters = static_cast<long>(problem.NumParameters()) - n;  // quaternion: 4 stored, 3 free
+  s.num_residuals = problem.NumResiduals();
+  s.num_xover = static_cast<int>(obs.xover_epochs.rows());
+
+  CheckArgument(!options.variance_components || s.num_parameters <= kMaxDenseUnknowns, "options",
+                "variance_components is limited to " + std::to_string(kMaxDenseUnknowns) + " unknowns (got " +
+                    std::to_string(s.num_parameters) + ")");
+  if (options.gravity_covariance == NetworkOptions::Covariance::kDense && s.num_parameters > kMaxDenseUnknowns)
+    ThrowInvalidArgument("options", "gravity_covariance = dense is limited to " + std::to_string(kMaxDenseUnknowns) +
+                                        " unknowns (got " +
+                                        std::to_string(s.num_parameters) + "); use ceres");
+  // Numerical datum check: LDLᵀ of JᵀJ at the initial values.
+  if (options.check_datum) {
+    WallTimer datum_timer;
+    ceres::Problem::EvaluateOptions eo;
+    eo.parameter_blocks = ordered_blocks;
+    eo.apply_loss_function = false;
+    eo.num_threads = options.num_threads;
+    ceres::CRSMatrix crs;
+    double cost = 0.0;
+    if (!problem.Evaluate(eo, &cost, nullptr, nullptr, &crs))
+      throw std::runtime_error("indoorloc: network: evaluating the Jacobian at the initial values failed");
+    Eigen::Map<const Eigen::SparseMatrix<double, Eigen::RowMajor, int>> jac(
+        crs.num_rows, crs.num_cols, static_cast<Eigen::Index>(crs.values.size()), crs.rows.data(), crs.cols.data(),
+        crs.values.data());
+    Eigen::SparseMatrix<double> normal = Eigen::SparseMatrix<double>(jac.transpose()) * jac;
+    // Jacobi scaling to a unit diagonal: the pivots are then the ratios pivot / diagonal entry,
+    // and the factorisation does not suffer from the units of the parameters.
+    Eigen::VectorXd scale = normal.diagonal();
+    for (Eigen::Index i = 0; i < scale.size(); ++i) scale[i] = scale[i] > 0.0 ? 1.0 / std::sqrt(scale[i]) : 1.0;
+    normal = scale.asDiagonal() * normal * scale.asDiagonal();
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt;
+    ldlt.analyzePattern(normal);
+    ldlt.factorize(normal);
+    const Eigen::VectorXd diag = normal.diagonal();
+    const Eigen::VectorXd d = ldlt.vectorD();
+    const auto& perm = ldlt.permutationP().indices();
+    double worst = std::numeric_limits<double>::infinity();
+    int worst_col = -1;
+    const bool failed = ldlt.info() != Eigen::Success;
+    std::vector<int> inverse(static_cast<size_t>(normal.cols()));
+    for (int col = 0; col < normal.cols(); ++col) inverse[static_cast<size_t>(perm[col])] = col;
+    if (failed) {
+      // Eigen stops at the first exactly zero pivot; later entries of D are not computed.
+      worst = 0.0;
+      for (int k = 0; k < d.size(); ++k)
+        if (d[k] == 0.0) {
+          worst_col = inverse[static_cast<size_t>(k)];
+          break;
+        }
+    } else {
+      for (int col = 0; col < normal.cols(); ++col) {
+        const double ratio = diag[col] > 0.0 ? d[perm[col]] : 0.0;
+        if (ratio < worst) {
+          worst = ratio;
+          worst_col = col;
+        }
+      }
+    }
+    s.min_pivot_ratio = worst;
+    s.seconds_datum_check = datum_timer.ElapsedSeconds();
+    if (failed || worst < options.datum_pivot_tolerance) {
+      std::ostringstream m;
+      m << "datum defect: the normal matrix is rank deficient (smallest pivot ratio " << worst << " < "
+        << options.datum_pivot_tolerance << ")";
+      if (worst_col >= 0)
+        m << "; first undetermined parameter: " << BlockName(worst_col % kParamsPerEpoch) << " at epoch "
+          << worst_col / kParamsPerEpoch;
+      m << ". Add observations (CUPT for position, GUPT or XOVER for gravity vs accelerometer bias)";
+      ThrowInvalidArgument("observations", m.str());
+    }
+  }
+
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  so.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
+  so.max_num_iterations = options.max_iterations;
+  so.initial_trust_region_radius = options.initial_trust_region_radius;
+  so.max_trust_region_radius = std::max(1e16, options.initial_trust_region_radius);
+  so.function_tolerance = options.function_tolerance;
+  so.gradient_tolerance = options.gradient_tolerance;
+  so.parameter_tolerance = options.parameter_tolerance;
+  so.num_threads = options.num_threads;
+  so.logging_type = ceres::SILENT;
+  so.minimizer_progress_to_stdout = false;
+  if (!ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::SUITE_SPARSE))
+    so.sparse_linear_algebra_library_type = ceres::EIGEN_SPARSE;
+  std::string error;
+  if (!so.IsValid(&error)) throw std::runtime_error("indoorloc: network: invalid Ceres options: " + error);
+  ceres::Solver::Summary cs;
+  WallTimer solve_timer;
+  ceres::Solve(so, &problem, &cs);
+  s.seconds_solve = solve_timer.ElapsedSeconds();
+  s.iterations = static_cast<int>(cs.iterations.size()) - 1;
+  s.initial_cost = cs.initial_cost;
+  s.final_cost = cs.final_cost;
+  s.message = cs.message;
+  switch (cs.termination_type) {
+    case ceres::CONVERGENCE: s.termination = Termination::kConverged; break;
+    case ceres::NO_CONVERGENCE: s.termination = Termination::kMaxIterations; break;
+    default: s.termination = Termination::kFailure; break;
+  }
+  const double redundancy = static_cast<double>(s.num_residuals) - static_cast<double>(s.num_parameters);
+  s.variance_factor = redundancy > 0.0 ? 2.0 * s.final_cost / redundancy : 0.0;
+  NetworkState out = ToState(b);
+  if (options.variance_components) {
+    WallTimer vc_timer;
+    ceres::Problem::EvaluateOptions eo;
+    eo.parameter_blocks = ordered_blocks;
+    eo.apply_loss_function = false;
+    ceres::CRSMatrix crs;
+    double cost = 0.0;
+    if (!problem.Evaluate(eo, &cost, nullptr, nullptr, &crs))
+      throw std::runtime_error("indoorloc: network: evaluating the Jacobian at the solution failed");
+    Eigen::Map<const Eigen::SparseMatrix<double, Eigen::RowMajor, int>> jac(
+        crs.num_rows, crs.num_cols, static_cast<Eigen::Index>(crs.values.size()), crs.rows.data(), crs.cols.data(),
+        crs.values.data());
+    const Eigen::MatrixXd inverse = DenseInverseOfNormal(jac);
+    auto group = [&](const std::vector<ceres::ResidualBlockId>& ids, double* factor, double* group_redundancy) {
+      if (ids.empty()) return;
+      ceres::Problem::EvaluateOptions ge = eo;
+      ge.residual_blocks = ids;
+      std::vector<double> v;
+      ceres::CRSMatrix jg;
+      double c = 0.0;
+      if (!problem.Evaluate(ge, &c, &v, nullptr, &jg))
+        throw std::runtime_error("indoorloc: network: evaluating a residual group failed");
+      // tr(N⁻¹ J_gᵀ J_g) = Σ_rows j_r N⁻¹ j_rᵀ over the few non-zeros of each row.
+      double trace = 0.0;
+      for (int r = 0; r < jg.num_rows; ++r)
+        for (int a = jg.rows[r]; a < jg.rows[r + 1]; ++a)
+          for (int bb = jg.rows[r]; bb < jg.rows[r + 1]; ++bb)
+            trace += jg.values[a] * jg.values[bb] * inverse(jg.cols[a], jg.cols[bb]);
+      double vtv = 0.0;
+      for (double x : v) vtv += x * x;
+      *group_redundancy = static_cast<double>(v.size()) - trace;
+      *factor = *group_redundancy > 0.0 ? vtv / *group_redundancy : 0.0;
+    };
+    group(acc_ids, &s.variance_factor_acc, &s.redundancy_acc);
+    group(gyro_ids, &s.variance_factor_gyro, &s.redundancy_gyro);
+    group(gps_ids, &s.variance_factor_gps, &s.redundancy_gps);
+    s.seconds_covariance += vc_timer.ElapsedSeconds();
+  }
+  if (options.gravity_covariance != NetworkOptions::Covariance::kNone) {
+    WallTimer cov_timer;
+    out.gravity_disturbance_sd_mps2.resize(n);
+    if (options.gravity_covariance == NetworkOptions::Covariance::kDense) {
+      ceres::Problem::EvaluateOptions eo;
+      eo.parameter_blocks = ordered_blocks;
+      eo.apply_loss_function = false;
+      ceres::CRSMatrix crs;
+      double cost = 0.0;
+      if (!problem.Evaluate(eo, &cost, nullptr, nullptr, &crs))
+        throw std::runtime_error("indoorloc: network: evaluating the Jacobian at the solution failed");
+      Eigen::Map<const Eigen::SparseMatrix<double, Eigen::RowMajor, int>> jac(
+          crs.num_rows, crs.num_cols, static_cast<Eigen::Index>(crs.values.size()), crs.rows.data(),
+          crs.cols.data(), crs.values.data());
+      const Eigen::MatrixXd inverse = DenseInverseOfNormal(jac);
+      for (int i = 0; i < n; ++i) {
+        const double v = inverse(kParamsPerEpoch * i + 15, kParamsPerEpoch * i + 15);
+        out.gravity_disturbance_sd_mps2[i] = v > 0.0 ? std::sqrt(v) : std::numeric_limits<double>::quiet_NaN();
+      }
+    } else {
+      ceres::Covariance::Options co;
+      co.algorithm_type = ceres::SPARSE_QR;
+      co.num_threads = options.num_threads;
+      ceres::Covariance covariance(co);
+      std::vector<std::pair<const double*, const double*>> blocks;
+      blocks.reserve(static_cast<size_t>(n));
+      for (int i = 0; i < n; ++i) blocks.emplace_back(b.G(i), b.G(i));
+      if (!covariance.Compute(blocks, &problem))
+        throw std::runtime_error("indoorloc: network: ceres::Covariance failed (rank-deficient network?)");
+      for (int i = 0; i < n; ++i) {
+        double v = 0.0;
+        covariance.GetCovarianceBlock(b.G(i), b.G(i), &v);
+        out.gravity_disturbance_sd_mps2[i] = std::sqrt(std::max(v, 0.0));
+      }
+    }
+    s.seconds_covariance += cov_timer.ElapsedSeconds();
+  }
+  s.seconds_total = total.ElapsedSeconds();
+  if (summary) *summary = s;
+  return out;
+}
+
+}  // namespace indoorloc::network

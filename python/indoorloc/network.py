@@ -1,0 +1,127 @@
+"""INS/GPS network adjustment for strapdown inertial kinematic gravimetry (paper 003, Térmens &
+Colomina): the network approach (NA, :func:`solve_network`: one sparse least-squares problem over
+all epochs, with cross-overs) and the state-space approach (SSA, :func:`kalman_smoother`: an
+error-state EKF + RTS smoother with the same model, without cross-overs).
+
+Model (docs/network.md): local Earth-fixed ENU frame with Earth rotation and GRS80 normal gravity
+γ(h); per epoch position, velocity, attitude quaternion, accelerometer and gyro biases (random
+walks) and the vertical gravity disturbance δg (random walk along time). Dynamic equations by the
+leap-frog rule (paper §3.3) or the trapezoidal rule; CUPT, ZUPT, GUPT and XOVER observations.
+
+The helpers :func:`flight_options`, :func:`start_state`, :func:`solve_flight` and
+:func:`smooth_flight` run both approaches on a simulated flight
+(:mod:`indoorloc.simulate.flight`).
+
+Examples
+--------
+>>> from indoorloc import network
+>>> float(network.normal_gravity(0.0, [0.0])[0])  # doctest: +ELLIPSIS
+9.780326...
+"""
+
+from __future__ import annotations
+
+from typing import Dict, Optional, Tuple
+
+import numpy as np
+
+from indoorloc._core.network import (
+    KalmanSmootherOptions,
+    NetworkOptions,
+    earth_rate_enu,
+    find_crossovers,
+    kalman_smoother,
+    normal_gravity,
+    solve_network,
+)
+
+__all__ = [
+    "KalmanSmootherOptions",
+    "NetworkOptions",
+    "earth_rate_enu",
+    "find_crossovers",
+    "flight_options",
+    "kalman_smoother",
+    "normal_gravity",
+    "smooth_flight",
+    "solve_flight",
+    "solve_network",
+    "start_state",
+]
+
+MGAL = 1e-5  #: 1 mGal in m/s^2
+
+
+def flight_options(config, discretization: str = "trapezoidal", **overrides) -> NetworkOptions:
+    """NetworkOptions whose noise densities and sigmas are those the simulator used."""
+    o = NetworkOptions()
+    o.discretization = discretization
+    o.latitude_rad = config.latitude_rad
+    o.origin_height_m = config.origin_height_m
+    o.acc_noise_mps2_rthz = config.acc_noise_mps2_rthz
+    o.gyro_noise_radps_rthz = config.gyro_noise_radps_rthz
+    o.acc_bias_walk_mps2_rts = config.acc_bias_walk_mps2_rts
+    o.gyro_bias_walk_radps_rts = config.gyro_bias_walk_radps_rts
+    o.sigma_gps_m = config.sigma_gps_m
+    o.sigma_gupt_mps2 = config.sigma_gupt_mps2
+    for k, v in overrides.items():
+        if not hasattr(o, k):
+            raise ValueError(f"indoorloc: argument '{k}': not a NetworkOptions field")
+        setattr(o, k, v)
+    return o
+
+
+def start_state(flight, seed: int = 0, level_sd_rad: float = 1e-3, heading_sd_rad: float = 1e-2) -> Dict[str, np.ndarray]:
+    """Initial state (one row) for the filter: first GPS fix, zero velocity (hover), true
+    attitude with N(0, level_sd) roll/pitch and N(0, heading_sd) heading errors, zero biases and δg.
+    Stream ``default_rng([seed, 2])``."""
+    from scipy.spatial.transform import Rotation
+
+    rng = np.random.default_rng([int(seed), 2])
+    q = flight.truth["attitude_wxyz"][0]
+    err = rng.normal(0.0, [level_sd_rad, level_sd_rad, heading_sd_rad])
+    r = Rotation.from_rotvec(err) * Rotation.from_quat([q[1], q[2], q[3], q[0]])
+    xyzw = r.as_quat()
+    return {
+        "position_m": flight.gps_position_m[:1].copy(),
+        "velocity_mps": np.zeros((1, 3)),
+        "attitude_wxyz": np.array([[xyzw[3], xyzw[0], xyzw[1], xyzw[2]]]),
+        "acc_bias_mps2": np.zeros((1, 3)),
+        "gyro_bias_radps": np.zeros((1, 3)),
+        "gravity_disturbance_mps2": np.zeros(1),
+    }
+
+
+def _obs(flight) -> dict:
+    return dict(imu_time_s=flight.imu_time_s, acc_body_mps2=flight.acc_body_mps2, gyro_body_radps=flight.gyro_body_radps,
+                gps_time_s=flight.gps_time_s, gps_position_m=flight.gps_position_m, zupt_epochs=flight.zupt_epochs,
+                gupt_epochs=flight.gupt_epochs, gupt_gravity_mps2=flight.gupt_gravity_mps2)
+
+
+def smooth_flight(flight, options: Optional[NetworkOptions] = None, seed: int = 0, smooth: bool = True,
+                  kalman_options: Optional[KalmanSmootherOptions] = None) -> Tuple[dict, dict, dict]:
+    """SSA on a simulated flight: (smoothed state, filtered state, summary)."""
+    options = options or flight_options(flight.config)
+    ko = kalman_options or KalmanSmootherOptions()
+    ko.smooth = smooth
+    return kalman_smoother(initial=start_state(flight, seed), model=options, options=ko, **_obs(flight))
+
+
+def solve_flight(flight, options: Optional[NetworkOptions] = None, xover: bool = True, seed: int = 0,
+                 initial: Optional[dict] = None, crossover_radius_m: float = 5.0,
+                 min_separation_s: float = 30.0) -> Tuple[dict, dict, np.ndarray]:
+    """NA on a simulated flight: (state, summary, cross-over pairs used).
+
+    Initial values: the forward EKF's states (``initial`` overrides). Cross-overs are found on the
+    initial trajectory with :func:`find_crossovers` when ``xover``.
+    """
+    options = options or flight_options(flight.config)
+    if initial is None:
+        _, initial, _ = smooth_flight(flight, options, seed=seed, smooth=False)
+    pairs = np.zeros((0, 2), dtype=np.int32)
+    if xover:
+        pairs = find_crossovers(flight.imu_time_s, initial["position_m"], radius_m=crossover_radius_m,
+                                min_separation_s=min_separation_s)
+    state, summary = solve_network(initial=initial, xover_epochs=pairs if pairs.size else None, options=options,
+                                   **_obs(flight))
+    return state, summary, pairs
