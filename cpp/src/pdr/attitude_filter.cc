@@ -9,6 +9,7 @@
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "imu_timing.h"
 
 namespace indoorloc::pdr {
 namespace {
@@ -48,18 +49,9 @@ AttitudeOutput RunMahony(const Eigen::Ref<const Eigen::VectorXd>& time_s, const 
   CheckFinite(acc, "acc_mps2");
   CheckFinite(gyro, "gyro_radps");
   if (use_mag) CheckFinite(mag, "mag");
-  std::vector<double> dts;
-  for (Eigen::Index k = 1; k < n; ++k) {
-    if (time_s[k] > time_s[k - 1]) dts.push_back(time_s[k] - time_s[k - 1]);
-  }
-  CheckArgument(!dts.empty(), "time_s", "does not increase");
-  std::nth_element(dts.begin(), dts.begin() + static_cast<std::ptrdiff_t>(dts.size() / 2), dts.end());
-  const double median_dt = dts[dts.size() / 2];
+  const double median_dt = internal::MedianSamplePeriod(time_s);
 
-  const Eigen::Index init = std::min<Eigen::Index>(options.init_samples, n);
-  const Eigen::Vector3d mean_f = acc.topRows(init).colwise().mean().transpose();
-  CheckArgument(mean_f.norm() > 0.1 * options.gravity_mps2, "acc_mps2",
-                "the first samples do not measure gravity (is the unit g instead of m/s^2?)");
+  const Eigen::Vector3d mean_f = internal::InitialSpecificForce(acc, options.init_samples, options.gravity_mps2);
   // Level: rotate the mean specific force onto +z, then remove the yaw that introduces.
   Eigen::Quaterniond q = Eigen::Quaterniond::FromTwoVectors(mean_f.normalized(), Eigen::Vector3d::UnitZ());
   q = (Eigen::Quaterniond(Eigen::AngleAxisd(-Yaw(q.toRotationMatrix()), Eigen::Vector3d::UnitZ())) * q).normalized();
@@ -74,7 +66,7 @@ AttitudeOutput RunMahony(const Eigen::Ref<const Eigen::VectorXd>& time_s, const 
     std::nth_element(norms.begin(), norms.begin() + static_cast<std::ptrdiff_t>(n / 2), norms.end());
     out.reference_field_norm = norms[static_cast<size_t>(n / 2)];
     CheckArgument(out.reference_field_norm > 0.0, "mag", "is zero");
-    const Eigen::Vector3d mean_m = mag.topRows(init).colwise().mean().transpose();
+    const Eigen::Vector3d mean_m = mag.topRows(std::min<Eigen::Index>(options.init_samples, n)).colwise().mean().transpose();
     const Eigen::Vector3d h = q * mean_m;  // levelled field
     CheckArgument(h.head<2>().norm() > 1e-9 * h.norm(), "mag", "the initial field is vertical: no heading");
     out.reference_dip_rad = std::atan2(h.z(), h.head<2>().norm());

@@ -7,6 +7,7 @@
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "imu_timing.h"
 
 namespace indoorloc::pdr {
 namespace {
@@ -130,13 +131,7 @@ InsZuptIncrements ComputeInsZuptIncrements(const Eigen::Ref<const Eigen::VectorX
   CheckQuaternions(q, n);
   CheckArgument(steps.size() >= 2, "step_indices", "needs at least 2 steps");
   CheckSteps(steps, n);
-  std::vector<double> dts;
-  for (Eigen::Index k = 1; k < n; ++k) {
-    if (time_s[k] > time_s[k - 1]) dts.push_back(time_s[k] - time_s[k - 1]);
-  }
-  CheckArgument(!dts.empty(), "time_s", "does not increase");
-  std::nth_element(dts.begin(), dts.begin() + static_cast<std::ptrdiff_t>(dts.size() / 2), dts.end());
-  const double median_dt = dts[dts.size() / 2];
+  const double median_dt = internal::MedianSamplePeriod(time_s);
   auto dt_at = [&](Eigen::Index k) { return time_s[k] > time_s[k - 1] ? time_s[k] - time_s[k - 1] : median_dt; };
   const int w = static_cast<int>(std::lround(options.window_s / median_dt));
   const Eigen::Vector3d g(0.0, 0.0, options.gravity_mps2);

@@ -10,6 +10,7 @@
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "imu_timing.h"
 
 namespace indoorloc::pdr {
 namespace {
@@ -66,18 +67,9 @@ ZuptEkfOutput RunZuptEkf(const Eigen::Ref<const Eigen::VectorXd>& time_s, const 
   CheckFinite(acc, "acc_mps2");
   CheckFinite(gyro, "gyro_radps");
   // Median positive sample period, used where timestamps repeat or go backwards.
-  std::vector<double> dts;
-  for (Eigen::Index k = 1; k < n; ++k) {
-    if (time_s[k] > time_s[k - 1]) dts.push_back(time_s[k] - time_s[k - 1]);
-  }
-  CheckArgument(!dts.empty(), "time_s", "does not increase");
-  std::nth_element(dts.begin(), dts.begin() + static_cast<std::ptrdiff_t>(dts.size() / 2), dts.end());
-  const double median_dt = dts[dts.size() / 2];
+  const double median_dt = internal::MedianSamplePeriod(time_s);
 
-  const Eigen::Index init = std::min<Eigen::Index>(options.init_samples, n);
-  const Eigen::Vector3d mean_f = acc.topRows(init).colwise().mean().transpose();
-  CheckArgument(mean_f.norm() > 0.1 * options.gravity_mps2, "acc_mps2",
-                "the first samples do not measure gravity (is the unit g instead of m/s^2?)");
+  const Eigen::Vector3d mean_f = internal::InitialSpecificForce(acc, options.init_samples, options.gravity_mps2);
   Eigen::Quaterniond q = LevelAttitude(mean_f);
   Eigen::Vector3d p = Eigen::Vector3d::Zero(), v = Eigen::Vector3d::Zero();
   const Eigen::Vector3d g(0, 0, -options.gravity_mps2);

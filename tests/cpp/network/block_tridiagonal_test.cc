@@ -8,6 +8,8 @@
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
 
+#include "random_block_system.h"
+
 #include "indoorloc/core/random.h"
 
 namespace indoorloc::network {
@@ -16,37 +18,12 @@ namespace {
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
-// A = Jᵀ J + 0.1 I with J block lower-bidiagonal: symmetric positive definite and
-// block-tridiagonal. Returns the dense A and b.
-void RandomSystem(int n, int b, std::uint64_t seed, MatrixXd* A, VectorXd* rhs) {
-  RandomStream rng(seed);
-  MatrixXd J = MatrixXd::Zero(n * b, n * b);
-  for (int i = 0; i < n; ++i) {
-    for (int r = 0; r < b; ++r) {
-      for (int c = 0; c < b; ++c) {
-        J(i * b + r, i * b + c) = rng.Normal();
-        if (i > 0) J(i * b + r, (i - 1) * b + c) = rng.Normal();
-      }
-    }
-  }
-  *A = J.transpose() * J + 0.1 * MatrixXd::Identity(n * b, n * b);
-  rhs->resize(n * b);
-  for (int i = 0; i < n * b; ++i) (*rhs)[i] = rng.Normal();
-}
-
-BlockRowAssembler FromDense(const MatrixXd& A, const VectorXd& rhs, int b) {
-  return [A, rhs, b](int i, MatrixXd* diagonal, MatrixXd* lower, VectorXd* r) {
-    *diagonal = A.block(i * b, i * b, b, b);
-    if (i > 0) *lower = A.block(i * b, (i - 1) * b, b, b);
-    *r = rhs.segment(i * b, b);
-  };
-}
-
+using testing::FromDense;
 TEST(BlockTridiagonal, MatchesDenseSolveAndInverseForEveryCheckpointInterval) {
   const int n = 9, b = 4;
   MatrixXd A;
   VectorXd rhs;
-  RandomSystem(n, b, 3, &A, &rhs);
+  testing::RandomBlockSystem(n, b, 3, &A, &rhs);
   const VectorXd x_dense = A.llt().solve(rhs);
   const MatrixXd inverse = A.inverse();
   BlockTridiagonalOptions o;
@@ -82,7 +59,7 @@ TEST(BlockTridiagonal, MatchesDenseSolveAndInverseForEveryCheckpointInterval) {
 TEST(BlockTridiagonal, SingleBlockAndNoSelection) {
   MatrixXd A;
   VectorXd rhs;
-  RandomSystem(1, 5, 7, &A, &rhs);
+  testing::RandomBlockSystem(1, 5, 7, &A, &rhs);
   const BlockTridiagonalSolution s = SolveBlockTridiagonal(1, 5, FromDense(A, rhs, 5));
   EXPECT_LT((s.x - A.llt().solve(rhs)).cwiseAbs().maxCoeff(), 1e-10);
   EXPECT_TRUE(s.covariance.empty());
@@ -92,7 +69,7 @@ TEST(BlockTridiagonal, RankDeficiencyIsReportedWithItsBlock) {
   const int n = 5, b = 3;
   MatrixXd A;
   VectorXd rhs;
-  RandomSystem(n, b, 11, &A, &rhs);
+  testing::RandomBlockSystem(n, b, 11, &A, &rhs);
   // Block 2 loses one direction entirely (an unobservable parameter): row/column zero.
   A.row(2 * b + 1).setZero();
   A.col(2 * b + 1).setZero();
@@ -108,7 +85,7 @@ TEST(BlockTridiagonal, RankDeficiencyIsReportedWithItsBlock) {
 TEST(BlockTridiagonal, BadInputGivesClearErrors) {
   MatrixXd A;
   VectorXd rhs;
-  RandomSystem(3, 2, 1, &A, &rhs);
+  testing::RandomBlockSystem(3, 2, 1, &A, &rhs);
   EXPECT_THROW(SolveBlockTridiagonal(0, 2, FromDense(A, rhs, 2)), std::invalid_argument);
   EXPECT_THROW(SolveBlockTridiagonal(3, 0, FromDense(A, rhs, 2)), std::invalid_argument);
   EXPECT_THROW(SolveBlockTridiagonal(3, 2, BlockRowAssembler()), std::invalid_argument);

@@ -6,6 +6,8 @@
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
 
+#include "random_block_system.h"
+
 #include "indoorloc/core/random.h"
 
 namespace indoorloc::network {
@@ -14,33 +16,12 @@ namespace {
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
-void RandomBand(int n, int b, std::uint64_t seed, MatrixXd* A, VectorXd* rhs) {
-  RandomStream rng(seed);
-  MatrixXd J = MatrixXd::Zero(n * b, n * b);
-  for (int i = 0; i < n; ++i)
-    for (int r = 0; r < b; ++r)
-      for (int c = 0; c < b; ++c) {
-        J(i * b + r, i * b + c) = rng.Normal();
-        if (i > 0) J(i * b + r, (i - 1) * b + c) = rng.Normal();
-      }
-  *A = J.transpose() * J + 0.1 * MatrixXd::Identity(n * b, n * b);
-  rhs->resize(n * b);
-  for (int i = 0; i < n * b; ++i) (*rhs)[i] = rng.Normal();
-}
-
-BlockRowAssembler FromDense(const MatrixXd& A, const VectorXd& rhs, int b) {
-  return [A, rhs, b](int i, MatrixXd* diagonal, MatrixXd* lower, VectorXd* r) {
-    *diagonal = A.block(i * b, i * b, b, b);
-    if (i > 0) *lower = A.block(i * b, (i - 1) * b, b, b);
-    *r = rhs.segment(i * b, b);
-  };
-}
-
+using testing::FromDense;
 TEST(BlockTridiagonalFactor, SolveAndMultiplyMatchDense) {
   const int n = 8, b = 3;
   MatrixXd A;
   VectorXd rhs;
-  RandomBand(n, b, 4, &A, &rhs);
+  testing::RandomBlockSystem(n, b, 4, &A, &rhs);
   const BlockTridiagonalFactor f(n, b, FromDense(A, rhs, b));
   EXPECT_LT((f.Solve(rhs) - A.llt().solve(rhs)).cwiseAbs().maxCoeff(), 1e-10);
   EXPECT_LT((f.Multiply(rhs) - A * rhs).cwiseAbs().maxCoeff(), 1e-10);
@@ -51,7 +32,7 @@ TEST(CrossoverPcg, MatchesTheDenseTiedSolution) {
   const int n = 30, b = 4;
   MatrixXd A;
   VectorXd rhs;
-  RandomBand(n, b, 9, &A, &rhs);
+  testing::RandomBlockSystem(n, b, 9, &A, &rhs);
   RandomStream rng(10);
   std::vector<Tie> ties;
   MatrixXd tied = A;
@@ -82,7 +63,7 @@ TEST(CrossoverPcg, MatchesTheDenseTiedSolution) {
 TEST(CrossoverPcg, BadTiesGiveClearErrors) {
   MatrixXd A;
   VectorXd rhs;
-  RandomBand(3, 2, 1, &A, &rhs);
+  testing::RandomBlockSystem(3, 2, 1, &A, &rhs);
   const BlockTridiagonalFactor f(3, 2, FromDense(A, rhs, 2));
   EXPECT_THROW(SolveWithTies(f, rhs, {Tie{0, 6, 1.0, 0.0}}), std::invalid_argument);  // outside
   EXPECT_THROW(SolveWithTies(f, rhs, {Tie{1, 1, 1.0, 0.0}}), std::invalid_argument);  // a == b
