@@ -107,7 +107,7 @@ DEFAULT_K = 10
 #: validation problems (docs/analog.md): a small catalog needs more and wider neighbours to let
 #: the chain jump between passes of the attractor, a large one a narrow kernel that keeps it on
 #: a pass. Sizes not listed use (k, sigma_scale) as given.
-VALIDATED_KERNELS: Dict[int, Tuple[int, float]] = {10**4: (15, 0.7), 10**5: (10, 0.5)}
+VALIDATED_KERNELS: Dict[int, Tuple[int, float]] = {10**4: (50, 0.35), 10**5: (10, 0.5)}
 #: First seed of the validation problems used to choose the kernel (never used for the test).
 VALIDATION_SEED = 10_000
 
