@@ -18,17 +18,6 @@ from indoorloc.simulate import lorenz63
 CLIMATOLOGY_STD = float(np.sqrt(np.trace(lorenz63.CLIMATOLOGY_COV) / 3))  # 8.5
 
 
-def _analog_built() -> bool:
-    try:
-        import indoorloc.analog as analog
-    except ImportError:
-        return False
-    return hasattr(analog, "AnalogHMM")
-
-
-needs_analog = pytest.mark.skipif(not _analog_built(), reason="analog bindings not built yet")
-
-
 def rmse(a, b):
     return float(np.sqrt(np.mean((np.asarray(a) - np.asarray(b)) ** 2)))
 
@@ -244,7 +233,6 @@ def test_anfb_runner_reports_missing_bindings(monkeypatch):
         analog_lorenz63.run_table1(n_realisations=1, methods=("anfb",))
 
 
-@needs_analog
 def test_anfb_lorenz63_below_climatology():
     result = analog_lorenz63.run_table1(
         n_realisations=1, catalog_sizes=(10**4,), beams=(None, 1000), methods=("anfb",), T=200, dt_obs=8
@@ -256,7 +244,6 @@ def test_anfb_lorenz63_below_climatology():
     assert example["estimates"]["AnFB"].shape == (200, 3)
 
 
-@needs_analog
 def test_kernel_selection_uses_validation_problems_and_sorts():
     rows = analog_lorenz63.run_kernel_selection(
         2000, ks=(5,), sigma_scales=(0.5, 1.0), beam=200, n_problems=2, T=120, dt_obs=8
@@ -309,7 +296,6 @@ def test_imu_split_and_baselines_on_real_walk(imu_split):
     assert "| A | NNN |" in analog_imu.markdown_table(result)
 
 
-@needs_analog
 def test_imu_anfb_on_real_walk(imu_split):
     result = analog_imu.run_imu_experiments(split=imu_split, methods=("anfb", "linear"), experiments=("A",))
     rmses = {r["method"]: r["rmse"] for r in result["rows"]}

@@ -527,19 +527,28 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
   const double redundancy = static_cast<double>(s.num_residuals) - static_cast<double>(s.num_parameters);
   s.variance_factor = redundancy > 0.0 ? 2.0 * s.final_cost / redundancy : 0.0;
   NetworkState out = ToState(b);
+  // (JᵀJ)⁻¹ at the solution, dense (small networks only): shared by the variance components and
+  // the dense δg covariance, computed at most once.
+  ceres::Problem::EvaluateOptions eo;
+  eo.parameter_blocks = ordered_blocks;
+  eo.apply_loss_function = false;
+  Eigen::MatrixXd dense_inverse;
+  auto inverse_at_solution = [&]() -> const Eigen::MatrixXd& {
+    if (dense_inverse.size() == 0) {
+      ceres::CRSMatrix crs;
+      double cost = 0.0;
+      if (!problem.Evaluate(eo, &cost, nullptr, nullptr, &crs))
+        throw std::runtime_error("indoorloc: network: evaluating the Jacobian at the solution failed");
+      Eigen::Map<const Eigen::SparseMatrix<double, Eigen::RowMajor, int>> jac(
+          crs.num_rows, crs.num_cols, static_cast<Eigen::Index>(crs.values.size()), crs.rows.data(), crs.cols.data(),
+          crs.values.data());
+      dense_inverse = DenseInverseOfNormal(jac);
+    }
+    return dense_inverse;
+  };
   if (options.variance_components) {
     WallTimer vc_timer;
-    ceres::Problem::EvaluateOptions eo;
-    eo.parameter_blocks = ordered_blocks;
-    eo.apply_loss_function = false;
-    ceres::CRSMatrix crs;
-    double cost = 0.0;
-    if (!problem.Evaluate(eo, &cost, nullptr, nullptr, &crs))
-      throw std::runtime_error("indoorloc: network: evaluating the Jacobian at the solution failed");
-    Eigen::Map<const Eigen::SparseMatrix<double, Eigen::RowMajor, int>> jac(
-        crs.num_rows, crs.num_cols, static_cast<Eigen::Index>(crs.values.size()), crs.rows.data(), crs.cols.data(),
-        crs.values.data());
-    const Eigen::MatrixXd inverse = DenseInverseOfNormal(jac);
+    const Eigen::MatrixXd& inverse = inverse_at_solution();
     auto group = [&](const std::vector<ceres::ResidualBlockId>& ids, double* factor, double* group_redundancy) {
       if (ids.empty()) return;
       ceres::Problem::EvaluateOptions ge = eo;
@@ -569,17 +578,7 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
     WallTimer cov_timer;
     out.gravity_disturbance_sd_mps2.resize(n);
     if (options.gravity_covariance == NetworkOptions::Covariance::kDense) {
-      ceres::Problem::EvaluateOptions eo;
-      eo.parameter_blocks = ordered_blocks;
-      eo.apply_loss_function = false;
-      ceres::CRSMatrix crs;
-      double cost = 0.0;
-      if (!problem.Evaluate(eo, &cost, nullptr, nullptr, &crs))
-        throw std::runtime_error("indoorloc: network: evaluating the Jacobian at the solution failed");
-      Eigen::Map<const Eigen::SparseMatrix<double, Eigen::RowMajor, int>> jac(
-          crs.num_rows, crs.num_cols, static_cast<Eigen::Index>(crs.values.size()), crs.rows.data(),
-          crs.cols.data(), crs.values.data());
-      const Eigen::MatrixXd inverse = DenseInverseOfNormal(jac);
+      const Eigen::MatrixXd& inverse = inverse_at_solution();
       for (int i = 0; i < n; ++i) {
         const double v = inverse(kParamsPerEpoch * i + 15, kParamsPerEpoch * i + 15);
         out.gravity_disturbance_sd_mps2[i] = v > 0.0 ? std::sqrt(v) : std::numeric_limits<double>::quiet_NaN();
