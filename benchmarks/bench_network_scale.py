@@ -5,8 +5,11 @@ equations, CUPT at 1 Hz, alignment prior, GUPT at the end; indoorloc/network/lin
 is solved
 
 1. against peers in the same run on the same equations at sizes they handle: GTSAM's linear
-   factor graph (``graph.optimize()``, default multifrontal elimination with COLAMD) and scipy
-   (normal equations, SuperLU with COLAMD) - both return the same solution (checked);
+   factor graph (``graph.optimize()``, default multifrontal elimination with COLAMD), Ceres
+   (``indoorloc._core.network.solve_linear_ins_network_ceres``: the same equations as Ceres
+   residual blocks, SPARSE_NORMAL_CHOLESKY with SuiteSparse, once with Ceres' default
+   Solver::Options and once as a single Gauss-Newton step, its best case on a linear problem) and
+   scipy (normal equations, SuperLU with COLAMD) - all return the same solution (checked);
 2. at the paper's Table 2 sizes (case 2: 50 Hz x 14,400 s, 12.96 M unknowns; case 1: 200 Hz x
    10,800 s, 38.9 M unknowns) with the covariances of every δg (selected inversion), each case in
    a child process so that its peak memory (ru_maxrss) is its own.
@@ -37,6 +40,7 @@ import network_peers  # noqa: E402
 RATE_HZ = 50.0
 PEER_DURATIONS_S = (20.0, 60.0, 90.0, 600.0, 2400.0)
 SCIPY_MAX_DURATION_S = 600.0
+CERES_MAX_DURATION_S = 2400.0
 TABLE2_CASES = (
     ("case 2", 50.0, 14_400.0),
     ("case 1", 200.0, 10_800.0),
@@ -80,6 +84,12 @@ def _peer_rows(durations) -> List[Dict[str, object]]:
             row["gtsam_seconds"] = g["assemble_seconds"] + g["solve_seconds"]
             row["gtsam_solve_seconds"] = g["solve_seconds"]
             row["gtsam_max_dg_diff"] = float(np.abs(g["x"].reshape(E, 18)[:, 15:] - ours["gravity_estimate"]).max())
+        if duration <= CERES_MAX_DURATION_S:
+            for key, one_step in (("ceres", False), ("ceres_one_step", True)):
+                c = network.solve_linear_ins_network_ceres(RATE_HZ, duration, one_gauss_newton_step=one_step)
+                row[f"{key}_seconds"] = c["build_seconds"] + c["solve_seconds"]
+                row[f"{key}_iterations"] = c["iterations"]
+                row[f"{key}_max_dg_diff"] = float(np.abs(c["x"][:, 15:] - ours["gravity_estimate"]).max())
         if duration <= SCIPY_MAX_DURATION_S:
             s = network_peers.solve_scipy(eq)
             row["scipy_seconds"] = s["assemble_seconds"] + s["solve_seconds"]
@@ -120,21 +130,28 @@ def run(quick: bool = False) -> dict:
 def markdown(result: dict) -> str:
     lines = [
         f"Same linearised network (18 unknowns per epoch, leap-frog, {RATE_HZ:.0f} Hz IMU, 1 Hz GPS), same run; "
-        "indoorloc solve without / with the covariances of every δg:",
+        "indoorloc solve without / with the covariances of every δg; peers' times include building their problem "
+        "(Ceres default: its default Solver::Options, LM from x = 0; Ceres 1 step: one Gauss-Newton step, exact here):",
         "",
         "| IMU epochs | unknowns | indoorloc [s] | + δg covariances [s] | GTSAM [s] (solve only) | GTSAM / indoorloc | "
-        "scipy SuperLU [s] | max δg diff vs GTSAM, scipy [m/s²] |",
-        "|---|---|---|---|---|---|---|---|",
+        "Ceres default [s] (iterations) | Ceres / indoorloc | Ceres 1 step [s] | Ceres 1 step / indoorloc | "
+        "scipy SuperLU [s] | max δg diff vs GTSAM, Ceres, scipy [m/s²] |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in result["peers"]:
         g = r.get("gtsam_seconds")
         s = r.get("scipy_seconds")
+        c = r.get("ceres_seconds")
+        c1 = r.get("ceres_one_step_seconds")
+        t = r["indoorloc_seconds"]
         lines.append(
-            f"| {r['epochs']:,} | {r['unknowns']:,} | {r['indoorloc_seconds']:.3f} | {r['indoorloc_with_covariance_seconds']:.3f} | "
-            + (f"{g:.3f} ({r['gtsam_solve_seconds']:.3f}) | {g / r['indoorloc_seconds']:.1f}x | " if g
+            f"| {r['epochs']:,} | {r['unknowns']:,} | {t:.3f} | {r['indoorloc_with_covariance_seconds']:.3f} | "
+            + (f"{g:.3f} ({r['gtsam_solve_seconds']:.3f}) | {g / t:.1f}x | " if g
                else ("fails: indeterminate | - | " if "gtsam_error" in r else "- | - | "))
+            + (f"{c:.3f} ({r['ceres_iterations']}) | {c / t:.0f}x | {c1:.3f} | {c1 / t:.1f}x | " if c else "- | - | - | - | ")
             + (f"{s:.3f} | " if s else "- | ")
-            + f"{r.get('gtsam_max_dg_diff', float('nan')):.1e}, {r.get('scipy_max_dg_diff', float('nan')):.1e} |"
+            + f"{r.get('gtsam_max_dg_diff', float('nan')):.1e}, {r.get('ceres_max_dg_diff', float('nan')):.1e}, "
+            f"{r.get('scipy_max_dg_diff', float('nan')):.1e} |"
         )
     lines += [
         "",

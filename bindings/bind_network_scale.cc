@@ -9,6 +9,7 @@
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "indoorloc/network/linear_ins_ceres.h"
 #include "indoorloc/network/linear_ins_network.h"
 
 namespace py = pybind11;
@@ -75,6 +76,40 @@ conjugate gradients preconditioned with the stored banded factor. Paper Table 2 
 Returns a dict: sizes, crossings, ties, factor_seconds, factor_bytes, pcg_iterations,
 pcg_seconds, pcg_relative_residual, pcg_converged, max_abs_error and gravity_rmse [m/s²]
 against the noise-free truth, total_seconds, report.)doc");
+
+  m.def(
+      "solve_linear_ins_network_ceres",
+      [](double imu_rate_hz, double duration_s, double gps_rate_hz, const std::string& rule, int prior_epochs,
+         bool one_gauss_newton_step) {
+        const network::LinearInsNetworkOptions o = MakeOptions(imu_rate_hz, duration_s, gps_rate_hz, rule, prior_epochs);
+        network::LinearInsCeresResult r;
+        {
+          py::gil_scoped_release release;
+          r = network::SolveLinearInsNetworkWithCeres(o, one_gauss_newton_step);
+        }
+        py::dict d;
+        d["imu_epochs"] = r.size.imu_epochs;
+        d["unknowns"] = r.size.unknowns;
+        d["x"] = r.x;
+        d["build_seconds"] = r.build_seconds;
+        d["solve_seconds"] = r.solve_seconds;
+        d["iterations"] = r.iterations;
+        d["converged"] = r.converged;
+        d["max_abs_error"] = r.max_abs_error;
+        d["linear_solver"] = r.linear_solver;
+        d["report"] = r.report;
+        return d;
+      },
+      py::arg("imu_rate_hz") = 200.0, py::arg("duration_s") = 60.0, py::arg("gps_rate_hz") = 1.0,
+      py::arg("rule") = "leapfrog", py::arg("prior_epochs") = 2, py::arg("one_gauss_newton_step") = false, R"doc(
+The linearised INS/GPS network (same equations as solve_linear_ins_network) solved by Ceres
+(SPARSE_NORMAL_CHOLESKY with SuiteSparse, single thread): the peer of the benchmark, in process.
+With one_gauss_newton_step=False Ceres runs with its default Solver::Options (Levenberg-
+Marquardt from x = 0); with True, one Gauss-Newton step (exact for this linear problem).
+
+Returns a dict: imu_epochs, unknowns, x (E, 18) [δr m, δv m/s, ψ rad, a m/s², ω rad/s, δg m/s²],
+build_seconds, solve_seconds, iterations, converged, max_abs_error (against the noise-free
+truth), linear_solver, report.)doc");
 
   m.def(
       "linear_ins_equations",

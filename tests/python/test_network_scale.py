@@ -68,3 +68,16 @@ def test_crossover_ties_are_solved_and_keep_the_truth():
     assert out["gravity_rmse"] < 1e-8
     with pytest.raises(ValueError, match="lines"):
         network.solve_linear_ins_network_with_crossovers(50.0, 40.0, 2.0, lines=0, cross_lines=4)
+
+
+@pytest.mark.parametrize("one_step", [True, False])
+def test_ceres_peer_solves_the_same_network(one_step):
+    ours = network.solve_linear_ins_network(50.0, 4.0, keep_gravity_estimate=True, gravity_covariance=False)
+    peer = network.solve_linear_ins_network_ceres(50.0, 4.0, one_gauss_newton_step=one_step)
+    assert peer["x"].shape == (ours["imu_epochs"], 18)
+    assert "SPARSE_NORMAL_CHOLESKY" in peer["linear_solver"]
+    np.testing.assert_allclose(peer["x"][:, 15:], ours["gravity_estimate"], rtol=0, atol=1e-8 if one_step else 1e-6)
+    if one_step:
+        assert peer["iterations"] == 1
+    with pytest.raises(ValueError, match="rule"):
+        network.solve_linear_ins_network_ceres(50.0, 4.0, rule="euler")

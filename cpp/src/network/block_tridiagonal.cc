@@ -58,7 +58,8 @@ class ForwardPass {
     if (i > 0) {
       // C_i = A_{i,i-1} L_{i-1}^{-T}  <=>  C_iᵀ = L_{i-1}^{-1} A_{i,i-1}ᵀ.
       *C = previous.L.triangularView<Eigen::Lower>().solve(lower_.transpose()).transpose();
-      S.noalias() -= (*C) * C->transpose();
+      // Lower triangle only (all the LLT below reads): half the flops of the full product.
+      S.selfadjointView<Eigen::Lower>().rankUpdate(*C, -1.0);
     } else {
       C->setZero(b_, b_);
     }

@@ -30,6 +30,14 @@ def linear_ins_equations(
     rule: str = "leapfrog",
     prior_epochs: int = 2,
 ) -> Dict[str, object]: ...
+def solve_linear_ins_network_ceres(
+    imu_rate_hz: float = 200.0,
+    duration_s: float = 60.0,
+    gps_rate_hz: float = 1.0,
+    rule: str = "leapfrog",
+    prior_epochs: int = 2,
+    one_gauss_newton_step: bool = False,
+) -> Dict[str, object]: ...
 def solve_linear_ins_network_with_crossovers(
     imu_rate_hz: float = 50.0,
     duration_s: float = 600.0,
