@@ -65,6 +65,9 @@ def _peer_rows(durations) -> List[Dict[str, object]]:
     from indoorloc._core import network
 
     rows = []
+    # Warm-up (first call pays page faults and lazy initialisation), so the first row compares like with like.
+    network.solve_linear_ins_network(RATE_HZ, durations[0], gravity_covariance=False)
+    network.solve_linear_ins_network_ceres(RATE_HZ, durations[0], one_gauss_newton_step=True)
     for duration in durations:
         eq = network.linear_ins_equations(RATE_HZ, duration)
         E = int(eq["imu_epochs"])
