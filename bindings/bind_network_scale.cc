@@ -10,6 +10,7 @@
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
 #include "indoorloc/network/linear_ins_ceres.h"
+#include "indoorloc/network/folded_network.h"
 #include "indoorloc/network/linear_ins_network.h"
 
 namespace py = pybind11;
@@ -33,6 +34,80 @@ network::LinearInsNetworkOptions MakeOptions(double imu_rate_hz, double duration
 }  // namespace
 
 void BindNetworkScale(py::module_& m) {
+  m.def(
+      "solve_folded_linear_ins_network",
+      [](double imu_rate_hz, double duration_s, double gps_rate_hz, const std::string& rule, long long num_ties,
+         long long num_gupts, double sigma_xover_mps2, double sigma_gupt_mps2, int checkpoint_interval,
+         bool gravity_covariance, bool keep_gravity_estimate) {
+        network::LinearInsNetworkOptions o = MakeOptions(imu_rate_hz, duration_s, gps_rate_hz, rule, 2);
+        o.gupt_end_epochs = 0;  // every GUPT comes from the layout, so the count is num_gupts
+        network::FoldedNetworkOptions fo;
+        fo.checkpoint_interval = checkpoint_interval;
+        fo.gravity_covariance = gravity_covariance;
+        fo.keep_gravity_estimate = keep_gravity_estimate;
+        ValidateOptions(fo);
+        network::FoldedNetworkResult r;
+        {
+          py::gil_scoped_release release;
+          const network::RepeatedPassLayout layout =
+              network::MakeRepeatedPassLayout(o, num_ties, num_gupts, sigma_xover_mps2, sigma_gupt_mps2);
+          r = network::SolveFoldedLinearInsNetwork(o, layout.ties, layout.gupts, fo);
+        }
+        py::dict d;
+        d["imu_epochs"] = r.size.imu_epochs;
+        d["gps_epochs"] = r.size.gps_epochs;
+        d["unknowns"] = r.size.unknowns;
+        d["ties"] = r.ties;
+        d["gupts"] = r.gupts;
+        d["equations"] = r.equations;
+        d["folded_blocks"] = r.folded_blocks;
+        d["folded_block_size"] = r.folded_block_size;
+        d["factor_seconds"] = r.solver.factor_seconds;
+        d["backward_seconds"] = r.solver.backward_seconds;
+        d["total_seconds"] = r.total_seconds;
+        d["stored_factor_bytes"] = r.solver.stored_factor_bytes;
+        d["min_relative_pivot"] = r.solver.min_relative_pivot;
+        d["max_abs_error"] = r.max_abs_error;
+        d["gravity_rmse"] = r.gravity_rmse;
+        d["gravity_sigma"] = r.gravity_sigma;
+        d["gravity_estimate"] = r.gravity_estimate;
+        d["report"] = r.BriefReport();
+        return d;
+      },
+      py::arg("imu_rate_hz") = 50.0, py::arg("duration_s") = 60.0, py::arg("gps_rate_hz") = 2.0,
+      py::arg("rule") = "leapfrog", py::arg("num_ties") = 1000, py::arg("num_gupts") = 10,
+      py::arg("sigma_xover_mps2") = 1e-5, py::arg("sigma_gupt_mps2") = 1e-5, py::arg("checkpoint_interval") = 2048,
+      py::arg("gravity_covariance") = true, py::arg("keep_gravity_estimate") = false, R"doc(
+The linearised INS/GPS network of a survey re-flown in reverse over its own track, with
+cross-over ties between the two passes and GUPTs, solved exactly (no iteration) by the
+block-tridiagonal Cholesky in the folded order (super-block k = base blocks m-1-k and m+k,
+block size 72 for leap-frog), with the covariance of every δg (selected inversion).
+Paper Table 2 case 4: imu_rate_hz=50, duration_s=565049/50 (565,050 epochs), gps_rate_hz=2,
+num_ties=332150, num_gupts=1907.
+
+Parameters
+----------
+imu_rate_hz, duration_s, gps_rate_hz : float
+    Network size [Hz, s, Hz]; epochs = round(duration_s * imu_rate_hz) + 1 (leap-frog: even).
+rule : "leapfrog" or "trapezoidal"
+num_ties : int
+    Scalar XOVER ties δg_z[t] - δg_z[E-1-t] (every mirror pair first, then ties to the
+    mirror's neighbour E-2-t), at most ⌊E/2⌋ + ⌊(E-1)/2⌋.
+num_gupts : int
+    Scalar GUPTs on δg_z evenly spread over the flight (no other GUPT).
+sigma_xover_mps2, sigma_gupt_mps2 : float
+    Standard deviations [m/s²] (1e-5 = 1 mGal).
+checkpoint_interval : int
+    0 keeps the whole factor (2 K 72² doubles); k > 0 one checkpoint every k super-blocks.
+gravity_covariance, keep_gravity_estimate : bool
+
+Returns
+-------
+dict: imu_epochs, gps_epochs, unknowns, ties, gupts, equations, folded_blocks,
+folded_block_size, factor_seconds, backward_seconds, total_seconds [s], stored_factor_bytes,
+min_relative_pivot, max_abs_error (every unknown, against the noise-free truth), gravity_rmse
+[m/s²], gravity_sigma (E, 3) [m/s²], gravity_estimate (E, 3) [m/s²] or empty, report.)doc");
+
   m.def(
       "solve_linear_ins_network_with_crossovers",
       [](double imu_rate_hz, double duration_s, double gps_rate_hz, const std::string& rule, int lines, int cross_lines,

@@ -81,3 +81,48 @@ def test_ceres_peer_solves_the_same_network(one_step):
         assert peer["iterations"] == 1
     with pytest.raises(ValueError, match="rule"):
         network.solve_linear_ins_network_ceres(50.0, 4.0, rule="euler")
+
+
+# --- Case 4: repeated passes folded into the band ---------------------------------------------
+
+def test_folded_repeated_pass_network_matches_the_dense_tied_solve():
+    from indoorloc import network as facade
+
+    d = facade.solve_repeated_pass_network(50.0, 2.0, 2.0, num_ties=60, num_gupts=4, keep_gravity_estimate=True,
+                                           checkpoint_interval=0)
+    E = int(d["imu_epochs"])
+    assert d["ties"] == 60 and d["gupts"] == 4 and d["folded_block_size"] == 72
+    assert d["max_abs_error"] < 1e-6 and d["gravity_rmse"] < 1e-9  # noise-free: the truth comes back
+    assert isinstance(d["gravity_sigma"], np.ndarray) and d["gravity_sigma"].shape == (E, 3)
+    # Dense reference in the original order: the banded normal matrix + the same ties and GUPTs.
+    D, L, rhs = network.linear_ins_normal_blocks(50.0, 2.0, 2.0, rule="leapfrog")
+    n, b = D.shape[0], D.shape[1]
+    A = np.zeros((n * b, n * b))
+    for j in range(n):
+        A[j * b:(j + 1) * b, j * b:(j + 1) * b] += D[j]
+        if j:
+            A[j * b:(j + 1) * b, (j - 1) * b:j * b] += L[j]
+            A[(j - 1) * b:j * b, j * b:(j + 1) * b] += L[j].T
+    landing = np.arange(E - 2, E) * 18 + 15 + np.arange(3)[:, None]
+    A[landing, landing] -= 1e10  # these blocks hold the default landing GUPT; the folded solve has none
+    # The layout: every mirror pair (t, E-1-t) (P = E/2 = 51 of them), then 9 ties to the
+    # mirror's neighbour (t, E-2-t), t = i Q / 9 with Q = (E-1)//2.
+    P, Q, w = E // 2, (E - 1) // 2, 1e10
+    pairs = [(t, E - 1 - t) for t in range(P)] + [((i * Q) // 9, E - 2 - (i * Q) // 9) for i in range(9)]
+    for t, m in pairs:
+        a, c = t * 18 + 17, m * 18 + 17
+        A[a, a] += w; A[c, c] += w; A[a, c] -= w; A[c, a] -= w
+    for i in range(4):
+        u = ((2 * i + 1) * E) // 8 * 18 + 17
+        A[u, u] += w
+    var = np.diag(np.linalg.inv(A))[np.arange(E)[:, None] * 18 + 15 + np.arange(3)[None, :]]
+    np.testing.assert_allclose(d["gravity_sigma"], np.sqrt(var), rtol=1e-6)
+
+
+def test_folded_network_bad_input_names_the_argument():
+    with pytest.raises(ValueError, match="num_ties"):
+        network.solve_folded_linear_ins_network(50.0, 2.0, 2.0, num_ties=10**6)
+    with pytest.raises(ValueError, match="sigma_xover_mps2"):
+        network.solve_folded_linear_ins_network(50.0, 2.0, 2.0, num_ties=10, sigma_xover_mps2=float("nan"))
+    with pytest.raises(ValueError, match="checkpoint_interval"):
+        network.solve_folded_linear_ins_network(50.0, 2.0, 2.0, num_ties=10, checkpoint_interval=-1)

@@ -16,6 +16,19 @@ def solve_linear_ins_network(
     prior_epochs: int = 2,
     keep_gravity_estimate: bool = False,
 ) -> Dict[str, object]: ...
+def solve_folded_linear_ins_network(
+    imu_rate_hz: float = 50.0,
+    duration_s: float = 60.0,
+    gps_rate_hz: float = 2.0,
+    rule: str = "leapfrog",
+    num_ties: int = 1000,
+    num_gupts: int = 10,
+    sigma_xover_mps2: float = 1e-5,
+    sigma_gupt_mps2: float = 1e-5,
+    checkpoint_interval: int = 2048,
+    gravity_covariance: bool = True,
+    keep_gravity_estimate: bool = False,
+) -> Dict[str, object]: ...
 def linear_ins_normal_blocks(
     imu_rate_hz: float = 200.0,
     duration_s: float = 60.0,
