@@ -12,7 +12,7 @@ is solved
    scipy (normal equations, SuperLU with COLAMD) - all return the same solution (checked);
 2. at the paper's Table 2 sizes (case 2: 50 Hz x 14,400 s, 12.96 M unknowns; case 1: 200 Hz x
    10,800 s, 38.9 M unknowns) with the covariances of every δg (selected inversion), each case in
-   a child process so that its peak memory (ru_maxrss) is its own.
+   a child process so that its peak memory (VmHWM) is its own.
 
 3. Table 2 case 4 (Rockies'95: 50 Hz x 11,301 s, 2 Hz GPS, 332,150 cross-overs, 1,907 GUPT) at
    full size, the cross-overs laid out as repeated passes (the flight re-flown in reverse over its
@@ -58,7 +58,7 @@ CASE4 = dict(imu_rate_hz=50.0, duration_s=565049.0 / 50.0, gps_rate_hz=2.0, num_
 PAPER_CASE4 = dict(imu_epochs=565050, gps_epochs=22602, gupts=1907, ties=332150, equations=10572763, unknowns=10170900)
 
 _CHILD4 = """
-import json, resource, sys
+import json, sys
 import numpy as np
 from indoorloc import network
 r = network.solve_repeated_pass_network(**{case}, checkpoint_interval={interval})
@@ -69,7 +69,6 @@ out["gravity_sigma_mgal"] = {{
     axis: dict(min=float(sig[:, c].min() * 1e5), median=float(np.median(sig[:, c]) * 1e5), max=float(sig[:, c].max() * 1e5))
     for c, axis in enumerate(("x", "y", "z"))}}
 out["gravity_sigma_count"] = int(np.isfinite(sig).sum())
-out["ru_maxrss_gib"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
 hwm = [l for l in open("/proc/self/status") if l.startswith("VmHWM:")][0].split()[1]
 out["peak_rss_gib"] = int(hwm) / 2**20
 print(json.dumps(out))
@@ -231,12 +230,12 @@ def markdown(result: dict) -> str:
             p = c4["paper"]
             sg = c4["gravity_sigma_mgal"]
             lines += [
-                "| case | IMU epochs | GPS | XOVER | GUPT | unknowns | equations (paper N*_eq) | factor [s] | backward + selected inversion [s] | total [s] | peak memory [GiB] (ru_maxrss) | max error vs truth | δg RMSE [m/s²] | σ(δg_z) min / median / max [mGal] |",
+                "| case | IMU epochs | GPS | XOVER | GUPT | unknowns | equations (paper N*_eq) | factor [s] | backward + selected inversion [s] | total [s] | peak memory [GiB] (VmHWM) | max error vs truth | δg RMSE [m/s²] | σ(δg_z) min / median / max [mGal] |",
                 "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
                 f"| case 4 | {c4['imu_epochs']:,} ({p['imu_epochs']:,}) | {c4['gps_epochs']:,} ({p['gps_epochs']:,}) | "
                 f"{c4['ties']:,} ({p['ties']:,}) | {c4['gupts']:,} ({p['gupts']:,}) | {c4['unknowns']:,} ({p['unknowns']:,}) | "
                 f"{c4['equations']:,} ({p['equations']:,}) | {c4['factor_seconds']:.1f} | {c4['backward_seconds']:.1f} | "
-                f"{c4['total_seconds']:.1f} | {c4['peak_rss_gib']:.2f} ({c4['ru_maxrss_gib']:.2f}) | {c4['max_abs_error']:.1e} | "
+                f"{c4['total_seconds']:.1f} | {c4['peak_rss_gib']:.2f} | {c4['max_abs_error']:.1e} | "
                 f"{c4['gravity_rmse']:.1e} | {sg['z']['min']:.3f} / {sg['z']['median']:.3f} / {sg['z']['max']:.3f} |",
                 "",
                 f"σ(δg_x), σ(δg_y) median: {sg['x']['median']:.1f}, {sg['y']['median']:.1f} mGal (no tie or GUPT on the "
