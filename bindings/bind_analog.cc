@@ -2,6 +2,7 @@
 // generic sparse forward-backward / Viterbi.
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include <pybind11/eigen.h>
@@ -10,6 +11,7 @@
 #include "indoorloc/analog/analog_hmm.h"
 #include "indoorloc/analog/catalog.h"
 #include "indoorloc/analog/forward_backward.h"
+#include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
 #include "numpy_args.h"
 
@@ -129,12 +131,23 @@ R : (m, m) array
     Observation covariance, symmetric positive definite, in the state's units squared.
 sigma_scale : float
     Multiplier of the adaptive kernel width σ_i = std of state i's K distances (1 = the paper;
-    smaller values concentrate each transition on the nearest analog's successor).)doc")
+    smaller values concentrate each transition on the nearest analog's successor).
+successor_rule : {"catalog", "incremental"}
+    Target of the transition through analog a_j: "catalog" = its successor (eq. 4, the paper);
+    "incremental" = the catalog state nearest to s_i + (successor - a_j) (locally incremental
+    analog operator; equal targets merged).)doc")
       .def(py::init([](const std::shared_ptr<Catalog>& catalog, int k, const std::vector<int>& observed, const py::object& R,
-                       double sigma_scale) {
+                       double sigma_scale, const std::string& successor_rule) {
              AnalogHmmOptions o;
              o.k = k;
              o.sigma_scale = sigma_scale;
+             if (successor_rule == "catalog") {
+               o.successor_rule = analog::SuccessorRule::kCatalog;
+             } else if (successor_rule == "incremental") {
+               o.successor_rule = analog::SuccessorRule::kIncremental;
+             } else {
+               ThrowInvalidArgument("successor_rule", "must be 'catalog' or 'incremental', got '" + successor_rule + "'");
+             }
              o.observed = observed;
              const Eigen::Index mdim = static_cast<Eigen::Index>(observed.empty() ? 1 : observed.size());
              MatrixArg r = ToMatrix(R, "R", mdim, mdim);
@@ -143,7 +156,7 @@ sigma_scale : float
              return std::make_shared<AnalogHMM>(catalog, o);
            }),
            py::arg("catalog"), py::arg("k") = 10, py::arg("observed") = std::vector<int>{0}, py::arg("R"),
-           py::arg("sigma_scale") = 1.0)
+           py::arg("sigma_scale") = 1.0, py::arg("successor_rule") = "catalog")
       .def_property_readonly("transitions_next", [](const AnalogHMM& h) {
         const auto& t = h.transitions();
         return Eigen::Map<const Eigen::Matrix<int, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(t.next.data(), t.num_states, t.k);
@@ -174,6 +187,7 @@ sigma_scale : float
              d["mean"] = out.mean;
              d["mpm"] = out.mpm;
              d["filtering_mean"] = out.filtering_mean;
+             d["std"] = out.std;
              d["log_likelihood"] = out.log_likelihood;
              d["dropped_mass"] = out.dropped_mass;
              d["support_size"] = out.support_size;
@@ -185,7 +199,7 @@ sigma_scale : float
 Forward-backward on observations (T, m) (NaN = missing). beam=None: exact; beam=N: truncated
 (paper §2.3); beam_unobserved: a wider beam at steps with no observation (0: same as beam);
 max_dropped_mass: mass-adaptive beam, keep more than N states (most likely first) until at most
-this filtering mass is dropped per step (1: off), capped at beam_max states (0: no cap). Returns a dict: mean (T, D) posterior mean, mpm (T, D), filtering_mean (T, D),
+this filtering mass is dropped per step (1: off), capped at beam_max states (0: no cap). Returns a dict: mean (T, D) posterior mean, std (T, D) posterior standard deviation, mpm (T, D), filtering_mean (T, D),
 log_likelihood, dropped_mass (T,), support_size (T,), seconds.)doc")
       .def("viterbi", [](const AnalogHMM& h, const py::object& observations, const py::object& beam) {
              MatrixArg obs = ToMatrix(observations, "observations", -1, -1, Finiteness::kAny);

@@ -20,6 +20,8 @@ def cmd_lorenz63(args: argparse.Namespace) -> int:
         max_dropped_mass=args.max_dropped_mass,
         methods=tuple(args.methods),
         kernels=al.VALIDATED_KERNELS if (args.k is None and args.sigma_scale is None) else None,
+        successor_rule=args.successor_rule,
+        r_hmm_scale=args.r_hmm_scale,
     )
     text = al.markdown_table(result)
     print(text)
@@ -31,16 +33,19 @@ def cmd_lorenz63(args: argparse.Namespace) -> int:
 def cmd_lorenz63_tune(args: argparse.Namespace) -> int:
     from indoorloc.experiments import analog_lorenz63 as al
 
-    print(f"| M | K | sigma_scale | validation RMSE (mean over {args.problems}) | per problem | time per run [s] |")
-    print("|---|---|---|---|---|---|")
+    print(f"| M | rule | K | sigma_scale | R_hmm / R | validation RMSE (mean over {args.problems}) | median | "
+          "per problem | time per run [s] |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for M in args.catalog_sizes:
         rows = al.run_kernel_selection(
             M, ks=tuple(args.ks), sigma_scales=tuple(args.sigma_scales), beam=None if args.beam == 0 else args.beam,
             max_dropped_mass=args.max_dropped_mass, n_problems=args.problems, seed=args.seed,
+            successor_rule=args.successor_rule, r_hmm_scales=tuple(args.r_hmm_scales),
         )
         for r in rows:
             per = " ".join(f"{e:.2f}" for e in r["rmse"])
-            print(f"| {M} | {r['k']} | {r['sigma_scale']} | {r['rmse_mean']:.3f} | {per} | {r['seconds_mean']:.2f} |")
+            print(f"| {M} | {r['successor_rule']} | {r['k']} | {r['sigma_scale']} | {r['r_hmm_scale']} | "
+                  f"{r['rmse_mean']:.3f} | {r['rmse_median']:.3f} | {per} | {r['seconds_mean']:.2f} |", flush=True)
     return 0
 
 
@@ -69,6 +74,10 @@ def add_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
                      help="kernel width multiplier of eq. 4 (1 = the paper's adaptive sigma); default: validated")
     l63.add_argument("--max-dropped-mass", type=float, default=al.DEFAULT_MAX_DROPPED_MASS,
                      help="mass-adaptive beam tolerance (1 = the paper's fixed N)")
+    l63.add_argument("--successor-rule", default=al.DEFAULT_SUCCESSOR_RULE, choices=list(al.SUCCESSOR_RULES),
+                     help="AnFB transition target: 'catalog' (paper eq. 4) or 'incremental' (docs/analog.md)")
+    l63.add_argument("--r-hmm-scale", type=float, default=1.0,
+                     help="the AnFB assumes observation variance r_hmm_scale * R (1: the data's)")
     l63.add_argument("--methods", nargs="+", default=list(al.METHODS), choices=list(al.METHODS))
     l63.add_argument("--seed", type=int, default=0)
     l63.add_argument("--json")
@@ -81,6 +90,9 @@ def add_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
     tune.add_argument("--beam", type=int, default=1000, help="N (0: exact)")
     tune.add_argument("--max-dropped-mass", type=float, default=al.DEFAULT_MAX_DROPPED_MASS)
     tune.add_argument("--problems", type=int, default=6)
+    tune.add_argument("--successor-rule", default=al.DEFAULT_SUCCESSOR_RULE, choices=list(al.SUCCESSOR_RULES))
+    tune.add_argument("--r-hmm-scales", type=float, nargs="+", default=[1.0],
+                      help="inflations of the AnFB's observation variance (R_hmm = scale * R) tried per kernel")
     tune.add_argument("--seed", type=int, default=0)
     tune.set_defaults(func=cmd_lorenz63_tune)
     imu = asub.add_parser("imu", help="missing-data interpolation on real walking IMU data", parents=[quiet_parent()])

@@ -103,3 +103,47 @@ def test_mass_adaptive_beam_bounds_the_dropped_mass_and_narrow_kernel_concentrat
     assert np.max(adaptive["dropped_mass"]) <= 1e-3 + 1e-12
     assert np.max(fixed["dropped_mass"]) > 1e-3
     assert np.max(adaptive["support_size"]) > 3
+
+
+def test_incremental_successor_rule_matches_numpy_construction():
+    cat = analog.Catalog([circle(400, noise=0.03, seed=5)])
+    k, scale = 6, 0.6
+    base = analog.AnalogHMM(cat, k=k, observed=[0], R=np.eye(1), sigma_scale=scale)
+    inc = analog.AnalogHMM(cat, k=k, observed=[0], R=np.eye(1), sigma_scale=scale, successor_rule="incremental")
+    states = np.asarray(cat.states)
+    analogs, successors = np.asarray(cat.analogs), np.asarray(cat.successors)
+    nn, _ = cat.knn(states, k)
+    # numpy: target = argmin_s ||s - (s_i + s_succ(a) - s_a)||, weights of equal targets summed
+    query = states[:, None, :] + states[successors[nn]] - states[analogs[nn]]
+    target = np.argmin(((query[:, :, None, :] - states[None, None, :, :]) ** 2).sum(axis=-1), axis=-1)
+    dense_expected = np.zeros((len(states), len(states)))
+    dense_got = np.zeros_like(dense_expected)
+    rows = np.repeat(np.arange(len(states)), k)
+    np.add.at(dense_expected, (rows, target.ravel()), np.asarray(base.transitions_prob).ravel())
+    np.add.at(dense_got, (rows, np.asarray(inc.transitions_next).ravel()), np.asarray(inc.transitions_prob).ravel())
+    np.testing.assert_allclose(dense_got, dense_expected, atol=1e-12)
+    np.testing.assert_allclose(np.asarray(inc.transitions_prob).sum(axis=1), 1.0, atol=1e-12)
+    with pytest.raises(ValueError, match="successor_rule"):
+        analog.AnalogHMM(cat, k=k, observed=[0], R=np.eye(1), successor_rule="bogus")
+
+
+def test_smooth_reports_the_posterior_std():
+    cat = analog.Catalog([circle(500, noise=0.02, seed=6)])
+    hmm = analog.AnalogHMM(cat, k=5, observed=[0], R=np.array([[0.05]]))
+    truth = circle(60, phase=0.2)
+    obs = np.full((60, 1), np.nan)
+    obs[::5, 0] = truth[::5, 0]
+    out = hmm.smooth(obs)
+    post = analog.forward_backward(hmm.transitions_next, hmm.transitions_prob,
+                                   _log_emission(cat, obs, 0.05), np.ones(cat.num_states))["posterior"]
+    states = np.asarray(cat.states)
+    mean = post @ states
+    std = np.sqrt(post @ states**2 - mean**2)
+    np.testing.assert_allclose(out["mean"], mean, atol=1e-9)
+    np.testing.assert_allclose(out["std"], std, atol=1e-6)
+
+
+def _log_emission(cat, obs, r):
+    x = np.asarray(cat.states)[:, 0]
+    log_b = -0.5 * (obs[:, :1] - x[None, :]) ** 2 / r - 0.5 * np.log(2 * np.pi * r)
+    return np.where(np.isnan(log_b), 0.0, log_b)

@@ -255,6 +255,30 @@ def test_kernel_selection_uses_validation_problems_and_sorts():
     assert analog_lorenz63.VALIDATION_SEED >= 1000
 
 
+def test_kernel_selection_with_incremental_rule_and_inflated_r():
+    rows = analog_lorenz63.run_kernel_selection(
+        2000, ks=(5,), sigma_scales=(0.5,), beam=200, n_problems=1, T=120, dt_obs=8,
+        successor_rule="incremental", r_hmm_scales=(1.0, 2.0),
+    )
+    assert sorted(r["r_hmm_scale"] for r in rows) == [1.0, 2.0]
+    assert all(r["successor_rule"] == "incremental" and r["rmse_mean"] < 0.5 * CLIMATOLOGY_STD for r in rows)
+
+
+def test_error_anatomy_splits_the_squared_error():
+    truth = np.zeros((40, 3))
+    mean = np.zeros((40, 3))
+    mean[5, 0] = 10.0  # one burst, between observations
+    mean[10:20, 2] = 1.0
+    obs = np.full((40, 1), np.nan)
+    obs[::20, 0] = 0.0
+    a = analog_lorenz63.error_anatomy(truth, obs, mean, std=np.ones((40, 3)))
+    np.testing.assert_allclose(a["mse_per_variable"], [100 / 40, 0, 10 / 40])
+    assert a["burst_fraction_steps"] == 1 / 40 and abs(a["burst_fraction_se"] - 100 / 110) < 1e-12
+    assert a["rmse_by_phase"]["0"] == 0.0
+    assert abs(a["coverage_2sd"] - (1 - 1 / 120)) < 1e-12
+    assert abs(a["rmse"] ** 2 - np.mean(a["mse_per_variable"])) < 1e-12
+
+
 def test_imu_runner_needs_the_data_root(tmp_path):
     with pytest.raises(ValueError, match="data_root"):
         analog_imu.prepare_split(tmp_path)

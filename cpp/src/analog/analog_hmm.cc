@@ -58,7 +58,59 @@ void KnnAnalogs(const Catalog& catalog, const Eigen::Ref<const RowMatrixXd>& que
   }
 }
 
-SparseTransitions BuildKnnTransitions(const Catalog& catalog, int k, double sigma_scale) {
+namespace {
+
+// nanoflann dataset adaptor over every row of the catalog's state matrix (targets of the
+// incremental rule may be any state, also one without a successor).
+struct StateCloud {
+  const RowMatrixXd& states;
+  size_t kdtree_get_point_count() const { return static_cast<size_t>(states.rows()); }
+  double kdtree_get_pt(size_t idx, size_t dim) const {
+    return states(static_cast<Eigen::Index>(idx), static_cast<Eigen::Index>(dim));
+  }
+  template <class BBox>
+  bool kdtree_get_bbox(BBox&) const { return false; }
+};
+
+using StateTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, StateCloud>, StateCloud, -1, size_t>;
+
+// SuccessorRule::kIncremental: replace each target s_{F(j)} of state i by the state nearest to
+// s_i + (s_{F(j)} - a_j); merge equal targets of a row (weights summed, first occurrence keeps
+// the mass, later ones keep the same target with probability 0 so that K stays fixed).
+void ApplyIncrementalRule(const Catalog& catalog, const Eigen::Matrix<int, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>& nn,
+                          SparseTransitions* tr) {
+  const RowMatrixXd& states = catalog.states();
+  const StateCloud cloud{states};
+  StateTree tree(static_cast<size_t>(catalog.dim()), cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  tree.buildIndex();
+  const int k = tr->k;
+  Eigen::VectorXd query(catalog.dim());
+  for (int i = 0; i < tr->num_states; ++i) {
+    const size_t base = static_cast<size_t>(i) * static_cast<size_t>(k);
+    for (int j = 0; j < k; ++j) {
+      const size_t a = static_cast<size_t>(nn(i, j));
+      const int analog = catalog.analogs()[a], successor = catalog.successors()[a];
+      query = states.row(i).transpose() + (states.row(successor) - states.row(analog)).transpose();
+      size_t target = 0;
+      double d2 = 0.0;
+      tree.knnSearch(query.data(), 1, &target, &d2);
+      tr->next[base + static_cast<size_t>(j)] = static_cast<int>(target);
+    }
+    for (int j = 1; j < k; ++j) {
+      for (int l = 0; l < j; ++l) {
+        if (tr->next[base + static_cast<size_t>(l)] == tr->next[base + static_cast<size_t>(j)]) {
+          tr->prob[base + static_cast<size_t>(l)] += tr->prob[base + static_cast<size_t>(j)];
+          tr->prob[base + static_cast<size_t>(j)] = 0.0;
+          break;
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+
+SparseTransitions BuildKnnTransitions(const Catalog& catalog, int k, double sigma_scale, SuccessorRule rule) {
   CheckArgument(std::isfinite(sigma_scale) && sigma_scale > 0.0, "sigma_scale", "must be finite and > 0, got " + std::to_string(sigma_scale));
   Eigen::Matrix<int, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> nn;
   RowMatrixXd d2;
@@ -90,6 +142,7 @@ SparseTransitions BuildKnnTransitions(const Catalog& catalog, int k, double sigm
     }
     for (int j = 0; j < k; ++j) tr.prob[base + static_cast<size_t>(j)] /= total;
   }
+  if (rule == SuccessorRule::kIncremental) ApplyIncrementalRule(catalog, nn, &tr);
   return tr;
 }
 
@@ -100,6 +153,10 @@ bool AnalogHmmOptions::IsValid(std::string* error) const {
   }
   if (!(std::isfinite(sigma_scale) && sigma_scale > 0.0)) {
     *error = "sigma_scale must be finite and > 0";
+    return false;
+  }
+  if (successor_rule != SuccessorRule::kCatalog && successor_rule != SuccessorRule::kIncremental) {
+    *error = "successor_rule must be kCatalog or kIncremental";
     return false;
   }
   return true;
@@ -126,7 +183,7 @@ AnalogHMM::AnalogHMM(std::shared_ptr<const Catalog> catalog, const AnalogHmmOpti
   CheckArgument(llt.info() == Eigen::Success, "R", "is not positive definite");
   CheckArgument(catalog_->num_analogs() >= options_.k + 1, "catalog",
                 "has " + std::to_string(catalog_->num_analogs()) + " analogs: needs at least K + 1 = " + std::to_string(options_.k + 1));
-  transitions_ = BuildKnnTransitions(*catalog_, options_.k, options_.sigma_scale);
+  transitions_ = BuildKnnTransitions(*catalog_, options_.k, options_.sigma_scale, options_.successor_rule);
 }
 
 LogEmission AnalogHMM::Emission(const Eigen::Ref<const RowMatrixXd>& observations) const {
@@ -224,6 +281,7 @@ SmoothingOutput AnalogHMM::Smooth(const Eigen::Ref<const RowMatrixXd>& observati
   SmoothingOutput out;
   out.mean = RowMatrixXd::Zero(steps, catalog_->dim());
   out.filtering_mean = RowMatrixXd::Zero(steps, catalog_->dim());
+  out.std = RowMatrixXd::Zero(steps, catalog_->dim());
   out.mpm.resize(steps, catalog_->dim());
   out.support_size.resize(steps);
   for (Eigen::Index t = 0; t < steps; ++t) {
@@ -238,6 +296,10 @@ SmoothingOutput AnalogHMM::Smooth(const Eigen::Ref<const RowMatrixXd>& observati
       if (g[i] > g[arg]) arg = i;
       support += g[i] > 0.0;
     }
+    for (size_t i = 0; i < s.size(); ++i) {
+      out.std.row(t) += g[i] * (states.row(s[i]) - out.mean.row(t)).array().square().matrix();
+    }
+    out.std.row(t) = out.std.row(t).array().sqrt().matrix();
     out.mpm.row(t) = states.row(s[arg]);
     out.support_size[t] = support;
   }

@@ -27,7 +27,8 @@ class Catalog:
 
 class AnalogHMM:
     def __init__(
-        self, catalog: Catalog, k: int = 10, observed: Sequence[int] = ..., *, R: _ArrayLike, sigma_scale: float = 1.0
+        self, catalog: Catalog, k: int = 10, observed: Sequence[int] = ..., *, R: _ArrayLike, sigma_scale: float = 1.0,
+        successor_rule: str = "catalog",
     ) -> None: ...
     @property
     def transitions_next(self) -> npt.NDArray[np.int32]: ...

@@ -112,12 +112,27 @@ VALIDATED_KERNELS: Dict[int, Tuple[int, float]] = {10**4: (50, 0.35), 10**5: (10
 VALIDATION_SEED = 10_000
 
 
-def build_anfb(catalog: np.ndarray, k: int, R: float, sigma_scale: float = DEFAULT_SIGMA_SCALE):
-    """Analog HMM of a Lorenz-63 catalog trajectory (x observed); returns (hmm, seconds)."""
+#: Successor rules of the AnFB transitions (``AnalogHMM(successor_rule=...)``): "catalog" is the
+#: paper's eq. 4, "incremental" the locally incremental analog operator (docs/analog.md).
+SUCCESSOR_RULES = ("catalog", "incremental")
+DEFAULT_SUCCESSOR_RULE = "catalog"
+
+
+def build_anfb(
+    catalog: np.ndarray, k: int, R: float, sigma_scale: float = DEFAULT_SIGMA_SCALE,
+    successor_rule: str = DEFAULT_SUCCESSOR_RULE,
+):
+    """Analog HMM of a Lorenz-63 catalog trajectory (x observed); returns (hmm, seconds).
+
+    R is the observation variance the HMM assumes (it may be inflated over the data's).
+    """
     analog = analog_bindings()
     start = time.perf_counter()
     cat = analog.Catalog([np.ascontiguousarray(catalog)], lag=1, stride=1)
-    hmm = analog.AnalogHMM(cat, k=int(k), observed=[0], R=np.array([[float(R)]]), sigma_scale=float(sigma_scale))
+    hmm = analog.AnalogHMM(
+        cat, k=int(k), observed=[0], R=np.array([[float(R)]]), sigma_scale=float(sigma_scale),
+        successor_rule=str(successor_rule),
+    )
     return hmm, time.perf_counter() - start
 
 
@@ -136,9 +151,11 @@ def run_anfb(
         out = hmm.smooth(observations, beam=int(beam), max_dropped_mass=float(max_dropped_mass))
     seconds = time.perf_counter() - start
     mean = np.asarray(out["mean"])[:, :3]
+    std = np.asarray(out["std"])[:, :3] if "std" in out else None
     dropped = np.asarray(out["dropped_mass"]) if "dropped_mass" in out else np.zeros(0)
     return {
         "mean": mean,
+        "std": std,
         "seconds": seconds,
         "log_likelihood": float(out["log_likelihood"]),
         "max_dropped_mass": float(np.max(dropped)) if dropped.size else 0.0,
@@ -162,6 +179,8 @@ def run_table1(
     sigma_scale: float = DEFAULT_SIGMA_SCALE,
     max_dropped_mass: float = DEFAULT_MAX_DROPPED_MASS,
     kernels: Optional[Dict[int, Tuple[int, float]]] = None,
+    successor_rule: str = DEFAULT_SUCCESSOR_RULE,
+    r_hmm_scale: float = 1.0,
 ) -> Dict[str, object]:
     """Run Table 1: RMSE and time of EnKS, AnEnKS and AnFB over seeded realisations.
 
@@ -190,6 +209,10 @@ def run_table1(
         Mass-adaptive beam of the truncated AnFB (1 = the paper's fixed N).
     kernels : {M: (K, sigma_scale)} or None
         Per-catalog-size kernel overriding (k, sigma_scale) (e.g. :data:`VALIDATED_KERNELS`).
+    successor_rule : "catalog" or "incremental"
+        Target of the AnFB transitions (see :data:`SUCCESSOR_RULES`).
+    r_hmm_scale : float
+        The AnFB's observation variance is r_hmm_scale · R (1: the data's own).
 
     Returns
     -------
@@ -218,7 +241,7 @@ def run_table1(
             build[M]["anenks_kdtree"] = time.perf_counter() - start
         if "anfb" in methods:
             k_m, scale_m = (kernels or {}).get(M, (k, sigma_scale))
-            hmms[M], build[M]["anfb_hmm"] = build_anfb(catalog, k_m, R, scale_m)
+            hmms[M], build[M]["anfb_hmm"] = build_anfb(catalog, k_m, r_hmm_scale * R, scale_m, successor_rule)
             build[M]["anfb_kernel"] = (int(k_m), float(scale_m))
 
     rows: Dict[tuple, Dict[str, object]] = {}
@@ -268,6 +291,7 @@ def run_table1(
     for row in rows.values():
         values = np.asarray(row["rmse"])
         row["rmse_mean"] = float(values.mean())
+        row["rmse_median"] = float(np.median(values))
         row["rmse_std"] = float(values.std(ddof=1)) if values.size > 1 else 0.0
         row["seconds_mean"] = float(np.mean(row["seconds"]))
         out_rows.append(row)
@@ -279,6 +303,7 @@ def run_table1(
             "n_members": int(n_members), "anenks_k": int(anenks_k), "enks_Q": float(enks_Q), "seed": int(seed),
             "sigma_scale": float(sigma_scale), "max_dropped_mass": float(max_dropped_mass),
             "kernels": {str(M): list(v) for M, v in (kernels or {}).items()},
+            "successor_rule": str(successor_rule), "r_hmm_scale": float(r_hmm_scale),
         },
         "rows": out_rows,
         "build_seconds": {str(M): v for M, v in build.items()},
@@ -289,9 +314,9 @@ def markdown_table(result: Dict[str, object]) -> str:
     """The rows of :func:`run_table1` as a markdown table next to the paper's Table 1."""
     n = result["settings"]["n_realisations"]
     lines = [
-        f"| method | M | N (beam) | RMSE (mean ± std, {n} runs) | worst run | paper RMSE | time per run [s] | "
+        f"| method | M | N (beam) | RMSE (mean ± std, {n} runs) | median | worst run | paper RMSE | time per run [s] | "
         "mean support | paper time |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for row in result["rows"]:
         M = _format_size(row["M"])
@@ -301,7 +326,7 @@ def markdown_table(result: Dict[str, object]) -> str:
         support = f"{np.mean(row['mean_support']):.0f}" if "mean_support" in row else "-"
         lines.append(
             f"| {row['method']} | {M} | {beam} | {row['rmse_mean']:.3f} ± {row['rmse_std']:.3f} | "
-            f"{np.max(row['rmse']):.2f} | {paper} | {row['seconds_mean']:.2f} | {support} | {paper_time} |"
+            f"{np.median(row['rmse']):.3f} | {np.max(row['rmse']):.2f} | {paper} | {row['seconds_mean']:.2f} | {support} | {paper_time} |"
         )
     return "\n".join(lines)
 
@@ -384,6 +409,8 @@ def run_kernel_selection(
     dt_obs: int = 40,
     R: float = 2.0,
     seed: int = 0,
+    successor_rule: str = DEFAULT_SUCCESSOR_RULE,
+    r_hmm_scales: Sequence[float] = (1.0,),
 ) -> List[Dict[str, object]]:
     """Choose K and the kernel width on validation problems, never on the test problems.
 
@@ -392,10 +419,14 @@ def run_kernel_selection(
     disjoint from the Table 1 test problems (seeds ``seed + r``, r < 10). The catalog is the one
     of Table 1 (``catalog_trajectory(M, seed)``).
 
+    successor_rule selects the transition rule; r_hmm_scales the inflations of the HMM's
+    observation variance (r_hmm_scale · R) tried for every kernel.
+
     Returns
     -------
-    list of dicts (one per (K, sigma_scale)): "k", "sigma_scale", "rmse" (per problem),
-    "rmse_mean", "seconds_mean"; sorted by rmse_mean, best first.
+    list of dicts (one per (K, sigma_scale, r_hmm_scale)): "k", "sigma_scale",
+    "successor_rule", "r_hmm_scale", "rmse" (per problem), "rmse_mean", "rmse_median",
+    "seconds_mean"; sorted by rmse_mean, best first.
     """
     analog_bindings()
     catalog = lorenz63.catalog_trajectory(int(M), seed=seed)
@@ -403,14 +434,96 @@ def run_kernel_selection(
     rows = []
     for k in ks:
         for scale in sigma_scales:
-            hmm, _ = build_anfb(catalog, int(k), R, float(scale))
-            errors, seconds = [], []
-            for truth, observations in problems:
-                out = run_anfb(hmm, observations, beam, max_dropped_mass)
-                errors.append(rmse(out["mean"], truth))
-                seconds.append(out["seconds"])
-            rows.append({
-                "k": int(k), "sigma_scale": float(scale), "rmse": errors,
-                "rmse_mean": float(np.mean(errors)), "seconds_mean": float(np.mean(seconds)),
-            })
+            for r_scale in r_hmm_scales:
+                hmm, _ = build_anfb(catalog, int(k), float(r_scale) * R, float(scale), successor_rule)
+                errors, seconds = [], []
+                for truth, observations in problems:
+                    out = run_anfb(hmm, observations, beam, max_dropped_mass)
+                    errors.append(rmse(out["mean"], truth))
+                    seconds.append(out["seconds"])
+                rows.append({
+                    "k": int(k), "sigma_scale": float(scale), "successor_rule": str(successor_rule),
+                    "r_hmm_scale": float(r_scale), "rmse": errors, "rmse_mean": float(np.mean(errors)),
+                    "rmse_median": float(np.median(errors)), "seconds_mean": float(np.mean(seconds)),
+                })
     return sorted(rows, key=lambda r: r["rmse_mean"])
+
+
+def error_anatomy(
+    truth: np.ndarray, observations: np.ndarray, mean: np.ndarray, std: Optional[np.ndarray] = None,
+    burst_threshold: float = 5.0,
+) -> Dict[str, object]:
+    """Where the squared error of one reconstruction comes from.
+
+    Parameters
+    ----------
+    truth, mean : (T, 3) true and estimated states; std : (T, 3) posterior standard deviation.
+    observations : (T, 1), NaN where x is not observed.
+    burst_threshold : float
+        A step is in a burst when its error norm ||mean_t - truth_t|| exceeds this (state units).
+
+    Returns
+    -------
+    dict: "rmse"; "mse_per_variable" (3,) (their mean is rmse²); "rmse_by_phase" {label: RMSE
+    over the steps at that distance from the nearest observation (0, 1-10, 11-20)};
+    "burst_fraction_steps", "burst_fraction_se" (share of the steps in bursts and of the
+    squared error they carry); "se_share_worst_10pct" (squared error share of the worst 10 %
+    of the steps); with std: "spread_per_variable" (3,) sqrt(mean posterior variance),
+    "rmse_per_variable" (3,), "coverage_2sd" (share of components within 2 posterior sd).
+    """
+    truth = np.asarray(truth, dtype=float)
+    mean = np.asarray(mean, dtype=float)
+    err = mean - truth
+    se_t = (err**2).sum(axis=1)
+    t_obs = np.flatnonzero(np.isfinite(np.asarray(observations)[:, 0]))
+    steps = np.arange(truth.shape[0])
+    distance = np.min(np.abs(steps[:, None] - t_obs[None, :]), axis=1) if t_obs.size else np.full(steps.size, -1)
+    phases = {"0": distance == 0, "1-10": (distance >= 1) & (distance <= 10), "11-20": distance >= 11}
+    burst = np.sqrt(se_t) > burst_threshold
+    worst = np.sort(se_t)[::-1][: max(1, se_t.size // 10)]
+    out: Dict[str, object] = {
+        "rmse": rmse(mean, truth),
+        "mse_per_variable": (err**2).mean(axis=0),
+        "rmse_by_phase": {k: float(np.sqrt(se_t[m].mean() / 3.0)) if m.any() else float("nan") for k, m in phases.items()},
+        "burst_fraction_steps": float(burst.mean()),
+        "burst_fraction_se": float(se_t[burst].sum() / max(se_t.sum(), 1e-300)),
+        "se_share_worst_10pct": float(worst.sum() / max(se_t.sum(), 1e-300)),
+    }
+    if std is not None:
+        std = np.asarray(std, dtype=float)
+        out["spread_per_variable"] = np.sqrt((std**2).mean(axis=0))
+        out["rmse_per_variable"] = np.sqrt((err**2).mean(axis=0))
+        out["coverage_2sd"] = float((np.abs(err) <= 2.0 * std).mean())
+    return out
+
+
+def run_error_anatomy(
+    M: int = 10**5,
+    k: Optional[int] = None,
+    sigma_scale: Optional[float] = None,
+    beam: Optional[int] = 3000,
+    n_problems: int = 4,
+    successor_rule: str = DEFAULT_SUCCESSOR_RULE,
+    max_dropped_mass: float = DEFAULT_MAX_DROPPED_MASS,
+    T: int = 1000,
+    dt_obs: int = 40,
+    R: float = 2.0,
+    seed: int = 0,
+) -> List[Dict[str, object]]:
+    """:func:`error_anatomy` of the AnFB on the first n_problems validation problems (seeds 10000+).
+
+    k and sigma_scale default to :data:`VALIDATED_KERNELS` for M.
+    """
+    k_default, scale_default = VALIDATED_KERNELS.get(int(M), (DEFAULT_K, DEFAULT_SIGMA_SCALE))
+    k = k_default if k is None else int(k)
+    sigma_scale = scale_default if sigma_scale is None else float(sigma_scale)
+    catalog = lorenz63.catalog_trajectory(int(M), seed=seed)
+    hmm, _ = build_anfb(catalog, k, R, sigma_scale, successor_rule)
+    rows = []
+    for r in range(int(n_problems)):
+        truth, observations = lorenz63.test_problem(VALIDATION_SEED + r, T=T, dt_obs=dt_obs, R=R)
+        out = run_anfb(hmm, observations, beam, max_dropped_mass)
+        row = error_anatomy(truth, observations, out["mean"], out["std"])
+        row["seed"] = VALIDATION_SEED + r
+        rows.append(row)
+    return rows

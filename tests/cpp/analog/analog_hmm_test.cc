@@ -1,6 +1,7 @@
 #include "indoorloc/analog/analog_hmm.h"
 
 #include <cmath>
+#include <map>
 #include <memory>
 
 #include <Eigen/Dense>
@@ -74,6 +75,60 @@ TEST(KnnTransitions, NarrowerKernelFavoursTheNearestAnalogsSuccessor) {
   EXPECT_NO_THROW(narrow.Validate());
   EXPECT_THROW(BuildKnnTransitions(*catalog, 7, 0.0), std::invalid_argument);
   EXPECT_THROW(BuildKnnTransitions(*catalog, 7, std::nan("")), std::invalid_argument);
+}
+
+TEST(KnnTransitions, IncrementalRuleMapsAStraightLineToItsOwnSuccessors) {
+  // A straight line sampled at unit steps: every analog's increment is +1, so from any state the
+  // incremental target is the state's own successor, whichever neighbours it has; the catalog
+  // rule instead sends state i to i-2 .. i+3 (the successors of its time neighbours).
+  RowMatrixXd line(60, 2);
+  for (int t = 0; t < 60; ++t) line.row(t) << t, 0.5 * t;
+  const Catalog catalog({line});
+  const int k = 5;
+  const SparseTransitions inc = BuildKnnTransitions(catalog, k, 1.0, SuccessorRule::kIncremental);
+  const SparseTransitions cat = BuildKnnTransitions(catalog, k, 1.0, SuccessorRule::kCatalog);
+  EXPECT_NO_THROW(inc.Validate());
+  int catalog_rule_spread = 0;
+  for (int i = 0; i + 1 < inc.num_states; ++i) {
+    double to_successor = 0.0;
+    for (int j = 0; j < k; ++j) {
+      const size_t e = static_cast<size_t>(i) * k + static_cast<size_t>(j);
+      if (inc.next[e] == i + 1) to_successor += inc.prob[e];
+      else EXPECT_EQ(inc.prob[e], 0.0) << "state " << i << " slot " << j;
+      catalog_rule_spread += cat.next[e] != i + 1;
+    }
+    EXPECT_NEAR(to_successor, 1.0, 1e-12) << "state " << i;
+  }
+  EXPECT_GT(catalog_rule_spread, 0);
+}
+
+TEST(KnnTransitions, IncrementalRuleOnACircleMatchesBruteForce) {
+  const Catalog catalog({Circle(300, 0.0, 0.05, 4)});
+  const int k = 6;
+  const SparseTransitions tr = BuildKnnTransitions(catalog, k, 0.7, SuccessorRule::kIncremental);
+  const SparseTransitions base = BuildKnnTransitions(catalog, k, 0.7, SuccessorRule::kCatalog);
+  EXPECT_NO_THROW(tr.Validate());
+  Eigen::Matrix<int, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> nn;
+  RowMatrixXd d2;
+  KnnAnalogs(catalog, catalog.states(), k, &nn, &d2);
+  const RowMatrixXd& s = catalog.states();
+  for (int i = 0; i < catalog.num_states(); ++i) {
+    std::map<int, double> expected;  // brute-force target -> summed weight
+    for (int j = 0; j < k; ++j) {
+      const size_t a = static_cast<size_t>(nn(i, j));
+      const Eigen::RowVectorXd q = s.row(i) + s.row(catalog.successors()[a]) - s.row(catalog.analogs()[a]);
+      Eigen::Index target = 0;
+      (s.rowwise() - q).rowwise().squaredNorm().minCoeff(&target);
+      expected[static_cast<int>(target)] += base.prob[static_cast<size_t>(i) * k + static_cast<size_t>(j)];
+    }
+    std::map<int, double> got;
+    for (int j = 0; j < k; ++j) {
+      const size_t e = static_cast<size_t>(i) * k + static_cast<size_t>(j);
+      got[tr.next[e]] += tr.prob[e];
+    }
+    ASSERT_EQ(got.size(), expected.size()) << "state " << i;
+    for (const auto& [target, w] : expected) EXPECT_NEAR(got[target], w, 1e-12) << "state " << i;
+  }
 }
 
 TEST(AnalogHMM, ReconstructsAHiddenComponentAndHandlesMissingValues) {

@@ -16,11 +16,27 @@
 
 namespace indoorloc::analog {
 
+/// Where the transition from state s_i through its analog a_j goes.
+enum class SuccessorRule {
+  /// The analog's own successor s_{F(j)} (eq. 4 of the paper).
+  kCatalog,
+  /// The "locally incremental" analog operator of the AnDA literature (Lguensat et al., MWR 2017,
+  /// "locally-incremental" analog forecasting) made discrete: the catalog state nearest to
+  /// s_i + (s_{F(j)} - a_j), i.e. the analog's increment applied to the state itself.
+  /// Analogs on the state's own trajectory (s_{i±1}, s_{i±2}) then all lead to s_{i+1} instead
+  /// of s_{i-1} .. s_{i+3}, which removes the phase diffusion along the own trajectory, while
+  /// analogs on other passes still carry their increments. Targets that coincide are merged
+  /// (weights summed; the spare slots keep the target with probability 0).
+  kIncremental,
+};
+
 /// K nearest analogs of every catalog state (exact kNN on a kd-tree built once) and the
 /// transition probabilities of eq. 4 with σ_i = sigma_scale · std(K distances of state i).
 /// sigma_scale = 1 is the paper's adaptive σ; smaller values concentrate the transition on the
-/// nearest analogs' successors (see AnalogHmmOptions::sigma_scale).
-SparseTransitions BuildKnnTransitions(const Catalog& catalog, int k, double sigma_scale = 1.0);
+/// nearest analogs' successors (see AnalogHmmOptions::sigma_scale). `rule` chooses the target
+/// of each analog (kCatalog = the paper; kIncremental costs M·K extra 1-NN queries).
+SparseTransitions BuildKnnTransitions(const Catalog& catalog, int k, double sigma_scale = 1.0,
+                                      SuccessorRule rule = SuccessorRule::kCatalog);
 
 /// Exact kNN of arbitrary query points among the catalog's analogs: indices (into the analog
 /// list) and squared distances, K per query, nearest first.
@@ -36,6 +52,8 @@ struct AnalogHmmOptions {
   /// on a catalog of consecutive states a narrower kernel keeps the chain from drifting in time
   /// along its own trajectory (docs/analog.md). Must be > 0.
   double sigma_scale = 1.0;
+  /// Target of each analog's transition (kCatalog = the paper's eq. 4; see SuccessorRule).
+  SuccessorRule successor_rule = SuccessorRule::kCatalog;
   bool IsValid(std::string* error) const;
 };
 
@@ -52,6 +70,7 @@ struct SmoothingOutput {
   RowMatrixXd mean;               ///< T x D posterior mean E[X_t | y_1:T]
   RowMatrixXd mpm;                ///< T x D maximum posterior mode
   RowMatrixXd filtering_mean;     ///< T x D E[X_t | y_1:t]
+  RowMatrixXd std;                ///< T x D posterior standard deviation sqrt(Var[X_t | y_1:T]) per component
   double log_likelihood = 0.0;
   Eigen::VectorXd dropped_mass;   ///< T
   Eigen::VectorXi support_size;   ///< T: states with non-zero smoothing posterior
