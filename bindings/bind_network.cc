@@ -35,7 +35,11 @@ Eigen::VectorXi ToIndices(const py::object& obj, const char* name) {
 NetworkObservations MakeObservations(const py::object& imu_time_s, const py::object& acc, const py::object& gyro,
                                      const py::object& gps_time_s, const py::object& gps_position_m,
                                      const py::object& zupt_epochs, const py::object& gupt_epochs,
-                                     const py::object& gupt_gravity_mps2, const py::object& xover_epochs) {
+                                     const py::object& gupt_gravity_mps2, const py::object& xover_epochs,
+                                     const py::object& vupt_epochs = py::none(),
+                                     const py::object& vupt_velocity_mps = py::none(),
+                                     const py::object& vupt_sd_mps = py::none(),
+                                     const py::object& sgupt_epochs = py::none()) {
   NetworkObservations o;
   VectorArg t = ToVector(imu_time_s, "imu_time_s");
   o.imu_time_s = t.map;
@@ -68,6 +72,16 @@ NetworkObservations MakeObservations(const py::object& imu_time_s, const py::obj
         }
     }
   }
+  o.vupt_epochs = ToIndices(vupt_epochs, "vupt_epochs");
+  const Eigen::Index nv = o.vupt_epochs.size();
+  if (vupt_velocity_mps.is_none()) {
+    CheckArgument(nv == 0, "vupt_velocity_mps", "needs one row per entry of vupt_epochs");
+    o.vupt_velocity_mps.resize(0, 3);
+  } else {
+    o.vupt_velocity_mps = ToMatrix(vupt_velocity_mps, "vupt_velocity_mps", nv, 3).map;
+  }
+  if (!vupt_sd_mps.is_none()) o.vupt_sd_mps = ToVector(vupt_sd_mps, "vupt_sd_mps", nv).map;
+  o.sgupt_epochs = ToIndices(sgupt_epochs, "sgupt_epochs");
   return o;
 }
 
@@ -106,6 +120,14 @@ zupt_epochs : (Z,) int epochs with zero velocity, or None
 gupt_epochs : (G,) int epochs with known gravity; gupt_gravity_mps2 : (G,) total gravity [m/s^2]
 xover_epochs : (K, 2) int epoch pairs with equal gravity disturbance (see find_crossovers), or None)doc";
 
+constexpr const char* kStaticDoc = R"doc(
+vupt_epochs : (V,) int epochs with known velocity (VUPT), or None
+vupt_velocity_mps : (V, 3) known ENU velocities v0 [m/s] (required with vupt_epochs)
+vupt_sd_mps : (V,) sd per axis [m/s] (> 0), or None: options.sigma_vupt_mps
+sgupt_epochs : (S,) int static epochs with constant gravity (SGUPT, paper §3.2), strictly
+    increasing; each must carry a ZUPT or a VUPT with zero velocity; each run of consecutive
+    epochs is one static period, tied delta_g[n] = delta_g[n0] to its first epoch. Or None)doc";
+
 }  // namespace
 
 void BindNetwork(py::module_& m) {
@@ -114,7 +136,8 @@ Options of the network adjustment (see cpp/include/indoorloc/network/network_adj
 discretization: "leapfrog" (paper §3.3; decouples even and odd epochs) or "trapezoidal".
 Noise densities: acc_noise_mps2_rthz [m/s^2/sqrt(Hz)], gyro_noise_radps_rthz [rad/s/sqrt(Hz)],
 random walks acc_bias_walk_mps2_rts, gyro_bias_walk_radps_rts, gravity_walk_mps2_rts [unit/sqrt(s)];
-sigmas of VEL, CUPT, ZUPT, GUPT, XOVER; solver tolerances; check_datum.)doc")
+sigmas of VEL, CUPT, ZUPT, GUPT, XOVER, VUPT, SGUPT; slow_parameter_stride (paper §4); solver
+tolerances; check_datum.)doc")
       .def(py::init<>())
       .def_property(
           "discretization",
@@ -143,6 +166,14 @@ sigmas of VEL, CUPT, ZUPT, GUPT, XOVER; solver tolerances; check_datum.)doc")
       .def_readwrite("sigma_zupt_mps", &network::NetworkOptions::sigma_zupt_mps)
       .def_readwrite("sigma_gupt_mps2", &network::NetworkOptions::sigma_gupt_mps2)
       .def_readwrite("sigma_xover_mps2", &network::NetworkOptions::sigma_xover_mps2)
+      .def_readwrite("sigma_vupt_mps", &network::NetworkOptions::sigma_vupt_mps,
+                     "VUPT sd per axis [m/s] for observations without their own vupt_sd_mps (default 0.01).")
+      .def_readwrite("sigma_sgupt_mps2", &network::NetworkOptions::sigma_sgupt_mps2,
+                     "SGUPT sd [m/s^2] of each tie delta_g[n] - delta_g[n0] in a static period (default 1e-6 = 0.1 mGal).")
+      .def_readwrite("slow_parameter_stride", &network::NetworkOptions::slow_parameter_stride,
+                     "Slow parameters (paper §4): one accelerometer-bias, gyro-bias and delta_g block per this many "
+                     "IMU epochs (piecewise constant; 1 = every epoch, the default; e.g. IMU rate / GPS rate). "
+                     "Unknowns 9 N + 7 ceil(N / stride) instead of 16 N.")
       .def_readwrite("gps_huber_threshold", &network::NetworkOptions::gps_huber_threshold)
       .def_readwrite("max_iterations", &network::NetworkOptions::max_iterations)
       .def_readwrite("initial_trust_region_radius", &network::NetworkOptions::initial_trust_region_radius)
@@ -191,10 +222,13 @@ sigmas of VEL, CUPT, ZUPT, GUPT, XOVER; solver tolerances; check_datum.)doc")
         [](const py::object& imu_time_s, const py::object& acc, const py::object& gyro, const py::object& gps_time_s,
            const py::object& gps_position_m, const py::dict& initial, const py::object& zupt_epochs,
            const py::object& gupt_epochs, const py::object& gupt_gravity_mps2, const py::object& xover_epochs,
-           const network::NetworkOptions& options) {
+           const network::NetworkOptions& options, const py::object& vupt_epochs,
+           const py::object& vupt_velocity_mps, const py::object& vupt_sd_mps, const py::object& sgupt_epochs) {
           ValidateOptions(options);
-          const NetworkObservations obs = MakeObservations(imu_time_s, acc, gyro, gps_time_s, gps_position_m,
-                                                           zupt_epochs, gupt_epochs, gupt_gravity_mps2, xover_epochs);
+          const NetworkObservations obs =
+              MakeObservations(imu_time_s, acc, gyro, gps_time_s, gps_position_m, zupt_epochs, gupt_epochs,
+                               gupt_gravity_mps2, xover_epochs, vupt_epochs, vupt_velocity_mps, vupt_sd_mps,
+                               sgupt_epochs);
           const NetworkState init = MakeState(initial, obs.imu_time_s.size());
           network::NetworkSummary s;
           NetworkState out;
@@ -214,6 +248,9 @@ sigmas of VEL, CUPT, ZUPT, GUPT, XOVER; solver tolerances; check_datum.)doc")
           summary["num_parameters"] = s.num_parameters;
           summary["num_residuals"] = s.num_residuals;
           summary["num_xover"] = s.num_xover;
+          summary["num_slow_nodes"] = s.num_slow_nodes;
+          summary["num_vupt"] = s.num_vupt;
+          summary["num_sgupt"] = s.num_sgupt;
           summary["min_pivot_ratio"] = s.min_pivot_ratio;
           summary["variance_factor"] = s.variance_factor;
           summary["variance_factor_acc"] = s.variance_factor_acc;
@@ -231,14 +268,19 @@ sigmas of VEL, CUPT, ZUPT, GUPT, XOVER; solver tolerances; check_datum.)doc")
         py::arg("gps_position_m"), py::arg("initial"), py::arg("zupt_epochs") = py::none(),
         py::arg("gupt_epochs") = py::none(), py::arg("gupt_gravity_mps2") = py::none(),
         py::arg("xover_epochs") = py::none(), py::arg("options") = network::NetworkOptions(),
+        py::arg("vupt_epochs") = py::none(), py::arg("vupt_velocity_mps") = py::none(),
+        py::arg("vupt_sd_mps") = py::none(), py::arg("sgupt_epochs") = py::none(),
         (std::string(R"doc(
 INS/GPS network adjustment (paper 003): every epoch's position, velocity, attitude, biases and
 vertical gravity disturbance from one sparse least-squares network (Ceres, SuiteSparse).
-)doc") + kObservationsDoc + R"doc(
+)doc") + kObservationsDoc + kStaticDoc + R"doc(
 initial : dict of initial values, keys position_m (N, 3), velocity_mps (N, 3), attitude_wxyz (N, 4),
           acc_bias_mps2 (N, 3), gyro_bias_radps (N, 3), gravity_disturbance_mps2 (N,)
-Returns (state dict with the same keys, summary dict). Raises ValueError naming the argument for
-bad input and for datum defects (rank-deficient networks).)doc").c_str());
+          (with options.slow_parameter_stride > 1 the biases and delta_g are averaged per interval)
+Returns (state dict with the same keys, one row per IMU epoch: with slow parameters the epochs of
+an interval share the values; summary dict with num_parameters, num_slow_nodes, num_xover,
+num_vupt, num_sgupt, timings, ...). Raises ValueError naming the argument for bad input and for
+datum defects (rank-deficient networks).)doc").c_str());
 
   m.def("kalman_smoother",
         [](const py::object& imu_time_s, const py::object& acc, const py::object& gyro, const py::object& gps_time_s,

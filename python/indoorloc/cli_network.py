@@ -15,7 +15,7 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
     if args.imu_rate is not None:
         config.imu_rate_hz = args.imu_rate
     results = nr.reproduce(config, runs=args.runs, seed=args.seed, discretization=args.discretization,
-                           gravity_walk_mps2_rts=args.gravity_walk)
+                           gravity_walk_mps2_rts=args.gravity_walk, slow_stride=args.slow_stride)
     text = nr.markdown(results)
     print(text)
     if args.out:
@@ -38,5 +38,8 @@ def add_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
     r.add_argument("--discretization", choices=("trapezoidal", "leapfrog"), default="trapezoidal",
                    help="leapfrog is rejected with 1 Hz GPS on an even IMU rate (parity datum defect)")
     r.add_argument("--gravity-walk", type=float, default=2e-5, help="δg random-walk density [m/s^2/sqrt(s)]")
+    r.add_argument("--slow-stride", type=int, default=1,
+                   help="add NA rows with slow parameters (paper §4: biases and δg once per this many IMU epochs); "
+                        "0 = IMU rate / GPS rate; 1 (default) = no slow rows")
     r.add_argument("--out", default=None, help="folder for network_reproduce.md and .json")
     r.set_defaults(func=cmd_reproduce)

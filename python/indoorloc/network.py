@@ -6,7 +6,10 @@ error-state EKF + RTS smoother with the same model, without cross-overs).
 Model (docs/network.md): local Earth-fixed ENU frame with Earth rotation and GRS80 normal gravity
 γ(h); per epoch position, velocity, attitude quaternion, accelerometer and gyro biases (random
 walks) and the vertical gravity disturbance δg (random walk along time). Dynamic equations by the
-leap-frog rule (paper §3.3) or the trapezoidal rule; CUPT, ZUPT, GUPT and XOVER observations.
+leap-frog rule (paper §3.3) or the trapezoidal rule; CUPT, VUPT, ZUPT, GUPT, SGUPT and XOVER
+observations. ``NetworkOptions.slow_parameter_stride`` carries the biases and δg at a lower rate
+(paper §4: one block per that many IMU epochs, e.g. the IMU/GPS rate ratio; about half the
+unknowns).
 
 The helpers :func:`flight_options`, :func:`start_state`, :func:`solve_flight` and
 :func:`smooth_flight` run both approaches on a simulated flight
@@ -164,11 +167,12 @@ def smooth_flight(flight, options: Optional[NetworkOptions] = None, seed: int = 
 
 def solve_flight(flight, options: Optional[NetworkOptions] = None, xover: bool = True, seed: int = 0,
                  initial: Optional[dict] = None, crossover_radius_m: float = 5.0,
-                 min_separation_s: float = 30.0) -> Tuple[dict, dict, np.ndarray]:
+                 min_separation_s: float = 30.0, sgupt: bool = False) -> Tuple[dict, dict, np.ndarray]:
     """NA on a simulated flight: (state, summary, cross-over pairs used).
 
     Initial values: the forward EKF's states (``initial`` overrides). Cross-overs are found on the
-    initial trajectory with :func:`find_crossovers` when ``xover``.
+    initial trajectory with :func:`find_crossovers` when ``xover``. ``sgupt``: constant gravity
+    (SGUPT) over the flight's ZUPT (hover) epochs. Slow parameters: ``options.slow_parameter_stride``.
     """
     options = options or flight_options(flight.config)
     if initial is None:
@@ -178,5 +182,5 @@ def solve_flight(flight, options: Optional[NetworkOptions] = None, xover: bool =
         pairs = find_crossovers(flight.imu_time_s, initial["position_m"], radius_m=crossover_radius_m,
                                 min_separation_s=min_separation_s)
     state, summary = solve_network(initial=initial, xover_epochs=pairs if pairs.size else None, options=options,
-                                   **_obs(flight))
+                                   sgupt_epochs=flight.zupt_epochs if sgupt else None, **_obs(flight))
     return state, summary, pairs

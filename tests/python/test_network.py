@@ -186,3 +186,78 @@ def test_gauss_markov_biases_na_agrees_with_the_smoother():
     assert "acc_bias_correlation_time_s" in bad.is_valid()
     with pytest.raises(ValueError, match="'options'.*acc_bias_correlation_time_s"):
         network.solve_flight(flight, bad, xover=False, initial=ssa)
+
+
+# Slow parameters (paper §4): biases and δg once per IMU/GPS-rate-ratio epochs.
+def test_slow_parameters_halve_the_unknowns_and_keep_the_gravity_estimate(solved):
+    flight, t = solved["flight"], solved["flight"].truth
+    stride = int(round(flight.config.imu_rate_hz / flight.config.gps_rate_hz))
+    opts = network.flight_options(flight.config, slow_parameter_stride=stride)
+    assert opts.slow_parameter_stride == stride
+    slow, summary, pairs = network.solve_flight(flight, opts, xover=True, initial=solved["ssa"])
+    n = flight.n_epochs
+    m = -(-n // stride)
+    assert summary["termination"] == "converged"
+    assert summary["num_slow_nodes"] == m
+    assert summary["num_parameters"] == 9 * n + 7 * m
+    assert summary["num_parameters"] < 0.6 * solved["nax_summary"]["num_parameters"]
+    dg = slow["gravity_disturbance_mps2"]
+    assert dg.shape == (n,)
+    assert np.all(dg[:stride] == dg[0]) and np.all(slow["acc_bias_mps2"][stride:2 * stride] == slow["acc_bias_mps2"][stride])
+    # Cross-overs refer to the δg block of their epoch's interval: the ties still hold.
+    assert summary["num_xover"] == pairs.shape[0]
+    assert np.abs(dg[pairs[:, 0]] - dg[pairs[:, 1]]).mean() < 0.5 * np.abs(
+        solved["na"]["gravity_disturbance_mps2"][pairs[:, 0]] - solved["na"]["gravity_disturbance_mps2"][pairs[:, 1]]).mean()
+    err_fast = _rms(solved["nax"]["gravity_disturbance_mps2"] - t["gravity_disturbance_mps2"])
+    err_slow = _rms(dg - t["gravity_disturbance_mps2"])
+    assert err_slow < 1.3 * err_fast + 0.5 * MGAL, (err_slow / MGAL, err_fast / MGAL)
+
+
+def test_vupt_and_sgupt(small_problem):
+    flight, init = small_problem
+    o = network.NetworkOptions()
+    o.discretization = "trapezoidal"
+    epochs = np.arange(20, flight.n_epochs - 20, 50)
+    v0 = flight.truth["velocity_mps"][epochs]
+    kw = _obs(flight)
+    state, summary = network.solve_network(initial=init, options=o, vupt_epochs=epochs, vupt_velocity_mps=v0,
+                                           vupt_sd_mps=np.full(epochs.size, 1e-3), **kw)
+    assert summary["num_vupt"] == epochs.size
+    # SGUPT over the hovers (ZUPT epochs): δg constant over each static period.
+    z = flight.zupt_epochs
+    state, summary = network.solve_network(initial=init, options=o, sgupt_epochs=z, **kw)
+    runs = np.split(z, np.flatnonzero(np.diff(z) > 1) + 1)
+    assert summary["num_sgupt"] == z.size - len(runs)
+    for run in runs:
+        dg = state["gravity_disturbance_mps2"][run]
+        assert dg.max() - dg.min() < 0.05 * MGAL
+
+
+def test_bad_vupt_sgupt_and_slow_input_names_the_argument(small_problem):
+    flight, init = small_problem
+    n = flight.n_epochs
+    _expect("'vupt_epochs'", flight, init, vupt_epochs=np.array([n]), vupt_velocity_mps=np.zeros((1, 3)))
+    _expect("'vupt_velocity_mps'", flight, init, vupt_epochs=np.array([3]))
+    _expect("'vupt_velocity_mps'.*NaN", flight, init, vupt_epochs=np.array([3]),
+            vupt_velocity_mps=np.full((1, 3), np.nan))
+    _expect("'vupt_sd_mps'", flight, init, vupt_epochs=np.array([3]), vupt_velocity_mps=np.zeros((1, 3)),
+            vupt_sd_mps=np.array([0.0]))
+    moving = int(np.flatnonzero(np.linalg.norm(flight.truth["velocity_mps"], axis=1) > 1.0)[0])
+    _expect("'sgupt_epochs'.*not static", flight, init, sgupt_epochs=np.array([moving]))
+    o = network.NetworkOptions()
+    o.slow_parameter_stride = 0
+    _expect("'options'.*slow_parameter_stride", flight, init, options=o)
+    o = network.NetworkOptions()
+    o.sigma_vupt_mps = -1.0
+    _expect("'options'.*sigma_vupt_mps", flight, init, options=o)
+
+
+def test_reproduce_adds_slow_rows():
+    from indoorloc.experiments import network_reproduce as nr
+
+    res = nr.reproduce(_tiny(), runs=1, seed=3, slow_stride=0)
+    assert res["slow_stride"] == 25
+    assert set(nr.slow_methods(25)) <= set(res["methods"])
+    text = nr.markdown(res)
+    assert "NA + XOVER, slow s=25" in text and "9 N + 7 M" in text
+    assert res["info"]["unknowns_slow"][0] < 0.6 * res["info"]["unknowns"][0]

@@ -24,43 +24,40 @@ namespace {
 
 bool Positive(double x) { return std::isfinite(x) && x > 0.0; }
 
-constexpr int kParamsPerEpoch = 16;  // r 3, v 3, q 3 (tangent), a 3, o 3, δg 1
-const char* BlockName(int offset) {
-  if (offset < 3) return "position";
-  if (offset < 6) return "velocity";
-  if (offset < 9) return "attitude";
-  if (offset < 12) return "acc_bias";
-  if (offset < 15) return "gyro_bias";
-  return "gravity_disturbance";
-}
-
-/// Parameter storage of the whole network.
+/// Parameter storage of the whole network: r, v, q per IMU epoch; a, o, δg per slow node
+/// (one per `stride` epochs; stride 1: per epoch).
 struct Blocks {
-  int n = 0;
+  int n = 0;       // IMU epochs
+  int stride = 1;  // slow_parameter_stride
+  int m = 0;       // slow nodes ⌈n / stride⌉
   std::vector<double> r, v, q, a, o, dg;  // q in x, y, z, w
+  int Slow(int epoch) const { return epoch / stride; }
   double* R(int i) { return &r[3 * i]; }
   double* V(int i) { return &v[3 * i]; }
   double* Q(int i) { return &q[4 * i]; }
-  double* A(int i) { return &a[3 * i]; }
-  double* O(int i) { return &o[3 * i]; }
-  double* G(int i) { return &dg[i]; }
+  double* A(int k) { return &a[3 * k]; }  // slow node k
+  double* O(int k) { return &o[3 * k]; }
+  double* G(int k) { return &dg[k]; }
+  /// First and one-past-last epoch of slow node k.
+  int First(int k) const { return k * stride; }
+  int End(int k) const { return std::min((k + 1) * stride, n); }
 };
 
-Blocks FromState(const NetworkState& s) {
+Blocks FromState(const NetworkState& s, int stride) {
   Blocks b;
   b.n = static_cast<int>(s.position_m.rows());
+  b.stride = stride;
+  b.m = (b.n + stride - 1) / stride;
   b.r.resize(3 * b.n);
   b.v.resize(3 * b.n);
   b.q.resize(4 * b.n);
-  b.a.resize(3 * b.n);
-  b.o.resize(3 * b.n);
-  b.dg.resize(b.n);
+  b.a.assign(3 * b.m, 0.0);
+  b.o.assign(3 * b.m, 0.0);
+  b.dg.assign(b.m, 0.0);
   for (int i = 0; i < b.n; ++i) {
     for (int k = 0; k < 3; ++k) {
       b.r[3 * i + k] = s.position_m(i, k);
       b.v[3 * i + k] = s.velocity_mps(i, k);
-      b.a[3 * i + k] = s.acc_bias_mps2(i, k);
-      b.o[3 * i + k] = s.gyro_bias_radps(i, k);
     }
     Eigen::Quaterniond q(s.attitude_wxyz(i, 0), s.attitude_wxyz(i, 1), s.attitude_wxyz(i, 2), s.attitude_wxyz(i, 3));
     q.normalize();
@@ -68,7 +65,15 @@ Blocks FromState(const NetworkState& s) {
     b.q[4 * i + 1] = q.y();
     b.q[4 * i + 2] = q.z();
     b.q[4 * i + 3] = q.w();
-    b.dg[i] = s.gravity_disturbance_mps2[i];
+  }
+  // Slow blocks: the mean of the initial values over the interval.
+  for (int k = 0; k < b.m; ++k) {
+    const int first = b.First(k), count = b.End(k) - first;
+    for (int c = 0; c < 3; ++c) {
+      b.a[3 * k + c] = s.acc_bias_mps2.col(c).segment(first, count).mean();
+      b.o[3 * k + c] = s.gyro_bias_radps.col(c).segment(first, count).mean();
+    }
+    b.dg[k] = s.gravity_disturbance_mps2.segment(first, count).mean();
   }
   return b;
 }
@@ -82,20 +87,28 @@ NetworkState ToState(const Blocks& b) {
   s.gyro_bias_radps.resize(b.n, 3);
   s.gravity_disturbance_mps2.resize(b.n);
   for (int i = 0; i < b.n; ++i) {
-    for (int k = 0; k < 3; ++k) {
-      s.position_m(i, k) = b.r[3 * i + k];
-      s.velocity_mps(i, k) = b.v[3 * i + k];
-      s.acc_bias_mps2(i, k) = b.a[3 * i + k];
-      s.gyro_bias_radps(i, k) = b.o[3 * i + k];
+    const int k = b.Slow(i);
+    for (int c = 0; c < 3; ++c) {
+      s.position_m(i, c) = b.r[3 * i + c];
+      s.velocity_mps(i, c) = b.v[3 * i + c];
+      s.acc_bias_mps2(i, c) = b.a[3 * k + c];
+      s.gyro_bias_radps(i, c) = b.o[3 * k + c];
     }
     s.attitude_wxyz(i, 0) = b.q[4 * i + 3];
     s.attitude_wxyz(i, 1) = b.q[4 * i + 0];
     s.attitude_wxyz(i, 2) = b.q[4 * i + 1];
     s.attitude_wxyz(i, 3) = b.q[4 * i + 2];
-    s.gravity_disturbance_mps2[i] = b.dg[i];
+    s.gravity_disturbance_mps2[i] = b.dg[k];
   }
   return s;
 }
+
+/// What a column of the (tangent-space) Jacobian is: block name and epoch (slow blocks: the
+/// first epoch of their interval), for the datum-defect message.
+struct ColumnLabel {
+  const char* name;
+  int epoch;
+};
 
 template <typename Functor, int kRes, int... kSizes>
 ceres::CostFunction* Auto(Functor f) {
@@ -164,6 +177,9 @@ bool NetworkOptions::IsValid(std::string* error) const {
   if (num_threads < 1) return fail("num_threads must be >= 1");
   if (!std::isfinite(initial_trust_region_radius) || initial_trust_region_radius <= 0.0)
     return fail("initial_trust_region_radius must be finite and > 0");
+  if (!Positive(sigma_vupt_mps)) return fail("sigma_vupt_mps must be finite and > 0");
+  if (!Positive(sigma_sgupt_mps2)) return fail("sigma_sgupt_mps2 must be finite and > 0");
+  if (slow_parameter_stride < 1) return fail("slow_parameter_stride must be >= 1 (1: every IMU epoch)");
   return true;
 }
 
@@ -214,7 +230,7 @@ std::string NetworkSummary::BriefReport() const {
   std::ostringstream s;
   s << "network: " << ToString(termination) << ", " << iterations << " iterations, cost " << initial_cost << " -> "
     << final_cost << ", " << num_epochs << " epochs, " << num_parameters << " unknowns, " << num_residuals
-    << " residuals, " << num_xover << " cross-overs, " << seconds_total << " s (solve " << seconds_solve
+    << " residuals, " << num_slow_nodes << " slow nodes, " << num_xover << " cross-overs, " << seconds_total << " s (solve " << seconds_solve
     << " s, datum check " << seconds_datum_check << " s, covariance " << seconds_covariance
     << " s), variance factor " << variance_factor;
   return s.str();
@@ -259,6 +275,34 @@ void CheckNetworkInput(const NetworkObservations& obs, const NetworkState& state
                     "row " + std::to_string(i) + " has an epoch outside [0, " + std::to_string(n) + ")");
     CheckArgument(obs.xover_epochs(i, 0) != obs.xover_epochs(i, 1), "xover_epochs",
                   "row " + std::to_string(i) + " ties an epoch to itself");
+  }
+  CheckEpochs(obs.vupt_epochs, static_cast<int>(n), "vupt_epochs");
+  const Eigen::Index nv = obs.vupt_epochs.size();
+  if (nv > 0 || obs.vupt_velocity_mps.size() > 0) CheckShape(obs.vupt_velocity_mps, nv, 3, "vupt_velocity_mps");
+  CheckFinite(obs.vupt_velocity_mps, "vupt_velocity_mps");
+  if (obs.vupt_sd_mps.size() > 0) {
+    CheckShape(obs.vupt_sd_mps, nv, 1, "vupt_sd_mps");
+    for (Eigen::Index i = 0; i < nv; ++i)
+      CheckArgument(std::isfinite(obs.vupt_sd_mps[i]) && obs.vupt_sd_mps[i] > 0.0, "vupt_sd_mps",
+                    "entry " + std::to_string(i) + " = " + std::to_string(obs.vupt_sd_mps[i]) +
+                        " must be finite and > 0");
+  }
+  CheckEpochs(obs.sgupt_epochs, static_cast<int>(n), "sgupt_epochs");
+  if (obs.sgupt_epochs.size() > 0) {
+    // SGUPT needs a static platform: a ZUPT or a VUPT with v0 = 0 at each of its epochs.
+    std::vector<char> is_static(static_cast<size_t>(n), 0);
+    for (Eigen::Index i = 0; i < obs.zupt_epochs.size(); ++i) is_static[static_cast<size_t>(obs.zupt_epochs[i])] = 1;
+    for (Eigen::Index i = 0; i < nv; ++i)
+      if (obs.vupt_velocity_mps.row(i).isZero(0.0)) is_static[static_cast<size_t>(obs.vupt_epochs[i])] = 1;
+    for (Eigen::Index i = 0; i < obs.sgupt_epochs.size(); ++i) {
+      const int e = obs.sgupt_epochs[i];
+      if (i > 0)
+        CheckArgument(e > obs.sgupt_epochs[i - 1], "sgupt_epochs",
+                      "not strictly increasing at entry " + std::to_string(i));
+      CheckArgument(is_static[static_cast<size_t>(e)] != 0, "sgupt_epochs",
+                    "entry " + std::to_string(i) + " = epoch " + std::to_string(e) +
+                        " is not static: SGUPT (constant gravity) needs a ZUPT or a VUPT with zero velocity there");
+    }
   }
   CheckShape(state.position_m, n, 3, "initial position_m");
   CheckShape(state.velocity_mps, n, 3, "initial velocity_mps");
@@ -320,7 +364,8 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
                       "-epoch chain has no position datum (leap-frog couples only epochs of equal parity); "
                       "use the trapezoidal discretisation or GPS times on both parities");
 
-  Blocks b = FromState(initial);
+  Blocks b = FromState(initial, options.slow_parameter_stride);
+  const int stride = b.stride, m_slow = b.m;
   internal::ModelConstants model;
   model.earth_rate_enu = EarthRateEnu(options.latitude_rad) * (options.earth_rate_radps / kEarthRateRadps);
   const Eigen::Vector3d gc = NormalGravityCoefficients(options.latitude_rad);
@@ -333,16 +378,31 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
   popts.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::EigenQuaternionManifold quaternion_manifold;
   ceres::Problem problem(popts);
+  // Column order of the Jacobian (datum check, dense inverse): per epoch r, v, q and, at the first
+  // epoch of each slow interval, that interval's a, o, δg. labels[col] names each tangent column.
   std::vector<double*> ordered_blocks;
-  ordered_blocks.reserve(6 * n);
+  ordered_blocks.reserve(3 * n + 3 * m_slow);
+  std::vector<ColumnLabel> labels;
+  labels.reserve(9 * n + 7 * m_slow);
+  std::vector<int> gravity_column(static_cast<size_t>(m_slow));
   for (int i = 0; i < n; ++i) {
     problem.AddParameterBlock(b.R(i), 3);
     problem.AddParameterBlock(b.V(i), 3);
     problem.AddParameterBlock(b.Q(i), 4, &quaternion_manifold);
-    problem.AddParameterBlock(b.A(i), 3);
-    problem.AddParameterBlock(b.O(i), 3);
-    problem.AddParameterBlock(b.G(i), 1);
-    for (double* p : {b.R(i), b.V(i), b.Q(i), b.A(i), b.O(i), b.G(i)}) ordered_blocks.push_back(p);
+    for (double* p : {b.R(i), b.V(i), b.Q(i)}) ordered_blocks.push_back(p);
+    for (const char* name : {"position", "velocity", "attitude"})
+      for (int c = 0; c < 3; ++c) labels.push_back({name, i});
+    if (i % stride == 0) {
+      const int k = b.Slow(i);
+      problem.AddParameterBlock(b.A(k), 3);
+      problem.AddParameterBlock(b.O(k), 3);
+      problem.AddParameterBlock(b.G(k), 1);
+      for (double* p : {b.A(k), b.O(k), b.G(k)}) ordered_blocks.push_back(p);
+      for (const char* name : {"acc_bias", "gyro_bias"})
+        for (int c = 0; c < 3; ++c) labels.push_back({name, i});
+      gravity_column[static_cast<size_t>(k)] = static_cast<int>(labels.size());
+      labels.push_back({"gravity_disturbance", i});
+    }
   }
 
   std::vector<ceres::ResidualBlockId> acc_ids, gyro_ids, gps_ids;
@@ -350,49 +410,61 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
   const double sigma_w = options.gyro_noise_radps_rthz / std::sqrt(dt);
   auto f_at = [&](int i) { return Eigen::Vector3d(obs.acc_body_mps2.row(i).transpose()); };
   auto w_at = [&](int i) { return Eigen::Vector3d(obs.gyro_body_radps.row(i).transpose()); };
+  // AB, OB, GDT between two slow nodes (or epochs) over `step` seconds.
+  auto add_random_walks = [&](int ka, int kb, double step) {
+    problem.AddResidualBlock(BiasModel(options.acc_bias_walk_mps2_rts, options.acc_bias_correlation_time_s, step),
+                             nullptr, b.A(ka), b.A(kb));
+    problem.AddResidualBlock(BiasModel(options.gyro_bias_walk_radps_rts, options.gyro_bias_correlation_time_s, step),
+                             nullptr, b.O(ka), b.O(kb));
+    problem.AddResidualBlock(
+        Auto<internal::RandomWalk<1>, 1, 1, 1>({1.0 / (options.gravity_walk_mps2_rts * std::sqrt(step))}), nullptr,
+        b.G(ka), b.G(kb));
+  };
   if (leap) {
     const double step = 2.0 * dt;
-    const double walk = std::sqrt(step);
     for (int i = 1; i + 1 < n; ++i) {
+      const int k = b.Slow(i);
       problem.AddResidualBlock(Auto<internal::VelLeapFrog, 3, 3, 3, 3>({step, 1.0 / options.sigma_vel_mps}), nullptr,
                                b.R(i - 1), b.R(i + 1), b.V(i));
       acc_ids.push_back(problem.AddResidualBlock(
           Auto<internal::FbLeapFrog, 3, 3, 3, 3, 4, 3, 3, 1>({model, f_at(i), step, 1.0 / sigma_f}), nullptr,
-          b.V(i - 1), b.V(i + 1), b.V(i), b.Q(i), b.R(i), b.A(i), b.G(i)));
+          b.V(i - 1), b.V(i + 1), b.V(i), b.Q(i), b.R(i), b.A(k), b.G(k)));
       gyro_ids.push_back(problem.AddResidualBlock(
           Auto<internal::WibLeapFrog, 3, 4, 4, 4, 3>({model.earth_rate_enu, w_at(i), step, 1.0 / sigma_w}), nullptr,
-          b.Q(i - 1), b.Q(i + 1), b.Q(i), b.O(i)));
-      problem.AddResidualBlock(BiasModel(options.acc_bias_walk_mps2_rts, options.acc_bias_correlation_time_s, step),
-                               nullptr, b.A(i - 1), b.A(i + 1));
-      problem.AddResidualBlock(
-          BiasModel(options.gyro_bias_walk_radps_rts, options.gyro_bias_correlation_time_s, step), nullptr,
-          b.O(i - 1), b.O(i + 1));
-      problem.AddResidualBlock(
-          Auto<internal::RandomWalk<1>, 1, 1, 1>({1.0 / (options.gravity_walk_mps2_rts * walk)}), nullptr,
-          b.G(i - 1), b.G(i + 1));
+          b.Q(i - 1), b.Q(i + 1), b.Q(i), b.O(k)));
+      // Stride 1: the paper's Λ(a, n) = (a[n+1] - a[n-1]) / 2δt (two interleaved bias chains).
+      if (stride == 1) add_random_walks(i - 1, i + 1, step);
     }
   } else {
-    const double walk = std::sqrt(dt);
     for (int i = 0; i + 1 < n; ++i) {
+      const int ka = b.Slow(i), kb = b.Slow(i + 1);
       problem.AddResidualBlock(Auto<internal::VelTrapezoidal, 3, 3, 3, 3, 3>({dt, 1.0 / options.sigma_vel_mps}),
                                nullptr, b.R(i), b.R(i + 1), b.V(i), b.V(i + 1));
-      acc_ids.push_back(problem.AddResidualBlock(Auto<internal::FbTrapezoidal, 3, 3, 3, 4, 4, 3, 3, 3, 3, 1, 1>(
-                                                     {model, f_at(i), f_at(i + 1), dt, 1.0 / sigma_f}),
-                                                 nullptr, b.V(i), b.V(i + 1), b.Q(i), b.Q(i + 1), b.R(i), b.R(i + 1),
-                                                 b.A(i), b.A(i + 1), b.G(i), b.G(i + 1)));
-      gyro_ids.push_back(problem.AddResidualBlock(Auto<internal::WibTrapezoidal, 3, 4, 4, 3, 3>(
-                                                      {model.earth_rate_enu, 0.5 * (w_at(i) + w_at(i + 1)), dt,
-                                                       1.0 / sigma_w}),
-                                                  nullptr, b.Q(i), b.Q(i + 1), b.O(i), b.O(i + 1)));
-      problem.AddResidualBlock(BiasModel(options.acc_bias_walk_mps2_rts, options.acc_bias_correlation_time_s, dt),
-                               nullptr, b.A(i), b.A(i + 1));
-      problem.AddResidualBlock(BiasModel(options.gyro_bias_walk_radps_rts, options.gyro_bias_correlation_time_s, dt),
-                               nullptr, b.O(i), b.O(i + 1));
-      problem.AddResidualBlock(
-          Auto<internal::RandomWalk<1>, 1, 1, 1>({1.0 / (options.gravity_walk_mps2_rts * walk)}), nullptr, b.G(i),
-          b.G(i + 1));
+      const internal::FbTrapezoidal fb{model, f_at(i), f_at(i + 1), dt, 1.0 / sigma_f};
+      const internal::WibTrapezoidal wib{model.earth_rate_enu, 0.5 * (w_at(i) + w_at(i + 1)), dt, 1.0 / sigma_w};
+      if (ka == kb) {  // both epochs in one slow interval: one a, o, δg block
+        acc_ids.push_back(problem.AddResidualBlock(
+            Auto<internal::FbTrapezoidalShared, 3, 3, 3, 4, 4, 3, 3, 3, 1>({fb}), nullptr, b.V(i), b.V(i + 1),
+            b.Q(i), b.Q(i + 1), b.R(i), b.R(i + 1), b.A(ka), b.G(ka)));
+        gyro_ids.push_back(problem.AddResidualBlock(Auto<internal::WibTrapezoidalShared, 3, 4, 4, 3>({wib}), nullptr,
+                                                    b.Q(i), b.Q(i + 1), b.O(ka)));
+      } else {
+        acc_ids.push_back(problem.AddResidualBlock(Auto<internal::FbTrapezoidal, 3, 3, 3, 4, 4, 3, 3, 3, 3, 1, 1>(fb),
+                                                   nullptr, b.V(i), b.V(i + 1), b.Q(i), b.Q(i + 1), b.R(i),
+                                                   b.R(i + 1), b.A(ka), b.A(kb), b.G(ka), b.G(kb)));
+        gyro_ids.push_back(problem.AddResidualBlock(Auto<internal::WibTrapezoidal, 3, 4, 4, 3, 3>(wib), nullptr,
+                                                    b.Q(i), b.Q(i + 1), b.O(ka), b.O(kb)));
+      }
+      if (stride == 1) add_random_walks(i, i + 1, dt);
     }
   }
+  // Slow parameters: random walks between consecutive slow nodes over the time between the
+  // centres of their intervals (s δt for full intervals; the last one may be shorter).
+  if (stride > 1)
+    for (int k = 0; k + 1 < m_slow; ++k) {
+      const double centre_a = 0.5 * (b.First(k) + b.End(k) - 1), centre_b = 0.5 * (b.First(k + 1) + b.End(k + 1) - 1);
+      add_random_walks(k, k + 1, (centre_b - centre_a) * dt);
+    }
   // Static observations.
   const bool huber = options.gps_huber_threshold > 0.0;  // the Problem owns each loss
   for (Eigen::Index i = 0; i < obs.gps_time_s.size(); ++i) {
@@ -410,21 +482,52 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
   for (Eigen::Index i = 0; i < obs.zupt_epochs.size(); ++i)
     problem.AddResidualBlock(Auto<internal::Zupt, 3, 3>({1.0 / options.sigma_zupt_mps}), nullptr,
                              b.V(obs.zupt_epochs[i]));
+  for (Eigen::Index i = 0; i < obs.vupt_epochs.size(); ++i) {
+    const Eigen::Vector3d v0 = obs.vupt_velocity_mps.row(i).transpose();
+    const double sd = obs.vupt_sd_mps.size() > 0 ? obs.vupt_sd_mps[i] : options.sigma_vupt_mps;
+    problem.AddResidualBlock(Auto<internal::Vupt, 3, 3>({v0, 1.0 / sd}), nullptr, b.V(obs.vupt_epochs[i]));
+  }
   for (Eigen::Index i = 0; i < obs.gupt_epochs.size(); ++i) {
     const int e = obs.gupt_epochs[i];
     problem.AddResidualBlock(
         Auto<internal::Gupt, 1, 3, 1>({model, obs.gupt_gravity_mps2[i], 1.0 / options.sigma_gupt_mps2}), nullptr,
-        b.R(e), b.G(e));
+        b.R(e), b.G(b.Slow(e)));
   }
-  for (Eigen::Index i = 0; i < obs.xover_epochs.rows(); ++i)
-    problem.AddResidualBlock(Auto<internal::Xover, 1, 1, 1>({1.0 / options.sigma_xover_mps2}), nullptr,
-                             b.G(obs.xover_epochs(i, 0)), b.G(obs.xover_epochs(i, 1)));
+  int num_xover = 0;
+  for (Eigen::Index i = 0; i < obs.xover_epochs.rows(); ++i) {
+    const int ka = b.Slow(obs.xover_epochs(i, 0)), kb = b.Slow(obs.xover_epochs(i, 1));
+    if (ka == kb) continue;  // both epochs share one δg block: the tie holds identically
+    problem.AddResidualBlock(Auto<internal::Xover, 1, 1, 1>({1.0 / options.sigma_xover_mps2}), nullptr, b.G(ka),
+                             b.G(kb));
+    ++num_xover;
+  }
+  // SGUPT: in each run of consecutive static epochs, δg[n] = δg[n0] (n0 the run's first epoch),
+  // once per slow block of the run other than n0's.
+  int num_sgupt = 0;
+  for (Eigen::Index i = 0; i < obs.sgupt_epochs.size();) {
+    Eigen::Index j = i + 1;
+    while (j < obs.sgupt_epochs.size() && obs.sgupt_epochs[j] == obs.sgupt_epochs[j - 1] + 1) ++j;
+    const int k0 = b.Slow(obs.sgupt_epochs[i]);
+    int last = k0;
+    for (Eigen::Index e = i + 1; e < j; ++e) {
+      const int k = b.Slow(obs.sgupt_epochs[e]);
+      if (k == last) continue;  // epochs of one slow block: one tie
+      last = k;
+      problem.AddResidualBlock(Auto<internal::Sgupt, 1, 1, 1>({1.0 / options.sigma_sgupt_mps2}), nullptr, b.G(k0),
+                               b.G(k));
+      ++num_sgupt;
+    }
+    i = j;
+  }
 
   NetworkSummary s;
   s.num_epochs = n;
   s.num_parameters = static_cast<long>(problem.NumParameters()) - n;  // quaternion: 4 stored, 3 free
   s.num_residuals = problem.NumResiduals();
-  s.num_xover = static_cast<int>(obs.xover_epochs.rows());
+  s.num_slow_nodes = m_slow;
+  s.num_xover = num_xover;
+  s.num_vupt = static_cast<int>(obs.vupt_epochs.size());
+  s.num_sgupt = num_sgupt;
 
   CheckArgument(!options.variance_components || s.num_parameters <= kMaxDenseUnknowns, "options",
                 "variance_components is limited to " + std::to_string(kMaxDenseUnknowns) + " unknowns (got " +
@@ -488,8 +591,8 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
       m << "datum defect: the normal matrix is rank deficient (smallest pivot ratio " << worst << " < "
         << options.datum_pivot_tolerance << ")";
       if (worst_col >= 0)
-        m << "; first undetermined parameter: " << BlockName(worst_col % kParamsPerEpoch) << " at epoch "
-          << worst_col / kParamsPerEpoch;
+        m << "; first undetermined parameter: " << labels[static_cast<size_t>(worst_col)].name << " at epoch "
+          << labels[static_cast<size_t>(worst_col)].epoch;
       m << ". Add observations (CUPT for position, GUPT or XOVER for gravity vs accelerometer bias)";
       ThrowInvalidArgument("observations", m.str());
     }
@@ -580,7 +683,8 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
     if (options.gravity_covariance == NetworkOptions::Covariance::kDense) {
       const Eigen::MatrixXd& inverse = inverse_at_solution();
       for (int i = 0; i < n; ++i) {
-        const double v = inverse(kParamsPerEpoch * i + 15, kParamsPerEpoch * i + 15);
+        const int col = gravity_column[static_cast<size_t>(b.Slow(i))];
+        const double v = inverse(col, col);
         out.gravity_disturbance_sd_mps2[i] = v > 0.0 ? std::sqrt(v) : std::numeric_limits<double>::quiet_NaN();
       }
     } else {
@@ -589,14 +693,14 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
       co.num_threads = options.num_threads;
       ceres::Covariance covariance(co);
       std::vector<std::pair<const double*, const double*>> blocks;
-      blocks.reserve(static_cast<size_t>(n));
-      for (int i = 0; i < n; ++i) blocks.emplace_back(b.G(i), b.G(i));
+      blocks.reserve(static_cast<size_t>(m_slow));
+      for (int k = 0; k < m_slow; ++k) blocks.emplace_back(b.G(k), b.G(k));
       if (!covariance.Compute(blocks, &problem))
         throw std::runtime_error("indoorloc: network: ceres::Covariance failed (rank-deficient network?)");
-      for (int i = 0; i < n; ++i) {
+      for (int k = 0; k < m_slow; ++k) {
         double v = 0.0;
-        covariance.GetCovarianceBlock(b.G(i), b.G(i), &v);
-        out.gravity_disturbance_sd_mps2[i] = std::sqrt(std::max(v, 0.0));
+        covariance.GetCovarianceBlock(b.G(k), b.G(k), &v);
+        out.gravity_disturbance_sd_mps2.segment(b.First(k), b.End(k) - b.First(k)).setConstant(std::sqrt(std::max(v, 0.0)));
       }
     }
     s.seconds_covariance += cov_timer.ElapsedSeconds();

@@ -110,6 +110,18 @@ struct FbTrapezoidal {
   }
 };
 
+/// FB, trapezoidal on [n, n+1] with slow parameters (slow_parameter_stride > 1) when both epochs
+/// fall in one slow interval: a[n] = a[n+1] = a, δg[n] = δg[n+1] = δg share one block (Ceres
+/// forbids passing a block twice to one residual).
+struct FbTrapezoidalShared {
+  FbTrapezoidal fb;
+  template <typename T>
+  bool operator()(const T* v0, const T* v1, const T* q0, const T* q1, const T* r0, const T* r1, const T* a,
+                  const T* dg, T* res) const {
+    return fb(v0, v1, q0, q1, r0, r1, a, a, dg, dg, res);
+  }
+};
+
 /// WIB, leap-frog at epoch n (body frame):
 /// (Log(q[n-1]⁻¹ q[n+1]) / 2δt + R(q[n])ᵀ ω_ie + o[n] - ω[n]) / σ_ω.
 struct WibLeapFrog {
@@ -142,6 +154,15 @@ struct WibTrapezoidal {
                  T(0.5) * (oa + ob) - w_mean_body.cast<T>();
     for (int i = 0; i < 3; ++i) res[i] = e[i] * T(inv_sigma);
     return true;
+  }
+};
+
+/// WIB, trapezoidal, both epochs in one slow interval: o[n] = o[n+1] = o (see FbTrapezoidalShared).
+struct WibTrapezoidalShared {
+  WibTrapezoidal wib;
+  template <typename T>
+  bool operator()(const T* q0, const T* q1, const T* o, T* res) const {
+    return wib(q0, q1, o, o, res);
   }
 };
 
@@ -196,6 +217,28 @@ struct Zupt {
   template <typename T>
   bool operator()(const T* v, T* res) const {
     for (int i = 0; i < 3; ++i) res[i] = v[i] * T(inv_sigma);
+    return true;
+  }
+};
+
+/// VUPT: (v[n] - v0) / σ (paper §3.4: v0 + w_v = v^e[n]).
+struct Vupt {
+  Eigen::Vector3d v0;
+  double inv_sigma;
+  template <typename T>
+  bool operator()(const T* v, T* res) const {
+    for (int i = 0; i < 3; ++i) res[i] = (v[i] - T(v0[i])) * T(inv_sigma);
+    return true;
+  }
+};
+
+/// SGUPT: (δg[n] - δg[n0]) / σ, n0 the first epoch of the static period containing n (paper
+/// §3.2: constant gravity during a ZUPT period, "seen as a XOVER observation").
+struct Sgupt {
+  double inv_sigma;
+  template <typename T>
+  bool operator()(const T* dg_first, const T* dg, T* res) const {
+    res[0] = (dg[0] - dg_first[0]) * T(inv_sigma);
     return true;
   }
 };

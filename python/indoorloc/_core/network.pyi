@@ -83,6 +83,9 @@ class NetworkOptions:
     sigma_zupt_mps: float
     sigma_gupt_mps2: float
     sigma_xover_mps2: float
+    sigma_vupt_mps: float
+    sigma_sgupt_mps2: float
+    slow_parameter_stride: int
     gps_huber_threshold: float
     max_iterations: int
     initial_trust_region_radius: float
@@ -120,6 +123,10 @@ def solve_network(
     gupt_gravity_mps2: Optional[_ArrayLike] = None,
     xover_epochs: Optional[_ArrayLike] = None,
     options: NetworkOptions = ...,
+    vupt_epochs: Optional[_ArrayLike] = None,
+    vupt_velocity_mps: Optional[_ArrayLike] = None,
+    vupt_sd_mps: Optional[_ArrayLike] = None,
+    sgupt_epochs: Optional[_ArrayLike] = None,
 ) -> Tuple[_State, Dict[str, Any]]: ...
 def kalman_smoother(
     imu_time_s: _ArrayLike,

@@ -12,6 +12,10 @@ found on the SSA trajectory (5 m radius). Metrics against the simulator's truth:
   over all epochs;
 - run time [s]: SSA filter + smoother; NA: datum check + Ceres solve (the SSA that gives its
   initial values is not included).
+
+With ``slow_stride`` > 1 two more rows solve NA and NA + XOVER with slow parameters (paper §4:
+accelerometer bias, gyro bias and δg once per ``slow_stride`` IMU epochs, e.g. the IMU/GPS rate
+ratio) on the same flights and cross-overs.
 """
 
 from __future__ import annotations
@@ -50,9 +54,15 @@ def score(flight, state: Dict[str, np.ndarray], xover_epochs: np.ndarray) -> Dic
     }
 
 
+def slow_methods(stride: int) -> tuple:
+    """Row names of the slow-parameter NA rows."""
+    return (f"NA, slow s={stride}", f"NA + XOVER, slow s={stride}")
+
+
 def run_once(config: FlightConfig, seed: int, discretization: str = "trapezoidal",
-             gravity_walk_mps2_rts: float = 2e-5) -> Dict[str, object]:
-    """One flight, three methods. Returns {'flight', 'states', 'scores', 'xover'}."""
+             gravity_walk_mps2_rts: float = 2e-5, slow_stride: int = 1) -> Dict[str, object]:
+    """One flight, three methods (five with ``slow_stride`` > 1). Returns {'flight', 'states',
+    'scores', 'xover', 'summaries'}."""
     flight = simulate_flight(config, seed=seed)
     opts = network.flight_options(config, discretization=discretization, gravity_walk_mps2_rts=gravity_walk_mps2_rts)
     t0 = time.perf_counter()
@@ -62,12 +72,18 @@ def run_once(config: FlightConfig, seed: int, discretization: str = "trapezoidal
     states = {METHODS[0]: ssa}
     seconds = {METHODS[0]: ssa_s}
     summaries = {METHODS[0]: ssa_summary}
-    for name, use in ((METHODS[1], False), (METHODS[2], True)):
+    runs = [(METHODS[1], False, opts), (METHODS[2], True, opts)]
+    if slow_stride > 1:
+        slow = network.flight_options(config, discretization=discretization,
+                                      gravity_walk_mps2_rts=gravity_walk_mps2_rts, slow_parameter_stride=slow_stride)
+        names = slow_methods(slow_stride)
+        runs += [(names[0], False, slow), (names[1], True, slow)]
+    for name, use, o in runs:
         st, summ = network.solve_network(
             imu_time_s=flight.imu_time_s, acc_body_mps2=flight.acc_body_mps2, gyro_body_radps=flight.gyro_body_radps,
             gps_time_s=flight.gps_time_s, gps_position_m=flight.gps_position_m, initial=ssa,
             zupt_epochs=flight.zupt_epochs, gupt_epochs=flight.gupt_epochs, gupt_gravity_mps2=flight.gupt_gravity_mps2,
-            xover_epochs=pairs if (use and pairs.size) else None, options=opts)
+            xover_epochs=pairs if (use and pairs.size) else None, options=o)
         states[name] = st
         seconds[name] = summ["seconds_datum_check"] + summ["seconds_solve"]
         summaries[name] = summ
@@ -80,24 +96,38 @@ def run_once(config: FlightConfig, seed: int, discretization: str = "trapezoidal
 
 
 def reproduce(config: Optional[FlightConfig] = None, runs: int = 3, seed: int = 0, discretization: str = "trapezoidal",
-              gravity_walk_mps2_rts: float = 2e-5) -> Dict[str, object]:
-    """Monte Carlo over ``runs`` flights; per method and metric the list of values."""
+              gravity_walk_mps2_rts: float = 2e-5, slow_stride: int = 1) -> Dict[str, object]:
+    """Monte Carlo over ``runs`` flights; per method and metric the list of values.
+    ``slow_stride`` > 1 adds the slow-parameter NA rows (``0``: the IMU/GPS rate ratio)."""
     from indoorloc.progress import progress
 
     config = config or FlightConfig()
-    per_method: Dict[str, Dict[str, List[float]]] = {m: {} for m in METHODS}
-    info = {"epochs": [], "xovers": [], "unknowns": [], "iterations": []}
+    if slow_stride == 0:
+        slow_stride = int(round(config.imu_rate_hz / config.gps_rate_hz))
+    if slow_stride < 1:
+        raise ValueError("indoorloc: argument 'slow_stride': must be >= 0 (0: IMU rate / GPS rate, 1: no slow rows)")
+    names = METHODS + (slow_methods(slow_stride) if slow_stride > 1 else ())
+    per_method: Dict[str, Dict[str, List[float]]] = {m: {} for m in names}
+    info = {"epochs": [], "gps": [], "xovers": [], "unknowns": [], "iterations": [], "unknowns_slow": [],
+            "slow_nodes": [], "iterations_slow": []}
     for r in progress(range(runs), total=runs, desc="network runs"):
-        out = run_once(config, seed + r, discretization, gravity_walk_mps2_rts)
+        out = run_once(config, seed + r, discretization, gravity_walk_mps2_rts, slow_stride)
         for m, s in out["scores"].items():
             for k, v in s.items():
                 per_method[m].setdefault(k, []).append(v)
         info["epochs"].append(out["flight"].n_epochs)
+        info["gps"].append(int(out["flight"].gps_time_s.size))
         info["xovers"].append(int(out["xover"].shape[0]))
         info["unknowns"].append(int(out["summaries"][METHODS[2]]["num_parameters"]))
         info["iterations"].append(int(out["summaries"][METHODS[2]]["iterations"]))
+        if slow_stride > 1:
+            summ = out["summaries"][slow_methods(slow_stride)[1]]
+            info["unknowns_slow"].append(int(summ["num_parameters"]))
+            info["slow_nodes"].append(int(summ["num_slow_nodes"]))
+            info["iterations_slow"].append(int(summ["iterations"]))
     return {"config": asdict(config), "runs": runs, "seed": seed, "discretization": discretization,
-            "gravity_walk_mps2_rts": gravity_walk_mps2_rts, "methods": per_method, "info": info}
+            "gravity_walk_mps2_rts": gravity_walk_mps2_rts, "slow_stride": slow_stride, "methods": per_method,
+            "info": info}
 
 
 _COLUMNS = (("dg_rmse_line_mgal", "δg RMSE lines [mGal]", 2), ("dg_rmse_xover_mgal", "δg RMSE cross-overs [mGal]", 2),
@@ -122,6 +152,16 @@ def markdown(results: Dict[str, object]) -> str:
                  f"{results['discretization']} rule, {np.mean(info['epochs']):.0f} epochs "
                  f"({np.mean(info['unknowns']):.0f} unknowns), {np.mean(info['xovers']):.1f} cross-overs per flight, "
                  f"NA + XOVER iterations {np.mean(info['iterations']):.1f}; mean ± sd over flights.")
+    if info.get("unknowns_slow"):
+        n, m = np.mean(info["epochs"]), np.mean(info["slow_nodes"])
+        g = np.mean(info["gps"])
+        lines.append("")
+        lines.append(f"Slow parameters (s = {results['slow_stride']} IMU epochs): {np.mean(info['unknowns_slow']):.0f} "
+                     f"unknowns = 9 N + 7 M with M = {m:.0f} slow nodes, against {np.mean(info['unknowns']):.0f} = 16 N "
+                     f"({np.mean(info['unknowns_slow']) / np.mean(info['unknowns']):.3f}); the paper's count with a "
+                     f"3-vector δg, 9 N_IMU + 9 N_GPS = {9 * n + 9 * g:.0f} against 18 N_IMU = {18 * n:.0f} "
+                     f"({(9 * n + 9 * g) / (18 * n):.3f}). NA + XOVER iterations (slow) "
+                     f"{np.mean(info['iterations_slow']):.1f}.")
     return "\n".join(lines)
 
 

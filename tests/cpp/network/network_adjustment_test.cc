@@ -2,6 +2,7 @@
 // datum defects, the leap-frog parity decoupling, the cross-over finder and the Kalman smoother.
 #include <cmath>
 #include <random>
+#include <initializer_list>
 
 #include <gtest/gtest.h>
 
@@ -313,6 +314,198 @@ TEST(NetworkVarianceComponents, RecoversKnownVarianceFactors) {
   EXPECT_GT(s.redundancy_acc, 50.0);
   EXPECT_GT(s.redundancy_gyro, 50.0);
   EXPECT_GT(s.redundancy_gps, 50.0);
+}
+
+}  // namespace
+}  // namespace indoorloc::network
+
+namespace indoorloc::network {
+namespace {
+
+Eigen::VectorXi Ints(std::initializer_list<int> values) {
+  Eigen::VectorXi v(static_cast<Eigen::Index>(values.size()));
+  Eigen::Index i = 0;
+  for (int x : values) v[i++] = x;
+  return v;
+}
+
+// Slow parameters (paper §4): biases and δg carried once per `stride` IMU epochs. The fixture's
+// biases and δg are constant, so the piecewise-constant slow blocks represent the truth exactly
+// and the noise-free flight is still recovered; the unknowns drop from 16 N to 9 N + 7 ⌈N/s⌉.
+TEST(NetworkSlowParameters, NoiseFreeFlightIsRecoveredWithFewerUnknowns) {
+  for (const Discretization d : {Discretization::kTrapezoidal, Discretization::kLeapFrog}) {
+    NetworkOptions o = TightOptions(d);
+    const auto fl = MakeFlight(o, 300, 0.1);
+    for (const int stride : {10, 7}) {
+      o.slow_parameter_stride = stride;
+      NetworkSummary s;
+      const NetworkState est = SolveNetwork(fl.obs, Perturb(fl.truth), o, &s);
+      EXPECT_EQ(s.termination, Termination::kConverged) << s.message;
+      const int m = (300 + stride - 1) / stride;
+      EXPECT_EQ(s.num_slow_nodes, m);
+      EXPECT_EQ(s.num_parameters, 9L * 300 + 7L * m);
+      ExpectRecovered(est, fl.truth);
+      // Epochs of one interval share the block's value.
+      EXPECT_EQ(est.gravity_disturbance_mps2[0], est.gravity_disturbance_mps2[stride - 1]);
+      EXPECT_EQ(est.acc_bias_mps2(stride, 2), est.acc_bias_mps2(2 * stride - 1, 2));
+    }
+  }
+}
+
+// XOVER and GUPT refer to the δg block of their epoch's interval; a tie inside one interval holds
+// identically and is dropped. The dense δg covariance and ceres::Covariance agree and are equal
+// within an interval.
+TEST(NetworkSlowParameters, CrossoverGuptAndCovarianceUseTheIntervalBlock) {
+  NetworkOptions o = TightOptions(Discretization::kTrapezoidal);
+  auto fl = MakeFlight(o, 120, 0.1, 10, 0);
+  fl.obs.xover_epochs.resize(2, 2);
+  fl.obs.xover_epochs << 5, 95, 31, 38;  // the second is inside the interval [30, 40)
+  o.slow_parameter_stride = 10;
+  o.gravity_covariance = NetworkOptions::Covariance::kDense;
+  NetworkSummary s;
+  const NetworkState dense = SolveNetwork(fl.obs, Perturb(fl.truth), o, &s);
+  EXPECT_EQ(s.num_xover, 1);
+  ExpectRecovered(dense, fl.truth);
+  o.gravity_covariance = NetworkOptions::Covariance::kCeres;
+  const NetworkState sparse = SolveNetwork(fl.obs, fl.truth, o);
+  for (int i = 0; i < 120; ++i) {
+    EXPECT_NEAR(sparse.gravity_disturbance_sd_mps2[i], dense.gravity_disturbance_sd_mps2[i],
+                1e-6 * dense.gravity_disturbance_sd_mps2[i]);
+    EXPECT_EQ(dense.gravity_disturbance_sd_mps2[i], dense.gravity_disturbance_sd_mps2[10 * (i / 10)]);
+  }
+  // The GUPT at epoch 60 pins the block [60, 70): the smallest sd.
+  Eigen::Index k;
+  dense.gravity_disturbance_sd_mps2.minCoeff(&k);
+  EXPECT_EQ(k / 10, 6);
+  // The cross-over ties δg of the blocks of epochs 5 and 95: their sds fall below those without it.
+  fl.obs.xover_epochs.resize(0, 2);
+  o.gravity_covariance = NetworkOptions::Covariance::kDense;
+  const NetworkState no_xover = SolveNetwork(fl.obs, fl.truth, o);
+  EXPECT_LT(dense.gravity_disturbance_sd_mps2[5], no_xover.gravity_disturbance_sd_mps2[5]);
+  EXPECT_LT(dense.gravity_disturbance_sd_mps2[95], no_xover.gravity_disturbance_sd_mps2[95]);
+}
+
+// The datum check names the epoch of a slow block: the level flight without GUPT cannot separate
+// δg from the vertical accelerometer bias, with slow parameters too.
+TEST(NetworkSlowParameters, DatumCheckNamesSlowBlocks) {
+  NetworkOptions o = TightOptions(Discretization::kTrapezoidal);
+  o.slow_parameter_stride = 5;
+  auto fl = MakeFlight(o, 60, 0.1, 5, 0, /*level=*/true);
+  fl.obs.gupt_epochs.resize(0);
+  fl.obs.gupt_gravity_mps2.resize(0);
+  try {
+    SolveNetwork(fl.obs, fl.truth, o);
+    ADD_FAILURE() << "no datum defect reported";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("'observations'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("datum defect"), std::string::npos) << e.what();
+  }
+}
+
+// VUPT (paper §3.4: v0 + w_v = v[n]): at the truth the noise-free network still fits exactly; a
+// tight VUPT with a velocity 5 cm/s off pulls v[n] to it, a loose one barely moves it.
+TEST(NetworkStaticObservations, VuptIsFittedWithItsOwnSigma) {
+  NetworkOptions o = TightOptions(Discretization::kTrapezoidal);
+  auto fl = MakeFlight(o, 200, 0.1, 10, 0);
+  fl.obs.vupt_epochs = Eigen::VectorXi::LinSpaced(4, 20, 170);
+  fl.obs.vupt_velocity_mps.resize(4, 3);
+  for (int i = 0; i < 4; ++i) fl.obs.vupt_velocity_mps.row(i) = fl.truth.velocity_mps.row(fl.obs.vupt_epochs[i]);
+  NetworkSummary s;
+  ExpectRecovered(SolveNetwork(fl.obs, Perturb(fl.truth), o, &s), fl.truth);
+  EXPECT_EQ(s.num_vupt, 4);
+  const int e = fl.obs.vupt_epochs[1];
+  fl.obs.vupt_velocity_mps(1, 0) += 0.05;
+  fl.obs.vupt_sd_mps = Eigen::VectorXd::Constant(4, 1e-6);
+  const double tight = SolveNetwork(fl.obs, fl.truth, o).velocity_mps(e, 0) - fl.truth.velocity_mps(e, 0);
+  fl.obs.vupt_sd_mps.setConstant(10.0);
+  const double loose = SolveNetwork(fl.obs, fl.truth, o).velocity_mps(e, 0) - fl.truth.velocity_mps(e, 0);
+  EXPECT_NEAR(tight, 0.05, 1e-3);
+  EXPECT_LT(std::abs(loose), 1e-4);
+  // Without vupt_sd_mps the options' sigma_vupt_mps applies.
+  fl.obs.vupt_sd_mps.resize(0);
+  o.sigma_vupt_mps = 1e-6;
+  EXPECT_NEAR(SolveNetwork(fl.obs, fl.truth, o).velocity_mps(e, 0) - fl.truth.velocity_mps(e, 0), 0.05, 1e-3);
+}
+
+// SGUPT (paper §3.2): gravity constant over a static period, ties δg[n] = δg[n0]. The fixture
+// flight moves, so the "static" epochs carry ZUPTs with a huge sd (no information, but formally
+// static); the δg of that flight varies (30 mGal sine), and the tight SGUPT holds it constant over
+// the period; with slow parameters the ties are per block.
+TEST(NetworkStaticObservations, SguptHoldsGravityConstantOverAStaticPeriod) {
+  NetworkOptions o = TightOptions(Discretization::kTrapezoidal);
+  o.sigma_zupt_mps = 1e6;
+  o.sigma_sgupt_mps2 = 1e-9;
+  // mm GPS at every epoch and a loose δg random walk: without SGUPT the estimate follows the truth.
+  o.sigma_gps_m = 1e-5;
+  o.gravity_walk_mps2_rts = 1e-2;
+  auto fl = MakeFlight(o, 200, 0.1, 1, 0, false, /*vary_gravity=*/true);
+  fl.obs.zupt_epochs = Eigen::VectorXi::LinSpaced(51, 100, 150);
+  fl.obs.sgupt_epochs = fl.obs.zupt_epochs;
+  NetworkSummary s;
+  const NetworkState est = SolveNetwork(fl.obs, fl.truth, o, &s);
+  EXPECT_EQ(s.num_sgupt, 50);
+  const Eigen::VectorXd period = est.gravity_disturbance_mps2.segment(100, 51);
+  EXPECT_LT(period.maxCoeff() - period.minCoeff(), 1e-7);
+  const Eigen::VectorXd truth = fl.truth.gravity_disturbance_mps2.segment(100, 51);
+  EXPECT_GT(truth.maxCoeff() - truth.minCoeff(), 1e-5);  // the truth varies by > 1 mGal there
+  // Without SGUPT the estimate follows the varying truth.
+  fl.obs.sgupt_epochs.resize(0);
+  const Eigen::VectorXd free = SolveNetwork(fl.obs, fl.truth, o).gravity_disturbance_mps2.segment(100, 51);
+  EXPECT_GT(free.maxCoeff() - free.minCoeff(), 1e-5);
+  // Slow parameters: blocks [100, 110), ..., [150, 160): 5 ties to the first.
+  fl.obs.sgupt_epochs = fl.obs.zupt_epochs;
+  o.slow_parameter_stride = 10;
+  SolveNetwork(fl.obs, fl.truth, o, &s);
+  EXPECT_EQ(s.num_sgupt, 5);
+}
+
+TEST(NetworkStaticObservations, BadVuptSguptAndSlowOptionsNameTheArgument) {
+  const NetworkOptions o;
+  auto good = MakeFlight(o, 30, 0.1);
+  good.obs.vupt_epochs = Eigen::VectorXi::Constant(2, 3);
+  good.obs.vupt_epochs[1] = 4;
+  good.obs.vupt_velocity_mps = good.truth.velocity_mps.middleRows(3, 2);
+  auto expect_throw = [&](auto mutate, const std::string& name) {
+    auto fl = good;
+    NetworkOptions opt = o;
+    mutate(fl, opt);
+    try {
+      SolveNetwork(fl.obs, fl.truth, opt);
+      ADD_FAILURE() << "no exception for " << name;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("'" + name + "'"), std::string::npos) << e.what();
+    }
+  };
+  using F = testing::Flight;
+  expect_throw([](F& f, NetworkOptions&) { f.obs.vupt_epochs[1] = 30; }, "vupt_epochs");
+  expect_throw([](F& f, NetworkOptions&) { f.obs.vupt_epochs[1] = -1; }, "vupt_epochs");
+  expect_throw([](F& f, NetworkOptions&) { f.obs.vupt_velocity_mps(1, 2) = std::nan(""); }, "vupt_velocity_mps");
+  expect_throw([](F& f, NetworkOptions&) { f.obs.vupt_velocity_mps.resize(1, 3); }, "vupt_velocity_mps");
+  expect_throw([](F& f, NetworkOptions&) { f.obs.vupt_sd_mps = Eigen::Vector2d(0.1, 0.0); }, "vupt_sd_mps");
+  expect_throw([](F& f, NetworkOptions&) { f.obs.vupt_sd_mps = Eigen::Vector2d(0.1, std::nan("")); }, "vupt_sd_mps");
+  expect_throw([](F& f, NetworkOptions&) { f.obs.vupt_sd_mps = Eigen::Vector3d(0.1, 0.1, 0.1); }, "vupt_sd_mps");
+  // SGUPT at a moving epoch (the VUPT velocities are not zero), out of range, not increasing.
+  expect_throw([](F& f, NetworkOptions&) { f.obs.sgupt_epochs = Ints({3, 4}); }, "sgupt_epochs");
+  expect_throw([](F& f, NetworkOptions&) { f.obs.sgupt_epochs = Ints({3, 40}); }, "sgupt_epochs");
+  expect_throw(
+      [](F& f, NetworkOptions&) {
+        f.obs.zupt_epochs = Ints({3, 4});
+        f.obs.sgupt_epochs = Ints({4, 3});
+      },
+      "sgupt_epochs");
+  expect_throw([](F&, NetworkOptions& p) { p.sigma_vupt_mps = 0.0; }, "options");
+  expect_throw([](F&, NetworkOptions& p) { p.sigma_sgupt_mps2 = -1.0; }, "options");
+  expect_throw([](F&, NetworkOptions& p) { p.slow_parameter_stride = 0; }, "options");
+  // A VUPT with zero velocity makes an epoch static too.
+  const NetworkOptions trap = TightOptions(Discretization::kTrapezoidal);
+  auto fl = MakeFlight(trap, 120, 0.1, 10, 0);
+  fl.obs.vupt_epochs = good.obs.vupt_epochs;
+  fl.obs.vupt_velocity_mps = RowMatrixXd::Zero(2, 3);
+  fl.obs.vupt_sd_mps = Eigen::Vector2d(1e6, 1e6);
+  fl.obs.sgupt_epochs = Ints({3, 4});
+  NetworkSummary s;
+  SolveNetwork(fl.obs, fl.truth, trap, &s);
+  EXPECT_EQ(s.num_sgupt, 1);
 }
 
 }  // namespace

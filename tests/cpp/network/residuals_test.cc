@@ -131,6 +131,12 @@ TEST(NetworkResiduals, JacobiansMatchNumericalDifferentiation) {
   CheckFunctor<Zupt, 3, 3>({1e3}, "Zupt");
   CheckFunctor<Gupt, 1, 3, 1>({m, 9.8, 1e5}, "Gupt");
   CheckFunctor<Xover, 1, 1, 1>({1e5}, "Xover");
+  CheckFunctor<Vupt, 3, 3>({Eigen::Vector3d(50, -3, 0.5), 1e2}, "Vupt");
+  CheckFunctor<Sgupt, 1, 1, 1>({1e6}, "Sgupt");
+  CheckFunctor<FbTrapezoidalShared, 3, 3, 3, 4, 4, 3, 3, 3, 1>({FbTrapezoidal{m, f, f + w, 0.02, 10.0}},
+                                                                 "FbTrapezoidalShared");
+  CheckFunctor<WibTrapezoidalShared, 3, 4, 4, 3>({WibTrapezoidal{m.earth_rate_enu, w, 0.02, 100.0}},
+                                                   "WibTrapezoidalShared");
 }
 
 TEST(NetworkResiduals, RelativeRotationIsTheLogOfTheRelativeQuaternion) {

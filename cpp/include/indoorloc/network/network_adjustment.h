@@ -20,10 +20,27 @@
 // stability" of §3.3). Trapezoidal: Λ(x, n+½) = (x[n+1] - x[n]) / δt with the other terms the mean
 // of epochs n and n+1 (Λ_q = Log(q[n]⁻¹ q[n+1]) / δt), for n = 0..N-2; no parity decoupling.
 //
-// Static observation equations (paper §3.4): CUPT r(t_gps) = p_gps (linear interpolation between
-// the two epochs around t_gps), ZUPT v[n] = 0, GUPT g0 = γ(h[n]) + δg[n], XOVER δg[n] = δg[k]
-// (equal disturbance at two epochs that coincide horizontally; the paper equates total gravity,
-// which differs by the normal-gravity height gradient: see docs/network.md).
+// Static observation equations (paper §3.2, §3.4): CUPT r(t_gps) = p_gps (linear interpolation
+// between the two epochs around t_gps), VUPT v[n] = v0 (known velocity, σ per observation or
+// sigma_vupt_mps), ZUPT v[n] = 0 (a VUPT with v0 = 0), GUPT g0 = γ(h[n]) + δg[n], XOVER
+// δg[n] = δg[k] (equal disturbance at two epochs that coincide horizontally; the paper equates
+// total gravity, which differs by the normal-gravity height gradient: see docs/network.md), and
+// SGUPT (paper §3.2: "for every ZUPT equation, gravity can be considered as a constant function.
+// It can be seen as a XOVER observation"): during a static period (a run of consecutive epochs
+// that carry a ZUPT, or a VUPT with v0 = 0) the platform does not move, so gravity is the same at
+// every epoch of the period: δg[n] = δg[n0] for every epoch n of the run, n0 its first epoch
+// (XOVER ties to the period's first epoch, σ = sigma_sgupt_mps2). SGUPT does not make gravity
+// known (that is a GUPT); it makes it constant while static.
+//
+// Slow parameters (paper §4: "a^b, o^b, δg^e at Hz(GPS) frequency and r^e, v^e and q at
+// Hz(IMU)"): with slow_parameter_stride s > 1 the biases and δg are carried by one block per
+// interval of s IMU epochs, [ks, (k+1)s) ("subsets of them grouped in a single one": piecewise
+// constant). The dynamic equations at epoch n (FB, WIB; trapezoidal: the two epochs of the
+// interval) use the block of the interval containing n; AB, OB, GDT link consecutive blocks over
+// the time between the interval centres, Δt = s δt (the random-walk sd q √Δt grows accordingly);
+// GUPT, XOVER and SGUPT refer to the block of their epoch's interval. Unknowns: 9 N + 7 ⌈N/s⌉
+// instead of 16 N. The state in and out keeps one row per epoch (the epochs of an interval share
+// the block's value; initial values are averaged over the interval).
 //
 // Weights come from noise densities: an IMU sample with white-noise density N [unit/√Hz] has
 // σ = N / √δt; a random walk with density q [unit/√s] over a step Δt has σ = q √Δt.
@@ -74,6 +91,14 @@ struct NetworkOptions {
   double sigma_zupt_mps = 1e-3;            ///< ZUPT sd per axis [m/s]
   double sigma_gupt_mps2 = 1e-5;           ///< GUPT sd [m/s^2] (1 mGal)
   double sigma_xover_mps2 = 1e-5;          ///< XOVER sd [m/s^2] (1 mGal)
+  /// VUPT sd per axis [m/s] for the observations without their own (vupt_sd_mps empty).
+  double sigma_vupt_mps = 0.01;
+  /// SGUPT sd [m/s^2] of each tie δg[n] - δg[n0] inside a static period (0.1 mGal: gravity does
+  /// not change while the platform stands still; the sd absorbs the model's own approximations).
+  double sigma_sgupt_mps2 = 1e-6;
+  /// Slow parameters (paper §4): one accelerometer-bias, gyro-bias and δg block per
+  /// slow_parameter_stride IMU epochs (1: every epoch). E.g. IMU rate / GPS rate.
+  int slow_parameter_stride = 1;
   /// Huber loss on CUPT residuals with this threshold in units of sigma_gps_m (0: plain least
   /// squares) against GPS outliers.
   double gps_huber_threshold = 0.0;
@@ -115,6 +140,12 @@ struct NetworkObservations {
   Eigen::VectorXi gupt_epochs;       ///< epochs with known gravity
   Eigen::VectorXd gupt_gravity_mps2; ///< total gravity g0 at those epochs (magnitude)
   RowMatrixX2i xover_epochs;         ///< K x 2 epoch pairs with equal δg (see FindCrossovers)
+  Eigen::VectorXi vupt_epochs;       ///< V epochs with known velocity
+  RowMatrixXd vupt_velocity_mps;     ///< V x 3 known ENU velocities v0 [m/s]
+  Eigen::VectorXd vupt_sd_mps;       ///< V sds per axis [m/s] (> 0), or empty: sigma_vupt_mps
+  /// Static epochs with constant gravity (SGUPT), strictly increasing; each must carry a ZUPT or a
+  /// VUPT with v0 = 0. Each run of consecutive epochs is one static period.
+  Eigen::VectorXi sgupt_epochs;
 };
 
 /// Parameters of all epochs (initial values in, estimates out).
@@ -122,8 +153,8 @@ struct NetworkState {
   RowMatrixXd position_m;            ///< N x 3 ENU
   RowMatrixXd velocity_mps;          ///< N x 3 ENU
   RowMatrixXd attitude_wxyz;         ///< N x 4 unit quaternion body -> ENU (w, x, y, z)
-  RowMatrixXd acc_bias_mps2;         ///< N x 3 body
-  RowMatrixXd gyro_bias_radps;       ///< N x 3 body
+  RowMatrixXd acc_bias_mps2;         ///< N x 3 body (slow stride s: equal within an interval)
+  RowMatrixXd gyro_bias_radps;       ///< N x 3 body (slow stride s: equal within an interval)
   Eigen::VectorXd gravity_disturbance_mps2;  ///< N vertical δg (positive: stronger gravity)
   /// N standard deviations of δg (output only, when options.gravity_covariance != kNone).
   Eigen::VectorXd gravity_disturbance_sd_mps2;
@@ -138,9 +169,12 @@ struct NetworkSummary {
   double seconds_solve = 0.0;       ///< Ceres Solve only
   double seconds_datum_check = 0.0;
   int num_epochs = 0;
-  long num_parameters = 0;          ///< tangent-space unknowns (16 per epoch)
+  long num_parameters = 0;          ///< tangent-space unknowns (16 N, or 9 N + 7 num_slow_nodes)
   long num_residuals = 0;
-  int num_xover = 0;
+  int num_slow_nodes = 0;           ///< bias / δg blocks: ⌈N / slow_parameter_stride⌉
+  int num_xover = 0;                ///< XOVER residuals (ties inside one slow interval are dropped)
+  int num_vupt = 0;
+  int num_sgupt = 0;                ///< SGUPT residuals (ties δg[n] - δg[n0])
   double min_pivot_ratio = 0.0;     ///< smallest LDLᵀ pivot / diagonal (datum check; 0 if off)
   /// A-posteriori variance factor 2 F / (m - n): about 1 when the stated noise densities are right.
   double variance_factor = 0.0;
