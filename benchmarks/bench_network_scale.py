@@ -18,6 +18,10 @@ is solved
    full size, the cross-overs laid out as repeated passes (the flight re-flown in reverse over its
    own track) and solved exactly in the folded band order (indoorloc/network/folded_network.h).
 
+indoorloc runs on one thread in the peer comparison (as the peers' defaults do) and also on both
+cores (``num_threads=2``: the twisted order eliminates the two halves of the band as two chains
+meeting in the middle, bit-identical results); Table 2 cases run on ``TABLE2_THREADS``.
+
 Usage: python benchmarks/bench_network_scale.py [--quick] [--case 4]   (also run by benchmarks/run.py)
   --case 4 runs case 4 alone and merges it into the existing results/bench_network_scale.json;
   the standard deviation of every δg is written to results/bench_network_scale_case4_sigma.npy
@@ -53,6 +57,7 @@ TABLE2_CASES = (
     ("case 1", 200.0, 10_800.0),
 )
 CHECKPOINT_INTERVAL = 2048
+TABLE2_THREADS = 2  # this machine's cores
 # Case 4: 565,049 intervals at 50 Hz = 565,050 epochs (the paper's 50 Hz x 11,301 s).
 CASE4 = dict(imu_rate_hz=50.0, duration_s=565049.0 / 50.0, gps_rate_hz=2.0, num_ties=332150, num_gupts=1907)
 PAPER_CASE4 = dict(imu_epochs=565050, gps_epochs=22602, gupts=1907, ties=332150, equations=10572763, unknowns=10170900)
@@ -61,7 +66,7 @@ _CHILD4 = """
 import json, sys
 import numpy as np
 from indoorloc import network
-r = network.solve_repeated_pass_network(**{case}, checkpoint_interval={interval})
+r = network.solve_repeated_pass_network(**{case}, checkpoint_interval={interval}, num_threads={threads})
 sig = r["gravity_sigma"]
 np.save({sigma_path!r}, sig)
 out = {{k: v for k, v in r.items() if k not in ("gravity_sigma", "gravity_estimate")}}
@@ -78,7 +83,7 @@ _CHILD = """
 import json, sys
 from indoorloc._core import network
 r = network.solve_linear_ins_network({rate}, {duration}, rule="leapfrog", gravity_covariance=True,
-                                     checkpoint_interval={interval})
+                                     checkpoint_interval={interval}, num_threads={threads})
 out = {{k: v for k, v in r.items() if k not in ("gravity_sigma", "gravity_estimate")}}
 out["gravity_sigma_median_mgal"] = float(__import__("numpy").median(r["gravity_sigma"]) * 1e5)
 # VmHWM: this process's own peak (ru_maxrss would inherit the parent's peak across fork + exec).
@@ -102,6 +107,11 @@ def _peer_rows(durations) -> List[Dict[str, object]]:
         start = time.perf_counter()
         ours = network.solve_linear_ins_network(RATE_HZ, duration, gravity_covariance=False, keep_gravity_estimate=True)
         row["indoorloc_seconds"] = time.perf_counter() - start
+        start = time.perf_counter()
+        two = network.solve_linear_ins_network(RATE_HZ, duration, gravity_covariance=False, keep_gravity_estimate=True,
+                                               num_threads=2)
+        row["indoorloc_2threads_seconds"] = time.perf_counter() - start
+        assert np.array_equal(two["gravity_estimate"], ours["gravity_estimate"]), "thread count changed the result"
         start = time.perf_counter()
         network.solve_linear_ins_network(RATE_HZ, duration, gravity_covariance=True)
         row["indoorloc_with_covariance_seconds"] = time.perf_counter() - start
@@ -132,7 +142,7 @@ def _peer_rows(durations) -> List[Dict[str, object]]:
 def _table2_rows(cases) -> List[Dict[str, object]]:
     rows = []
     for name, rate, duration in cases:
-        code = _CHILD.format(rate=rate, duration=duration, interval=CHECKPOINT_INTERVAL)
+        code = _CHILD.format(rate=rate, duration=duration, interval=CHECKPOINT_INTERVAL, threads=TABLE2_THREADS)
         start = time.perf_counter()
         proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
         wall = time.perf_counter() - start
@@ -148,14 +158,14 @@ def _table2_rows(cases) -> List[Dict[str, object]]:
 def _case4_row() -> Dict[str, object]:
     sigma_path = str(HERE / "results" / "bench_network_scale_case4_sigma.npy")
     (HERE / "results").mkdir(exist_ok=True)
-    code = _CHILD4.format(case=CASE4, interval=CHECKPOINT_INTERVAL, sigma_path=sigma_path)
+    code = _CHILD4.format(case=CASE4, interval=CHECKPOINT_INTERVAL, sigma_path=sigma_path, threads=TABLE2_THREADS)
     start = time.perf_counter()
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     wall = time.perf_counter() - start
     if proc.returncode != 0:
         return {"case": "case 4", "error": proc.stderr.strip()[-500:]}
     row = json.loads(proc.stdout.strip().splitlines()[-1])
-    row.update({"case": "case 4", "wall_seconds": wall, "paper": PAPER_CASE4, **CASE4})
+    row.update({"case": "case 4", "wall_seconds": wall, "paper": PAPER_CASE4, "threads": TABLE2_THREADS, **CASE4})
     return row
 
 
@@ -168,6 +178,7 @@ def run(quick: bool = False) -> dict:
         "table2": _table2_rows(cases),
         "case4": None if quick else _case4_row(),
         "checkpoint_interval": CHECKPOINT_INTERVAL,
+        "threads": TABLE2_THREADS,
         "gtsam": network_peers.gtsam_available(),
     }
 
@@ -175,13 +186,14 @@ def run(quick: bool = False) -> dict:
 def markdown(result: dict) -> str:
     lines = [
         f"Same linearised network (18 unknowns per epoch, leap-frog, {RATE_HZ:.0f} Hz IMU, 1 Hz GPS), same run; "
-        "indoorloc solve without / with the covariances of every δg; peers' times include building their problem "
+        "indoorloc solve on one thread without / with the covariances of every δg, and on two threads; ratios are "
+        "against indoorloc on one thread (on two in brackets); peers' times include building their problem "
         "(Ceres default: its default Solver::Options, LM from x = 0; Ceres 1 step: one Gauss-Newton step, exact here):",
         "",
-        "| IMU epochs | unknowns | indoorloc [s] | + δg covariances [s] | GTSAM [s] (solve only) | GTSAM / indoorloc | "
+        "| IMU epochs | unknowns | indoorloc [s] | + δg covariances [s] | 2 threads [s] | GTSAM [s] (solve only) | GTSAM / indoorloc | "
         "Ceres default [s] (iterations) | Ceres / indoorloc | Ceres 1 step [s] | Ceres 1 step / indoorloc | "
         "scipy SuperLU [s] | max δg diff vs GTSAM, Ceres, scipy [m/s²] |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in result["peers"]:
         g = r.get("gtsam_seconds")
@@ -189,11 +201,13 @@ def markdown(result: dict) -> str:
         c = r.get("ceres_seconds")
         c1 = r.get("ceres_one_step_seconds")
         t = r["indoorloc_seconds"]
+        t2 = r.get("indoorloc_2threads_seconds", float("nan"))
         lines.append(
-            f"| {r['epochs']:,} | {r['unknowns']:,} | {t:.3f} | {r['indoorloc_with_covariance_seconds']:.3f} | "
-            + (f"{g:.3f} ({r['gtsam_solve_seconds']:.3f}) | {g / t:.1f}x | " if g
+            f"| {r['epochs']:,} | {r['unknowns']:,} | {t:.3f} | {r['indoorloc_with_covariance_seconds']:.3f} | {t2:.3f} | "
+            + (f"{g:.3f} ({r['gtsam_solve_seconds']:.3f}) | {g / t:.1f}x ({g / t2:.1f}x) | " if g
                else ("fails: indeterminate | - | " if "gtsam_error" in r else "- | - | "))
-            + (f"{c:.3f} ({r['ceres_iterations']}) | {c / t:.0f}x | {c1:.3f} | {c1 / t:.1f}x | " if c else "- | - | - | - | ")
+            + (f"{c:.3f} ({r['ceres_iterations']}) | {c / t:.0f}x ({c / t2:.0f}x) | {c1:.3f} | {c1 / t:.1f}x ({c1 / t2:.1f}x) | "
+               if c else "- | - | - | - | ")
             + (f"{s:.3f} | " if s else "- | ")
             + f"{r.get('gtsam_max_dg_diff', float('nan')):.1e}, {r.get('ceres_max_dg_diff', float('nan')):.1e}, "
             f"{r.get('scipy_max_dg_diff', float('nan')):.1e} |"
@@ -201,7 +215,7 @@ def markdown(result: dict) -> str:
     lines += [
         "",
         f"Paper Table 2 sizes, leap-frog, with the covariances of every δg (checkpoint every "
-        f"{result['checkpoint_interval']} blocks), one child process per case:",
+        f"{result['checkpoint_interval']} blocks), {result.get('threads', 1)} thread(s), one child process per case:",
         "",
         "| case | IMU | unknowns | equations | factor [s] | backward + selected inversion [s] | total [s] | peak memory [GiB] | max error vs truth |",
         "|---|---|---|---|---|---|---|---|---|",
@@ -221,7 +235,8 @@ def markdown(result: dict) -> str:
             "",
             "Table 2 case 4 (Rockies'95) with all its cross-overs: the flight re-flown in reverse over its own track, "
             "scalar δg ties between the passes and GUPTs, solved exactly in the folded band order (blocks of 72), "
-            f"with the standard deviation of every δg (checkpoint every {result['checkpoint_interval']} blocks):",
+            f"with the standard deviation of every δg (checkpoint every {result['checkpoint_interval']} blocks, "
+            f"{c4.get('threads', 1)} thread(s)):",
             "",
         ]
         if "error" in c4:

@@ -38,13 +38,14 @@ void BindNetworkScale(py::module_& m) {
       "solve_folded_linear_ins_network",
       [](double imu_rate_hz, double duration_s, double gps_rate_hz, const std::string& rule, long long num_ties,
          long long num_gupts, double sigma_xover_mps2, double sigma_gupt_mps2, int checkpoint_interval,
-         bool gravity_covariance, bool keep_gravity_estimate) {
+         bool gravity_covariance, bool keep_gravity_estimate, int num_threads) {
         network::LinearInsNetworkOptions o = MakeOptions(imu_rate_hz, duration_s, gps_rate_hz, rule, 2);
         o.gupt_end_epochs = 0;  // every GUPT comes from the layout, so the count is num_gupts
         network::FoldedNetworkOptions fo;
         fo.checkpoint_interval = checkpoint_interval;
         fo.gravity_covariance = gravity_covariance;
         fo.keep_gravity_estimate = keep_gravity_estimate;
+        fo.num_threads = num_threads;
         ValidateOptions(fo);
         network::FoldedNetworkResult r;
         {
@@ -77,7 +78,7 @@ void BindNetworkScale(py::module_& m) {
       py::arg("imu_rate_hz") = 50.0, py::arg("duration_s") = 60.0, py::arg("gps_rate_hz") = 2.0,
       py::arg("rule") = "leapfrog", py::arg("num_ties") = 1000, py::arg("num_gupts") = 10,
       py::arg("sigma_xover_mps2") = 1e-5, py::arg("sigma_gupt_mps2") = 1e-5, py::arg("checkpoint_interval") = 2048,
-      py::arg("gravity_covariance") = true, py::arg("keep_gravity_estimate") = false, R"doc(
+      py::arg("gravity_covariance") = true, py::arg("keep_gravity_estimate") = false, py::arg("num_threads") = 1, R"doc(
 The linearised INS/GPS network of a survey re-flown in reverse over its own track, with
 cross-over ties between the two passes and GUPTs, solved exactly (no iteration) by the
 block-tridiagonal Cholesky in the folded order (super-block k = base blocks m-1-k and m+k,
@@ -100,6 +101,9 @@ sigma_xover_mps2, sigma_gupt_mps2 : float
 checkpoint_interval : int
     0 keeps the whole factor (2 K 72² doubles); k > 0 one checkpoint every k super-blocks.
 gravity_covariance, keep_gravity_estimate : bool
+num_threads : int
+    Threads for the two chains of the twisted elimination (1 or 2; <= 0: all cores). The
+    results are bit-identical on any count.
 
 Returns
 -------
@@ -264,13 +268,13 @@ libraries: diagonal (n, b, b) = A_ii, lower (n, b, b) = A_{i,i-1} (lower[0] is z
   m.def(
       "solve_linear_ins_network",
       [](double imu_rate_hz, double duration_s, double gps_rate_hz, const std::string& rule, bool gravity_covariance,
-         int checkpoint_interval, int prior_epochs, bool keep_gravity_estimate) {
+         int checkpoint_interval, int prior_epochs, bool keep_gravity_estimate, int num_threads) {
         const network::LinearInsNetworkOptions o = MakeOptions(imu_rate_hz, duration_s, gps_rate_hz, rule, prior_epochs);
         CheckArgument(checkpoint_interval >= 0, "checkpoint_interval", "must be >= 0");
         network::LinearInsNetworkResult r;
         {
           py::gil_scoped_release release;
-          r = network::SolveLinearInsNetwork(o, gravity_covariance, checkpoint_interval, keep_gravity_estimate);
+          r = network::SolveLinearInsNetwork(o, gravity_covariance, checkpoint_interval, keep_gravity_estimate, num_threads);
         }
         py::dict d;
         d["imu_epochs"] = r.size.imu_epochs;
@@ -294,7 +298,7 @@ libraries: diagonal (n, b, b) = A_ii, lower (n, b, b) = A_{i,i-1} (lower[0] is z
       },
       py::arg("imu_rate_hz") = 200.0, py::arg("duration_s") = 60.0, py::arg("gps_rate_hz") = 1.0,
       py::arg("rule") = "leapfrog", py::arg("gravity_covariance") = true, py::arg("checkpoint_interval") = 0,
-      py::arg("prior_epochs") = 2, py::arg("keep_gravity_estimate") = false, R"doc(
+      py::arg("prior_epochs") = 2, py::arg("keep_gravity_estimate") = false, py::arg("num_threads") = 1, R"doc(
 Builds the linearised strapdown INS/GPS network (18 unknowns per IMU epoch, leap-frog or
 trapezoidal dynamic equations, CUPT at the GPS epochs, alignment prior, GUPT at the end) block by
 block and solves it with the streaming block-tridiagonal Cholesky, with the covariances of every
@@ -315,6 +319,9 @@ prior_epochs : int
     RuntimeError naming the block).
 keep_gravity_estimate : bool
     Return the δg estimate (E, 3) too.
+num_threads : int
+    Threads for the two chains of the twisted elimination (blocks 0.. and ..n-1 meeting in the
+    middle; 1 or 2; <= 0: all cores). The results are bit-identical on any count.
 
 Returns
 -------

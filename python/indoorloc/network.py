@@ -71,6 +71,7 @@ def solve_repeated_pass_network(
     rule: str = "leapfrog",
     checkpoint_interval: int = 2048,
     keep_gravity_estimate: bool = False,
+    num_threads: int = 1,
 ) -> Dict[str, object]:
     """Linearised INS/GPS network of a survey re-flown in reverse over its own track, with
     cross-over ties between the passes, solved exactly in the folded band order
@@ -96,6 +97,9 @@ def solve_repeated_pass_network(
         0 keeps the whole factor; k > 0 keeps one checkpoint every k blocks.
     keep_gravity_estimate : bool
         Also return the δg estimate.
+    num_threads : int
+        1 or 2 threads for the two chains of the twisted elimination (<= 0: all cores); the
+        results are bit-identical on any count.
 
     Returns
     -------
@@ -107,7 +111,7 @@ def solve_repeated_pass_network(
     """
     return solve_folded_linear_ins_network(
         imu_rate_hz, duration_s, gps_rate_hz, rule, int(num_ties), int(num_gupts), sigma_xover_mps2,
-        sigma_gupt_mps2, checkpoint_interval, True, keep_gravity_estimate)
+        sigma_gupt_mps2, checkpoint_interval, True, keep_gravity_estimate, int(num_threads))
 
 
 def flight_options(config, discretization: str = "trapezoidal", **overrides) -> NetworkOptions:

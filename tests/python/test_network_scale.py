@@ -27,10 +27,16 @@ def test_solution_and_gravity_covariances_match_scipy_and_the_dense_inverse(rule
     inverse = np.linalg.inv(dense)
     idx = np.arange(E)[:, None] * 18 + 15 + np.arange(3)[None, :]
     np.testing.assert_allclose(ours["gravity_sigma"], np.sqrt(np.diag(inverse)[idx]), rtol=1e-6)
-    # Checkpointed: identical numbers, twice the assembler calls.
+    # Checkpointed: identical numbers, twice the assembler calls (the middle block of the twisted
+    # order once).
     again = network.solve_linear_ins_network(50.0, 2.0, rule=rule, keep_gravity_estimate=True, checkpoint_interval=5)
     np.testing.assert_array_equal(again["gravity_sigma"], ours["gravity_sigma"])
-    assert again["assembler_calls"] == 2 * ours["assembler_calls"]
+    assert again["assembler_calls"] == 2 * ours["assembler_calls"] - 1
+    # Two threads (one per chain): bit-identical.
+    two = network.solve_linear_ins_network(50.0, 2.0, rule=rule, keep_gravity_estimate=True, checkpoint_interval=5,
+                                           num_threads=2)
+    np.testing.assert_array_equal(two["gravity_sigma"], ours["gravity_sigma"])
+    np.testing.assert_array_equal(two["gravity_estimate"], ours["gravity_estimate"])
 
 
 def test_normal_blocks_rebuild_the_sparse_matrix():
@@ -117,6 +123,10 @@ def test_folded_repeated_pass_network_matches_the_dense_tied_solve():
         A[u, u] += w
     var = np.diag(np.linalg.inv(A))[np.arange(E)[:, None] * 18 + 15 + np.arange(3)[None, :]]
     np.testing.assert_allclose(d["gravity_sigma"], np.sqrt(var), rtol=1e-6)
+    two = facade.solve_repeated_pass_network(50.0, 2.0, 2.0, num_ties=60, num_gupts=4, keep_gravity_estimate=True,
+                                             checkpoint_interval=0, num_threads=2)
+    np.testing.assert_array_equal(two["gravity_sigma"], d["gravity_sigma"])
+    np.testing.assert_array_equal(two["gravity_estimate"], d["gravity_estimate"])
 
 
 def test_folded_network_bad_input_names_the_argument():

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
+#include <functional>
 #include <sstream>
 #include <stdexcept>
 #include <utility>
@@ -10,6 +12,8 @@
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/parallel.h"
+#include "indoorloc/core/random.h"
 
 namespace indoorloc::network {
 namespace {
@@ -17,92 +21,274 @@ namespace {
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
-// The factor of a run of consecutive blocks [first, first + L.size()).
-struct Segment {
-  int first = 0;
-  std::vector<MatrixXd> L;  // lower-triangular diagonal blocks L_i
-  std::vector<MatrixXd> C;  // sub-diagonal blocks C_i = A_{i,i-1} L_{i-1}^{-T} (zero for i = 0)
-  std::vector<VectorXd> y;  // forward-substituted right-hand side
+// An eliminated neighbour of the block being eliminated: the coupling A_{i,j} (b x b) and the
+// neighbour's factor L_j and forward-substituted right-hand side y_j.
+struct Neighbour {
+  const MatrixXd* coupling = nullptr;
+  const MatrixXd* L = nullptr;
+  const VectorXd* y = nullptr;
 };
 
-// Forward recursion state at the end of a block: what the next block needs.
-struct Carry {
-  MatrixXd L;
-  VectorXd y;
-  bool valid = false;
-};
-
-class ForwardPass {
+// Eliminates one block against up to two eliminated neighbours (one in a chain, two at the
+// middle of the twisted order), in scratch it owns so that the inner loop does not allocate:
+//     C_k = A_{i,j_k} L_{j_k}^{-T},  S = A_ii - Σ_k C_k C_kᵀ,  L_i = chol(S),  y_i = L_i^{-1} (b_i - Σ_k C_k y_{j_k}).
+class BlockEliminator {
  public:
-  ForwardPass(int block_size, const BlockRowAssembler& assemble, const BlockTridiagonalOptions& options,
-              BlockTridiagonalSummary* summary)
-      : b_(block_size), assemble_(assemble), options_(options), summary_(summary),
-        diagonal_(block_size, block_size), lower_(block_size, block_size), rhs_(block_size) {}
+  BlockEliminator(int block_size, double pivot_tolerance)
+      : b_(block_size), tolerance_(pivot_tolerance), r_(block_size) {}
 
-  const VectorXd& last_rhs() const { return rhs_; }
-
-  // Factors block i given the carry of block i-1; writes L_i, C_i, y_i.
-  void Step(int i, const Carry& previous, MatrixXd* L, MatrixXd* C, VectorXd* y) {
-    diagonal_.setZero();
-    lower_.setZero();
-    rhs_.setZero();
-    assemble_(i, &diagonal_, &lower_, &rhs_);
-    ++summary_->assembler_calls;
-    if (diagonal_.rows() != b_ || diagonal_.cols() != b_ || lower_.rows() != b_ || lower_.cols() != b_ || rhs_.size() != b_) {
-      ThrowInvalidArgument("assemble", "block " + std::to_string(i) + ": the assembler resized its outputs");
+  // Returns the smallest relative pivot (see BlockTridiagonalOptions::pivot_tolerance); throws
+  // std::runtime_error naming `block` when S is not (numerically) positive definite.
+  double Eliminate(int block, const MatrixXd& diagonal, const VectorXd& rhs, const Neighbour* first, MatrixXd* C_first,
+                   const Neighbour* second, MatrixXd* C_second, MatrixXd* L, VectorXd* y) {
+    *L = diagonal;
+    r_ = rhs;
+    for (auto [n, C] : {std::pair<const Neighbour*, MatrixXd*>{first, C_first}, {second, C_second}}) {
+      if (n == nullptr) continue;
+      // C L_jᵀ = A_{i,j}  <=>  C = A_{i,j} L_j^{-T}.
+      *C = *n->coupling;
+      n->L->transpose().triangularView<Eigen::Upper>().solveInPlace<Eigen::OnTheRight>(*C);
+      // Lower triangle only (all the factorisation reads): half the flops of the full product.
+      L->selfadjointView<Eigen::Lower>().rankUpdate(*C, -1.0);
+      r_.noalias() -= (*C) * (*n->y);
     }
-    if (!diagonal_.allFinite() || !rhs_.allFinite() || (i > 0 && !lower_.allFinite())) {
-      ThrowInvalidArgument("assemble", "block " + std::to_string(i) + " has a NaN or infinite entry");
-    }
-    MatrixXd S = diagonal_;
-    if (i > 0) {
-      // C_i = A_{i,i-1} L_{i-1}^{-T}  <=>  C_iᵀ = L_{i-1}^{-1} A_{i,i-1}ᵀ.
-      *C = previous.L.triangularView<Eigen::Lower>().solve(lower_.transpose()).transpose();
-      // Lower triangle only (all the LLT below reads): half the flops of the full product.
-      S.selfadjointView<Eigen::Lower>().rankUpdate(*C, -1.0);
-    } else {
-      C->setZero(b_, b_);
-    }
+    // In place: L's lower triangle becomes the factor of S.
+    Eigen::LLT<Eigen::Ref<MatrixXd>> llt(*L);
     // Rank test, invariant to the units of each unknown: the conditional information of unknown k
     // given the unknowns before it (pivot L_kk²) against its information alone (A_kk). A ratio
     // near zero means the unknown is (numerically) determined by the others: a rank defect.
-    Eigen::LLT<MatrixXd> llt(S);
     double min_ratio = -1.0;
     if (llt.info() == Eigen::Success) {
       min_ratio = 1.0;
       for (int k = 0; k < b_; ++k) {
-        const double info = std::max(diagonal_(k, k), 1e-300);
-        min_ratio = std::min(min_ratio, llt.matrixLLT()(k, k) * llt.matrixLLT()(k, k) / info);
+        const double info = std::max(diagonal(k, k), 1e-300);
+        min_ratio = std::min(min_ratio, (*L)(k, k) * (*L)(k, k) / info);
       }
     }
-    if (llt.info() != Eigen::Success || !(min_ratio > options_.pivot_tolerance)) {
+    if (llt.info() != Eigen::Success || !(min_ratio > tolerance_)) {
       std::ostringstream msg;
-      msg << "indoorloc: the normal matrix is not positive definite at block " << i
+      msg << "indoorloc: the normal matrix is not positive definite at block " << block
           << " (rank-deficient network: a datum defect or an unobservable parameter there; relative pivot "
-          << std::max(min_ratio, 0.0) << " < tolerance " << options_.pivot_tolerance << ")";
+          << std::max(min_ratio, 0.0) << " < tolerance " << tolerance_ << ")";
       throw std::runtime_error(msg.str());
     }
-    summary_->min_relative_pivot = std::min(summary_->min_relative_pivot, min_ratio);
-    *L = llt.matrixL();
-    VectorXd r = rhs_;
-    if (i > 0) r.noalias() -= (*C) * previous.y;
-    *y = L->triangularView<Eigen::Lower>().solve(r);
+    L->triangularView<Eigen::StrictlyUpper>().setZero();
+    L->triangularView<Eigen::Lower>().solveInPlace(r_);
+    *y = r_;
+    return min_ratio;
   }
 
  private:
   int b_;
-  const BlockRowAssembler& assemble_;
-  const BlockTridiagonalOptions& options_;
-  BlockTridiagonalSummary* summary_;
-  MatrixXd diagonal_, lower_;
-  VectorXd rhs_;
+  double tolerance_;
+  VectorXd r_;
 };
 
-MatrixXd Restrict(const MatrixXd& m, const std::vector<int>& idx) {
+// Calls `assemble` for block i and checks what it returned.
+void AssembleChecked(const BlockRowAssembler& assemble, int i, int b, MatrixXd* diagonal, MatrixXd* lower, VectorXd* rhs) {
+  diagonal->setZero(b, b);
+  lower->setZero(b, b);
+  rhs->setZero(b);
+  assemble(i, diagonal, lower, rhs);
+  if (diagonal->rows() != b || diagonal->cols() != b || lower->rows() != b || lower->cols() != b || rhs->size() != b) {
+    ThrowInvalidArgument("assemble", "block " + std::to_string(i) + ": the assembler resized its outputs");
+  }
+  if (!diagonal->allFinite() || !rhs->allFinite() || (i > 0 && !lower->allFinite())) {
+    ThrowInvalidArgument("assemble", "block " + std::to_string(i) + " has a NaN or infinite entry");
+  }
+}
+
+MatrixXd Restrict(const MatrixXd& m, const std::vector<int>& idx, bool transpose = false) {
   MatrixXd out(idx.size(), idx.size());
   for (size_t r = 0; r < idx.size(); ++r)
-    for (size_t c = 0; c < idx.size(); ++c) out(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = m(idx[r], idx[c]);
+    for (size_t c = 0; c < idx.size(); ++c)
+      out(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = transpose ? m(idx[c], idx[r]) : m(idx[r], idx[c]);
   return out;
+}
+
+// What the elimination of one block passes to the next: its factor and forward-substituted
+// right-hand side, and (bottom chain) the assembler's `lower` of the block, A_{i,i-1}, which is
+// the transposed coupling of the block eliminated after it.
+struct Carry {
+  MatrixXd L;
+  VectorXd y;
+  MatrixXd lower;
+};
+
+// One chain of the twisted order: `length` blocks first, first + step, .., each eliminated against
+// the one before it (step +1: the top chain, coupled to its predecessor by the assembler's lower
+// block; step -1: the bottom chain, coupled by the transpose of its predecessor's lower block).
+class Chain {
+ public:
+  Chain(int first, int length, int step, int block_size, const BlockRowAssembler& assemble,
+        const BlockTridiagonalOptions& options)
+      : first_(first), length_(length), step_(step), b_(block_size), assemble_(assemble), options_(options),
+        eliminator_(block_size, options.pivot_tolerance) {
+    const int ci = options.checkpoint_interval;
+    k_ = (ci <= 0 || ci >= length_) ? std::max(length_, 1) : ci;
+    keep_all_ = k_ >= length_;
+    num_segments_ = (length_ + k_ - 1) / k_;
+  }
+
+  int length() const { return length_; }
+  int block(int p) const { return first_ + step_ * p; }
+  // After Forward: the last block's factor, y and (bottom chain) lower block.
+  const Carry& last() const { return last_; }
+  long long assembler_calls() const { return assembler_calls_; }
+  double min_relative_pivot() const { return min_ratio_; }
+  double stored_bytes() const {
+    const double block_bytes = 8.0 * (2.0 * b_ * b_ + b_);
+    return keep_all_ ? length_ * block_bytes : num_segments_ * 8.0 * (2.0 * b_ * b_ + b_) + k_ * block_bytes;
+  }
+
+  void Forward() {
+    if (keep_all_) {
+      L_.resize(static_cast<size_t>(length_));
+      C_.resize(static_cast<size_t>(length_));
+      y_.resize(static_cast<size_t>(length_));
+    }
+    checkpoints_.resize(static_cast<size_t>(num_segments_));
+    Carry carry;
+    MatrixXd L, C;
+    VectorXd y;
+    for (int p = 0; p < length_; ++p) {
+      if (p % k_ == 0) checkpoints_[static_cast<size_t>(p / k_)] = carry;
+      Step(p, &carry, keep_all_ ? &L_[static_cast<size_t>(p)] : &L, keep_all_ ? &C_[static_cast<size_t>(p)] : &C,
+           keep_all_ ? &y_[static_cast<size_t>(p)] : &y);
+    }
+    last_ = std::move(carry);
+    if (!keep_all_) checkpoints_.shrink_to_fit();
+  }
+
+  // Back substitution and selected inversion from the chain's last block to its first, given the
+  // block eliminated after the chain (the middle): its solution x, its coupling factor C to the
+  // chain's last block and, when inverting, its full covariance Σ.
+  void Backward(const VectorXd& x_after, const MatrixXd& C_after, const MatrixXd* sigma_after,
+                BlockTridiagonalSolution* out) {
+    const bool invert = !options_.selected.empty();
+    VectorXd x_next = x_after, x, r;
+    MatrixXd C_next = C_after, sigma_next, Linv, CL, sigma_off, sigma_ii;
+    if (invert) sigma_next = *sigma_after;
+    std::vector<MatrixXd> seg_L, seg_C;
+    std::vector<VectorXd> seg_y;
+    for (int s = num_segments_ - 1; s >= 0; --s) {
+      const int begin = s * k_, end = std::min(length_, begin + k_);  // positions [begin, end)
+      const std::vector<MatrixXd>* Ls = &L_;
+      const std::vector<MatrixXd>* Cs = &C_;
+      const std::vector<VectorXd>* ys = &y_;
+      int offset = 0;
+      if (!keep_all_) {
+        const size_t len = static_cast<size_t>(end - begin);
+        seg_L.resize(len);
+        seg_C.resize(len);
+        seg_y.resize(len);
+        Carry carry = checkpoints_[static_cast<size_t>(s)];
+        for (int p = begin; p < end; ++p) {
+          const size_t j = static_cast<size_t>(p - begin);
+          Step(p, &carry, &seg_L[j], &seg_C[j], &seg_y[j]);
+        }
+        Ls = &seg_L;
+        Cs = &seg_C;
+        ys = &seg_y;
+        offset = begin;
+      }
+      for (int p = end - 1; p >= begin; --p) {
+        const size_t j = static_cast<size_t>(p - offset);
+        const MatrixXd& L = (*Ls)[j];
+        const auto Lt = L.triangularView<Eigen::Lower>();
+        r = (*ys)[j];
+        r.noalias() -= C_next.transpose() * x_next;
+        x = Lt.transpose().solve(r);
+        const int i = block(p);
+        out->x.segment(static_cast<Eigen::Index>(i) * b_, b_) = x;
+        if (invert) {
+          // Σ_{next,i} = -Σ_next C_next L_i^{-1},  Σ_ii = L_i^{-T} L_i^{-1} - Σ_{next,i}ᵀ C_next L_i^{-1}.
+          Linv.setIdentity(b_, b_);
+          Lt.solveInPlace(Linv);
+          CL.noalias() = C_next * Linv;
+          sigma_off.noalias() = -sigma_next * CL;
+          sigma_ii.noalias() = Linv.transpose() * Linv;
+          sigma_ii.noalias() -= sigma_off.transpose() * CL;
+          sigma_ii = 0.5 * (sigma_ii + sigma_ii.transpose()).eval();
+          if (options_.neighbour_covariances) {
+            // Σ_{i+1,i} is stored at i: the top chain's next block is i+1, the bottom chain's i-1.
+            if (step_ > 0) {
+              out->neighbour_covariance[static_cast<size_t>(i)] = Restrict(sigma_off, options_.selected);
+            } else {
+              out->neighbour_covariance[static_cast<size_t>(i - 1)] = Restrict(sigma_off, options_.selected, true);
+            }
+          }
+          out->covariance[static_cast<size_t>(i)] = Restrict(sigma_ii, options_.selected);
+          sigma_next.swap(sigma_ii);
+        }
+        x_next.swap(x);
+        C_next = (*Cs)[j];
+      }
+    }
+  }
+
+ private:
+  // Assembles and eliminates position p; `carry` holds position p-1 on entry and p on return.
+  void Step(int p, Carry* carry, MatrixXd* L, MatrixXd* C, VectorXd* y) {
+    const int i = block(p);
+    AssembleChecked(assemble_, i, b_, &diagonal_, &lower_, &rhs_);
+    ++assembler_calls_;
+    Neighbour previous;
+    if (p > 0) {
+      if (step_ > 0) {
+        previous.coupling = &lower_;
+      } else {
+        coupling_ = carry->lower.transpose();  // A_{i,i+1} = A_{i+1,i}ᵀ
+        previous.coupling = &coupling_;
+      }
+      previous.L = &carry->L;
+      previous.y = &carry->y;
+    }
+    const double ratio = eliminator_.Eliminate(i, diagonal_, rhs_, p > 0 ? &previous : nullptr, C, nullptr, nullptr, L, y);
+    if (p == 0) C->setZero(b_, b_);
+    min_ratio_ = std::min(min_ratio_, ratio);
+    carry->L = *L;
+    carry->y = *y;
+    if (step_ < 0) carry->lower.swap(lower_);
+  }
+
+  int first_, length_, step_, b_;
+  const BlockRowAssembler& assemble_;
+  const BlockTridiagonalOptions& options_;
+  BlockEliminator eliminator_;
+  int k_ = 1, num_segments_ = 0;
+  bool keep_all_ = true;
+  std::vector<MatrixXd> L_, C_;
+  std::vector<VectorXd> y_;
+  std::vector<Carry> checkpoints_;
+  Carry last_;
+  MatrixXd diagonal_, lower_, coupling_;
+  VectorXd rhs_;
+  long long assembler_calls_ = 0;
+  double min_ratio_ = 1.0;
+};
+
+// Runs top() and bottom() on two threads (or one after the other), rethrowing the top's
+// exception first so that the error does not depend on the thread count.
+void RunChains(int threads, const std::function<void()>& top, const std::function<void()>& bottom) {
+  std::exception_ptr errors[2];
+  const std::function<void()>* work[2] = {&top, &bottom};
+  auto run = [&](int c, RandomStream&) {
+    try {
+      (*work[c])();
+    } catch (...) {
+      errors[c] = std::current_exception();
+    }
+  };
+  if (threads >= 2) {
+    ParallelForRuns(2, 2, 0, run);
+  } else {
+    RandomStream unused(0);
+    run(0, unused);
+    if (!errors[0]) run(1, unused);
+  }
+  for (const std::exception_ptr& e : errors)
+    if (e) std::rethrow_exception(e);
 }
 
 }  // namespace
@@ -144,106 +330,59 @@ BlockTridiagonalSolution SolveBlockTridiagonal(int num_blocks, int block_size, c
                   "index " + std::to_string(s) + " is outside the block (size " + std::to_string(block_size) + ")");
   }
   const int n = num_blocks, b = block_size;
-  const int k = (options.checkpoint_interval <= 0 || options.checkpoint_interval >= n) ? n : options.checkpoint_interval;
-  const bool keep_all = k == n;
   const bool invert = !options.selected.empty();
+  const int threads = std::min(2, ResolveThreadCount(options.num_threads));
 
   BlockTridiagonalSolution out;
   BlockTridiagonalSummary& summary = out.summary;
   summary.num_blocks = n;
   summary.block_size = b;
-  summary.min_relative_pivot = 1.0;
   out.x.resize(static_cast<Eigen::Index>(n) * b);
   if (invert) out.covariance.resize(static_cast<size_t>(n));
   if (invert && options.neighbour_covariances) out.neighbour_covariance.resize(static_cast<size_t>(n - 1));
 
-  ForwardPass forward(b, assemble, options, &summary);
-  const double block_bytes = 8.0 * (2.0 * b * b + b);
-  const int num_segments = (n + k - 1) / k;
+  // Twisted order: top chain 0..m-1, bottom chain n-1..m+1, then the middle m.
+  const int m = n / 2;
+  Chain top(0, m, +1, b, assemble, options);
+  Chain bottom(n - 1, n - 1 - m, -1, b, assemble, options);
 
-  // Forward pass: keep everything (one segment), or only the carry entering each segment.
   WallTimer timer;
-  Segment all;
-  std::vector<Carry> checkpoints(static_cast<size_t>(num_segments));
-  {
-    Carry carry;
-    MatrixXd L, C;
-    VectorXd y;
-    if (keep_all) {
-      all.L.resize(static_cast<size_t>(n));
-      all.C.resize(static_cast<size_t>(n));
-      all.y.resize(static_cast<size_t>(n));
-    }
-    for (int i = 0; i < n; ++i) {
-      if (i % k == 0) checkpoints[static_cast<size_t>(i / k)] = carry;
-      forward.Step(i, carry, &L, &C, &y);
-      if (keep_all) {
-        all.L[static_cast<size_t>(i)] = L;
-        all.C[static_cast<size_t>(i)] = C;
-        all.y[static_cast<size_t>(i)] = y;
-      }
-      carry.L.swap(L);
-      carry.y.swap(y);
-      carry.valid = true;
-    }
+  RunChains(threads, [&] { top.Forward(); }, [&] { bottom.Forward(); });
+  MatrixXd diagonal, lower, L_mid, C_top, C_bottom, coupling_bottom;
+  VectorXd rhs, y_mid;
+  AssembleChecked(assemble, m, b, &diagonal, &lower, &rhs);
+  Neighbour from_top, from_bottom;
+  if (top.length() > 0) from_top = Neighbour{&lower, &top.last().L, &top.last().y};
+  if (bottom.length() > 0) {
+    coupling_bottom = bottom.last().lower.transpose();  // A_{m,m+1} = A_{m+1,m}ᵀ
+    from_bottom = Neighbour{&coupling_bottom, &bottom.last().L, &bottom.last().y};
   }
+  BlockEliminator eliminator(b, options.pivot_tolerance);
+  const double mid_ratio =
+      eliminator.Eliminate(m, diagonal, rhs, top.length() > 0 ? &from_top : nullptr, &C_top,
+                           bottom.length() > 0 ? &from_bottom : nullptr, &C_bottom, &L_mid, &y_mid);
   summary.factor_seconds = timer.ElapsedSeconds();
-  summary.stored_factor_bytes = keep_all ? n * block_bytes : num_segments * 8.0 * (b * b + b) + k * block_bytes;
+  summary.assembler_calls = top.assembler_calls() + bottom.assembler_calls() + 1;
+  summary.min_relative_pivot = std::min({mid_ratio, top.min_relative_pivot(), bottom.min_relative_pivot()});
 
-  // Backward pass, one segment at a time from the last.
+  // Outwards from the middle: x_m = L_m^{-T} y_m, Σ_mm = L_m^{-T} L_m^{-1}.
   timer.Reset();
-  VectorXd x_next;               // x_{i+1}
-  MatrixXd C_next;               // C_{i+1}
-  MatrixXd sigma_next;           // Σ_{i+1,i+1} (full b x b)
-  MatrixXd Linv, sigma_off, sigma_ii;
-  Segment seg;
-  for (int sidx = num_segments - 1; sidx >= 0; --sidx) {
-    const int first = sidx * k, last = std::min(n, first + k);  // [first, last)
-    const Segment* s = &all;
-    int offset = 0;
-    if (!keep_all) {
-      seg.first = first;
-      const size_t len = static_cast<size_t>(last - first);
-      seg.L.resize(len);
-      seg.C.resize(len);
-      seg.y.resize(len);
-      Carry carry = checkpoints[static_cast<size_t>(sidx)];
-      for (int i = first; i < last; ++i) {
-        const size_t j = static_cast<size_t>(i - first);
-        forward.Step(i, carry, &seg.L[j], &seg.C[j], &seg.y[j]);
-        carry.L = seg.L[j];
-        carry.y = seg.y[j];
-      }
-      s = &seg;
-      offset = first;
-    }
-    for (int i = last - 1; i >= first; --i) {
-      const size_t j = static_cast<size_t>(i - offset);
-      const MatrixXd& L = s->L[j];
-      const auto Lt = L.triangularView<Eigen::Lower>();
-      VectorXd r = s->y[j];
-      if (i < n - 1) r.noalias() -= C_next.transpose() * x_next;
-      VectorXd x = Lt.transpose().solve(r);
-      out.x.segment(static_cast<Eigen::Index>(i) * b, b) = x;
-      if (invert) {
-        Linv = Lt.solve(MatrixXd::Identity(b, b));
-        if (i == n - 1) {
-          sigma_ii.noalias() = Linv.transpose() * Linv;
-        } else {
-          const MatrixXd CL = C_next * Linv;  // C_{i+1} L_i^{-1}
-          sigma_off.noalias() = -sigma_next * CL;  // Σ_{i+1,i}
-          sigma_ii.noalias() = Linv.transpose() * Linv;
-          sigma_ii.noalias() -= sigma_off.transpose() * CL;
-          if (options.neighbour_covariances) out.neighbour_covariance[static_cast<size_t>(i)] = Restrict(sigma_off, options.selected);
-        }
-        sigma_ii = 0.5 * (sigma_ii + sigma_ii.transpose()).eval();
-        out.covariance[static_cast<size_t>(i)] = Restrict(sigma_ii, options.selected);
-        sigma_next.swap(sigma_ii);
-      }
-      x_next.swap(x);
-      C_next = s->C[j];
-    }
+  const MatrixXd& L_mid_const = L_mid;  // a view of a const matrix: its transpose() is usable
+  const auto Lt = L_mid_const.triangularView<Eigen::Lower>();
+  const VectorXd x_mid = Lt.transpose().solve(y_mid);
+  out.x.segment(static_cast<Eigen::Index>(m) * b, b) = x_mid;
+  MatrixXd sigma_mid;
+  if (invert) {
+    MatrixXd Linv = MatrixXd::Identity(b, b);
+    Lt.solveInPlace(Linv);
+    sigma_mid.noalias() = Linv.transpose() * Linv;
+    out.covariance[static_cast<size_t>(m)] = Restrict(sigma_mid, options.selected);
   }
+  RunChains(
+      threads, [&] { if (top.length() > 0) top.Backward(x_mid, C_top, invert ? &sigma_mid : nullptr, &out); },
+      [&] { if (bottom.length() > 0) bottom.Backward(x_mid, C_bottom, invert ? &sigma_mid : nullptr, &out); });
+  summary.assembler_calls = top.assembler_calls() + bottom.assembler_calls() + 1;
+  summary.stored_factor_bytes = top.stored_bytes() + bottom.stored_bytes() + 8.0 * (b * b + b);
   summary.backward_seconds = timer.ElapsedSeconds();
   return out;
 }
@@ -257,20 +396,20 @@ BlockTridiagonalFactor::BlockTridiagonalFactor(int num_blocks, int block_size, c
   BlockTridiagonalOptions options;
   options.pivot_tolerance = pivot_tolerance;
   ValidateOptions(options);
-  BlockTridiagonalSummary summary;
-  summary.min_relative_pivot = 1.0;
-  ForwardPass forward(b_, assemble, options, &summary);
+  BlockEliminator eliminator(b_, pivot_tolerance);
   L_.resize(static_cast<size_t>(n_));
   C_.resize(static_cast<size_t>(n_));
   rhs_.resize(static_cast<Eigen::Index>(n_) * b_);
-  Carry carry;
-  VectorXd y;
+  MatrixXd diagonal, lower;
+  VectorXd rhs, y, y_previous;
   for (int i = 0; i < n_; ++i) {
-    forward.Step(i, carry, &L_[static_cast<size_t>(i)], &C_[static_cast<size_t>(i)], &y);
-    rhs_.segment(static_cast<Eigen::Index>(i) * b_, b_) = forward.last_rhs();
-    carry.L = L_[static_cast<size_t>(i)];
-    carry.y = y;
-    carry.valid = true;
+    AssembleChecked(assemble, i, b_, &diagonal, &lower, &rhs);
+    const Neighbour previous{&lower, i > 0 ? &L_[static_cast<size_t>(i - 1)] : nullptr, &y_previous};
+    eliminator.Eliminate(i, diagonal, rhs, i > 0 ? &previous : nullptr, &C_[static_cast<size_t>(i)], nullptr, nullptr,
+                         &L_[static_cast<size_t>(i)], &y);
+    if (i == 0) C_[0].setZero(b_, b_);
+    rhs_.segment(static_cast<Eigen::Index>(i) * b_, b_) = rhs;
+    y_previous.swap(y);
   }
 }
 

@@ -207,6 +207,7 @@ bool FoldedNetworkOptions::IsValid(std::string* error) const {
     *error = "checkpoint_interval must be >= 0";
     return false;
   }
+  // num_threads: any value (<= 0 means the hardware's), as in BlockTridiagonalOptions.
   return true;
 }
 
@@ -288,6 +289,7 @@ FoldedNetworkResult SolveFoldedLinearInsNetwork(const LinearInsNetworkOptions& n
 
   BlockTridiagonalOptions so;
   so.checkpoint_interval = options.checkpoint_interval;
+  so.num_threads = options.num_threads;
   if (options.gravity_covariance) {
     for (int s = 0; s < 2; ++s)
       for (int e = 0; e < g; ++e)

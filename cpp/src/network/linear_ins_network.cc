@@ -256,7 +256,7 @@ LinearInsEquations LinearInsNetworkEquations(const LinearInsNetworkOptions& opti
 }
 
 LinearInsNetworkResult SolveLinearInsNetwork(const LinearInsNetworkOptions& o, bool gravity_covariance,
-                                             int checkpoint_interval, bool keep_gravity_estimate) {
+                                             int checkpoint_interval, bool keep_gravity_estimate, int num_threads) {
   WallTimer total;
   LinearInsNetworkResult result;
   result.size = LinearInsNetworkSize(o);
@@ -267,6 +267,7 @@ LinearInsNetworkResult SolveLinearInsNetwork(const LinearInsNetworkOptions& o, b
 
   BlockTridiagonalOptions so;
   so.checkpoint_interval = checkpoint_interval;
+  so.num_threads = num_threads;
   if (gravity_covariance) {
     for (int e = 0; e < g; ++e)
       for (int c = 15; c < 18; ++c) so.selected.push_back(e * kP + c);

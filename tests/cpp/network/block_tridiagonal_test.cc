@@ -52,7 +52,70 @@ TEST(BlockTridiagonal, MatchesDenseSolveAndInverseForEveryCheckpointInterval) {
     // The same operations in the same order: identical results.
     EXPECT_EQ((s.x - reference.x).cwiseAbs().maxCoeff(), 0.0) << "interval " << interval;
     for (int i = 0; i < n; ++i) EXPECT_EQ(s.covariance[static_cast<size_t>(i)], reference.covariance[static_cast<size_t>(i)]);
-    EXPECT_EQ(s.summary.assembler_calls, interval >= n ? n : 2 * n);
+    // Two chains of 4 blocks (0..3 and 8..5) around the middle block 4: a chain longer than the
+    // interval is assembled twice, the middle once.
+    EXPECT_EQ(s.summary.assembler_calls, interval >= n / 2 ? n : 2 * (n - 1) + 1) << "interval " << interval;
+  }
+}
+
+TEST(BlockTridiagonal, TwoThreadsGiveBitIdenticalResultsForEverySize) {
+  // The twisted order does not depend on the thread count: the same operations in the same order.
+  for (int n : {1, 2, 3, 4, 7, 10}) {
+    const int b = 3;
+    MatrixXd A;
+    VectorXd rhs;
+    testing::RandomBlockSystem(n, b, 20 + n, &A, &rhs);
+    const MatrixXd inverse = A.inverse();
+    for (int interval : {0, 1, 2}) {
+      BlockTridiagonalOptions o;
+      o.selected = {0, 2};
+      o.neighbour_covariances = true;
+      o.checkpoint_interval = interval;
+      o.num_threads = 1;
+      const BlockTridiagonalSolution one = SolveBlockTridiagonal(n, b, FromDense(A, rhs, b), o);
+      o.num_threads = 2;
+      const BlockTridiagonalSolution two = SolveBlockTridiagonal(n, b, FromDense(A, rhs, b), o);
+      EXPECT_LT((one.x - A.llt().solve(rhs)).cwiseAbs().maxCoeff(), 1e-9) << "n " << n;
+      EXPECT_EQ(one.x, two.x) << "n " << n << " interval " << interval;
+      ASSERT_EQ(two.covariance.size(), static_cast<size_t>(n));
+      for (int i = 0; i < n; ++i) {
+        EXPECT_EQ(one.covariance[static_cast<size_t>(i)], two.covariance[static_cast<size_t>(i)]);
+        EXPECT_NEAR(two.covariance[static_cast<size_t>(i)](1, 0), inverse(i * b + 2, i * b), 1e-10) << "n " << n << " block " << i;
+        if (i < n - 1) {
+          EXPECT_EQ(one.neighbour_covariance[static_cast<size_t>(i)], two.neighbour_covariance[static_cast<size_t>(i)]);
+          EXPECT_NEAR(two.neighbour_covariance[static_cast<size_t>(i)](0, 1), inverse((i + 1) * b, i * b + 2), 1e-10)
+              << "n " << n << " block " << i;
+        }
+      }
+    }
+  }
+}
+
+TEST(BlockTridiagonal, DefectOfTheWholeNetworkShowsAtTheMiddleBlockOnAnyThreadCount) {
+  // A direction shared by every block (a datum defect): each chain alone is still positive
+  // definite, the defect shows where the two chains meet.
+  const int n = 6, b = 2;
+  MatrixXd A = MatrixXd::Zero(n * b, n * b);
+  for (int i = 0; i < n; ++i) {
+    A(i * b + 1, i * b + 1) = 2.0;  // the second unknown of each block is determined
+    A(i * b, i * b) += 1.0;         // the first: only differences between neighbours
+    if (i > 0) {
+      A((i - 1) * b, (i - 1) * b) += 1.0;
+      A(i * b, (i - 1) * b) -= 1.0;
+      A((i - 1) * b, i * b) -= 1.0;
+    }
+  }
+  A(0, 0) -= 1.0;  // no absolute level: A has the constant vector of first unknowns as null space
+  const VectorXd rhs = VectorXd::Ones(n * b);
+  for (int threads : {1, 2}) {
+    BlockTridiagonalOptions o;
+    o.num_threads = threads;
+    try {
+      SolveBlockTridiagonal(n, b, FromDense(A, rhs, b), o);
+      FAIL() << "no exception";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("block 3"), std::string::npos) << e.what();
+    }
   }
 }
 

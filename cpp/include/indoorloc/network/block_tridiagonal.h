@@ -22,10 +22,23 @@
 //     Σ_ii      = L_i^{-T} L_i^{-1} - Σ_{i+1,i}ᵀ C_{i+1} L_i^{-1}
 // so every diagonal block of A^{-1} (and the block beside it) costs O(b³) without forming A^{-1}.
 //
-// Checkpoints: with checkpoint_interval = k > 0 only (L_{i-1}, y_{i-1}) at every k-th block is
-// kept in the forward pass; the backward pass refactors one segment of k blocks at a time from
-// its checkpoint (the assembler is called twice per block). Memory O((n/k + k) b²) instead of
-// O(n b²), time about 1.5x. The results are identical (same operations in the same order).
+// Twisted order (two chains meeting in the middle, "burn at both ends"): SolveBlockTridiagonal
+// eliminates blocks 0, 1, .., m-1 (top chain, the recursion above) and n-1, n-2, .., m+1 (bottom
+// chain, the same recursion run backwards: U_i = chol(A_ii - D_i D_iᵀ), D_i = A_{i,i+1}
+// U_{i+1}^{-T}) independently, then the middle block m = ⌊n/2⌋ against both:
+//     S_m = A_mm - C_m C_mᵀ - D_m D_mᵀ,  x_m = S_m^{-1} (b_m - C_m y_{m-1} - D_m z_{m+1}),  Σ_mm = S_m^{-1},
+// and substitutes (and inverts, with the recursion above in each chain's own direction) outwards
+// from m. This is the Cholesky factorisation of A in the order 0..m-1, n-1..m+1, m, which creates
+// no fill (each block still has one eliminated neighbour, the middle two), so it costs the same
+// flops as the one-way recursion; the two chains are independent and run on two threads
+// (num_threads >= 2). The order does not depend on the thread count: the results are identical
+// (bit for bit) on one thread or two.
+//
+// Checkpoints: with checkpoint_interval = k > 0 only (L_{i-1}, y_{i-1}) at every k-th block of a
+// chain is kept in the forward pass; the backward pass refactors one segment of k blocks at a time
+// from its checkpoint (the assembler is called twice per block of a chain longer than k). Memory
+// O((n/k + k) b²) instead of O(n b²), time about 1.5x. The results are identical (same operations in
+// the same order).
 #pragma once
 
 #include <functional>
@@ -38,7 +51,9 @@ namespace indoorloc::network {
 
 /// Fills block row i of a symmetric positive definite block-tridiagonal system: `diagonal` A_ii
 /// (b x b, symmetric), `lower` A_{i,i-1} (b x b; not read for i = 0) and `rhs` b_i (b). The
-/// outputs arrive sized and zeroed. Must be deterministic: it may be called twice per block.
+/// outputs arrive sized and zeroed. Must be deterministic: it may be called twice per block. With
+/// num_threads >= 2 it is called from two threads at once (for different blocks): it must not
+/// write to shared state.
 using BlockRowAssembler =
     std::function<void(int block, Eigen::MatrixXd* diagonal, Eigen::MatrixXd* lower, Eigen::VectorXd* rhs)>;
 
@@ -55,6 +70,9 @@ struct BlockTridiagonalOptions {
   /// unknowns eliminated before it) is below tolerance · A_kk (its information alone) is a rank
   /// defect (datum defect of the network). Invariant to the units of each unknown.
   double pivot_tolerance = 1e-12;
+  /// Threads for the two chains of the twisted order (1 or 2 are used; <= 0: the hardware's).
+  /// The results do not depend on it.
+  int num_threads = 1;
   bool IsValid(std::string* error) const;
 };
 
@@ -79,9 +97,10 @@ struct BlockTridiagonalSolution {
 };
 
 /// Solves A x = b for a symmetric positive definite block-tridiagonal A given block row by block
-/// row, with the selected blocks of A^{-1}. Throws std::runtime_error naming the block where A is
-/// not positive definite (rank-deficient network: datum defect, unobservable parameter) and
-/// std::invalid_argument on bad sizes or non-finite blocks.
+/// row, with the selected blocks of A^{-1}, in the twisted order above. Throws std::runtime_error
+/// naming the block where A is not positive definite (rank-deficient network: datum defect,
+/// unobservable parameter; a defect of the whole network shows at the middle block, where the two
+/// chains meet) and std::invalid_argument on bad sizes or non-finite blocks.
 BlockTridiagonalSolution SolveBlockTridiagonal(int num_blocks, int block_size, const BlockRowAssembler& assemble,
                                                const BlockTridiagonalOptions& options = BlockTridiagonalOptions());
 

@@ -105,6 +105,9 @@ struct FoldedNetworkOptions {
   bool gravity_covariance = true;   ///< selected inversion of every δg (3 per epoch)
   int checkpoint_interval = 2048;   ///< 0: keep the whole factor (2 K (2b)² doubles)
   bool keep_gravity_estimate = false;
+  /// Threads for the two chains of the twisted elimination (1 or 2; <= 0: the hardware's). The
+  /// results are bit-identical on any count.
+  int num_threads = 1;
   bool IsValid(std::string* error) const;
 };
 

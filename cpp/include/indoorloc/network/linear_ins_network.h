@@ -116,9 +116,11 @@ struct LinearInsNetworkResult {
 
 /// Builds the network of `options` block by block and solves it with SolveBlockTridiagonal
 /// (`solver.selected` is overridden to the δg components of every epoch in the block when
-/// `gravity_covariance` is true). Throws std::runtime_error on a rank-deficient network.
+/// `gravity_covariance` is true), on `num_threads` threads (1 or 2 are used; <= 0: the hardware's;
+/// bit-identical results on any count). Throws std::runtime_error on a rank-deficient network.
 LinearInsNetworkResult SolveLinearInsNetwork(const LinearInsNetworkOptions& options, bool gravity_covariance,
-                                             int checkpoint_interval, bool keep_gravity_estimate = false);
+                                             int checkpoint_interval, bool keep_gravity_estimate = false,
+                                             int num_threads = 1);
 
 /// Cross-over ties (XOVER) of a survey flown as `lines` East-West lines then `cross_lines`
 /// North-South lines of equal duration: every EW line crosses every NS line once, half-way
