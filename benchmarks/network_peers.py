@@ -95,8 +95,11 @@ def gtsam_available() -> bool:
     return True
 
 
-def solve_gtsam(eq: Dict[str, object]) -> Optional[Dict[str, object]]:
-    """The network as a GTSAM linear factor graph, solved by graph.optimize(); None without gtsam."""
+def solve_gtsam(eq: Dict[str, object], qr: bool = False) -> Optional[Dict[str, object]]:
+    """The network as a GTSAM linear factor graph, solved by graph.optimize() (default: multifrontal
+    Cholesky, COLAMD ordering) or, with ``qr``, by multifrontal QR on the COLAMD ordering
+    (gtsam.EliminateQR: slower, but it solves the long networks that the Cholesky declares
+    indeterminate); None without gtsam."""
     if not gtsam_available():
         return None
     import gtsam
@@ -128,7 +131,10 @@ def solve_gtsam(eq: Dict[str, object]) -> Optional[Dict[str, object]]:
         graph.add(gtsam.JacobianFactor(int(n), sel_g, l, gupt_noise))
     assemble = time.perf_counter() - start
     start = time.perf_counter()
-    values = graph.optimize()
+    if qr:
+        values = graph.eliminateMultifrontal(gtsam.Ordering.ColamdGaussianFactorGraph(graph), gtsam.EliminateQR).optimize()
+    else:
+        values = graph.optimize()
     solve = time.perf_counter() - start
     E = int(eq["imu_epochs"])
     x = np.concatenate([values.at(n) for n in range(E)])
