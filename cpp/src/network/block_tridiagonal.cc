@@ -395,9 +395,18 @@ BlockTridiagonalSolution SolveBlockTridiagonal(int num_blocks, int block_size, c
     from_bottom = Neighbour{&coupling_bottom, &bottom.last().L, &bottom.last().y};
   }
   BlockEliminator eliminator(b, options.pivot_tolerance);
-  const double mid_ratio =
-      eliminator.Eliminate(m, diagonal, rhs, top.length() > 0 ? &from_top : nullptr, &C_top,
-                           bottom.length() > 0 ? &from_bottom : nullptr, &C_bottom, &L_mid, &y_mid);
+  double mid_ratio = 1.0;
+  try {
+    mid_ratio = eliminator.Eliminate(m, diagonal, rhs, top.length() > 0 ? &from_top : nullptr, &C_top,
+                                     bottom.length() > 0 ? &from_bottom : nullptr, &C_bottom, &L_mid, &y_mid);
+  } catch (const std::runtime_error& e) {
+    if (n == 1) throw;
+    // Each chain alone can be regular while the whole is not: say so, the block number alone
+    // would suggest a local defect.
+    throw std::runtime_error(std::string(e.what()) +
+                             "; this is the middle block, where the two elimination chains meet, so the defect may "
+                             "belong to the whole network (e.g. a datum missing everywhere)");
+  }
   summary.factor_seconds = timer.ElapsedSeconds();
   summary.assembler_calls = top.assembler_calls() + bottom.assembler_calls() + 1;
   summary.min_relative_pivot = std::min({mid_ratio, top.min_relative_pivot(), bottom.min_relative_pivot()});

@@ -115,6 +115,7 @@ TEST(BlockTridiagonal, DefectOfTheWholeNetworkShowsAtTheMiddleBlockOnAnyThreadCo
       FAIL() << "no exception";
     } catch (const std::runtime_error& e) {
       EXPECT_NE(std::string(e.what()).find("block 3"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("whole network"), std::string::npos) << e.what();
     }
   }
 }
