@@ -186,7 +186,9 @@ class Chain {
   double min_relative_pivot() const { return min_ratio_; }
   double stored_bytes() const {
     const double block_bytes = 8.0 * (2.0 * b_ * b_ + b_);
-    return keep_all_ ? length_ * block_bytes : num_segments_ * 8.0 * (2.0 * b_ * b_ + b_) + k_ * block_bytes;
+    // Stored factor, or one checkpoint (L, y and the bottom chain's lower block) per segment plus
+    // one refactored segment.
+    return keep_all_ ? length_ * block_bytes : (num_segments_ + k_) * block_bytes;
   }
 
   void Forward() {
@@ -305,25 +307,19 @@ class Chain {
   double min_ratio_ = 1.0;
 };
 
-// Runs top() and bottom() on two threads (or one after the other), rethrowing the top's
-// exception first so that the error does not depend on the thread count.
+// Runs top() and bottom() on two threads (or one after the other). Each chain's exception is kept
+// in its own slot and the top's is rethrown first, so that the error does not depend on the
+// thread count or on which chain failed first in time.
 void RunChains(int threads, const std::function<void()>& top, const std::function<void()>& bottom) {
   std::exception_ptr errors[2];
   const std::function<void()>* work[2] = {&top, &bottom};
-  auto run = [&](int c, RandomStream&) {
+  ParallelForRuns(2, threads, 0, [&](int c, RandomStream&) {
     try {
       (*work[c])();
     } catch (...) {
       errors[c] = std::current_exception();
     }
-  };
-  if (threads >= 2) {
-    ParallelForRuns(2, 2, 0, run);
-  } else {
-    RandomStream unused(0);
-    run(0, unused);
-    if (!errors[0]) run(1, unused);
-  }
+  });
   for (const std::exception_ptr& e : errors)
     if (e) std::rethrow_exception(e);
 }

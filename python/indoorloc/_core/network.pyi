@@ -15,6 +15,7 @@ def solve_linear_ins_network(
     checkpoint_interval: int = 0,
     prior_epochs: int = 2,
     keep_gravity_estimate: bool = False,
+    num_threads: int = 1,
 ) -> Dict[str, object]: ...
 def solve_folded_linear_ins_network(
     imu_rate_hz: float = 50.0,
@@ -28,6 +29,7 @@ def solve_folded_linear_ins_network(
     checkpoint_interval: int = 2048,
     gravity_covariance: bool = True,
     keep_gravity_estimate: bool = False,
+    num_threads: int = 1,
 ) -> Dict[str, object]: ...
 def linear_ins_normal_blocks(
     imu_rate_hz: float = 200.0,
