@@ -1,0 +1,100 @@
+// The motion model of the fusion tracker: one detected step moves a particle.
+//
+// A step arrives from PDR (handheld step detection + stride length + heading, or foot-mounted
+// ZUPT increments, paper 002 eq. 8-9) as a displacement d (2) [m] in the PDR frame with its
+// covariance Σ_d (2 x 2) [m²]. The PDR frame differs from the floor frame by an unknown,
+// slowly drifting yaw (heading offset o), and the stride length by an unknown scale s. With
+// particle state (p, o, s) the model is
+//
+//   o' = wrap(o + w_o),        w_o ~ N(0, σ_o²)               heading-offset random walk
+//   s' = s + w_s,              w_s ~ N(0, σ_s²), s' kept in [s_min, s_max]
+//   p' = p + s' R(o') (d + e), e   ~ N(0, Σ_d + σ_p² I)        step noise + process noise
+//
+// R(o) the rotation by o. Given (o', s') the position transition is Gaussian with mean
+// p + s' R(o') d and covariance s'² R(o') (Σ_d + σ_p² I) R(o')ᵀ, which the backward smoother
+// evaluates exactly (TransitionLogDensity). The process noise σ_p is expressed in the step
+// frame (scaled by s') so that the transition stays exactly Gaussian.
+//
+// A polar step (length L with sd σ_L, heading h with sd σ_h) becomes d = L (cos h, sin h),
+// Σ_d = J diag(σ_L², σ_h²) Jᵀ, J = [[cos h, -L sin h], [sin h, L cos h]] (first-order
+// propagation, adequate for per-step heading noise of a few degrees).
+#pragma once
+#include <cmath>
+#include <string>
+#include <Eigen/Core>
+
+#include "indoorloc/core/random.h"
+
+namespace indoorloc::fusion {
+
+/// One detected step: time [s], displacement in the PDR frame [m], its covariance [m²].
+struct StepInput {
+  double time_s = 0.0;
+  Eigen::Vector2d displacement_m = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d covariance_m2 = Eigen::Matrix2d::Zero();
+};
+
+/// A step given as length and heading with standard deviations (see the header comment).
+StepInput StepFromPolar(double time_s, double length_m, double heading_rad, double length_sd_m,
+                        double heading_sd_rad);
+
+/// Process noise of the motion model (defaults: see docs/fusion.md for how they were chosen).
+struct StepMotionOptions {
+  /// σ_o: random walk of the heading offset per step [rad] (gyro / compass heading drift).
+  double heading_offset_walk_rad = 0.5 * M_PI / 180.0;
+  /// σ_s: random walk of the stride-length scale per step (dimensionless).
+  double scale_walk = 0.003;
+  /// Bounds of the scale s.
+  double min_scale = 0.5;
+  double max_scale = 1.8;
+  /// σ_p: isotropic process noise added to each step's covariance [m] (unmodelled motion,
+  /// sway, detection timing).
+  double position_noise_m = 0.05;
+  bool IsValid(std::string* error) const;
+};
+
+/// Throws std::invalid_argument naming `argument` unless the step is usable: finite time,
+/// displacement and covariance, covariance symmetric and positive semi-definite.
+void CheckStepInput(const StepInput& step, const char* argument);
+
+/// Sampling and density of the model for one step (the Cholesky factor is computed once per
+/// step and shared by all particles).
+class StepMotion {
+ public:
+  StepMotion(const StepInput& step, const StepMotionOptions& options);
+  /// Draws (o', s') and the displacement Δ = s' R(o') (d + e) for a particle with (o, s).
+  void Sample(double offset_rad, double scale, RandomStream& rng, double* new_offset_rad,
+              double* new_scale, Eigen::Vector2d* displacement_m) const {
+    double o = offset_rad + options_.heading_offset_walk_rad * rng.Normal();
+    if (o > M_PI) o -= 2.0 * M_PI;
+    if (o <= -M_PI) o += 2.0 * M_PI;
+    double s = scale + options_.scale_walk * rng.Normal();
+    s = s < options_.min_scale ? options_.min_scale : (s > options_.max_scale ? options_.max_scale : s);
+    const double n1 = rng.Normal();
+    const double n2 = rng.Normal();
+    // e = L n with L the lower Cholesky factor of Σ_d + σ_p² I.
+    const double ex = chol_(0, 0) * n1;
+    const double ey = chol_(1, 0) * n1 + chol_(1, 1) * n2;
+    const double dx = step_.displacement_m.x() + ex;
+    const double dy = step_.displacement_m.y() + ey;
+    const double c = std::cos(o), sn = std::sin(o);
+    *new_offset_rad = o;
+    *new_scale = s;
+    *displacement_m = Eigen::Vector2d(s * (c * dx - sn * dy), s * (sn * dx + c * dy));
+  }
+  /// log p(p', o', s' | p, o, s) up to the constant common to all pairs (the backward smoother
+  /// only needs ratios over the predecessor (p, o, s)).
+  double TransitionLogDensity(const Eigen::Vector2d& from_m, double from_offset_rad, double from_scale,
+                              const Eigen::Vector2d& to_m, double to_offset_rad, double to_scale) const;
+  const StepInput& step() const { return step_; }
+  /// Lower Cholesky factor of Σ_d + σ_p² I.
+  const Eigen::Matrix2d& cholesky() const { return chol_; }
+
+ private:
+  StepInput step_;
+  StepMotionOptions options_;
+  Eigen::Matrix2d chol_;
+  Eigen::Matrix2d noise_inverse_;  // (Σ_d + σ_p² I)⁻¹
+};
+
+}  // namespace indoorloc::fusion

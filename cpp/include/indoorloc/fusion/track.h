@@ -1,0 +1,46 @@
+// The batch API of the fusion tracker: a whole recording (steps and WiFi observations) in,
+// per-step estimates and optionally the backward-smoothed track out.
+//
+// Events are processed in time order; a WiFi observation at the same time as a step comes after
+// it. The estimate reported for step k is causal: after step k and every observation with time
+// <= t_k. Unknown start: the cloud starts uniform over the walkable area and is re-drawn from
+// the first observation that has readings (steps before it therefore carry little
+// information: their estimates are those of a uniform cloud).
+#pragma once
+#include <vector>
+#include <Eigen/Core>
+
+#include "indoorloc/fusion/backward_smoother.h"
+#include "indoorloc/fusion/particle_tracker.h"
+
+namespace indoorloc::fusion {
+
+/// A whole recording.
+struct Recording {
+  std::vector<StepInput> steps;                ///< sorted by time
+  std::vector<WifiObservation> observations;   ///< sorted by time (MakeWifiObservations)
+};
+
+/// Known or unknown start.
+struct TrackStart {
+  bool known = false;
+  double time_s = 0.0;                                   ///< known start: its time [s]
+  Eigen::Vector2d position_m = Eigen::Vector2d::Zero();  ///< known start position [m]
+  int floor = 0;                                         ///< known start floor number
+  double heading_offset_rad = 0.0;                       ///< known PDR-to-floor yaw [rad]
+};
+
+struct TrackResult {
+  std::vector<TrackerEstimate> estimates;   ///< one per step
+  SmoothedTrack smoothed;                   ///< empty unless smoothing was asked
+  TrackerSummary summary;
+};
+
+/// Runs a ParticleTracker over `recording`; smoothing when smoother.num_trajectories > 0.
+/// Throws std::invalid_argument on unsorted steps or observations (naming which).
+TrackResult Track(const FloorPlan* plan, const wifi::RssModel* wifi_model,
+                  const mapmatch::RoadNetwork* corridors, const Recording& recording,
+                  const TrackStart& start, const TrackerOptions& options,
+                  const SmootherOptions& smoother, bool smooth);
+
+}  // namespace indoorloc::fusion

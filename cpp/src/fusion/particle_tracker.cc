@@ -1,0 +1,796 @@
+#include "indoorloc/fusion/particle_tracker.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "indoorloc/core/check.h"
+#include "indoorloc/core/log_weights.h"
+#include "indoorloc/core/options.h"
+#include "indoorloc/core/parallel.h"
+
+namespace indoorloc::fusion {
+
+namespace {
+constexpr double kNegInf = -std::numeric_limits<double>::infinity();
+
+double WrapAngle(double a) { return std::remainder(a, 2.0 * M_PI); }
+
+// Systematic resampling stream ids of the tracker's own stream family: the per-event block
+// streams use DeriveSeed(seed, event) instead, so the two never overlap.
+constexpr std::uint64_t kTrackerStream = 0x7f3a5c11ULL;
+}  // namespace
+
+bool TrackerOptions::IsValid(std::string* error) const {
+  auto fail = [&](const std::string& message) {
+    *error = message;
+    return false;
+  };
+  if (num_particles < 1 || num_particles > 50'000'000) return fail("num_particles must be in [1, 5e7]");
+  std::string sub;
+  if (!motion.IsValid(&sub)) return fail("motion: " + sub);
+  if (!wifi.IsValid(&sub)) return fail("wifi: " + sub);
+  if (!resampling.IsValid(&sub)) return fail("resampling: " + sub);
+  if (std::isnan(wall_log_penalty) || wall_log_penalty > 0.0) return fail("wall_log_penalty must be <= 0 (-inf drops)");
+  if (respread_after_blocked_steps < 1) return fail("respread_after_blocked_steps must be >= 1");
+  if (!(std::isfinite(respread_sd_m) && respread_sd_m > 0.0)) return fail("respread_sd_m must be finite and > 0");
+  if (!(std::isfinite(start_position_sd_m) && start_position_sd_m >= 0.0)) return fail("start_position_sd_m must be finite and >= 0");
+  if (!(std::isfinite(start_heading_offset_sd_rad) && start_heading_offset_sd_rad >= 0.0))
+    return fail("start_heading_offset_sd_rad must be finite and >= 0");
+  if (!(std::isfinite(start_scale_sd) && start_scale_sd >= 0.0)) return fail("start_scale_sd must be finite and >= 0");
+  if (!(std::isfinite(candidate_spacing_m) && candidate_spacing_m >= 0.05 && candidate_spacing_m <= 1000.0))
+    return fail("candidate_spacing_m must be in [0.05, 1000]");
+  if (std::isnan(recovery_log_ratio) || std::isinf(recovery_log_ratio)) return fail("recovery_log_ratio must be finite (<= 0 disables)");
+  if (recovery_scans < 1) return fail("recovery_scans must be >= 1");
+  if (!(recovery_fraction > 0.0 && recovery_fraction <= 1.0)) return fail("recovery_fraction must be in (0, 1]");
+  if (!(floor_change_probability >= 0.0 && floor_change_probability <= 1.0)) return fail("floor_change_probability must be in [0, 1]");
+  if (!(std::isfinite(corridor_kappa) && corridor_kappa >= 0.0 && corridor_kappa <= 500.0)) return fail("corridor_kappa must be in [0, 500]");
+  if (smoothing_lag_steps < 0 || smoothing_lag_steps > 10000) return fail("smoothing_lag_steps must be in [0, 10000]");
+  if (num_threads < 0 || num_threads > 1024) return fail("num_threads must be in [0, 1024] (0: all cores)");
+  return true;
+}
+
+std::string TrackerSummary::BriefReport() const {
+  std::ostringstream out;
+  out << steps << " steps, " << wifi_updates << " WiFi updates (" << empty_wifi_updates << " empty), " << resamplings
+      << " resamplings, " << recoveries << " recoveries, " << all_blocked_steps << " all-blocked steps, " << respreads
+      << " re-spreads, mean ESS " << std::round(mean_ess * 10.0) / 10.0 << ", log-lik " << total_log_likelihood
+      << ", " << seconds << " s";
+  return out.str();
+}
+
+struct ParticleTracker::Impl {
+  const FloorPlan* plan = nullptr;
+  const wifi::RssModel* model = nullptr;
+  const mapmatch::RoadNetwork* corridors = nullptr;
+  TrackerOptions options;
+  std::unique_ptr<WifiLikelihood> wifi;
+
+  std::vector<int> floors;            // tracker floor numbers
+  std::vector<int> plan_floor;        // tracker floor index -> plan floor index (or -1)
+  std::vector<int> model_floor;       // tracker floor index -> model floor index (or -1)
+  std::vector<RowMatrixXd> candidates;  // per tracker floor: candidate points (unknown start, recovery)
+
+  int n = 0;
+  std::vector<double> x, y, offset, scale;
+  std::vector<int> floor;
+  std::vector<int> segment;
+  std::vector<signed char> direction;
+  std::vector<double> along;
+  Eigen::VectorXd log_w;
+  std::vector<double> lag_ring;  // n x (L + 1) x 2
+  int lag_len = 0;
+
+  RandomStream rng;
+  std::uint64_t event = 0;
+  bool initialized = false;
+  bool awaiting_first_fix = false;
+  double last_time = -std::numeric_limits<double>::infinity();
+  int consecutive_blocked = 0;
+  int consecutive_disagreement = 0;
+  double ess_sum = 0.0;
+  int events = 0;
+  ParticleHistory history;
+  TrackerSummary summary;
+  std::vector<int> ancestors;
+
+  bool corridor_mode() const { return corridors != nullptr; }
+
+  // Runs fn(begin, end, rng) over fixed particle blocks; the stream of block b depends only on
+  // (seed, event, b), never on the thread count.
+  template <typename Fn>
+  void ForBlocks(int count, const Fn& fn) {
+    const int blocks = (count + kBlockSize - 1) / kBlockSize;
+    const std::uint64_t seed = DeriveSeed(options.seed, ++event);
+    ParallelForRuns(blocks, options.num_threads, seed, [&](int b, RandomStream& block_rng) {
+      const int begin = b * kBlockSize;
+      const int end = std::min(count, begin + kBlockSize);
+      fn(b, begin, end, block_rng);
+    });
+  }
+
+  void Resize(int count) {
+    n = count;
+    x.assign(n, 0.0);
+    y.assign(n, 0.0);
+    offset.assign(n, 0.0);
+    scale.assign(n, 1.0);
+    floor.assign(n, 0);
+    if (corridor_mode()) {
+      segment.assign(n, 0);
+      direction.assign(n, 1);
+      along.assign(n, 0.0);
+    }
+    log_w = Eigen::VectorXd::Constant(n, -std::log(static_cast<double>(n)));
+    lag_len = options.smoothing_lag_steps;
+    lag_ring.assign(lag_len > 0 ? static_cast<size_t>(n) * (lag_len + 1) * 2 : 0, std::numeric_limits<double>::quiet_NaN());
+  }
+
+  bool Walkable(double px, double py, int f) const {
+    if (!plan) return true;
+    return plan->IsWalkable(px, py, plan_floor[f]);
+  }
+  bool Blocked(double x0, double y0, double x1, double y1, int f) const {
+    if (!plan) return false;
+    return plan->CrossesWall(x0, y0, x1, y1, plan_floor[f]);
+  }
+
+  void BuildCandidates() {
+    const double h = options.candidate_spacing_m;
+    candidates.assign(floors.size(), RowMatrixXd());
+    for (size_t f = 0; f < floors.size(); ++f) {
+      std::vector<double> pts;
+      if (plan) {
+        const Eigen::Vector4d b = plan->Bounds(plan_floor[f]);
+        const int nx = static_cast<int>(std::floor((b[2] - b[0]) / h)) + 1;
+        const int ny = static_cast<int>(std::floor((b[3] - b[1]) / h)) + 1;
+        CheckArgument(static_cast<double>(nx) * ny <= 2e7, "options.candidate_spacing_m",
+                      "gives more than 2e7 candidate points on floor " + std::to_string(floors[f]) + ": use a larger spacing");
+        for (int j = 0; j < ny; ++j) {
+          for (int i = 0; i < nx; ++i) {
+            const double px = b[0] + (i + 0.5) * h, py = b[1] + (j + 0.5) * h;
+            if (px <= b[2] && py <= b[3] && plan->IsWalkable(px, py, plan_floor[f])) {
+              pts.push_back(px);
+              pts.push_back(py);
+            }
+          }
+        }
+      } else if (model) {
+        const int mf = model_floor[f];
+        for (int row : model->points_on_floor(mf)) {
+          pts.push_back(model->map().positions_m()(row, 0));
+          pts.push_back(model->map().positions_m()(row, 1));
+        }
+      }
+      candidates[f] = Eigen::Map<RowMatrixXd>(pts.data(), static_cast<Eigen::Index>(pts.size() / 2), 2);
+    }
+  }
+
+  // Tempered log-likelihood of `obs` at every candidate of every floor (concatenated).
+  Eigen::VectorXd CandidateLogLikelihoods(const WifiObservation& obs, std::vector<int>* candidate_floor,
+                                          std::vector<int>* candidate_row) {
+    int total = 0;
+    for (const auto& c : candidates) total += static_cast<int>(c.rows());
+    candidate_floor->resize(total);
+    candidate_row->resize(total);
+    int k = 0;
+    for (size_t f = 0; f < candidates.size(); ++f) {
+      for (Eigen::Index r = 0; r < candidates[f].rows(); ++r, ++k) {
+        (*candidate_floor)[k] = static_cast<int>(f);
+        (*candidate_row)[k] = static_cast<int>(r);
+      }
+    }
+    Eigen::VectorXd ll(total);
+    ForBlocks(total, [&](int, int begin, int end, RandomStream&) {
+      std::vector<int> hints(model->floors().size(), -1);
+      for (int i = begin; i < end; ++i) {
+        const int f = (*candidate_floor)[i];
+        const int mf = model_floor[f];
+        ll[i] = wifi->LogLikelihood(candidates[f]((*candidate_row)[i], 0), candidates[f]((*candidate_row)[i], 1), mf,
+                                    obs, &hints[mf]);
+      }
+    });
+    return ll;
+  }
+
+  // Replaces the particles in `slots` by draws from the candidates' likelihood of `obs` (with
+  // uniform jitter within a candidate cell, kept walkable), heading offsets uniform.
+  void DrawFromCandidates(const WifiObservation& obs, const std::vector<int>& slots) {
+    std::vector<int> cf, cr;
+    const Eigen::VectorXd ll = CandidateLogLikelihoods(obs, &cf, &cr);
+    if (ll.size() == 0) ThrowInvalidArgument("plan", "has no candidate point (walkable area smaller than the candidate grid)");
+    std::vector<int> picks;
+    Resample(ll, ResamplingScheme::kSystematic, rng, &picks, static_cast<int>(slots.size()));
+    const double h = options.candidate_spacing_m;
+    for (size_t j = 0; j < slots.size(); ++j) {
+      const int c = picks[j];
+      const int f = cf[c];
+      const double cx = candidates[f](cr[c], 0), cy = candidates[f](cr[c], 1);
+      double px = cx, py = cy;
+      if (plan) {
+        for (int attempt = 0; attempt < 20; ++attempt) {
+          const double qx = cx + rng.Uniform(-0.5 * h, 0.5 * h), qy = cy + rng.Uniform(-0.5 * h, 0.5 * h);
+          if (plan->IsWalkable(qx, qy, plan_floor[f])) {
+            px = qx;
+            py = qy;
+            break;
+          }
+        }
+      } else {
+        px += rng.Uniform(-0.5 * h, 0.5 * h);
+        py += rng.Uniform(-0.5 * h, 0.5 * h);
+      }
+      PlaceFree(slots[j], px, py, f, rng.Uniform(-M_PI, M_PI));
+    }
+  }
+
+  // Sets particle i at (px, py) on tracker floor f with offset o and a scale from the prior.
+  void PlaceFree(int i, double px, double py, int f, double o) {
+    x[i] = px;
+    y[i] = py;
+    floor[i] = f;
+    offset[i] = WrapAngle(o);
+    scale[i] = std::clamp(1.0 + options.start_scale_sd * rng.Normal(), options.motion.min_scale, options.motion.max_scale);
+    if (corridor_mode()) {
+      const mapmatch::Projection p = corridors->Nearest(Eigen::Vector2d(px, py));
+      segment[i] = p.segment;
+      along[i] = p.along_m;
+      direction[i] = rng.Uniform01() < 0.5 ? 1 : -1;
+      const Eigen::Vector2d q = corridors->point_at(segment[i], along[i]);
+      x[i] = q.x();
+      y[i] = q.y();
+    }
+  }
+
+  void UniformCloud() {
+    // Floor chosen in proportion to the walkable area (or candidate count without a plan).
+    std::vector<double> mass(floors.size());
+    for (size_t f = 0; f < floors.size(); ++f) {
+      mass[f] = plan ? plan->WalkableArea(plan_floor[f]) : static_cast<double>(candidates[f].rows());
+    }
+    double total = 0.0;
+    for (double m : mass) total += m;
+    CheckArgument(total > 0.0, "plan", "no walkable area or candidate point to start from");
+    for (int i = 0; i < n; ++i) {
+      double u = rng.Uniform01() * total;
+      size_t f = 0;
+      while (f + 1 < mass.size() && u >= mass[f]) u -= mass[f++];
+      double px, py;
+      if (corridor_mode()) {
+        // Uniform along the network.
+        double s = rng.Uniform01() * corridors->total_length_m();
+        int seg = 0;
+        while (seg + 1 < corridors->num_segments() && s >= corridors->lengths_m()[seg]) s -= corridors->lengths_m()[seg++];
+        const Eigen::Vector2d q = corridors->point_at(seg, s);
+        px = q.x();
+        py = q.y();
+      } else if (plan) {
+        const RowMatrixXd p = plan->SampleWalkable(1, plan_floor[f], rng);
+        px = p(0, 0);
+        py = p(0, 1);
+      } else {
+        const int r = static_cast<int>(rng.UniformInt(static_cast<std::uint64_t>(candidates[f].rows())));
+        px = candidates[f](r, 0) + rng.Uniform(-0.5, 0.5) * options.candidate_spacing_m;
+        py = candidates[f](r, 1) + rng.Uniform(-0.5, 0.5) * options.candidate_spacing_m;
+      }
+      PlaceFree(i, px, py, static_cast<int>(f), rng.Uniform(-M_PI, M_PI));
+    }
+    log_w.setConstant(-std::log(static_cast<double>(n)));
+  }
+
+  void Gather(const std::vector<int>& anc) {
+    auto gather = [&](auto& v) {
+      auto tmp = v;
+      for (int i = 0; i < n; ++i) v[i] = tmp[anc[i]];
+    };
+    gather(x);
+    gather(y);
+    gather(offset);
+    gather(scale);
+    gather(floor);
+    if (corridor_mode()) {
+      gather(segment);
+      gather(direction);
+      gather(along);
+    }
+    if (lag_len > 0) {
+      const size_t stride = static_cast<size_t>(lag_len + 1) * 2;
+      std::vector<double> tmp = lag_ring;
+      for (int i = 0; i < n; ++i) {
+        std::copy_n(tmp.begin() + static_cast<std::ptrdiff_t>(anc[i] * stride), stride,
+                    lag_ring.begin() + static_cast<std::ptrdiff_t>(i * stride));
+      }
+    }
+  }
+
+  // Normalises, records ESS, resamples if needed. Returns the log normaliser.
+  double NormalizeAndResample(TrackerEstimate* est) {
+    est->ess = EffectiveSampleSize(log_w);
+    const ResamplingSummary rs = ResampleIfNeeded(log_w, options.resampling, rng, &ancestors);
+    if (rs.resampled) {
+      Gather(ancestors);
+      ++summary.resamplings;
+    }
+    est->resampled = rs.resampled;
+    ess_sum += est->ess;
+    ++events;
+    summary.mean_ess = ess_sum / events;
+    return rs.log_normalizer;
+  }
+
+  void FillEstimate(TrackerEstimate* est) const {
+    const Eigen::VectorXd w = NormalizedWeights(log_w);
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    double so = 0.0, co = 0.0, sc = 0.0;
+    est->floor_probabilities = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(floors.size()));
+    for (int i = 0; i < n; ++i) {
+      mean += w[i] * Eigen::Vector2d(x[i], y[i]);
+      so += w[i] * std::sin(offset[i]);
+      co += w[i] * std::cos(offset[i]);
+      sc += w[i] * scale[i];
+      est->floor_probabilities[floor[i]] += w[i];
+    }
+    Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Vector2d d(x[i] - mean.x(), y[i] - mean.y());
+      cov += w[i] * d * d.transpose();
+    }
+    est->mean_m = mean;
+    est->covariance_m2 = cov;
+    est->heading_offset_rad = std::atan2(so, co);
+    est->scale = sc;
+    Eigen::Index best = 0;
+    est->floor_probabilities.maxCoeff(&best);
+    est->floor_index = static_cast<int>(best);
+    if (lag_len > 0 && summary.steps > lag_len) {
+      const int slot = (summary.steps - 1 - lag_len) % (lag_len + 1);
+      const size_t stride = static_cast<size_t>(lag_len + 1) * 2;
+      Eigen::Vector2d lagged = Eigen::Vector2d::Zero();
+      for (int i = 0; i < n; ++i) {
+        const double* p = &lag_ring[i * stride + static_cast<size_t>(slot) * 2];
+        lagged += w[i] * Eigen::Vector2d(p[0], p[1]);
+      }
+      est->lagged_m = lagged;
+    }
+  }
+
+  void PushLag() {
+    if (lag_len <= 0) return;
+    const int slot = (summary.steps - 1) % (lag_len + 1);
+    const size_t stride = static_cast<size_t>(lag_len + 1) * 2;
+    for (int i = 0; i < n; ++i) {
+      lag_ring[i * stride + static_cast<size_t>(slot) * 2] = x[i];
+      lag_ring[i * stride + static_cast<size_t>(slot) * 2 + 1] = y[i];
+    }
+  }
+
+  void Snapshot(bool replace_last) {
+    if (!options.record_history || summary.steps == 0) return;
+    RowMatrixXd states(n, 4);
+    Eigen::VectorXi fl(n);
+    for (int i = 0; i < n; ++i) {
+      states(i, 0) = x[i];
+      states(i, 1) = y[i];
+      states(i, 2) = offset[i];
+      states(i, 3) = scale[i];
+      fl[i] = floor[i];
+    }
+    Eigen::VectorXd lw = log_w;
+    NormalizeLogWeights(lw);
+    if (replace_last && !history.states.empty()) {
+      history.states.back() = std::move(states);
+      history.floor_indices.back() = std::move(fl);
+      history.log_weights.back() = std::move(lw);
+    } else {
+      history.states.push_back(std::move(states));
+      history.floor_indices.push_back(std::move(fl));
+      history.log_weights.push_back(std::move(lw));
+    }
+  }
+
+  void Respread() {
+    TrackerEstimate est;
+    FillEstimate(&est);
+    const int f = est.floor_index;
+    for (int i = 0; i < n; ++i) {
+      double px = est.mean_m.x(), py = est.mean_m.y();
+      for (int attempt = 0; attempt < 50; ++attempt) {
+        const double qx = est.mean_m.x() + options.respread_sd_m * rng.Normal();
+        const double qy = est.mean_m.y() + options.respread_sd_m * rng.Normal();
+        if (Walkable(qx, qy, f)) {
+          px = qx;
+          py = qy;
+          break;
+        }
+      }
+      if (!Walkable(px, py, f)) {  // the mean itself is inside an obstacle: keep the particle
+        px = x[i];
+        py = y[i];
+      }
+      const double o = offset[i];
+      const double s = scale[i];
+      PlaceFree(i, px, py, floor[i] == f ? f : floor[i], o);
+      scale[i] = s;
+    }
+    log_w.setConstant(-std::log(static_cast<double>(n)));
+    ++summary.respreads;
+  }
+};
+
+ParticleTracker::ParticleTracker(const FloorPlan* plan, const wifi::RssModel* wifi_model,
+                                 const mapmatch::RoadNetwork* corridors, const TrackerOptions& options)
+    : impl_(std::make_unique<Impl>()) {
+  ValidateOptions(options, "options");
+  Impl& s = *impl_;
+  s.plan = plan;
+  s.model = wifi_model;
+  s.corridors = corridors;
+  s.options = options;
+  s.rng = RandomStream(options.seed, kTrackerStream);
+  if (plan) {
+    s.floors = plan->floors();
+  } else if (wifi_model) {
+    s.floors = wifi_model->floors();
+  } else {
+    s.floors = {0};
+  }
+  s.plan_floor.assign(s.floors.size(), -1);
+  s.model_floor.assign(s.floors.size(), -1);
+  for (size_t f = 0; f < s.floors.size(); ++f) {
+    if (plan) s.plan_floor[f] = static_cast<int>(f);
+    if (wifi_model) {
+      const auto& mf = wifi_model->floors();
+      const auto it = std::find(mf.begin(), mf.end(), s.floors[f]);
+      if (it == mf.end()) {
+        ThrowInvalidArgument("wifi_model", "the signal map has no reference point on floor " + std::to_string(s.floors[f]) +
+                                               " of the floor plan (the map's floors must be the plan's floors)");
+      }
+      s.model_floor[f] = static_cast<int>(it - mf.begin());
+    }
+  }
+  if (plan && wifi_model) {
+    for (int mf : wifi_model->floors()) {
+      if (std::find(s.floors.begin(), s.floors.end(), mf) == s.floors.end()) {
+        ThrowInvalidArgument("wifi_model", "the signal map has floor " + std::to_string(mf) +
+                                               ", which the floor plan does not have");
+      }
+    }
+  }
+  if (corridors) {
+    CheckArgument(s.floors.size() == 1, "corridors", "corridor mode supports one floor only (the plan or map has " +
+                                                         std::to_string(s.floors.size()) + ")");
+    CheckArgument(corridors->num_segments() > 0 && corridors->total_length_m() > 0.0, "corridors", "is empty");
+  }
+  if (wifi_model) s.wifi = std::make_unique<WifiLikelihood>(*wifi_model, options.wifi);
+  if (plan || wifi_model) s.BuildCandidates();
+  s.Resize(options.num_particles);
+}
+
+ParticleTracker::~ParticleTracker() = default;
+ParticleTracker::ParticleTracker(ParticleTracker&&) noexcept = default;
+ParticleTracker& ParticleTracker::operator=(ParticleTracker&&) noexcept = default;
+
+const std::vector<int>& ParticleTracker::floors() const { return impl_->floors; }
+bool ParticleTracker::initialized() const { return impl_->initialized; }
+const ParticleHistory& ParticleTracker::history() const { return impl_->history; }
+const TrackerSummary& ParticleTracker::summary() const { return impl_->summary; }
+const TrackerOptions& ParticleTracker::options() const { return impl_->options; }
+
+void ParticleTracker::InitializeKnown(double time_s, const Eigen::Vector2d& position_m, int floor_number,
+                                      double heading_offset_rad) {
+  Impl& s = *impl_;
+  CheckArgument(std::isfinite(time_s), "time_s", "must be finite");
+  CheckFinite(position_m, "position_m");
+  CheckArgument(std::isfinite(heading_offset_rad), "heading_offset_rad", "must be finite");
+  const auto it = std::find(s.floors.begin(), s.floors.end(), floor_number);
+  if (it == s.floors.end()) ThrowInvalidArgument("floor", "the tracker has no floor " + std::to_string(floor_number));
+  const int f = static_cast<int>(it - s.floors.begin());
+  if (!s.Walkable(position_m.x(), position_m.y(), f)) {
+    ThrowInvalidArgument("position_m", "(" + std::to_string(position_m.x()) + ", " + std::to_string(position_m.y()) +
+                                           ") is not walkable on floor " + std::to_string(floor_number) +
+                                           " (outside the outline or inside an obstacle)");
+  }
+  const TrackerOptions& o = s.options;
+  for (int i = 0; i < s.n; ++i) {
+    double px = position_m.x(), py = position_m.y();
+    for (int attempt = 0; attempt < 50 && o.start_position_sd_m > 0.0; ++attempt) {
+      const double qx = position_m.x() + o.start_position_sd_m * s.rng.Normal();
+      const double qy = position_m.y() + o.start_position_sd_m * s.rng.Normal();
+      // Behind a wall from the known start is not a possible start.
+      if (s.Walkable(qx, qy, f) && !s.Blocked(position_m.x(), position_m.y(), qx, qy, f)) {
+        px = qx;
+        py = qy;
+        break;
+      }
+    }
+    s.PlaceFree(i, px, py, f, heading_offset_rad + o.start_heading_offset_sd_rad * s.rng.Normal());
+  }
+  s.log_w.setConstant(-std::log(static_cast<double>(s.n)));
+  s.initialized = true;
+  s.awaiting_first_fix = false;
+  s.last_time = time_s;
+}
+
+void ParticleTracker::InitializeUnknown(const WifiObservation& observation) {
+  Impl& s = *impl_;
+  CheckArgument(s.plan || s.model || s.corridors, "plan", "an unknown start needs a floor plan, a signal map or corridors");
+  if (s.model) s.wifi->CheckObservation(observation, "observation");
+  if (observation.empty() || !s.model) {
+    s.UniformCloud();
+    s.awaiting_first_fix = s.model != nullptr;
+  } else {
+    std::vector<int> all(static_cast<size_t>(s.n));
+    for (int i = 0; i < s.n; ++i) all[i] = i;
+    s.DrawFromCandidates(observation, all);
+    s.log_w.setConstant(-std::log(static_cast<double>(s.n)));
+    s.awaiting_first_fix = false;
+  }
+  s.initialized = true;
+  s.last_time = observation.time_s;
+}
+
+TrackerEstimate ParticleTracker::Step(const StepInput& step) {
+  Impl& s = *impl_;
+  WallTimer timer;
+  CheckArgument(s.initialized, "step", "the tracker is not initialised (InitializeKnown or InitializeUnknown first)");
+  CheckStepInput(step, "step");
+  if (step.time_s < s.last_time) {
+    ThrowInvalidArgument("step.time_s", std::to_string(step.time_s) + " s is before the previous event (" +
+                                            std::to_string(s.last_time) + " s): negative time step");
+  }
+  s.last_time = step.time_s;
+  const StepMotion motion(step, s.options.motion);
+  const Eigen::VectorXd old_log_w = s.log_w;
+  const double penalty = s.options.wall_log_penalty;
+  const int num_floors = static_cast<int>(s.floors.size());
+  const double p_change = num_floors > 1 ? s.options.floor_change_probability : 0.0;
+  const double kappa = s.options.corridor_kappa;
+  const double log_vm_norm = s.corridor_mode() ? std::log(2.0 * M_PI * std::cyl_bessel_i(0.0, kappa)) : 0.0;
+  const int blocks = (s.n + kBlockSize - 1) / kBlockSize;
+  std::vector<double> blocked_mass(static_cast<size_t>(blocks), 0.0);
+  const double max_lw = s.log_w.maxCoeff();
+
+  s.ForBlocks(s.n, [&](int b, int begin, int end, RandomStream& rng) {
+    double blocked = 0.0;
+    for (int i = begin; i < end; ++i) {
+      double o, sc;
+      Eigen::Vector2d delta;
+      motion.Sample(s.offset[i], s.scale[i], rng, &o, &sc, &delta);
+      s.offset[i] = o;
+      s.scale[i] = sc;
+      if (s.corridor_mode()) {
+        // Paper 000 eq. 8-10 with the step's length, eq. 11 with the step's heading.
+        const double length = delta.norm();
+        const double heading = std::atan2(delta.y(), delta.x());
+        const Eigen::VectorXd& lengths = s.corridors->lengths_m();
+        int seg = s.segment[i];
+        int d = s.direction[i];
+        double u = s.along[i] + d * length;
+        for (int guard = 0; guard < 10000; ++guard) {
+          int e;
+          double left;
+          if (d > 0 && u > lengths[seg]) {
+            e = 1;
+            left = u - lengths[seg];
+          } else if (d < 0 && u < 0.0) {
+            e = 0;
+            left = -u;
+          } else {
+            break;
+          }
+          const auto& choices = s.corridors->continuations(seg, e);
+          const auto& c = choices[choices.size() > 1 ? rng.UniformInt(choices.size()) : 0];
+          seg = c.segment;
+          d = c.enter_end == 0 ? 1 : -1;
+          u = c.enter_end == 0 ? left : lengths[seg] - left;
+        }
+        u = std::clamp(u, 0.0, lengths[seg]);
+        s.segment[i] = seg;
+        s.direction[i] = static_cast<signed char>(d);
+        s.along[i] = u;
+        const Eigen::Vector2d q = s.corridors->point_at(seg, u);
+        s.x[i] = q.x();
+        s.y[i] = q.y();
+        const double beta = s.corridors->headings_rad()[seg] + (d > 0 ? 0.0 : M_PI);
+        if (length > 1e-9) s.log_w[i] += kappa * std::cos(heading - beta) - log_vm_norm;
+        continue;
+      }
+      const double qx = s.x[i] + delta.x(), qy = s.y[i] + delta.y();
+      int f = s.floor[i];
+      bool is_blocked;
+      if (p_change > 0.0 && rng.Uniform01() < p_change) {
+        int g = static_cast<int>(rng.UniformInt(static_cast<std::uint64_t>(num_floors - 1)));
+        if (g >= f) ++g;
+        f = g;
+        is_blocked = !s.Walkable(qx, qy, f);
+      } else {
+        is_blocked = s.Blocked(s.x[i], s.y[i], qx, qy, f);
+      }
+      if (is_blocked) {
+        blocked += std::exp(s.log_w[i] - max_lw);
+        s.log_w[i] += penalty;
+        if (std::isinf(penalty)) continue;  // dropped: stays where it was
+      }
+      s.x[i] = qx;
+      s.y[i] = qy;
+      s.floor[i] = f;
+    }
+    blocked_mass[b] = blocked;
+  });
+
+  ++s.summary.steps;
+  TrackerEstimate est;
+  est.time_s = step.time_s;
+  double total_mass = (old_log_w.array() - max_lw).exp().sum();
+  double blocked_total = 0.0;
+  for (double m : blocked_mass) blocked_total += m;
+  est.blocked_fraction = total_mass > 0.0 ? blocked_total / total_mass : 0.0;
+  if (!(s.log_w.maxCoeff() > kNegInf)) {
+    // Every particle blocked: the step contradicts the plan (an unmapped door, a wrong heading
+    // offset). Ignore it rather than lose the cloud (a dropped particle stayed where it was);
+    // re-spread if it keeps happening.
+    s.log_w = old_log_w;
+    ++s.summary.all_blocked_steps;
+    if (++s.consecutive_blocked >= s.options.respread_after_blocked_steps) {
+      s.Respread();
+      s.consecutive_blocked = 0;
+    }
+    est.ess = EffectiveSampleSize(s.log_w);
+    est.log_likelihood = 0.0;
+  } else {
+    s.consecutive_blocked = 0;
+    // log-likelihood increment: log Σ w_old,i · (likelihood factor); old weights normalised.
+    const double before = LogSumExp(old_log_w);
+    const double lz = s.NormalizeAndResample(&est);
+    est.log_likelihood = lz - before;
+    s.summary.total_log_likelihood += est.log_likelihood;
+  }
+  s.PushLag();
+  s.FillEstimate(&est);
+  if (s.options.record_history) {
+    s.history.times_s.push_back(step.time_s);
+    s.history.steps.push_back(step);
+    s.Snapshot(false);
+  }
+  s.summary.seconds += timer.ElapsedSeconds();
+  return est;
+}
+
+TrackerEstimate ParticleTracker::Wifi(const WifiObservation& observation) {
+  Impl& s = *impl_;
+  WallTimer timer;
+  CheckArgument(s.model != nullptr, "observation", "the tracker has no signal map (wifi_model is None)");
+  s.wifi->CheckObservation(observation, "observation");
+  if (!s.initialized) {
+    InitializeUnknown(observation);
+    TrackerEstimate est = Estimate();
+    est.time_s = observation.time_s;
+    return est;
+  }
+  // WiFi may arrive late (readings re-timed to their own time): no ordering check against the
+  // steps, whose own order is checked in Step.
+  TrackerEstimate est;
+  est.time_s = observation.time_s;
+  if (observation.empty()) {
+    ++s.summary.empty_wifi_updates;
+    s.FillEstimate(&est);
+    est.ess = EffectiveSampleSize(s.log_w);
+    return est;
+  }
+  ++s.summary.wifi_updates;
+  if (s.awaiting_first_fix && observation.num_heard > 0) {
+    // Unknown start: the first scan with readings places the cloud (the seeking phase).
+    std::vector<int> all(static_cast<size_t>(s.n));
+    for (int i = 0; i < s.n; ++i) all[i] = i;
+    s.DrawFromCandidates(observation, all);
+    s.log_w.setConstant(-std::log(static_cast<double>(s.n)));
+    s.awaiting_first_fix = false;
+    est.recovered = true;
+    s.FillEstimate(&est);
+    est.ess = s.n;
+    s.Snapshot(true);
+    s.summary.seconds += timer.ElapsedSeconds();
+    return est;
+  }
+  const Eigen::VectorXd old_log_w = s.log_w;
+  Eigen::VectorXd ll(s.n);
+  s.ForBlocks(s.n, [&](int, int begin, int end, RandomStream&) {
+    std::vector<int> hints(s.model->floors().size(), -1);
+    for (int i = begin; i < end; ++i) {
+      const int mf = s.model_floor[s.floor[i]];
+      ll[i] = s.wifi->LogLikelihood(s.x[i], s.y[i], mf, observation, &hints[mf]);
+    }
+  });
+  s.log_w += ll;
+  const double before = LogSumExp(old_log_w);
+  const double predictive = LogSumExp(s.log_w) - before;  // log p(scan | past), tempered
+  est.log_likelihood = predictive;
+  s.summary.total_log_likelihood += predictive;
+  s.NormalizeAndResample(&est);
+
+  // Recovery: the scan fits the best candidate far better than the cloud, several scans running.
+  if (s.options.recovery_log_ratio > 0.0 && observation.num_heard > 0) {
+    std::vector<int> cf, cr;
+    const Eigen::VectorXd cll = s.CandidateLogLikelihoods(observation, &cf, &cr);
+    const double best = cll.size() > 0 ? cll.maxCoeff() : kNegInf;
+    if (predictive < best - s.options.recovery_log_ratio) {
+      ++s.consecutive_disagreement;
+    } else {
+      s.consecutive_disagreement = 0;
+    }
+    if (s.consecutive_disagreement >= s.options.recovery_scans) {
+      if (!est.resampled) {  // equal weights first, so that replacing a subset is unbiased
+        Resample(s.log_w, s.options.resampling.scheme, s.rng, &s.ancestors);
+        s.Gather(s.ancestors);
+        s.log_w.setConstant(-std::log(static_cast<double>(s.n)));
+      }
+      const int every = std::max(1, static_cast<int>(std::lround(1.0 / s.options.recovery_fraction)));
+      std::vector<int> slots;
+      for (int i = 0; i < s.n; i += every) slots.push_back(i);
+      s.DrawFromCandidates(observation, slots);
+      s.consecutive_disagreement = 0;
+      est.recovered = true;
+      ++s.summary.recoveries;
+    }
+  }
+  s.FillEstimate(&est);
+  s.Snapshot(true);
+  s.summary.seconds += timer.ElapsedSeconds();
+  return est;
+}
+
+TrackerEstimate ParticleTracker::Estimate() const {
+  TrackerEstimate est;
+  est.time_s = impl_->last_time;
+  impl_->FillEstimate(&est);
+  est.ess = EffectiveSampleSize(impl_->log_w);
+  return est;
+}
+
+RowMatrixXd ParticleTracker::ParticleStates() const {
+  const Impl& s = *impl_;
+  RowMatrixXd out(s.n, 4);
+  for (int i = 0; i < s.n; ++i) out.row(i) << s.x[i], s.y[i], s.offset[i], s.scale[i];
+  return out;
+}
+
+Eigen::VectorXi ParticleTracker::ParticleFloorIndices() const {
+  return Eigen::Map<const Eigen::VectorXi>(impl_->floor.data(), impl_->n);
+}
+
+Eigen::VectorXd ParticleTracker::ParticleWeights() const { return NormalizedWeights(impl_->log_w); }
+
+void ParticleTracker::SetParticles(const Eigen::Ref<const RowMatrixXd>& states,
+                                   const Eigen::Ref<const Eigen::VectorXi>& floor_indices) {
+  Impl& s = *impl_;
+  CheckShape(states, -1, 4, "states");
+  CheckArgument(states.rows() > 0, "states", "has no particle");
+  CheckShape(floor_indices, states.rows(), 1, "floor_indices");
+  CheckFinite(states, "states");
+  CheckArgument(!s.corridor_mode(), "states", "SetParticles is not available in corridor mode");
+  const int num_floors = static_cast<int>(s.floors.size());
+  for (Eigen::Index i = 0; i < states.rows(); ++i) {
+    const int f = floor_indices[i];
+    if (f < 0 || f >= num_floors) {
+      ThrowInvalidArgument("floor_indices", "entry " + std::to_string(i) + " = " + std::to_string(f) +
+                                                " is not a floor index (0.." + std::to_string(num_floors - 1) + ")");
+    }
+    if (!(states(i, 3) > 0.0)) ThrowInvalidArgument("states", "scale (column 3) of row " + std::to_string(i) + " must be > 0");
+  }
+  s.options.num_particles = static_cast<int>(states.rows());
+  s.Resize(static_cast<int>(states.rows()));
+  for (int i = 0; i < s.n; ++i) {
+    s.x[i] = states(i, 0);
+    s.y[i] = states(i, 1);
+    s.offset[i] = WrapAngle(states(i, 2));
+    s.scale[i] = states(i, 3);
+    s.floor[i] = floor_indices[i];
+  }
+  s.initialized = true;
+  s.awaiting_first_fix = false;
+}
+
+}  // namespace indoorloc::fusion

@@ -1,0 +1,168 @@
+#include "indoorloc/fusion/wifi_likelihood.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <string>
+
+#include "indoorloc/core/check.h"
+#include "indoorloc/core/options.h"
+
+namespace indoorloc::fusion {
+
+bool WifiLikelihoodOptions::IsValid(std::string* error) const {
+  auto fail = [&](const std::string& message) {
+    *error = message;
+    return false;
+  };
+  if (!(std::isfinite(tempering) && tempering > 0.0 && tempering <= 1.0)) return fail("tempering must be in (0, 1]");
+  if (!(max_term > 0.0) || std::isnan(max_term)) return fail("max_term must be > 0 (+inf disables the cap)");
+  if (!(max_age_s >= 0.0) || std::isnan(max_age_s)) return fail("max_age_s must be >= 0 (+inf keeps every reading)");
+  if (!(std::isfinite(not_heard_dbm) && not_heard_dbm > -300.0 && not_heard_dbm < 50.0))
+    return fail("not_heard_dbm must be a finite RSS in (-300, 50) dBm");
+  return true;
+}
+
+std::vector<WifiObservation> MakeWifiObservations(const Eigen::Ref<const Eigen::VectorXd>& scan_times_s,
+                                                  const Eigen::Ref<const RowMatrixXd>& rss_dbm,
+                                                  const Eigen::Ref<const RowMatrixXd>& ages_s,
+                                                  const WifiLikelihoodOptions& options, bool at_own_time,
+                                                  WifiReadingCounts* counts) {
+  ValidateOptions(options, "options");
+  const Eigen::Index num_scans = scan_times_s.size();
+  CheckShape(rss_dbm, num_scans, -1, "rss_dbm");
+  const bool have_ages = ages_s.size() > 0;
+  if (have_ages) CheckShape(ages_s, num_scans, rss_dbm.cols(), "ages_s");
+  CheckFinite(scan_times_s, "scan_times_s");
+  for (Eigen::Index s = 1; s < num_scans; ++s) {
+    CheckArgument(scan_times_s[s] >= scan_times_s[s - 1], "scan_times_s",
+                  "must be non-decreasing (entry " + std::to_string(s) + " goes back in time)");
+  }
+  WifiReadingCounts local;
+  std::vector<WifiObservation> out;
+  struct Reading {
+    double time;
+    int ap;
+    double rss;
+  };
+  std::vector<Reading> timed;  // heard readings at their own time
+  for (Eigen::Index s = 0; s < num_scans; ++s) {
+    WifiObservation scan;
+    scan.time_s = scan_times_s[s];
+    for (Eigen::Index k = 0; k < rss_dbm.cols(); ++k) {
+      const double v = rss_dbm(s, k);
+      if (std::isnan(v)) {
+        if (options.use_not_heard) {
+          scan.access_points.push_back(static_cast<int>(k));
+          scan.rss_dbm.push_back(options.not_heard_dbm);
+          ++local.not_heard;
+        }
+        continue;
+      }
+      if (!std::isfinite(v) || v < -300.0 || v > 50.0) {
+        ThrowInvalidArgument("rss_dbm", DescribeEntry(s, k, false) + " = " + std::to_string(v) +
+                                            " is not an RSS in dBm (use NaN for not heard)");
+      }
+      double age = 0.0;
+      if (have_ages) {
+        age = ages_s(s, k);
+        if (std::isnan(age)) age = 0.0;
+        if (!std::isfinite(age) || age < 0.0) {
+          ThrowInvalidArgument("ages_s", DescribeEntry(s, k, false) + " = " + std::to_string(age) +
+                                             ": ages must be finite and >= 0 (scan time minus last-seen time)");
+        }
+      }
+      if (at_own_time) {
+        timed.push_back({scan.time_s - age, static_cast<int>(k), v});
+        ++local.heard;
+        continue;
+      }
+      if (age > options.max_age_s) {
+        ++local.dropped_stale;
+        continue;
+      }
+      scan.access_points.push_back(static_cast<int>(k));
+      scan.rss_dbm.push_back(v);
+      ++scan.num_heard;
+      ++local.heard;
+    }
+    if (!at_own_time && scan.num_heard == 0) ++local.scans_without_readings;
+    if (!scan.empty()) out.push_back(std::move(scan));
+  }
+  if (at_own_time) {
+    // Group the heard readings by their own time; a not-heard group stays with its scan. An AP
+    // read twice at one instant (the same reading reported by two scans) is kept once.
+    std::stable_sort(timed.begin(), timed.end(), [](const Reading& a, const Reading& b) { return a.time < b.time; });
+    std::vector<WifiObservation> heard;
+    for (size_t i = 0; i < timed.size();) {
+      WifiObservation group;
+      group.time_s = timed[i].time;
+      size_t j = i;
+      for (; j < timed.size() && timed[j].time == timed[i].time; ++j) {
+        if (std::find(group.access_points.begin(), group.access_points.end(), timed[j].ap) != group.access_points.end()) {
+          --local.heard;
+          continue;
+        }
+        group.access_points.push_back(timed[j].ap);
+        group.rss_dbm.push_back(timed[j].rss);
+        ++group.num_heard;
+      }
+      heard.push_back(std::move(group));
+      i = j;
+    }
+    std::vector<WifiObservation> merged;
+    merged.reserve(out.size() + heard.size());
+    std::merge(heard.begin(), heard.end(), out.begin(), out.end(), std::back_inserter(merged),
+               [](const WifiObservation& a, const WifiObservation& b) { return a.time_s < b.time_s; });
+    out = std::move(merged);
+  }
+  if (counts) *counts = local;
+  return out;
+}
+
+WifiLikelihood::WifiLikelihood(const wifi::RssModel& model, const WifiLikelihoodOptions& options)
+    : model_(model), options_(options) {
+  ValidateOptions(options, "options.wifi");
+}
+
+void WifiLikelihood::CheckObservation(const WifiObservation& observation, const char* argument) const {
+  const std::string name(argument);
+  CheckArgument(std::isfinite(observation.time_s), name + ".time_s", "must be finite");
+  CheckArgument(observation.access_points.size() == observation.rss_dbm.size(), name,
+                "access_points and rss_dbm differ in length");
+  const int k = model_.num_access_points();
+  for (size_t i = 0; i < observation.access_points.size(); ++i) {
+    const int ap = observation.access_points[i];
+    if (ap < 0 || ap >= k) {
+      ThrowInvalidArgument(name + ".access_points", "entry " + std::to_string(i) + " = " + std::to_string(ap) +
+                                                         " is not an AP column of the signal map (0.." +
+                                                         std::to_string(k - 1) + ")");
+    }
+    const double v = observation.rss_dbm[i];
+    if (!std::isfinite(v) || v < -300.0 || v > 50.0) {
+      ThrowInvalidArgument(name + ".rss_dbm", "entry " + std::to_string(i) + " = " + std::to_string(v) +
+                                                   " is not a finite RSS in dBm");
+    }
+  }
+}
+
+double WifiLikelihood::LogLikelihood(double x_m, double y_m, int model_floor_index,
+                                     const WifiObservation& observation, int* hint) const {
+  if (observation.access_points.empty()) return 0.0;
+  // Per-thread scratch: the fields of every AP at z (the interpolation is the cost, not the sum).
+  thread_local Eigen::VectorXd mean, variance;
+  model_.MeanAndVariance(Eigen::Vector2d(x_m, y_m), model_floor_index, &mean, &variance, hint);
+  constexpr double kHalfLog2Pi = 0.91893853320467274178;
+  double total = 0.0;
+  const size_t n = observation.access_points.size();
+  for (size_t i = 0; i < n; ++i) {
+    const int ap = observation.access_points[i];
+    const double var = variance[ap];
+    const double r = observation.rss_dbm[i] - mean[ap];
+    const double term = std::min(0.5 * r * r / var, options_.max_term);
+    total -= kHalfLog2Pi + 0.5 * std::log(var) + term;
+  }
+  return options_.tempering * total;
+}
+
+}  // namespace indoorloc::fusion
