@@ -10,6 +10,7 @@ from indoorloc.io.wifi_datasets import (
     load_rss_rtt_room,
     load_surimi,
     load_uji_library,
+    load_wifi_dataset,
 )
 from indoorloc.io.pdr_datasets import (
     STANDARD_GRAVITY_MPS2,
@@ -54,6 +55,7 @@ __all__ = [
     "load_surimi",
     "load_road_network",
     "load_uji_library",
+    "load_wifi_dataset",
     "read_csv_segments",
     "read_geojson_segments",
     "warehouse_segments",
