@@ -1,4 +1,9 @@
-"""File formats at the edge of indoorloc: dataset loaders (WiFi, foot IMU) and road-network files."""
+"""File formats at the edge of indoorloc: dataset loaders (WiFi, foot IMU) and road-network files.
+
+io imports nothing from indoorloc but the compiled ``indoorloc._core`` (plain arrays and
+dataclasses in, ``_core`` types out), so that facades may use it inside functions (e.g.
+``indoorloc.mapmatch.warehouse_network``) without an import cycle; docs/architecture.md, "Layers".
+"""
 
 from indoorloc.io.wifi_datasets import (
     RSS_RTT_GRID_M,
