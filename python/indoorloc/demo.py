@@ -1,9 +1,9 @@
-"""The demo registry behind ``indoorloc demo``.
+"""The runner behind ``indoorloc demo``.
 
-Each subsystem registers one quick experiment on built-in data with ``@register_demo``. The
-function receives a :class:`DemoContext` (output folder, seed) and returns a
-:class:`DemoSection` (markdown text and the PNG files it wrote). ``run_demos`` runs them all and
-writes ``report.md`` that links every section and figure.
+The registry itself (``register_demo``, :class:`DemoContext`, :class:`DemoSection`) lives in the
+leaf module :mod:`indoorloc.registry`, so that experiments register into it without importing
+this module. This module imports the built-in experiment modules (which registers their demos),
+runs them and writes ``report.md`` that links every section and figure.
 """
 
 from __future__ import annotations
@@ -11,59 +11,16 @@ from __future__ import annotations
 import datetime as _dt
 import platform
 import time
-from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Dict, List, Optional, Sequence
+from typing import List, Optional, Sequence
 
 from indoorloc import __version__
-
-
-@dataclass
-class DemoContext:
-    """What a demo gets: the folder to write figures into and a base seed."""
-
-    out_dir: Path
-    seed: int = 0
-    #: Fewer Monte Carlo runs and cross-validation folds (tests, smoke runs); same code paths.
-    quick: bool = False
-
-    def figure_path(self, name: str) -> Path:
-        """Path of a PNG figure named ``name`` inside the report folder."""
-        return self.out_dir / f"{name}.png"
-
-
-@dataclass
-class DemoSection:
-    """What a demo returns: a markdown body (no heading) and the figures it saved."""
-
-    markdown: str
-    figures: List[Path] = field(default_factory=list)
-
-
-@dataclass
-class _Entry:
-    name: str
-    title: str
-    fn: Callable[[DemoContext], DemoSection]
-
-
-_REGISTRY: Dict[str, _Entry] = {}
-
-
-def register_demo(name: str, title: str):
-    """Decorator: register ``fn(ctx) -> DemoSection`` as the demo of subsystem ``name``."""
-
-    def decorate(fn: Callable[[DemoContext], DemoSection]):
-        if name in _REGISTRY:
-            raise ValueError(f"indoorloc: demo {name!r} is registered twice")
-        _REGISTRY[name] = _Entry(name, title, fn)
-        return fn
-
-    return decorate
+from indoorloc.registry import DemoContext, DemoSection, registered_demos
 
 
 def _load_builtin_demos() -> None:
-    # Importing the experiment modules registers their demos.
+    # The table of built-in demos: importing an experiment module registers its demo in
+    # indoorloc.registry. A new subsystem adds its demo module here.
     from indoorloc.experiments import analog_demo  # noqa: F401
     from indoorloc.experiments import core_resampling  # noqa: F401
     from indoorloc.experiments import mapmatch_reproduce  # noqa: F401
@@ -75,17 +32,18 @@ def _load_builtin_demos() -> None:
 def available_demos() -> List[str]:
     """Names of the registered demos, in registration order."""
     _load_builtin_demos()
-    return list(_REGISTRY)
+    return list(registered_demos())
 
 
 def run_demos(out_dir: Path, names: Optional[Sequence[str]] = None, seed: int = 0, quick: bool = False) -> Path:
     """Run the demos ``names`` (default: all) and write ``out_dir/report.md``; return its path."""
     _load_builtin_demos()
-    selected = list(_REGISTRY) if not names else list(names)
-    unknown = [n for n in selected if n not in _REGISTRY]
+    demos = registered_demos()
+    selected = list(demos) if not names else list(names)
+    unknown = [n for n in selected if n not in demos]
     if unknown:
         raise ValueError(
-            f"indoorloc: argument 'names': unknown demo(s) {unknown}; available: {list(_REGISTRY)}"
+            f"indoorloc: argument 'names': unknown demo(s) {unknown}; available: {list(demos)}"
         )
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -99,9 +57,9 @@ def run_demos(out_dir: Path, names: Optional[Sequence[str]] = None, seed: int = 
         "",
     ]
     for name in selected:
-        entry = _REGISTRY[name]
+        entry = demos[name]
         start = time.perf_counter()
-        section = entry.fn(ctx)
+        section: DemoSection = entry.fn(ctx)
         elapsed = time.perf_counter() - start
         parts += [f"## {entry.title} (`{name}`)", "", section.markdown.strip(), ""]
         for fig in section.figures:

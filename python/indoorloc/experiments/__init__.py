@@ -1,1 +1,1 @@
-"""Experiments that reproduce the papers and the quick demos registered with indoorloc.demo."""
+"""Experiments that reproduce the papers and the quick demos registered with indoorloc.registry (run by indoorloc.demo)."""

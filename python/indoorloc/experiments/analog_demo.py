@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-from indoorloc.demo import DemoContext, DemoSection, register_demo
+from indoorloc.registry import DemoContext, DemoSection, default_pdr_root, register_demo
 
 
 @register_demo("analog", "Analog HMM: Lorenz-63 reconstruction and IMU missing data")
 def demo(ctx: DemoContext) -> DemoSection:
     from indoorloc import plots
-    from indoorloc.cli_wifi import default_data_root
     from indoorloc.experiments import analog_imu, analog_lorenz63
 
     example = analog_lorenz63.reconstruction_example(seed=ctx.seed, M=10**4, beam=3000)
@@ -22,7 +21,7 @@ def demo(ctx: DemoContext) -> DemoSection:
         "(paper: EnKS 3.78, AnEnKS 4.33, AnFB 1.32 at M = 10^4).",
         "",
     ]
-    pdr = default_data_root().parent / "pdr"
+    pdr = default_pdr_root()
     if pdr.is_dir() and not ctx.quick:
         result = analog_imu.run_imu_experiments(pdr, seed=ctx.seed)
         text += ["Missing data on real walking IMU recordings (PyShoe trials, 6-D, standardised):", "",

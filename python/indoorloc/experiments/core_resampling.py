@@ -13,7 +13,7 @@ from typing import Dict
 import numpy as np
 
 from indoorloc import core
-from indoorloc.demo import DemoContext, DemoSection, register_demo
+from indoorloc.registry import DemoContext, DemoSection, register_demo
 
 
 @dataclass

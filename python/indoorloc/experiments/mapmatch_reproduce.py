@@ -20,7 +20,7 @@ from typing import Dict, Optional, Sequence
 import numpy as np
 
 from indoorloc import mapmatch
-from indoorloc.demo import DemoContext, DemoSection, register_demo
+from indoorloc.registry import DemoContext, DemoSection, register_demo
 from indoorloc.progress import progress
 
 KAPPAS = (10.0, 5.0, 1.0, 0.5, 0.1)

@@ -27,7 +27,7 @@ from typing import Dict, List, Optional
 import numpy as np
 
 from indoorloc import network
-from indoorloc.demo import DemoContext, DemoSection, register_demo
+from indoorloc.registry import DemoContext, DemoSection, register_demo
 from indoorloc.simulate.flight import FlightConfig, simulate_flight, small_config
 
 MGAL = 1e-5

@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-from indoorloc.demo import DemoContext, DemoSection, register_demo
+from indoorloc.registry import DemoContext, DemoSection, default_pdr_root, register_demo
 
 
 @register_demo("pdr", "PDR: SHOE detector + ZUPT-aided EKF on real foot-mounted IMU data")
 def demo(ctx: DemoContext) -> DemoSection:
     from indoorloc import plots
-    from indoorloc.cli_pdr import default_pdr_root
     from indoorloc.experiments import pdr_evaluate as pe
     from indoorloc.io import pdr_datasets as io
 

@@ -16,7 +16,7 @@ from typing import Dict, Optional
 import numpy as np
 
 from indoorloc import core, wifi
-from indoorloc.demo import DemoContext, DemoSection, register_demo
+from indoorloc.registry import DemoContext, DemoSection, default_data_root, register_demo
 from indoorloc.progress import progress
 from indoorloc.simulate import wifi_scenarios
 
@@ -191,11 +191,11 @@ def demo(ctx: DemoContext) -> DemoSection:
         markdown_table({"vertical (0.5 dB noise)": vertical, "vertical (2 dB noise + 2 dB shadowing)": vertical_realistic}),
         "",
     ]
-    from indoorloc.cli_wifi import default_data_root, load_dataset
+    from indoorloc.io.wifi_datasets import load_wifi_dataset
 
     data_root = default_data_root()
     if data_root.is_dir():
-        ds = load_dataset("uji", data_root)
+        ds = load_wifi_dataset("uji", data_root)
         results = {}
         for k in (1, 10):
             hyper = we.cross_validate(ds, k=k, max_points=3 if ctx.quick else 12, seed=ctx.seed, quiet_label=f"cv uji k={k}")

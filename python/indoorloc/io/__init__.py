@@ -1,4 +1,9 @@
-"""File formats at the edge of indoorloc: dataset loaders (WiFi, foot IMU) and road-network files."""
+"""File formats at the edge of indoorloc: dataset loaders (WiFi, foot IMU) and road-network files.
+
+io imports nothing from indoorloc but the compiled ``indoorloc._core`` (plain arrays and
+dataclasses in, ``_core`` types out), so that facades may use it inside functions (e.g.
+``indoorloc.mapmatch.warehouse_network``) without an import cycle; docs/architecture.md, "Layers".
+"""
 
 from indoorloc.io.wifi_datasets import (
     RSS_RTT_GRID_M,
@@ -10,6 +15,7 @@ from indoorloc.io.wifi_datasets import (
     load_rss_rtt_room,
     load_surimi,
     load_uji_library,
+    load_wifi_dataset,
 )
 from indoorloc.io.pdr_datasets import (
     STANDARD_GRAVITY_MPS2,
@@ -54,6 +60,7 @@ __all__ = [
     "load_surimi",
     "load_road_network",
     "load_uji_library",
+    "load_wifi_dataset",
     "read_csv_segments",
     "read_geojson_segments",
     "warehouse_segments",

@@ -1,5 +1,9 @@
 """Road-network files for ``indoorloc.mapmatch``: GeoJSON and CSV segment lists (json, csv, numpy).
 
+Like all of :mod:`indoorloc.io`, this module imports nothing from indoorloc but the compiled
+``indoorloc._core`` (``load_road_network`` builds ``indoorloc._core.mapmatch.RoadNetwork``, the
+class :mod:`indoorloc.mapmatch` re-exports); the facade imports it, never the other way.
+
 A road network is a list of M straight segments, each ``[x_A, y_A, x_B, y_B]`` in metres, with an
 integer id per segment (paper 000, §II.B: "a set of linear segments identified by their identity
 index, the coordinates of their ends and their direction"). This module only reads and writes
@@ -467,9 +471,11 @@ def load_road_network(path: PathLike, **options: Any) -> Any:
     if ids.min() < _INT32_MIN or ids.max() > _INT32_MAX:
         raise _path_error(str(path), "segment ids must fit in 32 bits for RoadNetwork "
                                      f"(range {int(ids.min())}..{int(ids.max())})")
-    from indoorloc import mapmatch  # the binding is optional until the subsystem is built
+    # The compiled class itself (indoorloc.mapmatch re-exports it): io imports no facade, so that
+    # the facade may use io (mapmatch.warehouse_network) without an import cycle.
+    from indoorloc._core import mapmatch as _mapmatch
 
-    road_network = getattr(mapmatch, "RoadNetwork", None)
+    road_network = getattr(_mapmatch, "RoadNetwork", None)
     if road_network is None:
         raise ImportError("indoorloc.mapmatch.RoadNetwork is not available in this build")
     return road_network(segments_m, ids.astype(np.int32), **options)

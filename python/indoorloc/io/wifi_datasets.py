@@ -690,3 +690,34 @@ def available_datasets(data_root: PathLike) -> List[str]:
         if (root / "surimi" / f"{key}.mat").is_file():
             names.append(f"surimi_{key}")
     return names
+
+
+def load_wifi_dataset(name: str, data_root: PathLike) -> FingerprintDataset:
+    """Dataset by its command-line name (``indoorloc wifi evaluate --dataset``).
+
+    Parameters
+    ----------
+    name : str
+        ``"uji"`` (UJI library, month 01), a room of :data:`RSS_RTT_ROOMS` or
+        ``"surimi:<NAME>"`` with NAME in :data:`SURIMI_NAMES`.
+    data_root : str or pathlib.Path
+        Folder holding ``uji_library_month01/``, ``rss_rtt_rooms/`` and ``surimi/``
+        (:func:`indoorloc.registry.default_data_root`).
+
+    Raises
+    ------
+    ValueError
+        ``indoorloc: argument 'dataset': ...`` for an unknown name, and whatever the loader
+        raises for a missing or malformed file.
+    """
+    data_root = Path(data_root)
+    if name == "uji":
+        return load_uji_library(data_root / "uji_library_month01")
+    if name in RSS_RTT_ROOMS:
+        return load_rss_rtt_room(data_root / "rss_rtt_rooms", name)
+    if name.startswith("surimi:"):
+        return load_surimi(data_root / "surimi", name.split(":", 1)[1])
+    raise ValueError(
+        f"indoorloc: argument 'dataset': unknown dataset {name!r} "
+        f"(uji, {', '.join(RSS_RTT_ROOMS)}, surimi:<NAME>)"
+    )

@@ -9,7 +9,10 @@
     indoorloc wifi evaluate [--dataset uji office ...] [--scans 1 10]
     indoorloc wifi simulate [--runs R] [--noise-db S]
 
-Subsystems add a subcommand each through ``_SUBCOMMANDS`` as they are implemented.
+Each subsystem's subcommands live in ``indoorloc/cli/<subsystem>.py`` with an
+``add_parser(subparsers, quiet_parent)`` function, added to ``_SUBCOMMANDS`` below. CLI modules
+may import experiments, io, simulate and the facades; nothing imports them but this package
+(docs/architecture.md, "Layers").
 """
 
 from __future__ import annotations
@@ -77,33 +80,33 @@ def _add_core(sub: argparse._SubParsersAction) -> None:
 
 
 def _add_analog(sub: argparse._SubParsersAction) -> None:
-    from indoorloc import cli_analog
+    from indoorloc.cli import analog
 
-    cli_analog.add_parser(sub, quiet_parent)
+    analog.add_parser(sub, quiet_parent)
 
 
 def _add_mapmatch(sub: argparse._SubParsersAction) -> None:
-    from indoorloc import cli_mapmatch
+    from indoorloc.cli import mapmatch
 
-    cli_mapmatch.add_parser(sub, quiet_parent)
+    mapmatch.add_parser(sub, quiet_parent)
 
 
 def _add_network(sub: argparse._SubParsersAction) -> None:
-    from indoorloc import cli_network
+    from indoorloc.cli import network
 
-    cli_network.add_parser(sub, quiet_parent)
+    network.add_parser(sub, quiet_parent)
 
 
 def _add_pdr(sub: argparse._SubParsersAction) -> None:
-    from indoorloc import cli_pdr
+    from indoorloc.cli import pdr
 
-    cli_pdr.add_parser(sub, quiet_parent)
+    pdr.add_parser(sub, quiet_parent)
 
 
 def _add_wifi(sub: argparse._SubParsersAction) -> None:
-    from indoorloc import cli_wifi
+    from indoorloc.cli import wifi
 
-    cli_wifi.add_parser(sub, quiet_parent)
+    wifi.add_parser(sub, quiet_parent)
 
 
 # Subsystems register `add(subparsers)` functions here.
@@ -141,7 +144,3 @@ def main(argv: Optional[List[str]] = None) -> int:
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-
-
-if __name__ == "__main__":
-    sys.exit(main())

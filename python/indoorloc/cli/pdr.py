@@ -7,11 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-
-def default_pdr_root() -> Path:
-    from indoorloc.cli_wifi import default_data_root
-
-    return default_data_root().parent / "pdr"
+from indoorloc.registry import default_pdr_root
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:

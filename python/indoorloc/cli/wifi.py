@@ -6,48 +6,19 @@ import argparse
 import json
 from pathlib import Path
 
-import os
-
-
-def default_data_root() -> Path:
-    """Where the real WiFi datasets are: $INDOORLOC_WIFI_DATA, else the first `shared/data/wifi`
-    found beside the working folder or one of its parents (a clone sits next to `shared/`)."""
-    env = os.environ.get("INDOORLOC_WIFI_DATA")
-    if env:
-        return Path(env)
-    here = Path.cwd().resolve()
-    for folder in (here, *here.parents):
-        candidate = folder / "shared" / "data" / "wifi"
-        if candidate.is_dir():
-            return candidate
-    return here / "shared" / "data" / "wifi"
-
-
-def load_dataset(name: str, data_root: Path):
-    """Dataset by CLI name: uji, lecture_theatre, office, corridor, surimi:<NAME>."""
-    from indoorloc.io import wifi_datasets as io
-
-    if name == "uji":
-        return io.load_uji_library(data_root / "uji_library_month01")
-    if name in io.RSS_RTT_ROOMS:
-        return io.load_rss_rtt_room(data_root / "rss_rtt_rooms", name)
-    if name.startswith("surimi:"):
-        return io.load_surimi(data_root / "surimi", name.split(":", 1)[1])
-    raise ValueError(
-        f"indoorloc: argument 'dataset': unknown dataset {name!r} "
-        f"(uji, {', '.join(io.RSS_RTT_ROOMS)}, surimi:<NAME>)"
-    )
+from indoorloc.registry import default_data_root
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
     from indoorloc.experiments import wifi_evaluate as we
+    from indoorloc.io.wifi_datasets import load_wifi_dataset
 
     root = Path(args.data_root) if args.data_root else default_data_root()
     if not root.is_dir():
         raise ValueError(f"indoorloc: argument 'data_root': {root} is not a folder")
     report = {}
     for name in args.dataset:
-        ds = load_dataset(name, root)
+        ds = load_wifi_dataset(name, root)
         for k in args.scans:
             hyper = we.cross_validate(
                 ds, k=k, max_points=args.cv_points, seed=args.seed, quiet_label=f"cv {name} k={k}", num_threads=args.threads
@@ -65,13 +36,14 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
 def cmd_simulate(args: argparse.Namespace) -> int:
     from indoorloc.experiments import wifi_simulation as ws
+    from indoorloc.io.wifi_datasets import load_wifi_dataset
 
     if args.map == "paper":
         model = ws.paper_map(seed=args.seed, noise_db=args.noise_db, shadowing_db=args.shadowing_db)
         paths = ws.paper_paths()
     else:
         data_root = Path(args.data_root) if args.data_root else default_data_root()
-        model = ws.fitted_map(load_dataset(args.map, data_root))
+        model = ws.fitted_map(load_wifi_dataset(args.map, data_root))
         paths = ws.paths_through(model)
     results = {name: ws.run_path(model, name, path, n_runs=args.runs, seed=args.seed) for name, path in paths.items()}
     print(ws.markdown_table(results))

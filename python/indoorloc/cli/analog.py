@@ -6,6 +6,8 @@ import argparse
 import json
 from pathlib import Path
 
+from indoorloc.registry import default_pdr_root
+
 
 def cmd_lorenz63(args: argparse.Namespace) -> int:
     from indoorloc.experiments import analog_lorenz63 as al
@@ -50,10 +52,9 @@ def cmd_lorenz63_tune(args: argparse.Namespace) -> int:
 
 
 def cmd_imu(args: argparse.Namespace) -> int:
-    from indoorloc.cli_wifi import default_data_root
     from indoorloc.experiments import analog_imu as ai
 
-    root = Path(args.data_root) if args.data_root else default_data_root().parent / "pdr"
+    root = Path(args.data_root) if args.data_root else default_pdr_root()
     result = ai.run_imu_experiments(root, k_anfb=args.k, beam=args.beam, seed=args.seed)
     print(ai.markdown_table(result))
     return 0
