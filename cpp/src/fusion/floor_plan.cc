@@ -1,0 +1,1103 @@
+// Implementation of FloorPlan: a uniform grid of edges per floor (CSR layout, edge coordinates
+// stored contiguously per cell), exact orientation predicates (a floating-point filter with an
+// exact expansion-arithmetic fallback, after Shewchuk 1997), Amanatides & Woo cell traversal for
+// wall crossings, per-cell anchors with precomputed winding counts for point location, and
+// expanding rings of cells for the distance to the nearest wall. See docs/fusion.md, "Floor plan".
+#include "indoorloc/fusion/floor_plan.h"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "indoorloc/core/check.h"
+#include "indoorloc/core/options.h"
+#include "indoorloc/core/parallel.h"
+
+namespace indoorloc::fusion {
+namespace {
+
+// ------------------------------------------------------------------------------------------
+// Exact orientation predicate.
+//
+// Orient(a, b, c) = sign of (b - a) x (c - a): +1 if c lies left of the directed line a -> b,
+// -1 if right, 0 if the three points are collinear. It is computed as Shewchuk's orient2d
+// (detleft - detright with the differences taken at c = a) and is certified by his static error
+// bound; uncertain cases are decided exactly: each coordinate difference becomes a two-term
+// expansion (TwoDiff), the products four two-term expansions each (TwoProduct by fma), and the
+// sign of the exact sum of the 16 terms is read from a non-overlapping expansion (GrowExpansion
+// with zero elimination). The result is the exact sign for the given doubles.
+
+constexpr double kEpsilon = 0x1p-53;  // half an ulp of 1
+constexpr double kOrientBound = (3.0 + 16.0 * kEpsilon) * kEpsilon;
+
+inline void TwoSum(double a, double b, double* s, double* e) {
+  *s = a + b;
+  const double bv = *s - a;
+  const double av = *s - bv;
+  *e = (a - av) + (b - bv);
+}
+
+inline void TwoProduct(double a, double b, double* p, double* e) {
+  *p = a * b;
+  *e = std::fma(a, b, -*p);
+}
+
+// Sign of the exact sum of n doubles (n <= 32).
+int ExactSumSign(const double* terms, int n) {
+  double h[32];
+  int m = 0;
+  for (int k = 0; k < n; ++k) {
+    double q = terms[k];
+    int mm = 0;
+    for (int i = 0; i < m; ++i) {
+      double s, e;
+      TwoSum(q, h[i], &s, &e);
+      if (e != 0.0) h[mm++] = e;
+      q = s;
+    }
+    if (q != 0.0) h[mm++] = q;
+    m = mm;
+  }
+  // Components are non-overlapping and increasing in magnitude: the last one has the sign.
+  return m == 0 ? 0 : (h[m - 1] > 0.0 ? 1 : -1);
+}
+
+[[gnu::noinline]] int ExactOrient(double ax, double ay, double bx, double by, double cx,
+                                  double cy) {
+  // (bx - ax) (cy - ay) - (by - ay) (cx - ax), every difference and product kept exactly.
+  double d[4][2];
+  TwoSum(bx, -ax, &d[0][0], &d[0][1]);
+  TwoSum(cy, -ay, &d[1][0], &d[1][1]);
+  TwoSum(by, -ay, &d[2][0], &d[2][1]);
+  TwoSum(cx, -ax, &d[3][0], &d[3][1]);
+  double terms[16];
+  int n = 0;
+  for (int i = 0; i < 2; ++i) {
+    for (int j = 0; j < 2; ++j) {
+      TwoProduct(d[0][i], d[1][j], &terms[n], &terms[n + 1]);
+      n += 2;
+      TwoProduct(-d[2][i], d[3][j], &terms[n], &terms[n + 1]);
+      n += 2;
+    }
+  }
+  return ExactSumSign(terms, n);
+}
+
+inline int Orient(double ax, double ay, double bx, double by, double cx, double cy) {
+  const double detleft = (bx - ax) * (cy - ay);
+  const double detright = (by - ay) * (cx - ax);
+  const double det = detleft - detright;
+  const double bound = kOrientBound * (std::abs(detleft) + std::abs(detright));
+  if (det > bound) return 1;
+  if (-det > bound) return -1;
+  return ExactOrient(ax, ay, bx, by, cx, cy);
+}
+
+struct Segment {
+  double x0, y0, x1, y1;
+};
+
+// Closed segments p-q and u-v intersect (touching counts), exactly.
+bool SegmentsIntersect(double px, double py, double qx, double qy, const Segment& e) {
+  const int o1 = Orient(px, py, qx, qy, e.x0, e.y0);
+  const int o2 = Orient(px, py, qx, qy, e.x1, e.y1);
+  if (o1 == o2 && o1 != 0) return false;
+  const int o3 = Orient(e.x0, e.y0, e.x1, e.y1, px, py);
+  const int o4 = Orient(e.x0, e.y0, e.x1, e.y1, qx, qy);
+  if (o3 == o4 && o3 != 0) return false;
+  if (o1 == 0 && o2 == 0) {
+    // All four points on one line (or p == q on the line of u-v): the segments meet iff their
+    // bounding boxes do.
+    return std::max(std::min(px, qx), std::min(e.x0, e.x1)) <=
+               std::min(std::max(px, qx), std::max(e.x0, e.x1)) &&
+           std::max(std::min(py, qy), std::min(e.y0, e.y1)) <=
+               std::min(std::max(py, qy), std::max(e.y0, e.y1));
+  }
+  return true;
+}
+
+// Change of the winding number of a counter-clockwise ring along a -> p caused by its edge
+// u -> v: +1 entering (u -> v seen from outside to inside), -1 leaving, 0 otherwise. Vertices on
+// the line a -> p count as lying on its right (symbolic perturbation), so that a ring vertex on
+// the segment is counted once. `a` must not lie on the edge. A point p on the edge counts as
+// inside when `closed` (obstacles: conservative) and outside otherwise (outlines).
+int SignedCrossing(double ax, double ay, double px, double py, const Segment& e, bool closed) {
+  const bool su = Orient(ax, ay, px, py, e.x0, e.y0) > 0;
+  const bool sv = Orient(ax, ay, px, py, e.x1, e.y1) > 0;
+  if (su == sv) return 0;
+  const bool inside_a = Orient(e.x0, e.y0, e.x1, e.y1, ax, ay) > 0;
+  const int op = Orient(e.x0, e.y0, e.x1, e.y1, px, py);
+  const bool inside_p = closed ? op >= 0 : op > 0;
+  if (inside_a == inside_p) return 0;
+  return inside_p ? 1 : -1;
+}
+
+// The filter of the hot loops: true when u and v are certainly strictly on the same side of the
+// line through p with direction (dx, dy) (then the edge cannot meet the segment).
+inline bool CertainlySameSide(double px, double py, double dx, double dy, const Segment& e) {
+  const double l1 = dx * (e.y0 - py), r1 = dy * (e.x0 - px);
+  const double l2 = dx * (e.y1 - py), r2 = dy * (e.x1 - px);
+  const double o1 = l1 - r1, o2 = l2 - r2;
+  const double b1 = kOrientBound * (std::abs(l1) + std::abs(r1));
+  const double b2 = kOrientBound * (std::abs(l2) + std::abs(r2));
+  return ((o1 > b1) & (o2 > b2)) | ((o1 < -b1) & (o2 < -b2));
+}
+
+double PointSegmentDistanceSq(double x, double y, const Segment& e) {
+  const double ux = e.x1 - e.x0, uy = e.y1 - e.y0;
+  const double wx = x - e.x0, wy = y - e.y0;
+  const double len_sq = ux * ux + uy * uy;
+  double t = (wx * ux + wy * uy) / len_sq;
+  t = std::clamp(t, 0.0, 1.0);
+  const double rx = wx - t * ux, ry = wy - t * uy;
+  return rx * rx + ry * ry;
+}
+
+struct CellInfo {
+  double anchor_x, anchor_y;  // a point of the cell on no ring edge
+  std::int32_t outline_count;  // number of outlines containing the anchor
+  std::int32_t obstacle_count; // number of obstacles containing the anchor
+};
+
+enum class RingKind { kOutline, kObstacle };
+
+struct EdgeInfo {
+  int ring;      // index into rings (outlines first, then obstacles); -1 for a wall
+  int position;  // edge index within its ring
+};
+
+struct Ring {
+  RingKind kind;
+  int index;  // index within its kind (for messages)
+  int first_edge, num_edges;
+};
+
+std::string RingName(int floor_index, const Ring& ring) {
+  return "floors[" + std::to_string(floor_index) + "]." +
+         (ring.kind == RingKind::kOutline ? "outlines[" : "obstacles[") +
+         std::to_string(ring.index) + "]";
+}
+
+std::string FormatNumber(double v) {
+  std::ostringstream out;
+  out.precision(6);
+  out << v;
+  return out.str();
+}
+
+}  // namespace
+
+bool FloorPlanOptions::IsValid(std::string* error) const {
+  if (!std::isfinite(cell_size_m)) {
+    *error = "cell_size_m must be finite (<= 0 chooses it automatically)";
+    return false;
+  }
+  if (!(std::isfinite(target_edges_per_cell) && target_edges_per_cell > 0.0)) {
+    *error = "target_edges_per_cell must be finite and > 0";
+    return false;
+  }
+  if (max_cells < 1) {
+    *error = "max_cells must be >= 1";
+    return false;
+  }
+  return true;
+}
+
+namespace {
+
+// One floor's index.
+struct FloorData {
+  int floor = 0;
+  FloorGeometry geometry;       // as given, closing and repeated consecutive vertices dropped
+  std::vector<Segment> edges;   // outline edges, obstacle edges (all rings counter-clockwise), walls
+  std::vector<EdgeInfo> edge_info;
+  std::vector<Ring> rings;
+  int num_outline_edges = 0, num_ring_edges = 0;
+  Eigen::Vector4d bounds = Eigen::Vector4d::Zero();  // outlines' box
+  double walkable_area = 0.0;
+
+  // Grid: cell (i, j) covers [gx + i h, gx + (i + 1) h) x [gy + j h, gy + (j + 1) h).
+  double gx = 0, gy = 0, h = 1, inv_h = 1;
+  int nx = 1, ny = 1;
+  // CSR: the entries of cell c are [cell_begin[c], cell_begin[c + 1]): outline edges, then
+  // obstacle edges from obstacle_begin[c], then walls from wall_begin[c].
+  std::vector<std::int32_t> cell_begin, obstacle_begin, wall_begin;
+  std::vector<Segment> entries;
+  std::vector<std::int32_t> entry_edge;
+  std::vector<CellInfo> cells;
+
+  int CellOf(double x, double y, int* i, int* j) const {
+    const double fx = (x - gx) * inv_h, fy = (y - gy) * inv_h;
+    *i = static_cast<int>(std::clamp(std::floor(fx), 0.0, static_cast<double>(nx - 1)));
+    *j = static_cast<int>(std::clamp(std::floor(fy), 0.0, static_cast<double>(ny - 1)));
+    return *j * nx + *i;
+  }
+
+  bool TestCell(int c, double px, double py, double qx, double qy, double dx, double dy) const {
+    const Segment* e = entries.data() + cell_begin[static_cast<size_t>(c)];
+    const Segment* end = entries.data() + cell_begin[static_cast<size_t>(c) + 1];
+    for (; e != end; ++e) {
+      if (CertainlySameSide(px, py, dx, dy, *e)) continue;
+      if (SegmentsIntersect(px, py, qx, qy, *e)) return true;
+    }
+    return false;
+  }
+
+  bool CrossesWall(double px, double py, double qx, double qy) const {
+    const double dx = qx - px, dy = qy - py;
+    const double fx0 = (px - gx) * inv_h, fy0 = (py - gy) * inv_h;
+    const double fx1 = (qx - gx) * inv_h, fy1 = (qy - gy) * inv_h;
+    const double wx = static_cast<double>(nx), wy = static_cast<double>(ny);
+    // Fast path: both ends inside the grid.
+    if (fx0 >= 0 && fx0 < wx && fy0 >= 0 && fy0 < wy && fx1 >= 0 && fx1 < wx && fy1 >= 0 &&
+        fy1 < wy) {
+      const int i0 = static_cast<int>(fx0), j0 = static_cast<int>(fy0);
+      const int i1 = static_cast<int>(fx1), j1 = static_cast<int>(fy1);
+      if (i0 == i1 && j0 == j1) return TestCell(j0 * nx + i0, px, py, qx, qy, dx, dy);
+      return Traverse(px, py, qx, qy, dx, dy, i0, j0, i1, j1);
+    }
+    // Clip the segment to the grid's box (Liang & Barsky); no edge lies outside it.
+    double t0 = 0.0, t1 = 1.0;
+    auto clip = [&](double den, double num) {  // keep t with den * t <= num
+      if (den == 0.0) return num >= 0.0;
+      const double t = num / den;
+      if (den > 0.0) {
+        t1 = std::min(t1, t);
+      } else {
+        t0 = std::max(t0, t);
+      }
+      return t0 <= t1;
+    };
+    const double x_max = gx + wx * h, y_max = gy + wy * h;
+    if (!(clip(-dx, px - gx) && clip(dx, x_max - px) && clip(-dy, py - gy) &&
+          clip(dy, y_max - py))) {
+      return false;
+    }
+    const double sx = t0 == 0.0 ? px : px + t0 * dx, sy = t0 == 0.0 ? py : py + t0 * dy;
+    const double ex = t1 == 1.0 ? qx : px + t1 * dx, ey = t1 == 1.0 ? qy : py + t1 * dy;
+    int i0, j0, i1, j1;
+    CellOf(sx, sy, &i0, &j0);
+    CellOf(ex, ey, &i1, &j1);
+    return Traverse(px, py, qx, qy, dx, dy, i0, j0, i1, j1);
+  }
+
+  // Amanatides & Woo: the 4-connected chain of cells from (i0, j0) to (i1, j1) along the
+  // segment. Rounding can only swap the order of an x and a y step where the segment passes
+  // within rounding of a cell corner; the cells' registration margin covers that.
+  bool Traverse(double px, double py, double qx, double qy, double dx, double dy, int i0, int j0,
+                int i1, int j1) const {
+    int i = i0, j = j0;
+    if (TestCell(j * nx + i, px, py, qx, qy, dx, dy)) return true;
+    const int step_i = i1 > i0 ? 1 : -1, step_j = j1 > j0 ? 1 : -1;
+    const int n = std::abs(i1 - i0) + std::abs(j1 - j0);
+    const double next_x = step_i > 0 ? 1.0 : 0.0, next_y = step_j > 0 ? 1.0 : 0.0;
+    for (int k = 0; k < n; ++k) {
+      bool step_x;
+      if (i == i1) {
+        step_x = false;
+      } else if (j == j1) {
+        step_x = true;
+      } else {
+        // Parameters along p -> q at which the next x and y cell boundaries are reached.
+        const double tx = (gx + (i + next_x) * h - px) / dx;
+        const double ty = (gy + (j + next_y) * h - py) / dy;
+        step_x = tx < ty;
+      }
+      if (step_x) {
+        i += step_i;
+      } else {
+        j += step_j;
+      }
+      if (TestCell(j * nx + i, px, py, qx, qy, dx, dy)) return true;
+    }
+    return false;
+  }
+
+  bool IsWalkable(double x, double y) const {
+    const double fx = (x - gx) * inv_h, fy = (y - gy) * inv_h;
+    if (!(fx >= 0 && fx < static_cast<double>(nx) && fy >= 0 && fy < static_cast<double>(ny))) {
+      return false;  // outside the grid, hence outside every outline
+    }
+    const size_t c = static_cast<size_t>(static_cast<int>(fy) * nx + static_cast<int>(fx));
+    const CellInfo& cell = cells[c];
+    int outline = cell.outline_count, obstacle = cell.obstacle_count;
+    const double ax = cell.anchor_x, ay = cell.anchor_y;
+    const double dx = x - ax, dy = y - ay;
+    const Segment* e = entries.data() + cell_begin[c];
+    const Segment* obstacles = entries.data() + obstacle_begin[c];
+    const Segment* walls = entries.data() + wall_begin[c];
+    for (; e != obstacles; ++e) {
+      if (CertainlySameSide(ax, ay, dx, dy, *e)) continue;
+      outline += SignedCrossing(ax, ay, x, y, *e, false);
+    }
+    for (; e != walls; ++e) {
+      if (CertainlySameSide(ax, ay, dx, dy, *e)) continue;
+      obstacle += SignedCrossing(ax, ay, x, y, *e, true);
+    }
+    return outline > 0 && obstacle == 0;
+  }
+
+  double DistanceToWall(double x, double y) const {
+    int ci, cj;
+    CellOf(x, y, &ci, &cj);
+    double best = std::numeric_limits<double>::infinity();
+    for (int k = 0;; ++k) {
+      // Cells at Chebyshev index distance exactly k from (ci, cj).
+      const int i_lo = ci - k, i_hi = ci + k, j_lo = cj - k, j_hi = cj + k;
+      auto visit = [&](int i, int j) {
+        if (i < 0 || i >= nx || j < 0 || j >= ny) return;
+        const size_t c = static_cast<size_t>(j * nx + i);
+        for (std::int32_t m = cell_begin[c]; m < cell_begin[c + 1]; ++m) {
+          best = std::min(best, PointSegmentDistanceSq(x, y, entries[static_cast<size_t>(m)]));
+        }
+      };
+      if (k == 0) {
+        visit(ci, cj);
+      } else {
+        for (int i = i_lo; i <= i_hi; ++i) {
+          visit(i, j_lo);
+          visit(i, j_hi);
+        }
+        for (int j = j_lo + 1; j < j_hi; ++j) {
+          visit(i_lo, j);
+          visit(i_hi, j);
+        }
+      }
+      // Every cell not yet visited lies beyond one side of the box of visited cells: its points
+      // are at least that side's distance from (x, y) away (sides with no cells beyond are
+      // skipped). Stop once the best distance cannot be beaten.
+      double bound = std::numeric_limits<double>::infinity();
+      bool remaining = false;
+      if (i_lo > 0) {
+        remaining = true;
+        bound = std::min(bound, std::max(0.0, x - (gx + i_lo * h)));
+      }
+      if (i_hi < nx - 1) {
+        remaining = true;
+        bound = std::min(bound, std::max(0.0, gx + (i_hi + 1) * h - x));
+      }
+      if (j_lo > 0) {
+        remaining = true;
+        bound = std::min(bound, std::max(0.0, y - (gy + j_lo * h)));
+      }
+      if (j_hi < ny - 1) {
+        remaining = true;
+        bound = std::min(bound, std::max(0.0, gy + (j_hi + 1) * h - y));
+      }
+      if (!remaining || best <= bound * bound) break;
+    }
+    return std::sqrt(best);
+  }
+};
+}  // namespace
+
+struct FloorPlan::Impl {
+  std::vector<FloorData> floors;
+  std::vector<int> floor_numbers;
+  FloorPlanOptions options;
+};
+
+namespace {
+
+// Ring as given -> vertices without closing or consecutive repeated vertices; checks shape,
+// finiteness, distinct vertices and area. Returns the signed area.
+std::vector<Eigen::Vector2d> CleanRing(const RowMatrixXd& ring, const std::string& name,
+                                       double* signed_area) {
+  CheckArgument(ring.cols() == 2, name,
+                "expected shape (M, 2), got (" + std::to_string(ring.rows()) + ", " +
+                    std::to_string(ring.cols()) + ")");
+  CheckFinite(ring, name);
+  std::vector<Eigen::Vector2d> v;
+  v.reserve(static_cast<size_t>(ring.rows()));
+  for (Eigen::Index r = 0; r < ring.rows(); ++r) {
+    const Eigen::Vector2d p(ring(r, 0), ring(r, 1));
+    if (v.empty() || p != v.back()) v.push_back(p);
+  }
+  while (v.size() > 1 && v.back() == v.front()) v.pop_back();
+  // Distinct vertices (not only consecutive ones).
+  std::vector<Eigen::Vector2d> sorted = v;
+  std::sort(sorted.begin(), sorted.end(), [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    return a[0] < b[0] || (a[0] == b[0] && a[1] < b[1]);
+  });
+  const size_t distinct = static_cast<size_t>(
+      std::unique(sorted.begin(), sorted.end()) - sorted.begin());
+  CheckArgument(distinct >= 3, name,
+                "needs at least 3 distinct vertices, got " + std::to_string(distinct));
+  // Collinear vertices enclose no area (exact test against the vertex farthest from v[0]).
+  size_t far = 1;
+  double far_d = 0.0;
+  for (size_t k = 1; k < v.size(); ++k) {
+    const double d = (v[k] - v[0]).squaredNorm();
+    if (d > far_d) {
+      far_d = d;
+      far = k;
+    }
+  }
+  bool collinear = true;
+  for (size_t k = 1; k < v.size() && collinear; ++k) {
+    collinear = Orient(v[0][0], v[0][1], v[far][0], v[far][1], v[k][0], v[k][1]) == 0;
+  }
+  CheckArgument(!collinear, name, "has zero area (all vertices lie on one line)");
+  double area2 = 0.0;  // shoelace about v[0] (smaller rounding than about the origin)
+  for (size_t k = 1; k + 1 < v.size(); ++k) {
+    area2 += (v[k][0] - v[0][0]) * (v[k + 1][1] - v[0][1]) -
+             (v[k + 1][0] - v[0][0]) * (v[k][1] - v[0][1]);
+  }
+  CheckArgument(area2 != 0.0, name, "has zero area");
+  *signed_area = 0.5 * area2;
+  return v;
+}
+
+RowMatrixXd ToMatrix(const std::vector<Eigen::Vector2d>& v) {
+  RowMatrixXd m(static_cast<Eigen::Index>(v.size()), 2);
+  for (size_t k = 0; k < v.size(); ++k) m.row(static_cast<Eigen::Index>(k)) = v[k].transpose();
+  return m;
+}
+
+// Cell side chosen so that a cell holds about `target` edge references on average: an edge of
+// extent (|dx|, |dy|) overlaps about 1 + (|dx| + |dy|) / h cells, so with E edges and S the sum
+// of |dx| + |dy| over them, E h^2 + S h = target * W * H.
+double AutoCellSize(const std::vector<Segment>& edges, double width, double height,
+                    const FloorPlanOptions& options) {
+  const double e = static_cast<double>(edges.size());
+  double s = 0.0;
+  for (const Segment& g : edges) s += std::abs(g.x1 - g.x0) + std::abs(g.y1 - g.y0);
+  const double area = std::max(width * height, 1e-12);
+  const double t = options.target_edges_per_cell;
+  double h = (-s + std::sqrt(s * s + 4.0 * e * t * area)) / (2.0 * e);
+  h = std::clamp(h, 0.25, 10.0);
+  return h;
+}
+
+FloorData BuildFloor(const FloorGeometry& input, int floor_index, const FloorPlanOptions& options) {
+  const std::string prefix = "floors[" + std::to_string(floor_index) + "]";
+  FloorData d;
+  d.floor = input.floor;
+  d.geometry.floor = input.floor;
+  CheckArgument(!input.outlines.empty(), prefix + ".outlines",
+                "a floor needs at least one outline ring");
+
+  // Rings: cleaned, then their edges counter-clockwise.
+  std::vector<std::vector<Eigen::Vector2d>> ccw;
+  for (int kind = 0; kind < 2; ++kind) {
+    const auto& rings = kind == 0 ? input.outlines : input.obstacles;
+    auto& out = kind == 0 ? d.geometry.outlines : d.geometry.obstacles;
+    for (size_t k = 0; k < rings.size(); ++k) {
+      const std::string name =
+          prefix + (kind == 0 ? ".outlines[" : ".obstacles[") + std::to_string(k) + "]";
+      double area = 0.0;
+      std::vector<Eigen::Vector2d> v = CleanRing(rings[k], name, &area);
+      out.push_back(ToMatrix(v));
+      if (area < 0.0) std::reverse(v.begin(), v.end());
+      Ring ring;
+      ring.kind = kind == 0 ? RingKind::kOutline : RingKind::kObstacle;
+      ring.index = static_cast<int>(k);
+      ring.first_edge = static_cast<int>(d.edges.size());
+      ring.num_edges = static_cast<int>(v.size());
+      const int ring_id = static_cast<int>(d.rings.size());
+      d.rings.push_back(ring);
+      for (size_t m = 0; m < v.size(); ++m) {
+        const Eigen::Vector2d& a = v[m];
+        const Eigen::Vector2d& b = v[(m + 1) % v.size()];
+        d.edges.push_back({a[0], a[1], b[0], b[1]});
+        d.edge_info.push_back({ring_id, static_cast<int>(m)});
+      }
+      ccw.push_back(std::move(v));
+    }
+    if (kind == 0) d.num_outline_edges = static_cast<int>(d.edges.size());
+  }
+  d.num_ring_edges = static_cast<int>(d.edges.size());
+
+  // Walls.
+  const std::string walls_name = prefix + ".walls";
+  if (input.walls.size() == 0) {
+    d.geometry.walls = RowMatrixXd::Zero(0, 4);
+  } else {
+    CheckArgument(input.walls.cols() == 4, walls_name,
+                  "expected shape (W, 4) rows (x0, y0, x1, y1), got (" +
+                      std::to_string(input.walls.rows()) + ", " +
+                      std::to_string(input.walls.cols()) + ")");
+    CheckFinite(input.walls, walls_name);
+    d.geometry.walls = input.walls;
+    for (Eigen::Index r = 0; r < input.walls.rows(); ++r) {
+      const Segment w{input.walls(r, 0), input.walls(r, 1), input.walls(r, 2), input.walls(r, 3)};
+      CheckArgument(w.x0 != w.x1 || w.y0 != w.y1, walls_name,
+                    "row " + std::to_string(r) + " has zero length");
+      d.edges.push_back(w);
+      d.edge_info.push_back({-1, static_cast<int>(r)});
+    }
+  }
+
+  // Boxes: the outlines' (Bounds) and all edges' (the grid).
+  double ox0 = std::numeric_limits<double>::infinity(), oy0 = ox0, ox1 = -ox0, oy1 = -ox0;
+  for (const auto& ring : d.geometry.outlines) {
+    ox0 = std::min(ox0, ring.col(0).minCoeff());
+    ox1 = std::max(ox1, ring.col(0).maxCoeff());
+    oy0 = std::min(oy0, ring.col(1).minCoeff());
+    oy1 = std::max(oy1, ring.col(1).maxCoeff());
+  }
+  d.bounds << ox0, oy0, ox1, oy1;
+  double ex0 = ox0, ey0 = oy0, ex1 = ox1, ey1 = oy1;
+  double max_abs = 0.0;
+  for (const Segment& g : d.edges) {
+    ex0 = std::min({ex0, g.x0, g.x1});
+    ex1 = std::max({ex1, g.x0, g.x1});
+    ey0 = std::min({ey0, g.y0, g.y1});
+    ey1 = std::max({ey1, g.y0, g.y1});
+    max_abs = std::max({max_abs, std::abs(g.x0), std::abs(g.x1), std::abs(g.y0), std::abs(g.y1)});
+  }
+  const double width = ex1 - ex0, height = ey1 - ey0;
+
+  // Grid: cell size, then half a cell of margin around the edges' box (every edge lies strictly
+  // inside the grid, so the grid's border cells hold no edge near the border).
+  double h = options.cell_size_m > 0.0 ? options.cell_size_m
+                                       : AutoCellSize(d.edges, width, height, options);
+  auto cells_for = [&](double side) {
+    return std::ceil(width / side + 1.0) * std::ceil(height / side + 1.0);
+  };
+  if (cells_for(h) > static_cast<double>(options.max_cells)) {
+    CheckArgument(options.cell_size_m <= 0.0, "options.cell_size_m",
+                  "cell size " + FormatNumber(h) + " m gives " + FormatNumber(cells_for(h)) +
+                      " cells for " + prefix + ", more than options.max_cells = " +
+                      std::to_string(options.max_cells));
+    // Grow h until the grid fits.
+    h = std::max(h, std::sqrt(width * height / static_cast<double>(options.max_cells)));
+    while (cells_for(h) > static_cast<double>(options.max_cells)) h *= 1.05;
+  }
+  d.h = h;
+  d.inv_h = 1.0 / h;
+  d.nx = static_cast<int>(std::ceil(width / h + 1.0));
+  d.ny = static_cast<int>(std::ceil(height / h + 1.0));
+  d.gx = ex0 - 0.5 * (d.nx * h - width);
+  d.gy = ey0 - 0.5 * (d.ny * h - height);
+  const size_t num_cells = static_cast<size_t>(d.nx) * static_cast<size_t>(d.ny);
+
+  // Registration: an edge goes into every cell whose box, grown by a margin far above rounding
+  // of the traversal, it meets (conservative segment-box overlap: box test, then the four
+  // corners not all strictly on one side of the edge's line).
+  const double margin = 1e-6 * h + 64.0 * kEpsilon * max_abs;
+  auto for_each_cell = [&](const Segment& g, auto&& fn) {
+    const int i_lo = std::max(0, static_cast<int>(std::floor((std::min(g.x0, g.x1) - margin - d.gx) * d.inv_h)));
+    const int i_hi = std::min(d.nx - 1, static_cast<int>(std::floor((std::max(g.x0, g.x1) + margin - d.gx) * d.inv_h)));
+    const int j_lo = std::max(0, static_cast<int>(std::floor((std::min(g.y0, g.y1) - margin - d.gy) * d.inv_h)));
+    const int j_hi = std::min(d.ny - 1, static_cast<int>(std::floor((std::max(g.y0, g.y1) + margin - d.gy) * d.inv_h)));
+    const double ux = g.x1 - g.x0, uy = g.y1 - g.y0;
+    for (int j = j_lo; j <= j_hi; ++j) {
+      for (int i = i_lo; i <= i_hi; ++i) {
+        const double bx0 = d.gx + i * h - margin, bx1 = d.gx + (i + 1) * h + margin;
+        const double by0 = d.gy + j * h - margin, by1 = d.gy + (j + 1) * h + margin;
+        const double c0 = ux * (by0 - g.y0) - uy * (bx0 - g.x0);
+        const double c1 = ux * (by0 - g.y0) - uy * (bx1 - g.x0);
+        const double c2 = ux * (by1 - g.y0) - uy * (bx0 - g.x0);
+        const double c3 = ux * (by1 - g.y0) - uy * (bx1 - g.x0);
+        const bool all_pos = c0 > 0 && c1 > 0 && c2 > 0 && c3 > 0;
+        const bool all_neg = c0 < 0 && c1 < 0 && c2 < 0 && c3 < 0;
+        if (!all_pos && !all_neg) fn(j * d.nx + i);
+      }
+    }
+  };
+  // Three classes in order (outline edges, obstacle edges, walls), so a cell's entries come
+  // grouped by class when edges are added in index order.
+  std::vector<std::int64_t> count(num_cells * 3, 0);
+  auto edge_class = [&](size_t e) {
+    return e < static_cast<size_t>(d.num_outline_edges) ? 0
+           : e < static_cast<size_t>(d.num_ring_edges)  ? 1
+                                                        : 2;
+  };
+  for (size_t e = 0; e < d.edges.size(); ++e) {
+    const size_t cls = static_cast<size_t>(edge_class(e));
+    for_each_cell(d.edges[e], [&](int c) { ++count[static_cast<size_t>(c) * 3 + cls]; });
+  }
+  std::int64_t total = 0;
+  for (std::int64_t n : count) total += n;
+  if (total > std::numeric_limits<std::int32_t>::max()) {
+    throw std::runtime_error("indoorloc: FloorPlan: " + prefix +
+                             " has too many edge-cell references; use a larger cell size");
+  }
+  d.cell_begin.assign(num_cells + 1, 0);
+  d.obstacle_begin.assign(num_cells, 0);
+  d.wall_begin.assign(num_cells, 0);
+  std::vector<std::int32_t> fill(num_cells * 3);
+  std::int32_t offset = 0;
+  for (size_t c = 0; c < num_cells; ++c) {
+    d.cell_begin[c] = offset;
+    fill[c * 3] = offset;
+    offset += static_cast<std::int32_t>(count[c * 3]);
+    d.obstacle_begin[c] = offset;
+    fill[c * 3 + 1] = offset;
+    offset += static_cast<std::int32_t>(count[c * 3 + 1]);
+    d.wall_begin[c] = offset;
+    fill[c * 3 + 2] = offset;
+    offset += static_cast<std::int32_t>(count[c * 3 + 2]);
+  }
+  d.cell_begin[num_cells] = offset;
+  d.entries.resize(static_cast<size_t>(offset));
+  d.entry_edge.resize(static_cast<size_t>(offset));
+  for (size_t e = 0; e < d.edges.size(); ++e) {
+    const size_t cls = static_cast<size_t>(edge_class(e));
+    for_each_cell(d.edges[e], [&](int c) {
+      const size_t slot = static_cast<size_t>(fill[static_cast<size_t>(c) * 3 + cls]++);
+      d.entries[slot] = d.edges[e];
+      d.entry_edge[slot] = static_cast<std::int32_t>(e);
+    });
+  }
+
+  // Self-intersection: two edges of one ring that meet (beyond the shared vertex of neighbours)
+  // meet at a point of some cell that both overlap, so only pairs within a cell are tested.
+  if (options.check_self_intersection) {
+    for (size_t c = 0; c < num_cells; ++c) {
+      const std::int32_t begin = d.cell_begin[c], end = d.wall_begin[c];
+      for (std::int32_t a = begin; a < end; ++a) {
+        const EdgeInfo& ia = d.edge_info[static_cast<size_t>(d.entry_edge[static_cast<size_t>(a)])];
+        for (std::int32_t b = a + 1; b < end; ++b) {
+          const EdgeInfo& ib =
+              d.edge_info[static_cast<size_t>(d.entry_edge[static_cast<size_t>(b)])];
+          if (ia.ring != ib.ring) continue;
+          const Ring& ring = d.rings[static_cast<size_t>(ia.ring)];
+          const Segment& sa = d.entries[static_cast<size_t>(a)];
+          const Segment& sb = d.entries[static_cast<size_t>(b)];
+          const int gap = std::abs(ia.position - ib.position);
+          const bool neighbours = gap == 1 || gap == ring.num_edges - 1;
+          bool bad;
+          double wx, wy;
+          if (neighbours) {
+            // Consecutive edges x -> w -> y share w; they are bad only if they overlap along a
+            // line (the ring folds back on itself).
+            const bool a_first = (ia.position + 1) % ring.num_edges == ib.position;
+            const Segment& first = a_first ? sa : sb;
+            const Segment& second = a_first ? sb : sa;
+            wx = first.x1;
+            wy = first.y1;
+            bad = Orient(first.x0, first.y0, first.x1, first.y1, second.x1, second.y1) == 0 &&
+                  (first.x1 - first.x0) * (second.x1 - second.x0) +
+                          (first.y1 - first.y0) * (second.y1 - second.y0) <
+                      0.0;
+          } else {
+            bad = SegmentsIntersect(sa.x0, sa.y0, sa.x1, sa.y1, sb);
+            wx = 0.5 * (sa.x0 + sa.x1);
+            wy = 0.5 * (sa.y0 + sa.y1);
+          }
+          if (bad) {
+            ThrowInvalidArgument(RingName(floor_index, ring),
+                                 "is self-intersecting: edges " + std::to_string(ia.position) +
+                                     " and " + std::to_string(ib.position) + " meet near (" +
+                                     FormatNumber(wx) + ", " + FormatNumber(wy) + ")");
+          }
+        }
+      }
+    }
+  }
+
+  // Anchors: per cell a point on no ring edge, preferring the centre, then points of a fixed
+  // pattern inside the cell, choosing the first with a comfortable clearance from the cell's
+  // ring edges (or else the one with the largest clearance that is on no edge, exactly).
+  d.cells.resize(num_cells);
+  static constexpr double kPattern[][2] = {
+      {0.5, 0.5},    {0.31, 0.37},  {0.67, 0.29}, {0.29, 0.71}, {0.73, 0.63}, {0.5, 0.19},
+      {0.19, 0.5},   {0.81, 0.47},  {0.47, 0.83}, {0.13, 0.13}, {0.87, 0.11}, {0.11, 0.89},
+      {0.89, 0.87},  {0.41, 0.59},  {0.59, 0.43}, {0.23, 0.23}, {0.77, 0.79}, {0.37, 0.91},
+      {0.93, 0.33},  {0.07, 0.61}};
+  for (int j = 0; j < d.ny; ++j) {
+    for (int i = 0; i < d.nx; ++i) {
+      const size_t c = static_cast<size_t>(j * d.nx + i);
+      const std::int32_t begin = d.cell_begin[c], end = d.wall_begin[c];
+      double best_x = 0.0, best_y = 0.0, best_clearance = -1.0;
+      for (const auto& offsets : kPattern) {
+        const double x = d.gx + (i + offsets[0]) * h, y = d.gy + (j + offsets[1]) * h;
+        double clearance_sq = std::numeric_limits<double>::infinity();
+        bool on_edge = false;
+        for (std::int32_t m = begin; m < end; ++m) {
+          const Segment& g = d.entries[static_cast<size_t>(m)];
+          clearance_sq = std::min(clearance_sq, PointSegmentDistanceSq(x, y, g));
+          if (SegmentsIntersect(x, y, x, y, g)) on_edge = true;
+        }
+        if (on_edge) continue;
+        const double clearance = std::sqrt(clearance_sq);
+        if (clearance > best_clearance) {
+          best_clearance = clearance;
+          best_x = x;
+          best_y = y;
+        }
+        if (clearance >= 0.05 * h) break;
+      }
+      if (best_clearance < 0.0) {
+        throw std::runtime_error("indoorloc: FloorPlan: no anchor point found in a cell of " +
+                                 prefix + "; try another cell size");
+      }
+      d.cells[c].anchor_x = best_x;
+      d.cells[c].anchor_y = best_y;
+    }
+  }
+
+  // Winding counts of the anchors, propagated from a point outside the grid (count 0) along a
+  // chain of anchors of adjacent cells: the segment between two anchors lies in the union of
+  // their two cells, so the ring edges it crosses are listed there (counted once each).
+  {
+    std::vector<std::int32_t> stamp(d.edges.size(), -1);
+    std::int32_t stamp_id = 0;
+    auto accumulate = [&](double ax, double ay, double bx, double by, size_t c0, size_t c1,
+                          std::int32_t* outline, std::int32_t* obstacle) {
+      ++stamp_id;
+      for (size_t c : {c0, c1}) {
+        for (std::int32_t m = d.cell_begin[c]; m < d.wall_begin[c]; ++m) {
+          const size_t e = static_cast<size_t>(d.entry_edge[static_cast<size_t>(m)]);
+          if (stamp[e] == stamp_id) continue;
+          stamp[e] = stamp_id;
+          const int s = SignedCrossing(ax, ay, bx, by, d.edges[e], false);
+          if (e < static_cast<size_t>(d.num_outline_edges)) {
+            *outline += s;
+          } else {
+            *obstacle += s;
+          }
+        }
+      }
+    };
+    std::int32_t outline = 0, obstacle = 0;
+    // From (gx - h, gy - h): the segment to the anchor of cell (0, 0) meets the grid in that
+    // cell only.
+    accumulate(d.gx - h, d.gy - h, d.cells[0].anchor_x, d.cells[0].anchor_y, 0, 0, &outline,
+               &obstacle);
+    d.cells[0].outline_count = outline;
+    d.cells[0].obstacle_count = obstacle;
+    for (int j = 0; j < d.ny; ++j) {
+      const size_t row = static_cast<size_t>(j * d.nx);
+      if (j > 0) {
+        const size_t below = row - static_cast<size_t>(d.nx);
+        outline = d.cells[below].outline_count;
+        obstacle = d.cells[below].obstacle_count;
+        accumulate(d.cells[below].anchor_x, d.cells[below].anchor_y, d.cells[row].anchor_x,
+                   d.cells[row].anchor_y, below, row, &outline, &obstacle);
+        d.cells[row].outline_count = outline;
+        d.cells[row].obstacle_count = obstacle;
+      }
+      for (int i = 1; i < d.nx; ++i) {
+        const size_t c = row + static_cast<size_t>(i);
+        outline = d.cells[c - 1].outline_count;
+        obstacle = d.cells[c - 1].obstacle_count;
+        accumulate(d.cells[c - 1].anchor_x, d.cells[c - 1].anchor_y, d.cells[c].anchor_x,
+                   d.cells[c].anchor_y, c - 1, c, &outline, &obstacle);
+        d.cells[c].outline_count = outline;
+        d.cells[c].obstacle_count = obstacle;
+      }
+    }
+  }
+
+  // Walkable area by horizontal scanlines: exact along each line (sorted crossings of the ring
+  // edges with winding counts), midpoint rule across lines spaced min(0.05 m, height / 2000).
+  // A line in grid row j meets only ring edges listed in that row's cells.
+  {
+    const double oh = oy1 - oy0;
+    const int lines = static_cast<int>(std::ceil(oh / std::min(0.05, oh / 2000.0)));
+    const double dy = oh / lines;
+    std::vector<std::int32_t> stamp(d.edges.size(), -1);
+    std::vector<std::int32_t> row_edges;
+    int row = -1;
+    struct Crossing {
+      double x;
+      int outline, obstacle;
+    };
+    std::vector<Crossing> crossings;
+    double area = 0.0;
+    for (int k = 0; k < lines; ++k) {
+      const double y = oy0 + (k + 0.5) * dy;
+      const int j = static_cast<int>(std::clamp(std::floor((y - d.gy) * d.inv_h), 0.0,
+                                                static_cast<double>(d.ny - 1)));
+      if (j != row) {
+        row = j;
+        row_edges.clear();
+        for (int i = 0; i < d.nx; ++i) {
+          const size_t c = static_cast<size_t>(j * d.nx + i);
+          for (std::int32_t m = d.cell_begin[c]; m < d.wall_begin[c]; ++m) {
+            const std::int32_t e = d.entry_edge[static_cast<size_t>(m)];
+            if (stamp[static_cast<size_t>(e)] == j) continue;
+            stamp[static_cast<size_t>(e)] = j;
+            row_edges.push_back(e);
+          }
+        }
+      }
+      crossings.clear();
+      for (const std::int32_t e : row_edges) {
+        const Segment& g = d.edges[static_cast<size_t>(e)];
+        if ((g.y0 <= y) == (g.y1 <= y)) continue;  // half-open rule at vertices
+        const double x = g.x0 + (y - g.y0) * (g.x1 - g.x0) / (g.y1 - g.y0);
+        const int w = g.y1 > g.y0 ? -1 : 1;  // counter-clockwise: upward edges are left behind
+        if (e < d.num_outline_edges) {
+          crossings.push_back({x, w, 0});
+        } else {
+          crossings.push_back({x, 0, w});
+        }
+      }
+      std::sort(crossings.begin(), crossings.end(),
+                [](const Crossing& a, const Crossing& b) { return a.x < b.x; });
+      int outline = 0, obstacle = 0;
+      double length = 0.0;
+      for (size_t m = 0; m < crossings.size(); ++m) {
+        outline += crossings[m].outline;
+        obstacle += crossings[m].obstacle;
+        if (m + 1 < crossings.size() && outline > 0 && obstacle == 0) {
+          length += crossings[m + 1].x - crossings[m].x;
+        }
+      }
+      area += length * dy;
+    }
+    d.walkable_area = area;
+  }
+  CheckArgument(d.walkable_area > 0.0, prefix,
+                "has no walkable area (its outlines are covered by obstacles)");
+  return d;
+}
+
+void CheckFloorIndex(const std::vector<FloorData>& floors, int floor_index, const char* name) {
+  if (floor_index < 0 || floor_index >= static_cast<int>(floors.size())) {
+    ThrowInvalidArgument(name, "floor index " + std::to_string(floor_index) +
+                                   " out of range [0, " + std::to_string(floors.size()) + ")");
+  }
+}
+
+// Checks a batch's floor indices (one per query, or a single one for all) and returns a
+// function of the query index.
+struct FloorIndices {
+  const Eigen::Ref<const Eigen::VectorXi>& v;
+  int operator()(Eigen::Index q) const { return v.size() == 1 ? v[0] : v[q]; }
+};
+
+void CheckBatch(const std::vector<FloorData>& floors, Eigen::Index queries,
+                const Eigen::Ref<const Eigen::VectorXi>& floor_indices) {
+  if (!(floor_indices.size() == queries || floor_indices.size() == 1)) {
+    ThrowInvalidArgument("floor_indices", "expected one entry per query (" +
+                                              std::to_string(queries) +
+                                              ") or a single entry, got " +
+                                              std::to_string(floor_indices.size()));
+  }
+  const int n = static_cast<int>(floors.size());
+  for (Eigen::Index k = 0; k < floor_indices.size(); ++k) {
+    if (floor_indices[k] < 0 || floor_indices[k] >= n) {
+      ThrowInvalidArgument("floor_indices", DescribeEntry(k, 0, true) + " = " +
+                                                std::to_string(floor_indices[k]) +
+                                                " is out of range [0, " + std::to_string(n) + ")");
+    }
+  }
+}
+
+// Runs fn(begin, end) over fixed blocks of queries on up to num_threads threads. Every query's
+// result depends on the query only, so the output does not depend on the thread count.
+template <typename Fn>
+void ForBlocks(Eigen::Index queries, int num_threads, const Fn& fn) {
+  constexpr Eigen::Index kBlock = 2048;
+  const Eigen::Index blocks = (queries + kBlock - 1) / kBlock;
+  const int threads = ResolveThreadCount(num_threads);
+  if (threads <= 1 || blocks <= 1) {
+    fn(Eigen::Index{0}, queries);
+    return;
+  }
+  ParallelForRuns(static_cast<int>(blocks), threads, 0, [&](int block, RandomStream&) {
+    const Eigen::Index begin = block * kBlock;
+    fn(begin, std::min(queries, begin + kBlock));
+  });
+}
+
+}  // namespace
+
+FloorPlan::FloorPlan(std::vector<FloorGeometry> floors, const FloorPlanOptions& options)
+    : impl_(std::make_unique<Impl>()) {
+  ValidateOptions(options);
+  impl_->options = options;
+  CheckArgument(!floors.empty(), "floors", "a floor plan needs at least one floor");
+  for (size_t f = 0; f < floors.size(); ++f) {
+    for (size_t g = 0; g < f; ++g) {
+      if (floors[g].floor == floors[f].floor) {
+        ThrowInvalidArgument("floors[" + std::to_string(f) + "].floor",
+                             "floor number " + std::to_string(floors[f].floor) +
+                                 " is repeated (also floors[" + std::to_string(g) + "])");
+      }
+    }
+  }
+  for (size_t f = 0; f < floors.size(); ++f) {
+    impl_->floors.push_back(BuildFloor(floors[f], static_cast<int>(f), options));
+    impl_->floor_numbers.push_back(floors[f].floor);
+  }
+}
+
+FloorPlan::~FloorPlan() = default;
+FloorPlan::FloorPlan(FloorPlan&&) noexcept = default;
+FloorPlan& FloorPlan::operator=(FloorPlan&&) noexcept = default;
+
+int FloorPlan::num_floors() const { return static_cast<int>(impl_->floors.size()); }
+
+const std::vector<int>& FloorPlan::floors() const { return impl_->floor_numbers; }
+
+int FloorPlan::FloorIndex(int floor) const {
+  for (size_t f = 0; f < impl_->floor_numbers.size(); ++f) {
+    if (impl_->floor_numbers[f] == floor) return static_cast<int>(f);
+  }
+  ThrowInvalidArgument("floor", "the floor plan has no floor number " + std::to_string(floor));
+}
+
+const FloorGeometry& FloorPlan::geometry(int floor_index) const {
+  CheckFloorIndex(impl_->floors, floor_index, "floor_index");
+  return impl_->floors[static_cast<size_t>(floor_index)].geometry;
+}
+
+int FloorPlan::num_edges(int floor_index) const {
+  CheckFloorIndex(impl_->floors, floor_index, "floor_index");
+  return static_cast<int>(impl_->floors[static_cast<size_t>(floor_index)].edges.size());
+}
+
+RowMatrixXd FloorPlan::Edges(int floor_index) const {
+  CheckFloorIndex(impl_->floors, floor_index, "floor_index");
+  const FloorData& d = impl_->floors[static_cast<size_t>(floor_index)];
+  RowMatrixXd out(static_cast<Eigen::Index>(d.edges.size()), 4);
+  for (size_t e = 0; e < d.edges.size(); ++e) {
+    const Segment& g = d.edges[e];
+    out.row(static_cast<Eigen::Index>(e)) << g.x0, g.y0, g.x1, g.y1;
+  }
+  return out;
+}
+
+Eigen::Vector4d FloorPlan::Bounds(int floor_index) const {
+  CheckFloorIndex(impl_->floors, floor_index, "floor_index");
+  return impl_->floors[static_cast<size_t>(floor_index)].bounds;
+}
+
+double FloorPlan::WalkableArea(int floor_index) const {
+  CheckFloorIndex(impl_->floors, floor_index, "floor_index");
+  return impl_->floors[static_cast<size_t>(floor_index)].walkable_area;
+}
+
+double FloorPlan::CellSize(int floor_index) const {
+  CheckFloorIndex(impl_->floors, floor_index, "floor_index");
+  return impl_->floors[static_cast<size_t>(floor_index)].h;
+}
+
+bool FloorPlan::IsWalkable(double x_m, double y_m, int floor_index) const {
+  assert(floor_index >= 0 && floor_index < num_floors());
+  return impl_->floors[static_cast<size_t>(floor_index)].IsWalkable(x_m, y_m);
+}
+
+bool FloorPlan::CrossesWall(double x0_m, double y0_m, double x1_m, double y1_m,
+                            int floor_index) const {
+  assert(floor_index >= 0 && floor_index < num_floors());
+  return impl_->floors[static_cast<size_t>(floor_index)].CrossesWall(x0_m, y0_m, x1_m, y1_m);
+}
+
+double FloorPlan::DistanceToWall(double x_m, double y_m, int floor_index) const {
+  assert(floor_index >= 0 && floor_index < num_floors());
+  return impl_->floors[static_cast<size_t>(floor_index)].DistanceToWall(x_m, y_m);
+}
+
+VectorXb FloorPlan::IsWalkableBatch(const Eigen::Ref<const RowMatrixXd>& points_m,
+                                    const Eigen::Ref<const Eigen::VectorXi>& floor_indices,
+                                    int num_threads) const {
+  CheckShape(points_m, -1, 2, "points_m");
+  CheckFinite(points_m, "points_m");
+  CheckBatch(impl_->floors, points_m.rows(), floor_indices);
+  VectorXb out(points_m.rows());
+  const FloorIndices floor_of{floor_indices};
+  ForBlocks(points_m.rows(), num_threads, [&](Eigen::Index begin, Eigen::Index end) {
+    for (Eigen::Index q = begin; q < end; ++q) {
+      out[q] = impl_->floors[static_cast<size_t>(floor_of(q))].IsWalkable(points_m(q, 0),
+                                                                           points_m(q, 1));
+    }
+  });
+  return out;
+}
+
+VectorXb FloorPlan::CrossesWallBatch(const Eigen::Ref<const RowMatrixXd>& segments_m,
+                                     const Eigen::Ref<const Eigen::VectorXi>& floor_indices,
+                                     int num_threads) const {
+  CheckShape(segments_m, -1, 4, "segments_m");
+  CheckFinite(segments_m, "segments_m");
+  CheckBatch(impl_->floors, segments_m.rows(), floor_indices);
+  VectorXb out(segments_m.rows());
+  const FloorIndices floor_of{floor_indices};
+  ForBlocks(segments_m.rows(), num_threads, [&](Eigen::Index begin, Eigen::Index end) {
+    for (Eigen::Index q = begin; q < end; ++q) {
+      out[q] = impl_->floors[static_cast<size_t>(floor_of(q))].CrossesWall(
+          segments_m(q, 0), segments_m(q, 1), segments_m(q, 2), segments_m(q, 3));
+    }
+  });
+  return out;
+}
+
+Eigen::VectorXd FloorPlan::DistanceToWallBatch(const Eigen::Ref<const RowMatrixXd>& points_m,
+                                               const Eigen::Ref<const Eigen::VectorXi>& floor_indices,
+                                               int num_threads) const {
+  CheckShape(points_m, -1, 2, "points_m");
+  CheckFinite(points_m, "points_m");
+  CheckBatch(impl_->floors, points_m.rows(), floor_indices);
+  Eigen::VectorXd out(points_m.rows());
+  const FloorIndices floor_of{floor_indices};
+  ForBlocks(points_m.rows(), num_threads, [&](Eigen::Index begin, Eigen::Index end) {
+    for (Eigen::Index q = begin; q < end; ++q) {
+      out[q] = impl_->floors[static_cast<size_t>(floor_of(q))].DistanceToWall(points_m(q, 0),
+                                                                               points_m(q, 1));
+    }
+  });
+  return out;
+}
+
+RowMatrixXd FloorPlan::SampleWalkable(int n, int floor_index, RandomStream& rng) const {
+  CheckArgument(n >= 0, "n", "must be >= 0, got " + std::to_string(n));
+  CheckFloorIndex(impl_->floors, floor_index, "floor_index");
+  const FloorData& d = impl_->floors[static_cast<size_t>(floor_index)];
+  const double box_area = (d.bounds[2] - d.bounds[0]) * (d.bounds[3] - d.bounds[1]);
+  const double fraction = d.walkable_area / box_area;
+  if (!(fraction >= 1e-6)) {
+    throw std::runtime_error("indoorloc: FloorPlan::SampleWalkable: the walkable area of floor " +
+                             std::to_string(d.floor) + " is only " + FormatNumber(fraction) +
+                             " of its bounding box; rejection sampling would not finish");
+  }
+  RowMatrixXd out(n, 2);
+  // Far more attempts than needed (expected n / fraction); the limit only guards against an
+  // area estimate that is far too large.
+  const double max_attempts = 100.0 * (static_cast<double>(n) + 10.0) / fraction;
+  double attempts = 0.0;
+  for (int k = 0; k < n;) {
+    const double x = rng.Uniform(d.bounds[0], d.bounds[2]);
+    const double y = rng.Uniform(d.bounds[1], d.bounds[3]);
+    if (d.IsWalkable(x, y)) {
+      out(k, 0) = x;
+      out(k, 1) = y;
+      ++k;
+    }
+    if (++attempts > max_attempts) {
+      throw std::runtime_error("indoorloc: FloorPlan::SampleWalkable: too many rejected draws on "
+                               "floor " + std::to_string(d.floor));
+    }
+  }
+  return out;
+}
+
+std::string FloorPlan::Report() const {
+  std::ostringstream out;
+  out.setf(std::ios::fixed);
+  const Impl& s = *impl_;
+  size_t edges = 0, cells = 0, entries = 0;
+  double area = 0.0;
+  for (const FloorData& d : s.floors) {
+    edges += d.edges.size();
+    cells += d.cells.size();
+    entries += d.entries.size();
+    area += d.walkable_area;
+  }
+  out << "FloorPlan: " << s.floors.size() << (s.floors.size() == 1 ? " floor" : " floors")
+      << " (";
+  for (size_t f = 0; f < s.floors.size(); ++f) out << (f ? ", " : "") << s.floors[f].floor;
+  out << "), " << edges << " edges, " << cells << " cells (";
+  out.precision(2);
+  for (size_t f = 0; f < s.floors.size(); ++f) out << (f ? "/" : "") << s.floors[f].h;
+  out << " m), " << static_cast<double>(entries) / static_cast<double>(std::max<size_t>(cells, 1))
+      << " edges/cell, walkable area ";
+  out.precision(1);
+  out << area << " m^2";
+  return out.str();
+}
+
+}  // namespace indoorloc::fusion
