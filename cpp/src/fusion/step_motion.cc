@@ -3,7 +3,7 @@
 #include <cmath>
 #include <string>
 
-#include <Eigen/Cholesky>
+#include <Eigen/LU>
 
 #include "indoorloc/core/check.h"
 

@@ -1,0 +1,418 @@
+// Tests of the fusion tracker: motion model, WiFi observations, walls, degenerate weights,
+// determinism, recovery of a path with perfect inputs, and the backward smoother.
+#include "indoorloc/fusion/particle_tracker.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+
+#include "indoorloc/fusion/backward_smoother.h"
+#include "indoorloc/fusion/floor_plan.h"
+#include "indoorloc/fusion/step_motion.h"
+#include "indoorloc/fusion/track.h"
+#include "indoorloc/fusion/wifi_likelihood.h"
+#include "indoorloc/wifi/rss_model.h"
+
+namespace indoorloc::fusion {
+namespace {
+
+RowMatrixXd Ring(std::initializer_list<std::pair<double, double>> pts) {
+  RowMatrixXd r(static_cast<Eigen::Index>(pts.size()), 2);
+  Eigen::Index i = 0;
+  for (const auto& p : pts) {
+    r(i, 0) = p.first;
+    r(i, 1) = p.second;
+    ++i;
+  }
+  return r;
+}
+
+// A 20 x 10 m room with a 4 x 4 m block in the middle (x 8..12, y 3..7) and a thin wall at
+// x = 16 from y = 0 to y = 7 (a door above it).
+FloorPlan RoomPlan(int floors = 1) {
+  std::vector<FloorGeometry> geometry;
+  for (int f = 0; f < floors; ++f) {
+    FloorGeometry g;
+    g.floor = f;
+    g.outlines.push_back(Ring({{0, 0}, {20, 0}, {20, 10}, {0, 10}}));
+    g.obstacles.push_back(Ring({{8, 3}, {12, 3}, {12, 7}, {8, 7}}));
+    g.walls = RowMatrixXd(1, 4);
+    g.walls << 16, 0, 16, 7;
+    geometry.push_back(g);
+  }
+  return FloorPlan(geometry);
+}
+
+// Four APs at the room's corners, log-distance means on a 1 m lattice.
+wifi::SignalMap RoomMap() {
+  const double aps[4][2] = {{0, 0}, {20, 0}, {0, 10}, {20, 10}};
+  const int nx = 21, ny = 11;
+  RowMatrixXd pos(nx * ny, 2), mean(nx * ny, 4), var(nx * ny, 4);
+  for (int i = 0; i < nx; ++i) {
+    for (int j = 0; j < ny; ++j) {
+      const int r = i * ny + j;
+      pos.row(r) << i, j;
+      for (int a = 0; a < 4; ++a) {
+        mean(r, a) = -40.0 - 25.0 * std::log10(std::hypot(i - aps[a][0], j - aps[a][1]) + 1.0);
+        var(r, a) = 4.0;
+      }
+    }
+  }
+  return wifi::SignalMap(pos, Eigen::VectorXi::Zero(nx * ny), mean, var);
+}
+
+WifiObservation ScanAt(const wifi::RssModel& model, double t, double x, double y) {
+  Eigen::VectorXd mean, var;
+  int hint = -1;
+  model.MeanAndVariance(Eigen::Vector2d(x, y), 0, &mean, &var, &hint);
+  WifiObservation o;
+  o.time_s = t;
+  for (int a = 0; a < mean.size(); ++a) {
+    o.access_points.push_back(a);
+    o.rss_dbm.push_back(mean[a]);
+  }
+  o.num_heard = static_cast<int>(mean.size());
+  return o;
+}
+
+StepInput Step(double t, double dx, double dy, double sd = 0.02) {
+  StepInput s;
+  s.time_s = t;
+  s.displacement_m = Eigen::Vector2d(dx, dy);
+  s.covariance_m2 = sd * sd * Eigen::Matrix2d::Identity();
+  return s;
+}
+
+TrackerOptions SmallOptions(int n = 2000) {
+  TrackerOptions o;
+  o.num_particles = n;
+  o.seed = 7;
+  o.start_position_sd_m = 0.2;
+  o.start_heading_offset_sd_rad = 0.01;
+  o.start_scale_sd = 0.01;
+  return o;
+}
+
+TEST(StepMotion, PolarStepMatchesJacobianPropagation) {
+  const StepInput s = StepFromPolar(1.0, 0.7, 0.5, 0.05, 0.1);
+  EXPECT_NEAR(s.displacement_m.x(), 0.7 * std::cos(0.5), 1e-12);
+  EXPECT_NEAR(s.displacement_m.y(), 0.7 * std::sin(0.5), 1e-12);
+  // Variance along the heading is σ_L², across it (L σ_h)².
+  const Eigen::Vector2d along(std::cos(0.5), std::sin(0.5)), across(-std::sin(0.5), std::cos(0.5));
+  EXPECT_NEAR(along.dot(s.covariance_m2 * along), 0.05 * 0.05, 1e-12);
+  EXPECT_NEAR(across.dot(s.covariance_m2 * across), 0.07 * 0.07, 1e-12);
+}
+
+TEST(StepMotion, SamplesHaveTheModelMeanAndCovariance) {
+  StepMotionOptions o;
+  o.heading_offset_walk_rad = 1e-9;
+  o.scale_walk = 1e-9;
+  const StepInput s = Step(0.0, 0.7, 0.0, 0.1);
+  const StepMotion motion(s, o);
+  RandomStream rng(3);
+  const int n = 200000;
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  std::vector<Eigen::Vector2d> draws(n);
+  for (int i = 0; i < n; ++i) {
+    double no, ns;
+    motion.Sample(M_PI / 2, 1.2, rng, &no, &ns, &draws[i]);
+    mean += draws[i] / n;
+  }
+  for (const auto& d : draws) cov += (d - mean) * (d - mean).transpose() / n;
+  // Rotated by 90 degrees and scaled by 1.2: mean (0, 0.84), covariance 1.44 (0.1² + 0.05²) I.
+  EXPECT_NEAR(mean.x(), 0.0, 2e-3);
+  EXPECT_NEAR(mean.y(), 0.84, 2e-3);
+  const double v = 1.44 * (0.01 + 0.0025);
+  EXPECT_NEAR(cov(0, 0), v, 0.03 * v);
+  EXPECT_NEAR(cov(1, 1), v, 0.03 * v);
+}
+
+TEST(StepMotion, TransitionDensityIsTheGaussianOfTheModel) {
+  StepMotionOptions o;
+  const StepInput s = Step(0.0, 0.6, 0.2, 0.1);
+  const StepMotion motion(s, o);
+  const Eigen::Vector2d from(1.0, 2.0);
+  const double off = 0.3, sc = 1.1;
+  // The mean successor has the highest density among successors with the same (o', s').
+  const Eigen::Matrix2d r = Eigen::Rotation2Dd(off).toRotationMatrix();
+  const Eigen::Vector2d to = from + sc * r * s.displacement_m;
+  const double at_mean = motion.TransitionLogDensity(from, off, sc, to, off, sc);
+  EXPECT_NEAR(at_mean, 0.0, 1e-12);
+  // Off by one standard deviation along x of the step frame: -1/2.
+  const double sd = std::sqrt(0.01 + o.position_noise_m * o.position_noise_m);
+  const Eigen::Vector2d to1 = from + sc * r * (s.displacement_m + Eigen::Vector2d(sd, 0.0));
+  EXPECT_NEAR(motion.TransitionLogDensity(from, off, sc, to1, off, sc), -0.5, 1e-9);
+  // The offset walk: one σ_o of offset change costs -1/2 (position term evaluated at o').
+  const Eigen::Matrix2d r2 = Eigen::Rotation2Dd(off + o.heading_offset_walk_rad).toRotationMatrix();
+  const Eigen::Vector2d to2 = from + sc * r2 * s.displacement_m;
+  EXPECT_NEAR(motion.TransitionLogDensity(from, off, sc, to2, off + o.heading_offset_walk_rad, sc), -0.5, 1e-9);
+}
+
+TEST(StepMotion, RejectsBadSteps) {
+  StepInput s = Step(0.0, std::nan(""), 0.0);
+  EXPECT_THROW(CheckStepInput(s, "step"), std::invalid_argument);
+  s = Step(0.0, 0.5, 0.0);
+  s.covariance_m2(0, 1) = 1.0;
+  EXPECT_THROW(CheckStepInput(s, "step"), std::invalid_argument);  // not symmetric
+  s.covariance_m2 << 1.0, 2.0, 2.0, 1.0;
+  EXPECT_THROW(CheckStepInput(s, "step"), std::invalid_argument);  // indefinite
+}
+
+TEST(WifiObservations, ScanTimeModeDropsStaleReadings) {
+  Eigen::VectorXd t(2);
+  t << 1.0, 3.0;
+  RowMatrixXd rss(2, 3), ages(2, 3);
+  rss << -50, std::nan(""), -60, -55, -65, std::nan("");
+  ages << 0.5, std::nan(""), 9.0, 0.0, 1.0, std::nan("");
+  WifiLikelihoodOptions o;
+  o.max_age_s = 4.0;
+  WifiReadingCounts c;
+  const auto obs = MakeWifiObservations(t, rss, ages, o, /*at_own_time=*/false, &c);
+  ASSERT_EQ(obs.size(), 2u);
+  EXPECT_EQ(c.dropped_stale, 1);
+  EXPECT_EQ(c.heard, 3);
+  EXPECT_EQ(c.not_heard, 2);
+  EXPECT_EQ(obs[0].num_heard, 1);  // -60 (9 s old) dropped; AP 1 not heard
+  EXPECT_EQ(obs[0].access_points.size(), 2u);
+}
+
+TEST(WifiObservations, OwnTimeModeRetimesReadings) {
+  Eigen::VectorXd t(1);
+  t << 10.0;
+  RowMatrixXd rss(1, 3), ages(1, 3);
+  rss << -50, -60, std::nan("");
+  ages << 0.0, 6.0, std::nan("");
+  WifiLikelihoodOptions o;
+  o.use_not_heard = false;
+  const auto obs = MakeWifiObservations(t, rss, ages, o, /*at_own_time=*/true);
+  ASSERT_EQ(obs.size(), 2u);
+  EXPECT_DOUBLE_EQ(obs[0].time_s, 4.0);
+  EXPECT_EQ(obs[0].access_points, std::vector<int>({1}));
+  EXPECT_DOUBLE_EQ(obs[1].time_s, 10.0);
+  EXPECT_EQ(obs[1].access_points, std::vector<int>({0}));
+}
+
+TEST(WifiObservations, RejectsBadInput) {
+  Eigen::VectorXd t(2);
+  t << 2.0, 1.0;
+  RowMatrixXd rss = RowMatrixXd::Constant(2, 2, -50.0);
+  WifiLikelihoodOptions o;
+  EXPECT_THROW(MakeWifiObservations(t, rss, RowMatrixXd(0, 0), o, false), std::invalid_argument);  // time goes back
+  t << 1.0, 2.0;
+  RowMatrixXd ages = RowMatrixXd::Constant(2, 2, -1.0);
+  EXPECT_THROW(MakeWifiObservations(t, rss, ages, o, false), std::invalid_argument);  // negative age
+  rss(0, 0) = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(MakeWifiObservations(t, rss, RowMatrixXd(0, 0), o, false), std::invalid_argument);
+}
+
+TEST(ParticleTracker, PerfectStepsRecoverThePath) {
+  const FloorPlan plan = RoomPlan();
+  TrackerOptions o = SmallOptions();
+  ParticleTracker tracker(&plan, nullptr, nullptr, o);
+  tracker.InitializeKnown(0.0, Eigen::Vector2d(2.0, 1.5), 0, 0.0);
+  Eigen::Vector2d truth(2.0, 1.5);
+  // East along y = 1.5 to x = 18 (through the door region below? no: the wall at x = 16 spans
+  // y 0..7, so go north first to y = 8.5, then east, then south-east).
+  std::vector<Eigen::Vector2d> moves;
+  for (int k = 0; k < 10; ++k) moves.emplace_back(0.0, 0.7);
+  for (int k = 0; k < 22; ++k) moves.emplace_back(0.7, 0.0);
+  double t = 0.0;
+  double worst = 0.0;
+  for (const auto& d : moves) {
+    t += 0.5;
+    truth += d;
+    const TrackerEstimate e = tracker.Step(Step(t, d.x(), d.y()));
+    worst = std::max(worst, (e.mean_m - truth).norm());
+    EXPECT_FALSE(std::isnan(e.mean_m.x()));
+  }
+  EXPECT_LT(worst, 1.0);
+  EXPECT_LT((tracker.Estimate().mean_m - truth).norm(), 1.0);
+}
+
+TEST(ParticleTracker, NoParticleEverEndsInsideAnObstacle) {
+  const FloorPlan plan = RoomPlan();
+  TrackerOptions o = SmallOptions(3000);
+  o.start_position_sd_m = 3.0;
+  o.start_heading_offset_sd_rad = 1.0;
+  ParticleTracker tracker(&plan, nullptr, nullptr, o);
+  tracker.InitializeKnown(0.0, Eigen::Vector2d(6.0, 5.0), 0, 0.0);
+  RandomStream rng(11);
+  for (int k = 0; k < 40; ++k) {
+    const double h = rng.Uniform(-M_PI, M_PI);
+    tracker.Step(Step(0.5 * (k + 1), 0.8 * std::cos(h), 0.8 * std::sin(h), 0.2));
+    const RowMatrixXd p = tracker.ParticleStates();
+    for (Eigen::Index i = 0; i < p.rows(); ++i) {
+      ASSERT_TRUE(plan.IsWalkable(p(i, 0), p(i, 1), 0)) << "particle " << i << " at step " << k;
+    }
+    ASSERT_TRUE(tracker.ParticleWeights().allFinite());
+  }
+}
+
+TEST(ParticleTracker, EveryParticleBlockedIsIgnoredThenRespread) {
+  const FloorPlan plan = RoomPlan();
+  TrackerOptions o = SmallOptions(500);
+  o.start_position_sd_m = 0.0;
+  o.respread_after_blocked_steps = 2;
+  ParticleTracker tracker(&plan, nullptr, nullptr, o);
+  tracker.InitializeKnown(0.0, Eigen::Vector2d(15.5, 2.0), 0, 0.0);
+  // A 3 m step east crosses the thin wall at x = 16 for every particle.
+  TrackerEstimate e = tracker.Step(Step(0.5, 3.0, 0.0));
+  EXPECT_EQ(tracker.summary().all_blocked_steps, 1);
+  EXPECT_NEAR(e.blocked_fraction, 1.0, 1e-12);
+  EXPECT_TRUE(tracker.ParticleWeights().allFinite());
+  EXPECT_NEAR(e.mean_m.x(), 15.5, 1e-9);
+  e = tracker.Step(Step(1.0, 3.0, 0.0));
+  EXPECT_EQ(tracker.summary().all_blocked_steps, 2);
+  EXPECT_EQ(tracker.summary().respreads, 1);
+  EXPECT_TRUE(tracker.ParticleWeights().allFinite());
+  EXPECT_TRUE(e.mean_m.allFinite());
+}
+
+TEST(ParticleTracker, UnderflowingWifiLikelihoodsStayFinite) {
+  const FloorPlan plan = RoomPlan();
+  const wifi::RssModel model(RoomMap());
+  TrackerOptions o = SmallOptions(1000);
+  o.wifi.max_term = std::numeric_limits<double>::infinity();
+  o.wifi.tempering = 1.0;
+  ParticleTracker tracker(&plan, &model, nullptr, o);
+  tracker.InitializeKnown(0.0, Eigen::Vector2d(3.0, 3.0), 0, 0.0);
+  WifiObservation absurd;
+  absurd.time_s = 0.1;
+  absurd.access_points = {0, 1, 2, 3};
+  absurd.rss_dbm = {40.0, 40.0, 40.0, 40.0};  // about 1e4 nats below every particle's
+  absurd.num_heard = 4;
+  const TrackerEstimate e = tracker.Wifi(absurd);
+  EXPECT_TRUE(std::isfinite(e.log_likelihood));
+  EXPECT_LT(e.log_likelihood, -1000.0);
+  EXPECT_TRUE(tracker.ParticleWeights().allFinite());
+  EXPECT_NEAR(tracker.ParticleWeights().sum(), 1.0, 1e-9);
+}
+
+TEST(ParticleTracker, EmptyScanIsANoOp) {
+  const FloorPlan plan = RoomPlan();
+  const wifi::RssModel model(RoomMap());
+  ParticleTracker tracker(&plan, &model, nullptr, SmallOptions(300));
+  tracker.InitializeKnown(0.0, Eigen::Vector2d(3.0, 3.0), 0, 0.0);
+  const Eigen::VectorXd before = tracker.ParticleWeights();
+  WifiObservation none;
+  none.time_s = 1.0;
+  tracker.Wifi(none);
+  EXPECT_EQ(tracker.summary().empty_wifi_updates, 1);
+  EXPECT_EQ(tracker.ParticleWeights(), before);
+}
+
+TEST(ParticleTracker, RejectsBadInput) {
+  const FloorPlan plan = RoomPlan();
+  const wifi::RssModel model(RoomMap());
+  ParticleTracker tracker(&plan, &model, nullptr, SmallOptions(100));
+  EXPECT_THROW(tracker.Step(Step(0.0, 0.5, 0.0)), std::invalid_argument);  // not initialised
+  EXPECT_THROW(tracker.InitializeKnown(0.0, Eigen::Vector2d(10.0, 5.0), 0, 0.0), std::invalid_argument);  // in the block
+  EXPECT_THROW(tracker.InitializeKnown(0.0, Eigen::Vector2d(30.0, 5.0), 0, 0.0), std::invalid_argument);  // outside
+  EXPECT_THROW(tracker.InitializeKnown(0.0, Eigen::Vector2d(3.0, 3.0), 5, 0.0), std::invalid_argument);   // no floor 5
+  tracker.InitializeKnown(1.0, Eigen::Vector2d(3.0, 3.0), 0, 0.0);
+  EXPECT_THROW(tracker.Step(Step(2.0, std::nan(""), 0.0)), std::invalid_argument);
+  EXPECT_THROW(tracker.Step(Step(0.5, 0.5, 0.0)), std::invalid_argument);  // negative time step
+  WifiObservation bad;
+  bad.time_s = 2.0;
+  bad.access_points = {7};
+  bad.rss_dbm = {-50.0};
+  EXPECT_THROW(tracker.Wifi(bad), std::invalid_argument);  // AP column out of range
+  // A map on floor 3 with a plan on floor 0.
+  RowMatrixXd pos(3, 2);
+  pos << 0, 0, 1, 0, 0, 1;
+  const wifi::SignalMap other(pos, Eigen::VectorXi::Constant(3, 3), RowMatrixXd::Constant(3, 1, -50.0),
+                              RowMatrixXd::Constant(3, 1, 4.0));
+  const wifi::RssModel other_model(other);
+  EXPECT_THROW(ParticleTracker(&plan, &other_model, nullptr, SmallOptions(10)), std::invalid_argument);
+  TrackerOptions bad_options;
+  bad_options.num_particles = 0;
+  EXPECT_THROW(ParticleTracker(&plan, nullptr, nullptr, bad_options), std::invalid_argument);
+}
+
+TEST(ParticleTracker, SameSeedSameResultForAnyThreadCount) {
+  const FloorPlan plan = RoomPlan();
+  const wifi::RssModel model(RoomMap());
+  std::vector<RowMatrixXd> results;
+  for (int threads : {1, 2, 3}) {
+    TrackerOptions o = SmallOptions(3 * ParticleTracker::kBlockSize + 17);
+    o.num_threads = threads;
+    o.start_position_sd_m = 1.0;
+    ParticleTracker tracker(&plan, &model, nullptr, o);
+    tracker.InitializeKnown(0.0, Eigen::Vector2d(3.0, 2.0), 0, 0.0);
+    for (int k = 0; k < 12; ++k) {
+      tracker.Step(Step(0.5 * (k + 1), 0.7, 0.1, 0.1));
+      if (k % 3 == 2) tracker.Wifi(ScanAt(model, 0.5 * (k + 1), 3.0 + 0.7 * (k + 1), 2.0 + 0.1 * (k + 1)));
+    }
+    results.push_back(tracker.ParticleStates());
+  }
+  EXPECT_EQ(results[0], results[1]);
+  EXPECT_EQ(results[0], results[2]);
+}
+
+TEST(ParticleTracker, UnknownStartFindsTheWalkerFromWifiAndSteps) {
+  const FloorPlan plan = RoomPlan();
+  const wifi::RssModel model(RoomMap());
+  TrackerOptions o = SmallOptions(4000);
+  ParticleTracker tracker(&plan, &model, nullptr, o);
+  Eigen::Vector2d truth(2.0, 8.5);
+  tracker.InitializeUnknown(ScanAt(model, 0.0, truth.x(), truth.y()));
+  TrackerEstimate e;
+  // PDR heading offset unknown (uniform prior): walk east along y = 8.5, scan every 4 steps.
+  for (int k = 0; k < 24; ++k) {
+    truth.x() += 0.7;
+    e = tracker.Step(Step(0.5 * (k + 1), 0.7, 0.0, 0.05));
+    if (k % 4 == 3) e = tracker.Wifi(ScanAt(model, 0.5 * (k + 1), truth.x(), truth.y()));
+  }
+  EXPECT_LT((e.mean_m - truth).norm(), 1.5);
+  EXPECT_LT(std::abs(e.heading_offset_rad), 0.3);
+}
+
+TEST(Track, SmootherIsCloserToTheTruthThanTheFilterOnAverage) {
+  const FloorPlan plan = RoomPlan();
+  const wifi::RssModel model(RoomMap());
+  TrackerOptions o = SmallOptions(2000);
+  o.start_position_sd_m = 1.5;
+  o.wifi.tempering = 0.3;
+  Recording rec;
+  std::vector<Eigen::Vector2d> truth;
+  Eigen::Vector2d p(2.0, 1.5);
+  RandomStream rng(5);
+  for (int k = 0; k < 30; ++k) {
+    const Eigen::Vector2d d = k < 10 ? Eigen::Vector2d(0.0, 0.7) : Eigen::Vector2d(0.7, 0.0);
+    p += d;
+    truth.push_back(p);
+    rec.steps.push_back(Step(0.5 * (k + 1), d.x() + 0.05 * rng.Normal(), d.y() + 0.05 * rng.Normal(), 0.07));
+    if (k % 3 == 0) {
+      WifiObservation w = ScanAt(model, 0.5 * (k + 1), p.x(), p.y());
+      for (double& v : w.rss_dbm) v += 3.0 * rng.Normal();
+      rec.observations.push_back(w);
+    }
+  }
+  TrackStart start;
+  start.known = true;
+  start.position_m = Eigen::Vector2d(2.0, 1.5);
+  SmootherOptions so;
+  so.num_trajectories = 50;
+  const TrackResult r = Track(&plan, &model, nullptr, rec, start, o, so, /*smooth=*/true);
+  ASSERT_EQ(r.estimates.size(), truth.size());
+  ASSERT_EQ(r.smoothed.positions_m.rows(), static_cast<Eigen::Index>(truth.size()));
+  double filter_error = 0.0, smoother_error = 0.0;
+  for (size_t k = 0; k < truth.size(); ++k) {
+    filter_error += (r.estimates[k].mean_m - truth[k]).norm() / static_cast<double>(truth.size());
+    smoother_error += (r.smoothed.positions_m.row(static_cast<Eigen::Index>(k)).transpose() - truth[k]).norm() / static_cast<double>(truth.size());
+    // Every smoothed trajectory point is walkable.
+    for (int j = 0; j < so.num_trajectories; ++j) {
+      ASSERT_TRUE(plan.IsWalkable(r.smoothed.trajectories_m(static_cast<Eigen::Index>(k), 2 * j),
+                                  r.smoothed.trajectories_m(static_cast<Eigen::Index>(k), 2 * j + 1), 0));
+    }
+  }
+  EXPECT_LT(filter_error, 1.0);
+  EXPECT_LT(smoother_error, filter_error * 1.05);
+}
+
+}  // namespace
+}  // namespace indoorloc::fusion
