@@ -1,0 +1,421 @@
+// Python bindings of the fusion tracker: options, WiFi observations, the streaming
+// ParticleTracker and the batch track() with the backward smoother.
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <pybind11/eigen.h>
+#include <pybind11/stl.h>
+
+#include "indoorloc/core/options.h"
+#include "indoorloc/fusion/backward_smoother.h"
+#include "indoorloc/fusion/floor_plan.h"
+#include "indoorloc/fusion/particle_tracker.h"
+#include "indoorloc/fusion/step_motion.h"
+#include "indoorloc/fusion/track.h"
+#include "indoorloc/fusion/wifi_likelihood.h"
+#include "numpy_args.h"
+
+namespace indoorloc::bindings {
+
+using namespace indoorloc::fusion;  // NOLINT: binding file
+
+namespace {
+
+template <typename T>
+py::array_t<T> VectorToArray(const std::vector<T>& v) {
+  py::array_t<T> out(static_cast<py::ssize_t>(v.size()));
+  std::copy(v.begin(), v.end(), out.mutable_data());
+  return out;
+}
+
+py::dict EstimateToDict(const TrackerEstimate& e) {
+  py::dict d;
+  d["time_s"] = e.time_s;
+  d["mean_m"] = Eigen::Vector2d(e.mean_m);
+  d["covariance_m2"] = Eigen::Matrix2d(e.covariance_m2);
+  d["floor_probabilities"] = Eigen::VectorXd(e.floor_probabilities);
+  d["floor_index"] = e.floor_index;
+  d["heading_offset_rad"] = e.heading_offset_rad;
+  d["scale"] = e.scale;
+  d["ess"] = e.ess;
+  d["log_likelihood"] = e.log_likelihood;
+  d["blocked_fraction"] = e.blocked_fraction;
+  d["resampled"] = e.resampled;
+  d["recovered"] = e.recovered;
+  d["lagged_m"] = Eigen::Vector2d(e.lagged_m);
+  return d;
+}
+
+// Steps from arrays: times (M), displacements (M, 2), covariances (M, 3) = (xx, xy, yy).
+std::vector<StepInput> StepsFromArrays(const py::object& times_s, const py::object& displacements_m,
+                                       const py::object& covariances_m2) {
+  VectorArg t = ToVector(times_s, "step_times_s");
+  MatrixArg d = ToMatrix(displacements_m, "displacements_m", t.map.size(), 2);
+  MatrixArg c = ToMatrix(covariances_m2, "covariances_m2", t.map.size(), 3);
+  std::vector<StepInput> steps(static_cast<size_t>(t.map.size()));
+  for (Eigen::Index k = 0; k < t.map.size(); ++k) {
+    StepInput& s = steps[static_cast<size_t>(k)];
+    s.time_s = t.map[k];
+    s.displacement_m = d.map.row(k).transpose();
+    s.covariance_m2 << c.map(k, 0), c.map(k, 1), c.map(k, 1), c.map(k, 2);
+    CheckStepInput(s, ("steps[" + std::to_string(k) + "]").c_str());
+  }
+  return steps;
+}
+
+template <typename T>
+const T* OptionalPointer(const py::object& obj, const char* name) {
+  if (obj.is_none()) return nullptr;
+  try {
+    return obj.cast<const T*>();
+  } catch (const py::cast_error&) {
+    ThrowInvalidArgument(name, std::string("must be None or a ") + name + " object, got " +
+                                   std::string(Py_TYPE(obj.ptr())->tp_name));
+  }
+}
+
+}  // namespace
+
+void BindFusionTracker(py::module_& m) {
+  py::class_<TrackerOptions>(m, "TrackerOptions", R"doc(
+Options of the fusion particle tracker (see docs/fusion.md for each constant and how its
+default was chosen). Set fields by keyword: ``TrackerOptions(num_particles=2000, tempering=0.3)``;
+the nested motion (heading_offset_walk_rad, scale_walk, min_scale, max_scale, position_noise_m) and
+WiFi (tempering, max_term, max_age_s, use_not_heard, not_heard_dbm) options are flattened.)doc")
+      .def(py::init([](const py::kwargs& kwargs) {
+        TrackerOptions o;
+        py::object self = py::cast(o);
+        for (const auto& item : kwargs) {
+          const std::string key = py::str(item.first);
+          if (!py::hasattr(self, key.c_str())) ThrowInvalidArgument(key, "is not a TrackerOptions field");
+          self.attr(key.c_str()) = item.second;
+        }
+        TrackerOptions out = self.cast<TrackerOptions>();
+        ValidateOptions(out);
+        return out;
+      }))
+      .def_readwrite("num_particles", &TrackerOptions::num_particles)
+      .def_property("heading_offset_walk_rad", [](const TrackerOptions& o) { return o.motion.heading_offset_walk_rad; },
+                    [](TrackerOptions& o, double v) { o.motion.heading_offset_walk_rad = v; },
+                    "σ_o: heading-offset random walk per step [rad].")
+      .def_property("scale_walk", [](const TrackerOptions& o) { return o.motion.scale_walk; },
+                    [](TrackerOptions& o, double v) { o.motion.scale_walk = v; }, "σ_s: stride-scale random walk per step.")
+      .def_property("min_scale", [](const TrackerOptions& o) { return o.motion.min_scale; },
+                    [](TrackerOptions& o, double v) { o.motion.min_scale = v; })
+      .def_property("max_scale", [](const TrackerOptions& o) { return o.motion.max_scale; },
+                    [](TrackerOptions& o, double v) { o.motion.max_scale = v; })
+      .def_property("position_noise_m", [](const TrackerOptions& o) { return o.motion.position_noise_m; },
+                    [](TrackerOptions& o, double v) { o.motion.position_noise_m = v; }, "σ_p: process noise per step [m].")
+      .def_property("tempering", [](const TrackerOptions& o) { return o.wifi.tempering; },
+                    [](TrackerOptions& o, double v) { o.wifi.tempering = v; }, "τ: WiFi likelihood exponent in (0, 1].")
+      .def_property("max_term", [](const TrackerOptions& o) { return o.wifi.max_term; },
+                    [](TrackerOptions& o, double v) { o.wifi.max_term = v; }, "Cap of each AP's residual term [nats].")
+      .def_property("max_age_s", [](const TrackerOptions& o) { return o.wifi.max_age_s; },
+                    [](TrackerOptions& o, double v) { o.wifi.max_age_s = v; }, "Staleness limit of a reading [s].")
+      .def_property("use_not_heard", [](const TrackerOptions& o) { return o.wifi.use_not_heard; },
+                    [](TrackerOptions& o, bool v) { o.wifi.use_not_heard = v; })
+      .def_property("not_heard_dbm", [](const TrackerOptions& o) { return o.wifi.not_heard_dbm; },
+                    [](TrackerOptions& o, double v) { o.wifi.not_heard_dbm = v; })
+      .def_property("resampling", [](const TrackerOptions& o) { return std::string(ToString(o.resampling.scheme)); },
+                    [](TrackerOptions& o, const std::string& v) { o.resampling.scheme = ParseResamplingScheme(v, "resampling"); })
+      .def_property("ess_threshold", [](const TrackerOptions& o) { return o.resampling.ess_threshold; },
+                    [](TrackerOptions& o, double v) { o.resampling.ess_threshold = v; })
+      .def_readwrite("wall_log_penalty", &TrackerOptions::wall_log_penalty)
+      .def_readwrite("respread_after_blocked_steps", &TrackerOptions::respread_after_blocked_steps)
+      .def_readwrite("respread_sd_m", &TrackerOptions::respread_sd_m)
+      .def_readwrite("start_position_sd_m", &TrackerOptions::start_position_sd_m)
+      .def_readwrite("start_heading_offset_sd_rad", &TrackerOptions::start_heading_offset_sd_rad)
+      .def_readwrite("start_scale_sd", &TrackerOptions::start_scale_sd)
+      .def_readwrite("candidate_spacing_m", &TrackerOptions::candidate_spacing_m)
+      .def_readwrite("recovery_log_ratio", &TrackerOptions::recovery_log_ratio)
+      .def_readwrite("recovery_scans", &TrackerOptions::recovery_scans)
+      .def_readwrite("recovery_fraction", &TrackerOptions::recovery_fraction)
+      .def_readwrite("floor_change_probability", &TrackerOptions::floor_change_probability)
+      .def_readwrite("corridor_kappa", &TrackerOptions::corridor_kappa)
+      .def_readwrite("smoothing_lag_steps", &TrackerOptions::smoothing_lag_steps)
+      .def_readwrite("num_threads", &TrackerOptions::num_threads)
+      .def_readwrite("seed", &TrackerOptions::seed)
+      .def("validate", [](const TrackerOptions& o) { ValidateOptions(o); })
+      .def("__repr__", [](const TrackerOptions& o) {
+        return "<TrackerOptions num_particles=" + std::to_string(o.num_particles) +
+               " tempering=" + std::to_string(o.wifi.tempering) + " seed=" + std::to_string(o.seed) + ">";
+      });
+
+  py::class_<SmootherOptions>(m, "SmootherOptions", "Forward-filter backward-simulation smoother options.")
+      .def(py::init([](int num_trajectories, int max_particles, std::uint64_t seed, int num_threads) {
+             SmootherOptions o;
+             o.num_trajectories = num_trajectories;
+             o.max_particles = max_particles;
+             o.seed = seed;
+             o.num_threads = num_threads;
+             ValidateOptions(o);
+             return o;
+           }),
+           py::arg("num_trajectories") = 100, py::arg("max_particles") = 2000, py::arg("seed") = 1,
+           py::arg("num_threads") = 1)
+      .def_readwrite("num_trajectories", &SmootherOptions::num_trajectories)
+      .def_readwrite("max_particles", &SmootherOptions::max_particles)
+      .def_readwrite("seed", &SmootherOptions::seed)
+      .def_readwrite("num_threads", &SmootherOptions::num_threads);
+
+  py::class_<TrackerSummary>(m, "TrackerSummary", "What a tracker run did.")
+      .def_readonly("steps", &TrackerSummary::steps)
+      .def_readonly("wifi_updates", &TrackerSummary::wifi_updates)
+      .def_readonly("empty_wifi_updates", &TrackerSummary::empty_wifi_updates)
+      .def_readonly("resamplings", &TrackerSummary::resamplings)
+      .def_readonly("recoveries", &TrackerSummary::recoveries)
+      .def_readonly("all_blocked_steps", &TrackerSummary::all_blocked_steps)
+      .def_readonly("respreads", &TrackerSummary::respreads)
+      .def_readonly("mean_ess", &TrackerSummary::mean_ess)
+      .def_readonly("total_log_likelihood", &TrackerSummary::total_log_likelihood)
+      .def_readonly("seconds", &TrackerSummary::seconds)
+      .def("brief_report", &TrackerSummary::BriefReport)
+      .def("__repr__", [](const TrackerSummary& s) { return "<TrackerSummary " + s.BriefReport() + ">"; });
+
+  py::class_<WifiObservation>(m, "WifiObservation", R"doc(
+Usable readings of one scan (or of readings sharing their own time): AP columns of the signal
+map and RSS [dBm]. Build them with make_wifi_observations.)doc")
+      .def(py::init([](double time_s, const std::vector<int>& access_points, const std::vector<double>& rss_dbm) {
+             CheckArgument(access_points.size() == rss_dbm.size(), "rss_dbm", "must have one entry per access point");
+             WifiObservation o;
+             o.time_s = time_s;
+             o.access_points = access_points;
+             o.rss_dbm = rss_dbm;
+             o.num_heard = static_cast<int>(rss_dbm.size());
+             return o;
+           }),
+           py::arg("time_s"), py::arg("access_points"), py::arg("rss_dbm"))
+      .def_readonly("time_s", &WifiObservation::time_s)
+      .def_readonly("access_points", &WifiObservation::access_points)
+      .def_readonly("rss_dbm", &WifiObservation::rss_dbm)
+      .def_readonly("num_heard", &WifiObservation::num_heard)
+      .def("__len__", [](const WifiObservation& o) { return o.access_points.size(); })
+      .def("__repr__", [](const WifiObservation& o) {
+        return "<WifiObservation t=" + std::to_string(o.time_s) + " s, " + std::to_string(o.access_points.size()) +
+               " readings (" + std::to_string(o.num_heard) + " heard)>";
+      });
+
+  m.def("make_wifi_observations",
+        [](const py::object& scan_times_s, const py::object& rss_dbm, const py::object& ages_s,
+           const TrackerOptions& options, bool at_own_time) {
+          VectorArg t = ToVector(scan_times_s, "scan_times_s");
+          MatrixArg r = ToMatrix(rss_dbm, "rss_dbm", t.map.size(), -1, Finiteness::kAny);
+          RowMatrixXd ages(0, 0);
+          if (!ages_s.is_none()) {
+            MatrixArg a = ToMatrix(ages_s, "ages_s", t.map.size(), r.map.cols(), Finiteness::kAny);
+            ages = a.map;
+          }
+          WifiReadingCounts counts;
+          std::vector<WifiObservation> out;
+          {
+            py::gil_scoped_release release;
+            out = MakeWifiObservations(t.map, r.map, ages, options.wifi, at_own_time, &counts);
+          }
+          py::dict c;
+          c["heard"] = counts.heard;
+          c["not_heard"] = counts.not_heard;
+          c["dropped_stale"] = counts.dropped_stale;
+          c["scans_without_readings"] = counts.scans_without_readings;
+          return py::make_tuple(out, c);
+        },
+        py::arg("scan_times_s"), py::arg("rss_dbm"), py::arg("ages_s") = py::none(),
+        py::arg("options") = TrackerOptions(), py::arg("at_own_time") = true, R"doc(
+Scans to observations. scan_times_s (S,) [s] non-decreasing; rss_dbm (S, K) with the signal map's
+AP columns, NaN = not heard; ages_s (S, K) [s] scan time minus last-seen time (None: all fresh).
+at_own_time: heard readings re-timed to t - age and grouped; else readings older than
+options.max_age_s are dropped. Returns (list of WifiObservation sorted by time, counts dict).)doc");
+
+  m.def("steps_from_polar",
+        [](const py::object& lengths_m, const py::object& headings_rad, const py::object& length_sd_m,
+           const py::object& heading_sd_rad) {
+          VectorArg l = ToVector(lengths_m, "lengths_m");
+          const Eigen::Index n = l.map.size();
+          VectorArg h = ToVector(headings_rad, "headings_rad", n);
+          VectorArg ls = ToVector(length_sd_m, "length_sd_m", n);
+          VectorArg hs = ToVector(heading_sd_rad, "heading_sd_rad", n);
+          RowMatrixXd disp(n, 2), cov(n, 3);
+          for (Eigen::Index k = 0; k < n; ++k) {
+            CheckArgument(l.map[k] >= 0.0, "lengths_m", DescribeEntry(k, 0, true) + " is negative");
+            CheckArgument(ls.map[k] >= 0.0, "length_sd_m", DescribeEntry(k, 0, true) + " is negative");
+            CheckArgument(hs.map[k] >= 0.0, "heading_sd_rad", DescribeEntry(k, 0, true) + " is negative");
+            const StepInput s = StepFromPolar(0.0, l.map[k], h.map[k], ls.map[k], hs.map[k]);
+            disp.row(k) = s.displacement_m.transpose();
+            cov.row(k) << s.covariance_m2(0, 0), s.covariance_m2(0, 1), s.covariance_m2(1, 1);
+          }
+          return py::make_tuple(disp, cov);
+        },
+        py::arg("lengths_m"), py::arg("headings_rad"), py::arg("length_sd_m"), py::arg("heading_sd_rad"), R"doc(
+Polar steps (length [m], heading [rad], their sd; each (M,)) to displacements (M, 2) [m] and
+covariances (M, 3) = (xx, xy, yy) [m²] by first-order propagation.)doc");
+
+  py::class_<ParticleTracker>(m, "ParticleTracker", R"doc(
+Streaming fusion particle filter (PDR steps + WiFi + floor plan, optional corridor network).
+Keeps references to plan, wifi_model and corridors (kept alive by this object).
+
+Parameters
+----------
+plan : FloorPlan or None
+wifi_model : indoorloc.wifi.RssModel or None
+corridors : indoorloc.mapmatch.RoadNetwork or None
+    Corridor mode: particles live on the network (paper 000) instead of free space.
+options : TrackerOptions)doc")
+      .def(py::init([](const py::object& plan, const py::object& wifi_model, const py::object& corridors,
+                       const TrackerOptions& options) {
+             return std::make_unique<ParticleTracker>(OptionalPointer<FloorPlan>(plan, "FloorPlan"),
+                                                      OptionalPointer<wifi::RssModel>(wifi_model, "RssModel"),
+                                                      OptionalPointer<mapmatch::RoadNetwork>(corridors, "RoadNetwork"),
+                                                      options);
+           }),
+           py::arg("plan") = py::none(), py::arg("wifi_model") = py::none(), py::arg("corridors") = py::none(),
+           py::arg("options") = TrackerOptions(), py::keep_alive<1, 2>(), py::keep_alive<1, 3>(), py::keep_alive<1, 4>())
+      .def_property_readonly("floors", &ParticleTracker::floors)
+      .def_property_readonly("initialized", &ParticleTracker::initialized)
+      .def_property_readonly("summary", &ParticleTracker::summary)
+      .def("initialize_known", [](ParticleTracker& t, double time_s, const py::object& position_m, int floor,
+                                  double heading_offset_rad) {
+             VectorArg p = ToVector(position_m, "position_m", 2);
+             t.InitializeKnown(time_s, p.map, floor, heading_offset_rad);
+           },
+           py::arg("time_s"), py::arg("position_m"), py::arg("floor") = 0, py::arg("heading_offset_rad") = 0.0,
+           "Known start: position (2,) [m] on floor number `floor`, PDR-to-floor yaw [rad].")
+      .def("initialize_unknown", [](ParticleTracker& t, const py::object& observation) {
+             WifiObservation none;
+             const WifiObservation& o = observation.is_none() ? none : observation.cast<const WifiObservation&>();
+             py::gil_scoped_release release;
+             t.InitializeUnknown(o);
+           },
+           py::arg("observation") = py::none(),
+           "Unknown start: from a WifiObservation's likelihood over the walkable area, or uniform (None).")
+      .def("step", [](ParticleTracker& t, double time_s, const py::object& displacement_m, const py::object& covariance_m2) {
+             VectorArg d = ToVector(displacement_m, "displacement_m", 2);
+             MatrixArg c = ToMatrix(covariance_m2, "covariance_m2", 2, 2);
+             StepInput s;
+             s.time_s = time_s;
+             s.displacement_m = d.map;
+             s.covariance_m2 = c.map;
+             TrackerEstimate e;
+             {
+               py::gil_scoped_release release;
+               e = t.Step(s);
+             }
+             return EstimateToDict(e);
+           },
+           py::arg("time_s"), py::arg("displacement_m"), py::arg("covariance_m2"),
+           "One step: displacement (2,) [m] in the PDR frame and its covariance (2, 2) [m²]. Returns the estimate dict.")
+      .def("wifi", [](ParticleTracker& t, const WifiObservation& o) {
+             TrackerEstimate e;
+             {
+               py::gil_scoped_release release;
+               e = t.Wifi(o);
+             }
+             return EstimateToDict(e);
+           },
+           py::arg("observation"), "One WiFi observation. Returns the estimate dict.")
+      .def("estimate", [](const ParticleTracker& t) { return EstimateToDict(t.Estimate()); })
+      .def("particles", [](const ParticleTracker& t) {
+             return py::make_tuple(t.ParticleStates(), t.ParticleFloorIndices(), t.ParticleWeights());
+           },
+           "(states (N, 4): x [m], y [m], heading offset [rad], scale; floor indices (N,); weights (N,)).")
+      .def("set_particles", [](ParticleTracker& t, const py::object& states, const py::object& floor_indices) {
+             MatrixArg s = ToMatrix(states, "states", -1, 4);
+             VectorArg f = ToVector(floor_indices, "floor_indices", s.map.rows());
+             Eigen::VectorXi fi(f.map.size());
+             for (Eigen::Index i = 0; i < f.map.size(); ++i) {
+               CheckArgument(f.map[i] == std::floor(f.map[i]), "floor_indices", DescribeEntry(i, 0, true) + " is not an integer");
+               fi[i] = static_cast<int>(f.map[i]);
+             }
+             t.SetParticles(s.map, fi);
+           },
+           py::arg("states"), py::arg("floor_indices"));
+
+  m.def("track",
+        [](const py::object& plan, const py::object& wifi_model, const py::object& corridors, const py::object& step_times_s,
+           const py::object& displacements_m, const py::object& covariances_m2, const std::vector<WifiObservation>& observations,
+           const py::object& start, const TrackerOptions& options, const py::object& smoother) {
+          Recording rec;
+          rec.steps = StepsFromArrays(step_times_s, displacements_m, covariances_m2);
+          rec.observations = observations;
+          TrackStart st;
+          if (!start.is_none()) {
+            const py::dict s = start.cast<py::dict>();
+            st.known = true;
+            VectorArg p = ToVector(s["position_m"], "start['position_m']", 2);
+            st.position_m = p.map;
+            st.time_s = s.contains("time_s") ? s["time_s"].cast<double>() : (rec.steps.empty() ? 0.0 : rec.steps.front().time_s);
+            st.floor = s.contains("floor") ? s["floor"].cast<int>() : 0;
+            st.heading_offset_rad = s.contains("heading_offset_rad") ? s["heading_offset_rad"].cast<double>() : 0.0;
+          }
+          SmootherOptions so;
+          const bool smooth = !smoother.is_none();
+          if (smooth) so = smoother.cast<SmootherOptions>();
+          const FloorPlan* p = OptionalPointer<FloorPlan>(plan, "FloorPlan");
+          const wifi::RssModel* w = OptionalPointer<wifi::RssModel>(wifi_model, "RssModel");
+          const mapmatch::RoadNetwork* c = OptionalPointer<mapmatch::RoadNetwork>(corridors, "RoadNetwork");
+          TrackResult r;
+          {
+            py::gil_scoped_release release;
+            r = Track(p, w, c, rec, st, options, so, smooth);
+          }
+          const Eigen::Index n = static_cast<Eigen::Index>(r.estimates.size());
+          const Eigen::Index nf = n > 0 ? r.estimates.front().floor_probabilities.size() : 0;
+          RowMatrixXd mean(n, 2), cov(n, 3), lagged(n, 2), floor_p(n, nf);
+          Eigen::VectorXd times(n), offset(n), scale(n), ess(n), loglik(n), blocked(n);
+          std::vector<std::int64_t> floor_index(static_cast<size_t>(n));
+          py::array_t<bool> resampled(n), recovered(n);
+          for (Eigen::Index k = 0; k < n; ++k) {
+            const TrackerEstimate& e = r.estimates[static_cast<size_t>(k)];
+            times[k] = e.time_s;
+            mean.row(k) = e.mean_m.transpose();
+            cov.row(k) << e.covariance_m2(0, 0), e.covariance_m2(0, 1), e.covariance_m2(1, 1);
+            lagged.row(k) = e.lagged_m.transpose();
+            floor_p.row(k) = e.floor_probabilities.transpose();
+            floor_index[static_cast<size_t>(k)] = e.floor_index;
+            offset[k] = e.heading_offset_rad;
+            scale[k] = e.scale;
+            ess[k] = e.ess;
+            loglik[k] = e.log_likelihood;
+            blocked[k] = e.blocked_fraction;
+            resampled.mutable_data()[k] = e.resampled;
+            recovered.mutable_data()[k] = e.recovered;
+          }
+          py::dict d;
+          d["times_s"] = times;
+          d["mean_m"] = mean;
+          d["covariance_m2"] = cov;
+          d["floor_probabilities"] = floor_p;
+          d["floor_index"] = VectorToArray(floor_index);
+          d["heading_offset_rad"] = offset;
+          d["scale"] = scale;
+          d["ess"] = ess;
+          d["log_likelihood"] = loglik;
+          d["blocked_fraction"] = blocked;
+          d["resampled"] = resampled;
+          d["recovered"] = recovered;
+          d["lagged_m"] = lagged;
+          d["summary"] = r.summary;
+          if (smooth) {
+            d["smoothed_m"] = r.smoothed.positions_m;
+            d["smoothed_covariance_m2"] = r.smoothed.covariances_m2;
+            d["smoothed_floor_index"] = r.smoothed.floor_indices;
+            d["smoothed_trajectories_m"] = r.smoothed.trajectories_m;
+            d["smoother_seconds"] = r.smoothed.seconds;
+          }
+          return d;
+        },
+        py::arg("plan"), py::arg("wifi_model"), py::arg("corridors"), py::arg("step_times_s"), py::arg("displacements_m"),
+        py::arg("covariances_m2"), py::arg("observations"), py::arg("start") = py::none(),
+        py::arg("options") = TrackerOptions(), py::arg("smoother") = py::none(), R"doc(
+Batch tracking of one recording (GIL released). Steps as arrays: step_times_s (M,) [s],
+displacements_m (M, 2) [m] in the PDR frame, covariances_m2 (M, 3) = (xx, xy, yy) [m²];
+observations: list of WifiObservation sorted by time. start: None (unknown start) or a dict
+{"position_m", "floor", "heading_offset_rad", "time_s"}. smoother: SmootherOptions or None.
+Returns a dict of per-step arrays (times_s, mean_m (M, 2), covariance_m2 (M, 3),
+floor_probabilities (M, F), floor_index, heading_offset_rad, scale, ess, log_likelihood,
+blocked_fraction, resampled, recovered, lagged_m), the TrackerSummary, and with a smoother
+smoothed_m (M, 2), smoothed_covariance_m2 (M, 3), smoothed_floor_index (M,),
+smoothed_trajectories_m (M, 2T), smoother_seconds.)doc");
+}
+
+}  // namespace indoorloc::bindings
