@@ -3,10 +3,10 @@
 Route. Rooms are visited in random order (each next room uniform among the other open rooms);
 between two rooms the walker follows a shortest path of the building's walk graph (corridor
 centre lines, door axes). Inside a visited room it walks to two random points at least
-``room_margin_m`` from the walls (clear of the pillar) and may stand still at the first for
+``room_margin_m`` from the walls (clear of the pillar, turning at most ``max_room_turn_rad``) and may stand still at the first for
 ``pause_s`` seconds (probability ``pause_probability``; no steps then, scans go on). Corners of
 the polyline are rounded by quadratic Bézier arcs that start ``corner_cut_m`` before the corner
-(at most 45 % of either leg, 0.5 m at door approach points), so the curve stays within the
+(at most 45 % of either leg, approach_m - 5 cm at door approach points), so the curve stays within the
 triangle of each corner and never reaches a door jamb.
 
 Gait. Per walk: mean step length L̄ ~ N(step_length_m, step_length_walker_sd_m²) and cadence
@@ -63,6 +63,7 @@ class WalkConfig:
     pause_probability: float = 0.5            #: per visited room
     pause_s: Tuple[float, float] = (2.0, 6.0)
     room_margin_m: float = 0.7
+    max_room_turn_rad: float = float(np.deg2rad(110.0))  #: turn limit at the points visited in a room
     dense_rate_hz: float = 10.0               #: rate of the dense truth
 
     def validate(self) -> None:
@@ -279,18 +280,20 @@ def _wander(building: Building, room: int, entry: np.ndarray, exit_: Optional[np
     lo, hi = r.rect_m[:2] + cfg.room_margin_m, r.rect_m[2:] - cfg.room_margin_m
     if np.any(hi <= lo):
         return [r.centre_m]
-    for attempt in range(300):
+    best, best_turn = None, np.inf
+    for _ in range(300):
         pts = [rng.uniform(lo, hi) for _ in range(n)]
         if n == 2 and np.linalg.norm(pts[1] - pts[0]) < 1.5:
             continue
         chain = [p for p in [entry] + pts + [exit_] if p is not None]
         if not _clear_of(np.array(chain), pillar, 0.5):
             continue
-        if attempt < 200 and any(_turn(chain[i - 1], chain[i], chain[i + 1]) > np.deg2rad(150)
-                                 for i in range(1, len(chain) - 1)):
-            continue
-        return pts
-    return [r.centre_m]
+        turn = max([_turn(chain[i - 1], chain[i], chain[i + 1]) for i in range(1, len(chain) - 1)], default=0.0)
+        if turn < best_turn:
+            best, best_turn = pts, turn
+        if turn <= cfg.max_room_turn_rad:
+            break
+    return best if best is not None else [r.centre_m]
 
 
 def _route(building: Building, target_m: float, cfg: WalkConfig, rng: np.random.Generator):
@@ -309,6 +312,8 @@ def _route(building: Building, target_m: float, cfg: WalkConfig, rng: np.random.
     pts: List[np.ndarray] = []
     cut: List[float] = []
     pauses: List[Tuple[np.ndarray, float]] = []
+    # At a door's approach point the arc must not reach the wall line (door jambs 0.5 m aside).
+    approach_cut = building.config.approach_m - 0.05
     first_exit = g.nodes_m[legs[0][1]]
     start = _wander(building, seq[0], None, first_exit, 1, cfg, rng)[0]
     pts.append(start)
@@ -317,7 +322,7 @@ def _route(building: Building, target_m: float, cfg: WalkConfig, rng: np.random.
         inner = nodes[1:-1]
         for v in inner:
             pts.append(g.nodes_m[v])
-            cut.append(0.5 if g.kind[v] == APPROACH else cfg.corner_cut_m)
+            cut.append(min(cfg.corner_cut_m, approach_cut) if g.kind[v] == APPROACH else cfg.corner_cut_m)
         exit_ = g.nodes_m[legs[i + 1][1]] if i + 1 < len(legs) else None
         wander = _wander(building, seq[i + 1], pts[-1], exit_, 2, cfg, rng)
         pause = rng.random() < cfg.pause_probability
