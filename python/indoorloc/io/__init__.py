@@ -1,4 +1,5 @@
-"""File formats at the edge of indoorloc: dataset loaders (WiFi, foot IMU) and road-network files."""
+"""File formats at the edge of indoorloc: dataset loaders (WiFi, foot IMU, Indoor Location
+Competition 2.0 walks) and road-network files."""
 
 from indoorloc.io.wifi_datasets import (
     RSS_RTT_GRID_M,
@@ -23,6 +24,19 @@ from indoorloc.io.pdr_datasets import (
     load_pyshoe_trial,
     load_xio,
 )
+from indoorloc.io.ilc2020 import (
+    ILC_SENSOR_TYPES,
+    BssidVocabulary,
+    IlcBeacons,
+    IlcFloor,
+    IlcSensor,
+    IlcWalk,
+    IlcWifi,
+    ilc_floor_origin_lonlat,
+    read_ilc_floor,
+    read_ilc_site,
+    read_ilc_walk,
+)
 from indoorloc.io.road_network import (
     grid_with_diagonals_segments,
     load_road_network,
@@ -33,6 +47,17 @@ from indoorloc.io.road_network import (
 )
 
 __all__ = [
+    "ILC_SENSOR_TYPES",
+    "BssidVocabulary",
+    "IlcBeacons",
+    "IlcFloor",
+    "IlcSensor",
+    "IlcWalk",
+    "IlcWifi",
+    "ilc_floor_origin_lonlat",
+    "read_ilc_floor",
+    "read_ilc_site",
+    "read_ilc_walk",
     "STANDARD_GRAVITY_MPS2",
     "ImuRecording",
     "MobgapTrial",
