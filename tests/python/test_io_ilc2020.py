@@ -82,7 +82,8 @@ def _walk_records(rng, *, n_epochs=30, rv_w=False, t0=T0):
                     ("TP-LINK", "9c:a6:15:27:3b:29", -71, 2437, -19377),
                     ("JOY CITY", "04:40:a9:a1:89:00", -52, 5300, -3),
                     ("guest", "00:10:f3:32:7c:ba", -88, 2462, -2100)]),
-        (t0 + 600, [("", "04:40:a9:a1:89:01", -60, 5300, -100)]),
+        (t0 + 600, [("", "04:40:a9:a1:89:01", -60, 5300, -100),
+                    ("guest", "00:10:f3:32:7c:ba", -88, 2462, -2280)]),  # repeats scan 1's
     ]
     scans = [s for s in scans if s[1]]
     wifi_rows = []
@@ -218,15 +219,18 @@ def test_wifi_scans_and_stale_readings(tmp_path):
     p = tmp_path / "w.txt"
     _write_walk(p)
     w = read_ilc_walk(p).wifi
-    assert w.n_readings == 8 and w.n_scans == 3
+    assert w.n_readings == 9 and w.n_scans == 3
     np.testing.assert_array_equal(w.scan_times_s, [0.25, 0.42, 0.6])
-    np.testing.assert_array_equal(w.scan_index, [0, 0, 0, 1, 1, 1, 1, 2])
-    assert w.scan_slice(1) == slice(3, 7) and w.scan_slice(2) == slice(7, 8)
+    np.testing.assert_array_equal(w.scan_index, [0, 0, 0, 1, 1, 1, 1, 2, 2])
+    assert w.scan_slice(1) == slice(3, 7) and w.scan_slice(2) == slice(7, 9)
     with pytest.raises(IndexError):
         w.scan_slice(3)
     # Reading age = scan time - last seen; the 19.4 s old reading was seen before the walk began.
-    np.testing.assert_allclose(w.age_s, [0.476, 0.475, 8.124, 0.012, 19.377, 0.003, 2.1, 0.1])
+    np.testing.assert_allclose(w.age_s, [0.476, 0.475, 8.124, 0.012, 19.377, 0.003, 2.1, 0.1,
+                                         2.28])
     assert w.last_seen_s.min() < 0
+    # The last reading repeats scan 1's measurement of 00:10:f3:32:7c:ba (same last-seen time).
+    np.testing.assert_array_equal(w.new_measurement_mask(), [True] * 8 + [False])
     # One BSSID twice in scan 1 (2412 and 2437 MHz), once with an empty SSID.
     dup = w.bssids.index("9c:a6:15:27:3b:29")
     assert np.sum(w.bssid_index[w.scan_slice(1)] == dup) == 2
@@ -518,13 +522,15 @@ def test_describe_floor_measures_the_fixture(tmp_path):
     assert d["floor"] == "F1" and d["n_walks"] == 2 and d["total_scans"] == 6
     assert d["duration_s"]["p50"] == pytest.approx(0.712)
     assert d["scans_per_walk"]["p50"] == 3 and d["readings_per_scan"]["p100"] == 4
+    assert d["readings_per_scan"]["p0"] == 2
     np.testing.assert_allclose([d["scan_interval_s"][k] for k in ("p0", "p100")], [0.17, 0.18])
     assert d["scans_with_repeated_bssid"] == pytest.approx(1 / 3)
-    assert d["n_readings"] == 16 and d["n_bssids"] == 4 and d["n_bssids_in_one_walk"] == 0
-    # Per walk, ages [s]: 0.476 0.475 8.124 | 0.012 19.377 0.003 2.1 | 0.1
+    assert d["n_readings"] == 18 and d["n_bssids"] == 4 and d["n_bssids_in_one_walk"] == 0
+    # Per walk, ages [s]: 0.476 0.475 8.124 | 0.012 19.377 0.003 2.1 | 0.1 2.28
     assert d["age_s"]["p0"] == pytest.approx(0.003) and d["age_s"]["p100"] == pytest.approx(19.377)
-    assert d["age_fraction_over_s"]["2"] == pytest.approx(3 / 8)
-    assert d["age_fraction_over_s"]["10"] == pytest.approx(1 / 8)
+    assert d["age_fraction_over_s"]["2"] == pytest.approx(4 / 9)
+    assert d["age_fraction_over_s"]["10"] == pytest.approx(1 / 9)
+    assert d["repeated_measurement_fraction"] == pytest.approx(1 / 9)
     assert sum(d["age_histogram"]) == pytest.approx(1.0)
     # Fresh (<= 2 s) readings: scan 0: 2, scan 1: 2, scan 2: 1; BSSIDs heard fresh in >= 10 %
     # of the 6 scans (at least once): 89:00, 89:01, 9c:a6 (00:10 is 2.1 s old).

@@ -160,8 +160,9 @@ class IlcWifi:
 
     One scan is the group of consecutive readings with the same scan time (the first column
     of the file). A reading's RSSI was measured at its ``last_seen_s``, which can be many
-    seconds before the scan time: Android reports cached results. One BSSID can appear twice
-    in a scan (e.g. on two channels, or once with an empty SSID); both readings are kept.
+    seconds before the scan time: Android reports cached results, and a later scan can repeat
+    an earlier measurement (see :meth:`new_measurement_mask`). One BSSID can appear twice in
+    a scan (e.g. on two channels, or once with an empty SSID); every reading is kept.
 
     Attributes
     ----------
@@ -219,6 +220,21 @@ class IlcWifi:
     def age_s(self) -> np.ndarray:
         """(R,) scan time minus last-seen time [s]: how stale each reading is."""
         return self.scan_time_s - self.last_seen_s
+
+    def new_measurement_mask(self) -> np.ndarray:
+        """(R,) bool: True for the first reading of each (BSSID, last-seen time) pair.
+
+        Android repeats cached results: a later scan can report the same measurement again
+        (same BSSID, last-seen time and RSSI; about half of the readings of the shared site).
+        Using only the first report of each measurement avoids counting it several times.
+        """
+        mask = np.zeros(self.n_readings, dtype=bool)
+        if self.n_readings:
+            key = np.stack([self.bssid_index, np.round(self.last_seen_s * 1000.0)
+                            .astype(np.int64)], axis=1)
+            first = np.unique(key, axis=0, return_index=True)[1]
+            mask[first] = True
+        return mask
 
     def scan_slice(self, s: int) -> slice:
         """The readings of scan ``s`` (0 <= s < S) as a slice of the (R,) arrays."""
@@ -1097,7 +1113,8 @@ def describe_ilc_floor(floor: IlcFloor, min_scan_fraction: float = 0.10,
       ``bssids_per_walk``, ``fresh_readings_per_scan`` (readings at most ``fresh_age_s`` old);
     - ``age_s``: reading age (scan time - last seen) percentiles 1, 5, 10, 25, 50, 75, 90, 95,
       99 and the extremes, ``age_fraction_over_s``: fraction of readings older than 1, 2, 3, 5,
-      10, 20 s; ``age_histogram``: fractions of readings in the age bins ``age_bins_s``;
+      10, 20 s; ``repeated_measurement_fraction``: readings that repeat an earlier report of
+      the same measurement (:meth:`IlcWifi.new_measurement_mask`); ``age_histogram``: fractions of readings in the age bins ``age_bins_s``;
       ``rssi_dbm`` percentiles;
     - ``waypoints_per_walk``, ``waypoint_spacing_m`` and ``waypoint_interval_s`` (consecutive
       waypoints of a walk), ``first_waypoint_s`` (time of a walk's first waypoint),
@@ -1117,6 +1134,7 @@ def describe_ilc_floor(floor: IlcFloor, min_scan_fraction: float = 0.10,
     unknown: Dict[str, int] = {}
     n_beacons = 0
     fresh_per_scan: List[int] = []
+    n_repeated = 0
     fresh_scans = np.zeros(voc.size, dtype=np.int64)
     for w in walks:
         wf = w.wifi
@@ -1130,6 +1148,7 @@ def describe_ilc_floor(floor: IlcFloor, min_scan_fraction: float = 0.10,
             pair, n_pair = np.unique(wf.scan_index * v + wf.bssid_index, return_counts=True)
             repeated.append(np.unique(pair[n_pair > 1] // v).size)
         ages.append(wf.age_s)
+        n_repeated += int(np.sum(~wf.new_measurement_mask()))
         fresh = wf.age_s <= fresh_age_s
         fresh_per_scan.extend(np.bincount(wf.scan_index[fresh], minlength=wf.n_scans))
         fresh_pairs = np.unique(wf.scan_index[fresh] * max(1, voc.size) + voc.map_walk(w)[fresh])
@@ -1165,6 +1184,7 @@ def describe_ilc_floor(floor: IlcFloor, min_scan_fraction: float = 0.10,
         "readings_per_scan": _spread(per_scan),
         "scans_with_repeated_bssid": float(np.sum(repeated) / max(1, np.sum(scans))),
         "n_readings": int(age.size),
+        "repeated_measurement_fraction": float(n_repeated / max(1, age.size)),
         "n_bssids": voc.size,
         "n_bssids_frequent": int(voc.frequent(min_scan_fraction).size),
         "min_scan_fraction": float(min_scan_fraction),
