@@ -1113,9 +1113,10 @@ def describe_ilc_floor(floor: IlcFloor, min_scan_fraction: float = 0.10,
       ``bssids_per_walk``, ``fresh_readings_per_scan`` (readings at most ``fresh_age_s`` old);
     - ``age_s``: reading age (scan time - last seen) percentiles 1, 5, 10, 25, 50, 75, 90, 95,
       99 and the extremes, ``age_fraction_over_s``: fraction of readings older than 1, 2, 3, 5,
-      10, 20 s; ``repeated_measurement_fraction``: readings that repeat an earlier report of
-      the same measurement (:meth:`IlcWifi.new_measurement_mask`); ``age_histogram``: fractions of readings in the age bins ``age_bins_s``;
-      ``rssi_dbm`` percentiles;
+      10, 20 s; ``age_histogram``: fractions of readings between the edges ``age_bins_s``
+      (the last bin: 30 s or more); ``repeated_measurement_fraction``: readings that repeat
+      an earlier report of the same measurement (:meth:`IlcWifi.new_measurement_mask`);
+      ``negative_age_fraction``; ``rssi_dbm`` percentiles;
     - ``waypoints_per_walk``, ``waypoint_spacing_m`` and ``waypoint_interval_s`` (consecutive
       waypoints of a walk), ``first_waypoint_s`` (time of a walk's first waypoint),
       ``after_last_waypoint_s`` (walk end - last waypoint);
@@ -1170,8 +1171,8 @@ def describe_ilc_floor(floor: IlcFloor, min_scan_fraction: float = 0.10,
         n_beacons += w.beacons.n_readings
     age = np.concatenate(ages) if ages else np.zeros(0)
     age_q = (0, 1, 5, 10, 25, 50, 75, 90, 95, 99, 100)
-    age_bins = [0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 10.0, 20.0, 30.0, np.inf]
-    age_hist = np.histogram(age, bins=age_bins)[0] / max(1, age.size)
+    age_bins = [0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 10.0, 20.0, 30.0]
+    age_hist = np.histogram(age, bins=age_bins + [np.inf])[0] / max(1, age.size)
     return {
         "floor": floor.name,
         "n_walks": len(walks),
