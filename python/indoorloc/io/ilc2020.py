@@ -423,8 +423,8 @@ class _WalkText:
         if raw.startswith(b"\xef\xbb\xbf"):  # UTF-8 byte-order mark
             starts[0] = min(3, int(ends[0]))
         line_no = np.arange(1, starts.size + 1, dtype=np.int64)
-        cr = (ends > starts) & (buf[np.maximum(ends - 1, 0)] == _CR) if buf.size else ends > ends
-        ends = ends - cr
+        if buf.size:  # a CR before the LF (Windows line ends) is not part of the line
+            ends = ends - ((ends > starts) & (buf[np.maximum(ends - 1, 0)] == _CR))
         nonempty = ends > starts
         starts, ends, line_no = starts[nonempty], ends[nonempty], line_no[nonempty]
         header = buf[starts] == ord("#")
@@ -551,7 +551,9 @@ class _WalkText:
             if not np.any(bad):
                 return values
         self._diagnose(sel, fields, names, type_name, integer)
-        raise _err(f"{self.path}: {type_name}: numeric fields could not be parsed")  # unreachable
+        # np.loadtxt refused a field that the line-by-line check accepts (not seen so far).
+        raise _err(f"{self.path}: {type_name}: np.loadtxt could not parse the numeric fields "
+                   f"{list(names)}, and no single line was found at fault")
 
     def _diagnose(self, sel: np.ndarray, fields: Sequence[int], names: Sequence[str],
                   type_name: str, integer: Sequence[bool]) -> None:
