@@ -1,4 +1,5 @@
-"""File formats at the edge of indoorloc: dataset loaders (WiFi, foot IMU) and road-network files.
+"""File formats at the edge of indoorloc: dataset loaders (WiFi, foot IMU, Indoor Location
+Competition 2.0 walks) and road-network files.
 
 io imports nothing from indoorloc but the compiled ``indoorloc._core`` (plain arrays and
 dataclasses in, ``_core`` types out), so that facades may use it inside functions (e.g.
@@ -29,6 +30,20 @@ from indoorloc.io.pdr_datasets import (
     load_pyshoe_trial,
     load_xio,
 )
+from indoorloc.io.ilc2020 import (
+    ILC_SENSOR_TYPES,
+    BssidVocabulary,
+    IlcBeacons,
+    IlcFloor,
+    IlcSensor,
+    IlcWalk,
+    IlcWifi,
+    describe_ilc_floor,
+    ilc_floor_origin_lonlat,
+    read_ilc_floor,
+    read_ilc_site,
+    read_ilc_walk,
+)
 from indoorloc.io.road_network import (
     grid_with_diagonals_segments,
     load_road_network,
@@ -39,6 +54,18 @@ from indoorloc.io.road_network import (
 )
 
 __all__ = [
+    "ILC_SENSOR_TYPES",
+    "BssidVocabulary",
+    "IlcBeacons",
+    "IlcFloor",
+    "IlcSensor",
+    "IlcWalk",
+    "IlcWifi",
+    "describe_ilc_floor",
+    "ilc_floor_origin_lonlat",
+    "read_ilc_floor",
+    "read_ilc_site",
+    "read_ilc_walk",
     "STANDARD_GRAVITY_MPS2",
     "ImuRecording",
     "MobgapTrial",
