@@ -267,7 +267,7 @@ class Survey:
         Keeps every AP heard somewhere (``min_point_fraction`` 0 by default), so the map's columns
         are the building's APs minus the never-heard ones: ``access_point_indices()`` says which.
         """
-        from indoorloc import wifi
+        from indoorloc._core import wifi  # simulate sits below the facades (docs/architecture.md)
 
         pos, fl, rss = self.scans()
         opts = options if options is not None else wifi.SignalMapOptions()
