@@ -76,6 +76,8 @@ struct ParticleTracker::Impl {
 
   int n = 0;
   std::vector<double> x, y, offset, scale;
+  std::vector<double> cos_offset, sin_offset;  // of `offset`, kept for the estimates (no trig there)
+  std::vector<double> weights;                 // normalised linear weights of the last update
   std::vector<int> floor;
   std::vector<int> segment;
   std::vector<signed char> direction;
@@ -117,6 +119,8 @@ struct ParticleTracker::Impl {
     x.assign(n, 0.0);
     y.assign(n, 0.0);
     offset.assign(n, 0.0);
+    cos_offset.assign(n, 1.0);
+    sin_offset.assign(n, 0.0);
     scale.assign(n, 1.0);
     floor.assign(n, 0);
     if (corridor_mode()) {
@@ -233,6 +237,8 @@ struct ParticleTracker::Impl {
     y[i] = py;
     floor[i] = f;
     offset[i] = WrapAngle(o);
+    cos_offset[i] = std::cos(offset[i]);
+    sin_offset[i] = std::sin(offset[i]);
     scale[i] = std::clamp(1.0 + options.start_scale_sd * rng.Normal(), options.motion.min_scale, options.motion.max_scale);
     if (corridor_mode()) {
       const mapmatch::Projection p = corridors->Nearest(Eigen::Vector2d(px, py));
@@ -289,6 +295,8 @@ struct ParticleTracker::Impl {
     gather(x);
     gather(y);
     gather(offset);
+    gather(cos_offset);
+    gather(sin_offset);
     gather(scale);
     gather(floor);
     if (corridor_mode()) {
@@ -306,40 +314,60 @@ struct ParticleTracker::Impl {
     }
   }
 
-  // Normalises, records ESS, resamples if needed. Returns the log normaliser.
-  double NormalizeAndResample(TrackerEstimate* est) {
-    est->ess = EffectiveSampleSize(log_w);
-    const ResamplingSummary rs = ResampleIfNeeded(log_w, options.resampling, rng, &ancestors);
-    if (rs.resampled) {
-      Gather(ancestors);
-      ++summary.resamplings;
+  // After an update of log_w that was normalised before it: one pass of exp() gives the linear
+  // weights, the log normaliser (the event's log-likelihood increment), the ESS and the estimate;
+  // resamples (from the linear weights) when ESS < threshold N. Leaves log_w normalised.
+  double FinishUpdate(double max_log_w, TrackerEstimate* est) {
+    weights.resize(static_cast<size_t>(n));
+    double sum = 0.0, sum_sq = 0.0;
+    for (int i = 0; i < n; ++i) {
+      const double w = std::exp(log_w[i] - max_log_w);
+      weights[i] = w;
+      sum += w;
+      sum_sq += w * w;
     }
-    est->resampled = rs.resampled;
+    const double log_z = max_log_w + std::log(sum);
+    est->ess = sum * sum / sum_sq;
+    const double threshold = options.resampling.ess_threshold * n;
+    est->resampled = options.resampling.ess_threshold > 0.0 && est->ess < threshold;
+    if (est->resampled) {
+      ResampleLinear(weights.data(), n, sum, options.resampling.scheme, rng, &ancestors);
+      Gather(ancestors);
+      log_w.setConstant(-std::log(static_cast<double>(n)));
+      std::fill(weights.begin(), weights.end(), 1.0 / n);
+      ++summary.resamplings;
+    } else {
+      log_w.array() -= log_z;
+      const double inv = 1.0 / sum;
+      for (double& w : weights) w *= inv;
+    }
     ess_sum += est->ess;
     ++events;
     summary.mean_ess = ess_sum / events;
-    return rs.log_normalizer;
+    FillEstimate(weights, est);
+    return log_z;
   }
 
-  void FillEstimate(TrackerEstimate* est) const {
-    const Eigen::VectorXd w = NormalizedWeights(log_w);
-    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-    double so = 0.0, co = 0.0, sc = 0.0;
+  void FillEstimate(const std::vector<double>& w, TrackerEstimate* est) const {
+    double mx = 0.0, my = 0.0, so = 0.0, co = 0.0, sc = 0.0;
     est->floor_probabilities = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(floors.size()));
     for (int i = 0; i < n; ++i) {
-      mean += w[i] * Eigen::Vector2d(x[i], y[i]);
-      so += w[i] * std::sin(offset[i]);
-      co += w[i] * std::cos(offset[i]);
+      mx += w[i] * x[i];
+      my += w[i] * y[i];
+      so += w[i] * sin_offset[i];
+      co += w[i] * cos_offset[i];
       sc += w[i] * scale[i];
       est->floor_probabilities[floor[i]] += w[i];
     }
-    Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+    double cxx = 0.0, cxy = 0.0, cyy = 0.0;
     for (int i = 0; i < n; ++i) {
-      const Eigen::Vector2d d(x[i] - mean.x(), y[i] - mean.y());
-      cov += w[i] * d * d.transpose();
+      const double dx = x[i] - mx, dy = y[i] - my;
+      cxx += w[i] * dx * dx;
+      cxy += w[i] * dx * dy;
+      cyy += w[i] * dy * dy;
     }
-    est->mean_m = mean;
-    est->covariance_m2 = cov;
+    est->mean_m = Eigen::Vector2d(mx, my);
+    est->covariance_m2 << cxx, cxy, cxy, cyy;
     est->heading_offset_rad = std::atan2(so, co);
     est->scale = sc;
     Eigen::Index best = 0;
@@ -355,6 +383,12 @@ struct ParticleTracker::Impl {
       }
       est->lagged_m = lagged;
     }
+  }
+
+  // Estimate from the current log-weights (outside an update).
+  void FillEstimate(TrackerEstimate* est) const {
+    const Eigen::VectorXd w = NormalizedWeights(log_w);
+    FillEstimate(std::vector<double>(w.data(), w.data() + w.size()), est);
   }
 
   void PushLag() {
@@ -406,13 +440,15 @@ struct ParticleTracker::Impl {
           break;
         }
       }
+      int pf = f;
       if (!Walkable(px, py, f)) {  // the mean itself is inside an obstacle: keep the particle
         px = x[i];
         py = y[i];
+        pf = floor[i];
       }
       const double o = offset[i];
       const double s = scale[i];
-      PlaceFree(i, px, py, floor[i] == f ? f : floor[i], o);
+      PlaceFree(i, px, py, pf, o);
       scale[i] = s;
     }
     log_w.setConstant(-std::log(static_cast<double>(n)));
@@ -543,7 +579,7 @@ TrackerEstimate ParticleTracker::Step(const StepInput& step) {
   }
   s.last_time = step.time_s;
   const StepMotion motion(step, s.options.motion);
-  const Eigen::VectorXd old_log_w = s.log_w;
+  const Eigen::VectorXd old_log_w = s.log_w;  // normalised (the invariant between events)
   const double penalty = s.options.wall_log_penalty;
   const int num_floors = static_cast<int>(s.floors.size());
   const double p_change = num_floors > 1 ? s.options.floor_change_probability : 0.0;
@@ -551,14 +587,12 @@ TrackerEstimate ParticleTracker::Step(const StepInput& step) {
   const double log_vm_norm = s.corridor_mode() ? std::log(2.0 * M_PI * std::cyl_bessel_i(0.0, kappa)) : 0.0;
   const int blocks = (s.n + kBlockSize - 1) / kBlockSize;
   std::vector<double> blocked_mass(static_cast<size_t>(blocks), 0.0);
-  const double max_lw = s.log_w.maxCoeff();
-
   s.ForBlocks(s.n, [&](int b, int begin, int end, RandomStream& rng) {
     double blocked = 0.0;
     for (int i = begin; i < end; ++i) {
       double o, sc;
       Eigen::Vector2d delta;
-      motion.Sample(s.offset[i], s.scale[i], rng, &o, &sc, &delta);
+      motion.Sample(s.offset[i], &s.cos_offset[i], &s.sin_offset[i], s.scale[i], rng, &o, &sc, &delta);
       s.offset[i] = o;
       s.scale[i] = sc;
       if (s.corridor_mode()) {
@@ -610,7 +644,7 @@ TrackerEstimate ParticleTracker::Step(const StepInput& step) {
         is_blocked = s.Blocked(s.x[i], s.y[i], qx, qy, f);
       }
       if (is_blocked) {
-        blocked += std::exp(s.log_w[i] - max_lw);
+        blocked += std::exp(s.log_w[i]);
         s.log_w[i] += penalty;
         if (std::isinf(penalty)) continue;  // dropped: stays where it was
       }
@@ -624,11 +658,11 @@ TrackerEstimate ParticleTracker::Step(const StepInput& step) {
   ++s.summary.steps;
   TrackerEstimate est;
   est.time_s = step.time_s;
-  double total_mass = (old_log_w.array() - max_lw).exp().sum();
   double blocked_total = 0.0;
   for (double m : blocked_mass) blocked_total += m;
-  est.blocked_fraction = total_mass > 0.0 ? blocked_total / total_mass : 0.0;
-  if (!(s.log_w.maxCoeff() > kNegInf)) {
+  est.blocked_fraction = std::min(1.0, blocked_total);
+  const double max_log_w = s.log_w.maxCoeff();
+  if (!(max_log_w > kNegInf)) {
     // Every particle blocked: the step contradicts the plan (an unmapped door, a wrong heading
     // offset). Ignore it rather than lose the cloud (a dropped particle stayed where it was);
     // re-spread if it keeps happening.
@@ -640,16 +674,15 @@ TrackerEstimate ParticleTracker::Step(const StepInput& step) {
     }
     est.ess = EffectiveSampleSize(s.log_w);
     est.log_likelihood = 0.0;
+    s.PushLag();
+    s.FillEstimate(&est);
   } else {
     s.consecutive_blocked = 0;
-    // log-likelihood increment: log Σ w_old,i · (likelihood factor); old weights normalised.
-    const double before = LogSumExp(old_log_w);
-    const double lz = s.NormalizeAndResample(&est);
-    est.log_likelihood = lz - before;
+    s.PushLag();
+    // log-likelihood increment: log Σ w_old,i · (wall factor), the old weights normalised.
+    est.log_likelihood = s.FinishUpdate(max_log_w, &est);
     s.summary.total_log_likelihood += est.log_likelihood;
   }
-  s.PushLag();
-  s.FillEstimate(&est);
   if (s.options.record_history) {
     s.history.times_s.push_back(step.time_s);
     s.history.steps.push_back(step);
@@ -695,7 +728,6 @@ TrackerEstimate ParticleTracker::Wifi(const WifiObservation& observation) {
     s.summary.seconds += timer.ElapsedSeconds();
     return est;
   }
-  const Eigen::VectorXd old_log_w = s.log_w;
   Eigen::VectorXd ll(s.n);
   s.ForBlocks(s.n, [&](int, int begin, int end, RandomStream&) {
     std::vector<int> hints(s.model->floors().size(), -1);
@@ -705,11 +737,10 @@ TrackerEstimate ParticleTracker::Wifi(const WifiObservation& observation) {
     }
   });
   s.log_w += ll;
-  const double before = LogSumExp(old_log_w);
-  const double predictive = LogSumExp(s.log_w) - before;  // log p(scan | past), tempered
+  // log p(scan | past), tempered (log_w was normalised before the update).
+  const double predictive = s.FinishUpdate(s.log_w.maxCoeff(), &est);
   est.log_likelihood = predictive;
   s.summary.total_log_likelihood += predictive;
-  s.NormalizeAndResample(&est);
 
   // Recovery: the scan fits the best candidate far better than the cloud, several scans running.
   if (s.options.recovery_log_ratio > 0.0 && observation.num_heard > 0) {
@@ -734,9 +765,9 @@ TrackerEstimate ParticleTracker::Wifi(const WifiObservation& observation) {
       s.consecutive_disagreement = 0;
       est.recovered = true;
       ++s.summary.recoveries;
+      s.FillEstimate(&est);
     }
   }
-  s.FillEstimate(&est);
   s.Snapshot(true);
   s.summary.seconds += timer.ElapsedSeconds();
   return est;
@@ -786,6 +817,8 @@ void ParticleTracker::SetParticles(const Eigen::Ref<const RowMatrixXd>& states,
     s.x[i] = states(i, 0);
     s.y[i] = states(i, 1);
     s.offset[i] = WrapAngle(states(i, 2));
+    s.cos_offset[i] = std::cos(s.offset[i]);
+    s.sin_offset[i] = std::sin(s.offset[i]);
     s.scale[i] = states(i, 3);
     s.floor[i] = floor_indices[i];
   }

@@ -63,6 +63,35 @@ TEST(RandomStream, NormalMoments) {
   EXPECT_NEAR(sum_4 / n, 3.0, 0.1);  // kurtosis of a Gaussian
 }
 
+TEST(RandomStream, ZigguratNormalMatchesTheNormalDistribution) {
+  RandomStream rng(17);
+  const int n = 1000000;
+  std::vector<double> x(n);
+  double mean = 0.0, m2 = 0.0, m4 = 0.0;
+  for (double& v : x) {
+    v = rng.NormalZiggurat();
+    mean += v / n;
+  }
+  for (double v : x) {
+    m2 += (v - mean) * (v - mean) / n;
+    m4 += std::pow(v - mean, 4) / n;
+  }
+  EXPECT_NEAR(mean, 0.0, 0.005);
+  EXPECT_NEAR(m2, 1.0, 0.005);
+  EXPECT_NEAR(m4, 3.0, 0.03);
+  // Kolmogorov-Smirnov against the normal CDF: D < 1.63 / sqrt(n) at the 1 % level.
+  std::sort(x.begin(), x.end());
+  double d = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double cdf = 0.5 * std::erfc(-x[i] / std::sqrt(2.0));
+    d = std::max({d, std::abs(cdf - static_cast<double>(i) / n), std::abs(cdf - static_cast<double>(i + 1) / n)});
+  }
+  EXPECT_LT(d, 1.63 / std::sqrt(static_cast<double>(n)));
+  // The tail beyond R = 3.44 has the right mass (2.88e-4 on each side), to 10 %.
+  const double tail = static_cast<double>(std::count_if(x.begin(), x.end(), [](double v) { return v > 3.442619855899; })) / n;
+  EXPECT_NEAR(tail, 0.5 * std::erfc(3.442619855899 / std::sqrt(2.0)), 0.1 * 2.88e-4 + 5e-5);
+}
+
 TEST(RandomStream, UniformIntIsUniformAndInRange) {
   RandomStream r(3);
   std::vector<int> counts(7, 0);

@@ -63,6 +63,11 @@ class RandomStream {
   std::uint64_t UniformInt(std::uint64_t n);
   /// Standard normal N(0, 1) (Marsaglia polar method; the spare draw is cached).
   double Normal();
+  /// Standard normal N(0, 1) by the ziggurat method (Marsaglia & Tsang 2000, in Doornik's 2005
+  /// ZIGNOR form with 128 layers): about 4x faster than Normal() (one raw draw and no log in
+  /// 98.8 % of the calls), for particle filters' inner loops. Same distribution as Normal(),
+  /// different values.
+  double NormalZiggurat();
   /// Normal with mean `mean` and standard deviation `sd` (sd >= 0).
   double Normal(double mean, double sd);
   /// Exponential with rate 1.

@@ -65,21 +65,41 @@ class StepMotion {
   /// Draws (o', s') and the displacement Δ = s' R(o') (d + e) for a particle with (o, s).
   void Sample(double offset_rad, double scale, RandomStream& rng, double* new_offset_rad,
               double* new_scale, Eigen::Vector2d* displacement_m) const {
-    double o = offset_rad + options_.heading_offset_walk_rad * rng.Normal();
+    double c = std::cos(offset_rad), sn = std::sin(offset_rad);
+    Sample(offset_rad, &c, &sn, scale, rng, new_offset_rad, new_scale, displacement_m);
+  }
+  /// As above for a particle that also carries cos o and sin o (updated in place to cos o' and
+  /// sin o'): the tracker's inner loop. The rotation by the small offset increment δ uses
+  /// cos δ, sin δ from their Taylor series (|δ| < 0.1 rad: error below 1e-13) instead of a
+  /// sincos call; normal draws by the ziggurat method (RandomStream::NormalZiggurat).
+  void Sample(double offset_rad, double* cos_offset, double* sin_offset, double scale, RandomStream& rng,
+              double* new_offset_rad, double* new_scale, Eigen::Vector2d* displacement_m) const {
+    const double delta = options_.heading_offset_walk_rad * rng.NormalZiggurat();
+    double o = offset_rad + delta;
+    double c, sn;
+    if (std::abs(delta) < 0.1) {
+      const double d2 = delta * delta;
+      const double cd = 1.0 - d2 * (0.5 - d2 * (1.0 / 24.0 - d2 * (1.0 / 720.0)));
+      const double sd = delta * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0 - d2 * (1.0 / 5040.0))));
+      c = *cos_offset * cd - *sin_offset * sd;
+      sn = *sin_offset * cd + *cos_offset * sd;
+    } else {
+      c = std::cos(o);
+      sn = std::sin(o);
+    }
     if (o > M_PI) o -= 2.0 * M_PI;
     if (o <= -M_PI) o += 2.0 * M_PI;
-    double s = scale + options_.scale_walk * rng.Normal();
+    double s = scale + options_.scale_walk * rng.NormalZiggurat();
     s = s < options_.min_scale ? options_.min_scale : (s > options_.max_scale ? options_.max_scale : s);
-    const double n1 = rng.Normal();
-    const double n2 = rng.Normal();
+    const double n1 = rng.NormalZiggurat();
+    const double n2 = rng.NormalZiggurat();
     // e = L n with L the lower Cholesky factor of Σ_d + σ_p² I.
-    const double ex = chol_(0, 0) * n1;
-    const double ey = chol_(1, 0) * n1 + chol_(1, 1) * n2;
-    const double dx = step_.displacement_m.x() + ex;
-    const double dy = step_.displacement_m.y() + ey;
-    const double c = std::cos(o), sn = std::sin(o);
+    const double dx = step_.displacement_m.x() + chol_(0, 0) * n1;
+    const double dy = step_.displacement_m.y() + chol_(1, 0) * n1 + chol_(1, 1) * n2;
     *new_offset_rad = o;
     *new_scale = s;
+    *cos_offset = c;
+    *sin_offset = sn;
     *displacement_m = Eigen::Vector2d(s * (c * dx - sn * dy), s * (sn * dx + c * dy));
   }
   /// log p(p', o', s' | p, o, s) up to the constant common to all pairs (the backward smoother
