@@ -11,6 +11,7 @@ namespace py = pybind11;
 namespace indoorloc::bindings {
 void BindAnalog(py::module_& m);
 void BindCore(py::module_& m);
+void BindFusionFloorPlan(py::module_& m);
 void BindFusionTracker(py::module_& m);
 void BindMapmatch(py::module_& m);
 void BindNetworkScale(py::module_& m);
@@ -41,5 +42,6 @@ PYBIND11_MODULE(_core, m) {
   indoorloc::bindings::BindWifi(wifi);
   indoorloc::bindings::BindWifiBaselines(wifi);
   py::module_ fusion = m.def_submodule("fusion", "Particle-filter fusion of PDR steps, WiFi and a floor plan (issue 14).");
+  indoorloc::bindings::BindFusionFloorPlan(fusion);
   indoorloc::bindings::BindFusionTracker(fusion);
 }

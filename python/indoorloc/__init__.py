@@ -13,6 +13,7 @@ Only the computational API is re-exported here; plots, file formats and the CLI 
 from indoorloc import _core
 from indoorloc import analog
 from indoorloc import core
+from indoorloc import fusion
 from indoorloc import mapmatch
 from indoorloc import metrics
 from indoorloc import network

@@ -195,3 +195,43 @@ def network_gravity_line(x_m, truth_mgal, series_mgal: Mapping[str, object], pat
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
+
+
+def fusion_walk(snapshot: Mapping[str, object], path: Path) -> Path:
+    """One fusion walk (experiments.fusion_synthetic.walk_snapshot): the plan, the truth, WiFi-only
+    fixes, PDR-only, the unknown-start filter with its particle cloud at a few times, the
+    smoothed track; and each method's error over time. Saves PNG."""
+    import numpy as np
+
+    fig, (ax, ax_err) = plt.subplots(1, 2, figsize=(13, 5), dpi=110, gridspec_kw={"width_ratios": [1.6, 1]})
+    edges = np.asarray(snapshot["edges_m"])
+    ax.plot(edges[:, [0, 2]].T, edges[:, [1, 3]].T, color="#555", lw=0.7)
+    colours = ["#d62728", "#9467bd", "#8c564b", "#e377c2", "#17becf", "#bcbd22"]
+    for c, cloud in enumerate(snapshot["clouds"]):
+        xy = cloud["xy_m"]
+        ax.scatter(xy[:, 0], xy[:, 1], s=1, color=colours[c % len(colours)], alpha=0.25, lw=0)
+        ax.plot(*cloud["truth_m"], marker="*", ms=11, color=colours[c % len(colours)], mec="k",
+                label=f"cloud at {cloud['t_s']:.0f} s")
+    aps = np.asarray(snapshot["aps_m"])
+    ax.plot(aps[:, 0], aps[:, 1], "^", color="#999", ms=4, label="access points")
+    ax.plot(*np.asarray(snapshot["truth_m"]).T, color="k", lw=2, label="truth")
+    ax.plot(*np.asarray(snapshot["wifi_fixes_m"]).T, "x", color="#ff7f0e", ms=5, label="WiFi-only fixes")
+    ax.plot(*np.asarray(snapshot["pdr_only_m"]).T, color="#2ca02c", lw=1.2, label="PDR only (known start)")
+    ax.plot(*np.asarray(snapshot["filter_m"]).T, color="#1f77b4", lw=1.2, label="filter (unknown start)")
+    ax.plot(*np.asarray(snapshot["smoothed_m"]).T, color="#d62728", lw=1.6, ls="--", label="smoother")
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title(f"Synthetic building, walk seed {snapshot['seed']}")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+    for name, (t, e) in snapshot["errors"].items():
+        ax_err.plot(t, e, label=name, lw=1.2, marker="." if name == "wifi_only" else None)
+    ax_err.set_xlabel("time since start [s]")
+    ax_err.set_ylabel("position error [m]")
+    ax_err.set_yscale("log")
+    ax_err.legend(fontsize=8)
+    ax_err.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return Path(path)

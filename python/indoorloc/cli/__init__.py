@@ -85,6 +85,12 @@ def _add_analog(sub: argparse._SubParsersAction) -> None:
     analog.add_parser(sub, quiet_parent)
 
 
+def _add_fusion(sub: argparse._SubParsersAction) -> None:
+    from indoorloc.cli import fusion
+
+    fusion.add_parser(sub, quiet_parent)
+
+
 def _add_mapmatch(sub: argparse._SubParsersAction) -> None:
     from indoorloc.cli import mapmatch
 
@@ -110,7 +116,7 @@ def _add_wifi(sub: argparse._SubParsersAction) -> None:
 
 
 # Subsystems register `add(subparsers)` functions here.
-_SUBCOMMANDS: List[Callable[[argparse._SubParsersAction], None]] = [_add_core, _add_analog, _add_mapmatch, _add_network, _add_pdr, _add_wifi]
+_SUBCOMMANDS: List[Callable[[argparse._SubParsersAction], None]] = [_add_core, _add_analog, _add_fusion, _add_mapmatch, _add_network, _add_pdr, _add_wifi]
 
 
 def build_parser() -> argparse.ArgumentParser:

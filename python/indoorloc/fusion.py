@@ -1,0 +1,188 @@
+"""Fusion: one particle filter that tracks a walking person from PDR steps, a WiFi signal map and
+a floor plan (issue 14; the "future work" of papers 000 §IV and 002 §VI).
+
+- :class:`FloorPlan` / :class:`FloorGeometry`: walkable space per floor (outlines minus obstacles,
+  thin walls) with indexed batch queries: walkable points, wall crossings of steps, distance
+  to the nearest wall; :func:`floor_plan_from_geometries` builds one from any objects with
+  ``floor``, ``outlines``, ``obstacles``, ``walls`` (e.g. ``simulate.building``'s floors).
+- :class:`ParticleTracker`: the streaming filter (``initialize_known`` / ``initialize_unknown``,
+  ``step``, ``wifi``), state (x, y, floor, heading offset, stride scale), walls, WiFi (paper 004's
+  interpolated Gaussian model, tempered, stale readings handled), corridor mode (paper 000's
+  particles on a RoadNetwork), recovery, fixed-lag smoothing.
+- :func:`track`: the batch API over a recording, with the backward (FFBSi) smoother.
+- :func:`make_wifi_observations`: scans (NaN = not heard, per-reading ages) to observations.
+- :class:`Steps`: steps as displacements with covariances, from polar steps or ZUPT increments.
+
+The model, its equations and how each default was chosen: docs/fusion.md. Example::
+
+    from indoorloc import fusion, wifi
+    plan = fusion.FloorPlan([fusion.FloorGeometry(0, [outline], [shop1, shop2])])
+    model = wifi.RssModel(signal_map)
+    obs, counts = fusion.make_wifi_observations(scan_t, rss, ages)
+    steps = fusion.Steps.from_polar(step_t, lengths, headings, 0.05, 0.05)
+    result = fusion.track(steps, obs, plan=plan, wifi_model=model, smoother=fusion.SmootherOptions())
+    track_m = result["smoothed_m"]
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Iterable, Optional, Sequence
+
+import numpy as np
+
+from indoorloc._core.fusion import (
+    FloorGeometry,
+    FloorPlan,
+    FloorPlanOptions,
+    ParticleTracker,
+    SmootherOptions,
+    TrackerOptions,
+    TrackerSummary,
+    WifiObservation,
+    make_wifi_observations,
+    steps_from_polar,
+)
+from indoorloc._core.fusion import track as _core_track
+
+
+def floor_plan_from_geometries(floors: Iterable[object], options: Optional[FloorPlanOptions] = None) -> FloorPlan:
+    """A FloorPlan from objects with ``floor`` (int), ``outlines`` and ``obstacles`` (lists of
+    (M, 2) rings [m]) and ``walls`` ((W, 4) segments [m] or None): FloorGeometry instances, the
+    synthetic building's floors, or your own records."""
+    geometries = []
+    for g in floors:
+        if isinstance(g, FloorGeometry):
+            geometries.append(g)
+            continue
+        walls = getattr(g, "walls", None)
+        if walls is not None and np.asarray(walls).size == 0:
+            walls = None
+        geometries.append(FloorGeometry(int(g.floor), [np.asarray(r, float) for r in g.outlines],
+                                        [np.asarray(r, float) for r in getattr(g, "obstacles", [])], walls))
+    return FloorPlan(geometries, options if options is not None else FloorPlanOptions())
+
+
+def covariance_matrix(row) -> np.ndarray:
+    """(xx, xy, yy) -> the symmetric 2 x 2 matrix [m²]."""
+    xx, xy, yy = (float(v) for v in row)
+    return np.array([[xx, xy], [xy, yy]])
+
+
+# --------------------------------------------------------------------------- the tracker
+
+def tracker_options(**settings) -> TrackerOptions:
+    """TrackerOptions with the library defaults and the given fields set, validated.
+
+    Fields (flattened; units in the names): num_particles, heading_offset_walk_rad, scale_walk,
+    min_scale, max_scale, position_noise_m, tempering, max_term, max_age_s, use_not_heard,
+    not_heard_dbm, resampling, ess_threshold, wall_log_penalty, respread_after_blocked_steps,
+    respread_sd_m, start_position_sd_m, start_heading_offset_sd_rad, start_scale_sd,
+    candidate_spacing_m, recovery_log_ratio, recovery_scans, recovery_fraction,
+    floor_change_probability, corridor_kappa, smoothing_lag_steps, num_threads, seed.
+    Raises ValueError naming an unknown field or an invalid value.
+    """
+    return TrackerOptions(**settings)
+
+
+@dataclass
+class Steps:
+    """Detected steps for the tracker: times (M,) [s], displacements (M, 2) [m] in the PDR frame
+    and their covariances (M, 3) = (xx, xy, yy) [m²]."""
+
+    times_s: np.ndarray
+    displacements_m: np.ndarray
+    covariances_m2: np.ndarray
+
+    @classmethod
+    def from_polar(cls, times_s, lengths_m, headings_rad, length_sd_m, heading_sd_rad) -> "Steps":
+        """From step lengths [m] and headings [rad] with their sd (scalars broadcast), by
+        first-order propagation (docs/fusion.md)."""
+        times = np.asarray(times_s, dtype=float)
+        n = times.shape[0]
+        lengths = np.broadcast_to(np.asarray(lengths_m, dtype=float), (n,))
+        headings = np.broadcast_to(np.asarray(headings_rad, dtype=float), (n,))
+        length_sd = np.broadcast_to(np.asarray(length_sd_m, dtype=float), (n,))
+        heading_sd = np.broadcast_to(np.asarray(heading_sd_rad, dtype=float), (n,))
+        displacements, covariances = steps_from_polar(lengths, headings, length_sd, heading_sd)
+        return cls(times.copy(), displacements, covariances)
+
+    @classmethod
+    def from_increments(cls, times_s, increments_m, covariances_m2) -> "Steps":
+        """From foot-mounted ZUPT increments ΔP_k (M, 2 or 3; x, y used) [m] (paper 002 eq. 9) and
+        their covariances (M, 2, 2) or (M, 3) [m²]."""
+        inc = np.asarray(increments_m, dtype=float)
+        if inc.ndim != 2 or inc.shape[1] not in (2, 3):
+            raise ValueError("indoorloc: argument 'increments_m': expected shape (M, 2) or (M, 3), got "
+                             f"{inc.shape}")
+        cov = np.asarray(covariances_m2, dtype=float)
+        if cov.ndim == 3:
+            cov = np.stack([cov[:, 0, 0], cov[:, 0, 1], cov[:, 1, 1]], axis=1)
+        return cls(np.asarray(times_s, dtype=float).copy(), inc[:, :2].copy(), cov.copy())
+
+    def __len__(self) -> int:
+        return int(self.times_s.shape[0])
+
+
+def rotate(displacements_m, angle_rad: float) -> np.ndarray:
+    """Displacements (M, 2) rotated by angle_rad (PDR frame -> floor frame for a known yaw)."""
+    d = np.asarray(displacements_m, dtype=float)
+    c, s = np.cos(angle_rad), np.sin(angle_rad)
+    return np.stack([c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1]], axis=1)
+
+
+def track(steps: Steps, observations: Sequence[WifiObservation] = (), *, plan=None, wifi_model=None,
+          corridors=None, start: Optional[dict] = None, options: Optional[TrackerOptions] = None,
+          smoother: Optional[SmootherOptions] = None) -> dict:
+    """Track one recording (the batch API; C++ with the GIL released).
+
+    Parameters
+    ----------
+    steps : Steps
+        Detected steps (see :class:`Steps`).
+    observations : list of WifiObservation
+        From :func:`make_wifi_observations` (sorted by time); empty without WiFi.
+    plan : FloorPlan or None
+    wifi_model : indoorloc.wifi.RssModel or None
+    corridors : indoorloc.mapmatch.RoadNetwork or None
+        Corridor mode (particles on the network, paper 000's heading likelihood).
+    start : dict or None
+        None: unknown start (seeking from the first scan). Known start:
+        ``{"position_m": (2,), "floor": int, "heading_offset_rad": float, "time_s": float}``.
+    options : TrackerOptions or None
+        Library defaults when None (:func:`tracker_options`).
+    smoother : SmootherOptions or None
+        Run the backward smoother (FFBSi) when given.
+
+    Returns
+    -------
+    dict
+        Per-step arrays: ``times_s`` (M,), ``mean_m`` (M, 2), ``covariance_m2`` (M, 3),
+        ``floor_probabilities`` (M, F), ``floor_index`` (M,), ``heading_offset_rad``, ``scale``,
+        ``ess``, ``log_likelihood``, ``blocked_fraction``, ``resampled``, ``recovered``,
+        ``lagged_m`` (M, 2); ``summary`` (TrackerSummary); with a smoother ``smoothed_m`` (M, 2),
+        ``smoothed_covariance_m2`` (M, 3), ``smoothed_floor_index`` (M,),
+        ``smoothed_trajectories_m`` (M, 2T), ``smoother_seconds``.
+    """
+    return _core_track(plan, wifi_model, corridors, steps.times_s, steps.displacements_m, steps.covariances_m2,
+                       list(observations), start, options if options is not None else TrackerOptions(), smoother)
+
+
+__all__ = [
+    "FloorGeometry",
+    "FloorPlan",
+    "FloorPlanOptions",
+    "ParticleTracker",
+    "SmootherOptions",
+    "Steps",
+    "TrackerOptions",
+    "TrackerSummary",
+    "WifiObservation",
+    "covariance_matrix",
+    "floor_plan_from_geometries",
+    "make_wifi_observations",
+    "rotate",
+    "steps_from_polar",
+    "track",
+    "tracker_options",
+]
