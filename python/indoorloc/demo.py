@@ -23,6 +23,7 @@ def _load_builtin_demos() -> None:
     # indoorloc.registry. A new subsystem adds its demo module here.
     from indoorloc.experiments import analog_demo  # noqa: F401
     from indoorloc.experiments import core_resampling  # noqa: F401
+    from indoorloc.experiments import fusion_synthetic  # noqa: F401
     from indoorloc.experiments import mapmatch_reproduce  # noqa: F401
     from indoorloc.experiments import network_reproduce  # noqa: F401
     from indoorloc.experiments import pdr_demo  # noqa: F401
