@@ -54,6 +54,7 @@ from indoorloc._core.pdr import (
 )
 
 GRAVITY_MPS2 = 9.80665
+HEADING_SOURCES = ("rotation_vector", "gyro", "complementary")
 
 # --------------------------------------------------------------------------------------------
 # Inputs, options, outputs
@@ -134,7 +135,8 @@ class HandheldOptions:
     min_step_interval_s: float = 0.35   #: at most one step per this interval [s]
     max_step_half_window_s: float = 0.4 #: Weinberg window: half-way to the neighbour steps, at most this [s]
     k: float = 0.45                     #: Weinberg K [m / (m/s^2)^(1/4)] (refit by calibrate_handheld)
-    heading_source: str = "rotation_vector"  #: "rotation_vector" or "gyro" for HandheldSteps.heading_rad
+    heading_source: str = "rotation_vector"  #: "rotation_vector", "gyro" or "complementary" for HandheldSteps.heading_rad
+    complementary_tau_s: float = 5.0    #: time constant of the complementary heading (gyro below, rotation vector above) [s]
     yaw_offset_rad: float = 0.0         #: mean floor-frame minus phone-frame heading on training walks (not applied to heading_rad)
     length_sd_fraction: float = 0.15    #: length_sd_m = this x length (refit from CV residuals)
     heading_sd_rad: float = 0.2         #: per-step heading sd (refit from CV residuals)
@@ -147,13 +149,13 @@ class HandheldOptions:
             bad("method", f"{self.method!r} is not 'peaks' or 'variance'")
         if self.signal not in ("magnitude", "vertical"):
             bad("signal", f"{self.signal!r} is not 'magnitude' or 'vertical'")
-        if self.heading_source not in ("rotation_vector", "gyro"):
-            bad("heading_source", f"{self.heading_source!r} is not 'rotation_vector' or 'gyro'")
+        if self.heading_source not in HEADING_SOURCES:
+            bad("heading_source", f"{self.heading_source!r} is not one of {HEADING_SOURCES}")
         if not 0 < self.highpass_hz < self.lowpass_hz:
             bad("highpass_hz", "need 0 < highpass_hz < lowpass_hz")
         if not 1 <= int(self.filter_order) <= 8:
             bad("filter_order", "need 1..8")
-        for name in ("rms_window_s", "min_step_interval_s", "max_step_half_window_s", "k"):
+        for name in ("rms_window_s", "min_step_interval_s", "max_step_half_window_s", "k", "complementary_tau_s"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
                 bad(name, f"must be finite and > 0, got {v}")
@@ -179,6 +181,7 @@ class HandheldSteps:
     feature: np.ndarray             #: (M,) Weinberg feature (max - min of LP|a|)^(1/4)
     heading_rotation_vector_rad: np.ndarray  #: (M,) heading from the rotation vector
     heading_gyro_rad: np.ndarray    #: (M,) heading from gyro integration
+    heading_complementary_rad: np.ndarray  #: (M,) complementary heading (options.complementary_tau_s)
     start_t_s: float                #: time at which the first step's motion starts [s]
     options: HandheldOptions = field(repr=False, default_factory=HandheldOptions)
 
@@ -231,6 +234,27 @@ def gyro_heading(t_s: np.ndarray, gyro_radps: np.ndarray, quat_xyzw: np.ndarray)
     inc = 0.5 * (w_up[1:] + w_up[:-1]) * dt
     h0 = rotation_vector_heading(quat_xyzw[:1])[0]
     return h0 + np.concatenate([[0.0], np.cumsum(inc)])
+
+
+def complementary_heading(t_s: np.ndarray, heading_rv_rad: np.ndarray, heading_gyro_rad: np.ndarray,
+                          tau_s: float) -> np.ndarray:
+    """Gyro heading corrected towards the rotation vector: h = h_gyro + LP_tau(h_rv - h_gyro), a
+    causal first-order Butterworth low-pass with cut-off 1 / (2 pi tau) started in its steady
+    state (usable on line). tau -> 0 gives the rotation vector, tau -> inf the gyro (unwrapped)."""
+    rate = (t_s.shape[0] - 1) / (t_s[-1] - t_s[0])
+    d = np.unwrap(wrap_angle(np.asarray(heading_rv_rad) - np.asarray(heading_gyro_rad)))
+    fc = 1.0 / (2.0 * np.pi * tau_s)
+    if fc >= 0.45 * rate:
+        return np.asarray(heading_gyro_rad) + d
+    return np.asarray(heading_gyro_rad) + sos_filter(butterworth_sos(1, fc, rate), d, True)
+
+
+def step_headings(t_s: np.ndarray, heading_rad: np.ndarray, steps: "HandheldSteps") -> np.ndarray:
+    """Per-step mean of a per-sample (unwrapped) heading over [t_{k-1}, t_k], wrapped (M,)."""
+    if steps.n_steps == 0:
+        return np.zeros(0)
+    prev_t = np.concatenate([[steps.start_t_s], steps.t_s[:-1]])
+    return wrap_angle(_interval_mean(np.asarray(t_s), np.asarray(heading_rad), prev_t, steps.t_s))
 
 
 def wrap_angle(a: np.ndarray) -> np.ndarray:
@@ -319,7 +343,7 @@ def handheld_steps(walk_or_arrays: Any, options: Optional[HandheldOptions] = Non
     h_gy = gyro_heading(t, arrays.gyro_radps, arrays.quat_xyzw)
     if m == 0:
         e = np.zeros(0)
-        return HandheldSteps(e, idx, e, e, e, e, e, e, e, float(t[0]), options)
+        return HandheldSteps(e, idx, e, e, e, e, e, e, e, e, float(t[0]), options)
     ts = t[idx]
     gap = float(np.median(np.diff(ts))) if m > 1 else 0.5
     gap = min(max(gap, options.min_step_interval_s), 2 * options.max_step_half_window_s)
@@ -336,12 +360,14 @@ def handheld_steps(walk_or_arrays: Any, options: Optional[HandheldOptions] = Non
     length = options.k * feat
     hr = _interval_mean(t, h_rv, prev_t, ts)
     hg = _interval_mean(t, h_gy, prev_t, ts)
-    heading = hr if options.heading_source == "rotation_vector" else hg
+    hc = _interval_mean(t, complementary_heading(t, h_rv, h_gy, options.complementary_tau_s), prev_t, ts)
+    heading = {"rotation_vector": hr, "gyro": hg, "complementary": hc}[options.heading_source]
     return HandheldSteps(
         t_s=ts, index=idx, length_m=length, heading_rad=wrap_angle(heading),
         length_sd_m=options.length_sd_fraction * length,
         heading_sd_rad=np.full(m, options.heading_sd_rad), feature=feat,
         heading_rotation_vector_rad=wrap_angle(hr), heading_gyro_rad=wrap_angle(hg),
+        heading_complementary_rad=wrap_angle(hc),
         start_t_s=start, options=options)
 
 
@@ -367,9 +393,8 @@ def cumulative_at(steps: HandheldSteps, values: np.ndarray, t_query: np.ndarray)
 
 def step_displacements(steps: HandheldSteps, heading: str = "selected", yaw_offset_rad: float = 0.0) -> np.ndarray:
     """(M, 2) east/north displacement of each step, heading source ``"selected"``,
-    ``"rotation_vector"`` or ``"gyro"``, rotated by ``yaw_offset_rad``."""
-    h = {"selected": steps.heading_rad, "rotation_vector": steps.heading_rotation_vector_rad,
-         "gyro": steps.heading_gyro_rad}[heading] + yaw_offset_rad
+    ``"rotation_vector"``, ``"gyro"`` or ``"complementary"``, rotated by ``yaw_offset_rad``."""
+    h = _heading_of(steps, heading) + yaw_offset_rad
     return steps.length_m[:, None] * np.column_stack([np.cos(h), np.sin(h)])
 
 
@@ -385,6 +410,11 @@ class WaypointIntervals:
     length_sq_sum: np.ndarray       #: (J,) sum of squared step lengths (for the length sd fit)
     disp_rv_m: np.ndarray           #: (J, 2) PDR displacement, rotation-vector heading (phone frame)
     disp_gyro_m: np.ndarray         #: (J, 2) same, gyro heading
+    disp_comp_m: np.ndarray         #: (J, 2) same, complementary heading
+
+    def displacement(self, heading: str) -> np.ndarray:
+        """(J, 2) PDR displacement with the heading source's per-step headings."""
+        return {"rotation_vector": self.disp_rv_m, "gyro": self.disp_gyro_m, "complementary": self.disp_comp_m}[heading]
 
 
 def waypoint_intervals(steps: HandheldSteps, waypoint_t_s: np.ndarray, waypoint_xy_m: np.ndarray) -> WaypointIntervals:
@@ -393,12 +423,13 @@ def waypoint_intervals(steps: HandheldSteps, waypoint_t_s: np.ndarray, waypoint_
     wxy = np.asarray(waypoint_xy_m, dtype=np.float64).reshape(-1, 2)
     d = np.diff(wxy, axis=0)
     vals = np.column_stack([np.ones(steps.n_steps), steps.feature, steps.length_m, steps.length_m ** 2,
-                            step_displacements(steps, "rotation_vector"), step_displacements(steps, "gyro")])
+                            step_displacements(steps, "rotation_vector"), step_displacements(steps, "gyro"),
+                            step_displacements(steps, "complementary")])
     c = np.diff(cumulative_at(steps, vals, wt), axis=0)
     return WaypointIntervals(
         distance_m=np.hypot(d[:, 0], d[:, 1]), direction_rad=np.arctan2(d[:, 1], d[:, 0]),
         n_steps=c[:, 0], feature_sum=c[:, 1], path_m=c[:, 2], length_sq_sum=c[:, 3],
-        disp_rv_m=c[:, 4:6], disp_gyro_m=c[:, 6:8])
+        disp_rv_m=c[:, 4:6], disp_gyro_m=c[:, 6:8], disp_comp_m=c[:, 8:10])
 
 
 def best_yaw_offset(truth_dir_rad: np.ndarray, pdr_disp_m: np.ndarray, weights: Optional[np.ndarray] = None) -> float:
@@ -464,12 +495,11 @@ def calibrate_handheld(walks: Iterable[Any], options: Optional[HandheldOptions] 
     r2_over = []
     offsets, off_w = [], []
     dir_terms = []
-    key = "disp_rv_m" if options.heading_source == "rotation_vector" else "disp_gyro_m"
     for _, iv in per_walk:
         path = iv.path_m * scale
         ok = (iv.distance_m >= min_distance_m) & (iv.length_sq_sum > 0)
-        r2_over.append(((path - iv.distance_m) ** 2 / (iv.length_sq_sum * scale * scale))[ok])
-        disp = getattr(iv, key) * scale
+        r2_over.append((path[ok] - iv.distance_m[ok]) ** 2 / (iv.length_sq_sum[ok] * scale * scale))
+        disp = iv.displacement(options.heading_source) * scale
         okd = (iv.distance_m >= 2.0) & (np.hypot(disp[:, 0], disp[:, 1]) > 0)
         if okd.sum() >= 1:
             off = best_yaw_offset(iv.direction_rad[okd], disp[okd])
@@ -494,10 +524,15 @@ def rescale(steps: HandheldSteps, options: HandheldOptions) -> HandheldSteps:
     """The same steps under new K / sds / heading source (no re-detection; detector settings must
     be equal)."""
     length = options.k * steps.feature
-    heading = steps.heading_rotation_vector_rad if options.heading_source == "rotation_vector" else steps.heading_gyro_rad
+    heading = _heading_of(steps, options.heading_source)
     return replace(steps, length_m=length, length_sd_m=options.length_sd_fraction * length,
                    heading_rad=heading.copy(), heading_sd_rad=np.full(steps.n_steps, options.heading_sd_rad),
                    options=options)
+
+
+def _heading_of(steps: HandheldSteps, source: str) -> np.ndarray:
+    return {"selected": steps.heading_rad, "rotation_vector": steps.heading_rotation_vector_rad,
+            "gyro": steps.heading_gyro_rad, "complementary": steps.heading_complementary_rad}[source]
 
 
 def pdr_track(steps: HandheldSteps, start_xy_m: Sequence[float], t_query: np.ndarray, heading: str = "selected",
@@ -516,6 +551,7 @@ __all__ = [
     "as_arrays",
     "best_yaw_offset",
     "calibrate_handheld",
+    "complementary_heading",
     "cumulative_at",
     "detect_steps_handheld",
     "gyro_heading",
@@ -524,6 +560,7 @@ __all__ = [
     "rescale",
     "rotation_vector_heading",
     "step_displacements",
+    "step_headings",
     "step_signal",
     "vertical_acceleration",
     "waypoint_intervals",
