@@ -131,15 +131,15 @@ class HandheldOptions:
     filter_order: int = 2               #: Butterworth order of each edge (run forward and backward)
     rms_window_s: float = 2.0           #: running RMS window (centred) for the adaptive threshold [s]
     threshold_fraction: float = 0.5     #: peak must exceed this x running RMS
-    min_peak_mps2: float = 0.6          #: ... and this absolute level (a phone held still gives no steps) [m/s^2]
-    min_step_interval_s: float = 0.35   #: at most one step per this interval [s]
+    min_peak_mps2: float = 1.0          #: ... and this absolute level (a phone held still gives no steps) [m/s^2]
+    min_step_interval_s: float = 0.4    #: at most one step per this interval [s]
     max_step_half_window_s: float = 0.4 #: Weinberg window: half-way to the neighbour steps, at most this [s]
-    k: float = 0.45                     #: Weinberg K [m / (m/s^2)^(1/4)] (refit by calibrate_handheld)
+    k: float = 0.41                     #: Weinberg K [m / (m/s^2)^(1/4)] (refit by calibrate_handheld)
     heading_source: str = "rotation_vector"  #: "rotation_vector", "gyro" or "complementary" for HandheldSteps.heading_rad
-    complementary_tau_s: float = 5.0    #: time constant of the complementary heading (gyro below, rotation vector above) [s]
+    complementary_tau_s: float = 10.0   #: time constant of the complementary heading (gyro below, rotation vector above) [s]
     yaw_offset_rad: float = 0.0         #: mean floor-frame minus phone-frame heading on training walks (not applied to heading_rad)
-    length_sd_fraction: float = 0.15    #: length_sd_m = this x length (refit from CV residuals)
-    heading_sd_rad: float = 0.2         #: per-step heading sd (refit from CV residuals)
+    length_sd_fraction: float = 0.42    #: length_sd_m = this x length (refit from CV residuals)
+    heading_sd_rad: float = 0.87        #: per-step heading sd, 50 deg (refit from CV residuals; see docs)
 
     def validate(self) -> None:
         """Raises ValueError naming the first invalid field."""
