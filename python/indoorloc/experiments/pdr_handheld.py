@@ -170,6 +170,8 @@ def _score(test: List[_Walk], cals: Dict[str, ph.HandheldCalibration], fold: int
         add("count_rel", ((iv.n_steps - expected) / expected)[m])
         add("dist_err_m", (iv.path_m - iv.distance_m)[m])
         add("dist_rel", ((iv.path_m - iv.distance_m) / iv.distance_m)[m])
+        # Baseline without steps: the training median speed times the interval's duration.
+        add("const_speed_err_m", (cals["median_speed_mps"] * np.diff(w.wt) - iv.distance_m)[m])
         add("distance_m", iv.distance_m[m])
         add("fold", np.full(int(m.sum()), fold))
         # Coverage of the per-step length sd: |r_j| <= 2 f sqrt(sum L^2).
@@ -248,6 +250,8 @@ def _run_protocol(walks: List[_Walk], protocol: str, k: int, seed: int, detector
         key = _key(opts)
         feats = np.concatenate([w.steps[key].feature for w in train])
         cals["median_stride_m"] = float(np.median(cals["rotation_vector"].k * feats))
+        speeds = np.concatenate([np.hypot(*np.diff(w.wxy, axis=0).T) / np.diff(w.wt) for w in train])
+        cals["median_speed_mps"] = float(np.median(speeds))
         c = cals["rotation_vector"]
         chosen.append({"signal": opts.signal, "threshold_fraction": opts.threshold_fraction,
                        "min_peak_mps2": opts.min_peak_mps2, "min_step_interval_s": opts.min_step_interval_s,
@@ -306,6 +310,7 @@ def _summaries(run: Dict[str, Any]) -> Dict[str, Any]:
             "count_rel": _stats(a["count_rel"][sel], a["fold"][sel]),
             "dist_err_m": _stats(a["dist_err_m"][sel], a["fold"][sel]),
             "dist_rel": _stats(a["dist_rel"][sel], a["fold"][sel]),
+            "const_speed_err_m": _stats(a["const_speed_err_m"][sel], a["fold"][sel]),
             "dist_bias_m": float(np.mean(a["dist_err_m"][sel])) if sel.any() else math.nan,
             "len_cov2": float(np.mean(a["len_cov2"][sel])) if sel.any() else math.nan,
         }
@@ -395,6 +400,7 @@ def markdown(result: Dict[str, Any]) -> str:
             lines.append(_row("  same, relative", s["count_rel"]))
             lines.append(_row("path length - straight distance [m]", s["dist_err_m"]))
             lines.append(_row("  same, relative", s["dist_rel"]))
+            lines.append(_row("baseline: training median speed x duration - distance [m]", s["const_speed_err_m"]))
             for h in HEADINGS:
                 lines.append(_row(f"{h}: direction, raw [°]", s[f"{h}:dir_raw_deg"], "{:.1f}"))
                 lines.append(_row(f"{h}: direction, training mean offset [°]", s[f"{h}:dir_train_deg"], "{:.1f}"))
