@@ -19,7 +19,9 @@ the hand sees the body's vertical bounce instead, one oscillation per step. This
 3. **Heading** of the phone's +y axis in the east-north frame (east = 0, north = pi/2), either from
    the rotation vector (Android TYPE_ROTATION_VECTOR: unit quaternion device -> ENU,
    :func:`rotation_vector_heading`) or from the gyroscope's rate about the vertical, integrated
-   from the first rotation-vector heading (:func:`gyro_heading`). Per step, the mean heading over
+   from the first rotation-vector heading (:func:`gyro_heading`), or the complementary blend of
+   the two (:func:`complementary_heading`: gyro below 1 / (2 pi tau), rotation vector above).
+   Per step, the mean heading over
    the step's interval. The floor frame differs from this frame by a yaw offset (map orientation,
    magnetic declination, how the phone is held) that a fusion filter estimates; its mean over the
    training walks is :attr:`HandheldOptions.yaw_offset_rad`.
