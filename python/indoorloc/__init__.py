@@ -18,9 +18,10 @@ from indoorloc import mapmatch
 from indoorloc import metrics
 from indoorloc import network
 from indoorloc import pdr
+from indoorloc import pdr_handheld
 from indoorloc import wifi
 
 # One source of truth: project(VERSION) in CMakeLists.txt, compiled into _core.
 __version__: str = _core.__version__
 
-__all__ = ["__version__", "analog", "core", "mapmatch", "metrics", "network", "pdr", "wifi"]
+__all__ = ["__version__", "analog", "core", "mapmatch", "metrics", "network", "pdr", "pdr_handheld", "wifi"]
