@@ -14,6 +14,7 @@
 #include "indoorloc/fusion/step_motion.h"
 #include "indoorloc/fusion/track.h"
 #include "indoorloc/fusion/wifi_likelihood.h"
+#include "indoorloc/mapmatch/road_network.h"
 #include "indoorloc/wifi/rss_model.h"
 
 namespace indoorloc::fusion {
@@ -369,6 +370,54 @@ TEST(ParticleTracker, UnknownStartFindsTheWalkerFromWifiAndSteps) {
   }
   EXPECT_LT((e.mean_m - truth).norm(), 1.5);
   EXPECT_LT(std::abs(e.heading_offset_rad), 0.3);
+}
+
+TEST(ParticleTracker, CorridorModeFollowsTheNetworkAndTheHeading) {
+  // An L of corridors: (2, 1.5) -> (2, 8.5) -> (18, 8.5), plus a dead-end spur (2, 8.5) -> (2, 9.5).
+  RowMatrixXd segments(3, 4);
+  segments << 2, 1.5, 2, 8.5, 2, 8.5, 18, 8.5, 2, 8.5, 2, 9.5;
+  const mapmatch::RoadNetwork corridors(segments, Eigen::VectorXi(), mapmatch::RoadNetworkOptions());
+  const FloorPlan plan = RoomPlan();
+  const wifi::RssModel model(RoomMap());
+  TrackerOptions o = SmallOptions(2000);
+  o.corridor_kappa = 4.0;
+  ParticleTracker tracker(&plan, &model, &corridors, o);
+  tracker.InitializeKnown(0.0, Eigen::Vector2d(2.0, 1.5), 0, 0.0);
+  Eigen::Vector2d truth(2.0, 1.5);
+  TrackerEstimate e;
+  for (int k = 0; k < 30; ++k) {
+    const Eigen::Vector2d d = k < 10 ? Eigen::Vector2d(0.0, 0.7) : Eigen::Vector2d(0.7, 0.0);
+    truth += d;
+    e = tracker.Step(Step(0.5 * (k + 1), d.x(), d.y(), 0.03));
+    // Every particle is on the network.
+    const RowMatrixXd p = tracker.ParticleStates();
+    for (Eigen::Index i = 0; i < p.rows(); i += 97) {
+      ASSERT_LT(corridors.Nearest(p.row(i).head<2>().transpose()).distance_m, 1e-9);
+    }
+    if (k % 5 == 4) e = tracker.Wifi(ScanAt(model, 0.5 * (k + 1), truth.x(), truth.y()));
+  }
+  EXPECT_LT((e.mean_m - truth).norm(), 1.0);
+  // Without corridors, SetParticles is available; in corridor mode it is refused.
+  EXPECT_THROW(tracker.SetParticles(tracker.ParticleStates(), tracker.ParticleFloorIndices()), std::invalid_argument);
+}
+
+TEST(ParticleTracker, FixedLagSmootherReportsThePositionLagStepsBack) {
+  const FloorPlan plan = RoomPlan();
+  TrackerOptions o = SmallOptions(500);
+  o.smoothing_lag_steps = 3;
+  ParticleTracker tracker(&plan, nullptr, nullptr, o);
+  tracker.InitializeKnown(0.0, Eigen::Vector2d(2.0, 1.5), 0, 0.0);
+  std::vector<Eigen::Vector2d> means;
+  for (int k = 0; k < 8; ++k) {
+    const TrackerEstimate e = tracker.Step(Step(0.5 * (k + 1), 0.0, 0.7, 0.01));
+    means.push_back(e.mean_m);
+    if (k < 3) {
+      EXPECT_TRUE(std::isnan(e.lagged_m.x()));
+    } else {
+      // No WiFi and no walls hit: the lagged estimate is the filter's estimate 3 steps back.
+      EXPECT_NEAR((e.lagged_m - means[static_cast<size_t>(k - 3)]).norm(), 0.0, 0.05);
+    }
+  }
 }
 
 TEST(Track, SmootherIsCloserToTheTruthThanTheFilterOnAverage) {
