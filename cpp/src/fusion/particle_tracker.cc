@@ -189,12 +189,10 @@ struct ParticleTracker::Impl {
     }
     Eigen::VectorXd ll(total);
     ForBlocks(total, [&](int, int begin, int end, RandomStream&) {
-      std::vector<int> hints(model->floors().size(), -1);
       for (int i = begin; i < end; ++i) {
         const int f = (*candidate_floor)[i];
-        const int mf = model_floor[f];
-        ll[i] = wifi->LogLikelihood(candidates[f]((*candidate_row)[i], 0), candidates[f]((*candidate_row)[i], 1), mf,
-                                    obs, &hints[mf]);
+        ll[i] = wifi->LogLikelihood(candidates[f]((*candidate_row)[i], 0), candidates[f]((*candidate_row)[i], 1),
+                                    model_floor[f], obs);
       }
     });
     return ll;
@@ -730,10 +728,8 @@ TrackerEstimate ParticleTracker::Wifi(const WifiObservation& observation) {
   }
   Eigen::VectorXd ll(s.n);
   s.ForBlocks(s.n, [&](int, int begin, int end, RandomStream&) {
-    std::vector<int> hints(s.model->floors().size(), -1);
     for (int i = begin; i < end; ++i) {
-      const int mf = s.model_floor[s.floor[i]];
-      ll[i] = s.wifi->LogLikelihood(s.x[i], s.y[i], mf, observation, &hints[mf]);
+      ll[i] = s.wifi->LogLikelihood(s.x[i], s.y[i], s.model_floor[s.floor[i]], observation);
     }
   });
   s.log_w += ll;

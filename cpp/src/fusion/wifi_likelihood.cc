@@ -147,18 +147,28 @@ void WifiLikelihood::CheckObservation(const WifiObservation& observation, const 
 }
 
 double WifiLikelihood::LogLikelihood(double x_m, double y_m, int model_floor_index,
-                                     const WifiObservation& observation, int* hint) const {
+                                     const WifiObservation& observation) const {
   if (observation.access_points.empty()) return 0.0;
-  // Per-thread scratch: the fields of every AP at z (the interpolation is the cost, not the sum).
-  thread_local Eigen::VectorXd mean, variance;
-  model_.MeanAndVariance(Eigen::Vector2d(x_m, y_m), model_floor_index, &mean, &variance, hint);
+  // Locate once (from the interpolator's coarse grid: particle clouds are scattered), then
+  // interpolate only the fields of the observation's APs: mean_i and variance_i are columns i
+  // and K + i of the model's fields (wifi/rss_model.h), the variance floored as in RssModel.
+  const wifi::DelaunayInterpolator& interp = model_.interpolator(model_floor_index);
+  const wifi::BarycentricLocation at = interp.Locate(Eigen::Vector2d(x_m, y_m));
+  const wifi::RowMatrixXd& fields = interp.fields();
+  const double* f0 = fields.row(at.vertices[0]).data();
+  const double* f1 = fields.row(at.vertices[1]).data();
+  const double* f2 = fields.row(at.vertices[2]).data();
+  const double b0 = at.weights[0], b1 = at.weights[1], b2 = at.weights[2];
+  const int k = model_.num_access_points();
+  const double floor_db2 = model_.options().variance_floor_db2;
   constexpr double kHalfLog2Pi = 0.91893853320467274178;
   double total = 0.0;
   const size_t n = observation.access_points.size();
   for (size_t i = 0; i < n; ++i) {
     const int ap = observation.access_points[i];
-    const double var = variance[ap];
-    const double r = observation.rss_dbm[i] - mean[ap];
+    const double mean = b0 * f0[ap] + b1 * f1[ap] + b2 * f2[ap];
+    const double var = std::max(b0 * f0[k + ap] + b1 * f1[k + ap] + b2 * f2[k + ap], floor_db2);
+    const double r = observation.rss_dbm[i] - mean;
     const double term = std::min(0.5 * r * r / var, options_.max_term);
     total -= kHalfLog2Pi + 0.5 * std::log(var) + term;
   }

@@ -333,6 +333,19 @@ bool DelaunayInterpolator::Interpolate(const Eigen::Vector2d& z_m, Eigen::Ref<Ei
   return inside;
 }
 
+BarycentricLocation DelaunayInterpolator::Locate(const Eigen::Vector2d& z_m) const {
+  const Impl& s = *impl_;
+  int t;
+  double ex, ey;
+  BarycentricLocation out;
+  out.inside = s.Locate(s.GridStart(z_m[0], z_m[1]), z_m[0], z_m[1], &t, &ex, &ey, out.weights);
+  const auto& tri = s.triangles[static_cast<size_t>(t)];
+  for (int j = 0; j < 3; ++j) out.vertices[j] = tri.vertex[j];
+  return out;
+}
+
+const RowMatrixXd& DelaunayInterpolator::fields() const { return impl_->fields; }
+
 InterpolationBatch DelaunayInterpolator::InterpolateBatch(const Eigen::Ref<const RowMatrixXd>& queries_m,
                                                           bool sequential, int num_threads) const {
   CheckShape(queries_m, -1, 2, "queries_m");

@@ -163,6 +163,32 @@ TEST(StepMotion, RejectsBadSteps) {
   EXPECT_THROW(CheckStepInput(s, "step"), std::invalid_argument);  // indefinite
 }
 
+TEST(WifiLikelihood, EqualsTheRssModelsInterpolatedGaussianInsideAndOutsideTheHull) {
+  const wifi::RssModel model(RoomMap());
+  WifiLikelihoodOptions o;
+  o.tempering = 0.3;
+  o.max_term = 5.0;
+  const WifiLikelihood likelihood(model, o);
+  WifiObservation obs;
+  obs.access_points = {0, 2, 3};
+  obs.rss_dbm = {-55.0, -70.0, -62.0};
+  RandomStream rng(9);
+  for (int q = 0; q < 200; ++q) {
+    const double x = rng.Uniform(-5.0, 25.0), y = rng.Uniform(-5.0, 15.0);
+    Eigen::VectorXd mean, var;
+    int hint = -1;
+    model.MeanAndVariance(Eigen::Vector2d(x, y), 0, &mean, &var, &hint);
+    double expected = 0.0;
+    for (size_t i = 0; i < obs.access_points.size(); ++i) {
+      const int a = obs.access_points[i];
+      const double r = obs.rss_dbm[i] - mean[a];
+      expected -= 0.5 * std::log(2.0 * M_PI * var[a]) + std::min(0.5 * r * r / var[a], 5.0);
+    }
+    EXPECT_NEAR(likelihood.LogLikelihood(x, y, 0, obs), 0.3 * expected, 1e-9) << x << ", " << y;
+  }
+  EXPECT_EQ(likelihood.LogLikelihood(1.0, 1.0, 0, WifiObservation()), 0.0);
+}
+
 TEST(WifiObservations, ScanTimeModeDropsStaleReadings) {
   Eigen::VectorXd t(2);
   t << 1.0, 3.0;

@@ -82,10 +82,9 @@ class WifiLikelihood {
   const wifi::RssModel& model() const { return model_; }
   const WifiLikelihoodOptions& options() const { return options_; }
   /// Tempered log-likelihood of `observation` at (x, y) [m] on the model's floor
-  /// `model_floor_index`. `hint` carries the interpolator's last triangle (start at -1; one per
-  /// thread and floor). Empty observation: 0.
-  double LogLikelihood(double x_m, double y_m, int model_floor_index, const WifiObservation& observation,
-                       int* hint) const;
+  /// `model_floor_index`: one point location (DelaunayInterpolator::Locate) and the fields of the
+  /// observation's APs only. Thread-safe. Empty observation: 0.
+  double LogLikelihood(double x_m, double y_m, int model_floor_index, const WifiObservation& observation) const;
   /// Checks that every AP index of `observation` is a column of the model and every RSS finite.
   void CheckObservation(const WifiObservation& observation, const char* argument) const;
 

@@ -33,6 +33,13 @@ struct InterpolationBatch {
   RowMatrixXd evaluated_at_m;    ///< Q x 2: the query, or its projection onto the hull
 };
 
+/// Where a point falls in the triangulation: f(z) = Σ_j weights[j] f(vertices[j]) for every field.
+struct BarycentricLocation {
+  int vertices[3] = {0, 0, 0};     ///< point indices (rows of positions / fields)
+  double weights[3] = {0, 0, 0};   ///< barycentric coordinates (of the hull projection when outside)
+  bool inside = true;              ///< z inside the convex hull
+};
+
 class DelaunayInterpolator {
  public:
   /// Triangulates positions_m (N x 2) [m] carrying fields (N x F). Throws
@@ -67,6 +74,12 @@ class DelaunayInterpolator {
                             Eigen::Ref<Eigen::Matrix<bool, Eigen::Dynamic, 1>> inside,
                             Eigen::Ref<RowMatrixXd> evaluated_at_m) const;
 
+  /// Locates z_m (projected onto the hull when outside) from the coarse grid of faces: the fast
+  /// path for scattered queries (particle clouds) that need only some fields; combine with
+  /// fields(). Thread-safe.
+  BarycentricLocation Locate(const Eigen::Vector2d& z_m) const;
+  /// The fields at the data points (N x F), as given at construction.
+  const RowMatrixXd& fields() const;
   /// Nearest point of the triangulated region (the point itself when inside).
   Eigen::Vector2d ClampToHull(const Eigen::Vector2d& z_m) const;
 
