@@ -41,7 +41,8 @@ def cmd_synthetic(args: argparse.Namespace) -> int:
 def cmd_tune(args: argparse.Namespace) -> int:
     from indoorloc.experiments import fusion_tuning as ft
 
-    rows = ft.grid_search(seeds=list(range(args.seed, args.seed + args.walks)), threads=args.threads)
+    rows = ft.grid_search(seeds=list(range(args.seed, args.seed + args.walks)), threads=args.threads,
+                          grid=ft.GRIDS[args.round])
     print(ft.markdown_table(rows))
     if args.json:
         Path(args.json).write_text(json.dumps(rows, indent=2) + "\n")
@@ -63,5 +64,6 @@ def add_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
     t.add_argument("--walks", type=int, default=20)
     t.add_argument("--seed", type=int, default=1000)
     t.add_argument("--threads", type=int, default=2)
+    t.add_argument("--round", type=int, default=2, choices=sorted((1, 2)), help="which grid (docs/fusion.md)")
     t.add_argument("--json", default=None)
     t.set_defaults(func=cmd_tune)
