@@ -128,6 +128,7 @@ WiFi (tempering, max_term, max_age_s, use_not_heard, not_heard_dbm) options are 
       .def_readwrite("start_position_sd_m", &TrackerOptions::start_position_sd_m)
       .def_readwrite("start_heading_offset_sd_rad", &TrackerOptions::start_heading_offset_sd_rad)
       .def_readwrite("start_scale_sd", &TrackerOptions::start_scale_sd)
+      .def_readwrite("unknown_start_heading_sd_rad", &TrackerOptions::unknown_start_heading_sd_rad)
       .def_readwrite("candidate_spacing_m", &TrackerOptions::candidate_spacing_m)
       .def_readwrite("recovery_log_ratio", &TrackerOptions::recovery_log_ratio)
       .def_readwrite("recovery_scans", &TrackerOptions::recovery_scans)

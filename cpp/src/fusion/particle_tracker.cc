@@ -41,6 +41,8 @@ bool TrackerOptions::IsValid(std::string* error) const {
   if (!(std::isfinite(start_heading_offset_sd_rad) && start_heading_offset_sd_rad >= 0.0))
     return fail("start_heading_offset_sd_rad must be finite and >= 0");
   if (!(std::isfinite(start_scale_sd) && start_scale_sd >= 0.0)) return fail("start_scale_sd must be finite and >= 0");
+  if (std::isnan(unknown_start_heading_sd_rad) || unknown_start_heading_sd_rad < 0.0)
+    return fail("unknown_start_heading_sd_rad must be >= 0 (+inf: uniform on the circle)");
   if (!(std::isfinite(candidate_spacing_m) && candidate_spacing_m >= 0.05 && candidate_spacing_m <= 1000.0))
     return fail("candidate_spacing_m must be in [0.05, 1000]");
   if (std::isnan(recovery_log_ratio) || std::isinf(recovery_log_ratio)) return fail("recovery_log_ratio must be finite (<= 0 disables)");
@@ -225,8 +227,14 @@ struct ParticleTracker::Impl {
         px += rng.Uniform(-0.5 * h, 0.5 * h);
         py += rng.Uniform(-0.5 * h, 0.5 * h);
       }
-      PlaceFree(slots[j], px, py, f, rng.Uniform(-M_PI, M_PI));
+      PlaceFree(slots[j], px, py, f, UnknownOffset());
     }
+  }
+
+  // Heading offset of a particle placed without a known start.
+  double UnknownOffset() {
+    const double sd = options.unknown_start_heading_sd_rad;
+    return std::isinf(sd) ? rng.Uniform(-M_PI, M_PI) : sd * rng.Normal();
   }
 
   // Sets particle i at (px, py) on tracker floor f with offset o and a scale from the prior.
@@ -280,7 +288,7 @@ struct ParticleTracker::Impl {
         px = candidates[f](r, 0) + rng.Uniform(-0.5, 0.5) * options.candidate_spacing_m;
         py = candidates[f](r, 1) + rng.Uniform(-0.5, 0.5) * options.candidate_spacing_m;
       }
-      PlaceFree(i, px, py, static_cast<int>(f), rng.Uniform(-M_PI, M_PI));
+      PlaceFree(i, px, py, static_cast<int>(f), UnknownOffset());
     }
     log_w.setConstant(-std::log(static_cast<double>(n)));
   }

@@ -69,6 +69,7 @@ class TrackerOptions:
     start_position_sd_m: float
     start_heading_offset_sd_rad: float
     start_scale_sd: float
+    unknown_start_heading_sd_rad: float
     candidate_spacing_m: float
     recovery_log_ratio: float
     recovery_scans: int

@@ -63,6 +63,10 @@ struct TrackerOptions {
   double start_position_sd_m = 1.0;
   double start_heading_offset_sd_rad = 5.0 * M_PI / 180.0;
   double start_scale_sd = 0.1;
+  /// Unknown start and recovery: the heading offset is drawn uniformly on the circle (+inf), or
+  /// from N(0, sd²) [rad] when the PDR heading is already nearly in the floor frame (a phone's
+  /// rotation vector: docs/pdr_handheld.md).
+  double unknown_start_heading_sd_rad = std::numeric_limits<double>::infinity();
   /// Unknown start and recovery: spacing of the candidate grid over the walkable area [m].
   double candidate_spacing_m = 1.0;
   /// Recovery: log-ratio threshold [nats, tempered], scans in a row, fraction re-drawn;
