@@ -11,6 +11,7 @@ namespace py = pybind11;
 namespace indoorloc::bindings {
 void BindAnalog(py::module_& m);
 void BindCore(py::module_& m);
+void BindFusionFloorPlan(py::module_& m);
 void BindMapmatch(py::module_& m);
 void BindNetworkScale(py::module_& m);
 void BindNetwork(py::module_& m);
@@ -39,4 +40,6 @@ PYBIND11_MODULE(_core, m) {
   py::module_ wifi = m.def_submodule("wifi", "RSS signal maps, Delaunay interpolation, gradient tracker (paper 004).");
   indoorloc::bindings::BindWifi(wifi);
   indoorloc::bindings::BindWifiBaselines(wifi);
+  py::module_ fusion = m.def_submodule("fusion", "Particle-filter fusion of PDR, WiFi and a floor plan");
+  indoorloc::bindings::BindFusionFloorPlan(fusion);
 }
