@@ -867,7 +867,7 @@ FloorData BuildFloor(const FloorGeometry& input, int floor_index, const FloorPla
       int outline, obstacle;
     };
     std::vector<Crossing> crossings;
-    double area = 0.0;
+    double total_length = 0.0;
     for (int k = 0; k < lines; ++k) {
       const double y = oy0 + (k + 0.5) * dy;
       const int j = static_cast<int>(std::clamp(std::floor((y - d.gy) * d.inv_h), 0.0,
@@ -908,9 +908,10 @@ FloorData BuildFloor(const FloorGeometry& input, int floor_index, const FloorPla
           length += crossings[m + 1].x - crossings[m].x;
         }
       }
-      area += length * dy;
+      total_length += length;
     }
-    d.walkable_area = area;
+    // (sum of lengths) * height / lines: exact for axis-aligned plans with representable sizes.
+    d.walkable_area = total_length * oh / lines;
   }
   CheckArgument(d.walkable_area > 0.0, prefix,
                 "has no walkable area (its outlines are covered by obstacles)");

@@ -1,4 +1,5 @@
-"""File formats at the edge of indoorloc: dataset loaders (WiFi, foot IMU) and road-network files."""
+"""File formats at the edge of indoorloc: dataset loaders (WiFi, foot IMU), road-network files and
+floor plans (GeoJSON)."""
 
 from indoorloc.io.wifi_datasets import (
     RSS_RTT_GRID_M,
@@ -23,6 +24,16 @@ from indoorloc.io.pdr_datasets import (
     load_pyshoe_trial,
     load_xio,
 )
+from indoorloc.io.floor_plan import (
+    GeoJsonFloor,
+    floor_geometry_to_geojson,
+    load_floor_plan,
+    local_to_lonlat,
+    lonlat_to_local,
+    metres_per_degree,
+    read_geojson_floor,
+    write_geojson_floor,
+)
 from indoorloc.io.road_network import (
     grid_with_diagonals_segments,
     load_road_network,
@@ -33,6 +44,14 @@ from indoorloc.io.road_network import (
 )
 
 __all__ = [
+    "GeoJsonFloor",
+    "floor_geometry_to_geojson",
+    "load_floor_plan",
+    "local_to_lonlat",
+    "lonlat_to_local",
+    "metres_per_degree",
+    "read_geojson_floor",
+    "write_geojson_floor",
     "STANDARD_GRAVITY_MPS2",
     "ImuRecording",
     "MobgapTrial",
