@@ -852,13 +852,21 @@ FloorData BuildFloor(const FloorGeometry& input, int floor_index, const FloorPla
     }
   }
 
-  // Walkable area by horizontal scanlines: exact along each line (sorted crossings of the ring
-  // edges with winding counts), midpoint rule across lines spaced min(0.05 m, height / 2000).
+  // Walkable area by horizontal scanlines. Between consecutive vertex ordinates ("slabs") the
+  // walkable length L(y) of a horizontal line is linear (no vertex inside) except where edges of
+  // overlapping rings cross, so the midpoint rule per slab is exact for simple non-overlapping
+  // rings; slabs taller than height / 1000 are split so that the error at such crossings stays
+  // second order. L(y) itself is exact: sorted crossings of the ring edges with winding counts.
   // A line in grid row j meets only ring edges listed in that row's cells.
   {
-    const double oh = oy1 - oy0;
-    const int lines = static_cast<int>(std::ceil(oh / std::min(0.05, oh / 2000.0)));
-    const double dy = oh / lines;
+    std::vector<double> ys{oy0, oy1};
+    for (int e = 0; e < d.num_ring_edges; ++e) {
+      const double y = d.edges[static_cast<size_t>(e)].y0;
+      if (y > oy0 && y < oy1) ys.push_back(y);
+    }
+    std::sort(ys.begin(), ys.end());
+    ys.erase(std::unique(ys.begin(), ys.end()), ys.end());
+    const double max_slab = (oy1 - oy0) / 1000.0;
     std::vector<std::int32_t> stamp(d.edges.size(), -1);
     std::vector<std::int32_t> row_edges;
     int row = -1;
@@ -867,9 +875,7 @@ FloorData BuildFloor(const FloorGeometry& input, int floor_index, const FloorPla
       int outline, obstacle;
     };
     std::vector<Crossing> crossings;
-    double total_length = 0.0;
-    for (int k = 0; k < lines; ++k) {
-      const double y = oy0 + (k + 0.5) * dy;
+    auto walkable_length = [&](double y) {
       const int j = static_cast<int>(std::clamp(std::floor((y - d.gy) * d.inv_h), 0.0,
                                                 static_cast<double>(d.ny - 1)));
       if (j != row) {
@@ -908,10 +914,18 @@ FloorData BuildFloor(const FloorGeometry& input, int floor_index, const FloorPla
           length += crossings[m + 1].x - crossings[m].x;
         }
       }
-      total_length += length;
+      return length;
+    };
+    double area = 0.0;
+    for (size_t k = 0; k + 1 < ys.size(); ++k) {
+      const double a = ys[k], b = ys[k + 1];
+      const int pieces = std::max(1, static_cast<int>(std::ceil((b - a) / max_slab)));
+      const double step = (b - a) / pieces;
+      double length_sum = 0.0;
+      for (int m = 0; m < pieces; ++m) length_sum += walkable_length(a + (m + 0.5) * step);
+      area += length_sum * (b - a) / pieces;
     }
-    // (sum of lengths) * height / lines: exact for axis-aligned plans with representable sizes.
-    d.walkable_area = total_length * oh / lines;
+    d.walkable_area = area;
   }
   CheckArgument(d.walkable_area > 0.0, prefix,
                 "has no walkable area (its outlines are covered by obstacles)");

@@ -82,16 +82,20 @@ class FloorPlan {
   const std::vector<int>& floors() const;
   /// Index of floor number `floor`; throws std::invalid_argument if the plan has no such floor.
   int FloorIndex(int floor) const;
-  /// The geometry a floor was built from (rings without repeated closing vertex).
+  /// The geometry a floor was built from (rings in their given orientation, without repeated
+  /// closing or consecutive vertices).
   const FloorGeometry& geometry(int floor_index) const;
   /// Number of wall edges (ring edges + wall segments) on a floor.
   int num_edges(int floor_index) const;
-  /// All wall edges of a floor as E x 4 rows (x0, y0, x1, y1) [m] (for plots and peers).
+  /// All wall edges of a floor as E x 4 rows (x0, y0, x1, y1) [m] (for plots and peers):
+  /// outline edges, obstacle edges (each ring counter-clockwise), then the walls.
   RowMatrixXd Edges(int floor_index) const;
   /// Bounding box of a floor's outlines: (min_x, min_y, max_x, max_y) [m].
   Eigen::Vector4d Bounds(int floor_index) const;
-  /// Walkable area [m^2], estimated once at construction on a 0.25 m-or-finer sample grid
-  /// (relative error well below 1 % for plans whose features exceed a few cells).
+  /// Walkable area [m^2], computed once at construction by horizontal scanlines: exact along
+  /// each line, one line per slab between consecutive vertex ordinates (slabs split to at most
+  /// 1/1000 of the height), hence exact up to rounding for rings that do not overlap, and within
+  /// a second-order error where rings overlap.
   double WalkableArea(int floor_index) const;
   /// Side of the index grid's cells on a floor [m].
   double CellSize(int floor_index) const;
