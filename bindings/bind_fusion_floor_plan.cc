@@ -150,7 +150,8 @@ Parameters
 ----------
 cell_size_m : float, default 0
     Side of the grid's square cells [m]; <= 0 chooses it per floor so that a cell holds about
-    ``target_edges_per_cell`` edges (bounded to [0.25, 10] m and to ``max_cells`` cells).
+    ``target_edges_per_cell`` edges on average, bounded to [0.25, 1] m (a pedestrian step then
+    visits one to three cells) and to ``max_cells`` cells.
 target_edges_per_cell : float, default 2
 max_cells : int, default 4000000
 check_self_intersection : bool, default True

@@ -50,8 +50,8 @@ struct FloorGeometry {
 
 struct FloorPlanOptions {
   /// Side of the index grid's cells [m]; <= 0 chooses it per floor so that a cell holds about
-  /// `target_edges_per_cell` edges on average (bounded to [0.25, 10] m and to at most
-  /// `max_cells` cells).
+  /// `target_edges_per_cell` edges on average over the floor's box, bounded to [0.25, 1] m (a
+  /// pedestrian step then visits one to three cells) and to at most `max_cells` cells.
   double cell_size_m = 0.0;
   double target_edges_per_cell = 2.0;
   int max_cells = 4'000'000;
