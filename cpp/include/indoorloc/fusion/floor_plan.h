@@ -14,11 +14,13 @@
 // Spatial index: a uniform grid of square cells over the floor's bounding box; each cell lists
 // the edges that overlap it. A step visits the cells its segment passes through (Amanatides &
 // Woo traversal), so a query costs O(edges in a few cells), not O(all edges). For IsWalkable
-// each cell stores which rings contain its anchor point (a point near the cell centre, computed
-// once by exact crossing numbers); a query then toggles those memberships by the ring edges
-// that the segment anchor -> p crosses inside the cell. Degenerate positions (a query exactly on
-// an edge or a segment through a vertex) have probability zero for continuous particles; they
-// are resolved conservatively (touching a wall counts as crossing it).
+// each cell stores how many outlines and how many obstacles contain its anchor point (a point
+// near the cell centre on no edge; the counts are computed once by exact crossing numbers along
+// a chain of anchors); a query then adds the signed crossings of the ring edges that the
+// segment anchor -> p crosses inside the cell. All predicates are exact (a floating-point filter
+// with an exact fallback). Degenerate positions (a query exactly on an edge, a segment through
+// a vertex) are resolved consistently and conservatively: touching a wall counts as crossing
+// it, a point on an obstacle's boundary is not walkable.
 //
 // Paper link: the floor plan constraint of paper 002 §VI (PDR matched with the building's map)
 // and paper 000 §IV (map matching); see docs/fusion.md.
