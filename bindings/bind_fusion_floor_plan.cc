@@ -1,4 +1,8 @@
-// Python bindings of the fusion floor plan: walkable space with batch geometric queries.
+// Python bindings of the fusion subsystem's floor plan: FloorGeometry, FloorPlanOptions and
+// FloorPlan with batched (numpy) queries.
+#include <cmath>
+#include <cstdint>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -12,60 +16,148 @@
 
 namespace indoorloc::bindings {
 
-using namespace indoorloc::fusion;  // NOLINT: binding file
+using fusion::FloorGeometry;
+using fusion::FloorPlan;
+using fusion::FloorPlanOptions;
 
 namespace {
 
-RowMatrixXd RingArg(const py::handle& obj, const std::string& name) {
-  MatrixArg m = ToMatrix(obj, name.c_str(), -1, 2);
-  return m.map;
+// A list of rings (each array-like (M, 2) [m]) -> matrices, naming "<name>[k]" on errors.
+std::vector<RowMatrixXd> ToRings(const py::handle& obj, const std::string& name) {
+  std::vector<RowMatrixXd> rings;
+  if (obj.is_none()) return rings;
+  if (!py::isinstance<py::sequence>(obj) || py::isinstance<py::str>(obj)) {
+    ThrowInvalidArgument(name, "expected a list of (M, 2) arrays");
+  }
+  // A single (M, 2) array passed instead of a list of them is a common slip: say so.
+  if (py::isinstance<py::array>(obj) && py::cast<py::array>(obj).ndim() == 2) {
+    ThrowInvalidArgument(name, "expected a list of (M, 2) arrays, got one 2-D array "
+                               "(wrap it in a list)");
+  }
+  const py::sequence seq = py::reinterpret_borrow<py::sequence>(obj);
+  for (size_t k = 0; k < seq.size(); ++k) {
+    const std::string item = name + "[" + std::to_string(k) + "]";
+    MatrixArg m = ToMatrix(seq[k], item.c_str(), -1, 2);
+    rings.emplace_back(m.map);
+  }
+  return rings;
 }
 
-Eigen::VectorXi FloorIndicesArg(const py::object& obj, Eigen::Index count) {
-  // A scalar applies to every query.
-  const py::object arr = py::module_::import("numpy").attr("atleast_1d")(obj);
-  VectorArg v = ToVector(arr, "floor_indices");
-  CheckArgument(v.map.size() == 1 || v.map.size() == count, "floor_indices",
-                "must have one entry or one per query (" + std::to_string(count) + "), got " + std::to_string(v.map.size()));
+Eigen::VectorXi ToFloorIndices(const py::handle& obj, const char* name) {
+  if (py::isinstance<py::int_>(obj) && !py::isinstance<py::bool_>(obj)) {
+    return Eigen::VectorXi::Constant(1, obj.cast<int>());
+  }
+  VectorArg v = ToVector(obj, name);
   Eigen::VectorXi out(v.map.size());
   for (Eigen::Index i = 0; i < v.map.size(); ++i) {
-    CheckArgument(v.map[i] == std::floor(v.map[i]), "floor_indices", DescribeEntry(i, 0, true) + " is not an integer");
-    out[i] = static_cast<int>(v.map[i]);
+    const double x = v.map[i];
+    if (x != std::floor(x) || std::abs(x) > 2e9) {
+      ThrowInvalidArgument(name, DescribeEntry(i, 0, true) + " is not an integer");
+    }
+    out[i] = static_cast<int>(x);
   }
   return out;
 }
+
+py::list RingsToList(const std::vector<RowMatrixXd>& rings) {
+  py::list out;
+  for (const RowMatrixXd& r : rings) out.append(py::cast(r));
+  return out;
+}
+
+py::array_t<bool> ToNumpyBool(const fusion::VectorXb& v) {
+  py::array_t<bool> out(v.size());
+  bool* data = out.mutable_data();
+  for (Eigen::Index i = 0; i < v.size(); ++i) data[i] = v[i];
+  return out;
+}
+
+std::string GeometryRepr(const FloorGeometry& g) {
+  std::ostringstream out;
+  out << "<FloorGeometry floor " << g.floor << ": " << g.outlines.size() << " outline(s), "
+      << g.obstacles.size() << " obstacle(s), " << g.walls.rows() << " wall(s)>";
+  return out.str();
+}
+
+const char* kBatchNote = R"doc(
+floor_indices : int or (Q,) int array, default 0
+    Index into ``floors`` (not the floor number; see ``floor_index``): one per query, or a
+    single one for all queries.
+num_threads : int, default 1
+    Threads to use (<= 0: all hardware threads). Results do not depend on it.)doc";
 
 }  // namespace
 
 void BindFusionFloorPlan(py::module_& m) {
   py::class_<FloorGeometry>(m, "FloorGeometry", R"doc(
-One floor's geometry in metres: outlines (list of (M, 2) rings whose union is the floor area),
-obstacles (list of rings removed from it: shops, rooms, columns, holes) and walls ((W, 4) thin
-wall segments x0, y0, x1, y1).)doc")
-      .def(py::init([](int floor, const py::list& outlines, const py::list& obstacles, const py::object& walls) {
+The geometry of one floor, in metres in the floor frame.
+
+Parameters
+----------
+floor : int, default 0
+    Floor number (the numbering of the signal map's floors).
+outlines : list of (M, 2) float arrays [m]
+    Closed rings (a repeated closing vertex is accepted) whose union is the floor's area.
+obstacles : list of (M, 2) float arrays [m], optional
+    Rings removed from the area (shops, rooms, columns, the holes of a polygon).
+walls : (W, 4) float array [m], optional
+    Thin walls as segments, rows (x0, y0, x1, y1).
+
+Walkable = inside at least one outline and inside no obstacle. Every ring edge and every wall
+is a wall for ``FloorPlan.crosses_wall``.)doc")
+      .def(py::init([](int floor, const py::object& outlines, const py::object& obstacles,
+                       const py::object& walls) {
              FloorGeometry g;
              g.floor = floor;
-             for (size_t i = 0; i < outlines.size(); ++i) g.outlines.push_back(RingArg(outlines[i], "outlines[" + std::to_string(i) + "]"));
-             for (size_t i = 0; i < obstacles.size(); ++i) g.obstacles.push_back(RingArg(obstacles[i], "obstacles[" + std::to_string(i) + "]"));
-             if (!walls.is_none()) {
-               MatrixArg w = ToMatrix(walls, "walls", -1, 4);
-               g.walls = w.map;
+             g.outlines = ToRings(outlines, "outlines");
+             g.obstacles = ToRings(obstacles, "obstacles");
+             if (!walls.is_none() && ToDoubleArray(walls, "walls").size() > 0) {
+               MatrixArg w = ToMatrix(walls, "walls", -1, -1);
+               if (w.map.size() > 0) {
+                 CheckArgument(w.map.cols() == 4, "walls",
+                               "expected shape (W, 4) rows (x0, y0, x1, y1), got (" +
+                                   std::to_string(w.map.rows()) + ", " +
+                                   std::to_string(w.map.cols()) + ")");
+                 g.walls = w.map;
+               }
              }
              return g;
            }),
-           py::arg("floor") = 0, py::arg("outlines") = py::list(), py::arg("obstacles") = py::list(),
-           py::arg("walls") = py::none())
-      .def_readonly("floor", &FloorGeometry::floor)
-      .def_readonly("outlines", &FloorGeometry::outlines)
-      .def_readonly("obstacles", &FloorGeometry::obstacles)
-      .def_readonly("walls", &FloorGeometry::walls)
-      .def("__repr__", [](const FloorGeometry& g) {
-        return "<FloorGeometry floor " + std::to_string(g.floor) + ": " + std::to_string(g.outlines.size()) + " outline(s), " +
-               std::to_string(g.obstacles.size()) + " obstacle(s), " + std::to_string(g.walls.rows()) + " wall(s)>";
-      });
+           py::arg("floor") = 0, py::arg("outlines") = py::list(),
+           py::arg("obstacles") = py::list(), py::arg("walls") = py::none())
+      .def_readwrite("floor", &FloorGeometry::floor, "Floor number.")
+      .def_property(
+          "outlines", [](const FloorGeometry& g) { return RingsToList(g.outlines); },
+          [](FloorGeometry& g, const py::object& rings) { g.outlines = ToRings(rings, "outlines"); },
+          "Outline rings: list of (M, 2) arrays [m] (copies).")
+      .def_property(
+          "obstacles", [](const FloorGeometry& g) { return RingsToList(g.obstacles); },
+          [](FloorGeometry& g, const py::object& rings) { g.obstacles = ToRings(rings, "obstacles"); },
+          "Obstacle rings: list of (M, 2) arrays [m] (copies).")
+      .def_property(
+          "walls", [](const FloorGeometry& g) { return g.walls; },
+          [](FloorGeometry& g, const py::object& walls) {
+            MatrixArg w = ToMatrix(walls, "walls", -1, 4);
+            g.walls = w.map;
+          },
+          "Wall segments (W, 4) rows (x0, y0, x1, y1) [m] (a copy).")
+      .def("__repr__", &GeometryRepr);
 
-  py::class_<FloorPlanOptions>(m, "FloorPlanOptions", "Index grid of the floor plan.")
-      .def(py::init([](double cell_size_m, double target_edges_per_cell, int max_cells, bool check_self_intersection) {
+  py::class_<FloorPlanOptions>(m, "FloorPlanOptions", R"doc(
+Options of the floor plan's index.
+
+Parameters
+----------
+cell_size_m : float, default 0
+    Side of the grid's square cells [m]; <= 0 chooses it per floor so that a cell holds about
+    ``target_edges_per_cell`` edges on average, bounded to [0.25, 1] m (a pedestrian step then
+    visits one to three cells) and to ``max_cells`` cells.
+target_edges_per_cell : float, default 2
+max_cells : int, default 4000000
+check_self_intersection : bool, default True
+    Reject rings whose edges cross each other (one indexed pass at construction).)doc")
+      .def(py::init([](double cell_size_m, double target_edges_per_cell, int max_cells,
+                       bool check_self_intersection) {
              FloorPlanOptions o;
              o.cell_size_m = cell_size_m;
              o.target_edges_per_cell = target_edges_per_cell;
@@ -74,86 +166,190 @@ wall segments x0, y0, x1, y1).)doc")
              ValidateOptions(o);
              return o;
            }),
-           py::arg("cell_size_m") = 0.0, py::arg("target_edges_per_cell") = 2.0, py::arg("max_cells") = 4'000'000,
-           py::arg("check_self_intersection") = true)
+           py::arg("cell_size_m") = 0.0, py::arg("target_edges_per_cell") = 2.0,
+           py::arg("max_cells") = 4'000'000, py::arg("check_self_intersection") = true)
       .def_readwrite("cell_size_m", &FloorPlanOptions::cell_size_m)
       .def_readwrite("target_edges_per_cell", &FloorPlanOptions::target_edges_per_cell)
       .def_readwrite("max_cells", &FloorPlanOptions::max_cells)
-      .def_readwrite("check_self_intersection", &FloorPlanOptions::check_self_intersection);
+      .def_readwrite("check_self_intersection", &FloorPlanOptions::check_self_intersection)
+      .def("__repr__", [](const FloorPlanOptions& o) {
+        std::ostringstream out;
+        out << "FloorPlanOptions(cell_size_m=" << o.cell_size_m
+            << ", target_edges_per_cell=" << o.target_edges_per_cell
+            << ", max_cells=" << o.max_cells << ", check_self_intersection="
+            << (o.check_self_intersection ? "True" : "False") << ")";
+        return out.str();
+      });
 
-  py::class_<FloorPlan, std::shared_ptr<FloorPlan>>(m, "FloorPlan", R"doc(
-A building's walkable space, floor by floor, with indexed queries (walkable point, wall crossing of
-a step, distance to the nearest wall). Walkable = inside an outline and inside no obstacle.
+  // pybind11 copies docstrings; these are assembled once here.
+  static const std::string is_walkable_doc = std::string(R"doc(
+Whether points are walkable (inside an outline and inside no obstacle).
 
 Parameters
 ----------
-floors : list of FloorGeometry
-options : FloorPlanOptions)doc")
-      .def(py::init([](const std::vector<FloorGeometry>& floors, const FloorPlanOptions& options) {
+points_m : (Q, 2) float array [m])doc") + kBatchNote + R"doc(
+
+Returns
+-------
+(Q,) bool array)doc";
+  static const std::string crosses_wall_doc = std::string(R"doc(
+Whether steps p -> q intersect or touch any wall edge (exact predicates). The ends themselves
+are not tested for walkability.
+
+Parameters
+----------
+segments_m : (Q, 4) float array [m]
+    Rows (x0, y0, x1, y1).)doc") + kBatchNote + R"doc(
+
+Returns
+-------
+(Q,) bool array)doc";
+  static const std::string distance_doc = std::string(R"doc(
+Euclidean distance [m] from points to the nearest wall edge (ring edge or wall segment).
+
+Parameters
+----------
+points_m : (Q, 2) float array [m])doc") + kBatchNote + R"doc(
+
+Returns
+-------
+(Q,) float array [m])doc";
+
+  py::class_<FloorPlan>(m, "FloorPlan", R"doc(
+A building's walkable space, floor by floor, with indexed geometric queries: is a point walkable,
+does a step cross a wall, how far is the nearest wall. Immutable; queries release the GIL and
+may run on several threads.
+
+Parameters
+----------
+floors : FloorGeometry or list of FloorGeometry
+    One entry per floor; floor numbers must be distinct. ``floor_index`` arguments index this
+    list.
+options : FloorPlanOptions, optional
+
+Raises
+------
+ValueError
+    Naming the bad argument (e.g. ``floors[1].obstacles[3]``): no floors, a repeated floor
+    number, a floor without outline, a ring with fewer than 3 distinct vertices or zero area,
+    NaN or infinite coordinates, a self-intersecting ring, a zero-length wall, a floor with no
+    walkable area.)doc")
+      .def(py::init([](const py::object& floors, const FloorPlanOptions& options) {
+             std::vector<FloorGeometry> list;
+             if (py::isinstance<FloorGeometry>(floors)) {
+               list.push_back(floors.cast<FloorGeometry>());
+             } else {
+               if (!py::isinstance<py::sequence>(floors)) {
+                 ThrowInvalidArgument("floors", "expected a FloorGeometry or a list of them");
+               }
+               const py::sequence seq = py::reinterpret_borrow<py::sequence>(floors);
+               for (size_t k = 0; k < seq.size(); ++k) {
+                 if (!py::isinstance<FloorGeometry>(seq[k])) {
+                   ThrowInvalidArgument("floors[" + std::to_string(k) + "]",
+                                        "expected a FloorGeometry");
+                 }
+                 list.push_back(seq[k].cast<FloorGeometry>());
+               }
+             }
              py::gil_scoped_release release;
-             return std::make_shared<FloorPlan>(floors, options);
+             return new FloorPlan(std::move(list), options);
            }),
            py::arg("floors"), py::arg("options") = FloorPlanOptions())
       .def_property_readonly("num_floors", &FloorPlan::num_floors)
-      .def_property_readonly("floors", &FloorPlan::floors, "Floor numbers; floor_index arguments index this list.")
-      .def("floor_index", &FloorPlan::FloorIndex, py::arg("floor"))
-      .def("geometry", [](const FloorPlan& p, int f) {
-             CheckArgument(f >= 0 && f < p.num_floors(), "floor_index", "out of range");
-             return p.geometry(f);
-           }, py::arg("floor_index"))
-      .def("num_edges", [](const FloorPlan& p, int f) {
-             CheckArgument(f >= 0 && f < p.num_floors(), "floor_index", "out of range");
-             return p.num_edges(f);
-           }, py::arg("floor_index") = 0)
-      .def("edges", [](const FloorPlan& p, int f) {
-             CheckArgument(f >= 0 && f < p.num_floors(), "floor_index", "out of range");
-             return p.Edges(f);
-           }, py::arg("floor_index") = 0, "Wall edges (E, 4) x0, y0, x1, y1 [m].")
-      .def("bounds", [](const FloorPlan& p, int f) {
-             CheckArgument(f >= 0 && f < p.num_floors(), "floor_index", "out of range");
-             return Eigen::Vector4d(p.Bounds(f));
-           }, py::arg("floor_index") = 0, "(min_x, min_y, max_x, max_y) [m].")
-      .def("walkable_area", [](const FloorPlan& p, int f) {
-             CheckArgument(f >= 0 && f < p.num_floors(), "floor_index", "out of range");
-             return p.WalkableArea(f);
-           }, py::arg("floor_index") = 0, "Walkable area [m²] (estimated on a fine grid).")
-      .def("cell_size", [](const FloorPlan& p, int f) {
-             CheckArgument(f >= 0 && f < p.num_floors(), "floor_index", "out of range");
-             return p.CellSize(f);
-           }, py::arg("floor_index") = 0)
-      .def("is_walkable", [](const FloorPlan& p, const py::object& points_m, const py::object& floor_indices, int num_threads) {
-             MatrixArg q = ToMatrix(points_m, "points_m", -1, 2);
-             const Eigen::VectorXi f = FloorIndicesArg(floor_indices, q.map.rows());
-             py::gil_scoped_release release;
-             return Eigen::Matrix<bool, Eigen::Dynamic, 1>(p.IsWalkableBatch(q.map, f, num_threads));
+      .def_property_readonly("floors", &FloorPlan::floors,
+                             "Floor numbers in construction order (list of int).")
+      .def("floor_index", &FloorPlan::FloorIndex, py::arg("floor"),
+           "Index of floor number ``floor`` (ValueError if the plan has no such floor).")
+      .def("geometry", &FloorPlan::geometry, py::arg("floor_index") = 0,
+           "The FloorGeometry a floor was built from (closing vertices dropped; a copy).")
+      .def("num_edges", &FloorPlan::num_edges, py::arg("floor_index") = 0,
+           "Number of wall edges (ring edges + wall segments) of a floor.")
+      .def("edges", &FloorPlan::Edges, py::arg("floor_index") = 0, R"doc(
+All wall edges of a floor, (E, 4) rows (x0, y0, x1, y1) [m]: outline edges, obstacle edges (each
+ring counter-clockwise), then the walls.)doc")
+      .def("bounds", &FloorPlan::Bounds, py::arg("floor_index") = 0,
+           "Bounding box of a floor's outlines (min_x, min_y, max_x, max_y) [m].")
+      .def("walkable_area", &FloorPlan::WalkableArea, py::arg("floor_index") = 0,
+           "Walkable area of a floor [m^2] (computed at construction by scanlines).")
+      .def("cell_size", &FloorPlan::CellSize, py::arg("floor_index") = 0,
+           "Side of a floor's index cells [m].")
+      .def("is_walkable", [](const FloorPlan& plan, const py::object& points_m,
+                             const py::object& floor_indices, int num_threads) {
+             MatrixArg p = ToMatrix(points_m, "points_m", -1, 2);
+             const Eigen::VectorXi f = ToFloorIndices(floor_indices, "floor_indices");
+             fusion::VectorXb out;
+             {
+               py::gil_scoped_release release;
+               out = plan.IsWalkableBatch(p.map, f, num_threads);
+             }
+             return ToNumpyBool(out);
            },
            py::arg("points_m"), py::arg("floor_indices") = 0, py::arg("num_threads") = 1,
-           "Walkable flags (Q,) of points (Q, 2) [m] on floor indices (Q,) or one for all.")
-      .def("crosses_wall", [](const FloorPlan& p, const py::object& segments_m, const py::object& floor_indices, int num_threads) {
-             MatrixArg q = ToMatrix(segments_m, "segments_m", -1, 4);
-             const Eigen::VectorXi f = FloorIndicesArg(floor_indices, q.map.rows());
-             py::gil_scoped_release release;
-             return Eigen::Matrix<bool, Eigen::Dynamic, 1>(p.CrossesWallBatch(q.map, f, num_threads));
+           is_walkable_doc.c_str())
+      .def("crosses_wall", [](const FloorPlan& plan, const py::object& segments_m,
+                              const py::object& floor_indices, int num_threads) {
+             MatrixArg s = ToMatrix(segments_m, "segments_m", -1, 4);
+             const Eigen::VectorXi f = ToFloorIndices(floor_indices, "floor_indices");
+             fusion::VectorXb out;
+             {
+               py::gil_scoped_release release;
+               out = plan.CrossesWallBatch(s.map, f, num_threads);
+             }
+             return ToNumpyBool(out);
            },
            py::arg("segments_m"), py::arg("floor_indices") = 0, py::arg("num_threads") = 1,
-           "True where the segment (Q, 4) x0, y0, x1, y1 [m] intersects or touches a wall edge.")
-      .def("distance_to_wall", [](const FloorPlan& p, const py::object& points_m, const py::object& floor_indices, int num_threads) {
-             MatrixArg q = ToMatrix(points_m, "points_m", -1, 2);
-             const Eigen::VectorXi f = FloorIndicesArg(floor_indices, q.map.rows());
-             py::gil_scoped_release release;
-             return Eigen::VectorXd(p.DistanceToWallBatch(q.map, f, num_threads));
+           crosses_wall_doc.c_str())
+      .def("distance_to_wall", [](const FloorPlan& plan, const py::object& points_m,
+                                  const py::object& floor_indices, int num_threads) {
+             MatrixArg p = ToMatrix(points_m, "points_m", -1, 2);
+             const Eigen::VectorXi f = ToFloorIndices(floor_indices, "floor_indices");
+             Eigen::VectorXd out;
+             {
+               py::gil_scoped_release release;
+               out = plan.DistanceToWallBatch(p.map, f, num_threads);
+             }
+             return ToNumpy(out);
            },
            py::arg("points_m"), py::arg("floor_indices") = 0, py::arg("num_threads") = 1,
-           "Distance [m] (Q,) from each point (Q, 2) to the nearest wall edge.")
-      .def("sample_walkable", [](const FloorPlan& p, int n, int floor_index, RandomStream& rng) {
-             CheckArgument(n >= 0, "n", "must be >= 0");
-             CheckArgument(floor_index >= 0 && floor_index < p.num_floors(), "floor_index", "out of range");
-             py::gil_scoped_release release;
-             return p.SampleWalkable(n, floor_index, rng);
+           distance_doc.c_str())
+      .def("sample_walkable", [](const FloorPlan& plan, int n, int floor_index,
+                                 const py::object& rng) {
+             CheckArgument(n >= 0, "n", "must be >= 0, got " + std::to_string(n));
+             RowMatrixXd out;
+             if (py::isinstance<RandomStream>(rng)) {
+               RandomStream& stream = rng.cast<RandomStream&>();
+               py::gil_scoped_release release;
+               out = plan.SampleWalkable(n, floor_index, stream);
+             } else if (py::isinstance<py::int_>(rng)) {
+               RandomStream stream(rng.cast<std::uint64_t>());
+               py::gil_scoped_release release;
+               out = plan.SampleWalkable(n, floor_index, stream);
+             } else {
+               ThrowInvalidArgument("rng", "expected an indoorloc.core.RandomStream or an int seed");
+             }
+             return out;
            },
-           py::arg("n"), py::arg("floor_index"), py::arg("stream"), "n points (n, 2) [m] uniform over the walkable area.")
-      .def("report", &FloorPlan::Report)
-      .def("__repr__", [](const FloorPlan& p) { return "<" + p.Report() + ">"; });
+           py::arg("n"), py::arg("floor_index") = 0, py::arg("rng") = 0, R"doc(
+Draw points uniformly over a floor's walkable area (rejection in the outlines' bounding box).
+
+Parameters
+----------
+n : int
+    Number of points.
+floor_index : int, default 0
+rng : indoorloc.core.RandomStream or int, default 0
+    A stream (advanced in place) or a seed for a fresh stream.
+
+Returns
+-------
+(n, 2) float array [m]
+
+Raises
+------
+RuntimeError
+    If the walkable area is below 1e-6 of the bounding box.)doc")
+      .def("report", &FloorPlan::Report, "One line: floors, edges, cells, walkable area.")
+      .def("__repr__", [](const FloorPlan& plan) { return "<" + plan.Report() + ">"; });
 }
 
 }  // namespace indoorloc::bindings

@@ -5,6 +5,7 @@ A C++17 core (``indoorloc._core``) with Python facades, one per subsystem:
 - ``indoorloc.core``: seeded random streams, log-space weights, resampling.
 - ``mapmatch``, ``analog``, ``pdr``, ``network``, ``wifi``: the five methods of the papers in
   ``docs/`` (added as they are implemented).
+- ``fusion``: their combination (so far the floor plan: walkable space and wall crossings).
 
 Only the computational API is re-exported here; plots, file formats and the CLI live in
 ``indoorloc.plots``, ``indoorloc.io`` and ``indoorloc.cli`` and are imported on demand.
@@ -24,4 +25,4 @@ from indoorloc import wifi
 # One source of truth: project(VERSION) in CMakeLists.txt, compiled into _core.
 __version__: str = _core.__version__
 
-__all__ = ["__version__", "analog", "core", "mapmatch", "metrics", "network", "pdr", "pdr_handheld", "wifi"]
+__all__ = ["__version__", "analog", "core", "fusion", "mapmatch", "metrics", "network", "pdr", "pdr_handheld", "wifi"]

@@ -1,10 +1,13 @@
 """Fusion: one particle filter that tracks a walking person from PDR steps, a WiFi signal map and
 a floor plan (issue 14; the "future work" of papers 000 §IV and 002 §VI).
 
-- :class:`FloorPlan` / :class:`FloorGeometry`: walkable space per floor (outlines minus obstacles,
-  thin walls) with indexed batch queries: walkable points, wall crossings of steps, distance
-  to the nearest wall; :func:`floor_plan_from_geometries` builds one from any objects with
-  ``floor``, ``outlines``, ``obstacles``, ``walls`` (e.g. ``simulate.building``'s floors).
+- :class:`FloorPlan` / :class:`FloorGeometry` / :class:`FloorPlanOptions`: walkable space per
+  floor (outlines minus obstacles, thin walls) with indexed batch queries: walkable points, wall
+  crossings of steps, distance to the nearest wall, uniform sampling;
+  :func:`floor_plan_from_polygons` (one floor from rings or shapely-like polygons),
+  :func:`floor_plan_from_geometries` (from any objects with ``floor``, ``outlines``,
+  ``obstacles``, ``walls``, e.g. ``simulate.building``'s floors); GeoJSON plans through
+  :func:`indoorloc.io.load_floor_plan`.
 - :class:`ParticleTracker`: the streaming filter (``initialize_known`` / ``initialize_unknown``,
   ``step``, ``wifi``), state (x, y, floor, heading offset, stride scale), walls, WiFi (paper 004's
   interpolated Gaussian model, tempered, stale readings handled), corridor mode (paper 000's
@@ -27,7 +30,7 @@ The model, its equations and how each default was chosen: docs/fusion.md. Exampl
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Iterable, Optional, Sequence
+from typing import Any, Iterable, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -44,6 +47,115 @@ from indoorloc._core.fusion import (
     steps_from_polar,
 )
 from indoorloc._core.fusion import track as _core_track
+
+
+def _error(arg: str, msg: str) -> ValueError:
+    return ValueError(f"indoorloc: argument '{arg}': {msg}")
+
+
+def _ring_array(obj: Any, name: str) -> np.ndarray:
+    try:
+        ring = np.asarray(obj, dtype=float)
+    except (TypeError, ValueError):
+        raise _error(name, "cannot be converted to an (M, 2) float array") from None
+    if ring.ndim != 2 or ring.shape[1] < 2:
+        raise _error(name, f"expected an (M, 2) array of vertices, got shape {ring.shape}")
+    return np.ascontiguousarray(ring[:, :2])  # a third coordinate (altitude) is dropped
+
+
+def _coords(obj: Any) -> Any:
+    return getattr(obj, "coords", obj)
+
+
+def _is_single_ring(obj: Any) -> bool:
+    """True for an (M, 2) array-like (a ring), False for a list of rings or polygons."""
+    if hasattr(obj, "exterior") or hasattr(obj, "geoms"):
+        return False
+    try:
+        arr = np.asarray(_coords(obj), dtype=float)
+    except (TypeError, ValueError):
+        return False
+    return arr.ndim == 2
+
+
+def _split_polygons(obj: Any, name: str) -> Tuple[List[np.ndarray], List[np.ndarray]]:
+    """Rings and holes of a ring, a polygon-like object, or a list of them."""
+    if obj is None:
+        return [], []
+    if hasattr(obj, "geoms"):  # MultiPolygon-like
+        obj = list(obj.geoms)
+    if hasattr(obj, "exterior"):  # Polygon-like
+        holes = [_ring_array(_coords(h), f"{name}.interiors[{k}]") for k, h in enumerate(obj.interiors)]
+        return [_ring_array(_coords(obj.exterior), f"{name}.exterior")], holes
+    if _is_single_ring(obj):
+        return [_ring_array(_coords(obj), name)], []
+    rings: List[np.ndarray] = []
+    holes: List[np.ndarray] = []
+    try:
+        items = list(obj)
+    except TypeError:
+        raise _error(name, "expected a ring (M, 2), a polygon, or a list of them") from None
+    for k, item in enumerate(items):
+        r, h = _split_polygons(item, f"{name}[{k}]")
+        rings += r
+        holes += h
+    return rings, holes
+
+
+def floor_geometry(
+    outlines: Any,
+    obstacles: Any = (),
+    walls: Optional[Any] = None,
+    *,
+    floor: int = 0,
+) -> FloorGeometry:
+    """One floor's :class:`FloorGeometry` from rings or polygon-like objects.
+
+    Parameters
+    ----------
+    outlines : (M, 2) array-like, polygon-like, or a list of them [m]
+        The floor's area (union of the rings). Holes of polygon-like outlines (``interiors``)
+        become obstacles.
+    obstacles : list of (M, 2) array-likes or polygon-likes [m], optional
+        Areas removed from the floor. An obstacle is its exterior ring; holes of obstacles are
+        ignored (a hole inside an obstacle cannot be walkable in this model).
+    walls : (W, 4) array-like [m], optional
+        Thin wall segments, rows (x0, y0, x1, y1).
+    floor : int, default 0
+        Floor number.
+    """
+    outline_rings, holes = _split_polygons(outlines, "outlines")
+    obstacle_rings, _ = _split_polygons(obstacles, "obstacles")
+    if walls is not None:
+        walls = np.asarray(walls, dtype=float)
+        if walls.size == 0:
+            walls = None
+    return FloorGeometry(floor=int(floor), outlines=outline_rings, obstacles=obstacle_rings + holes,
+                         walls=walls)
+
+
+def floor_plan_from_polygons(
+    outlines: Any,
+    obstacles: Any = (),
+    walls: Optional[Any] = None,
+    *,
+    floor: int = 0,
+    options: Optional[FloorPlanOptions] = None,
+    **option_values: Any,
+) -> FloorPlan:
+    """A one-floor :class:`FloorPlan` from rings (see :func:`floor_geometry` for the arguments).
+
+    ``options`` or keyword arguments of :class:`FloorPlanOptions` (``cell_size_m=0.5``, ...)
+    configure the index. Raises ``ValueError`` naming the bad ring (``floors[0].obstacles[3]``)
+    for NaN coordinates, fewer than 3 distinct vertices, zero area, self-intersection or an
+    empty walkable area.
+    """
+    if options is not None and option_values:
+        raise _error("options", "give either an options object or option keywords, not both")
+    if options is None:
+        options = FloorPlanOptions(**option_values)
+    return FloorPlan([floor_geometry(outlines, obstacles, walls, floor=floor)], options)
+
 
 
 def floor_plan_from_geometries(floors: Iterable[object], options: Optional[FloorPlanOptions] = None) -> FloorPlan:
@@ -179,7 +291,9 @@ __all__ = [
     "TrackerSummary",
     "WifiObservation",
     "covariance_matrix",
+    "floor_geometry",
     "floor_plan_from_geometries",
+    "floor_plan_from_polygons",
     "make_wifi_observations",
     "rotate",
     "steps_from_polar",

@@ -1,5 +1,5 @@
 """File formats at the edge of indoorloc: dataset loaders (WiFi, foot IMU, Indoor Location
-Competition 2.0 walks) and road-network files.
+Competition 2.0 walks), road-network files and floor plans (GeoJSON).
 
 io imports nothing from indoorloc but the compiled ``indoorloc._core`` (plain arrays and
 dataclasses in, ``_core`` types out), so that facades may use it inside functions (e.g.
@@ -44,6 +44,16 @@ from indoorloc.io.ilc2020 import (
     read_ilc_site,
     read_ilc_walk,
 )
+from indoorloc.io.floor_plan import (
+    GeoJsonFloor,
+    floor_geometry_to_geojson,
+    load_floor_plan,
+    local_to_lonlat,
+    lonlat_to_local,
+    metres_per_degree,
+    read_geojson_floor,
+    write_geojson_floor,
+)
 from indoorloc.io.road_network import (
     grid_with_diagonals_segments,
     load_road_network,
@@ -66,6 +76,14 @@ __all__ = [
     "read_ilc_floor",
     "read_ilc_site",
     "read_ilc_walk",
+    "GeoJsonFloor",
+    "floor_geometry_to_geojson",
+    "load_floor_plan",
+    "local_to_lonlat",
+    "lonlat_to_local",
+    "metres_per_degree",
+    "read_geojson_floor",
+    "write_geojson_floor",
     "STANDARD_GRAVITY_MPS2",
     "ImuRecording",
     "MobgapTrial",

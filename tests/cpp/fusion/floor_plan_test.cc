@@ -243,7 +243,12 @@ TEST(FloorPlan, ObstacleCoveringTheOutlineBorderAndHolesInHoles) {
   EXPECT_TRUE(plan.IsWalkable(25, 5, 0));
   EXPECT_FALSE(plan.IsWalkable(15, 5, 0));
   EXPECT_NEAR(plan.WalkableArea(0), 200.0 - 9.0, 1e-9);
-  EXPECT_NEAR(plan.WalkableArea(0) + 9.0, 200.0, 1e-9);
+  // Horizontal edges between the scanlines of a fixed spacing: the area stays exact.
+  FloorGeometry h;
+  h.outlines.push_back(Box(0, 0, 40, 30));
+  h.obstacles.push_back(Box(18, 12, 22, 16));
+  h.obstacles.push_back(Box(30, 20.003, 36, 28.001));
+  EXPECT_NEAR(FloorPlan({h}).WalkableArea(0), 1200.0 - 16.0 - 6 * 7.998, 1e-9);
 }
 
 TEST(FloorPlan, TriangleAndCircleAreas) {
@@ -426,6 +431,20 @@ TEST(FloorPlan, RandomPlanWithManyEdgesMatchesBruteForce) {
       ASSERT_EQ(other.IsWalkable(x, y, 0), plan.IsWalkable(x, y, 0));
       ASSERT_DOUBLE_EQ(other.DistanceToWall(x, y, 0), plan.DistanceToWall(x, y, 0));
     }
+  }
+}
+
+TEST(FloorPlan, DistanceInASparseHallSkipsEmptyRings) {
+  FloorGeometry g;
+  g.outlines.push_back(Box(0, 0, 300, 200));
+  g.walls = Walls({{150, 100, 151, 101}, {20, 180, 20, 181}});
+  FloorPlan plan({g});
+  EXPECT_DOUBLE_EQ(plan.CellSize(0), 1.0);
+  const BruteForce brute(plan, 0);
+  RandomStream rng(21);
+  for (int q = 0; q < 500; ++q) {
+    const double x = rng.Uniform(-50, 350), y = rng.Uniform(-50, 250);
+    ASSERT_DOUBLE_EQ(plan.DistanceToWall(x, y, 0), brute.Distance(x, y)) << x << ", " << y;
   }
 }
 

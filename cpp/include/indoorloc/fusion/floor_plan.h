@@ -14,11 +14,13 @@
 // Spatial index: a uniform grid of square cells over the floor's bounding box; each cell lists
 // the edges that overlap it. A step visits the cells its segment passes through (Amanatides &
 // Woo traversal), so a query costs O(edges in a few cells), not O(all edges). For IsWalkable
-// each cell stores which rings contain its anchor point (a point near the cell centre, computed
-// once by exact crossing numbers); a query then toggles those memberships by the ring edges
-// that the segment anchor -> p crosses inside the cell. Degenerate positions (a query exactly on
-// an edge or a segment through a vertex) have probability zero for continuous particles; they
-// are resolved conservatively (touching a wall counts as crossing it).
+// each cell stores how many outlines and how many obstacles contain its anchor point (a point
+// near the cell centre on no edge; the counts are computed once by exact crossing numbers along
+// a chain of anchors); a query then adds the signed crossings of the ring edges that the
+// segment anchor -> p crosses inside the cell. All predicates are exact (a floating-point filter
+// with an exact fallback). Degenerate positions (a query exactly on an edge, a segment through
+// a vertex) are resolved consistently and conservatively: touching a wall counts as crossing
+// it, a point on an obstacle's boundary is not walkable.
 //
 // Paper link: the floor plan constraint of paper 002 §VI (PDR matched with the building's map)
 // and paper 000 §IV (map matching); see docs/fusion.md.
@@ -50,8 +52,8 @@ struct FloorGeometry {
 
 struct FloorPlanOptions {
   /// Side of the index grid's cells [m]; <= 0 chooses it per floor so that a cell holds about
-  /// `target_edges_per_cell` edges on average (bounded to [0.25, 10] m and to at most
-  /// `max_cells` cells).
+  /// `target_edges_per_cell` edges on average over the floor's box, bounded to [0.25, 1] m (a
+  /// pedestrian step then visits one to three cells) and to at most `max_cells` cells.
   double cell_size_m = 0.0;
   double target_edges_per_cell = 2.0;
   int max_cells = 4'000'000;
@@ -82,16 +84,20 @@ class FloorPlan {
   const std::vector<int>& floors() const;
   /// Index of floor number `floor`; throws std::invalid_argument if the plan has no such floor.
   int FloorIndex(int floor) const;
-  /// The geometry a floor was built from (rings without repeated closing vertex).
+  /// The geometry a floor was built from (rings in their given orientation, without repeated
+  /// closing or consecutive vertices).
   const FloorGeometry& geometry(int floor_index) const;
   /// Number of wall edges (ring edges + wall segments) on a floor.
   int num_edges(int floor_index) const;
-  /// All wall edges of a floor as E x 4 rows (x0, y0, x1, y1) [m] (for plots and peers).
+  /// All wall edges of a floor as E x 4 rows (x0, y0, x1, y1) [m] (for plots and peers):
+  /// outline edges, obstacle edges (each ring counter-clockwise), then the walls.
   RowMatrixXd Edges(int floor_index) const;
   /// Bounding box of a floor's outlines: (min_x, min_y, max_x, max_y) [m].
   Eigen::Vector4d Bounds(int floor_index) const;
-  /// Walkable area [m^2], estimated once at construction on a 0.25 m-or-finer sample grid
-  /// (relative error well below 1 % for plans whose features exceed a few cells).
+  /// Walkable area [m^2], computed once at construction by horizontal scanlines: exact along
+  /// each line, one line per slab between consecutive vertex ordinates (slabs split to at most
+  /// 1/1000 of the height), hence exact up to rounding for rings that do not overlap, and within
+  /// a second-order error where rings overlap.
   double WalkableArea(int floor_index) const;
   /// Side of the index grid's cells on a floor [m].
   double CellSize(int floor_index) const;
