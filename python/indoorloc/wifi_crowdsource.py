@@ -22,7 +22,8 @@ into the scan matrices the fusion filter reads:
    first and after the last waypoint, positions are extrapolated for at most
    ``max_extrapolation_s`` (PDR with the neighbouring interval's similarity, or the neighbouring
    interval's constant velocity in ``"linear"`` mode); readings further out, or before the
-   phone's first sensor sample, are dropped and counted.
+   phone's first sensor sample (no motion is known before the recording starts), are dropped
+   and counted.
 2. **The map** (:func:`build_signal_map`): reference points are the visited cells of a square
    grid (``cell_size_m``), placed at the centroid of the positions that fell in the cell. Per
    cell and BSSID: the heard readings; the passes (scans whose measurement epoch, the median
@@ -183,6 +184,10 @@ def walk_positions(walk: Any, t_query_s: np.ndarray, settings: Optional[CrowdMap
     after = (t > wt[-1]) & (t <= wt[-1] + s.max_extrapolation_s)
     # Linear interpolation in time (and constant-velocity extrapolation).
     lin = wxy[j] + vel[j] * (t - wt[j])[:, None]
+    # Before the first sensor sample the walker's motion is unknown (both modes).
+    acc = getattr(walk, "accelerometer", None)
+    t0_sensor = float(acc.t_s[0]) if acc is not None and acc.t_s.size else -np.inf
+    before &= t >= t0_sensor - 1e-9
     use_pdr = np.zeros(n_int, dtype=bool)
     if s.positioning == "pdr":
         if steps is None:
@@ -205,16 +210,13 @@ def walk_positions(walk: Any, t_query_s: np.ndarray, settings: Optional[CrowdMap
         z = fac[jj] * (d[:, 0] + 1j * d[:, 1])
         pdr_xy = anchor + np.column_stack([z.real, z.imag])
         pdr_ok = use_pdr[jj]
-        sensor_t0 = steps.start_t_s if steps.n_steps else 0.0
-        t0_sensor = float(walk.accelerometer.t_s[0]) if hasattr(walk, "accelerometer") and \
-            walk.accelerometer.t_s.size else sensor_t0
         # Interior: PDR where usable, else linear.
         m = inside & pdr_ok
         xy[m], source[m] = pdr_xy[m], 1
         m = inside & ~pdr_ok
         xy[m], source[m] = lin[m], 2
         # Outside: PDR with the neighbouring usable interval; needs sensor data at t.
-        m = (before | after) & use_pdr.any() & (t >= t0_sensor - 1e-9)
+        m = (before | after) & use_pdr.any()
         xy[m], source[m] = pdr_xy[m], 3
     else:
         xy[inside], source[inside] = lin[inside], 2
