@@ -52,7 +52,7 @@ def grid_search(seeds: Sequence[int] = fs.TUNING_SEEDS, threads: int = 2, grid: 
 
 
 def markdown_table(rows: List[dict]) -> str:
-    names = [k for k in rows[0] if not k.endswith("_m")] if rows else []
+    names = [k for k in rows[0] if not k.endswith("_mean_m") and k != "criterion_m"] if rows else []
     head = "| " + " | ".join(names) + " | known start [m] | unknown start [m] | criterion [m] |"
     lines = [head, "|" + "---|" * (len(names) + 3)]
     for r in rows:

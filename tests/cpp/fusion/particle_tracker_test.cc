@@ -111,6 +111,7 @@ TEST(StepMotion, SamplesHaveTheModelMeanAndCovariance) {
   StepMotionOptions o;
   o.heading_offset_walk_rad = 1e-9;
   o.scale_walk = 1e-9;
+  o.position_noise_m = 0.05;
   const StepInput s = Step(0.0, 0.7, 0.0, 0.1);
   const StepMotion motion(s, o);
   RandomStream rng(3);

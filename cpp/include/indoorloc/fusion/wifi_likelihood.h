@@ -28,8 +28,9 @@ namespace indoorloc::fusion {
 using RowMatrixXd = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
 struct WifiLikelihoodOptions {
-  /// τ: tempering exponent of the scan likelihood (0, 1].
-  double tempering = 0.2;
+  /// τ: tempering exponent of the scan likelihood (0, 1] (chosen by `indoorloc fusion tune` on
+  /// synthetic tuning seeds; docs/fusion.md).
+  double tempering = 0.1;
   /// c: cap on each AP's residual term r²/(2δ) (nats before tempering); +inf disables.
   double max_term = 8.0;
   /// Readings older than this relative to their scan are dropped [s] (streaming use; the batch
