@@ -38,6 +38,23 @@ def cmd_synthetic(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_evaluate(args: argparse.Namespace) -> int:
+    from indoorloc import progress
+    from indoorloc.experiments import fusion_real as fr
+
+    settings = fr.RealSettings(folds=args.folds, seed=args.seed, threads=args.threads)
+    root = Path(args.data_root) if args.data_root else fr.default_site_root()
+    bar = progress.progress(iter(int, 1), total=None, desc="walks") if progress.enabled() else None
+    tick = (lambda: next(bar)) if bar is not None else None
+    result = fr.evaluate(root, args.floors, settings, progress=tick)
+    print(fr.markdown(result))
+    if args.json:
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.json).write_text(json.dumps(result, indent=1) + "\n")
+        print(f"JSON written to {args.json}")
+    return 0
+
+
 def cmd_tune(args: argparse.Namespace) -> int:
     from indoorloc.experiments import fusion_tuning as ft
 
@@ -59,6 +76,15 @@ def add_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
     s.add_argument("--threads", type=int, default=2, help="walks run in parallel (results do not depend on it)")
     s.add_argument("--json", default=None, help="write the JSON summary here")
     s.set_defaults(func=cmd_synthetic)
+    e = fsub.add_parser("evaluate", parents=[quiet_parent()],
+                        help="real phone walks (ILC 2020 layout): k-fold by walk, every method scored at the waypoints")
+    e.add_argument("--data-root", default=None, help="site folder with one sub-folder per floor (default: shared data)")
+    e.add_argument("--floors", nargs="+", default=["F3", "F4", "F7", "F8"])
+    e.add_argument("--folds", type=int, default=4)
+    e.add_argument("--seed", type=int, default=0)
+    e.add_argument("--threads", type=int, default=2, help="walks tracked in parallel (results do not depend on it)")
+    e.add_argument("--json", default=None, help="write the JSON (schema: docs/fusion_real.md)")
+    e.set_defaults(func=cmd_evaluate)
     t = fsub.add_parser("tune", parents=[quiet_parent()],
                         help="grid search of the tracker's settings on tuning seeds (how the defaults were chosen)")
     t.add_argument("--walks", type=int, default=20)
