@@ -59,7 +59,7 @@ from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
-from indoorloc.fusion import FloorGeometry, FloorPlan, FloorPlanOptions
+from indoorloc._core.fusion import FloorGeometry, FloorPlan, FloorPlanOptions  # io sits below the facades
 
 PathLike = Union[str, os.PathLike]
 Source = Union[PathLike, Mapping[str, Any]]
