@@ -85,11 +85,15 @@ class RealSettings:
     #: which APs were not heard: use heard readings only.
     use_not_heard: bool = False
     candidate_spacing_m: float = 2.0    #: unknown start and recovery on the mall floors
+    #: τ of the WiFi likelihood; None: the library default (chosen on the synthetic building)
+    tempering: Optional[float] = None
     threads: int = 2                    #: walks tracked in parallel (results do not depend on it)
 
     def tracker_options(self, **overrides) -> fusion.TrackerOptions:
         settings = dict(num_particles=self.num_particles, wall_log_penalty=self.wall_log_penalty,
                         use_not_heard=self.use_not_heard, candidate_spacing_m=self.candidate_spacing_m, seed=self.seed)
+        if self.tempering is not None:
+            settings["tempering"] = self.tempering
         settings.update(overrides)
         return fusion.tracker_options(**settings)
 
