@@ -530,7 +530,10 @@ void ParticleTracker::InitializeKnown(double time_s, const Eigen::Vector2d& posi
   const auto it = std::find(s.floors.begin(), s.floors.end(), floor_number);
   if (it == s.floors.end()) ThrowInvalidArgument("floor", "the tracker has no floor " + std::to_string(floor_number));
   const int f = static_cast<int>(it - s.floors.begin());
-  if (!s.Walkable(position_m.x(), position_m.y(), f)) {
+  // With soft walls (a finite wall_log_penalty) obstacles are only unlikely, not forbidden: a start
+  // inside one (a shop without a door in the plan) is accepted and the prior is not truncated.
+  const bool hard_walls = std::isinf(s.options.wall_log_penalty);
+  if (hard_walls && !s.Walkable(position_m.x(), position_m.y(), f)) {
     ThrowInvalidArgument("position_m", "(" + std::to_string(position_m.x()) + ", " + std::to_string(position_m.y()) +
                                            ") is not walkable on floor " + std::to_string(floor_number) +
                                            " (outside the outline or inside an obstacle)");
@@ -542,7 +545,7 @@ void ParticleTracker::InitializeKnown(double time_s, const Eigen::Vector2d& posi
       const double qx = position_m.x() + o.start_position_sd_m * s.rng.Normal();
       const double qy = position_m.y() + o.start_position_sd_m * s.rng.Normal();
       // Behind a wall from the known start is not a possible start.
-      if (s.Walkable(qx, qy, f) && !s.Blocked(position_m.x(), position_m.y(), qx, qy, f)) {
+      if (!hard_walls || (s.Walkable(qx, qy, f) && !s.Blocked(position_m.x(), position_m.y(), qx, qy, f))) {
         px = qx;
         py = qy;
         break;

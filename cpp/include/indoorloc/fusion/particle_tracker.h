@@ -147,7 +147,9 @@ class ParticleTracker {
   const std::vector<int>& floors() const;
 
   /// Known start at `position_m` on floor number `floor` with PDR-to-floor heading offset
-  /// `heading_offset_rad`. Throws std::invalid_argument if the position is not walkable.
+  /// `heading_offset_rad`. With hard walls (wall_log_penalty = -inf) throws
+  /// std::invalid_argument if the position is not walkable and truncates the position prior to
+  /// walkable points not behind a wall; with soft walls neither.
   void InitializeKnown(double time_s, const Eigen::Vector2d& position_m, int floor,
                        double heading_offset_rad);
   /// Unknown start from a WiFi observation (needs a signal map): particles drawn from its
