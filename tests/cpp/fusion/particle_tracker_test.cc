@@ -320,6 +320,19 @@ TEST(ParticleTracker, UnderflowingWifiLikelihoodsStayFinite) {
   EXPECT_NEAR(tracker.ParticleWeights().sum(), 1.0, 1e-9);
 }
 
+TEST(ParticleTracker, SoftWallsAcceptAStartInsideAnObstacleAndPenaliseCrossings) {
+  const FloorPlan plan = RoomPlan();
+  TrackerOptions o = SmallOptions(400);
+  o.wall_log_penalty = std::log(0.1);
+  ParticleTracker tracker(&plan, nullptr, nullptr, o);
+  tracker.InitializeKnown(0.0, Eigen::Vector2d(10.0, 5.0), 0, 0.0);  // inside the block: accepted
+  const TrackerEstimate e = tracker.Step(Step(0.5, 3.0, 0.0));      // crosses the block's edge
+  EXPECT_GT(e.blocked_fraction, 0.95);
+  EXPECT_NEAR(e.log_likelihood, std::log(0.1), 0.1);   // (nearly) every particle paid the penalty once
+  EXPECT_NEAR(e.mean_m.x(), 13.0, 0.3);                // and moved through
+  EXPECT_EQ(tracker.summary().all_blocked_steps, 0);
+}
+
 TEST(ParticleTracker, EmptyScanIsANoOp) {
   const FloorPlan plan = RoomPlan();
   const wifi::RssModel model(RoomMap());
