@@ -47,16 +47,7 @@ Eigen::VectorXi ToFloorIndices(const py::handle& obj, const char* name) {
   if (py::isinstance<py::int_>(obj) && !py::isinstance<py::bool_>(obj)) {
     return Eigen::VectorXi::Constant(1, obj.cast<int>());
   }
-  VectorArg v = ToVector(obj, name);
-  Eigen::VectorXi out(v.map.size());
-  for (Eigen::Index i = 0; i < v.map.size(); ++i) {
-    const double x = v.map[i];
-    if (x != std::floor(x) || std::abs(x) > 2e9) {
-      ThrowInvalidArgument(name, DescribeEntry(i, 0, true) + " is not an integer");
-    }
-    out[i] = static_cast<int>(x);
-  }
-  return out;
+  return ToIntVector(obj, name);
 }
 
 py::list RingsToList(const std::vector<RowMatrixXd>& rings) {

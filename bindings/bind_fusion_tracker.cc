@@ -321,13 +321,7 @@ options : TrackerOptions)doc")
            "(states (N, 4): x [m], y [m], heading offset [rad], scale; floor indices (N,); weights (N,)).")
       .def("set_particles", [](ParticleTracker& t, const py::object& states, const py::object& floor_indices) {
              MatrixArg s = ToMatrix(states, "states", -1, 4);
-             VectorArg f = ToVector(floor_indices, "floor_indices", s.map.rows());
-             Eigen::VectorXi fi(f.map.size());
-             for (Eigen::Index i = 0; i < f.map.size(); ++i) {
-               CheckArgument(f.map[i] == std::floor(f.map[i]), "floor_indices", DescribeEntry(i, 0, true) + " is not an integer");
-               fi[i] = static_cast<int>(f.map[i]);
-             }
-             t.SetParticles(s.map, fi);
+             t.SetParticles(s.map, ToIntVector(floor_indices, "floor_indices", s.map.rows()));
            },
            py::arg("states"), py::arg("floor_indices"));
 

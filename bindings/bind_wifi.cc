@@ -31,19 +31,6 @@ using wifi::WifiFix;
 
 namespace {
 
-Eigen::VectorXi ToIntVector(const py::handle& obj, const char* name, Eigen::Index size) {
-  VectorArg v = ToVector(obj, name, size);
-  Eigen::VectorXi out(v.map.size());
-  for (Eigen::Index i = 0; i < v.map.size(); ++i) {
-    const double x = v.map[i];
-    if (x != std::floor(x) || std::abs(x) > 2e9) {
-      ThrowInvalidArgument(name, DescribeEntry(i, 0, true) + " is not an integer");
-    }
-    out[i] = static_cast<int>(x);
-  }
-  return out;
-}
-
 // Fixes of a batch as numpy arrays.
 py::dict FixesToDict(const std::vector<WifiFix>& fixes) {
   const py::ssize_t n = static_cast<py::ssize_t>(fixes.size());

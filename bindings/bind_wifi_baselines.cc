@@ -18,25 +18,6 @@ using wifi::FingerprintEstimates;
 using wifi::FingerprintLocator;
 using wifi::FingerprintOptions;
 
-// An integer-valued 1-D array (any numeric dtype) as Eigen::VectorXi; ValueError naming `name`
-// for a non-integral or out-of-range entry.
-Eigen::VectorXi ToIntVector(const py::handle& obj, const char* name, Eigen::Index size) {
-  const VectorArg arg = ToVector(obj, name, size);
-  Eigen::VectorXi out(arg.map.size());
-  for (Eigen::Index i = 0; i < arg.map.size(); ++i) {
-    const double v = arg.map[i];
-    if (v != std::floor(v) || v < std::numeric_limits<int>::min() ||
-        v > std::numeric_limits<int>::max()) {
-      std::ostringstream value;
-      value << v;
-      ThrowInvalidArgument(name, DescribeEntry(i, 0, true) + " is not an int (" + value.str() +
-                                     ")");
-    }
-    out[i] = static_cast<int>(v);
-  }
-  return out;
-}
-
 std::unique_ptr<FingerprintLocator> MakeLocator(
     const py::object& reference_rss_dbm, const py::object& reference_positions_m,
     const py::object& reference_floors, const py::object& reference_variance_db2,

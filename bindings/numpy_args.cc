@@ -76,4 +76,17 @@ py::array_t<double> ToNumpy(const Eigen::Ref<const Eigen::VectorXd>& v) {
   return out;
 }
 
+Eigen::VectorXi ToIntVector(const py::handle& obj, const char* name, Eigen::Index size) {
+  VectorArg v = ToVector(obj, name, size);
+  Eigen::VectorXi out(v.map.size());
+  for (Eigen::Index i = 0; i < v.map.size(); ++i) {
+    const double x = v.map[i];
+    if (x != std::floor(x) || std::abs(x) > 2e9) {
+      ThrowInvalidArgument(name, DescribeEntry(i, 0, true) + " is not an integer");
+    }
+    out[i] = static_cast<int>(x);
+  }
+  return out;
+}
+
 }  // namespace indoorloc::bindings

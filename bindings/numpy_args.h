@@ -47,6 +47,9 @@ VectorArg ToVector(const py::handle& obj, const char* name, Eigen::Index size = 
 MatrixArg ToMatrix(const py::handle& obj, const char* name, Eigen::Index rows = -1,
                    Eigen::Index cols = -1, Finiteness finiteness = Finiteness::kFinite);
 
+/// 1-D integer argument of length `size` (-1: any): every entry a whole number within ±2e9,
+/// else ValueError naming `name` and the entry.
+Eigen::VectorXi ToIntVector(const py::handle& obj, const char* name, Eigen::Index size = -1);
 /// Copies an Eigen vector into a new numpy array.
 py::array_t<double> ToNumpy(const Eigen::Ref<const Eigen::VectorXd>& v);
 
