@@ -50,6 +50,16 @@ def test_steps_from_polar_and_rotation():
     np.testing.assert_allclose(fusion.rotate(steps.displacements_m, math.pi / 2), [[0.0, 0.7], [-0.7, 0.0]], atol=1e-12)
 
 
+def test_steps_from_zupt_increments():
+    inc = np.array([[0.7, 0.0, 0.01], [0.0, 0.7, -0.02]])
+    cov = np.stack([np.eye(2) * 0.01, np.array([[0.02, 0.005], [0.005, 0.03]])])
+    steps = fusion.Steps.from_increments([0.5, 1.0], inc, cov)
+    np.testing.assert_array_equal(steps.displacements_m, inc[:, :2])
+    np.testing.assert_array_equal(steps.covariances_m2, [[0.01, 0.0, 0.01], [0.02, 0.005, 0.03]])
+    with pytest.raises(ValueError, match="increments_m"):
+        fusion.Steps.from_increments([0.5], np.zeros((1, 4)), np.zeros((1, 3)))
+
+
 def test_streaming_tracker_follows_perfect_steps_and_never_enters_obstacles():
     plan = room_plan()
     tracker = fusion.ParticleTracker(plan, options=fusion.tracker_options(num_particles=1500, seed=2,

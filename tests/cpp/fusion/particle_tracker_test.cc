@@ -333,6 +333,23 @@ TEST(ParticleTracker, SoftWallsAcceptAStartInsideAnObstacleAndPenaliseCrossings)
   EXPECT_EQ(tracker.summary().all_blocked_steps, 0);
 }
 
+TEST(ParticleTracker, RecoveryRedrawsWhenTheWifiKeepsDisagreeing) {
+  const FloorPlan plan = RoomPlan();
+  const wifi::RssModel model(RoomMap());
+  TrackerOptions o = SmallOptions(1000);
+  o.wifi.tempering = 0.5;
+  o.recovery_scans = 2;
+  ParticleTracker tracker(&plan, &model, nullptr, o);
+  tracker.InitializeKnown(0.0, Eigen::Vector2d(3.0, 3.0), 0, 0.0);  // wrong: the walker is at (18, 8.5)
+  TrackerEstimate e;
+  for (int k = 1; k <= 12; ++k) {
+    e = tracker.Step(Step(0.5 * k, 0.0, 0.0, 0.02));  // standing still
+    e = tracker.Wifi(ScanAt(model, 0.5 * k, 18.0, 8.5));
+  }
+  EXPECT_GE(tracker.summary().recoveries, 1);
+  EXPECT_LT((e.mean_m - Eigen::Vector2d(18.0, 8.5)).norm(), 2.0);
+}
+
 TEST(ParticleTracker, EmptyScanIsANoOp) {
   const FloorPlan plan = RoomPlan();
   const wifi::RssModel model(RoomMap());
