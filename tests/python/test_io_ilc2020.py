@@ -77,7 +77,6 @@ def _walk_records(rng, *, n_epochs=30, rv_w=False, t0=T0):
         (t0 + 250, [("JOY CITY", "04:40:a9:a1:89:00", -49, 5300, -476),
                     ("", "04:40:a9:a1:89:01", -50, 5300, -475),
                     ("大悦城", "9c:a6:15:27:3b:29", -71, 2437, -8124)]),
-        (t0 + 350, []),  # placeholder, removed below (keeps indices readable)
         (t0 + 420, [("", "9c:a6:15:27:3b:29", -76, 2412, -12),
                     ("TP-LINK", "9c:a6:15:27:3b:29", -71, 2437, -19377),
                     ("JOY CITY", "04:40:a9:a1:89:00", -52, 5300, -3),
@@ -85,7 +84,6 @@ def _walk_records(rng, *, n_epochs=30, rv_w=False, t0=T0):
         (t0 + 600, [("", "04:40:a9:a1:89:01", -60, 5300, -100),
                     ("guest", "00:10:f3:32:7c:ba", -88, 2462, -2280)]),  # repeats scan 1's
     ]
-    scans = [s for s in scans if s[1]]
     wifi_rows = []
     for t_scan, readings in scans:
         for ssid, bssid, rssi, freq, age in readings:

@@ -157,28 +157,22 @@ const double RandomStream::kZigguratRatio[128] = {
 };
 
 double RandomStream::NormalZigguratOutside(double u, int layer) {
-  for (;;) {
-    if (layer == 0) {
-      // Base strip outside the rectangle: the normal tail beyond R (Marsaglia 1964).
-      double x, y;
-      do {
-        x = std::log(UniformOpen01()) / kR;
-        y = std::log(UniformOpen01());
-      } while (-2.0 * y < x * x);
-      return u < 0.0 ? x - kR : kR - x;
-    }
-    // The wedge between the layer's inner rectangle and the curve.
-    const double x = u * kZigguratX[layer];
-    const double x0 = kZigguratX[layer], x1 = kZigguratX[layer + 1];
-    const double f0 = std::exp(-0.5 * (x0 * x0 - x * x));
-    const double f1 = std::exp(-0.5 * (x1 * x1 - x * x));
-    if (f1 + Uniform01() * (f0 - f1) < 1.0) return x;
-    // Rejected: a new draw, fast path first.
-    const std::uint64_t bits = (*this)();
-    u = 2.0 * (static_cast<double>(bits >> 11) + 0.5) * 0x1.0p-53 - 1.0;
-    layer = static_cast<int>(bits & 0x7F);
-    if (std::abs(u) < kZigguratRatio[layer]) return u * kZigguratX[layer];
+  if (layer == 0) {
+    // Base strip outside the rectangle: the normal tail beyond R (Marsaglia 1964).
+    double x, y;
+    do {
+      x = std::log(UniformOpen01()) / kR;
+      y = std::log(UniformOpen01());
+    } while (-2.0 * y < x * x);
+    return u < 0.0 ? x - kR : kR - x;
   }
+  // The wedge between the layer's inner rectangle and the curve.
+  const double x = u * kZigguratX[layer];
+  const double x0 = kZigguratX[layer], x1 = kZigguratX[layer + 1];
+  const double f0 = std::exp(-0.5 * (x0 * x0 - x * x));
+  const double f1 = std::exp(-0.5 * (x1 * x1 - x * x));
+  if (f1 + Uniform01() * (f0 - f1) < 1.0) return x;
+  return NormalZiggurat();  // rejected: a new draw (fast path first); rare, so no deep recursion
 }
 
 double RandomStream::Normal(double mean, double sd) { return mean + sd * Normal(); }

@@ -38,6 +38,15 @@ def _pair_blocks(n: int, m: int):
         yield slice(i, min(n, i + rows))
 
 
+def _block_orientations(a, b, blk, cx, cy, dx, dy):
+    """Segment ends of a block of queries (columns) and the four orientations against every edge:
+    o1, o2 of the edge ends against the query segment, o3, o4 of the query ends against the edge."""
+    ax, ay = a[blk, 0:1], a[blk, 1:2]
+    bx, by = b[blk, 0:1], b[blk, 1:2]
+    return (ax, ay, bx, by), (_orient(ax, ay, bx, by, cx, cy), _orient(ax, ay, bx, by, dx, dy),
+                              _orient(cx, cy, dx, dy, ax, ay), _orient(cx, cy, dx, dy, bx, by))
+
+
 def crossing_counts(starts_m: np.ndarray, ends_m: np.ndarray, edges_m: np.ndarray) -> np.ndarray:
     """Number of edges each segment start -> end crosses properly.
 
@@ -51,12 +60,7 @@ def crossing_counts(starts_m: np.ndarray, ends_m: np.ndarray, edges_m: np.ndarra
         return out
     cx, cy, dx, dy = (e[None, :, k] for k in range(4))
     for blk in _pair_blocks(a.shape[0], e.shape[0]):
-        ax, ay = a[blk, 0:1], a[blk, 1:2]
-        bx, by = b[blk, 0:1], b[blk, 1:2]
-        o1 = _orient(ax, ay, bx, by, cx, cy)
-        o2 = _orient(ax, ay, bx, by, dx, dy)
-        o3 = _orient(cx, cy, dx, dy, ax, ay)
-        o4 = _orient(cx, cy, dx, dy, bx, by)
+        (ax, ay, bx, by), (o1, o2, o3, o4) = _block_orientations(a, b, blk, cx, cy, dx, dy)
         out[blk] = np.count_nonzero((o1 * o2 < 0.0) & (o3 * o4 < 0.0), axis=1)
     return out
 
@@ -71,12 +75,7 @@ def touches_any(starts_m: np.ndarray, ends_m: np.ndarray, edges_m: np.ndarray) -
         return out
     cx, cy, dx, dy = (e[None, :, k] for k in range(4))
     for blk in _pair_blocks(a.shape[0], e.shape[0]):
-        ax, ay = a[blk, 0:1], a[blk, 1:2]
-        bx, by = b[blk, 0:1], b[blk, 1:2]
-        o1 = _orient(ax, ay, bx, by, cx, cy)
-        o2 = _orient(ax, ay, bx, by, dx, dy)
-        o3 = _orient(cx, cy, dx, dy, ax, ay)
-        o4 = _orient(cx, cy, dx, dy, bx, by)
+        (ax, ay, bx, by), (o1, o2, o3, o4) = _block_orientations(a, b, blk, cx, cy, dx, dy)
         general = (o1 * o2 <= 0.0) & (o3 * o4 <= 0.0)
         collinear = (o1 == 0.0) & (o2 == 0.0)
         boxes = ((np.minimum(ax, bx) <= np.maximum(cx, dx)) & (np.minimum(cx, dx) <= np.maximum(ax, bx))
