@@ -65,6 +65,42 @@ std::vector<StepInput> StepsFromArrays(const py::object& times_s, const py::obje
   return steps;
 }
 
+// Position fixes from arrays: times (F,), means (F, 2K) = per fix K (x, y) pairs, sds (F, K),
+// weights (F, K), floors (F,) (PositionFix::kAnyFloor = any). Components of weight 0 are padding
+// and dropped (their mean and sd may be NaN), so fixes may have different component counts.
+std::vector<PositionFix> FixesFromArrays(const py::tuple& arrays) {
+  if (arrays.size() != 5) ThrowInvalidArgument("fixes", "must be (times_s, means_m, sds_m, weights, floors)");
+  VectorArg t = ToVector(arrays[0], "fixes.times_s");
+  const Eigen::Index f = t.map.size();
+  MatrixArg sds = ToMatrix(arrays[2], "fixes.sds_m", f);
+  const Eigen::Index k = sds.map.cols();
+  MatrixArg means = ToMatrix(arrays[1], "fixes.means_m", f, 2 * k);
+  MatrixArg weights = ToMatrix(arrays[3], "fixes.weights", f, k);
+  Eigen::VectorXi floors = ToIntVector(arrays[4], "fixes.floors", f);
+  std::vector<PositionFix> out(static_cast<size_t>(f));
+  for (Eigen::Index i = 0; i < f; ++i) {
+    PositionFix& fix = out[static_cast<size_t>(i)];
+    fix.time_s = t.map[i];
+    fix.floor = floors[i];
+    int used = 0;
+    for (Eigen::Index j = 0; j < k; ++j) used += weights.map(i, j) != 0.0 ? 1 : 0;
+    fix.means_m.resize(used, 2);
+    fix.sds_m.resize(used);
+    fix.weights.resize(used);
+    int c = 0;
+    for (Eigen::Index j = 0; j < k; ++j) {
+      if (weights.map(i, j) == 0.0) continue;
+      fix.means_m(c, 0) = means.map(i, 2 * j);
+      fix.means_m(c, 1) = means.map(i, 2 * j + 1);
+      fix.sds_m[c] = sds.map(i, j);
+      fix.weights[c] = weights.map(i, j);
+      ++c;
+    }
+    CheckPositionFix(fix, ("fixes[" + std::to_string(i) + "]").c_str());
+  }
+  return out;
+}
+
 template <typename T>
 const T* OptionalPointer(const py::object& obj, const char* name) {
   if (obj.is_none()) return nullptr;
@@ -79,6 +115,7 @@ const T* OptionalPointer(const py::object& obj, const char* name) {
 }  // namespace
 
 void BindFusionTracker(py::module_& m) {
+  m.attr("ANY_FLOOR") = PositionFix::kAnyFloor;
   py::class_<TrackerOptions>(m, "TrackerOptions", R"doc(
 Options of the fusion particle tracker (see docs/fusion.md for each constant and how its
 default was chosen). Set fields by keyword: ``TrackerOptions(num_particles=2000, tempering=0.3)``;
@@ -122,6 +159,11 @@ WiFi (tempering, max_term, max_age_s, use_not_heard, not_heard_dbm) options are 
                     [](TrackerOptions& o, const std::string& v) { o.resampling.scheme = ParseResamplingScheme(v, "resampling"); })
       .def_property("ess_threshold", [](const TrackerOptions& o) { return o.resampling.ess_threshold; },
                     [](TrackerOptions& o, double v) { o.resampling.ess_threshold = v; })
+      .def_property("fix_outlier_probability", [](const TrackerOptions& o) { return o.fix.outlier_probability; },
+                    [](TrackerOptions& o, double v) { o.fix.outlier_probability = v; },
+                    "ε: probability that a position fix is unrelated to the position, in (0, 1).")
+      .def_property("fix_tempering", [](const TrackerOptions& o) { return o.fix.tempering; },
+                    [](TrackerOptions& o, double v) { o.fix.tempering = v; }, "τ_fix: position-fix likelihood exponent in (0, 1].")
       .def_readwrite("wall_log_penalty", &TrackerOptions::wall_log_penalty)
       .def_readwrite("respread_after_blocked_steps", &TrackerOptions::respread_after_blocked_steps)
       .def_readwrite("respread_sd_m", &TrackerOptions::respread_sd_m)
@@ -165,6 +207,7 @@ WiFi (tempering, max_term, max_age_s, use_not_heard, not_heard_dbm) options are 
       .def_readonly("steps", &TrackerSummary::steps)
       .def_readonly("wifi_updates", &TrackerSummary::wifi_updates)
       .def_readonly("empty_wifi_updates", &TrackerSummary::empty_wifi_updates)
+      .def_readonly("fix_updates", &TrackerSummary::fix_updates)
       .def_readonly("resamplings", &TrackerSummary::resamplings)
       .def_readonly("recoveries", &TrackerSummary::recoveries)
       .def_readonly("all_blocked_steps", &TrackerSummary::all_blocked_steps)
@@ -314,6 +357,30 @@ options : TrackerOptions)doc")
              return EstimateToDict(e);
            },
            py::arg("observation"), "One WiFi observation. Returns the estimate dict.")
+      .def("fix", [](ParticleTracker& t, double time_s, const py::object& means_m, const py::object& sds_m,
+                     const py::object& weights, const py::object& floor) {
+             MatrixArg m = ToMatrix(means_m, "means_m", -1, 2);
+             VectorArg sd = ToVector(sds_m, "sds_m", m.map.rows());
+             VectorArg w = ToVector(weights, "weights", m.map.rows());
+             PositionFix fix;
+             fix.time_s = time_s;
+             fix.floor = floor.is_none() ? PositionFix::kAnyFloor : floor.cast<int>();
+             fix.means_m = m.map;
+             fix.sds_m = sd.map;
+             fix.weights = w.map;
+             TrackerEstimate e;
+             {
+               py::gil_scoped_release release;
+               e = t.Fix(fix);
+             }
+             return EstimateToDict(e);
+           },
+           py::arg("time_s"), py::arg("means_m"), py::arg("sds_m"), py::arg("weights"), py::arg("floor") = py::none(),
+           "One position fix: a Gaussian mixture with component means (K, 2) [m], isotropic sds (K,) [m] and "
+           "weights (K,) on floor number `floor` (None: any floor), plus the outlier floor of "
+           "TrackerOptions.fix_outlier_probability. Returns the estimate dict.")
+      .def_property_readonly("floor_areas_m2", &ParticleTracker::floor_areas_m2,
+                             "Walkable area [m²] per tracker floor (the outlier density of a fix is 1 / area).")
       .def("estimate", [](const ParticleTracker& t) { return EstimateToDict(t.Estimate()); })
       .def("particles", [](const ParticleTracker& t) {
              return py::make_tuple(t.ParticleStates(), t.ParticleFloorIndices(), t.ParticleWeights());
@@ -328,10 +395,11 @@ options : TrackerOptions)doc")
   m.def("track",
         [](const py::object& plan, const py::object& wifi_model, const py::object& corridors, const py::object& step_times_s,
            const py::object& displacements_m, const py::object& covariances_m2, const std::vector<WifiObservation>& observations,
-           const py::object& start, const TrackerOptions& options, const py::object& smoother) {
+           const py::object& start, const TrackerOptions& options, const py::object& smoother, const py::object& fixes) {
           Recording rec;
           rec.steps = StepsFromArrays(step_times_s, displacements_m, covariances_m2);
           rec.observations = observations;
+          if (!fixes.is_none()) rec.fixes = FixesFromArrays(fixes.cast<py::tuple>());
           TrackStart st;
           if (!start.is_none()) {
             const py::dict s = start.cast<py::dict>();
@@ -401,11 +469,13 @@ options : TrackerOptions)doc")
         },
         py::arg("plan"), py::arg("wifi_model"), py::arg("corridors"), py::arg("step_times_s"), py::arg("displacements_m"),
         py::arg("covariances_m2"), py::arg("observations"), py::arg("start") = py::none(),
-        py::arg("options") = TrackerOptions(), py::arg("smoother") = py::none(), R"doc(
+        py::arg("options") = TrackerOptions(), py::arg("smoother") = py::none(), py::arg("fixes") = py::none(), R"doc(
 Batch tracking of one recording (GIL released). Steps as arrays: step_times_s (M,) [s],
 displacements_m (M, 2) [m] in the PDR frame, covariances_m2 (M, 3) = (xx, xy, yy) [m²];
 observations: list of WifiObservation sorted by time. start: None (unknown start) or a dict
 {"position_m", "floor", "heading_offset_rad", "time_s"}. smoother: SmootherOptions or None.
+fixes: None or (times_s (F,), means_m (F, 2K), sds_m (F, K), weights (F, K), floors (F,)),
+weight-0 components being padding, floor ANY_FLOOR for any floor (see Fixes in indoorloc.fusion).
 Returns a dict of per-step arrays (times_s, mean_m (M, 2), covariance_m2 (M, 3),
 floor_probabilities (M, F), floor_index, heading_offset_rad, scale, ess, log_likelihood,
 blocked_fraction, resampled, recovered, lagged_m), the TrackerSummary, and with a smoother

@@ -15,6 +15,8 @@ a floor plan (issue 14; the "future work" of papers 000 §IV and 002 §VI).
 - :func:`track`: the batch API over a recording, with the backward (FFBSi) smoother.
 - :func:`make_wifi_observations`: scans (NaN = not heard, per-reading ages) to observations.
 - :class:`Steps`: steps as displacements with covariances, from polar steps or ZUPT increments.
+- :class:`Fixes`: position fixes from any external locator (e.g. fingerprint kNN on a
+  crowdsourced map): per fix a Gaussian mixture plus an outlier floor (docs/fusion.md).
 
 The model, its equations and how each default was chosen: docs/fusion.md. Example::
 
@@ -35,6 +37,7 @@ from typing import Any, Iterable, List, Optional, Sequence, Tuple
 import numpy as np
 
 from indoorloc._core.fusion import (
+    ANY_FLOOR,
     FloorGeometry,
     FloorPlan,
     FloorPlanOptions,
@@ -243,9 +246,67 @@ def rotate(displacements_m, angle_rad: float) -> np.ndarray:
     return np.stack([c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1]], axis=1)
 
 
+@dataclass
+class Fixes:
+    """Position fixes for the tracker: per fix a Gaussian mixture over the floor plus an outlier
+    floor (``TrackerOptions.fix_outlier_probability``):
+    p(fix | z) = ε / A + (1 - ε) Σ_k w_k N(z; μ_k, σ_k² I) (docs/fusion.md, position_fix.h).
+
+    times_s (F,) [s] non-decreasing; means_m (F, K, 2) [m]; sds_m (F, K) [m] > 0; weights (F, K)
+    >= 0 (normalised per fix; weight 0 marks padding, whose mean and sd are ignored); floors (F,)
+    floor numbers, or ``ANY_FLOOR`` where the fix holds on every floor."""
+
+    times_s: np.ndarray
+    means_m: np.ndarray
+    sds_m: np.ndarray
+    weights: np.ndarray
+    floors: np.ndarray
+
+    @classmethod
+    def from_arrays(cls, times_s, means_m, sds_m, weights=None, floors=None) -> "Fixes":
+        """Checks shapes and copies. means_m (F, K, 2) or (F, 2) (one component each); sds_m
+        (F, K), (F,) or a scalar; weights default equal; floors default ``ANY_FLOOR``."""
+        t = np.array(times_s, dtype=float).reshape(-1)
+        f = t.shape[0]
+        m = np.array(means_m, dtype=float)
+        if m.ndim == 2 and m.shape == (f, 2):
+            m = m[:, None, :]
+        if m.ndim != 3 or m.shape[0] != f or m.shape[2] != 2:
+            raise _error("means_m", f"expected shape ({f}, K, 2) or ({f}, 2), got {m.shape}")
+        k = m.shape[1]
+        sd = np.asarray(sds_m, dtype=float)
+        if sd.ndim == 1 and sd.shape == (f,):
+            sd = sd[:, None]
+        try:
+            sd = np.array(np.broadcast_to(sd, (f, k)))
+        except ValueError:
+            raise _error("sds_m", f"expected shape ({f}, {k}), ({f},) or a scalar, got {sd.shape}") from None
+        w = np.ones((f, k)) if weights is None else np.array(weights, dtype=float)
+        if w.shape != (f, k):
+            raise _error("weights", f"expected shape ({f}, {k}), got {w.shape}")
+        fl = np.full(f, ANY_FLOOR, dtype=np.int64) if floors is None else np.array(floors, dtype=np.int64).reshape(-1)
+        if fl.shape != (f,):
+            raise _error("floors", f"expected shape ({f},), got {fl.shape}")
+        if f > 1 and np.any(np.diff(t) < 0):
+            raise _error("times_s", "must be non-decreasing")
+        return cls(t, m, sd, w, fl)
+
+    def __len__(self) -> int:
+        return int(self.times_s.shape[0])
+
+    def as_arrays(self) -> Tuple[np.ndarray, ...]:
+        """The tuple the C++ ``track`` takes: means flattened to (F, 2K), padding (weight 0)
+        given placeholder means and sds (the C++ side drops it)."""
+        f, k = self.sds_m.shape
+        pad = self.weights == 0
+        means = np.where(pad[:, :, None], 0.0, self.means_m).reshape(f, 2 * k)
+        sds = np.where(pad, 1.0, self.sds_m)
+        return (self.times_s, means, sds, self.weights, self.floors)
+
+
 def track(steps: Steps, observations: Sequence[WifiObservation] = (), *, plan=None, wifi_model=None,
           corridors=None, start: Optional[dict] = None, options: Optional[TrackerOptions] = None,
-          smoother: Optional[SmootherOptions] = None) -> dict:
+          smoother: Optional[SmootherOptions] = None, fixes: Optional[Fixes] = None) -> dict:
     """Track one recording (the batch API; C++ with the GIL released).
 
     Parameters
@@ -265,6 +326,9 @@ def track(steps: Steps, observations: Sequence[WifiObservation] = (), *, plan=No
         Library defaults when None (:func:`tracker_options`).
     smoother : SmootherOptions or None
         Run the backward smoother (FFBSi) when given.
+    fixes : Fixes or None
+        Position fixes from an external locator, merged with the WiFi observations in time
+        (WiFi first at equal times); an unknown start is placed by the first scan or fix.
 
     Returns
     -------
@@ -277,10 +341,13 @@ def track(steps: Steps, observations: Sequence[WifiObservation] = (), *, plan=No
         ``smoothed_trajectories_m`` (M, 2T), ``smoother_seconds``.
     """
     return _core_track(plan, wifi_model, corridors, steps.times_s, steps.displacements_m, steps.covariances_m2,
-                       list(observations), start, options if options is not None else TrackerOptions(), smoother)
+                       list(observations), start, options if options is not None else TrackerOptions(), smoother,
+                       None if fixes is None or len(fixes) == 0 else fixes.as_arrays())
 
 
 __all__ = [
+    "ANY_FLOOR",
+    "Fixes",
     "FloorGeometry",
     "FloorPlan",
     "FloorPlanOptions",

@@ -33,6 +33,7 @@ bool TrackerOptions::IsValid(std::string* error) const {
   std::string sub;
   if (!motion.IsValid(&sub)) return fail("motion: " + sub);
   if (!wifi.IsValid(&sub)) return fail("wifi: " + sub);
+  if (!fix.IsValid(&sub)) return fail("fix: " + sub);
   if (!resampling.IsValid(&sub)) return fail("resampling: " + sub);
   if (std::isnan(wall_log_penalty) || wall_log_penalty > 0.0) return fail("wall_log_penalty must be <= 0 (-inf drops)");
   if (respread_after_blocked_steps < 1) return fail("respread_after_blocked_steps must be >= 1");
@@ -57,7 +58,8 @@ bool TrackerOptions::IsValid(std::string* error) const {
 
 std::string TrackerSummary::BriefReport() const {
   std::ostringstream out;
-  out << steps << " steps, " << wifi_updates << " WiFi updates (" << empty_wifi_updates << " empty), " << resamplings
+  out << steps << " steps, " << wifi_updates << " WiFi updates (" << empty_wifi_updates << " empty), " << fix_updates
+      << " fixes, " << resamplings
       << " resamplings, " << recoveries << " recoveries, " << all_blocked_steps << " all-blocked steps, " << respreads
       << " re-spreads, mean ESS " << std::round(mean_ess * 10.0) / 10.0 << ", log-lik " << total_log_likelihood
       << ", " << seconds << " s";
@@ -75,6 +77,7 @@ struct ParticleTracker::Impl {
   std::vector<int> plan_floor;        // tracker floor index -> plan floor index (or -1)
   std::vector<int> model_floor;       // tracker floor index -> model floor index (or -1)
   std::vector<RowMatrixXd> candidates;  // per tracker floor: candidate points (unknown start, recovery)
+  std::vector<double> floor_area;       // per tracker floor: walkable area [m²] (fix outlier density)
 
   int n = 0;
   std::vector<double> x, y, offset, scale;
@@ -175,8 +178,9 @@ struct ParticleTracker::Impl {
     }
   }
 
-  // Tempered log-likelihood of `obs` at every candidate of every floor (concatenated).
-  Eigen::VectorXd CandidateLogLikelihoods(const WifiObservation& obs, std::vector<int>* candidate_floor,
+  // Log-likelihood point_ll(x, y, tracker floor) at every candidate of every floor (concatenated).
+  template <typename PointLL>
+  Eigen::VectorXd CandidateLogLikelihoods(const PointLL& point_ll, std::vector<int>* candidate_floor,
                                           std::vector<int>* candidate_row) {
     int total = 0;
     for (const auto& c : candidates) total += static_cast<int>(c.rows());
@@ -193,18 +197,18 @@ struct ParticleTracker::Impl {
     ForBlocks(total, [&](int, int begin, int end, RandomStream&) {
       for (int i = begin; i < end; ++i) {
         const int f = (*candidate_floor)[i];
-        ll[i] = wifi->LogLikelihood(candidates[f]((*candidate_row)[i], 0), candidates[f]((*candidate_row)[i], 1),
-                                    model_floor[f], obs);
+        ll[i] = point_ll(candidates[f]((*candidate_row)[i], 0), candidates[f]((*candidate_row)[i], 1), f);
       }
     });
     return ll;
   }
 
-  // Replaces the particles in `slots` by draws from the candidates' likelihood of `obs` (with
-  // uniform jitter within a candidate cell, kept walkable), heading offsets uniform.
-  void DrawFromCandidates(const WifiObservation& obs, const std::vector<int>& slots) {
+  // Replaces the particles in `slots` by draws from the candidates' likelihood point_ll (with
+  // uniform jitter within a candidate cell, kept walkable), heading offsets as UnknownOffset.
+  template <typename PointLL>
+  void DrawFromCandidates(const PointLL& point_ll, const std::vector<int>& slots) {
     std::vector<int> cf, cr;
-    const Eigen::VectorXd ll = CandidateLogLikelihoods(obs, &cf, &cr);
+    const Eigen::VectorXd ll = CandidateLogLikelihoods(point_ll, &cf, &cr);
     if (ll.size() == 0) ThrowInvalidArgument("plan", "has no candidate point (walkable area smaller than the candidate grid)");
     std::vector<int> picks;
     Resample(ll, ResamplingScheme::kSystematic, rng, &picks, static_cast<int>(slots.size()));
@@ -229,6 +233,72 @@ struct ParticleTracker::Impl {
       }
       PlaceFree(slots[j], px, py, f, UnknownOffset());
     }
+  }
+
+  // One absolute observation (WiFi scan or position fix) given by its log-likelihood point_ll(x,
+  // y, tracker floor): places the cloud of an unknown start that is still waiting for one, else
+  // weights the particles, resamples, and runs the recovery test. `informative`: the observation
+  // says something about the position (a scan with heard readings, a fix with components).
+  template <typename PointLL>
+  TrackerEstimate Observe(double time_s, bool informative, const PointLL& point_ll) {
+    TrackerEstimate est;
+    est.time_s = time_s;
+    if (awaiting_first_fix && informative) {
+      // Unknown start: the first informative observation places the cloud (the seeking phase).
+      std::vector<int> all(static_cast<size_t>(n));
+      for (int i = 0; i < n; ++i) all[i] = i;
+      DrawFromCandidates(point_ll, all);
+      log_w.setConstant(-std::log(static_cast<double>(n)));
+      awaiting_first_fix = false;
+      est.recovered = true;
+      FillEstimate(&est);
+      est.ess = n;
+      Snapshot(true);
+      return est;
+    }
+    Eigen::VectorXd ll(n);
+    ForBlocks(n, [&](int, int begin, int end, RandomStream&) {
+      for (int i = begin; i < end; ++i) ll[i] = point_ll(x[i], y[i], floor[i]);
+    });
+    log_w += ll;
+    // log p(observation | past), tempered (log_w was normalised before the update).
+    const double predictive = FinishUpdate(log_w.maxCoeff(), &est);
+    est.log_likelihood = predictive;
+    summary.total_log_likelihood += predictive;
+
+    // Recovery: the observation fits the best candidate far better than the cloud, several in a row.
+    if (options.recovery_log_ratio > 0.0 && informative) {
+      std::vector<int> cf, cr;
+      const Eigen::VectorXd cll = CandidateLogLikelihoods(point_ll, &cf, &cr);
+      const double best = cll.size() > 0 ? cll.maxCoeff() : kNegInf;
+      if (predictive < best - options.recovery_log_ratio) {
+        ++consecutive_disagreement;
+      } else {
+        consecutive_disagreement = 0;
+      }
+      if (consecutive_disagreement >= options.recovery_scans) {
+        if (!est.resampled) {  // equal weights first, so that replacing a subset is unbiased
+          Resample(log_w, options.resampling.scheme, rng, &ancestors);
+          Gather(ancestors);
+          log_w.setConstant(-std::log(static_cast<double>(n)));
+        }
+        const int every = std::max(1, static_cast<int>(std::lround(1.0 / options.recovery_fraction)));
+        std::vector<int> slots;
+        for (int i = 0; i < n; i += every) slots.push_back(i);
+        DrawFromCandidates(point_ll, slots);
+        consecutive_disagreement = 0;
+        est.recovered = true;
+        ++summary.recoveries;
+        FillEstimate(&est);
+      }
+    }
+    Snapshot(true);
+    return est;
+  }
+
+  // The WiFi likelihood as a point function of tracker floors.
+  auto WifiPointLL(const WifiObservation& obs) const {
+    return [this, &obs](double px, double py, int f) { return wifi->LogLikelihood(px, py, model_floor[f], obs); };
   }
 
   // Heading offset of a particle placed without a known start.
@@ -508,6 +578,14 @@ ParticleTracker::ParticleTracker(const FloorPlan* plan, const wifi::RssModel* wi
   }
   if (wifi_model) s.wifi = std::make_unique<WifiLikelihood>(*wifi_model, options.wifi);
   if (plan || wifi_model) s.BuildCandidates();
+  s.floor_area.assign(s.floors.size(), 1e4);
+  for (size_t f = 0; f < s.floors.size(); ++f) {
+    if (plan) {
+      s.floor_area[f] = plan->WalkableArea(s.plan_floor[f]);
+    } else if (wifi_model && s.candidates[f].rows() > 0) {
+      s.floor_area[f] = static_cast<double>(s.candidates[f].rows()) * options.candidate_spacing_m * options.candidate_spacing_m;
+    }
+  }
   s.Resize(options.num_particles);
 }
 
@@ -565,11 +643,12 @@ void ParticleTracker::InitializeUnknown(const WifiObservation& observation) {
   if (s.model) s.wifi->CheckObservation(observation, "observation");
   if (observation.empty() || !s.model) {
     s.UniformCloud();
-    s.awaiting_first_fix = s.model != nullptr;
+    // The first scan with readings, or the first fix, places the cloud.
+    s.awaiting_first_fix = true;
   } else {
     std::vector<int> all(static_cast<size_t>(s.n));
     for (int i = 0; i < s.n; ++i) all[i] = i;
-    s.DrawFromCandidates(observation, all);
+    s.DrawFromCandidates(s.WifiPointLL(observation), all);
     s.log_w.setConstant(-std::log(static_cast<double>(s.n)));
     s.awaiting_first_fix = false;
   }
@@ -714,71 +793,48 @@ TrackerEstimate ParticleTracker::Wifi(const WifiObservation& observation) {
   }
   // WiFi may arrive late (readings re-timed to their own time): no ordering check against the
   // steps, whose own order is checked in Step.
-  TrackerEstimate est;
-  est.time_s = observation.time_s;
   if (observation.empty()) {
+    TrackerEstimate est;
+    est.time_s = observation.time_s;
     ++s.summary.empty_wifi_updates;
     s.FillEstimate(&est);
     est.ess = EffectiveSampleSize(s.log_w);
     return est;
   }
   ++s.summary.wifi_updates;
-  if (s.awaiting_first_fix && observation.num_heard > 0) {
-    // Unknown start: the first scan with readings places the cloud (the seeking phase).
-    std::vector<int> all(static_cast<size_t>(s.n));
-    for (int i = 0; i < s.n; ++i) all[i] = i;
-    s.DrawFromCandidates(observation, all);
-    s.log_w.setConstant(-std::log(static_cast<double>(s.n)));
-    s.awaiting_first_fix = false;
-    est.recovered = true;
-    s.FillEstimate(&est);
-    est.ess = s.n;
-    s.Snapshot(true);
-    s.summary.seconds += timer.ElapsedSeconds();
-    return est;
-  }
-  Eigen::VectorXd ll(s.n);
-  s.ForBlocks(s.n, [&](int, int begin, int end, RandomStream&) {
-    for (int i = begin; i < end; ++i) {
-      ll[i] = s.wifi->LogLikelihood(s.x[i], s.y[i], s.model_floor[s.floor[i]], observation);
-    }
-  });
-  s.log_w += ll;
-  // log p(scan | past), tempered (log_w was normalised before the update).
-  const double predictive = s.FinishUpdate(s.log_w.maxCoeff(), &est);
-  est.log_likelihood = predictive;
-  s.summary.total_log_likelihood += predictive;
-
-  // Recovery: the scan fits the best candidate far better than the cloud, several scans running.
-  if (s.options.recovery_log_ratio > 0.0 && observation.num_heard > 0) {
-    std::vector<int> cf, cr;
-    const Eigen::VectorXd cll = s.CandidateLogLikelihoods(observation, &cf, &cr);
-    const double best = cll.size() > 0 ? cll.maxCoeff() : kNegInf;
-    if (predictive < best - s.options.recovery_log_ratio) {
-      ++s.consecutive_disagreement;
-    } else {
-      s.consecutive_disagreement = 0;
-    }
-    if (s.consecutive_disagreement >= s.options.recovery_scans) {
-      if (!est.resampled) {  // equal weights first, so that replacing a subset is unbiased
-        Resample(s.log_w, s.options.resampling.scheme, s.rng, &s.ancestors);
-        s.Gather(s.ancestors);
-        s.log_w.setConstant(-std::log(static_cast<double>(s.n)));
-      }
-      const int every = std::max(1, static_cast<int>(std::lround(1.0 / s.options.recovery_fraction)));
-      std::vector<int> slots;
-      for (int i = 0; i < s.n; i += every) slots.push_back(i);
-      s.DrawFromCandidates(observation, slots);
-      s.consecutive_disagreement = 0;
-      est.recovered = true;
-      ++s.summary.recoveries;
-      s.FillEstimate(&est);
-    }
-  }
-  s.Snapshot(true);
+  TrackerEstimate est = s.Observe(observation.time_s, observation.num_heard > 0, s.WifiPointLL(observation));
   s.summary.seconds += timer.ElapsedSeconds();
   return est;
 }
+
+TrackerEstimate ParticleTracker::Fix(const PositionFix& fix) {
+  Impl& s = *impl_;
+  WallTimer timer;
+  CheckPositionFix(fix, "fix");
+  if (!s.initialized) {
+    CheckArgument(s.plan || s.model || s.corridors, "fix", "an unknown start needs a floor plan, a signal map or corridors");
+    s.UniformCloud();
+    s.initialized = true;
+    s.awaiting_first_fix = true;
+    s.last_time = fix.time_s;
+  }
+  if (fix.empty()) {
+    TrackerEstimate est;
+    est.time_s = fix.time_s;
+    s.FillEstimate(&est);
+    est.ess = EffectiveSampleSize(s.log_w);
+    return est;
+  }
+  ++s.summary.fix_updates;
+  const FixLikelihood likelihood(fix, s.options.fix);
+  TrackerEstimate est = s.Observe(fix.time_s, true, [&](double px, double py, int f) {
+    return likelihood.LogLikelihood(px, py, s.floors[f], s.floor_area[f]);
+  });
+  s.summary.seconds += timer.ElapsedSeconds();
+  return est;
+}
+
+const std::vector<double>& ParticleTracker::floor_areas_m2() const { return impl_->floor_area; }
 
 TrackerEstimate ParticleTracker::Estimate() const {
   TrackerEstimate est;

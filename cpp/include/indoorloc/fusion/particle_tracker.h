@@ -14,12 +14,15 @@
 //    von Mises likelihood of the measured heading h + o' against their direction of travel
 //    (paper 000 eq. 11): log w += κ cos(h + o' - β(S, d)) - log(2π I0(κ)).
 //  - WiFi (WifiLikelihood): log w += τ log p(v | p) on the particle's floor.
+//  - Position fix (FixLikelihood, position_fix.h): log w += τ_fix log p(fix | p), a Gaussian
+//    mixture with an outlier floor from any external locator (fingerprint kNN, BLE, UWB).
 //  - Log-weights are normalised (log-sum-exp); resampling when ESS < threshold N (paper 000
 //    eq. 14), all state arrays gathered together.
 // Start: known (Gaussian prior on position, heading offset and scale on one floor, truncated to
-// the walkable area) or unknown (drawn from the first scan's WiFi likelihood over candidate
-// points of the walkable area on every floor: the short seeking phase paper 000 §IV asks for).
-// Recovery: when the filter's predictive likelihood of a scan stays more than
+// the walkable area) or unknown (drawn from the first scan's WiFi likelihood, or the first fix's,
+// over candidate points of the walkable area on every floor: the short seeking phase paper 000
+// §IV asks for).
+// Recovery: when the filter's predictive likelihood of a scan (or fix) stays more than
 // `recovery_log_ratio` nats below the best candidate's for `recovery_scans` scans in a row, a
 // fraction of the particles is re-drawn from the scan's likelihood over the candidates.
 // Outputs per step: weighted mean and covariance, floor probabilities, ESS, log-likelihood
@@ -41,6 +44,7 @@
 #include "indoorloc/core/random.h"
 #include "indoorloc/core/resampling.h"
 #include "indoorloc/fusion/floor_plan.h"
+#include "indoorloc/fusion/position_fix.h"
 #include "indoorloc/fusion/step_motion.h"
 #include "indoorloc/fusion/wifi_likelihood.h"
 #include "indoorloc/mapmatch/road_network.h"
@@ -52,6 +56,7 @@ struct TrackerOptions {
   int num_particles = 5000;
   StepMotionOptions motion;
   WifiLikelihoodOptions wifi;
+  FixLikelihoodOptions fix;
   ResamplingOptions resampling;
   /// Added to the log-weight of a particle whose step crosses a wall; -inf drops it.
   double wall_log_penalty = -std::numeric_limits<double>::infinity();
@@ -111,6 +116,7 @@ struct TrackerSummary {
   int steps = 0;
   int wifi_updates = 0;
   int empty_wifi_updates = 0;   ///< observations without usable readings (no-ops)
+  int fix_updates = 0;          ///< position fixes applied (empty fixes are no-ops, not counted)
   int resamplings = 0;
   int recoveries = 0;
   int all_blocked_steps = 0;    ///< steps in which every particle was blocked (ignored)
@@ -162,6 +168,13 @@ class ParticleTracker {
   TrackerEstimate Step(const StepInput& step);
   /// One WiFi observation (no-op estimate if it has no readings).
   TrackerEstimate Wifi(const WifiObservation& observation);
+  /// One position fix (no-op estimate if it has no component). Before any start, or after an
+  /// unknown start that no scan or fix has placed yet, the fix places the cloud (unknown start).
+  /// Throws std::invalid_argument on a malformed fix (CheckPositionFix).
+  TrackerEstimate Fix(const PositionFix& fix);
+  /// Walkable area [m²] of each tracker floor: the outlier density of a fix is 1 / area (the
+  /// plan's walkable area; without a plan, candidate points x spacing²; with neither, 1e4 m²).
+  const std::vector<double>& floor_areas_m2() const;
   /// The current estimate without an update.
   TrackerEstimate Estimate() const;
 

@@ -1,8 +1,8 @@
 // The batch API of the fusion tracker: a whole recording (steps and WiFi observations) in,
 // per-step estimates and optionally the backward-smoothed track out.
 //
-// Events are processed in time order; a WiFi observation at the same time as a step comes after
-// it. The estimate reported for step k is causal: after step k and every observation with time
+// Events are processed in time order; a WiFi observation or fix at the same time as a step comes
+// after it, and at equal times WiFi observations come before fixes. The estimate reported for step k is causal: after step k and every observation with time
 // <= t_k. Unknown start: the cloud starts uniform over the walkable area and is re-drawn from
 // the first observation that has readings (steps before it therefore carry little
 // information: their estimates are those of a uniform cloud).
@@ -19,6 +19,7 @@ namespace indoorloc::fusion {
 struct Recording {
   std::vector<StepInput> steps;                ///< sorted by time
   std::vector<WifiObservation> observations;   ///< sorted by time (MakeWifiObservations)
+  std::vector<PositionFix> fixes;              ///< sorted by time (position_fix.h); may be empty
 };
 
 /// Known or unknown start.

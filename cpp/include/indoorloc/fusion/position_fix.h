@@ -1,0 +1,66 @@
+// Position fixes: what an external locator (a fingerprint kNN on a crowdsourced map, BLE, UWB,
+// a user's tap on the map) says about where the walker is, as an observation of the fusion
+// tracker. A fix is a Gaussian mixture over the floor plus an outlier floor:
+//
+//   p(fix | z) = ε / A_f + (1 - ε) Σ_k w_k N(z; μ_k, σ_k² I₂)          (z on floor f)
+//
+// with weights w_k normalised to sum 1, ε the probability that the fix has nothing to do with
+// the walker's position (a gross fingerprint mismatch across the building) and A_f the walkable
+// area of floor f [m²] (the uniform density of an unrelated fix). A fix for floor F gives the
+// particles on other floors the outlier density only. The tracker adds τ_fix log p(fix | z).
+//
+// Why a mixture with an outlier term: on real crowdsourced maps (the 2020 indoor-location
+// competition's mall) the nearest fingerprints of one scan are often spread over several places
+// tens of metres apart (docs/fusion_real.md); a single Gaussian fix at their mean is then
+// between them, in a shop, and a light-tailed likelihood lets one such scan wipe out the
+// particles that were right. The mixture keeps each candidate place, the ε term bounds what one
+// scan can do: at most log((1 - ε) ... ) - log(ε / A) nats between any two positions.
+#pragma once
+#include <limits>
+#include <string>
+#include <Eigen/Core>
+
+namespace indoorloc::fusion {
+
+struct PositionFix {
+  /// "Any floor" marker (outside every real floor number and exact as a double).
+  static constexpr int kAnyFloor = -(1 << 20);
+  double time_s = 0.0;
+  /// Floor number the fix is on; kAnyFloor: the same mixture applies on every floor.
+  int floor = kAnyFloor;
+  Eigen::Matrix<double, Eigen::Dynamic, 2, Eigen::RowMajor> means_m;  ///< K x 2 component means [m]
+  Eigen::VectorXd sds_m;     ///< K isotropic component sds [m], finite and > 0
+  Eigen::VectorXd weights;   ///< K, finite and >= 0 with a positive sum (normalised on use)
+  bool empty() const { return means_m.rows() == 0; }
+};
+
+struct FixLikelihoodOptions {
+  /// ε: probability that a fix is unrelated to the position (uniform over the walkable area).
+  double outlier_probability = 0.2;
+  /// τ_fix: exponent of the fix likelihood in (0, 1] (consecutive fixes from overlapping WiFi
+  /// readings are not independent).
+  double tempering = 1.0;
+  bool IsValid(std::string* error) const;
+};
+
+/// Throws std::invalid_argument naming `argument` (and the field) on a malformed fix: shapes
+/// that disagree, NaN/inf, sd <= 0, negative weights or weights summing to 0.
+void CheckPositionFix(const PositionFix& fix, const char* argument);
+
+/// Evaluates τ_fix log p(fix | z) for one fix.
+class FixLikelihood {
+ public:
+  /// `fix` must have passed CheckPositionFix and outlive this object.
+  FixLikelihood(const PositionFix& fix, const FixLikelihoodOptions& options);
+  /// Tempered log-likelihood at (x, y) [m] on floor number `floor` whose walkable area is
+  /// `area_m2` (> 0). Thread-safe.
+  double LogLikelihood(double x_m, double y_m, int floor, double area_m2) const;
+
+ private:
+  const PositionFix& fix_;
+  FixLikelihoodOptions options_;
+  Eigen::VectorXd log_component_scale_;  // log((1 - ε) w_k / (2π σ_k²))
+  Eigen::VectorXd inv_two_var_;          // 1 / (2 σ_k²)
+};
+
+}  // namespace indoorloc::fusion

@@ -1,0 +1,83 @@
+#include "indoorloc/fusion/position_fix.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "indoorloc/core/check.h"
+
+namespace indoorloc::fusion {
+
+bool FixLikelihoodOptions::IsValid(std::string* error) const {
+  if (!(std::isfinite(outlier_probability) && outlier_probability > 0.0 && outlier_probability < 1.0)) {
+    *error = "outlier_probability must be in (0, 1)";
+    return false;
+  }
+  if (!(std::isfinite(tempering) && tempering > 0.0 && tempering <= 1.0)) {
+    *error = "tempering must be in (0, 1]";
+    return false;
+  }
+  return true;
+}
+
+void CheckPositionFix(const PositionFix& fix, const char* argument) {
+  const std::string arg(argument);
+  CheckArgument(std::isfinite(fix.time_s), arg + ".time_s", "must be finite");
+  const Eigen::Index k = fix.means_m.rows();
+  CheckArgument(fix.sds_m.size() == k, arg + ".sds_m",
+                "has " + std::to_string(fix.sds_m.size()) + " entries, means_m has " + std::to_string(k) + " rows");
+  CheckArgument(fix.weights.size() == k, arg + ".weights",
+                "has " + std::to_string(fix.weights.size()) + " entries, means_m has " + std::to_string(k) + " rows");
+  if (k == 0) return;
+  CheckFinite(fix.means_m, (arg + ".means_m").c_str());
+  double total = 0.0;
+  for (Eigen::Index i = 0; i < k; ++i) {
+    CheckArgument(std::isfinite(fix.sds_m[i]) && fix.sds_m[i] > 0.0, arg + ".sds_m",
+                  "entry " + std::to_string(i) + " = " + std::to_string(fix.sds_m[i]) + " must be finite and > 0");
+    CheckArgument(std::isfinite(fix.weights[i]) && fix.weights[i] >= 0.0, arg + ".weights",
+                  "entry " + std::to_string(i) + " = " + std::to_string(fix.weights[i]) + " must be finite and >= 0");
+    total += fix.weights[i];
+  }
+  CheckArgument(total > 0.0, arg + ".weights", "sum to 0 (a fix needs at least one component with weight > 0)");
+}
+
+FixLikelihood::FixLikelihood(const PositionFix& fix, const FixLikelihoodOptions& options)
+    : fix_(fix), options_(options) {
+  const Eigen::Index k = fix.means_m.rows();
+  log_component_scale_.resize(k);
+  inv_two_var_.resize(k);
+  const double total = fix.weights.sum();
+  const double log_inlier = std::log1p(-options.outlier_probability);
+  for (Eigen::Index i = 0; i < k; ++i) {
+    const double var = fix.sds_m[i] * fix.sds_m[i];
+    inv_two_var_[i] = 0.5 / var;
+    log_component_scale_[i] = fix.weights[i] > 0.0
+                                  ? log_inlier + std::log(fix.weights[i] / total) - std::log(2.0 * M_PI * var)
+                                  : -std::numeric_limits<double>::infinity();
+  }
+}
+
+double FixLikelihood::LogLikelihood(double x_m, double y_m, int floor, double area_m2) const {
+  if (fix_.empty()) return 0.0;
+  const double log_outlier = std::log(options_.outlier_probability / area_m2);
+  double best = log_outlier;
+  const Eigen::Index k = fix_.means_m.rows();
+  const bool on_floor = fix_.floor == PositionFix::kAnyFloor || fix_.floor == floor;
+  // Log-sum-exp over the outlier term and the components, in two passes (max, then sum).
+  thread_local Eigen::VectorXd terms;
+  if (on_floor) {
+    terms.resize(k);
+    for (Eigen::Index i = 0; i < k; ++i) {
+      const double dx = x_m - fix_.means_m(i, 0), dy = y_m - fix_.means_m(i, 1);
+      terms[i] = log_component_scale_[i] - (dx * dx + dy * dy) * inv_two_var_[i];
+      best = std::max(best, terms[i]);
+    }
+  }
+  double sum = std::exp(log_outlier - best);
+  if (on_floor) {
+    for (Eigen::Index i = 0; i < k; ++i) sum += std::exp(terms[i] - best);
+  }
+  return options_.tempering * (best + std::log(sum));
+}
+
+}  // namespace indoorloc::fusion

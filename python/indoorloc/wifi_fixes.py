@@ -1,0 +1,208 @@
+"""WiFi fingerprint fixes for the fusion tracker: each scan of a walk matched against the scans
+of a crowdsourced training set, its best matches turned into a Gaussian-mixture position fix
+(``fusion.Fixes``) with an outlier floor (docs/fusion_real.md, "WiFi as fixes").
+
+Why scans and not the cell map: on the competition mall the per-cell model of paper 004 and
+Euclidean kNN with a floor value are 20-30 m off on average (docs/fusion_real.md); what holds
+better is the dissimilarity of two scans over the union of the APs they heard,
+
+    d(a, b) = (Σ_{i ∈ A∩B} |a_i - b_i| + c |A Δ B|) / |A ∪ B|     [dB]
+
+(A, B the APs heard in each; c the cost of an AP heard in one scan only): APs that one scan hears
+and the other does not say as much as the RSS differences, and no floor value has to be
+invented for them. The k best training scans become the components of the fix, at the
+positions where they were recorded, with weights exp(-(d_j - d_min) / T) and sd σ; the tracker
+adds the outlier floor ε (``TrackerOptions.fix_outlier_probability``). Every constant is chosen
+by leave-one-floor-out cross-validation (``indoorloc fusion evaluate --select``).
+
+Training scans are placed at their measurement epoch (the median last-seen time of their fresh
+readings, ``wifi_crowdsource.scan_epochs``) by ``wifi_crowdsource.walk_positions`` (PDR between
+the waypoints); the fixes of a walk are timed the same way.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+from indoorloc import fusion
+from indoorloc import pdr_handheld as ph
+from indoorloc import wifi_crowdsource as wc
+
+
+@dataclass
+class FixSettings:
+    """Settings of the fingerprint fixes (defaults: leave-one-floor-out choice, docs/fusion_real.md)."""
+
+    fresh_age_s: float = 2.5        #: readings at most this old make a scan's fingerprint [s]
+    min_scans: int = 3              #: keep a BSSID heard in at least this many training scans
+    unshared_cost_db: float = 20.0  #: c: cost of an AP heard in one scan only [dB]
+    k: int = 8                      #: components per fix (best training scans)
+    temperature_db: float = 2.0     #: T of the component weights [dB]
+    sd_m: float = 4.0               #: σ of each component [m]
+    min_aps: int = 3                #: scans with fewer APs known to the database give no fix
+
+    def validate(self) -> None:
+        """Raises ValueError naming the first invalid field."""
+        for name in ("fresh_age_s", "unshared_cost_db", "temperature_db", "sd_m"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise ValueError(f"indoorloc: FixSettings.{name} must be finite and > 0, got {v!r}")
+        for name in ("min_scans", "k", "min_aps"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, np.integer)) and 1 <= v <= 10_000):
+                raise ValueError(f"indoorloc: FixSettings.{name} must be an integer in [1, 10000], got {v!r}")
+
+
+def fresh_scans(walk: Any, fresh_age_s: float, bssids: Optional[Sequence[str]] = None
+                ) -> Tuple[np.ndarray, np.ndarray, List[str]]:
+    """The fresh fingerprint of every scan of a walk.
+
+    Returns ``(epochs_s (S,), rss_dbm (S, K), bssids)``: per scan with at least one reading at
+    most ``fresh_age_s`` old, its epoch (median last-seen time of those readings, walk clock [s])
+    and the readings (NaN = not heard; a BSSID listed twice: the stronger). Columns are
+    ``bssids`` when given (others dropped), else the walk's own vocabulary."""
+    wf = walk.wifi
+    names = list(wf.bssids) if bssids is None else list(bssids)
+    index = {b: i for i, b in enumerate(names)}
+    epochs = wc.scan_epochs(wf, fresh_age_s)
+    keep = np.flatnonzero(np.isfinite(epochs))
+    rss = np.full((keep.size, len(names)), np.nan)
+    if wf.n_readings and keep.size:
+        row_of_scan = np.full(wf.n_scans, -1, dtype=np.int64)
+        row_of_scan[keep] = np.arange(keep.size)
+        col = np.array([index.get(b, -1) for b in wf.bssids], dtype=np.int64)[wf.bssid_index]
+        row = row_of_scan[wf.scan_index]
+        sel = (wf.age_s <= fresh_age_s) & (col >= 0) & (row >= 0)
+        order = np.argsort(wf.rssi_dbm[sel], kind="stable")  # stronger last: it wins the assignment
+        r, c, v = row[sel][order], col[sel][order], wf.rssi_dbm[sel][order]
+        rss[r, c] = v
+    return epochs[keep], rss, names
+
+
+@dataclass
+class FingerprintDatabase:
+    """Training scans: fingerprints (N, K) [dBm, NaN = not heard], positions (N, 2) [m] and the
+    BSSID of each column."""
+
+    rss_dbm: np.ndarray
+    positions_m: np.ndarray
+    bssids: List[str]
+    settings: FixSettings
+
+    @property
+    def n_scans(self) -> int:
+        return int(self.positions_m.shape[0])
+
+
+def build_database(train_walks: Sequence[Any], settings: Optional[FixSettings] = None,
+                   steps: Optional[Sequence[ph.HandheldSteps]] = None,
+                   map_settings: Optional[wc.CrowdMapSettings] = None) -> FingerprintDatabase:
+    """Every fresh scan of the training walks, placed at its epoch by PDR between waypoints
+    (``wifi_crowdsource.walk_positions``); BSSIDs heard in fewer than ``min_scans`` scans dropped.
+    Raises ValueError when no scan can be placed."""
+    s = settings or FixSettings()
+    s.validate()
+    per_walk = []
+    for i, walk in enumerate(train_walks):
+        t, rss, names = fresh_scans(walk, s.fresh_age_s)
+        if t.size == 0:
+            continue
+        pos = wc.walk_positions(walk, t, map_settings, None if steps is None else steps[i])
+        if pos.valid.any():
+            per_walk.append((rss[pos.valid], pos.xy_m[pos.valid], names))
+    if not per_walk:
+        raise ValueError("indoorloc: argument 'train_walks': no WiFi scan could be placed (no fresh readings "
+                         "between waypoints)")
+    counts: Dict[str, int] = {}
+    for rss, _, names in per_walk:
+        heard = np.isfinite(rss).sum(axis=0)
+        for name, c in zip(names, heard):
+            if c:
+                counts[name] = counts.get(name, 0) + int(c)
+    vocab = sorted(b for b, c in counts.items() if c >= s.min_scans)
+    col = {b: i for i, b in enumerate(vocab)}
+    blocks, positions = [], []
+    for rss, xy, names in per_walk:
+        out = np.full((rss.shape[0], len(vocab)), np.nan)
+        src = np.array([i for i, b in enumerate(names) if b in col], dtype=np.int64)
+        dst = np.array([col[names[i]] for i in src], dtype=np.int64)
+        if src.size:
+            out[:, dst] = rss[:, src]
+        blocks.append(out)
+        positions.append(xy)
+    return FingerprintDatabase(np.vstack(blocks), np.vstack(positions), vocab, s)
+
+
+def scan_dissimilarity(queries_dbm: np.ndarray, database_dbm: np.ndarray, unshared_cost_db: float
+                       ) -> np.ndarray:
+    """d(a, b) of the module docstring for every query (Q, K) against every database scan (N, K)
+    (NaN = not heard): (Q, N) [dB]; +inf where the union of heard APs is empty."""
+    q = np.asarray(queries_dbm, dtype=float)
+    x = np.asarray(database_dbm, dtype=float)
+    qh, xh = np.isfinite(q), np.isfinite(x)
+    q0, x0 = np.where(qh, q, 0.0), np.where(xh, x, 0.0)
+    qh_f, xh_f = qh.astype(float), xh.astype(float)
+    shared = qh_f @ xh_f.T                                           # |A ∩ B|
+    union = qh_f.sum(1)[:, None] + xh_f.sum(1)[None, :] - shared      # |A ∪ B|
+    # Σ over shared APs of |a - b|, by chunks of queries to bound memory (Q x N x K).
+    abs_sum = np.empty(shared.shape)
+    chunk = max(1, int(2e7 // max(1, x.shape[0] * x.shape[1])))
+    for a in range(0, q.shape[0], chunk):
+        b = min(q.shape[0], a + chunk)
+        diff = np.abs(q0[a:b, None, :] - x0[None, :, :])
+        both = qh[a:b, None, :] & xh[None, :, :]
+        abs_sum[a:b] = np.where(both, diff, 0.0).sum(axis=2)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        d = (abs_sum + unshared_cost_db * (union - shared)) / union
+    return np.where(union > 0, d, np.inf)
+
+
+def fixes_for_walk(walk: Any, database: FingerprintDatabase, floor: Optional[int] = None) -> fusion.Fixes:
+    """One fix per fresh scan of the walk with at least ``min_aps`` APs of the database: the
+    ``k`` most similar training scans as components (module docstring). ``floor``: the floor
+    number of the fixes (None: any floor)."""
+    s = database.settings
+    t, rss, _ = fresh_scans(walk, s.fresh_age_s, database.bssids)
+    ok = np.isfinite(rss).sum(axis=1) >= s.min_aps
+    t, rss = t[ok], rss[ok]
+    k = min(s.k, database.n_scans)
+    if t.size == 0:
+        return fusion.Fixes.from_arrays(np.zeros(0), np.zeros((0, k, 2)), np.zeros((0, k)), np.zeros((0, k)))
+    d = scan_dissimilarity(rss, database.rss_dbm, s.unshared_cost_db)
+    best = np.argsort(d, axis=1, kind="stable")[:, :k]
+    db = np.take_along_axis(d, best, axis=1)
+    weights = np.exp(-(db - db[:, :1]) / s.temperature_db)
+    weights[~np.isfinite(db)] = 0.0
+    order = np.argsort(t, kind="stable")
+    floors = None if floor is None else np.full(t.size, int(floor))
+    return fusion.Fixes.from_arrays(t[order], database.positions_m[best[order]], s.sd_m, weights[order], floors)
+
+
+def locate_scans(rss_dbm: np.ndarray, database: FingerprintDatabase) -> np.ndarray:
+    """WiFi-only positions (Q, 2) [m] of scans (Q, K in the database's columns): the
+    weight-averaged position of each scan's fix components (the kNN baseline on this metric)."""
+    s = database.settings
+    d = scan_dissimilarity(rss_dbm, database.rss_dbm, s.unshared_cost_db)
+    k = min(s.k, database.n_scans)
+    best = np.argsort(d, axis=1, kind="stable")[:, :k]
+    db = np.take_along_axis(d, best, axis=1)
+    w = np.exp(-(db - db[:, :1]) / s.temperature_db)
+    w = np.where(np.isfinite(db), w, 0.0)
+    w_sum = w.sum(axis=1, keepdims=True)
+    pos = (w[:, :, None] * database.positions_m[best]).sum(axis=1) / np.where(w_sum > 0, w_sum, 1.0)
+    return np.where(w_sum > 0, pos, np.nan)
+
+
+__all__ = [
+    "FingerprintDatabase",
+    "FixSettings",
+    "build_database",
+    "fixes_for_walk",
+    "fresh_scans",
+    "locate_scans",
+    "scan_dissimilarity",
+]
