@@ -66,7 +66,7 @@ std::vector<StepInput> StepsFromArrays(const py::object& times_s, const py::obje
 }
 
 // Position fixes from arrays: times (F,), means (F, 2K) = per fix K (x, y) pairs, sds (F, K),
-// weights (F, K), floors (F,) (PositionFix::kAnyFloor = any). Components of weight 0 are padding
+// weights (F, K), floors (F, K) per component (PositionFix::kAnyFloor = any). Components of weight 0 are padding
 // and dropped (their mean and sd may be NaN), so fixes may have different component counts.
 std::vector<PositionFix> FixesFromArrays(const py::tuple& arrays) {
   if (arrays.size() != 5) ThrowInvalidArgument("fixes", "must be (times_s, means_m, sds_m, weights, floors)");
@@ -76,17 +76,17 @@ std::vector<PositionFix> FixesFromArrays(const py::tuple& arrays) {
   const Eigen::Index k = sds.map.cols();
   MatrixArg means = ToMatrix(arrays[1], "fixes.means_m", f, 2 * k);
   MatrixArg weights = ToMatrix(arrays[3], "fixes.weights", f, k);
-  Eigen::VectorXi floors = ToIntVector(arrays[4], "fixes.floors", f);
+  MatrixArg floors = ToMatrix(arrays[4], "fixes.floors", f, k);
   std::vector<PositionFix> out(static_cast<size_t>(f));
   for (Eigen::Index i = 0; i < f; ++i) {
     PositionFix& fix = out[static_cast<size_t>(i)];
     fix.time_s = t.map[i];
-    fix.floor = floors[i];
     int used = 0;
     for (Eigen::Index j = 0; j < k; ++j) used += weights.map(i, j) != 0.0 ? 1 : 0;
     fix.means_m.resize(used, 2);
     fix.sds_m.resize(used);
     fix.weights.resize(used);
+    fix.floors.resize(used);
     int c = 0;
     for (Eigen::Index j = 0; j < k; ++j) {
       if (weights.map(i, j) == 0.0) continue;
@@ -94,6 +94,11 @@ std::vector<PositionFix> FixesFromArrays(const py::tuple& arrays) {
       fix.means_m(c, 1) = means.map(i, 2 * j + 1);
       fix.sds_m[c] = sds.map(i, j);
       fix.weights[c] = weights.map(i, j);
+      const double fl = floors.map(i, j);
+      if (fl != std::floor(fl) || std::abs(fl) > 2e9) {
+        ThrowInvalidArgument("fixes.floors", "entry (" + std::to_string(i) + ", " + std::to_string(j) + ") is not an integer");
+      }
+      fix.floors[c] = static_cast<int>(fl);
       ++c;
     }
     CheckPositionFix(fix, ("fixes[" + std::to_string(i) + "]").c_str());
@@ -358,13 +363,13 @@ options : TrackerOptions)doc")
            },
            py::arg("observation"), "One WiFi observation. Returns the estimate dict.")
       .def("fix", [](ParticleTracker& t, double time_s, const py::object& means_m, const py::object& sds_m,
-                     const py::object& weights, const py::object& floor) {
+                     const py::object& weights, const py::object& floors) {
              MatrixArg m = ToMatrix(means_m, "means_m", -1, 2);
              VectorArg sd = ToVector(sds_m, "sds_m", m.map.rows());
              VectorArg w = ToVector(weights, "weights", m.map.rows());
              PositionFix fix;
              fix.time_s = time_s;
-             fix.floor = floor.is_none() ? PositionFix::kAnyFloor : floor.cast<int>();
+             if (!floors.is_none()) fix.floors = ToIntVector(floors, "floors", m.map.rows());
              fix.means_m = m.map;
              fix.sds_m = sd.map;
              fix.weights = w.map;
@@ -375,9 +380,9 @@ options : TrackerOptions)doc")
              }
              return EstimateToDict(e);
            },
-           py::arg("time_s"), py::arg("means_m"), py::arg("sds_m"), py::arg("weights"), py::arg("floor") = py::none(),
-           "One position fix: a Gaussian mixture with component means (K, 2) [m], isotropic sds (K,) [m] and "
-           "weights (K,) on floor number `floor` (None: any floor), plus the outlier floor of "
+           py::arg("time_s"), py::arg("means_m"), py::arg("sds_m"), py::arg("weights"), py::arg("floors") = py::none(),
+           "One position fix: a Gaussian mixture with component means (K, 2) [m], isotropic sds (K,) [m], "
+           "weights (K,) and floor numbers (K,) (None or ANY_FLOOR: any floor), plus the outlier floor of "
            "TrackerOptions.fix_outlier_probability. Returns the estimate dict.")
       .def_property_readonly("floor_areas_m2", &ParticleTracker::floor_areas_m2,
                              "Walkable area [m²] per tracker floor (the outlier density of a fix is 1 / area).")
@@ -474,7 +479,7 @@ Batch tracking of one recording (GIL released). Steps as arrays: step_times_s (M
 displacements_m (M, 2) [m] in the PDR frame, covariances_m2 (M, 3) = (xx, xy, yy) [m²];
 observations: list of WifiObservation sorted by time. start: None (unknown start) or a dict
 {"position_m", "floor", "heading_offset_rad", "time_s"}. smoother: SmootherOptions or None.
-fixes: None or (times_s (F,), means_m (F, 2K), sds_m (F, K), weights (F, K), floors (F,)),
+fixes: None or (times_s (F,), means_m (F, 2K), sds_m (F, K), weights (F, K), floors (F, K)),
 weight-0 components being padding, floor ANY_FLOOR for any floor (see Fixes in indoorloc.fusion).
 Returns a dict of per-step arrays (times_s, mean_m (M, 2), covariance_m2 (M, 3),
 floor_probabilities (M, F), floor_index, heading_offset_rad, scale, ess, log_likelihood,

@@ -253,8 +253,9 @@ class Fixes:
     p(fix | z) = ε / A + (1 - ε) Σ_k w_k N(z; μ_k, σ_k² I) (docs/fusion.md, position_fix.h).
 
     times_s (F,) [s] non-decreasing; means_m (F, K, 2) [m]; sds_m (F, K) [m] > 0; weights (F, K)
-    >= 0 (normalised per fix; weight 0 marks padding, whose mean and sd are ignored); floors (F,)
-    floor numbers, or ``ANY_FLOOR`` where the fix holds on every floor."""
+    >= 0 (normalised per fix; weight 0 marks padding, whose mean and sd are ignored); floors
+    (F, K) floor number of each component, or ``ANY_FLOOR`` where it holds on every floor
+    (components on several floors let the fixes identify the floor)."""
 
     times_s: np.ndarray
     means_m: np.ndarray
@@ -265,7 +266,8 @@ class Fixes:
     @classmethod
     def from_arrays(cls, times_s, means_m, sds_m, weights=None, floors=None) -> "Fixes":
         """Checks shapes and copies. means_m (F, K, 2) or (F, 2) (one component each); sds_m
-        (F, K), (F,) or a scalar; weights default equal; floors default ``ANY_FLOOR``."""
+        (F, K), (F,) or a scalar; weights default equal; floors (F, K), (F,) (one floor per fix)
+        or a scalar, default ``ANY_FLOOR``."""
         t = np.array(times_s, dtype=float).reshape(-1)
         f = t.shape[0]
         m = np.array(means_m, dtype=float)
@@ -284,9 +286,13 @@ class Fixes:
         w = np.ones((f, k)) if weights is None else np.array(weights, dtype=float)
         if w.shape != (f, k):
             raise _error("weights", f"expected shape ({f}, {k}), got {w.shape}")
-        fl = np.full(f, ANY_FLOOR, dtype=np.int64) if floors is None else np.array(floors, dtype=np.int64).reshape(-1)
-        if fl.shape != (f,):
-            raise _error("floors", f"expected shape ({f},), got {fl.shape}")
+        fl = np.asarray(ANY_FLOOR if floors is None else floors)
+        if fl.ndim == 1 and fl.shape == (f,):
+            fl = fl[:, None]
+        try:
+            fl = np.array(np.broadcast_to(fl, (f, k)), dtype=np.int64)
+        except ValueError:
+            raise _error("floors", f"expected shape ({f}, {k}), ({f},) or a scalar, got {fl.shape}") from None
         if f > 1 and np.any(np.diff(t) < 0):
             raise _error("times_s", "must be non-decreasing")
         return cls(t, m, sd, w, fl)

@@ -178,7 +178,7 @@ def fixes_for_walk(walk: Any, database: FingerprintDatabase, floor: Optional[int
     weights = np.exp(-(db - db[:, :1]) / s.temperature_db)
     weights[~np.isfinite(db)] = 0.0
     order = np.argsort(t, kind="stable")
-    floors = None if floor is None else np.full(t.size, int(floor))
+    floors = None if floor is None else int(floor)
     return fusion.Fixes.from_arrays(t[order], database.positions_m[best[order]], s.sd_m, weights[order], floors)
 
 

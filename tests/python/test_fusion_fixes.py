@@ -14,13 +14,17 @@ HALL = [[0, 0], [40, 0], [40, 10], [0, 10]]
 def test_fixes_from_arrays_shapes_and_errors():
     f = fusion.Fixes.from_arrays([0.0, 1.0], [[1.0, 2.0], [3.0, 4.0]], 2.0)
     assert f.means_m.shape == (2, 1, 2) and f.sds_m.shape == (2, 1) and f.weights.shape == (2, 1)
-    assert np.all(f.floors == fusion.ANY_FLOOR)
+    assert f.floors.shape == (2, 1) and np.all(f.floors == fusion.ANY_FLOOR)
+    g = fusion.Fixes.from_arrays([0.0], [[[1.0, 2.0], [3.0, 4.0]]], 2.0, floors=[[3, 4]])
+    assert g.floors.tolist() == [[3, 4]]
     t, means, sds, w, floors = f.as_arrays()
     assert means.shape == (2, 2)
     with pytest.raises(ValueError, match="means_m"):
         fusion.Fixes.from_arrays([0.0], np.zeros((2, 3, 2)), 1.0)
     with pytest.raises(ValueError, match="sds_m"):
         fusion.Fixes.from_arrays([0.0], np.zeros((1, 3, 2)), [1.0, 2.0])
+    with pytest.raises(ValueError, match="floors"):
+        fusion.Fixes.from_arrays([0.0], np.zeros((1, 3, 2)), 1.0, floors=[1, 2])
     with pytest.raises(ValueError, match="times_s"):
         fusion.Fixes.from_arrays([1.0, 0.0], np.zeros((2, 2)), 1.0)
     plan = fusion.floor_plan_from_polygons(HALL)
@@ -61,6 +65,23 @@ def test_padding_components_are_ignored_and_streaming_equals_batch():
             k += 1
     np.testing.assert_allclose(est["mean_m"], batch["mean_m"][-1], rtol=0, atol=1e-12)
     assert tr.floor_areas_m2[0] == pytest.approx(400.0)
+
+
+def test_fixes_with_components_on_two_floors_identify_the_floor():
+    plan = fusion.floor_plan_from_geometries([
+        fusion.FloorGeometry(0, [np.array(HALL, float)], [], np.zeros((0, 4))),
+        fusion.FloorGeometry(1, [np.array(HALL, float)], [], np.zeros((0, 4)))])
+    times = 0.5 * np.arange(1, 21)
+    steps = fusion.Steps.from_polar(times, 0.7, 0.0, 0.05, 0.05)
+    ft = np.arange(0.0, 10.0, 1.0)
+    x = 3.0 + 0.7 * 2.0 * ft
+    # Each fix: the truth on floor 1 (weight 0.6) and a wrong place on floor 0 (weight 0.4).
+    means = np.stack([np.c_[x, np.full(ft.size, 5.0)], np.c_[40 - x, np.full(ft.size, 2.0)]], axis=1)
+    fixes = fusion.Fixes.from_arrays(ft, means, 2.0, [[0.6, 0.4]] * ft.size, floors=[[1, 0]] * ft.size)
+    opts = fusion.tracker_options(num_particles=3000, seed=1, unknown_start_heading_sd_rad=0.05)
+    r = fusion.track(steps, plan=plan, fixes=fixes, options=opts)
+    assert r["floor_index"][-1] == 1 and r["floor_probabilities"][-1, 1] > 0.99
+    assert np.linalg.norm(r["mean_m"][-1] - [3.0 + 0.7 * 20, 5.0]) < 1.5
 
 
 def test_scan_dissimilarity_by_hand():

@@ -77,7 +77,8 @@ struct ParticleTracker::Impl {
   std::vector<int> plan_floor;        // tracker floor index -> plan floor index (or -1)
   std::vector<int> model_floor;       // tracker floor index -> model floor index (or -1)
   std::vector<RowMatrixXd> candidates;  // per tracker floor: candidate points (unknown start, recovery)
-  std::vector<double> floor_area;       // per tracker floor: walkable area [m²] (fix outlier density)
+  std::vector<double> floor_area;       // per tracker floor: walkable area [m²]
+  double total_area = 0.0;              // over all floors: the outlier density of a fix is ε / total_area
 
   int n = 0;
   std::vector<double> x, y, offset, scale;
@@ -586,6 +587,7 @@ ParticleTracker::ParticleTracker(const FloorPlan* plan, const wifi::RssModel* wi
       s.floor_area[f] = static_cast<double>(s.candidates[f].rows()) * options.candidate_spacing_m * options.candidate_spacing_m;
     }
   }
+  for (double a : s.floor_area) s.total_area += a;
   s.Resize(options.num_particles);
 }
 
@@ -828,7 +830,7 @@ TrackerEstimate ParticleTracker::Fix(const PositionFix& fix) {
   ++s.summary.fix_updates;
   const FixLikelihood likelihood(fix, s.options.fix);
   TrackerEstimate est = s.Observe(fix.time_s, true, [&](double px, double py, int f) {
-    return likelihood.LogLikelihood(px, py, s.floors[f], s.floor_area[f]);
+    return likelihood.LogLikelihood(px, py, s.floors[f], s.total_area);
   });
   s.summary.seconds += timer.ElapsedSeconds();
   return est;

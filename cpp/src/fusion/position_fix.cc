@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "indoorloc/core/check.h"
@@ -28,6 +29,9 @@ void CheckPositionFix(const PositionFix& fix, const char* argument) {
                 "has " + std::to_string(fix.sds_m.size()) + " entries, means_m has " + std::to_string(k) + " rows");
   CheckArgument(fix.weights.size() == k, arg + ".weights",
                 "has " + std::to_string(fix.weights.size()) + " entries, means_m has " + std::to_string(k) + " rows");
+  CheckArgument(fix.floors.size() == 0 || fix.floors.size() == k, arg + ".floors",
+                "has " + std::to_string(fix.floors.size()) + " entries, means_m has " + std::to_string(k) +
+                    " rows (or pass none: any floor)");
   if (k == 0) return;
   CheckFinite(fix.means_m, (arg + ".means_m").c_str());
   double total = 0.0;
@@ -62,21 +66,21 @@ double FixLikelihood::LogLikelihood(double x_m, double y_m, int floor, double ar
   const double log_outlier = std::log(options_.outlier_probability / area_m2);
   double best = log_outlier;
   const Eigen::Index k = fix_.means_m.rows();
-  const bool on_floor = fix_.floor == PositionFix::kAnyFloor || fix_.floor == floor;
-  // Log-sum-exp over the outlier term and the components, in two passes (max, then sum).
+  const bool any_floor = fix_.floors.size() == 0;
+  // Log-sum-exp over the outlier term and the components on this floor, in two passes.
   thread_local Eigen::VectorXd terms;
-  if (on_floor) {
-    terms.resize(k);
-    for (Eigen::Index i = 0; i < k; ++i) {
-      const double dx = x_m - fix_.means_m(i, 0), dy = y_m - fix_.means_m(i, 1);
-      terms[i] = log_component_scale_[i] - (dx * dx + dy * dy) * inv_two_var_[i];
-      best = std::max(best, terms[i]);
+  terms.resize(k);
+  for (Eigen::Index i = 0; i < k; ++i) {
+    if (!any_floor && fix_.floors[i] != PositionFix::kAnyFloor && fix_.floors[i] != floor) {
+      terms[i] = -std::numeric_limits<double>::infinity();
+      continue;
     }
+    const double dx = x_m - fix_.means_m(i, 0), dy = y_m - fix_.means_m(i, 1);
+    terms[i] = log_component_scale_[i] - (dx * dx + dy * dy) * inv_two_var_[i];
+    best = std::max(best, terms[i]);
   }
   double sum = std::exp(log_outlier - best);
-  if (on_floor) {
-    for (Eigen::Index i = 0; i < k; ++i) sum += std::exp(terms[i] - best);
-  }
+  for (Eigen::Index i = 0; i < k; ++i) sum += std::exp(terms[i] - best);
   return options_.tempering * (best + std::log(sum));
 }
 

@@ -61,10 +61,19 @@ TEST(FixLikelihood, IsTheMixtureWithTheOutlierFloor) {
     EXPECT_NEAR(like.LogLikelihood(p.x(), p.y(), 0, area), 0.5 * std::log(density), 1e-12);
   }
   // A fix on floor 3 gives particles on other floors the outlier density only.
-  fix.floor = 3;
+  fix.floors = Eigen::Vector2i(3, 3);
   const FixLikelihood on3(fix, o);
   EXPECT_NEAR(on3.LogLikelihood(5.0, 5.0, 2, area), 0.5 * std::log(0.1 / area), 1e-12);
   EXPECT_GT(on3.LogLikelihood(5.0, 5.0, 3, area), on3.LogLikelihood(5.0, 5.0, 2, area));
+  // Components on two floors: each floor sees its own components only.
+  fix.floors = Eigen::Vector2i(1, PositionFix::kAnyFloor);
+  const FixLikelihood split(fix, o);
+  auto normal1 = [&](const Eigen::Vector2d& p) {
+    const double var = fix.sds_m[1] * fix.sds_m[1];
+    return std::exp(-(p - fix.means_m.row(1).transpose()).squaredNorm() / (2 * var)) / (2 * M_PI * var);
+  };
+  const Eigen::Vector2d q(29.0, 3.0);
+  EXPECT_NEAR(split.LogLikelihood(q.x(), q.y(), 2, area), 0.5 * std::log(0.1 / area + 0.9 * 0.25 * normal1(q)), 1e-12);
 }
 
 TEST(FixLikelihood, FarFromEveryComponentItIsTheOutlierFloorNotMinusInfinity) {
@@ -103,6 +112,9 @@ TEST(PositionFix, RejectsMalformedFixesNamingTheField) {
   bad.sds_m.resize(3);
   bad.sds_m.setOnes();
   EXPECT_NE(message(bad).find("fix.sds_m"), std::string::npos);
+  bad = f;
+  bad.floors = Eigen::Vector3i(0, 0, 0);
+  EXPECT_NE(message(bad).find("fix.floors"), std::string::npos);
   bad = f;
   bad.time_s = INFINITY;
   EXPECT_NE(message(bad).find("fix.time_s"), std::string::npos);

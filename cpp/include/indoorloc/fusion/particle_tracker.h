@@ -172,8 +172,8 @@ class ParticleTracker {
   /// unknown start that no scan or fix has placed yet, the fix places the cloud (unknown start).
   /// Throws std::invalid_argument on a malformed fix (CheckPositionFix).
   TrackerEstimate Fix(const PositionFix& fix);
-  /// Walkable area [m²] of each tracker floor: the outlier density of a fix is 1 / area (the
-  /// plan's walkable area; without a plan, candidate points x spacing²; with neither, 1e4 m²).
+  /// Walkable area [m²] of each tracker floor (the plan's walkable area; without a plan,
+  /// candidate points x spacing²; with neither, 1e4 m²); a fix's outlier density is ε / their sum.
   const std::vector<double>& floor_areas_m2() const;
   /// The current estimate without an update.
   TrackerEstimate Estimate() const;

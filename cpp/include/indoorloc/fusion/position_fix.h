@@ -2,12 +2,14 @@
 // a user's tap on the map) says about where the walker is, as an observation of the fusion
 // tracker. A fix is a Gaussian mixture over the floor plus an outlier floor:
 //
-//   p(fix | z) = ε / A_f + (1 - ε) Σ_k w_k N(z; μ_k, σ_k² I₂)          (z on floor f)
+//   p(fix | z, f) = ε / A + (1 - ε) Σ_{k: f_k = f or any} w_k N(z; μ_k, σ_k² I₂)   (z on floor f)
 //
-// with weights w_k normalised to sum 1, ε the probability that the fix has nothing to do with
-// the walker's position (a gross fingerprint mismatch across the building) and A_f the walkable
-// area of floor f [m²] (the uniform density of an unrelated fix). A fix for floor F gives the
-// particles on other floors the outlier density only. The tracker adds τ_fix log p(fix | z).
+// with weights w_k normalised to sum 1, component k on floor f_k (or on any floor), ε the
+// probability that the fix has nothing to do with the walker's position (a gross fingerprint
+// mismatch across the building) and A the walkable area of all the tracker's floors [m²] (the
+// uniform density of an unrelated fix). Components on several floors make the fix say which
+// floor too (floor identification); a particle on a floor without components gets the outlier
+// density only. The tracker adds τ_fix log p(fix | z, f).
 //
 // Why a mixture with an outlier term: on real crowdsourced maps (the 2020 indoor-location
 // competition's mall) the nearest fingerprints of one scan are often spread over several places
@@ -26,9 +28,10 @@ struct PositionFix {
   /// "Any floor" marker (outside every real floor number and exact as a double).
   static constexpr int kAnyFloor = -(1 << 20);
   double time_s = 0.0;
-  /// Floor number the fix is on; kAnyFloor: the same mixture applies on every floor.
-  int floor = kAnyFloor;
   Eigen::Matrix<double, Eigen::Dynamic, 2, Eigen::RowMajor> means_m;  ///< K x 2 component means [m]
+  /// K floor numbers of the components; kAnyFloor: the component applies on every floor. Empty:
+  /// every component on any floor.
+  Eigen::VectorXi floors;
   Eigen::VectorXd sds_m;     ///< K isotropic component sds [m], finite and > 0
   Eigen::VectorXd weights;   ///< K, finite and >= 0 with a positive sum (normalised on use)
   bool empty() const { return means_m.rows() == 0; }
@@ -52,8 +55,8 @@ class FixLikelihood {
  public:
   /// `fix` must have passed CheckPositionFix and outlive this object.
   FixLikelihood(const PositionFix& fix, const FixLikelihoodOptions& options);
-  /// Tempered log-likelihood at (x, y) [m] on floor number `floor` whose walkable area is
-  /// `area_m2` (> 0). Thread-safe.
+  /// Tempered log-likelihood at (x, y) [m] on floor number `floor`; `area_m2` (> 0) is the
+  /// walkable area of all floors (the outlier density is ε / area). Thread-safe.
   double LogLikelihood(double x_m, double y_m, int floor, double area_m2) const;
 
  private:
