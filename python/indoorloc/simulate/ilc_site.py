@@ -102,11 +102,13 @@ class IlcSiteConfig:
     stand_end_s: Tuple[float, float] = (0.5, 1.5)
     corner_cut_m: float = 1.5
     step_length_m: float = 0.7
-    step_length_walker_sd_m: float = 0.04      #: spread of the mean stride between walks
+    step_length_walker_sd_m: float = 0.03      #: spread of the mean stride between walks (clipped to +-0.08 m)
     step_length_sd_fraction: float = 0.04      #: step-to-step variability
     step_frequency_hz: float = 1.8
     step_frequency_walker_sd_hz: float = 0.08
-    weinberg_k: float = 0.48                   #: K of L = K (max - min LP|a|)^(1/4) [m / (m/s^2)^(1/4)]
+    #: K of L = K (max - min LP|a|)^(1/4) [m / (m/s^2)^(1/4)]; with 0.62-0.78 m strides the bounce
+    #: amplitude is 1.6-4 m/s^2, clear of pdr_handheld's 1 m/s^2 peak floor
+    weinberg_k: float = 0.46
     yaw_offset_deg: float = 4.0                #: floor-frame heading minus phone heading, site mean
     yaw_offset_walk_sd_deg: float = 1.5        #: per-walk spread of that offset
     heading_error_sd_deg: float = 2.0          #: slow error of the rotation vector's heading
@@ -396,7 +398,7 @@ def _walk(site: "IlcSite", floor_index: int, walk_index: int, t0_unix_ms: int, s
     stand1 = rng.uniform(*cfg.stand_end_s)
     cadence = float(np.clip(cfg.step_frequency_hz + cfg.step_frequency_walker_sd_hz * rng.standard_normal(),
                             0.8 * cfg.step_frequency_hz, 1.2 * cfg.step_frequency_hz))
-    stride = max(0.4, cfg.step_length_m + cfg.step_length_walker_sd_m * rng.standard_normal())
+    stride = cfg.step_length_m + float(np.clip(cfg.step_length_walker_sd_m * rng.standard_normal(), -0.08, 0.08))
     periods, t_end = [], stand0
     while True:
         p = (1.0 + 0.03 * rng.standard_normal()) / cadence
@@ -420,7 +422,8 @@ def _walk(site: "IlcSite", floor_index: int, walk_index: int, t0_unix_ms: int, s
     first_ms = int(rng.integers(110, 150))
     n = int(np.floor((duration * 1000.0 - first_ms) / (1000.0 / rate))) + 1
     t_ms = first_ms + np.round(np.arange(n) * 1000.0 / rate).astype(np.int64)
-    t_ms[1:-1] += rng.integers(-1, 2, n - 2) * (rng.random(n - 2) < 0.1)  # Android's 19-21 ms jitter
+    # Android's 19-21 ms jitter: +-1 ms on some odd samples, so no two neighbours move.
+    t_ms[1:-1] += rng.integers(-1, 2, n - 2) * ((rng.random(n - 2) < 0.1) & (np.arange(1, n - 1) % 2 == 1))
     t = t_ms / 1000.0
     pos = traj.position_at(t)
     # Walking direction, smoothed: people turn the phone over a fraction of a second.
