@@ -8,6 +8,7 @@ import time
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 from indoorloc import pdr_handheld as ph
 from indoorloc import wifi_crowdsource as wc
@@ -143,6 +144,16 @@ def test_handheld_steps_and_calibration_recover_the_truth(site):
         # The detected steps are the true ones (peak of the bounce), within a sample or two.
         near = np.min(np.abs(st.t_s[:, None] - t.step_t_s[None, :]), axis=1)
         assert np.median(near) < 0.05
+        # The gyroscope turns with the rotation vector (up to its constant bias and the rotation
+        # vector's slow heading error, sd 2 deg); the magnetometer is the site's field seen
+        # through the rotation vector's orientation.
+        a = ph.as_arrays(w)
+        diff = ph.gyro_heading(a.t_s, a.gyro_radps, a.quat_xyzw) - np.unwrap(ph.rotation_vector_heading(a.quat_xyzw))
+        resid = diff - np.polyval(np.polyfit(a.t_s, diff, 1), a.t_s)
+        assert math.degrees(np.sqrt(np.mean(resid ** 2))) < 4.0
+        field_enu = Rotation.from_quat(a.quat_xyzw).apply(w.magnetometer.values)
+        np.testing.assert_allclose(field_enu.mean(axis=0), IlcSiteConfig().magnetic_field_enu_ut, atol=0.3)
+        assert np.all(field_enu.std(axis=0) < 1.0)
     cal = ph.calibrate_handheld([w for w, _ in pairs])
     assert cal.k == pytest.approx(truth.weinberg_k, rel=0.05)
     mean_offset = np.angle(np.mean(np.exp(1j * np.array([t.yaw_offset_rad for _, t in pairs]))))

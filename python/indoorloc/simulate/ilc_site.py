@@ -49,7 +49,7 @@ same layout, as in :mod:`indoorloc.simulate.building`):
 
 Randomness: ``numpy.random.default_rng([seed, 0x1C2, stream, ...])``; streams 0 layout, 1 radio,
 2 site-wide calibration, 3 walks (per floor and walk). Writing one floor of 8 walks of 20-40 s
-takes about 0.3 s.
+takes about 0.4 s.
 """
 
 from __future__ import annotations
@@ -412,9 +412,15 @@ def _walk(site: "IlcSite", floor_index: int, walk_index: int, t0_unix_ms: int, s
     step_len = stride * (1.0 + cfg.step_length_sd_fraction * rng.standard_normal(m))
     duration = float(step_t[-1] + stand1)
     # Route and motion along it: arc length linear within each step, flat while standing.
-    route = _route(site.layout, float(step_len.sum()) + 4.0 * cfg.corner_cut_m + 2.0, rng)
-    path = _round_corners(route, np.full(route.shape[0], cfg.corner_cut_m))
-    arc = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(path, axis=0), axis=1))]
+    # Rounding shortens each corner by about 0.4 corner_cut_m: ask for a margin, longer if needed.
+    margin = 4.0 * cfg.corner_cut_m + 2.0
+    while True:
+        route = _route(site.layout, float(step_len.sum()) + margin, rng)
+        path = _round_corners(route, np.full(route.shape[0], cfg.corner_cut_m))
+        arc = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(path, axis=0), axis=1))]
+        if arc[-1] >= step_len.sum():
+            break
+        margin *= 2.0
     knot_t = np.r_[0.0, stand0, step_t, duration]
     knot_s = np.r_[0.0, 0.0, np.cumsum(step_len), step_len.sum()]
     traj = Trajectory(path_m=path, path_arc_m=arc, knot_time_s=knot_t, knot_arc_m=knot_s)
