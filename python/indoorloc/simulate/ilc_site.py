@@ -208,8 +208,9 @@ def make_layout(config: IlcSiteConfig, rng: np.random.Generator) -> IlcLayout:
     """Corridor grid and shops tiling the blocks (1-3 shops per block, split along its long side)."""
     W, D, cw = config.width_m, config.depth_m, config.corridor_width_m
     jit = config.corridor_jitter_m
-    xs = W * np.arange(1, config.ns_corridors + 1) / (config.ns_corridors + 1) + rng.uniform(-jit, jit, config.ns_corridors)
-    ys = D * np.arange(1, config.ew_corridors + 1) / (config.ew_corridors + 1) + rng.uniform(-jit, jit, config.ew_corridors)
+    nx, ny = config.ns_corridors, config.ew_corridors
+    xs = W * np.arange(1, nx + 1) / (nx + 1) + rng.uniform(-jit, jit, nx)
+    ys = D * np.arange(1, ny + 1) / (ny + 1) + rng.uniform(-jit, jit, ny)
     bx = np.concatenate([[0.0], np.ravel(np.column_stack([xs - cw / 2, xs + cw / 2])), [W]]).reshape(-1, 2)
     by = np.concatenate([[0.0], np.ravel(np.column_stack([ys - cw / 2, ys + cw / 2])), [D]]).reshape(-1, 2)
     shops: List[np.ndarray] = []
@@ -357,7 +358,7 @@ def _route(layout: IlcLayout, length_m: float, rng: np.random.Generator) -> np.n
 
 
 def _butterworth_gain(f_hz: float, cutoff_hz: float = 3.0, order: int = 4) -> float:
-    # |H| of the analog prototype; the bilinear design of pdr.butterworth_sos differs by < 1 % at 2 Hz / 50 Hz.
+    # |H| of the analog prototype; the bilinear design at 50 Hz differs by < 0.2 % at 1.4-2.2 Hz.
     return 1.0 / math.sqrt(1.0 + (f_hz / cutoff_hz) ** (2 * order))
 
 
@@ -386,8 +387,9 @@ _SENSOR_HEADER = [
 ]
 
 
-def _walk(site: "IlcSite", floor_index: int, walk_index: int, t0_unix_ms: int, site_id: str, floor_id: str,
+def _walk(site: "IlcSite", floor_index: int, t0_unix_ms: int, site_id: str, floor_id: str,
           rng: np.random.Generator) -> IlcWalkTruth:
+    """One walk on floor ``floor_index``: its truth and the lines of its file (module docstring)."""
     cfg = site.config
     name = site.floor_names[floor_index]
     number = site.floor_numbers[floor_index]
@@ -464,7 +466,8 @@ def _walk(site: "IlcSite", floor_index: int, walk_index: int, t0_unix_ms: int, s
     r_rv = Rotation.from_rotvec(np.column_stack([np.zeros(n), np.zeros(n), err])) * r_true
     quat = r_rv.as_quat()                      # x, y, z, w
     quat[quat[:, 3] < 0] *= -1.0               # Android writes the w >= 0 hemisphere (w not stored)
-    mag = r_rv.inv().apply(np.asarray(cfg.magnetic_field_enu_ut, float)) + cfg.mag_noise_sd_ut * rng.standard_normal((n, 3))
+    mag = (r_rv.inv().apply(np.asarray(cfg.magnetic_field_enu_ut, float))
+           + cfg.mag_noise_sd_ut * rng.standard_normal((n, 3)))
     # Waypoints: start, corners of the route, last step, and fill-ins 3-6 s apart.
     wp = [0.0, float(step_t[-1])]
     corner_s = [float(arc[np.argmin(np.linalg.norm(path - c, axis=1))]) for c in route[1:-1]]
@@ -535,7 +538,8 @@ def _walk(site: "IlcSite", floor_index: int, walk_index: int, t0_unix_ms: int, s
     walk_id = rng.bytes(12).hex()
     end_ms = max(int(t_ms[-1]), int(round(wp_t[-1] * 1000.0)))
     lines = [f"#\tstartTime:{t0_unix_ms - int(rng.integers(6, 24))}",
-             f"#\tSiteID:{site_id}\tSiteName:indoorloc synthetic mall {site.seed}\tFloorId:{floor_id}\tFloorName:{name}",
+             f"#\tSiteID:{site_id}\tSiteName:indoorloc synthetic mall {site.seed}\tFloorId:{floor_id}"
+             f"\tFloorName:{name}",
              "#\tBrand:indoorloc\tModel:synthetic\tAndroidName:8.1.0\tAPILevel:27\t",
              *_SENSOR_HEADER,
              "#\tVersionName:indoorloc.simulate.ilc_site\tVersionCode:1\t"]
@@ -621,7 +625,7 @@ def make_ilc_site(*, floors: Sequence[str] = ("F1",), walks_per_floor: int = 8, 
         walks = []
         for wi in range(int(walks_per_floor)):
             start = t0 + (fi * int(walks_per_floor) + wi) * 120_000
-            walks.append(_walk(site, fi, wi, start, site_id, floor_id, stream(_WALK_STREAM, fi, wi)))
+            walks.append(_walk(site, fi, start, site_id, floor_id, stream(_WALK_STREAM, fi, wi)))
         site.walks[name] = walks
     return site
 
