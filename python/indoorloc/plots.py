@@ -58,8 +58,9 @@ def wifi_path_result(model, result, path: Path) -> Path:
     return Path(path)
 
 
-def error_cdfs(errors_by_method: Mapping[str, object], path: Path) -> Path:
-    """Empirical CDFs of position errors [m], one curve per method."""
+def error_cdfs(errors_by_method: Mapping[str, object], path: Path, xmax_m: float = 8.0,
+               title: str = "") -> Path:
+    """Empirical CDFs of position errors [m], one curve per method (x axis 0..xmax_m)."""
     from indoorloc.metrics import empirical_cdf
 
     fig, ax = plt.subplots(figsize=(6, 4), dpi=120)
@@ -68,8 +69,10 @@ def error_cdfs(errors_by_method: Mapping[str, object], path: Path) -> Path:
         ax.plot(x, p, label=name, lw=1.2, ls="-" if "(1 " in name else "--")
     ax.set_xlabel("error [m]")
     ax.set_ylabel("fraction of estimates")
-    ax.set_xlim(0, 8)
+    ax.set_xlim(0, xmax_m)
     ax.grid(alpha=0.3)
+    if title:
+        ax.set_title(title, fontsize=9)
     ax.legend(fontsize=6, ncol=2)
     fig.tight_layout()
     fig.savefig(path)
@@ -231,6 +234,53 @@ def fusion_walk(snapshot: Mapping[str, object], path: Path) -> Path:
     ax_err.set_yscale("log")
     ax_err.legend(fontsize=8)
     ax_err.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return Path(path)
+
+
+def fusion_real_walk(snapshot: Mapping[str, object], path: Path) -> Path:
+    """One real walk (experiments.fusion_real.walk_snapshot) on its floor image: surveyed
+    waypoints, WiFi fix centres, PDR from the first waypoint, the smoothed track from the unknown
+    start and the smoother's trajectories (its posterior cloud); and each method's error at the
+    waypoints over time. Saves PNG."""
+    import numpy as np
+
+    fig, (ax, ax_err) = plt.subplots(1, 2, figsize=(13, 5.5), dpi=110, gridspec_kw={"width_ratios": [1.5, 1]})
+    extent = snapshot.get("extent_m")
+    if snapshot.get("image_path") and extent:
+        image = plt.imread(snapshot["image_path"])
+        ax.imshow(image, extent=extent, origin="upper", alpha=0.6)
+    edges = np.asarray(snapshot["edges_m"])
+    if edges.size:
+        ax.plot(edges[:, [0, 2]].T, edges[:, [1, 3]].T, color="#555", lw=0.5)
+    traj = np.asarray(snapshot["trajectories_m"])
+    if traj.size:
+        ax.scatter(traj[:, 0::2].ravel(), traj[:, 1::2].ravel(), s=1, color="#d62728", alpha=0.05, lw=0,
+                   label="smoother trajectories")
+    wp = np.asarray(snapshot["waypoints_m"])
+    ax.plot(wp[:, 0], wp[:, 1], "o-", color="k", ms=4, lw=1.5, label="surveyed waypoints")
+    fx = np.asarray(snapshot["fix_centres_m"])
+    if fx.size:
+        ax.plot(fx[:, 0], fx[:, 1], "x", color="#ff7f0e", ms=5, label="WiFi fixes (kNN centre)")
+    ax.plot(*np.asarray(snapshot["pdr_m"]).T, color="#2ca02c", lw=1.2, label="PDR only (known start)")
+    ax.plot(*np.asarray(snapshot["smoothed_m"]).T, color="#d62728", lw=1.8, label="fused, smoothed (unknown start)")
+    ax.set_aspect("equal")
+    if extent:
+        ax.set_xlim(extent[0], extent[1])
+        ax.set_ylim(extent[2], extent[3])
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title(f"{snapshot['floor']}, walk {snapshot['walk']}", fontsize=9)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+    t = np.asarray(snapshot["waypoint_t_s"])
+    for name, e in snapshot["errors"].items():
+        ax_err.plot(t, e, marker=".", lw=1.2, label=name)
+    ax_err.set_xlabel("time since the first waypoint [s]")
+    ax_err.set_ylabel("error at the waypoint [m]")
+    ax_err.grid(alpha=0.3)
+    ax_err.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path)
     plt.close(fig)

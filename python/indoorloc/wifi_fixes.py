@@ -85,13 +85,24 @@ def fresh_scans(walk: Any, fresh_age_s: float, bssids: Optional[Sequence[str]] =
 
 @dataclass
 class FingerprintDatabase:
-    """Training scans: fingerprints (N, K) [dBm, NaN = not heard], positions (N, 2) [m] and the
-    BSSID of each column."""
+    """Training scans: fingerprints (N, K) [dBm, NaN = not heard], positions (N, 2) [m], floor
+    number of each scan (N,) and the BSSID of each column."""
 
     rss_dbm: np.ndarray
     positions_m: np.ndarray
     bssids: List[str]
     settings: FixSettings
+    floors: Optional[np.ndarray] = None
+
+    def __post_init__(self) -> None:
+        if self.floors is None:
+            self.floors = np.zeros(self.positions_m.shape[0], dtype=np.int64)
+
+    def with_settings(self, settings: FixSettings) -> "FingerprintDatabase":
+        """The same scans with other fix settings (``min_scans`` and ``fresh_age_s`` are those
+        the database was built with)."""
+        settings.validate()
+        return FingerprintDatabase(self.rss_dbm, self.positions_m, self.bssids, settings, self.floors)
 
     @property
     def n_scans(self) -> int:
@@ -100,12 +111,17 @@ class FingerprintDatabase:
 
 def build_database(train_walks: Sequence[Any], settings: Optional[FixSettings] = None,
                    steps: Optional[Sequence[ph.HandheldSteps]] = None,
-                   map_settings: Optional[wc.CrowdMapSettings] = None) -> FingerprintDatabase:
+                   map_settings: Optional[wc.CrowdMapSettings] = None,
+                   floors: Optional[Sequence[int]] = None) -> FingerprintDatabase:
     """Every fresh scan of the training walks, placed at its epoch by PDR between waypoints
     (``wifi_crowdsource.walk_positions``); BSSIDs heard in fewer than ``min_scans`` scans dropped.
+    ``floors``: the floor number of each walk (default 0), for fixes over several floors.
     Raises ValueError when no scan can be placed."""
     s = settings or FixSettings()
     s.validate()
+    if floors is not None and len(floors) != len(train_walks):
+        raise ValueError(f"indoorloc: argument 'floors': expected {len(train_walks)} floor numbers (one per walk), "
+                         f"got {len(floors)}")
     per_walk = []
     for i, walk in enumerate(train_walks):
         t, rss, names = fresh_scans(walk, s.fresh_age_s)
@@ -113,20 +129,21 @@ def build_database(train_walks: Sequence[Any], settings: Optional[FixSettings] =
             continue
         pos = wc.walk_positions(walk, t, map_settings, None if steps is None else steps[i])
         if pos.valid.any():
-            per_walk.append((rss[pos.valid], pos.xy_m[pos.valid], names))
+            fl = 0 if floors is None else int(floors[i])
+            per_walk.append((rss[pos.valid], pos.xy_m[pos.valid], names, np.full(int(pos.valid.sum()), fl)))
     if not per_walk:
         raise ValueError("indoorloc: argument 'train_walks': no WiFi scan could be placed (no fresh readings "
                          "between waypoints)")
     counts: Dict[str, int] = {}
-    for rss, _, names in per_walk:
+    for rss, _, names, _ in per_walk:
         heard = np.isfinite(rss).sum(axis=0)
         for name, c in zip(names, heard):
             if c:
                 counts[name] = counts.get(name, 0) + int(c)
     vocab = sorted(b for b, c in counts.items() if c >= s.min_scans)
     col = {b: i for i, b in enumerate(vocab)}
-    blocks, positions = [], []
-    for rss, xy, names in per_walk:
+    blocks, positions, scan_floors = [], [], []
+    for rss, xy, names, fl in per_walk:
         out = np.full((rss.shape[0], len(vocab)), np.nan)
         src = np.array([i for i, b in enumerate(names) if b in col], dtype=np.int64)
         dst = np.array([col[names[i]] for i in src], dtype=np.int64)
@@ -134,7 +151,8 @@ def build_database(train_walks: Sequence[Any], settings: Optional[FixSettings] =
             out[:, dst] = rss[:, src]
         blocks.append(out)
         positions.append(xy)
-    return FingerprintDatabase(np.vstack(blocks), np.vstack(positions), vocab, s)
+        scan_floors.append(fl)
+    return FingerprintDatabase(np.vstack(blocks), np.vstack(positions), vocab, s, np.concatenate(scan_floors))
 
 
 def scan_dissimilarity(queries_dbm: np.ndarray, database_dbm: np.ndarray, unshared_cost_db: float
@@ -161,10 +179,10 @@ def scan_dissimilarity(queries_dbm: np.ndarray, database_dbm: np.ndarray, unshar
     return np.where(union > 0, d, np.inf)
 
 
-def fixes_for_walk(walk: Any, database: FingerprintDatabase, floor: Optional[int] = None) -> fusion.Fixes:
+def fixes_for_walk(walk: Any, database: FingerprintDatabase, with_floors: bool = True) -> fusion.Fixes:
     """One fix per fresh scan of the walk with at least ``min_aps`` APs of the database: the
-    ``k`` most similar training scans as components (module docstring). ``floor``: the floor
-    number of the fixes (None: any floor)."""
+    ``k`` most similar training scans as components (module docstring), each on the floor of
+    its training scan (``with_floors``; else on any floor)."""
     s = database.settings
     t, rss, _ = fresh_scans(walk, s.fresh_age_s, database.bssids)
     ok = np.isfinite(rss).sum(axis=1) >= s.min_aps
@@ -178,8 +196,15 @@ def fixes_for_walk(walk: Any, database: FingerprintDatabase, floor: Optional[int
     weights = np.exp(-(db - db[:, :1]) / s.temperature_db)
     weights[~np.isfinite(db)] = 0.0
     order = np.argsort(t, kind="stable")
-    floors = None if floor is None else int(floor)
+    floors = database.floors[best[order]] if with_floors else None
     return fusion.Fixes.from_arrays(t[order], database.positions_m[best[order]], s.sd_m, weights[order], floors)
+
+
+def fix_centres(fixes: fusion.Fixes) -> np.ndarray:
+    """The weighted mean position (F, 2) [m] of each fix's components: the kNN estimate of the
+    scan (the WiFi-only baseline on this metric)."""
+    w = fixes.weights / np.maximum(fixes.weights.sum(axis=1, keepdims=True), 1e-300)
+    return (w[:, :, None] * np.where(fixes.weights[:, :, None] > 0, fixes.means_m, 0.0)).sum(axis=1)
 
 
 def locate_scans(rss_dbm: np.ndarray, database: FingerprintDatabase) -> np.ndarray:
@@ -201,6 +226,7 @@ __all__ = [
     "FingerprintDatabase",
     "FixSettings",
     "build_database",
+    "fix_centres",
     "fixes_for_walk",
     "fresh_scans",
     "locate_scans",

@@ -46,12 +46,30 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     root = Path(args.data_root) if args.data_root else fr.default_site_root()
     bar = progress.progress(iter(int, 1), total=None, desc="walks") if progress.enabled() else None
     tick = (lambda: next(bar)) if bar is not None else None
-    result = fr.evaluate(root, args.floors, settings, progress=tick)
-    print(fr.markdown(result))
+    if args.select:
+        result = fr.select_settings(root, args.floors, settings, progress=tick)
+        print(fr.select_markdown(result))
+    else:
+        result = fr.evaluate(root, args.floors, settings, progress=tick)
+        print(fr.markdown(result))
     if args.json:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json.dumps(result, indent=1) + "\n")
         print(f"JSON written to {args.json}")
+    if args.plots and not args.select:
+        from indoorloc import plots
+
+        out = Path(args.plots)
+        out.mkdir(parents=True, exist_ok=True)
+        errors = {}
+        for row in result["waypoints"]:
+            errors.setdefault(row["method"], []).append(row["error_m"])
+        written = [plots.error_cdfs(errors, out / "fusion_real_error_cdfs.png", xmax_m=60.0,
+                                    title=f"Waypoint errors, floors {' '.join(args.floors)}")]
+        for floor in args.floors:
+            written.append(plots.fusion_real_walk(fr.walk_snapshot(root, floor, args.plot_walk, settings),
+                                                  out / f"fusion_real_walk_{floor}.png"))
+        print("plots: " + ", ".join(str(p) for p in written))
     return 0
 
 
@@ -84,6 +102,11 @@ def add_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
     e.add_argument("--seed", type=int, default=0)
     e.add_argument("--threads", type=int, default=2, help="walks tracked in parallel (results do not depend on it)")
     e.add_argument("--json", default=None, help="write the JSON (schema: docs/fusion_real.md)")
+    e.add_argument("--select", action="store_true",
+                   help="leave-one-floor-out choice of the settings over fusion_real.SELECT_GRID instead")
+    e.add_argument("--plots", default=None, metavar="DIR",
+                   help="write error CDFs of all methods and one walk per floor on its floor image here")
+    e.add_argument("--plot-walk", type=int, default=0, help="index of the walk drawn per floor (default 0)")
     e.set_defaults(func=cmd_evaluate)
     t = fsub.add_parser("tune", parents=[quiet_parent()],
                         help="grid search of the tracker's settings on tuning seeds (how the defaults were chosen)")

@@ -9,40 +9,49 @@ and WiFi and the floor plan, and scored at its surveyed waypoints. Methods, side
 same folds:
 
 ``wifi_knn``, ``wifi_model``
-    WiFi only: the scan nearest in time to each waypoint (readings older than the staleness limit
-    dropped), weighted kNN on the map's cells / the posterior mean of paper 004's model.
+    WiFi only, from the scan nearest in time to each waypoint (readings older than the staleness
+    limit dropped): kNN on the placed training scans with the union dissimilarity
+    (``wifi_fixes``: the centre of the scan's fix) / the posterior mean of paper 004's model on
+    the crowdsourced cell map.
 ``pdr_only``
     handheld PDR from the first waypoint, headings rotated by the training yaw offset.
 ``peer_costmin``
     the cost-minimisation post-processing of the 2021 competition's public solutions
-    (``benchmarks/ilc_costmin_peer.py``): WiFi-model fixes at every scan plus the PDR
-    displacements by robust least squares with a per-walk rotation. Only when run from a source
+    (``benchmarks/ilc_costmin_peer.py``): the kNN WiFi fixes (``wifi_knn``) at every scan plus
+    the PDR displacements by robust least squares with a per-walk rotation. Only when run from a source
     tree (the peer is not part of the package); otherwise absent from the table.
 ``fusion_unknown_start``, ``fusion_known_start``, ``fusion_smoother``
-    the tracker (floor given); the smoother runs from the unknown start and is the library's
-    recommended default.
+    the tracker (floor given) with the WiFi as fingerprint fixes (``wifi_fixes``: Gaussian
+    mixtures with an outlier floor); the smoother runs from the unknown start and is the
+    library's recommended default.
 ``fusion_no_walls``, ``fusion_no_wifi``, ``fusion_no_heading_offset``
     ablations of the default (unknown start + smoother): no floor plan; no WiFi (then the start
     must be known: it is); the heading offset fixed at the training offset (no offset state).
 
-Every setting is either fixed in advance (``RealSettings``, with the reason) or fitted on the
-training walks of the fold; nothing is chosen on the test walks. Estimates at step times are
-interpolated linearly to the waypoint times.
+Floor identification: the default (unknown start + smoother) once more with the floor not given,
+on the plan of every floor evaluated and fixes from the training scans of every floor (same
+fold); its floor accuracy at the waypoints is ``floor_identification`` in the JSON.
+
+Every setting is either fixed in advance (``RealSettings``, with the reason), fitted on the
+training walks of the fold, or chosen by leave-one-floor-out cross-validation
+(:func:`select_settings`, ``indoorloc fusion evaluate --select``); nothing is chosen on the test
+walks. Estimates at step times are interpolated linearly to the waypoint times.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
-from typing import Any, Dict, List, Optional, Sequence
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from indoorloc import fusion, pdr_handheld as ph, wifi, wifi_crowdsource as wc
+from indoorloc import fusion, pdr_handheld as ph, wifi, wifi_crowdsource as wc, wifi_fixes as wfx
 from indoorloc.io import load_floor_plan, read_ilc_floor
 
 FLOORS = ("F3", "F4", "F7", "F8")
@@ -62,40 +71,44 @@ METHODS = (
 
 @dataclass
 class RealSettings:
-    """Settings of ``indoorloc fusion evaluate``; each is fixed in advance (why in the comment)
-    or fitted per fold on the training walks (``calibrate_handheld``)."""
+    """Settings of ``indoorloc fusion evaluate``; each is fixed in advance (why in the comment),
+    fitted per fold on the training walks (``calibrate_handheld``), or chosen by
+    leave-one-floor-out cross-validation (:func:`select_settings`; marked LOFO)."""
 
     folds: int = 4                      #: k of the k-fold by walk (issue 15)
-    seed: int = 0                       #: fold assignment
-    num_particles: int = 3000           #: enough for a 237 x 219 m floor (the candidate grid seeds the cloud)
+    seed: int = 0                       #: fold assignment and tracker seeds
+    num_particles: int = 3000           #: 20000 gave the same errors on F8 (docs/fusion_real.md)
     smoother_trajectories: int = 50     #: FFBSi trajectories
     #: Staleness limit of the WiFi-only fixes [s]: the dip of the reading-age histogram between the
-    #: current scan and Android's cache (docs/fusion_data.md); the tracker re-times readings instead.
+    #: current scan and Android's cache (docs/fusion_data.md).
     wifi_max_age_s: float = 2.5
-    knn_k: int = 3                      #: the inner-CV choice of docs/fusion_real.md
     grid_spacing_m: float = 2.0         #: GridPosterior spacing of the model fixes (docs/fusion_real.md)
     #: Per-step white noise of the handheld PDR given to the filter: length sd as a fraction of the
     #: stride and heading sd [rad]; the systematic parts are the filter's scale and offset states.
     step_length_sd_fraction: float = 0.15
     step_heading_sd_rad: float = math.radians(10.0)
-    #: Shops are polygons without doors and surveyors do walk into them (12 of 866 waypoints lie
-    #: inside one): crossing an obstacle edge costs this log-weight instead of dropping the particle.
+    #: LOFO: log-weight of a step through a shop wall (-inf: the particle is dropped). Shops are
+    #: polygons without doors and surveyors do walk into a few (12 of 866 waypoints lie inside one).
     wall_log_penalty: float = math.log(0.02)
-    #: The crowdsourced map is built from heard readings only, and deduplicated scans do not say
-    #: which APs were not heard: use heard readings only.
-    use_not_heard: bool = False
     candidate_spacing_m: float = 2.0    #: unknown start and recovery on the mall floors
-    #: τ of the WiFi likelihood; None: the library default (chosen on the synthetic building)
-    tempering: Optional[float] = None
+    #: The WiFi as fingerprint fixes (``wifi_fixes``); k, T, σ, c: LOFO.
+    fixes: wfx.FixSettings = field(default_factory=wfx.FixSettings)
+    fix_outlier_probability: float = 0.2  #: LOFO: ε of the fixes
+    fix_tempering: float = 0.5            #: LOFO: τ_fix (consecutive scans share stale readings)
+    floor_identification: bool = True   #: also run the default with the floor not given
     threads: int = 2                    #: walks tracked in parallel (results do not depend on it)
 
     def tracker_options(self, **overrides) -> fusion.TrackerOptions:
         settings = dict(num_particles=self.num_particles, wall_log_penalty=self.wall_log_penalty,
-                        use_not_heard=self.use_not_heard, candidate_spacing_m=self.candidate_spacing_m, seed=self.seed)
-        if self.tempering is not None:
-            settings["tempering"] = self.tempering
+                        candidate_spacing_m=self.candidate_spacing_m, seed=self.seed,
+                        fix_outlier_probability=self.fix_outlier_probability, fix_tempering=self.fix_tempering)
         settings.update(overrides)
         return fusion.tracker_options(**settings)
+
+    def to_dict(self) -> Dict[str, Any]:
+        d = asdict(self)
+        d["wall_log_penalty"] = None if math.isinf(self.wall_log_penalty) else self.wall_log_penalty
+        return d
 
 
 @dataclass
@@ -105,6 +118,33 @@ class WalkScore:
     t_s: np.ndarray                                  #: waypoint times since the walk's first waypoint
     errors_m: Dict[str, np.ndarray] = field(default_factory=dict)
     seconds: Dict[str, float] = field(default_factory=dict)
+    floor_correct: Optional[np.ndarray] = None       #: floor identification at the waypoints
+    floor_free_errors_m: Optional[np.ndarray] = None  #: position error of that run
+
+
+@dataclass
+class FloorData:
+    """One floor's walks, plan and detected steps."""
+
+    name: str
+    number: int
+    walks: List[Any]
+    plan: Any
+    steps: List[ph.HandheldSteps]
+    geojson_path: Path
+
+
+@dataclass
+class FoldModels:
+    """What a fold's training walks give one floor: PDR calibration, crowdsourced cell map,
+    fingerprint database; and the all-floor plan and database for floor identification."""
+
+    floor: FloorData
+    cal: ph.HandheldCalibration
+    crowd: wc.CrowdMap
+    database: wfx.FingerprintDatabase
+    all_plan: Any = None
+    all_database: Optional[wfx.FingerprintDatabase] = None
 
 
 def default_site_root() -> Path:
@@ -112,6 +152,12 @@ def default_site_root() -> Path:
     from indoorloc.registry import default_data_root
 
     return default_data_root().parent / "fusion" / "ilc2020_site2"
+
+
+def floor_number(name: str) -> int:
+    """Floor number of an ILC floor folder: F3 -> 3, B1 -> -1 (digits of the name)."""
+    digits = "".join(ch for ch in name if ch.isdigit())
+    return int(digits or 0) * (-1 if name.upper().startswith("B") else 1)
 
 
 def _peer():
@@ -133,11 +179,11 @@ def _folds(n: int, k: int, seed: int) -> List[np.ndarray]:
     return [np.sort(perm[i::k]) for i in range(min(k, n))]
 
 
-def _nearest_scan_rows(times_s: np.ndarray, scan_t: np.ndarray, rss: np.ndarray) -> np.ndarray:
-    idx = np.clip(np.searchsorted(scan_t, times_s), 0, len(scan_t) - 1)
-    prev = np.clip(idx - 1, 0, len(scan_t) - 1)
-    use_prev = np.abs(scan_t[prev] - times_s) < np.abs(scan_t[idx] - times_s)
-    return rss[np.where(use_prev, prev, idx)]
+def _nearest_rows(times_s: np.ndarray, row_t: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    idx = np.clip(np.searchsorted(row_t, times_s), 0, len(row_t) - 1)
+    prev = np.clip(idx - 1, 0, len(row_t) - 1)
+    use_prev = np.abs(row_t[prev] - times_s) < np.abs(row_t[idx] - times_s)
+    return rows[np.where(use_prev, prev, idx)]
 
 
 def _interp_track(t_query: np.ndarray, t_steps: np.ndarray, xy: np.ndarray) -> np.ndarray:
@@ -146,73 +192,18 @@ def _interp_track(t_query: np.ndarray, t_steps: np.ndarray, xy: np.ndarray) -> n
     return np.stack([np.interp(t_query, t_steps, xy[:, 0]), np.interp(t_query, t_steps, xy[:, 1])], axis=1)
 
 
-def _score_walk(walk, floor_name: str, floor_number: int, plan, crowd: wc.CrowdMap, cal: ph.HandheldCalibration,
-                steps_raw: ph.HandheldSteps, settings: RealSettings, peer) -> WalkScore:
-    wt = np.asarray(walk.waypoint_t_s, float)
-    wxy = np.asarray(walk.waypoint_xy_m, float)
-    score = WalkScore(floor_name, walk.walk_id, wt - wt[0])
-    err = score.errors_m
-
-    def put(name: str, est: np.ndarray) -> None:
-        err[name] = np.hypot(*(np.asarray(est) - wxy).T)
-
-    # WiFi only: the scan nearest in time to each waypoint, stale readings dropped.
-    scan_t, rss_fresh, _ = wc.scan_matrix(walk, crowd.bssids, dedup=False, max_age_s=settings.wifi_max_age_s)
-    nh = crowd.settings.not_heard_dbm
-    if scan_t.size:
-        q = wc.prepare(_nearest_scan_rows(wt, scan_t, rss_fresh), nh)
-        m = crowd.signal_map
-        knn = wifi.FingerprintLocator(m.mean_dbm, m.positions_m, m.floors, method="wknn", k=settings.knn_k)
-        put("wifi_knn", np.asarray(knn.locate(q)[0]))
-        grid = wifi.GridPosterior(crowd.model, settings.grid_spacing_m)
-        put("wifi_model", np.asarray(grid.locate(q)["positions_m"]))
-        all_fixes = np.asarray(grid.locate(wc.prepare(rss_fresh, nh))["positions_m"])
-        heard = np.isfinite(rss_fresh).any(axis=1)
-    # PDR: calibrated steps, headings rotated into the floor frame by the training yaw offset.
-    steps = ph.rescale(steps_raw, cal.options)
-    heading = steps.heading_rad + cal.yaw_offset_rad
-    length_sd = settings.step_length_sd_fraction * steps.length_m
-    pdr_steps = fusion.Steps.from_polar(steps.t_s, steps.length_m, heading, length_sd, settings.step_heading_sd_rad)
-    put("pdr_only", ph.pdr_track(steps, wxy[0], wt, yaw_offset_rad=cal.yaw_offset_rad))
-    if peer is not None and scan_t.size and heard.sum() >= 1 and len(pdr_steps) >= 1:
-        tic = time.perf_counter()
-        # Positions before the first step and after each step: M + 1 times, M displacements.
-        t_nodes = np.r_[min(float(wt[0]), float(pdr_steps.times_s[0]) - 0.5), pdr_steps.times_s]
-        track = peer.costmin_track(t_nodes, pdr_steps.displacements_m, scan_t[heard], all_fixes[heard])
-        score.seconds["peer_costmin"] = time.perf_counter() - tic
-        put("peer_costmin", peer.evaluate_at(wt, t_nodes, track))
-    if len(pdr_steps) == 0:
-        return score
-    # The tracker: WiFi readings re-timed to their last-seen time, each measurement once.
-    t_all, rss_all, ages_all = wc.scan_matrix(walk, crowd.bssids, dedup=True, max_age_s=None)
-    options = settings.tracker_options(unknown_start_heading_sd_rad=max(cal.yaw_offset_spread_rad, 1e-3),
-                                       start_heading_offset_sd_rad=max(cal.yaw_offset_spread_rad, 1e-3))
-    observations, _ = fusion.make_wifi_observations(t_all, rss_all, ages_all, options, at_own_time=True)
-    known = {"position_m": wxy[0], "floor": floor_number, "heading_offset_rad": 0.0, "time_s": float(wt[0])}
-    smoother = fusion.SmootherOptions(num_trajectories=settings.smoother_trajectories, seed=settings.seed)
-    runs = {
-        "fusion_unknown_start": dict(start=None, smoother=smoother, keys=("fusion_unknown_start", "fusion_smoother")),
-        "fusion_known_start": dict(start=known, smoother=None, keys=("fusion_known_start",)),
-        "fusion_no_walls": dict(start=None, smoother=smoother, plan=None, keys=(None, "fusion_no_walls")),
-        "fusion_no_wifi": dict(start=known, smoother=smoother, observations=[], model=None, keys=(None, "fusion_no_wifi")),
-        "fusion_no_heading_offset": dict(start=None, smoother=smoother, keys=(None, "fusion_no_heading_offset"),
-                                         options=replace_options(options, heading_offset_walk_rad=0.0,
-                                                                 unknown_start_heading_sd_rad=0.0)),
-    }
-    for name, run in runs.items():
-        tic = time.perf_counter()
-        result = fusion.track(pdr_steps, run.get("observations", observations), plan=run.get("plan", plan),
-                              wifi_model=run.get("model", crowd.model), start=run["start"],
-                              options=run.get("options", options), smoother=run["smoother"])
-        seconds = time.perf_counter() - tic
-        filtered, smoothed = run["keys"][0], run["keys"][-1] if len(run["keys"]) > 1 else None
-        if filtered:
-            put(filtered, _interp_track(wt, pdr_steps.times_s, result["mean_m"]))
-            score.seconds[filtered] = seconds
-        if smoothed:
-            put(smoothed, _interp_track(wt, pdr_steps.times_s, result["smoothed_m"]))
-            score.seconds[smoothed] = seconds
-    return score
+def _walkable_start(plan, xy: np.ndarray, floor_index: int = 0) -> np.ndarray:
+    """The surveyed start, or with hard walls the nearest walkable point on rings around it
+    (a few starts lie inside a shop polygon; the tracker refuses those with hard walls)."""
+    if plan.is_walkable(np.asarray(xy, float)[None, :], floor_index)[0]:
+        return np.asarray(xy, float)
+    angles = np.linspace(0.0, 2.0 * np.pi, 32, endpoint=False)
+    for r in np.arange(0.25, 30.0, 0.25):
+        ring = np.asarray(xy, float) + r * np.c_[np.cos(angles), np.sin(angles)]
+        ok = plan.is_walkable(ring, floor_index)
+        if ok.any():
+            return ring[np.flatnonzero(ok)[0]]
+    return np.asarray(xy, float)
 
 
 def replace_options(options: fusion.TrackerOptions, **changes) -> fusion.TrackerOptions:
@@ -223,23 +214,156 @@ def replace_options(options: fusion.TrackerOptions, **changes) -> fusion.Tracker
     return fusion.tracker_options(**values)
 
 
-def evaluate_floor(floor_dir: Path, floor_number: int, settings: RealSettings, peer=None, progress=None) -> List[WalkScore]:
-    """Every method on every walk of one floor, k-fold by walk."""
-    floor = read_ilc_floor(floor_dir)
+def _score_walk(walk, steps_raw: ph.HandheldSteps, models: FoldModels, settings: RealSettings, peer,
+                methods: Sequence[str]) -> WalkScore:
+    fl = models.floor
+    wt = np.asarray(walk.waypoint_t_s, float)
+    wxy = np.asarray(walk.waypoint_xy_m, float)
+    score = WalkScore(fl.name, walk.walk_id, wt - wt[0])
+    err = score.errors_m
+    want = set(methods)
+
+    def put(name: str, est: np.ndarray) -> None:
+        err[name] = np.hypot(*(np.asarray(est) - wxy).T)
+
+    fixes = wfx.fixes_for_walk(walk, models.database)
+    centres = wfx.fix_centres(fixes) if len(fixes) else np.zeros((0, 2))
+    # WiFi only: the scan nearest in time to each waypoint.
+    if len(fixes) and "wifi_knn" in want:
+        put("wifi_knn", _nearest_rows(wt, fixes.times_s, centres))
+    if "wifi_model" in want:
+        scan_t, rss_fresh, _ = wc.scan_matrix(walk, models.crowd.bssids, dedup=False, max_age_s=settings.wifi_max_age_s)
+        if scan_t.size:
+            q = wc.prepare(_nearest_rows(wt, scan_t, rss_fresh), models.crowd.settings.not_heard_dbm)
+            grid = wifi.GridPosterior(models.crowd.model, settings.grid_spacing_m)
+            put("wifi_model", np.asarray(grid.locate(q)["positions_m"]))
+    # PDR: calibrated steps, headings rotated into the floor frame by the training yaw offset.
+    cal = models.cal
+    steps = ph.rescale(steps_raw, cal.options)
+    heading = steps.heading_rad + cal.yaw_offset_rad
+    length_sd = settings.step_length_sd_fraction * steps.length_m
+    pdr_steps = fusion.Steps.from_polar(steps.t_s, steps.length_m, heading, length_sd, settings.step_heading_sd_rad)
+    if "pdr_only" in want:
+        put("pdr_only", ph.pdr_track(steps, wxy[0], wt, yaw_offset_rad=cal.yaw_offset_rad))
+    if peer is not None and "peer_costmin" in want and len(fixes) and len(pdr_steps):
+        tic = time.perf_counter()
+        # Positions before the first step and after each step: M + 1 times, M displacements.
+        t_nodes = np.r_[min(float(wt[0]), float(pdr_steps.times_s[0]) - 0.5), pdr_steps.times_s]
+        track = peer.costmin_track(t_nodes, pdr_steps.displacements_m, fixes.times_s, centres)
+        score.seconds["peer_costmin"] = time.perf_counter() - tic
+        put("peer_costmin", peer.evaluate_at(wt, t_nodes, track))
+    if len(pdr_steps) == 0:
+        return score
+    spread = max(cal.yaw_offset_spread_rad, 1e-3)
+    options = settings.tracker_options(unknown_start_heading_sd_rad=spread, start_heading_offset_sd_rad=spread)
+    start_xy = wxy[0] if not math.isinf(settings.wall_log_penalty) else _walkable_start(fl.plan, wxy[0])
+    known = {"position_m": start_xy, "floor": fl.number, "heading_offset_rad": 0.0, "time_s": float(wt[0])}
+    smoother = fusion.SmootherOptions(num_trajectories=settings.smoother_trajectories, seed=settings.seed)
+    runs = {
+        "fusion_unknown_start": dict(start=None, smoother=smoother, keys=("fusion_unknown_start", "fusion_smoother")),
+        "fusion_known_start": dict(start=known, smoother=None, keys=("fusion_known_start",)),
+        "fusion_no_walls": dict(start=None, smoother=smoother, plan=None, keys=(None, "fusion_no_walls")),
+        "fusion_no_wifi": dict(start=known, smoother=smoother, fixes=None, keys=(None, "fusion_no_wifi")),
+        "fusion_no_heading_offset": dict(start=None, smoother=smoother, keys=(None, "fusion_no_heading_offset"),
+                                         options=replace_options(options, heading_offset_walk_rad=0.0,
+                                                                 unknown_start_heading_sd_rad=0.0)),
+    }
+    for name, run in runs.items():
+        if not want.intersection(k for k in run["keys"] if k):
+            continue
+        tic = time.perf_counter()
+        if name == "fusion_no_walls":
+            # Without a plan the tracker's floor and candidates come from the fixes' area: the
+            # plan's bounding box as a one-floor outline, no obstacles.
+            run_plan = _outline_plan(fl)
+        else:
+            run_plan = run.get("plan", fl.plan)
+        result = fusion.track(pdr_steps, plan=run_plan, start=run["start"], options=run.get("options", options),
+                              smoother=run["smoother"], fixes=run.get("fixes", fixes))
+        seconds = time.perf_counter() - tic
+        filtered, smoothed = run["keys"][0], run["keys"][-1] if len(run["keys"]) > 1 else None
+        if filtered:
+            put(filtered, _interp_track(wt, pdr_steps.times_s, result["mean_m"]))
+            score.seconds[filtered] = seconds
+        if smoothed:
+            put(smoothed, _interp_track(wt, pdr_steps.times_s, result["smoothed_m"]))
+            score.seconds[smoothed] = seconds
+    if settings.floor_identification and models.all_plan is not None and "fusion_smoother" in want:
+        all_fixes = wfx.fixes_for_walk(walk, models.all_database)
+        tic = time.perf_counter()
+        result = fusion.track(pdr_steps, plan=models.all_plan, options=options, smoother=smoother, fixes=all_fixes)
+        score.seconds["floor_identification"] = time.perf_counter() - tic
+        plan_floors = list(models.all_plan.floors)
+        step_idx = np.clip(np.searchsorted(pdr_steps.times_s, wt), 0, len(pdr_steps) - 1)
+        est_floor = np.asarray(plan_floors)[np.asarray(result["smoothed_floor_index"])[step_idx]]
+        score.floor_correct = est_floor == fl.number
+        score.floor_free_errors_m = np.where(score.floor_correct,
+                                             np.hypot(*(_interp_track(wt, pdr_steps.times_s, result["smoothed_m"]) - wxy).T),
+                                             np.nan)
+    return score
+
+
+_OUTLINE_PLANS: Dict[str, Any] = {}
+
+
+def _outline_plan(floor: FloorData):
+    """The floor's outline without its shops (the no-walls ablation keeps the building's extent)."""
+    key = str(floor.geojson_path)
+    if key not in _OUTLINE_PLANS:
+        geometry = floor.plan.geometry(0)
+        _OUTLINE_PLANS[key] = fusion.FloorPlan([fusion.FloorGeometry(floor.number, list(geometry.outlines), [],
+                                                                      np.zeros((0, 4)))])
+    return _OUTLINE_PLANS[key]
+
+
+def load_floor(root: Path, name: str) -> FloorData:
+    """Walks, plan (origin at the outline's south-west corner, the floor frame) and detected steps."""
+    floor = read_ilc_floor(Path(root) / name)
+    number = floor_number(name)
     walks = [floor.walk(i) for i in range(floor.n_walks)]
-    plan = load_floor_plan(floor.geojson_path, floors=[floor_number], origin_lon_lat="outline_sw")
-    steps = [ph.handheld_steps(w) for w in walks]
-    scores: List[WalkScore] = []
-    for test_idx in _folds(len(walks), settings.folds, settings.seed):
-        test = set(test_idx.tolist())
-        train = [w for i, w in enumerate(walks) if i not in test]
-        train_steps = [s for i, s in enumerate(steps) if i not in test]
+    plan = load_floor_plan(floor.geojson_path, floors=[number], origin_lon_lat="outline_sw")
+    return FloorData(name, number, walks, plan, [ph.handheld_steps(w) for w in walks], Path(floor.geojson_path))
+
+
+def _fold_models(floors: Sequence[FloorData], fold_of: Dict[str, List[np.ndarray]], j: int,
+                 settings: RealSettings, all_plan) -> Dict[str, FoldModels]:
+    """Fold j's training models of every floor (and the all-floor database when identifying floors)."""
+    out: Dict[str, FoldModels] = {}
+    all_walks, all_steps, all_numbers = [], [], []
+    for fl in floors:
+        test = set(fold_of[fl.name][j].tolist())
+        train = [w for i, w in enumerate(fl.walks) if i not in test]
+        train_steps = [s for i, s in enumerate(fl.steps) if i not in test]
         cal = ph.calibrate_handheld(train, steps_cache=train_steps)
-        crowd = wc.build_crowd_map(train, wc.CrowdMapSettings(), floor_number)
-        jobs = [(walks[i], steps[i]) for i in test_idx]
+        crowd = wc.build_crowd_map(train, wc.CrowdMapSettings(), fl.number)
+        database = wfx.build_database(train, settings.fixes, train_steps, floors=[fl.number] * len(train))
+        out[fl.name] = FoldModels(fl, cal, crowd, database)
+        all_walks += train
+        all_steps += train_steps
+        all_numbers += [fl.number] * len(train)
+    if all_plan is not None:
+        all_database = wfx.build_database(all_walks, settings.fixes, all_steps, floors=all_numbers)
+        for m in out.values():
+            m.all_plan, m.all_database = all_plan, all_database
+    return out
+
+
+def evaluate_floors(floors: Sequence[FloorData], settings: RealSettings, peer=None, progress=None,
+                    methods: Sequence[str] = METHODS, all_plan=None) -> List[WalkScore]:
+    """Every method on every walk of the floors, k-fold by walk within each floor (fold j of
+    every floor shares the all-floor database of floor identification)."""
+    # Fold lists padded with empty folds where a floor has fewer walks than folds.
+    fold_of = {fl.name: (_folds(len(fl.walks), settings.folds, settings.seed) + [np.zeros(0, int)] * settings.folds)
+               [:settings.folds] for fl in floors}
+    scores: List[WalkScore] = []
+    for j in range(settings.folds):
+        jobs_idx = [(fl, i) for fl in floors for i in fold_of[fl.name][j]]
+        if not jobs_idx:
+            continue
+        models = _fold_models(floors, fold_of, j, settings, all_plan)
+        jobs = [(fl.walks[i], fl.steps[i], models[fl.name]) for fl, i in jobs_idx]
         with ThreadPoolExecutor(max_workers=max(1, settings.threads)) as pool:
-            futures = [pool.submit(_score_walk, w, floor.name, floor_number, plan, crowd, cal, s, settings, peer)
-                       for w, s in jobs]
+            futures = [pool.submit(_score_walk, w, s, m, settings, peer, methods) for w, s, m in jobs]
             for f in futures:
                 scores.append(f.result())
                 if progress:
@@ -252,12 +376,18 @@ def _stats(errors: np.ndarray) -> Dict[str, float]:
             "p90_m": float(np.percentile(errors, 90)), "n_waypoints": int(errors.size)}
 
 
+#: Bins of the time since the walk's first waypoint for "error against time" [s].
+TIME_BINS_S = (0.0, 10.0, 20.0, 30.0, 45.0, math.inf)
+
+
 def summarize(scores: Sequence[WalkScore], settings: RealSettings, seconds: float) -> dict:
     """The JSON contract of ``indoorloc fusion evaluate`` (docs/fusion_real.md):
     ``{"methods": {NAME: {"mean_m", "median_m", "p90_m", "n_waypoints"}}, "waypoints": [{"floor",
-    "walk", "method", "t_s", "error_m"}], "settings": {...}}`` plus informative extras
-    (``per_floor``, ``seconds``)."""
-    methods, per_floor, rows = {}, {}, []
+    "walk", "method", "t_s", "error_m"}], "settings": {...}}`` plus informative extras:
+    ``per_floor``, ``error_vs_time`` (mean error per bin of time since the walk's start),
+    ``floor_identification`` (accuracy when the floor is not given), ``seconds``,
+    ``mean_seconds_per_walk``."""
+    methods, per_floor, rows, by_time = {}, {}, [], {}
     for name in METHODS:
         e = [s.errors_m[name] for s in scores if name in s.errors_m]
         if not e:
@@ -267,34 +397,197 @@ def summarize(scores: Sequence[WalkScore], settings: RealSettings, seconds: floa
             ef = [s.errors_m[name] for s in scores if s.floor == fl and name in s.errors_m]
             if ef:
                 per_floor.setdefault(fl, {})[name] = _stats(np.concatenate(ef))
+        t = np.concatenate([s.t_s for s in scores if name in s.errors_m])
+        ev = np.concatenate(e)
+        bins = []
+        for lo, hi in zip(TIME_BINS_S[:-1], TIME_BINS_S[1:]):
+            sel = (t >= lo) & (t < hi)
+            bins.append({"from_s": lo, "to_s": None if math.isinf(hi) else hi, "n_waypoints": int(sel.sum()),
+                         "mean_m": float(ev[sel].mean()) if sel.any() else None})
+        by_time[name] = bins
     for s in scores:
         for name, e in s.errors_m.items():
             for t, v in zip(s.t_s, e):
                 rows.append({"floor": s.floor, "walk": s.walk, "method": name, "t_s": round(float(t), 3),
                              "error_m": round(float(v), 4)})
     walk_seconds = {}
-    for name in METHODS:
+    for name in tuple(METHODS) + ("floor_identification",):
         v = [s.seconds[name] for s in scores if name in s.seconds]
         if v:
             walk_seconds[name] = float(np.mean(v))
-    return {"methods": methods, "waypoints": rows, "settings": asdict(settings), "per_floor": per_floor,
-            "seconds": round(seconds, 2), "mean_seconds_per_walk": walk_seconds}
+    out = {"methods": methods, "waypoints": rows, "settings": settings.to_dict(), "per_floor": per_floor,
+           "error_vs_time": by_time, "seconds": round(seconds, 2), "mean_seconds_per_walk": walk_seconds}
+    ident = [s for s in scores if s.floor_correct is not None]
+    if ident:
+        correct = np.concatenate([s.floor_correct for s in ident])
+        free = np.concatenate([s.floor_free_errors_m for s in ident])
+        out["floor_identification"] = {
+            "accuracy": float(correct.mean()), "n_waypoints": int(correct.size),
+            "walks_all_correct": int(sum(bool(s.floor_correct.all()) for s in ident)), "n_walks": len(ident),
+            "per_floor": {fl: float(np.concatenate([s.floor_correct for s in ident if s.floor == fl]).mean())
+                          for fl in sorted({s.floor for s in ident})},
+            # Position error of that run where the floor was right (the floor-given default is fusion_smoother).
+            "mean_m_where_floor_correct": float(np.nanmean(free)) if np.isfinite(free).any() else None,
+        }
+    return out
+
+
+def load_site(data_root: Optional[Path], floors: Sequence[str]) -> Tuple[Path, List[FloorData]]:
+    """The site folder (default: the shared data) and its floors; clear errors for a missing folder."""
+    root = Path(data_root) if data_root else default_site_root()
+    if not root.is_dir():
+        raise FileNotFoundError(f"indoorloc: argument 'data_root': {root} is not a folder of ILC floors")
+    if not floors:
+        raise ValueError("indoorloc: argument 'floors': no floor given")
+    for name in floors:
+        if not (root / name).is_dir():
+            raise FileNotFoundError(f"indoorloc: argument 'floors': {root / name} is not a floor folder")
+    return root, [load_floor(root, name) for name in floors]
+
+
+def _all_floor_plan(floors: Sequence[FloorData]):
+    return load_floor_plan([fl.geojson_path for fl in floors], floors=[fl.number for fl in floors],
+                           origin_lon_lat="outline_sw")
 
 
 def evaluate(data_root: Optional[Path] = None, floors: Sequence[str] = FLOORS, settings: Optional[RealSettings] = None,
              progress=None) -> dict:
     """``indoorloc fusion evaluate``: every method on every floor; the JSON dict of :func:`summarize`."""
     settings = settings or RealSettings()
-    root = Path(data_root) if data_root else default_site_root()
-    if not root.is_dir():
-        raise FileNotFoundError(f"indoorloc: argument 'data_root': {root} is not a folder of ILC floors")
-    peer = _peer()
     tic = time.perf_counter()
-    scores: List[WalkScore] = []
-    for name in floors:
-        number = int("".join(ch for ch in name if ch.isdigit()) or 0) * (-1 if name.upper().startswith("B") else 1)
-        scores += evaluate_floor(root / name, number, settings, peer, progress)
+    _, data = load_site(data_root, floors)
+    all_plan = _all_floor_plan(data) if settings.floor_identification and len(data) > 1 else None
+    scores = evaluate_floors(data, settings, _peer(), progress, METHODS, all_plan)
     return summarize(scores, settings, time.perf_counter() - tic)
+
+
+def walk_snapshot(data_root: Optional[Path], floor: str, walk_index: int = 0,
+                  settings: Optional[RealSettings] = None) -> dict:
+    """Everything :func:`indoorloc.plots.fusion_real_walk` draws for one walk, the walk tracked as
+    a test walk of its own fold (models from the other folds' walks of its floor): the floor image
+    and its extent [m], plan edges, surveyed waypoints, WiFi fix centres, PDR from the first
+    waypoint, the smoothed track from the unknown start and its FFBSi trajectories."""
+    settings = replace(settings or RealSettings(), floor_identification=False)
+    root, (fl,) = load_site(data_root, [floor])
+    if not 0 <= walk_index < len(fl.walks):
+        raise ValueError(f"indoorloc: argument 'walk_index': {walk_index} is not in [0, {len(fl.walks)})")
+    fold_of = {fl.name: (_folds(len(fl.walks), settings.folds, settings.seed) + [np.zeros(0, int)] * settings.folds)
+               [:settings.folds]}
+    j = next(k for k, f in enumerate(fold_of[fl.name]) if walk_index in f)
+    models = _fold_models([fl], fold_of, j, settings, None)[fl.name]
+    walk = fl.walks[walk_index]
+    wt = np.asarray(walk.waypoint_t_s, float)
+    wxy = np.asarray(walk.waypoint_xy_m, float)
+    fixes = wfx.fixes_for_walk(walk, models.database)
+    steps = ph.rescale(fl.steps[walk_index], models.cal.options)
+    pdr_steps = fusion.Steps.from_polar(steps.t_s, steps.length_m, steps.heading_rad + models.cal.yaw_offset_rad,
+                                        settings.step_length_sd_fraction * steps.length_m, settings.step_heading_sd_rad)
+    spread = max(models.cal.yaw_offset_spread_rad, 1e-3)
+    options = settings.tracker_options(unknown_start_heading_sd_rad=spread, start_heading_offset_sd_rad=spread)
+    result = fusion.track(pdr_steps, plan=fl.plan, options=options, fixes=fixes,
+                          smoother=fusion.SmootherOptions(num_trajectories=settings.smoother_trajectories,
+                                                          seed=settings.seed))
+    t_pdr = np.r_[wt[0], steps.t_s]
+    pdr = ph.pdr_track(steps, wxy[0], t_pdr, yaw_offset_rad=models.cal.yaw_offset_rad)
+    info = read_ilc_floor(root / floor)
+    extent = (0.0, info.width_m, 0.0, info.height_m) if info.width_m and info.height_m else None
+    return {"floor": floor, "walk": walk.walk_id, "image_path": str(info.image_path) if info.image_path else None,
+            "extent_m": extent, "edges_m": np.asarray(fl.plan.edges(0)), "waypoints_m": wxy, "waypoint_t_s": wt - wt[0],
+            "fix_centres_m": wfx.fix_centres(fixes) if len(fixes) else np.zeros((0, 2)), "pdr_m": pdr,
+            "smoothed_m": np.asarray(result["smoothed_m"]), "filter_m": np.asarray(result["mean_m"]),
+            "trajectories_m": np.asarray(result["smoothed_trajectories_m"]),
+            "errors": {"pdr_only": np.hypot(*(ph.pdr_track(steps, wxy[0], wt, yaw_offset_rad=models.cal.yaw_offset_rad) - wxy).T),
+                       "fusion_smoother": np.hypot(*(_interp_track(wt, pdr_steps.times_s, result["smoothed_m"]) - wxy).T),
+                       "wifi_knn": np.hypot(*(_nearest_rows(wt, fixes.times_s, wfx.fix_centres(fixes)) - wxy).T)
+                       if len(fixes) else np.full(wt.size, np.nan)}}
+
+
+# --------------------------------------------------------------------------------------------
+# Leave-one-floor-out choice of the settings
+
+#: The grid of ``indoorloc fusion evaluate --select``: the settings the real data decides
+#: (the rest are fixed in advance, RealSettings). Objective: the default method's mean error.
+SELECT_GRID: Dict[str, Sequence[Any]] = {
+    "wall_log_penalty": (math.log(0.02), -math.inf),
+    "fix_tempering": (0.3, 0.6, 1.0),
+    "fix_outlier_probability": (0.1, 0.3),
+    "fixes.sd_m": (3.0, 6.0),
+}
+SELECT_OBJECTIVE = "fusion_smoother"
+
+
+def _with(settings: RealSettings, key: str, value: Any) -> RealSettings:
+    if key.startswith("fixes."):
+        return replace(settings, fixes=replace(settings.fixes, **{key.split(".", 1)[1]: value}))
+    return replace(settings, **{key: value})
+
+
+def select_settings(data_root: Optional[Path] = None, floors: Sequence[str] = FLOORS,
+                    base: Optional[RealSettings] = None, grid: Optional[Dict[str, Sequence[Any]]] = None,
+                    progress: Optional[Callable[[], None]] = None) -> dict:
+    """Leave-one-floor-out choice of the settings in ``grid`` (default :data:`SELECT_GRID`).
+
+    Every grid point is evaluated on every floor (the same k-fold by walk; the default method and
+    the known-start filter only). For each floor, the point with the lowest mean error of
+    :data:`SELECT_OBJECTIVE` over the *other* floors is chosen and scored on that floor: the
+    ``lofo`` figures estimate what the choice gives on a floor it has not seen. ``best_all`` is
+    the point chosen on all floors (the default for floors and buildings not evaluated here).
+    Returns ``{"grid", "points": [{"settings", "per_floor": {floor: {method: stats}}}], "lofo":
+    {floor: {"chosen", "stats"}}, "lofo_overall": stats, "best_all"}``."""
+    base = base or RealSettings()
+    grid = grid or SELECT_GRID
+    base = replace(base, floor_identification=False)
+    _, data = load_site(data_root, floors)
+    keys = list(grid)
+    points = []
+    for values in itertools.product(*(grid[k] for k in keys)):
+        settings = base
+        for k, v in zip(keys, values):
+            settings = _with(settings, k, v)
+        scores = evaluate_floors(data, settings, None, progress, (SELECT_OBJECTIVE, "fusion_known_start"))
+        per_floor = {fl.name: {m: _stats(np.concatenate([s.errors_m[m] for s in scores if s.floor == fl.name]))
+                               for m in (SELECT_OBJECTIVE, "fusion_known_start")} for fl in data}
+        errors = {fl.name: np.concatenate([s.errors_m[SELECT_OBJECTIVE] for s in scores if s.floor == fl.name])
+                  for fl in data}
+        points.append({"values": dict(zip(keys, [None if isinstance(v, float) and math.isinf(v) else v for v in values])),
+                       "per_floor": per_floor, "_errors": errors})
+
+    def pooled_mean(point, names) -> float:
+        return float(np.mean(np.concatenate([point["_errors"][n] for n in names])))
+
+    lofo, held_out = {}, []
+    names = [fl.name for fl in data]
+    for name in names:
+        others = [n for n in names if n != name] or [name]
+        best = min(points, key=lambda p: pooled_mean(p, others))
+        lofo[name] = {"chosen": best["values"], "stats": _stats(best["_errors"][name])}
+        held_out.append(best["_errors"][name])
+    best_all = min(points, key=lambda p: pooled_mean(p, names))
+    for p in points:
+        p.pop("_errors")
+    return {"grid": {k: [None if isinstance(v, float) and math.isinf(v) else v for v in vs] for k, vs in grid.items()},
+            "objective": SELECT_OBJECTIVE, "points": points, "lofo": lofo,
+            "lofo_overall": _stats(np.concatenate(held_out)), "best_all": best_all["values"]}
+
+
+def select_markdown(result: dict) -> str:
+    keys = list(result["grid"])
+    floors = list(result["lofo"])
+    lines = ["| " + " | ".join(keys) + " | " + " | ".join(f"{f} mean [m]" for f in floors) + " |",
+             "|" + "---|" * (len(keys) + len(floors))]
+    for p in result["points"]:
+        cells = [str(p["values"][k]) for k in keys]
+        cells += [f"{p['per_floor'][f][result['objective']]['mean_m']:.2f}" for f in floors]
+        lines.append("| " + " | ".join(cells) + " |")
+    lines += ["", f"Leave-one-floor-out ({result['objective']}, settings chosen on the other floors):", "",
+              "| held-out floor | chosen | mean [m] | median [m] | p90 [m] |", "|---|---|---|---|---|"]
+    for f, r in result["lofo"].items():
+        st = r["stats"]
+        lines.append(f"| {f} | {r['chosen']} | {st['mean_m']:.2f} | {st['median_m']:.2f} | {st['p90_m']:.2f} |")
+    o = result["lofo_overall"]
+    lines += ["", f"Held-out floors pooled: mean {o['mean_m']:.2f} m, median {o['median_m']:.2f} m, p90 {o['p90_m']:.2f} m "
+              f"({o['n_waypoints']} waypoints). Chosen on all floors: {result['best_all']}."]
+    return "\n".join(lines)
 
 
 def markdown(result: dict) -> str:
@@ -309,6 +602,19 @@ def markdown(result: dict) -> str:
             s = m.get(name)
             cells.append(f"{s['mean_m']:.1f} / {s['median_m']:.1f} / {s['p90_m']:.1f}" if s else "-")
         lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    bins = next(iter(result["error_vs_time"].values()), [])
+    if bins:
+        heads = [f"{b['from_s']:.0f}-{b['to_s']:.0f} s" if b["to_s"] is not None else f">= {b['from_s']:.0f} s" for b in bins]
+        lines += ["", "Mean error [m] against time since the walk's first waypoint:", "",
+                  "| method | " + " | ".join(heads) + " |", "|---|" + "---|" * len(heads)]
+        for name, bs in result["error_vs_time"].items():
+            lines.append(f"| {name} | " + " | ".join("-" if b["mean_m"] is None else f"{b['mean_m']:.1f}" for b in bs) + " |")
+    fi = result.get("floor_identification")
+    if fi:
+        lines += ["", f"Floor identification (floor not given, {SELECT_OBJECTIVE} on all floors' plans and fixes): "
+                  f"{100 * fi['accuracy']:.1f} % of {fi['n_waypoints']} waypoints, {fi['walks_all_correct']} of "
+                  f"{fi['n_walks']} walks right throughout; per floor "
+                  + ", ".join(f"{k} {100 * v:.1f} %" for k, v in fi["per_floor"].items()) + "."]
     lines.append("")
     lines.append(f"{len({(w['floor'], w['walk']) for w in result['waypoints']})} walks in {result['seconds']:.0f} s.")
     return "\n".join(lines)

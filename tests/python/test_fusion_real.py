@@ -1,0 +1,98 @@
+"""``indoorloc fusion evaluate`` (experiments.fusion_real) on a synthetic site written in the
+competition's format by the test itself (simulate.ilc_site): floor identification over two
+floors, the leave-one-floor-out choice of settings, the plots and the CLI's JSON contract."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from indoorloc import cli
+from indoorloc.experiments import fusion_real as fr
+from indoorloc.simulate.ilc_site import write_ilc_site
+
+FAST = dict(num_particles=400, folds=2, smoother_trajectories=8)
+
+
+@pytest.fixture(scope="module")
+def two_floor_site(tmp_path_factory):
+    return write_ilc_site(tmp_path_factory.mktemp("ilc2") / "site", floors=("F1", "F2"), walks_per_floor=6, seed=3)
+
+
+def test_floor_identification_and_error_against_time(two_floor_site):
+    result = fr.evaluate(two_floor_site, ["F1", "F2"], fr.RealSettings(**FAST))
+    fi = result["floor_identification"]
+    n_wp = result["methods"]["fusion_smoother"]["n_waypoints"]
+    assert fi["n_waypoints"] == n_wp and fi["n_walks"] == 12
+    assert set(fi["per_floor"]) == {"F1", "F2"}
+    assert 0.0 <= fi["accuracy"] <= 1.0 and fi["accuracy"] >= 0.9  # the two floors' radios differ
+    assert set(result["per_floor"]) == {"F1", "F2"}
+    bins = result["error_vs_time"]["pdr_only"]
+    assert sum(b["n_waypoints"] for b in bins) == result["methods"]["pdr_only"]["n_waypoints"]
+    assert bins[0]["from_s"] == 0.0 and bins[-1]["to_s"] is None
+    # Waypoint rows carry the contract's keys, one per method and waypoint.
+    row = result["waypoints"][0]
+    assert set(row) == {"floor", "walk", "method", "t_s", "error_m"}
+    assert "| fusion_smoother |" in fr.markdown(result) and "Floor identification" in fr.markdown(result)
+
+
+def test_leave_one_floor_out_choice_never_looks_at_the_held_out_floor(two_floor_site):
+    grid = {"fix_tempering": (0.3, 1.0), "fixes.sd_m": (3.0,)}
+    result = fr.select_settings(two_floor_site, ["F1", "F2"], fr.RealSettings(**FAST), grid)
+    assert len(result["points"]) == 2
+    for held_out, chosen in result["lofo"].items():
+        other = "F2" if held_out == "F1" else "F1"
+        means = [p["per_floor"][other]["fusion_smoother"]["mean_m"] for p in result["points"]]
+        best = result["points"][int(np.argmin(means))]["values"]
+        assert chosen["chosen"] == best
+        # The held-out figure is the chosen point's own figure on the held-out floor.
+        point = next(p for p in result["points"] if p["values"] == best)
+        assert chosen["stats"]["mean_m"] == pytest.approx(point["per_floor"][held_out]["fusion_smoother"]["mean_m"])
+    assert result["lofo_overall"]["n_waypoints"] == sum(
+        result["points"][0]["per_floor"][f]["fusion_smoother"]["n_waypoints"] for f in ("F1", "F2"))
+    assert "Leave-one-floor-out" in fr.select_markdown(result)
+
+
+def test_walk_snapshot_and_plots(two_floor_site, tmp_path):
+    snap = fr.walk_snapshot(two_floor_site, "F2", 1, fr.RealSettings(**FAST))
+    assert snap["waypoints_m"].shape[1] == 2 and snap["smoothed_m"].shape[1] == 2
+    assert snap["extent_m"] is not None
+    assert np.all(np.isfinite(snap["errors"]["fusion_smoother"]))
+    from indoorloc import plots
+
+    png = plots.fusion_real_walk(snap, tmp_path / "walk.png")
+    assert png.stat().st_size > 10_000
+    with pytest.raises(ValueError, match="walk_index"):
+        fr.walk_snapshot(two_floor_site, "F2", 99, fr.RealSettings(**FAST))
+
+
+def test_cli_writes_the_json_contract_and_plots(two_floor_site, tmp_path, monkeypatch, capsys):
+    # The CLI builds RealSettings(folds, seed, threads): give it the fast tracker settings.
+    monkeypatch.setattr(fr, "RealSettings", _fast_settings)
+    out = tmp_path / "r.json"
+    code = cli.main(["fusion", "evaluate", "--data-root", str(two_floor_site), "--floors", "F1", "--folds", "2",
+                     "--json", str(out), "--plots", str(tmp_path / "plots"), "--quiet"])
+    assert code == 0
+    data = json.loads(out.read_text())
+    assert set(data) >= {"methods", "waypoints", "settings"}
+    for stats in data["methods"].values():
+        assert set(stats) == {"mean_m", "median_m", "p90_m", "n_waypoints"}
+        assert all(math.isfinite(stats[k]) for k in ("mean_m", "median_m", "p90_m"))
+    assert (tmp_path / "plots" / "fusion_real_error_cdfs.png").is_file()
+    assert (tmp_path / "plots" / "fusion_real_walk_F1.png").is_file()
+    assert "| method |" in capsys.readouterr().out
+
+
+_RealSettings = fr.RealSettings
+
+
+def _fast_settings(**kw):
+    return _RealSettings(**{**FAST, **kw})
+
+
+def test_missing_site_and_floor_are_clear_errors(tmp_path, two_floor_site):
+    with pytest.raises(FileNotFoundError, match="data_root"):
+        fr.evaluate(tmp_path / "nowhere", ["F1"])
+    with pytest.raises(FileNotFoundError, match="floors"):
+        fr.evaluate(two_floor_site, ["F9"])
