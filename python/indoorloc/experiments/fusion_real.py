@@ -79,6 +79,8 @@ class RealSettings:
     seed: int = 0                       #: fold assignment and tracker seeds
     num_particles: int = 3000           #: 20000 gave the same errors on F8 (docs/fusion_real.md)
     smoother_trajectories: int = 50     #: FFBSi trajectories
+    #: FFBSi cloud thinned to this many particles per step (cost O(trajectories x this x steps)).
+    smoother_max_particles: int = 500
     #: Staleness limit of the WiFi-only fixes [s]: the dip of the reading-age histogram between the
     #: current scan and Android's cache (docs/fusion_data.md).
     wifi_max_age_s: float = 2.5
@@ -258,7 +260,8 @@ def _score_walk(walk, steps_raw: ph.HandheldSteps, models: FoldModels, settings:
     options = settings.tracker_options(unknown_start_heading_sd_rad=spread, start_heading_offset_sd_rad=spread)
     start_xy = wxy[0] if not math.isinf(settings.wall_log_penalty) else _walkable_start(fl.plan, wxy[0])
     known = {"position_m": start_xy, "floor": fl.number, "heading_offset_rad": 0.0, "time_s": float(wt[0])}
-    smoother = fusion.SmootherOptions(num_trajectories=settings.smoother_trajectories, seed=settings.seed)
+    smoother = fusion.SmootherOptions(num_trajectories=settings.smoother_trajectories,
+                                      max_particles=settings.smoother_max_particles, seed=settings.seed)
     runs = {
         "fusion_unknown_start": dict(start=None, smoother=smoother, keys=("fusion_unknown_start", "fusion_smoother")),
         "fusion_known_start": dict(start=known, smoother=None, keys=("fusion_known_start",)),
@@ -486,6 +489,7 @@ def walk_snapshot(data_root: Optional[Path], floor: str, walk_index: int = 0,
     options = settings.tracker_options(unknown_start_heading_sd_rad=spread, start_heading_offset_sd_rad=spread)
     result = fusion.track(pdr_steps, plan=fl.plan, options=options, fixes=fixes,
                           smoother=fusion.SmootherOptions(num_trajectories=settings.smoother_trajectories,
+                                                          max_particles=settings.smoother_max_particles,
                                                           seed=settings.seed))
     t_pdr = np.r_[wt[0], steps.t_s]
     pdr = ph.pdr_track(steps, wxy[0], t_pdr, yaw_offset_rad=models.cal.yaw_offset_rad)
