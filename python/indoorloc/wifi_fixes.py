@@ -3,16 +3,20 @@ of a crowdsourced training set, its best matches turned into a Gaussian-mixture 
 (``fusion.Fixes``) with an outlier floor (docs/fusion_real.md, "WiFi as fixes").
 
 Why scans and not the cell map: on the competition mall the per-cell model of paper 004 and
-Euclidean kNN with a floor value are 20-30 m off on average (docs/fusion_real.md); what holds
-better is the dissimilarity of two scans over the union of the APs they heard,
+Euclidean kNN over every AP with a floor value are 20-30 m off on average
+(docs/fusion_real.md). Two dissimilarities of a query scan a against a training scan b do
+better there (``FixSettings.metric``):
 
-    d(a, b) = (Σ_{i ∈ A∩B} |a_i - b_i| + c |A Δ B|) / |A ∪ B|     [dB]
+- ``"strongest"``: the RMS difference over the query's n strongest APs, an AP the training scan
+  did not hear counting at the floor value v₀:
+  d(a, b) = sqrt(mean_{i ∈ top_n(a)} (a_i - b̃_i)²), b̃_i = b_i or v₀  [dB]. Strong readings are
+  the ones that locate (near APs); weak ones come and go with the body and the crowd.
+- ``"union"``: the mean absolute difference over the union of the APs heard, an AP heard in one
+  scan only costing c: d(a, b) = (Σ_{i ∈ A∩B} |a_i - b_i| + c |A Δ B|) / |A ∪ B|  [dB].
 
-(A, B the APs heard in each; c the cost of an AP heard in one scan only): APs that one scan hears
-and the other does not say as much as the RSS differences, and no floor value has to be
-invented for them. The k best training scans become the components of the fix, at the
-positions where they were recorded, with weights exp(-(d_j - d_min) / T) and sd σ; the tracker
-adds the outlier floor ε (``TrackerOptions.fix_outlier_probability``). Every constant is chosen
+The k best training scans become the components of the fix, at the positions where they were
+recorded, with weights exp(-(d_j - d_min) / T) and sd σ; the tracker adds the outlier floor ε
+(``TrackerOptions.fix_outlier_probability``). The metric and the tracker's ε and τ_fix are chosen
 by leave-one-floor-out cross-validation (``indoorloc fusion evaluate --select``).
 
 Training scans are placed at their measurement epoch (the median last-seen time of their fresh
@@ -32,6 +36,8 @@ from indoorloc import fusion
 from indoorloc import pdr_handheld as ph
 from indoorloc import wifi_crowdsource as wc
 
+METRICS = ("strongest", "union")
+
 
 @dataclass
 class FixSettings:
@@ -39,7 +45,10 @@ class FixSettings:
 
     fresh_age_s: float = 2.5        #: readings at most this old make a scan's fingerprint [s]
     min_scans: int = 3              #: keep a BSSID heard in at least this many training scans
-    unshared_cost_db: float = 20.0  #: c: cost of an AP heard in one scan only [dB]
+    metric: str = "strongest"       #: "strongest" or "union" (module docstring; LOFO)
+    strongest_n: int = 10           #: n of "strongest" (fixed in advance: a scan's near APs)
+    not_heard_dbm: float = -100.0   #: v₀ of "strongest" (the issue's floor value)
+    unshared_cost_db: float = 20.0  #: c of "union": cost of an AP heard in one scan only [dB]
     k: int = 8                      #: components per fix (best training scans)
     temperature_db: float = 2.0     #: T of the component weights [dB]
     sd_m: float = 4.0               #: σ of each component [m]
@@ -47,11 +56,15 @@ class FixSettings:
 
     def validate(self) -> None:
         """Raises ValueError naming the first invalid field."""
+        if self.metric not in METRICS:
+            raise ValueError(f"indoorloc: FixSettings.metric must be one of {METRICS}, got {self.metric!r}")
+        if not (isinstance(self.not_heard_dbm, (int, float)) and -300 < self.not_heard_dbm < 50):
+            raise ValueError(f"indoorloc: FixSettings.not_heard_dbm must be in (-300, 50) dBm, got {self.not_heard_dbm!r}")
         for name in ("fresh_age_s", "unshared_cost_db", "temperature_db", "sd_m"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ValueError(f"indoorloc: FixSettings.{name} must be finite and > 0, got {v!r}")
-        for name in ("min_scans", "k", "min_aps"):
+        for name in ("min_scans", "k", "min_aps", "strongest_n"):
             v = getattr(self, name)
             if not (isinstance(v, (int, np.integer)) and 1 <= v <= 10_000):
                 raise ValueError(f"indoorloc: FixSettings.{name} must be an integer in [1, 10000], got {v!r}")
@@ -179,6 +192,30 @@ def scan_dissimilarity(queries_dbm: np.ndarray, database_dbm: np.ndarray, unshar
     return np.where(union > 0, d, np.inf)
 
 
+def strongest_ap_dissimilarity(queries_dbm: np.ndarray, database_dbm: np.ndarray, n: int,
+                               not_heard_dbm: float) -> np.ndarray:
+    """d(a, b) of ``"strongest"`` (module docstring) for every query (Q, K) against every
+    database scan (N, K) (NaN = not heard): (Q, N) [dB]; +inf for a query that heard nothing."""
+    q = np.asarray(queries_dbm, dtype=float)
+    x = np.where(np.isnan(database_dbm), not_heard_dbm, database_dbm)
+    out = np.full((q.shape[0], x.shape[0]), np.inf)
+    for r in range(q.shape[0]):  # one small (N, n) block per query scan
+        heard = np.flatnonzero(np.isfinite(q[r]))
+        if heard.size == 0:
+            continue
+        top = heard[np.argsort(-q[r, heard], kind="stable")[:n]]
+        out[r] = np.sqrt(np.mean((x[:, top] - q[r, top]) ** 2, axis=1))
+    return out
+
+
+def dissimilarity(queries_dbm: np.ndarray, database: "FingerprintDatabase") -> np.ndarray:
+    """The database's metric (``settings.metric``) of every query (Q, K) to every scan: (Q, N) [dB]."""
+    s = database.settings
+    if s.metric == "strongest":
+        return strongest_ap_dissimilarity(queries_dbm, database.rss_dbm, s.strongest_n, s.not_heard_dbm)
+    return scan_dissimilarity(queries_dbm, database.rss_dbm, s.unshared_cost_db)
+
+
 def fixes_for_walk(walk: Any, database: FingerprintDatabase, with_floors: bool = True) -> fusion.Fixes:
     """One fix per fresh scan of the walk with at least ``min_aps`` APs of the database: the
     ``k`` most similar training scans as components (module docstring), each on the floor of
@@ -190,7 +227,7 @@ def fixes_for_walk(walk: Any, database: FingerprintDatabase, with_floors: bool =
     k = min(s.k, database.n_scans)
     if t.size == 0:
         return fusion.Fixes.from_arrays(np.zeros(0), np.zeros((0, k, 2)), np.zeros((0, k)), np.zeros((0, k)))
-    d = scan_dissimilarity(rss, database.rss_dbm, s.unshared_cost_db)
+    d = dissimilarity(rss, database)
     best = np.argsort(d, axis=1, kind="stable")[:, :k]
     db = np.take_along_axis(d, best, axis=1)
     weights = np.exp(-(db - db[:, :1]) / s.temperature_db)
@@ -211,7 +248,7 @@ def locate_scans(rss_dbm: np.ndarray, database: FingerprintDatabase) -> np.ndarr
     """WiFi-only positions (Q, 2) [m] of scans (Q, K in the database's columns): the
     weight-averaged position of each scan's fix components (the kNN baseline on this metric)."""
     s = database.settings
-    d = scan_dissimilarity(rss_dbm, database.rss_dbm, s.unshared_cost_db)
+    d = dissimilarity(rss_dbm, database)
     k = min(s.k, database.n_scans)
     best = np.argsort(d, axis=1, kind="stable")[:, :k]
     db = np.take_along_axis(d, best, axis=1)
@@ -225,10 +262,13 @@ def locate_scans(rss_dbm: np.ndarray, database: FingerprintDatabase) -> np.ndarr
 __all__ = [
     "FingerprintDatabase",
     "FixSettings",
+    "METRICS",
     "build_database",
+    "dissimilarity",
     "fix_centres",
     "fixes_for_walk",
     "fresh_scans",
     "locate_scans",
     "scan_dissimilarity",
+    "strongest_ap_dissimilarity",
 ]

@@ -101,3 +101,18 @@ def test_fix_settings_are_validated():
         wfx.FixSettings(sd_m=0.0).validate()
     with pytest.raises(ValueError, match="FixSettings.k"):
         wfx.FixSettings(k=0).validate()
+
+
+def test_strongest_ap_dissimilarity_by_hand():
+    nan = np.nan
+    q = np.array([[-40.0, -50.0, -90.0, nan]])
+    x = np.array([[-42.0, -50.0, nan, -30.0],   # top-2 of the query: AP0, AP1 -> sqrt((4 + 0) / 2)
+                  [nan, -60.0, -90.0, nan]])    # AP0 not heard -> -100: sqrt((60² + 10²) / 2)
+    d = wfx.strongest_ap_dissimilarity(q, x, n=2, not_heard_dbm=-100.0)
+    np.testing.assert_allclose(d, [[np.sqrt(2.0), np.sqrt((60.0 ** 2 + 10.0 ** 2) / 2)]])
+    assert np.isinf(wfx.strongest_ap_dissimilarity(np.full((1, 4), nan), x, 2, -100.0)).all()
+    db = wfx.FingerprintDatabase(x, np.array([[0.0, 0.0], [10.0, 0.0]]), ["a", "b", "c", "d"],
+                                 wfx.FixSettings(strongest_n=2, k=1))
+    np.testing.assert_allclose(wfx.locate_scans(q, db), [[0.0, 0.0]])
+    with pytest.raises(ValueError, match="FixSettings.metric"):
+        wfx.FixSettings(metric="cosine").validate()

@@ -512,10 +512,10 @@ def walk_snapshot(data_root: Optional[Path], floor: str, walk_index: int = 0,
 #: The grid of ``indoorloc fusion evaluate --select``: the settings the real data decides
 #: (the rest are fixed in advance, RealSettings). Objective: the default method's mean error.
 SELECT_GRID: Dict[str, Sequence[Any]] = {
+    "fixes.metric": ("strongest", "union"),
     "wall_log_penalty": (math.log(0.02), -math.inf),
     "fix_tempering": (0.3, 0.6, 1.0),
     "fix_outlier_probability": (0.1, 0.3),
-    "fixes.sd_m": (3.0, 6.0),
 }
 SELECT_OBJECTIVE = "fusion_smoother"
 
