@@ -227,11 +227,18 @@ def fusion_walk(snapshot: Mapping[str, object], path: Path) -> Path:
     ax.set_ylabel("y [m]")
     ax.set_title(f"Synthetic building, walk seed {snapshot['seed']}")
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
-    for name, (t, e) in snapshot["errors"].items():
-        ax_err.plot(t, e, label=name, lw=1.2, marker="." if name == "wifi_only" else None)
-    ax_err.set_xlabel("time since start [s]")
-    ax_err.set_ylabel("position error [m]")
-    ax_err.set_yscale("log")
+    series = {name: (t, e, "." if name == "wifi_only" else None) for name, (t, e) in snapshot["errors"].items()}
+    return _finish_walk_figure(fig, ax_err, series, "time since start [s]", "position error [m]", True, path)
+
+
+def _finish_walk_figure(fig, ax_err, series, xlabel: str, ylabel: str, log_y: bool, path: Path) -> Path:
+    """The error-over-time panel of the walk figures (series: name -> (t, error, marker)), saved."""
+    for name, (t, e, marker) in series.items():
+        ax_err.plot(t, e, label=name, lw=1.2, marker=marker)
+    ax_err.set_xlabel(xlabel)
+    ax_err.set_ylabel(ylabel)
+    if log_y:
+        ax_err.set_yscale("log")
     ax_err.legend(fontsize=8)
     ax_err.grid(alpha=0.3)
     fig.tight_layout()
@@ -275,13 +282,6 @@ def fusion_real_walk(snapshot: Mapping[str, object], path: Path) -> Path:
     ax.set_title(f"{snapshot['floor']}, walk {snapshot['walk']}", fontsize=9)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
     t = np.asarray(snapshot["waypoint_t_s"])
-    for name, e in snapshot["errors"].items():
-        ax_err.plot(t, e, marker=".", lw=1.2, label=name)
-    ax_err.set_xlabel("time since the first waypoint [s]")
-    ax_err.set_ylabel("error at the waypoint [m]")
-    ax_err.grid(alpha=0.3)
-    ax_err.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return Path(path)
+    series = {name: (t, e, ".") for name, e in snapshot["errors"].items()}
+    return _finish_walk_figure(fig, ax_err, series, "time since the first waypoint [s]", "error at the waypoint [m]",
+                               False, path)
