@@ -89,14 +89,15 @@ class RealSettings:
     #: stride and heading sd [rad]; the systematic parts are the filter's scale and offset states.
     step_length_sd_fraction: float = 0.15
     step_heading_sd_rad: float = math.radians(10.0)
-    #: LOFO: log-weight of a step through a shop wall (-inf: the particle is dropped). Shops are
-    #: polygons without doors and surveyors do walk into a few (12 of 866 waypoints lie inside one).
-    wall_log_penalty: float = math.log(0.02)
+    #: LOFO: log-weight of a step through a shop wall (-inf: the particle is dropped; log 0.02 in
+    #: the grid: shops are polygons without doors and 12 of 866 waypoints lie inside one). A known
+    #: start inside a shop is moved to the nearest walkable point.
+    wall_log_penalty: float = -math.inf
     candidate_spacing_m: float = 2.0    #: unknown start and recovery on the mall floors
     #: The WiFi as fingerprint fixes (``wifi_fixes``); k, T, σ, c: LOFO.
     fixes: wfx.FixSettings = field(default_factory=wfx.FixSettings)
-    fix_outlier_probability: float = 0.2  #: LOFO: ε of the fixes
-    fix_tempering: float = 0.5            #: LOFO: τ_fix (consecutive scans share stale readings)
+    fix_outlier_probability: float = 0.1  #: LOFO: ε of the fixes
+    fix_tempering: float = 0.6            #: LOFO: τ_fix (consecutive scans share stale readings)
     floor_identification: bool = True   #: also run the default with the floor not given
     threads: int = 2                    #: walks tracked in parallel (results do not depend on it)
 

@@ -82,7 +82,7 @@ TEST(FixLikelihood, FarFromEveryComponentItIsTheOutlierFloorNotMinusInfinity) {
   const FixLikelihood like(fix, o);
   const double far = like.LogLikelihood(1e6, -1e6, 0, 1000.0);
   EXPECT_TRUE(std::isfinite(far));
-  EXPECT_NEAR(far, std::log(o.outlier_probability / 1000.0), 1e-12);
+  EXPECT_NEAR(far, o.tempering * std::log(o.outlier_probability / 1000.0), 1e-12);
 }
 
 TEST(PositionFix, RejectsMalformedFixesNamingTheField) {

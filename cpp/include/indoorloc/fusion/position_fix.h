@@ -39,10 +39,12 @@ struct PositionFix {
 
 struct FixLikelihoodOptions {
   /// ε: probability that a fix is unrelated to the position (uniform over the walkable area).
-  double outlier_probability = 0.2;
+  /// Default: the leave-one-floor-out choice for WiFi fingerprint fixes on the competition mall
+  /// (docs/fusion_real.md); other locators (BLE, UWB) will want their own.
+  double outlier_probability = 0.1;
   /// τ_fix: exponent of the fix likelihood in (0, 1] (consecutive fixes from overlapping WiFi
-  /// readings are not independent).
-  double tempering = 1.0;
+  /// readings are not independent); default chosen with ε.
+  double tempering = 0.6;
   bool IsValid(std::string* error) const;
 };
 
