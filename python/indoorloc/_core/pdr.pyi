@@ -36,7 +36,31 @@ def zupt_ekf(
     init_samples: int = 20,
     smooth: bool = False,
     sigma_stance_heading_rad: float = 0.0,
-) -> Dict[str, np.ndarray]: ...
+    min_stance_fraction: float = 0.15,
+    max_plausible_stride_m: float = 2.5,
+    max_stance_speed_mps: float = 1.5,
+    speed_rise_factor: float = 3.0,
+) -> Dict[str, Any]: ...
+def zero_velocity(
+    acc_mps2: _ArrayLike,
+    gyro_radps: _ArrayLike,
+    rule: str = "stance_guard",
+    threshold: float = 3e4,
+    min_stance_fraction: float = 0.3,
+    max_threshold: float = 1e7,
+    window: int = 5,
+    sigma_acc_mps2: float = 0.01,
+    sigma_gyro_radps: float = ...,
+    gravity_mps2: float = 9.81,
+) -> Dict[str, Any]: ...
+def count_strides(
+    stance: _ArrayLike,
+    rate_hz: float,
+    min_stance_s: float = 0.02,
+    min_swing_s: float = 0.1,
+    min_swing_fraction: float = 0.5,
+    long_swing_factor: float = 1.7,
+) -> Dict[str, Any]: ...
 def steps_acceleration(
     acc_mps2: _ArrayLike,
     rate_hz: float,

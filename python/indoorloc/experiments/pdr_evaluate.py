@@ -425,6 +425,59 @@ def with_threshold(method: Callable[..., MethodOutput], threshold: float) -> Met
 
 
 # --------------------------------------------------------------------------------------------
+# The recommended method (issue 16): SHOE with the stance guard, EKF + RTS, C++ stride counting
+# --------------------------------------------------------------------------------------------
+#: Settings of :func:`indoorloc.pdr.zero_velocity` used by :func:`zupt_guard_method` for every
+#: sensor (one parameter set, adapted per recording by the guard). Chosen by leave-one-trial-out
+#: cross-validation over the 21 PyShoe trials (``python -m indoorloc.experiments.pdr_zupt_cv``;
+#: docs/pdr.md "Zero-velocity detection"): see the comment at each value.
+ZUPT_DETECTOR = {"rule": "stance_guard", "threshold": 3e4, "min_stance_fraction": 0.3, "max_threshold": 1e7}
+
+#: Name of the recommended method in ``indoorloc pdr evaluate --json`` (``default_method``).
+DEFAULT_METHOD = "zupt_rts_stance_guard"
+
+
+def detect_stance(recording: ImuRecording, **overrides: Any) -> Dict[str, Any]:
+    """:func:`indoorloc.pdr.zero_velocity` on a recording with :data:`ZUPT_DETECTOR` (keywords
+    override it) and this module's SHOE window and noise sds. Returns its dict (stance,
+    threshold, guard_raised, stance fractions, report)."""
+    from indoorloc import pdr
+
+    opts = dict(ZUPT_DETECTOR)
+    opts.update(overrides)
+    return pdr.zero_velocity(recording.acc_mps2, recording.gyro_radps, window=SHOE_WINDOW,
+                             sigma_acc_mps2=SHOE_SIGMA_ACC_MPS2, sigma_gyro_radps=SHOE_SIGMA_GYRO_RADPS, **opts)
+
+
+def run_recommended(recording: ImuRecording, smooth: bool = True, **overrides: Any) -> Dict[str, Any]:
+    """The recommended pipeline on one recording: :func:`detect_stance`, the ZUPT EKF (+ RTS
+    smoother when ``smooth``) and :func:`indoorloc.pdr.count_strides`. Returns ``{"positions_m"
+    (N, 3), "stride_indices" (S,), "stance" (N,), "detector" (the detector's dict without the
+    arrays), "health" (the EKF's health check plus the detector threshold and stride counts)}``."""
+    from indoorloc import pdr
+
+    det = detect_stance(recording, **overrides)
+    stance = np.asarray(det["stance"], dtype=bool)
+    out = pdr.zupt_ekf(recording.time_s, recording.acc_mps2, recording.gyro_radps, stance, smooth=smooth)
+    count = pdr.count_strides(stance, recording.rate_hz)
+    health = dict(out["health"])
+    health.update({"shoe_threshold": float(det["threshold"]), "guard_raised": bool(det["guard_raised"]),
+                   "median_swing_s": float(count["median_swing_s"]),
+                   "median_stance_s": float(count["median_stance_s"]),
+                   "split_strides": int(count["n_split_strides"])})
+    return {"positions_m": np.asarray(out["positions_m"], dtype=float),
+            "stride_indices": np.asarray(count["stride_indices"], dtype=np.int64), "stance": stance,
+            "detector": {k: v for k, v in det.items() if k not in ("stance", "statistic")}, "health": health}
+
+
+def zupt_guard_method(recording: ImuRecording, smooth: bool = True) -> Tuple[np.ndarray, np.ndarray]:
+    """The recommended method as a ``method(recording)`` for the evaluations:
+    ``(positions_m (N, 3), stride_indices)`` of :func:`run_recommended` (EKF + RTS)."""
+    r = run_recommended(recording, smooth=smooth)
+    return r["positions_m"], r["stride_indices"]
+
+
+# --------------------------------------------------------------------------------------------
 # Evaluations
 # --------------------------------------------------------------------------------------------
 def _split_output(out: MethodOutput, n: int, name: str) -> Tuple[np.ndarray, Optional[np.ndarray]]:
@@ -618,6 +671,125 @@ def tune_threshold(recordings: Sequence[ImuRecording], method: Callable[..., Met
             scores[float(gamma)] = float("inf")
     best = min(scores, key=lambda g: scores[g])
     return best, scores
+
+
+# --------------------------------------------------------------------------------------------
+# Machine-readable evaluation (``indoorloc pdr evaluate --json``)
+# --------------------------------------------------------------------------------------------
+#: The datasets ``indoorloc pdr evaluate --only`` accepts, and their folders under the data root.
+DATASETS = {"pyshoe": "pyshoe_vicon", "xio": "xio_gait_tracking", "openshoe": "openshoe_figure8",
+            "mobgap": "mobgap_lowerback"}
+
+#: Keys of every row of :func:`evaluate_json` (the stable schema of docs/pdr.md).
+JSON_ROW_KEYS = ("dataset", "name", "method", "armse_m", "final_error_m", "distance_m", "strides_truth",
+                 "strides_detected", "health")
+
+
+def _finite_or_none(v: Any) -> Optional[float]:
+    if v is None:
+        return None
+    v = float(v)
+    return v if math.isfinite(v) else None
+
+
+def _health_json(health: Dict[str, Any]) -> Dict[str, Any]:
+    out: Dict[str, Any] = {}
+    for k, v in health.items():
+        if isinstance(v, (bool, np.bool_)):
+            out[k] = bool(v)
+        elif isinstance(v, (int, np.integer)):
+            out[k] = int(v)
+        elif isinstance(v, (float, np.floating)):
+            out[k] = _finite_or_none(v)
+        elif isinstance(v, (list, tuple)):
+            out[k] = [str(x) for x in v]
+        else:
+            out[k] = str(v)
+    return out
+
+
+def _zupt_row(dataset: str, rec: ImuRecording) -> Dict[str, Any]:
+    r = run_recommended(rec)
+    pos, strides = r["positions_m"], r["stride_indices"]
+    armse_m = final_m = None
+    if rec.truth_xy_m is not None:
+        sc = score_pyshoe_trial(rec, (pos, strides))
+        armse_m, final_m = sc["armse_m"], sc["final_error_m"]
+    elif rec.closed_loop:
+        final_m = float(np.linalg.norm(pos[-1, :2] - pos[0, :2]))
+    health = dict(r["health"])
+    health["path_length_m"] = path_length(pos[:, :2])
+    si = rec.stride_indices
+    return {"dataset": dataset, "name": rec.name, "method": DEFAULT_METHOD, "armse_m": _finite_or_none(armse_m),
+            "final_error_m": _finite_or_none(final_m), "distance_m": _finite_or_none(rec.distance_m),
+            "strides_truth": None if si is None else max(0, int(si.size) - 1),
+            "strides_detected": int(strides.size), "health": _health_json(health)}
+
+
+def evaluate_json(root: PathLike, only: Optional[Sequence[str]] = None) -> Dict[str, Any]:
+    """Every recording under the pdr data folder ``root`` with the recommended method, as the
+    stable JSON document of ``indoorloc pdr evaluate --json`` (docs/pdr.md, "JSON output").
+
+    ``only``: dataset names out of :data:`DATASETS` (default all); datasets whose folder is
+    missing are skipped (a data root may hold only some of them), and an ``only`` naming a
+    missing one raises ValueError. PyShoe trials: ``armse_m`` and ``final_error_m`` after the
+    alignment of :func:`score_pyshoe_trial` (null when a file has no per-sample truth);
+    x-io / OpenShoe: ``final_error_m`` is the loop-closure error (2-D), ``armse_m`` null;
+    mobgap (a lower-back sensor, no zero-velocity phases): the gyroscope step detector of
+    paper 002 (0.5 rad/s), ``strides_truth`` / ``strides_detected`` count *steps* (initial
+    contacts of both feet) inside the INDIP walking bouts, positions are not estimated
+    (``armse_m`` and ``final_error_m`` null, ``health`` empty).
+    """
+    r = Path(root)
+    if not r.is_dir():
+        raise ValueError(f"indoorloc: argument 'root': {r} is not a folder")
+    names = list(DATASETS) if not only else list(only)
+    for nm in names:
+        if nm not in DATASETS:
+            raise ValueError(f"indoorloc: argument 'only': unknown dataset {nm!r}; one of {', '.join(DATASETS)}")
+    if only:
+        missing = [nm for nm in names if not (r / DATASETS[nm]).is_dir()]
+        if missing:
+            raise ValueError(f"indoorloc: argument 'only': no {', '.join(missing)} folder under {r}")
+    rows: List[Dict[str, Any]] = []
+    for nm in names:
+        folder = r / DATASETS[nm]
+        if not folder.is_dir():
+            continue
+        if nm == "pyshoe":
+            recs = [load_pyshoe_trial(p) for p in list_pyshoe_trials(folder)]
+        elif nm == "xio":
+            recs = [load_xio(folder / f) for f in ("short_walk.csv", "long_walk.csv") if (folder / f).is_file()]
+        elif nm == "openshoe":
+            recs = [load_openshoe(folder / "OpenShoeDataSet.txt")] if (folder / "OpenShoeDataSet.txt").is_file() else []
+        else:
+            rows.extend(_mobgap_rows(folder))
+            continue
+        for rec in progress(recs, total=len(recs), desc=nm):
+            rows.append(_zupt_row(nm, rec))
+    return {"default_method": DEFAULT_METHOD, "recordings": rows}
+
+
+def _mobgap_rows(folder: Path) -> List[Dict[str, Any]]:
+    from indoorloc import pdr
+    from indoorloc.io.pdr_datasets import list_mobgap_files, load_mobgap_trials
+
+    rows = []
+    for f in list_mobgap_files(folder):
+        for t in load_mobgap_trials(f):
+            rec = t.recording
+            if t.bout_bounds_s.shape[0] == 0:
+                continue
+            steps = np.asarray(pdr.steps_gyro(rec.gyro_radps, rec.rate_hz, threshold_radps=0.5))
+            ref = det = 0
+            for (a, b), contacts in zip(t.bout_bounds_s, t.bout_initial_contacts):
+                lo, hi = a * rec.rate_hz, b * rec.rate_hz
+                ref += int(len(contacts))
+                det += int(np.sum((steps >= lo) & (steps <= hi)))
+            rows.append({"dataset": "mobgap", "name": t.name, "method": "steps_gyro_lower_back",
+                         "armse_m": None, "final_error_m": None, "distance_m": _finite_or_none(rec.distance_m),
+                         "strides_truth": ref, "strides_detected": det, "health": {}})
+    return rows
 
 
 # --------------------------------------------------------------------------------------------
