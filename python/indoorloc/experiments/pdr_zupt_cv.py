@@ -127,7 +127,7 @@ CANDIDATES: Dict[str, Tuple[StanceRule, List[Dict[str, float]]]] = {
     "fixed": (_fixed, _grid(log_gamma=np.arange(4.0, 7.01, 0.25))),
     "p99_classes": (_p99_classes, _grid(p99_cut=[7.2, 7.3, 7.4, 7.45, 7.5, 7.55], log_low=[4.0, 4.5, 5.0],
                                         log_high=[5.0, 5.5, 6.0])),
-    "stance_guard": (_stance_guard, _grid(log_gamma=[4.0, 4.5, 5.0, 5.5, 6.0],
+    "stance_guard": (_stance_guard, _grid(log_gamma=np.arange(4.0, 6.01, 0.25),
                                           min_fraction=[0.0, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45])),
     "quantile": (_quantile, _grid(log_span=[5.0], fraction=np.arange(0.2, 0.61, 0.05))),
     "vote": (_vote, _grid(log_shoe=[4.5, 5.5], log_are=[4.0, 5.0], log_amv=[4.0, 5.0],

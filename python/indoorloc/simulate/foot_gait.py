@@ -7,17 +7,19 @@ the walk. The specific force and angular rate are exact for that motion (sensor 
 at rest), plus white noise. Three knobs reproduce what real recordings do to a zero-velocity
 detector:
 
-- ``stance_rate_radps``: the foot rocks (heel to toe) during every stance at up to this pitch
-  rate [rad/s] about the sensor, so the stance is never fully still: a running foot (about
-  1 rad/s), or a normal walk seen by a detector that expects a perfectly still foot (0.2-0.4
-  rad/s). The sensor does not translate while it rocks, so the zero-velocity hypothesis holds.
+- ``stance_rate_radps``: the foot trembles during every stance, turning about its y axis at
+  this rate [rad/s] back and forth (a square wave of the rate at about ``tremor_hz``, so the
+  pitch is a small triangle wave that ends at 0), and the stance is never fully still: a
+  running foot (about 1 rad/s), or a walk whose rest is noisier than a detector expects
+  (0.2-0.4 rad/s). The sensor turns about itself and does not translate, so the zero-velocity
+  hypothesis holds.
 - short ``stance_s`` with long ``stride_m`` (a run), or long stances with short, gentle swings
   (a very slow walk: the swing is above any threshold for only a fraction of its duration).
 - ``noise_acc_mps2`` / ``noise_gyro_radps``: white sensor noise (sd per axis).
 
 Swing kinematics (u = t / swing in [0, 1]): forward s(u) = stride (u - sin(2 pi u) / (2 pi)), up
-z(u) = lift (1 - cos 2 pi u) / 2, pitch theta(u) = pitch (1 - cos 2 pi u) / 2, all with zero
-rate at both ends. With R = Rz(heading) Ry(theta) (body -> nav), the body angular rate is
+z(u) = lift (1 - cos 2 pi u) / 2, pitch theta(u) = A sin(2 pi u) (1 - cos 2 pi u) / 2 (toe down,
+then heel down; peak |theta| = pitch), all with zero rate at both ends. With R = Rz(heading) Ry(theta) (body -> nav), the body angular rate is
 theta' e_y and the specific force R^T (a_nav + g e_z). Deterministic for a given ``seed``.
 """
 
@@ -46,7 +48,7 @@ def _ry(theta: np.ndarray) -> np.ndarray:
 
 def foot_gait(steps: int = 20, *, stance_s: float = 0.5, swing_s: float = 0.6, stride_m: float = 1.4,
               lift_m: float = 0.1, pitch_deg: float = 30.0, stance_rate_radps: float = 0.0,
-              rest_s: float = 2.0, heading_rad: float = 0.0, rate_hz: float = 200.0,
+              rest_s: float = 2.0, heading_rad: float = 0.0, rate_hz: float = 200.0, tremor_hz: float = 10.0,
               noise_acc_mps2: float = 0.03, noise_gyro_radps: float = 0.003, gravity_mps2: float = 9.81,
               seed: int = 0, name: Optional[str] = None) -> ImuRecording:
     """A straight synthetic walk as an :class:`~indoorloc.io.ImuRecording` (sensor ``"synthetic"``).
@@ -87,18 +89,23 @@ def foot_gait(steps: int = 20, *, stance_s: float = 0.5, swing_s: float = 0.6, s
             pos[sl, 2] = lift_m * (1 - np.cos(w * u)) / 2
             a_nav[sl, 0] = stride_m * w * np.sin(w * u) / T ** 2
             a_nav[sl, 2] = lift_m * w * w * np.cos(w * u) / (2 * T ** 2)
-            theta[sl] = max_pitch * (1 - np.cos(w * u)) / 2
-            theta_rate[sl] = max_pitch * math.pi * np.sin(w * u) / T
+            # toe down after toe-off, heel down before heel strike: theta = A sin(w u)(1 - cos w u)/2
+            # (|theta| <= pitch, A = pitch / 0.6495), rate A pi (cos w u - cos 2 w u) / T, large
+            # through mid-swing as on a real foot
+            amp = max_pitch / 0.649519052838329
+            theta[sl] = amp * np.sin(w * u) * (1 - np.cos(w * u)) / 2
+            theta_rate[sl] = amp * math.pi * (np.cos(w * u) - np.cos(2 * w * u)) / T
             x0 += stride_m
         else:
             pos[sl, 0] = x0
             mid.append(k + m // 2)
             if kind == "stance" and stance_rate_radps > 0:
-                # heel-to-toe rocking: theta' = r sin(2 pi u), theta = r T (1 - cos 2 pi u) / (2 pi)
-                u = (np.arange(m) + 0.5) / m
-                T = m / rate_hz
-                theta_rate[sl] = stance_rate_radps * np.sin(2 * math.pi * u)
-                theta[sl] = stance_rate_radps * T * (1 - np.cos(2 * math.pi * u)) / (2 * math.pi)
+                # tremor: theta' = +-r, an even number of half periods so that theta ends at 0
+                half = max(1, m // (2 * max(1, int(round(tremor_hz * m / rate_hz)))))
+                sign = np.where((np.arange(m) // half) % 2 == 0, 1.0, -1.0)
+                sign[(m // (2 * half)) * 2 * half:] = 0.0  # an unfinished period stays still
+                theta_rate[sl] = stance_rate_radps * sign
+                theta[sl] = np.cumsum(theta_rate[sl]) / rate_hz
         k += m
     # Rotate the forward axis by the heading.
     c, s = math.cos(heading_rad), math.sin(heading_rad)
