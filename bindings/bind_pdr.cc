@@ -150,27 +150,34 @@ void BindPdr(py::module_& m) {
         py::arg("sigma_acc_mps2") = 0.01, py::arg("sigma_gyro_radps") = 0.1 * kDeg, py::arg("gravity_mps2") = 9.81, R"doc(
 Stance flags (N,) bool of the SHOE zero-velocity detector (Skog et al. 2010): statistic < threshold.
 acc_mps2, gyro_radps: (N, 3) in the sensor frame [m/s^2], [rad/s]; window in samples.)doc");
-  m.def("zero_velocity", [](const py::object& acc, const py::object& gyro, const std::string& rule, double threshold,
-                            double min_stance_fraction, double max_threshold, int window, double sigma_acc, double sigma_gyro,
-                            double gravity) {
+  m.def("zero_velocity", [](const py::object& acc, const py::object& gyro, double rate_hz, const std::string& rule,
+                            double threshold, double max_swing_s, double max_swing_ratio, double ladder_step_decades,
+                            double min_stance_s, double min_stance_fraction, double max_threshold, int window, double sigma_acc,
+                            double sigma_gyro, double gravity) {
           MatrixArg a = ToMatrix(acc, "acc_mps2", -1, 3);
           MatrixArg g = ToMatrix(gyro, "gyro_radps", a.map.rows(), 3);
           pdr::ZeroVelocityOptions o;
           o.shoe = MakeShoe(window, threshold, sigma_acc, sigma_gyro, gravity);
           if (rule == "fixed") {
             o.rule = pdr::ZeroVelocityRule::kFixed;
+          } else if (rule == "swing_guard") {
+            o.rule = pdr::ZeroVelocityRule::kSwingGuard;
           } else if (rule == "stance_guard") {
             o.rule = pdr::ZeroVelocityRule::kStanceGuard;
           } else {
-            ThrowInvalidArgument("rule", "must be 'fixed' or 'stance_guard', got '" + rule + "'");
+            ThrowInvalidArgument("rule", "must be 'swing_guard', 'stance_guard' or 'fixed', got '" + rule + "'");
           }
+          o.max_swing_s = max_swing_s;
+          o.max_swing_ratio = max_swing_ratio;
+          o.ladder_step_decades = ladder_step_decades;
+          o.min_stance_s = min_stance_s;
           o.min_stance_fraction = min_stance_fraction;
           o.max_threshold = max_threshold;
           ValidateOptions(o);
           pdr::ZeroVelocityOutput out;
           {
             py::gil_scoped_release release;
-            out = pdr::DetectZeroVelocity(a.map, g.map, o);
+            out = pdr::DetectZeroVelocity(a.map, g.map, rate_hz, o);
           }
           const pdr::ZeroVelocitySummary& sm = out.summary;
           py::dict d;
@@ -179,22 +186,31 @@ acc_mps2, gyro_radps: (N, 3) in the sensor frame [m/s^2], [rad/s]; window in sam
           d["threshold"] = sm.threshold;
           d["base_threshold"] = sm.base_threshold;
           d["guard_raised"] = sm.guard_raised;
+          d["guard_satisfied"] = sm.guard_satisfied;
+          d["ladder_rungs"] = sm.ladder_rungs;
+          d["max_swing_s"] = sm.max_swing_s;
+          d["median_swing_s"] = sm.median_swing_s;
           d["stance_fraction"] = sm.stance_fraction;
           d["walking_stance_fraction"] = sm.walking_stance_fraction;
           d["walking_span"] = py::make_tuple(sm.walking_begin, sm.walking_end);
           d["report"] = sm.BriefReport();
           return d;
         },
-        py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("rule") = "stance_guard", py::arg("threshold") = 3e4,
-        py::arg("min_stance_fraction") = 0.3, py::arg("max_threshold") = 1e7, py::arg("window") = 5,
-        py::arg("sigma_acc_mps2") = 0.01, py::arg("sigma_gyro_radps") = 0.1 * kDeg, py::arg("gravity_mps2") = 9.81, R"doc(
-Zero-velocity detection with a threshold adapted to the recording (SHOE statistic, Skog et al. 2010).
-rule "fixed": stance where T < threshold. rule "stance_guard": the threshold is raised to the
-min_stance_fraction-quantile of T over the walking span (first to last sample with T >= threshold),
-at most max_threshold, so that at least that fraction of the walk is stance. acc_mps2, gyro_radps:
-(N, 3) sensor frame [m/s^2], [rad/s]; window in samples. Returns a dict: stance (N,) bool,
-statistic (N,) T, threshold (used), base_threshold, guard_raised, stance_fraction,
-walking_stance_fraction [0..1], walking_span (begin, end) samples, report.)doc");
+        py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("rate_hz"), py::arg("rule") = "swing_guard",
+        py::arg("threshold") = 1e4, py::arg("max_swing_s") = 2.0, py::arg("max_swing_ratio") = 1.5,
+        py::arg("ladder_step_decades") = 0.25, py::arg("min_stance_s") = 0.02, py::arg("min_stance_fraction") = 0.3,
+        py::arg("max_threshold") = 1e7, py::arg("window") = 5, py::arg("sigma_acc_mps2") = 0.01,
+        py::arg("sigma_gyro_radps") = 0.1 * kDeg, py::arg("gravity_mps2") = 9.81, R"doc(
+Zero-velocity detection with the SHOE threshold adapted to the recording (C++ DetectZeroVelocity).
+acc_mps2, gyro_radps: (N, 3) sensor frame [m/s^2], [rad/s]; rate_hz [Hz]; window in samples.
+rule "swing_guard" (default, chosen by cross-validation): the threshold climbs the ladder
+threshold * 10^(j * ladder_step_decades) up to max_threshold and stops at the first rung where
+no swing (non-stance between two stance phases; stance flicker shorter than min_stance_s [s]
+ignored) is longer than max_swing_s [s] or than max_swing_ratio times the median swing.
+"stance_guard": raised to the min_stance_fraction-quantile of the statistic over the walking
+span. "fixed": statistic < threshold. Returns a dict: stance (N,) bool, statistic (N,),
+threshold (used), base_threshold, guard_raised, guard_satisfied, ladder_rungs, max_swing_s,
+median_swing_s [s], stance_fraction, walking_stance_fraction [0..1], walking_span, report.)doc");
   m.def("count_strides", [](const py::object& stance, double rate_hz, double min_stance_s, double min_swing_s,
                             double min_swing_fraction, double long_swing_factor) {
           VectorArg s = ToVector(stance, "stance");
@@ -440,8 +456,9 @@ steps, and sum each step. step_indices: M >= 2 strictly increasing stance sample
 dict: increments_m (M-1, 3), stride_lengths_m (M-1,) (eq. 6), velocities_mps (N, 3).)doc");
   m.def("zupt_ekf", [](const py::object& time_s, const py::object& acc, const py::object& gyro, const py::object& stance,
                        double sigma_acc, double sigma_gyro, double sigma_zupt, double gravity, int init_samples, bool smooth,
-                       double sigma_stance_heading, double min_stance_fraction, double max_plausible_stride_m,
-                       double max_stance_speed_mps, double speed_rise_factor) {
+                       double sigma_stance_heading, double min_stance_fraction, double max_plausible_swing_s,
+                       double max_plausible_stride_m, double max_stance_speed_mps, double speed_rise_factor,
+                       double min_rising_speed_mps) {
           MatrixArg a = ToMatrix(acc, "acc_mps2", -1, 3);
           MatrixArg g = ToMatrix(gyro, "gyro_radps", a.map.rows(), 3);
           VectorArg t = ToVector(time_s, "time_s", a.map.rows());
@@ -456,7 +473,9 @@ dict: increments_m (M-1, 3), stride_lengths_m (M-1,) (eq. 6), velocities_mps (N,
           o.smooth = smooth;
           o.sigma_stance_heading_rad = sigma_stance_heading;
           o.min_stance_fraction = min_stance_fraction;
+          o.max_plausible_swing_s = max_plausible_swing_s;
           o.max_plausible_stride_m = max_plausible_stride_m;
+          o.min_rising_speed_mps = min_rising_speed_mps;
           o.max_stance_speed_mps = max_stance_speed_mps;
           o.speed_rise_factor = speed_rise_factor;
           pdr::ZuptEkfOutput out;
@@ -478,8 +497,8 @@ dict: increments_m (M-1, 3), stride_lengths_m (M-1,) (eq. 6), velocities_mps (N,
         py::arg("time_s"), py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("stance"), py::arg("sigma_acc_mps2") = 0.5,
         py::arg("sigma_gyro_radps") = 0.5 * kDeg, py::arg("sigma_zupt_mps") = 0.01, py::arg("gravity_mps2") = 9.81,
         py::arg("init_samples") = 20, py::arg("smooth") = false, py::arg("sigma_stance_heading_rad") = 0.0,
-        py::arg("min_stance_fraction") = 0.15, py::arg("max_plausible_stride_m") = 2.5, py::arg("max_stance_speed_mps") = 1.5,
-        py::arg("speed_rise_factor") = 3.0, R"doc(
+        py::arg("min_stance_fraction") = 0.02, py::arg("max_plausible_swing_s") = 5.0, py::arg("max_plausible_stride_m") = 4.0,
+        py::arg("max_stance_speed_mps") = 4.0, py::arg("speed_rise_factor") = 3.0, py::arg("min_rising_speed_mps") = 1.0, R"doc(
 Zero-velocity-aided strapdown INS (9-state error-state EKF, OpenShoe/PyShoe style) over a
 recording: time_s (N,) [s], acc_mps2 and gyro_radps (N, 3) sensor frame, stance (N,) bool.
 smooth=True adds the RTS smoother (positions_m smoothed, filtered_positions_m the EKF's).
@@ -491,7 +510,8 @@ health: the health check (ZuptEkfSummary) as a dict: stance_fraction and walking
 speed_at_stance_max_mps (|v| the filter had integrated when each stance began, before its update)
 [m/s], speed_at_stance_rise (last third / first third of the onsets), longest_stride_m [m],
 implausible (bool), reasons (list of str), report (one line). The limits min_stance_fraction,
-max_plausible_stride_m [m], max_stance_speed_mps [m/s] and speed_rise_factor only flag.)doc");
+max_plausible_swing_s [s], max_plausible_stride_m [m], max_stance_speed_mps [m/s],
+speed_rise_factor and min_rising_speed_mps [m/s] only flag (defaults calibrated in docs/pdr.md).)doc");
 }
 
 }  // namespace indoorloc::bindings

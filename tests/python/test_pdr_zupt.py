@@ -45,10 +45,10 @@ def test_low_motion_walk_keeps_its_stance_and_a_lost_stance_is_flagged():
     bad = pdr.zupt_ekf(rec.time_s, rec.acc_mps2, rec.gyro_radps, stance, smooth=True)
     assert bad["health"]["walking_stance_fraction"] < 0.15
     assert bad["health"]["implausible"] and bad["health"]["reasons"]
-    assert _final_error(rec, bad["positions_m"]) > 2.0  # diverged
+    assert _final_error(rec, bad["positions_m"]) > 0.3  # drifting
     good = pe.run_recommended(rec)
-    assert good["detector"]["guard_raised"]
-    assert good["health"]["walking_stance_fraction"] >= pe.ZUPT_DETECTOR["min_stance_fraction"]
+    assert good["detector"]["guard_raised"] and good["detector"]["guard_satisfied"]
+    assert good["health"]["walking_stance_fraction"] > 0.3
     assert not good["health"]["implausible"], good["health"]["report"]
     assert _final_error(rec, good["positions_m"]) < 0.02 * rec.distance_m
     assert good["stride_indices"].size == 20
@@ -82,7 +82,8 @@ def test_guard_mirror_in_the_cv_harness_equals_the_cpp_rule():
     rec = foot_gait(10, stance_rate_radps=0.4, seed=4)
     st = cv.detector_statistics(rec)
     for base, frac in ((3e4, 0.3), (1e4, 0.4), (1e6, 0.2)):
-        det = pdr.zero_velocity(rec.acc_mps2, rec.gyro_radps, threshold=base, min_stance_fraction=frac,
+        det = pdr.zero_velocity(rec.acc_mps2, rec.gyro_radps, rec.rate_hz, rule="stance_guard",
+                                threshold=base, min_stance_fraction=frac,
                                 window=pe.SHOE_WINDOW, sigma_acc_mps2=pe.SHOE_SIGMA_ACC_MPS2,
                                 sigma_gyro_radps=pe.SHOE_SIGMA_GYRO_RADPS)
         mine = cv._stance_guard(rec, st, {"log_gamma": math.log10(base), "min_fraction": frac})
@@ -91,15 +92,20 @@ def test_guard_mirror_in_the_cv_harness_equals_the_cpp_rule():
 
 def test_zero_velocity_options_are_checked_by_name():
     rec = foot_gait(3, seed=5)
+    acc, gyro, rate = rec.acc_mps2, rec.gyro_radps, rec.rate_hz
     with pytest.raises(ValueError, match="min_stance_fraction"):
-        pdr.zero_velocity(rec.acc_mps2, rec.gyro_radps, min_stance_fraction=1.5)
+        pdr.zero_velocity(acc, gyro, rate, min_stance_fraction=1.5)
     with pytest.raises(ValueError, match="max_threshold"):
-        pdr.zero_velocity(rec.acc_mps2, rec.gyro_radps, threshold=1e5, max_threshold=1e4)
+        pdr.zero_velocity(acc, gyro, rate, threshold=1e5, max_threshold=1e4)
+    with pytest.raises(ValueError, match="max_swing_ratio"):
+        pdr.zero_velocity(acc, gyro, rate, max_swing_ratio=0.9)
+    with pytest.raises(ValueError, match="rate_hz"):
+        pdr.zero_velocity(acc, gyro, -1.0)
     with pytest.raises(ValueError, match="rule"):
-        pdr.zero_velocity(rec.acc_mps2, rec.gyro_radps, rule="magic")
+        pdr.zero_velocity(acc, gyro, rate, rule="magic")
     with pytest.raises(ValueError, match="long_swing_factor"):
         pdr.count_strides(np.ones(10, bool), 100.0, long_swing_factor=0.5)
-    fixed = pdr.zero_velocity(rec.acc_mps2, rec.gyro_radps, rule="fixed", threshold=3e4)
+    fixed = pdr.zero_velocity(acc, gyro, rate, rule="fixed", threshold=3e4)
     np.testing.assert_array_equal(fixed["stance"], pdr.shoe_detector(rec.acc_mps2, rec.gyro_radps, threshold=3e4))
     assert not fixed["guard_raised"] and "threshold" in fixed["report"]
 

@@ -56,6 +56,8 @@ bool ZuptEkfOptions::IsValid(std::string* error) const {
   if (!(max_plausible_stride_m > 0.0)) return fail("max_plausible_stride_m must be > 0");
   if (!(max_stance_speed_mps > 0.0)) return fail("max_stance_speed_mps must be > 0");
   if (!(speed_rise_factor > 1.0)) return fail("speed_rise_factor must be > 1");
+  if (!(max_plausible_swing_s > 0.0)) return fail("max_plausible_swing_s must be > 0");
+  if (!(min_rising_speed_mps >= 0.0)) return fail("min_rising_speed_mps must be >= 0");
   return true;
 }
 
@@ -122,6 +124,10 @@ ZuptEkfSummary CheckZuptHealth(const Eigen::Ref<const Eigen::VectorXd>& time_s, 
   // Swings between consecutive stance runs.
   std::vector<double> swings;
   for (size_t i = 1; i < runs.size(); ++i) swings.push_back(time_s[runs[i].first] - time_s[runs[i - 1].second - 1]);
+  // The motion before the first and after the last stance counts too (all stances lost).
+  if (runs.empty() && n > 1) swings.push_back(time_s[n - 1] - time_s[0]);
+  if (!runs.empty() && runs.front().first > 0) swings.push_back(time_s[runs.front().first] - time_s[0]);
+  if (!runs.empty() && runs.back().second < n) swings.push_back(time_s[n - 1] - time_s[runs.back().second - 1]);
   h.swing_median_s = Median(swings);
   h.swing_max_s = swings.empty() ? 0.0 : *std::max_element(swings.begin(), swings.end());
   // Speeds at stance onsets (the initial rest has no swing before it: skipped when it starts at 0).
@@ -137,7 +143,7 @@ ZuptEkfSummary CheckZuptHealth(const Eigen::Ref<const Eigen::VectorXd>& time_s, 
     const double first = Median(std::vector<double>(speeds.begin(), speeds.begin() + static_cast<std::ptrdiff_t>(third)));
     const double last = Median(std::vector<double>(speeds.end() - static_cast<std::ptrdiff_t>(third), speeds.end()));
     h.speed_at_stance_rise = first > 0 ? last / first : 1.0;
-    if (h.speed_at_stance_rise > options.speed_rise_factor && last > 0.5) {
+    if (h.speed_at_stance_rise > options.speed_rise_factor && last > options.min_rising_speed_mps) {
       h.reasons.push_back("the speed at stance rises over the recording (x" + std::to_string(h.speed_at_stance_rise) +
                           "): the velocity error grows, the filter diverges");
     }
@@ -150,6 +156,10 @@ ZuptEkfSummary CheckZuptHealth(const Eigen::Ref<const Eigen::VectorXd>& time_s, 
   if (first_swing >= 0 && h.walking_stance_fraction < options.min_stance_fraction) {
     h.reasons.push_back("only " + std::to_string(100.0 * h.walking_stance_fraction) +
                         " % of the walking span is stance: zero-velocity updates are missing");
+  }
+  if (h.swing_max_s > options.max_plausible_swing_s) {
+    h.reasons.push_back("a swing of " + std::to_string(h.swing_max_s) + " s between stances (limit " +
+                        std::to_string(options.max_plausible_swing_s) + " s): stances are missing");
   }
   if (h.longest_stride_m > options.max_plausible_stride_m) {
     h.reasons.push_back("a stride of " + std::to_string(h.longest_stride_m) + " m (limit " +

@@ -428,13 +428,18 @@ def with_threshold(method: Callable[..., MethodOutput], threshold: float) -> Met
 # The recommended method (issue 16): SHOE with the stance guard, EKF + RTS, C++ stride counting
 # --------------------------------------------------------------------------------------------
 #: Settings of :func:`indoorloc.pdr.zero_velocity` used by :func:`zupt_guard_method` for every
-#: sensor (one parameter set, adapted per recording by the guard). Chosen by leave-one-trial-out
-#: cross-validation over the 21 PyShoe trials (``python -m indoorloc.experiments.pdr_zupt_cv``;
-#: docs/pdr.md "Zero-velocity detection"): see the comment at each value.
-ZUPT_DETECTOR = {"rule": "stance_guard", "threshold": 3e4, "min_stance_fraction": 0.3, "max_threshold": 1e7}
+#: sensor (one parameter set; the swing guard adapts the threshold per recording). Chosen by
+#: leave-one-trial-out cross-validation over the 21 PyShoe trials (``python -m
+#: indoorloc.experiments.pdr_zupt_cv``; docs/pdr.md "Zero-velocity detection"): the family won
+#: against a fixed threshold, a stance-fraction guard, a pure quantile, per-class thresholds and
+#: SHOE/ARE/AMV voting; within it, threshold 1e4 (grid 1e4-10^4.5), max_swing_s 2.0 (grid
+#: 1.25-3; 1.5-3 tie) and max_swing_ratio 1.5 (grid 1.3-2; 1.5-2 tie) were the folds' choices.
+#: The ladder step (0.25 decade) and the cap (1e7) were fixed beforehand, not tuned.
+ZUPT_DETECTOR = {"rule": "swing_guard", "threshold": 1e4, "max_swing_s": 2.0, "max_swing_ratio": 1.5,
+                 "ladder_step_decades": 0.25, "max_threshold": 1e7}
 
 #: Name of the recommended method in ``indoorloc pdr evaluate --json`` (``default_method``).
-DEFAULT_METHOD = "zupt_rts_stance_guard"
+DEFAULT_METHOD = "zupt_rts_swing_guard"
 
 
 def detect_stance(recording: ImuRecording, **overrides: Any) -> Dict[str, Any]:
@@ -445,7 +450,7 @@ def detect_stance(recording: ImuRecording, **overrides: Any) -> Dict[str, Any]:
 
     opts = dict(ZUPT_DETECTOR)
     opts.update(overrides)
-    return pdr.zero_velocity(recording.acc_mps2, recording.gyro_radps, window=SHOE_WINDOW,
+    return pdr.zero_velocity(recording.acc_mps2, recording.gyro_radps, recording.rate_hz, window=SHOE_WINDOW,
                              sigma_acc_mps2=SHOE_SIGMA_ACC_MPS2, sigma_gyro_radps=SHOE_SIGMA_GYRO_RADPS, **opts)
 
 
@@ -462,6 +467,7 @@ def run_recommended(recording: ImuRecording, smooth: bool = True, **overrides: A
     count = pdr.count_strides(stance, recording.rate_hz)
     health = dict(out["health"])
     health.update({"shoe_threshold": float(det["threshold"]), "guard_raised": bool(det["guard_raised"]),
+                   "guard_satisfied": bool(det.get("guard_satisfied", True)),
                    "median_swing_s": float(count["median_swing_s"]),
                    "median_stance_s": float(count["median_stance_s"]),
                    "split_strides": int(count["n_split_strides"])})

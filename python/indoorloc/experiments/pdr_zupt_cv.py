@@ -14,6 +14,9 @@ Candidates (``CANDIDATES``):
 - ``fixed``: one SHOE threshold for every recording (log10 gamma on a grid);
 - ``p99_classes``: motion classes by the recording's 99th percentile of log10 T (slow walk vs
   fast walk / run, the rule of issue 8 that overfitted), a threshold per class;
+- ``swing_guard``: a base threshold raised on a ladder (0.25 decade) until no swing is longer
+  than max_swing_s or than max_swing_ratio x the median swing (missed stances make long
+  swings; :func:`indoorloc.pdr.zero_velocity`, rule ``"swing_guard"``, the C++ code itself);
 - ``stance_guard``: a base threshold raised until at least a fraction f of the walking span is
   stance (:func:`indoorloc.pdr.zero_velocity`, rule ``"stance_guard"``);
 - ``quantile``: the threshold is the f-quantile of T over the walking span (pure distribution);
@@ -106,6 +109,16 @@ def _quantile(rec: ImuRecording, st: Stats, p: Dict[str, float]) -> np.ndarray:
     return x < np.quantile(span, p["fraction"])
 
 
+def _swing_guard(rec: ImuRecording, st: Stats, p: Dict[str, float]) -> np.ndarray:
+    from indoorloc import pdr
+
+    det = pdr.zero_velocity(rec.acc_mps2, rec.gyro_radps, rec.rate_hz, rule="swing_guard",
+                            threshold=10.0 ** p["log_gamma"], max_swing_s=p["max_swing_s"],
+                            max_swing_ratio=p["max_swing_ratio"], window=pe.SHOE_WINDOW,
+                            sigma_acc_mps2=pe.SHOE_SIGMA_ACC_MPS2, sigma_gyro_radps=pe.SHOE_SIGMA_GYRO_RADPS)
+    return np.asarray(det["stance"], dtype=bool)
+
+
 def _vote(rec: ImuRecording, st: Stats, p: Dict[str, float]) -> np.ndarray:
     votes = np.zeros(st["shoe"].size, dtype=np.int64)
     for key in ("shoe", "are", "amv"):
@@ -127,6 +140,8 @@ CANDIDATES: Dict[str, Tuple[StanceRule, List[Dict[str, float]]]] = {
     "fixed": (_fixed, _grid(log_gamma=np.arange(4.0, 7.01, 0.25))),
     "p99_classes": (_p99_classes, _grid(p99_cut=[7.2, 7.3, 7.4, 7.45, 7.5, 7.55], log_low=[4.0, 4.5, 5.0],
                                         log_high=[5.0, 5.5, 6.0])),
+    "swing_guard": (_swing_guard, _grid(log_gamma=[4.0, 4.25, 4.5], max_swing_s=[1.25, 1.5, 2.0, 3.0],
+                                        max_swing_ratio=[1.3, 1.5, 1.75, 2.0])),
     "stance_guard": (_stance_guard, _grid(log_gamma=np.arange(4.0, 6.01, 0.25),
                                           min_fraction=[0.0, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45])),
     "quantile": (_quantile, _grid(log_span=[5.0], fraction=np.arange(0.2, 0.61, 0.05))),
@@ -176,8 +191,16 @@ def sweep(recs: Sequence[ImuRecording], stats: Sequence[Stats], family: str,
     return {_key(p): res[_key(p)] for p in grid}
 
 
-def leave_one_out(res: Dict[str, List[Dict[str, Any]]]) -> Dict[str, Any]:
+def session_of(trial: str) -> str:
+    """The recording day of a PyShoe trial (``2017-11-22-11-22-03`` -> ``2017-11-22``)."""
+    return trial[:10]
+
+
+def leave_one_out(res: Dict[str, List[Dict[str, Any]]], by_session: bool = False) -> Dict[str, Any]:
     """Held-out scores: for each trial, the setting with the lowest mean ARMSE on the others.
+
+    ``by_session``: hold out a whole recording day at a time (4 days: 11, 5, 4 and 1 trials),
+    a harder test of transfer to recordings made on another day.
 
     Returns ``{"armse_m": [...], "stride_error": [...], "chosen": [...], "median_armse_m",
     "mean_armse_m", "worst_armse_m", "n_over_0_4_m", "strides_off", "strides_truth",
@@ -188,9 +211,13 @@ def leave_one_out(res: Dict[str, List[Dict[str, Any]]]) -> Dict[str, Any]:
     s = np.array([[r["stride_error"] for r in res[k]] for k in keys])
     flag = np.array([[r["implausible"] for r in res[k]] for k in keys])
     n = a.shape[1]
+    names = [r["trial"] for r in res[keys[0]]]
     held, strides, chosen, flags = [], [], [], []
     for i in range(n):
-        others = [j for j in range(n) if j != i]
+        if by_session:
+            others = [j for j in range(n) if session_of(names[j]) != session_of(names[i])]
+        else:
+            others = [j for j in range(n) if j != i]
         best = int(np.argmin(a[:, others].mean(axis=1)))
         held.append(float(a[best, i]))
         strides.append(int(s[best, i]))
@@ -225,7 +252,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     ap.add_argument("--families", nargs="*", default=list(CANDIDATES))
     ap.add_argument("--cache-dir", default=None, help="cache of per-setting rows (default: none)")
     ap.add_argument("--json", default=None, help="write the CV results here")
+    ap.add_argument("--quiet", action="store_true", help="no progress bars")
     args = ap.parse_args(argv)
+    from indoorloc import progress as _progress
+
+    _progress.set_quiet(args.quiet)
     from indoorloc.registry import default_pdr_root
 
     root = Path(args.data_root) if args.data_root else default_pdr_root()
@@ -234,17 +265,23 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     cache = Path(args.cache_dir) if args.cache_dir else None
     if cache is not None:
         cache.mkdir(parents=True, exist_ok=True)
-    results = {}
+    results, by_day = {}, {}
     for fam in args.families:
         res = sweep(recs, stats, fam, None if cache is None else cache / f"{fam}.json")
         r = leave_one_out(res)
         r["n_settings"] = len(res)
         results[fam] = r
+        d = leave_one_out(res, by_session=True)
+        d["n_settings"] = len(res)
+        by_day[fam] = d
         print(f"{fam}: held-out median {r['median_armse_m']:.3f} mean {r['mean_armse_m']:.3f} worst "
               f"{r['worst_armse_m']:.3f} m, strides off {r['strides_off']}/{r['strides_truth']}", file=sys.stderr)
+    print("Leave one trial out (21 folds)\n")
     print(markdown(results))
+    print("\nLeave one recording day out (4 folds)\n")
+    print(markdown(by_day))
     if args.json:
-        Path(args.json).write_text(json.dumps(results, indent=1))
+        Path(args.json).write_text(json.dumps({"leave_one_trial_out": results, "leave_one_day_out": by_day}, indent=1))
     return 0
 
 
