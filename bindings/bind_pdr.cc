@@ -152,7 +152,7 @@ Stance flags (N,) bool of the SHOE zero-velocity detector (Skog et al. 2010): st
 acc_mps2, gyro_radps: (N, 3) in the sensor frame [m/s^2], [rad/s]; window in samples.)doc");
   m.def("zero_velocity", [](const py::object& acc, const py::object& gyro, double rate_hz, const std::string& rule,
                             double threshold, double max_swing_s, double max_swing_ratio, double ladder_step_decades,
-                            double min_stance_s, double min_stance_fraction, double max_threshold, int window, double sigma_acc,
+                            double min_stance_s, double min_stance_share, double min_stance_fraction, double max_threshold, int window, double sigma_acc,
                             double sigma_gyro, double gravity) {
           MatrixArg a = ToMatrix(acc, "acc_mps2", -1, 3);
           MatrixArg g = ToMatrix(gyro, "gyro_radps", a.map.rows(), 3);
@@ -171,6 +171,7 @@ acc_mps2, gyro_radps: (N, 3) in the sensor frame [m/s^2], [rad/s]; window in sam
           o.max_swing_ratio = max_swing_ratio;
           o.ladder_step_decades = ladder_step_decades;
           o.min_stance_s = min_stance_s;
+          o.min_stance_share = min_stance_share;
           o.min_stance_fraction = min_stance_fraction;
           o.max_threshold = max_threshold;
           ValidateOptions(o);
@@ -198,7 +199,8 @@ acc_mps2, gyro_radps: (N, 3) in the sensor frame [m/s^2], [rad/s]; window in sam
         },
         py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("rate_hz"), py::arg("rule") = "swing_guard",
         py::arg("threshold") = 1e4, py::arg("max_swing_s") = 2.0, py::arg("max_swing_ratio") = 1.5,
-        py::arg("ladder_step_decades") = 0.25, py::arg("min_stance_s") = 0.02, py::arg("min_stance_fraction") = 0.3,
+        py::arg("ladder_step_decades") = 0.25, py::arg("min_stance_s") = 0.02, py::arg("min_stance_share") = 0.15,
+        py::arg("min_stance_fraction") = 0.3,
         py::arg("max_threshold") = 1e7, py::arg("window") = 5, py::arg("sigma_acc_mps2") = 0.01,
         py::arg("sigma_gyro_radps") = 0.1 * kDeg, py::arg("gravity_mps2") = 9.81, R"doc(
 Zero-velocity detection with the SHOE threshold adapted to the recording (C++ DetectZeroVelocity).
@@ -206,7 +208,8 @@ acc_mps2, gyro_radps: (N, 3) sensor frame [m/s^2], [rad/s]; rate_hz [Hz]; window
 rule "swing_guard" (default, chosen by cross-validation): the threshold climbs the ladder
 threshold * 10^(j * ladder_step_decades) up to max_threshold and stops at the first rung where
 no swing (non-stance between two stance phases; stance flicker shorter than min_stance_s [s]
-ignored) is longer than max_swing_s [s] or than max_swing_ratio times the median swing.
+ignored) is longer than max_swing_s [s] or than max_swing_ratio times the median swing, and at
+least min_stance_share of all samples are stance.
 "stance_guard": raised to the min_stance_fraction-quantile of the statistic over the walking
 span. "fixed": statistic < threshold. Returns a dict: stance (N,) bool, statistic (N,),
 threshold (used), base_threshold, guard_raised, guard_satisfied, ladder_rungs, max_swing_s,

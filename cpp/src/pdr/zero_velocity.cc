@@ -82,6 +82,7 @@ bool ZeroVelocityOptions::IsValid(std::string* error) const {
   if (!(max_swing_ratio > 1.0) || !std::isfinite(max_swing_ratio)) return fail("max_swing_ratio must be > 1");
   if (!(ladder_step_decades > 0.0 && ladder_step_decades <= 2.0)) return fail("ladder_step_decades must be in (0, 2]");
   if (!(min_stance_s >= 0.0) || !std::isfinite(min_stance_s)) return fail("min_stance_s must be >= 0");
+  if (!(min_stance_share >= 0.0 && min_stance_share < 1.0)) return fail("min_stance_share must be in [0, 1)");
   return true;
 }
 
@@ -180,7 +181,8 @@ ZeroVelocityOutput DetectZeroVelocity(const Eigen::Ref<const RowMatrixXd>& acc, 
       s.ladder_rungs = j;
       s.max_swing_s = longest / rate_hz;
       s.median_swing_s = median / rate_hz;
-      if (longest <= max_swing && longest <= options.max_swing_ratio * median) {
+      const double share = static_cast<double>((t.array() < gamma).count()) / static_cast<double>(std::max<Eigen::Index>(n, 1));
+      if (longest <= max_swing && longest <= options.max_swing_ratio * median && share >= options.min_stance_share) {
         s.guard_satisfied = true;
         break;
       }

@@ -53,6 +53,7 @@ def zero_velocity(
     max_swing_ratio: float = 1.5,
     ladder_step_decades: float = 0.25,
     min_stance_s: float = 0.02,
+    min_stance_share: float = 0.15,
     min_stance_fraction: float = 0.3,
     max_threshold: float = 1e7,
     window: int = 5,

@@ -434,9 +434,10 @@ def with_threshold(method: Callable[..., MethodOutput], threshold: float) -> Met
 #: against a fixed threshold, a stance-fraction guard, a pure quantile, per-class thresholds and
 #: SHOE/ARE/AMV voting; within it, threshold 1e4 (grid 1e4-10^4.5), max_swing_s 2.0 (grid
 #: 1.25-3; 1.5-3 tie) and max_swing_ratio 1.5 (grid 1.3-2; 1.5-2 tie) were the folds' choices.
-#: The ladder step (0.25 decade) and the cap (1e7) were fixed beforehand, not tuned.
+#: The ladder step (0.25 decade), the cap (1e7) and the stance floor (15 % of the samples, a
+#: safety net that binds on none of the recordings here) were fixed beforehand, not tuned.
 ZUPT_DETECTOR = {"rule": "swing_guard", "threshold": 1e4, "max_swing_s": 2.0, "max_swing_ratio": 1.5,
-                 "ladder_step_decades": 0.25, "max_threshold": 1e7}
+                 "ladder_step_decades": 0.25, "min_stance_share": 0.15, "max_threshold": 1e7}
 
 #: Name of the recommended method in ``indoorloc pdr evaluate --json`` (``default_method``).
 DEFAULT_METHOD = "zupt_rts_swing_guard"
@@ -468,8 +469,8 @@ def run_recommended(recording: ImuRecording, smooth: bool = True, **overrides: A
     health = dict(out["health"])
     health.update({"shoe_threshold": float(det["threshold"]), "guard_raised": bool(det["guard_raised"]),
                    "guard_satisfied": bool(det.get("guard_satisfied", True)),
-                   "median_swing_s": float(count["median_swing_s"]),
-                   "median_stance_s": float(count["median_stance_s"]),
+                   "stride_median_swing_s": float(count["median_swing_s"]),
+                   "stride_median_stance_s": float(count["median_stance_s"]),
                    "split_strides": int(count["n_split_strides"])})
     return {"positions_m": np.asarray(out["positions_m"], dtype=float),
             "stride_indices": np.asarray(count["stride_indices"], dtype=np.int64), "stance": stance,

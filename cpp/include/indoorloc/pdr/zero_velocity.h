@@ -18,7 +18,8 @@
 //    for a gait (a run whose stance is never still, a walk whose rest is noisier than γ₀
 //    expects) misses many: the guard raises γ until they are found, and a slow walk, whose
 //    stances are found at γ₀, keeps the low threshold it needs. The rule checks the consequence
-//    of a threshold on the recording itself instead of classifying the gait.
+//    of a threshold on the recording itself instead of classifying the gait. A rung must also
+//    make at least min_stance_share of the samples stance.
 //  - kStanceGuard: γ = min(γ_max, max(γ₀, Q_f(T))), Q_f the f-quantile of T over the walking
 //    span (first to last sample with T ≥ γ₀): at least the fraction f of the walk is stance.
 //    Kept as a candidate; it lost in cross-validation (docs/pdr.md).
@@ -80,6 +81,10 @@ struct ZeroVelocityOptions {
   double ladder_step_decades = 0.25;
   /// Swing guard: stance runs shorter than this [s] inside a swing are flicker.
   double min_stance_s = 0.02;
+  /// Swing guard: a rung is accepted only when at least this fraction of all samples is stance
+  /// (the diverging walk had 9 %). Not tuned: a safety net that binds on none of the 24
+  /// recordings here (their least stance fraction at the chosen threshold is 22 %).
+  double min_stance_share = 0.15;
   /// Stance guard: the least stance fraction f of the walking span [0..1).
   double min_stance_fraction = 0.3;
   /// Both guards: the threshold is never raised above this (γ_max > γ₀).
