@@ -206,3 +206,20 @@ def test_recommended_method_on_two_real_trials(shared_data):
         sc = pe.score_pyshoe_trial(rec, (r["positions_m"], r["stride_indices"]))
         assert sc["armse_m"] < 0.4 and abs(sc["stride_count_error"]) <= 1
         assert not r["health"]["implausible"], r["health"]["report"]
+
+
+# ------------------------------------------------------------------ the CV harness
+def test_leave_one_out_never_scores_a_trial_with_a_setting_chosen_on_it():
+    # Setting "a" is best on trials 0 and 1 but terrible on 2; "b" is mediocre everywhere.
+    # Held out 2, the folds choose "a" (best on 0, 1) and trial 2 scores 5.0: the held-out
+    # figure shows the failure that an in-sample choice would hide.
+    def rows(values):
+        return [{"trial": f"2017-11-2{i}-t", "armse_m": v, "stride_error": 0, "strides_truth": 10,
+                 "stance_fraction": 0.3, "implausible": False} for i, v in enumerate(values)]
+    res = {"a": rows([0.05, 0.05, 5.0]), "b": rows([0.3, 0.3, 0.3])}
+    r = cv.leave_one_out(res)
+    assert r["chosen"] == ["b", "b", "a"]
+    np.testing.assert_allclose(r["armse_m"], [0.3, 0.3, 5.0])
+    assert r["worst_armse_m"] == 5.0 and r["n_over_0_4_m"] == 1
+    by_day = cv.leave_one_out(res, by_session=True)  # three days: the same folds here
+    assert by_day["chosen"] == r["chosen"]
