@@ -13,9 +13,14 @@ Two evaluations, one parameter set for all recordings of a sensor:
 :func:`markdown` renders both as tables with the peers' published figures beside ours.
 
 A method is a callable ``method(recording) -> positions_m (N, 3)`` or
-``-> (positions_m (N, 3), stride_indices (S,))``. :func:`zupt_ekf_method` is the default: the
-SHOE stance detector then the ZUPT-aided error-state EKF of ``indoorloc.pdr``
-(imported lazily, so this module imports without the compiled bindings).
+``-> (positions_m (N, 3), stride_indices (S,))``. The recommended one (issue 16) is
+:func:`zupt_guard_method` / :func:`run_recommended`: the SHOE statistic with the swing-guard
+threshold (:data:`ZUPT_DETECTOR`, chosen by cross-validation in :mod:`pdr_zupt_cv`), the ZUPT EKF
++ RTS smoother with its health check, and :func:`indoorloc.pdr.count_strides`;
+:func:`evaluate_json` writes every recording's figures in the stable schema of docs/pdr.md.
+:func:`zupt_ekf_method` (fixed per-sensor threshold) and :func:`zupt_adaptive_method` (issue 8's
+per-class rule, which overfitted) remain for comparison. ``indoorloc.pdr`` is imported lazily,
+so this module imports without the compiled bindings.
 
 Examples
 --------

@@ -84,9 +84,9 @@ def guarded_log_threshold(log_t: np.ndarray, log_base: float, min_fraction: floa
     span = log_t[moving[0]:moving[-1] + 1] if moving.size else log_t
     if min_fraction <= 0:
         return log_base
-    q = float(np.partition(span, int(math.floor(min_fraction * (span.size - 1))))[int(math.floor(min_fraction * (span.size - 1)))])
-    q = float(np.nextafter(q, np.inf))
-    return min(max(log_base, q), log_max) if q > log_base else log_base
+    pos = int(math.floor(min_fraction * (span.size - 1)))  # the lower quantile, as the C++
+    q = float(np.nextafter(np.partition(span, pos)[pos], np.inf))  # T < threshold holds for it too
+    return min(q, log_max) if q > log_base else log_base
 
 
 def _fixed(rec: ImuRecording, st: Stats, p: Dict[str, float]) -> np.ndarray:
