@@ -118,6 +118,7 @@ py::dict HealthDict(const pdr::ZuptEkfSummary& h) {
   d["speed_at_stance_max_mps"] = h.speed_at_stance_max_mps;
   d["speed_at_stance_rise"] = h.speed_at_stance_rise;
   d["longest_stride_m"] = h.longest_stride_m;
+  d["median_stride_m"] = h.median_stride_m;
   d["implausible"] = h.implausible;
   d["reasons"] = h.reasons;
   d["seconds"] = h.seconds;
@@ -460,8 +461,8 @@ dict: increments_m (M-1, 3), stride_lengths_m (M-1,) (eq. 6), velocities_mps (N,
   m.def("zupt_ekf", [](const py::object& time_s, const py::object& acc, const py::object& gyro, const py::object& stance,
                        double sigma_acc, double sigma_gyro, double sigma_zupt, double gravity, int init_samples, bool smooth,
                        double sigma_stance_heading, double min_stance_fraction, double max_plausible_swing_s,
-                       double max_plausible_stride_m, double max_stance_speed_mps, double speed_rise_factor,
-                       double min_rising_speed_mps) {
+                       double max_plausible_stride_m, double max_median_stride_m, double max_stance_speed_mps,
+                       double speed_rise_factor, double min_rising_speed_mps) {
           MatrixArg a = ToMatrix(acc, "acc_mps2", -1, 3);
           MatrixArg g = ToMatrix(gyro, "gyro_radps", a.map.rows(), 3);
           VectorArg t = ToVector(time_s, "time_s", a.map.rows());
@@ -478,6 +479,7 @@ dict: increments_m (M-1, 3), stride_lengths_m (M-1,) (eq. 6), velocities_mps (N,
           o.min_stance_fraction = min_stance_fraction;
           o.max_plausible_swing_s = max_plausible_swing_s;
           o.max_plausible_stride_m = max_plausible_stride_m;
+          o.max_median_stride_m = max_median_stride_m;
           o.min_rising_speed_mps = min_rising_speed_mps;
           o.max_stance_speed_mps = max_stance_speed_mps;
           o.speed_rise_factor = speed_rise_factor;
@@ -501,7 +503,7 @@ dict: increments_m (M-1, 3), stride_lengths_m (M-1,) (eq. 6), velocities_mps (N,
         py::arg("sigma_gyro_radps") = 0.5 * kDeg, py::arg("sigma_zupt_mps") = 0.01, py::arg("gravity_mps2") = 9.81,
         py::arg("init_samples") = 20, py::arg("smooth") = false, py::arg("sigma_stance_heading_rad") = 0.0,
         py::arg("min_stance_fraction") = 0.02, py::arg("max_plausible_swing_s") = 5.0, py::arg("max_plausible_stride_m") = 4.0,
-        py::arg("max_stance_speed_mps") = 4.0, py::arg("speed_rise_factor") = 3.0, py::arg("min_rising_speed_mps") = 1.0, R"doc(
+        py::arg("max_median_stride_m") = 2.5, py::arg("max_stance_speed_mps") = 4.0, py::arg("speed_rise_factor") = 3.0, py::arg("min_rising_speed_mps") = 1.0, R"doc(
 Zero-velocity-aided strapdown INS (9-state error-state EKF, OpenShoe/PyShoe style) over a
 recording: time_s (N,) [s], acc_mps2 and gyro_radps (N, 3) sensor frame, stance (N,) bool.
 smooth=True adds the RTS smoother (positions_m smoothed, filtered_positions_m the EKF's).
@@ -511,9 +513,10 @@ headings_rad (N,), quaternions_wxyz (N, 4) body -> nav, position_sd_m (N, 3), se
 health: the health check (ZuptEkfSummary) as a dict: stance_fraction and walking_stance_fraction
 [0..1], n_stance_phases, swing_median_s / swing_max_s [s], speed_at_stance_median_mps /
 speed_at_stance_max_mps (|v| the filter had integrated when each stance began, before its update)
-[m/s], speed_at_stance_rise (last third / first third of the onsets), longest_stride_m [m],
+[m/s], speed_at_stance_rise (last third / first third of the onsets), longest_stride_m and
+median_stride_m [m],
 implausible (bool), reasons (list of str), report (one line). The limits min_stance_fraction,
-max_plausible_swing_s [s], max_plausible_stride_m [m], max_stance_speed_mps [m/s],
+max_plausible_swing_s [s], max_plausible_stride_m and max_median_stride_m [m], max_stance_speed_mps [m/s],
 speed_rise_factor and min_rising_speed_mps [m/s] only flag (defaults calibrated in docs/pdr.md).)doc");
 }
 

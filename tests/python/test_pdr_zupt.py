@@ -77,6 +77,17 @@ def test_slow_walk_counts_every_stride():
     assert _final_error(rec, good["positions_m"]) < 0.05 * rec.distance_m
 
 
+def test_a_stretched_path_is_flagged_by_its_median_stride():
+    # The divergent recordings: the path through the strides was 2-3x the walk. Here
+    # the strides really are 2.8 m (twice a walk's): the health check reports it, a walk passes.
+    long = pe.run_recommended(foot_gait(12, stride_m=2.8, seed=11))
+    assert long["health"]["implausible"]
+    assert long["health"]["median_stride_m"] == pytest.approx(2.8, abs=0.1)
+    assert any("median stride" in r for r in long["health"]["reasons"])
+    walk = pe.run_recommended(foot_gait(12, stride_m=1.4, seed=11))
+    assert not walk["health"]["implausible"] and walk["health"]["median_stride_m"] == pytest.approx(1.4, abs=0.05)
+
+
 # ------------------------------------------------------------------ detector and counter
 def test_guard_mirror_in_the_cv_harness_equals_the_cpp_rule():
     rec = foot_gait(10, stance_rate_radps=0.4, seed=4)

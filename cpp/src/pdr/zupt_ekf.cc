@@ -57,6 +57,7 @@ bool ZuptEkfOptions::IsValid(std::string* error) const {
   if (!(max_stance_speed_mps > 0.0)) return fail("max_stance_speed_mps must be > 0");
   if (!(speed_rise_factor > 1.0)) return fail("speed_rise_factor must be > 1");
   if (!(max_plausible_swing_s > 0.0)) return fail("max_plausible_swing_s must be > 0");
+  if (!(max_median_stride_m > 0.0)) return fail("max_median_stride_m must be > 0");
   if (!(min_rising_speed_mps >= 0.0)) return fail("min_rising_speed_mps must be >= 0");
   return true;
 }
@@ -78,7 +79,7 @@ std::string ZuptEkfSummary::BriefReport() const {
   s << "ZUPT EKF: " << n_samples << " samples, stance " << 100.0 * stance_fraction << " % (walking span "
     << 100.0 * walking_stance_fraction << " %), " << n_stance_phases << " stance phases, swing median " << swing_median_s
     << " s / max " << swing_max_s << " s, speed at stance median " << speed_at_stance_median_mps << " / max "
-    << speed_at_stance_max_mps << " m/s (rise x" << speed_at_stance_rise << "), longest stride " << longest_stride_m << " m: "
+    << speed_at_stance_max_mps << " m/s (rise x" << speed_at_stance_rise << "), stride median " << median_stride_m << " m / longest " << longest_stride_m << " m: "
     << (implausible ? "IMPLAUSIBLE" : "plausible");
   for (const std::string& r : reasons) s << "; " << r;
   return s.str();
@@ -148,11 +149,14 @@ ZuptEkfSummary CheckZuptHealth(const Eigen::Ref<const Eigen::VectorXd>& time_s, 
                           "): the velocity error grows, the filter diverges");
     }
   }
+  std::vector<double> strides;
   for (size_t i = 1; i < runs.size(); ++i) {
     const Eigen::Index a = runs[i - 1].first, b = runs[i].first;
     const double d = (positions_m.row(b).head<2>() - positions_m.row(a).head<2>()).norm();
     h.longest_stride_m = std::max(h.longest_stride_m, d);
+    strides.push_back(d);
   }
+  h.median_stride_m = Median(strides);
   if (first_swing >= 0 && h.walking_stance_fraction < options.min_stance_fraction) {
     h.reasons.push_back("only " + std::to_string(100.0 * h.walking_stance_fraction) +
                         " % of the walking span is stance: zero-velocity updates are missing");
@@ -164,6 +168,10 @@ ZuptEkfSummary CheckZuptHealth(const Eigen::Ref<const Eigen::VectorXd>& time_s, 
   if (h.longest_stride_m > options.max_plausible_stride_m) {
     h.reasons.push_back("a stride of " + std::to_string(h.longest_stride_m) + " m (limit " +
                         std::to_string(options.max_plausible_stride_m) + " m)");
+  }
+  if (h.median_stride_m > options.max_median_stride_m) {
+    h.reasons.push_back("the median stride is " + std::to_string(h.median_stride_m) + " m (limit " +
+                        std::to_string(options.max_median_stride_m) + " m): the path is stretched");
   }
   if (h.speed_at_stance_max_mps > options.max_stance_speed_mps) {
     h.reasons.push_back("a speed of " + std::to_string(h.speed_at_stance_max_mps) + " m/s at a stance onset (limit " +

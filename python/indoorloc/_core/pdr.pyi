@@ -39,6 +39,7 @@ def zupt_ekf(
     min_stance_fraction: float = 0.02,
     max_plausible_swing_s: float = 5.0,
     max_plausible_stride_m: float = 4.0,
+    max_median_stride_m: float = 2.5,
     max_stance_speed_mps: float = 4.0,
     speed_rise_factor: float = 3.0,
     min_rising_speed_mps: float = 1.0,

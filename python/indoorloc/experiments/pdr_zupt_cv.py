@@ -14,6 +14,8 @@ Candidates (``CANDIDATES``):
 - ``fixed``: one SHOE threshold for every recording (log10 gamma on a grid);
 - ``p99_classes``: motion classes by the recording's 99th percentile of log10 T (slow walk vs
   fast walk / run, the rule of issue 8 that overfitted), a threshold per class;
+- ``cadence_classes``: motion classes by the stride period (the autocorrelation peak of log10 T
+  between 0.4 and 2.5 s: running strides are shorter), a threshold per class;
 - ``swing_guard``: a base threshold raised on a ladder (0.25 decade) until no swing is longer
   than max_swing_s or than max_swing_ratio x the median swing (missed stances make long
   swings; :func:`indoorloc.pdr.zero_velocity`, rule ``"swing_guard"``, the C++ code itself);
@@ -98,6 +100,28 @@ def _p99_classes(rec: ImuRecording, st: Stats, p: Dict[str, float]) -> np.ndarra
     return st["shoe"] < (p["log_low"] if slow else p["log_high"])
 
 
+def stride_period_s(log_t: np.ndarray, rate_hz: float, lo_s: float = 0.4, hi_s: float = 2.5) -> float:
+    """The gait's stride period [s]: the lag of the highest local maximum of the autocorrelation
+    of the mean-removed log10 T between lo_s and hi_s (FFT autocorrelation); NaN if none."""
+    x = log_t - log_t.mean()
+    n = x.size
+    f = np.fft.rfft(x, 2 * n)
+    ac = np.fft.irfft(f * np.conj(f))[:n]
+    lo, hi = int(lo_s * rate_hz), min(n - 1, int(hi_s * rate_hz))
+    if hi <= lo + 1:
+        return float("nan")
+    k = np.arange(max(lo, 1), hi)
+    peaks = k[(ac[k] > ac[k - 1]) & (ac[k] >= ac[k + 1])]
+    if peaks.size == 0:
+        return float("nan")
+    return float(peaks[int(np.argmax(ac[peaks]))] / rate_hz)
+
+
+def _cadence_classes(rec: ImuRecording, st: Stats, p: Dict[str, float]) -> np.ndarray:
+    run = bool(stride_period_s(st["shoe"], rec.rate_hz) < p["period_cut_s"])  # NaN: a walk
+    return st["shoe"] < (p["log_run"] if run else p["log_walk"])
+
+
 def _stance_guard(rec: ImuRecording, st: Stats, p: Dict[str, float]) -> np.ndarray:
     return st["shoe"] < guarded_log_threshold(st["shoe"], p["log_gamma"], p["min_fraction"], p.get("log_max", 7.0))
 
@@ -140,6 +164,8 @@ CANDIDATES: Dict[str, Tuple[StanceRule, List[Dict[str, float]]]] = {
     "fixed": (_fixed, _grid(log_gamma=np.arange(4.0, 7.01, 0.25))),
     "p99_classes": (_p99_classes, _grid(p99_cut=[7.2, 7.3, 7.4, 7.45, 7.5, 7.55], log_low=[4.0, 4.5, 5.0],
                                         log_high=[5.0, 5.5, 6.0])),
+    "cadence_classes": (_cadence_classes, _grid(period_cut_s=[0.8, 0.9, 1.0], log_walk=[4.0, 4.5, 5.0],
+                                                log_run=[5.0, 5.5, 6.0])),
     "swing_guard": (_swing_guard, _grid(log_gamma=[4.0, 4.25, 4.5], max_swing_s=[1.25, 1.5, 2.0, 3.0],
                                         max_swing_ratio=[1.3, 1.5, 1.75, 2.0])),
     "stance_guard": (_stance_guard, _grid(log_gamma=np.arange(4.0, 6.01, 0.25),

@@ -60,6 +60,9 @@ struct ZuptEkfOptions {
   double min_stance_fraction = 0.02;      ///< flag when the walking span has less stance [0..1]
   double max_plausible_swing_s = 5.0;     ///< flag a swing (stance to stance) longer than this [s]
   double max_plausible_stride_m = 4.0;    ///< flag a stride (stance onset to onset) longer than this [m]
+  /// Flag when the median stride exceeds this [m] (the 2.5 m): the whole path is
+  /// stretched (a diverging filter whose path is 2-3x the walk), not one stance missed.
+  double max_median_stride_m = 2.5;
   double max_stance_speed_mps = 4.0;      ///< flag when |v̂⁻| at a stance onset exceeds this [m/s]
   /// Flag when the median |v̂⁻| at stance onsets in the last third of the recording exceeds this
   /// factor times the median in the first third and min_rising_speed_mps: the velocity at ZUPT rises.
@@ -82,6 +85,7 @@ struct ZuptEkfSummary {
   double speed_at_stance_max_mps = 0.0;     ///< largest |v̂⁻| at a stance onset [m/s]
   double speed_at_stance_rise = 1.0;     ///< median |v̂⁻| over the last third of onsets / first third
   double longest_stride_m = 0.0;         ///< longest horizontal displacement between consecutive stance onsets [m]
+  double median_stride_m = 0.0;          ///< median of those displacements [m]
   bool implausible = false;              ///< true when any check below failed
   std::vector<std::string> reasons;      ///< one sentence per failed check
   double seconds = 0.0;
