@@ -64,6 +64,8 @@ SHOE_SIGMA_GYRO_RADPS = 0.1 * math.pi / 180.0
 #: 1e4, 1.85 / 54.9 m at 3e3); OpenShoe 0.449 m at 3e4, 0.68 m at 1e5; PyShoe mean ARMSE 1.57 m
 #: at 3e5 vs 3.6 m at 3e4 (stride count error 8 % vs 36 %). The PyShoe value was picked on all
 #: 21 trials, so its figure is not a held-out one: use :func:`tune_threshold` on a training split.
+#: Superseded for recommendations by :data:`ZUPT_DETECTOR` (issue 16); kept for the comparison
+#: methods (``indoorloc pdr evaluate --compare``).
 DEFAULT_SHOE_THRESHOLD = {"xio": 3e4, "openshoe": 3e4, "pyshoe": 3e5}
 _FALLBACK_THRESHOLD = 3e4
 
@@ -255,6 +257,9 @@ def zupt_rts_method(recording: ImuRecording, threshold: Optional[float] = None) 
 #: with the fixed 3e5. Applied to x-io / OpenShoe (p99 7.5-7.7) the same rule would choose
 #: 10^5.5 and worsen their loops (0.37 / 0.75 m), so it is kept for the PyShoe sensor only:
 #: the parameter set is per sensor, not one for all recordings.
+#: Issue 16: on 21 other trials this rule scored 0.129 / 0.363 / 2.80 m (a walk just below the
+#: cut got 1e4 and diverged); a setting 0.05 above the cut costs 1.2 m here too. Kept only for
+#: ``--compare``; :data:`ZUPT_DETECTOR` replaces it.
 ADAPTIVE_SHOE = {"pyshoe": {"p99_cut": 7.45, "low": 1e4, "high": 10 ** 5.5}}
 
 
