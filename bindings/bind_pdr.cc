@@ -1,5 +1,7 @@
 // Python bindings of the pdr subsystem: zero-velocity detection and the ZUPT-aided EKF.
 #include <cmath>
+#include <cstdint>
+#include <string>
 #include <vector>
 
 #include <pybind11/eigen.h>
@@ -9,6 +11,7 @@
 #include "indoorloc/pdr/attitude_filter.h"
 #include "indoorloc/pdr/step_detection.h"
 #include "indoorloc/pdr/step_positioning.h"
+#include "indoorloc/pdr/stride_count.h"
 #include "indoorloc/pdr/stride_length.h"
 #include "indoorloc/pdr/zero_velocity.h"
 #include "indoorloc/pdr/zupt_ekf.h"
@@ -102,6 +105,26 @@ py::dict CalibrationDict(const pdr::WeinbergCalibration& c) {
   d["report"] = c.BriefReport();
   return d;
 }
+py::dict HealthDict(const pdr::ZuptEkfSummary& h) {
+  py::dict d;
+  d["n_samples"] = h.n_samples;
+  d["n_stance_samples"] = h.n_stance_samples;
+  d["n_stance_phases"] = h.n_stance_phases;
+  d["stance_fraction"] = h.stance_fraction;
+  d["walking_stance_fraction"] = h.walking_stance_fraction;
+  d["swing_median_s"] = h.swing_median_s;
+  d["swing_max_s"] = h.swing_max_s;
+  d["speed_at_stance_median_mps"] = h.speed_at_stance_median_mps;
+  d["speed_at_stance_max_mps"] = h.speed_at_stance_max_mps;
+  d["speed_at_stance_rise"] = h.speed_at_stance_rise;
+  d["longest_stride_m"] = h.longest_stride_m;
+  d["median_stride_m"] = h.median_stride_m;
+  d["implausible"] = h.implausible;
+  d["reasons"] = h.reasons;
+  d["seconds"] = h.seconds;
+  d["report"] = h.BriefReport();
+  return d;
+}
 }  // namespace
 
 void BindPdr(py::module_& m) {
@@ -128,6 +151,102 @@ void BindPdr(py::module_& m) {
         py::arg("sigma_acc_mps2") = 0.01, py::arg("sigma_gyro_radps") = 0.1 * kDeg, py::arg("gravity_mps2") = 9.81, R"doc(
 Stance flags (N,) bool of the SHOE zero-velocity detector (Skog et al. 2010): statistic < threshold.
 acc_mps2, gyro_radps: (N, 3) in the sensor frame [m/s^2], [rad/s]; window in samples.)doc");
+  m.def("zero_velocity", [](const py::object& acc, const py::object& gyro, double rate_hz, const std::string& rule,
+                            double threshold, double max_swing_s, double max_swing_ratio, double ladder_step_decades,
+                            double min_stance_s, double min_stance_share, double min_stance_fraction, double max_threshold, int window, double sigma_acc,
+                            double sigma_gyro, double gravity) {
+          MatrixArg a = ToMatrix(acc, "acc_mps2", -1, 3);
+          MatrixArg g = ToMatrix(gyro, "gyro_radps", a.map.rows(), 3);
+          pdr::ZeroVelocityOptions o;
+          o.shoe = MakeShoe(window, threshold, sigma_acc, sigma_gyro, gravity);
+          if (rule == "fixed") {
+            o.rule = pdr::ZeroVelocityRule::kFixed;
+          } else if (rule == "swing_guard") {
+            o.rule = pdr::ZeroVelocityRule::kSwingGuard;
+          } else if (rule == "stance_guard") {
+            o.rule = pdr::ZeroVelocityRule::kStanceGuard;
+          } else {
+            ThrowInvalidArgument("rule", "must be 'swing_guard', 'stance_guard' or 'fixed', got '" + rule + "'");
+          }
+          o.max_swing_s = max_swing_s;
+          o.max_swing_ratio = max_swing_ratio;
+          o.ladder_step_decades = ladder_step_decades;
+          o.min_stance_s = min_stance_s;
+          o.min_stance_share = min_stance_share;
+          o.min_stance_fraction = min_stance_fraction;
+          o.max_threshold = max_threshold;
+          ValidateOptions(o);
+          pdr::ZeroVelocityOutput out;
+          {
+            py::gil_scoped_release release;
+            out = pdr::DetectZeroVelocity(a.map, g.map, rate_hz, o);
+          }
+          const pdr::ZeroVelocitySummary& sm = out.summary;
+          py::dict d;
+          d["stance"] = out.stance;
+          d["statistic"] = out.statistic;
+          d["threshold"] = sm.threshold;
+          d["base_threshold"] = sm.base_threshold;
+          d["guard_raised"] = sm.guard_raised;
+          d["guard_satisfied"] = sm.guard_satisfied;
+          d["ladder_rungs"] = sm.ladder_rungs;
+          d["max_swing_s"] = sm.max_swing_s;
+          d["median_swing_s"] = sm.median_swing_s;
+          d["stance_fraction"] = sm.stance_fraction;
+          d["walking_stance_fraction"] = sm.walking_stance_fraction;
+          d["walking_span"] = py::make_tuple(sm.walking_begin, sm.walking_end);
+          d["report"] = sm.BriefReport();
+          return d;
+        },
+        py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("rate_hz"), py::arg("rule") = "swing_guard",
+        py::arg("threshold") = 1e4, py::arg("max_swing_s") = 2.0, py::arg("max_swing_ratio") = 1.5,
+        py::arg("ladder_step_decades") = 0.25, py::arg("min_stance_s") = 0.02, py::arg("min_stance_share") = 0.15,
+        py::arg("min_stance_fraction") = 0.3,
+        py::arg("max_threshold") = 1e7, py::arg("window") = 5, py::arg("sigma_acc_mps2") = 0.01,
+        py::arg("sigma_gyro_radps") = 0.1 * kDeg, py::arg("gravity_mps2") = 9.81, R"doc(
+Zero-velocity detection with the SHOE threshold adapted to the recording (C++ DetectZeroVelocity).
+acc_mps2, gyro_radps: (N, 3) sensor frame [m/s^2], [rad/s]; rate_hz [Hz]; window in samples.
+rule "swing_guard" (default, chosen by cross-validation): the threshold climbs the ladder
+threshold * 10^(j * ladder_step_decades) up to max_threshold and stops at the first rung where
+no swing (non-stance between two stance phases; stance flicker shorter than min_stance_s [s]
+ignored) is longer than max_swing_s [s] or than max_swing_ratio times the median swing, and at
+least min_stance_share of all samples are stance.
+"stance_guard": raised to the min_stance_fraction-quantile of the statistic over the walking
+span. "fixed": statistic < threshold. Returns a dict: stance (N,) bool, statistic (N,),
+threshold (used), base_threshold, guard_raised, guard_satisfied, ladder_rungs, max_swing_s,
+median_swing_s [s], stance_fraction, walking_stance_fraction [0..1], walking_span, report.)doc");
+  m.def("count_strides", [](const py::object& stance, double rate_hz, double min_stance_s, double min_swing_s,
+                            double min_swing_fraction, double long_swing_factor) {
+          VectorArg s = ToVector(stance, "stance");
+          const pdr::BoolVector st = (s.map.array() != 0.0).matrix();
+          pdr::StrideCountOptions o;
+          o.min_stance_s = min_stance_s;
+          o.min_swing_s = min_swing_s;
+          o.min_swing_fraction = min_swing_fraction;
+          o.long_swing_factor = long_swing_factor;
+          ValidateOptions(o);
+          pdr::StrideCountOutput out = pdr::CountStrides(st, rate_hz, o);
+          py::dict d;
+          d["stride_indices"] = Eigen::Map<const Eigen::VectorXi>(out.stride_indices.data(), static_cast<Eigen::Index>(out.stride_indices.size())).cast<std::int64_t>().eval();
+          d["cleaned_stance"] = out.cleaned_stance;
+          d["n_strides"] = out.summary.n_strides;
+          d["n_flicker_stances"] = out.summary.n_flicker_stances;
+          d["n_flicker_swings"] = out.summary.n_flicker_swings;
+          d["n_split_strides"] = out.summary.n_split_strides;
+          d["median_swing_s"] = out.summary.median_swing_s;
+          d["median_stance_s"] = out.summary.median_stance_s;
+          d["report"] = out.summary.BriefReport();
+          return d;
+        },
+        py::arg("stance"), py::arg("rate_hz"), py::arg("min_stance_s") = 0.02, py::arg("min_swing_s") = 0.1,
+        py::arg("min_swing_fraction") = 0.5, py::arg("long_swing_factor") = 1.7, R"doc(
+Strides of the instrumented foot from stance flags (N,) sampled at rate_hz [Hz] (C++ CountStrides):
+stance runs shorter than min_stance_s [s] inside a swing are flicker; swing runs shorter than
+max(min_swing_s [s], min_swing_fraction x the recording's median swing) inside a stance are
+flicker; a swing longer than long_swing_factor x the median swing (0 disables) counts as
+round(length / median) strides. Returns a dict: stride_indices (S,) int64 stance onsets,
+cleaned_stance (N,) bool, n_strides, n_flicker_stances, n_flicker_swings, n_split_strides,
+median_swing_s, median_stance_s [s], report.)doc");
   m.def("steps_acceleration", [](const py::object& acc, double rate_hz, double window_s, bool adaptive, double swing_threshold,
                                  double stance_threshold, double swing_fraction, double stance_fraction, double min_step_interval_s) {
           MatrixArg a = ToMatrix(acc, "acc_mps2", -1, 3);
@@ -341,7 +460,9 @@ steps, and sum each step. step_indices: M >= 2 strictly increasing stance sample
 dict: increments_m (M-1, 3), stride_lengths_m (M-1,) (eq. 6), velocities_mps (N, 3).)doc");
   m.def("zupt_ekf", [](const py::object& time_s, const py::object& acc, const py::object& gyro, const py::object& stance,
                        double sigma_acc, double sigma_gyro, double sigma_zupt, double gravity, int init_samples, bool smooth,
-                       double sigma_stance_heading) {
+                       double sigma_stance_heading, double min_stance_fraction, double max_plausible_swing_s,
+                       double max_plausible_stride_m, double max_median_stride_m, double max_stance_speed_mps,
+                       double speed_rise_factor, double min_rising_speed_mps) {
           MatrixArg a = ToMatrix(acc, "acc_mps2", -1, 3);
           MatrixArg g = ToMatrix(gyro, "gyro_radps", a.map.rows(), 3);
           VectorArg t = ToVector(time_s, "time_s", a.map.rows());
@@ -355,6 +476,13 @@ dict: increments_m (M-1, 3), stride_lengths_m (M-1,) (eq. 6), velocities_mps (N,
           o.init_samples = init_samples;
           o.smooth = smooth;
           o.sigma_stance_heading_rad = sigma_stance_heading;
+          o.min_stance_fraction = min_stance_fraction;
+          o.max_plausible_swing_s = max_plausible_swing_s;
+          o.max_plausible_stride_m = max_plausible_stride_m;
+          o.max_median_stride_m = max_median_stride_m;
+          o.min_rising_speed_mps = min_rising_speed_mps;
+          o.max_stance_speed_mps = max_stance_speed_mps;
+          o.speed_rise_factor = speed_rise_factor;
           pdr::ZuptEkfOutput out;
           {
             py::gil_scoped_release release;
@@ -368,17 +496,28 @@ dict: increments_m (M-1, 3), stride_lengths_m (M-1,) (eq. 6), velocities_mps (N,
           d["quaternions_wxyz"] = out.quaternions_wxyz;
           d["position_sd_m"] = out.position_sd_m;
           d["seconds"] = out.seconds;
+          d["health"] = HealthDict(out.summary);
           return d;
         },
         py::arg("time_s"), py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("stance"), py::arg("sigma_acc_mps2") = 0.5,
         py::arg("sigma_gyro_radps") = 0.5 * kDeg, py::arg("sigma_zupt_mps") = 0.01, py::arg("gravity_mps2") = 9.81,
-        py::arg("init_samples") = 20, py::arg("smooth") = false, py::arg("sigma_stance_heading_rad") = 0.0, R"doc(
+        py::arg("init_samples") = 20, py::arg("smooth") = false, py::arg("sigma_stance_heading_rad") = 0.0,
+        py::arg("min_stance_fraction") = 0.02, py::arg("max_plausible_swing_s") = 5.0, py::arg("max_plausible_stride_m") = 4.0,
+        py::arg("max_median_stride_m") = 2.5, py::arg("max_stance_speed_mps") = 4.0, py::arg("speed_rise_factor") = 3.0, py::arg("min_rising_speed_mps") = 1.0, R"doc(
 Zero-velocity-aided strapdown INS (9-state error-state EKF, OpenShoe/PyShoe style) over a
 recording: time_s (N,) [s], acc_mps2 and gyro_radps (N, 3) sensor frame, stance (N,) bool.
 smooth=True adds the RTS smoother (positions_m smoothed, filtered_positions_m the EKF's).
 sigma_stance_heading_rad > 0 adds a stance heading update (yaw held at its stance-onset value).
 Returns a dict: positions_m (N, 3) (z up, start at 0, initial yaw 0), velocities_mps (N, 3),
-headings_rad (N,), quaternions_wxyz (N, 4) body -> nav, position_sd_m (N, 3), seconds.)doc");
+headings_rad (N,), quaternions_wxyz (N, 4) body -> nav, position_sd_m (N, 3), seconds, and
+health: the health check (ZuptEkfSummary) as a dict: stance_fraction and walking_stance_fraction
+[0..1], n_stance_phases, swing_median_s / swing_max_s [s], speed_at_stance_median_mps /
+speed_at_stance_max_mps (|v| the filter had integrated when each stance began, before its update)
+[m/s], speed_at_stance_rise (last third / first third of the onsets), longest_stride_m and
+median_stride_m [m],
+implausible (bool), reasons (list of str), report (one line). The limits min_stance_fraction,
+max_plausible_swing_s [s], max_plausible_stride_m and max_median_stride_m [m], max_stance_speed_mps [m/s],
+speed_rise_factor and min_rising_speed_mps [m/s] only flag (defaults calibrated in docs/pdr.md).)doc");
 }
 
 }  // namespace indoorloc::bindings

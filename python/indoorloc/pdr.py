@@ -2,13 +2,16 @@
 
 - step / stance detection: the paper's acceleration-variance and gyroscope step detectors
   (:func:`steps_acceleration`, :func:`steps_gyro`), the SHOE zero-velocity detector
-  (:func:`shoe_detector`, :func:`shoe_statistic`);
+  (:func:`shoe_detector`, :func:`shoe_statistic`) and its threshold adapted to the recording
+  with a stance guard (:func:`zero_velocity`, chosen by cross-validation: docs/pdr.md);
+- stride counting from stance flags, robust to slow walks and runs (:func:`count_strides`);
 - stride length: Weinberg's rule (eq. 4; :func:`weinberg_stride_lengths`,
   :func:`weinberg_features`) with its 4th-order 3 Hz Butterworth low-pass
   (:func:`butterworth_sos`, :func:`sos_filter`, equal to scipy.signal's) and K calibrated on a walk
   of known length (:func:`calibrate_weinberg_k`, :func:`calibrate_weinberg_k_from_distance`);
 - the zero-velocity-aided strapdown INS, a 9-state error-state EKF with an optional RTS smoother
-  (:func:`zupt_ekf`);
+  (:func:`zupt_ekf`), whose ``health`` dict reports divergence (stance fraction, swing
+  durations, speed at stance, longest stride, ``implausible`` with reasons);
 - the magnetometer step detector (:func:`steps_magnetometer`) and the Mahony attitude filter
   (:func:`attitude_mahony`) for recordings without the sensor orientation;
 - step-wise positioning (paper eq. 5-9): INS-ZUPT increments (:func:`ins_zupt_increments`),
@@ -26,6 +29,7 @@ from indoorloc._core.pdr import (
     butterworth_sos,
     calibrate_weinberg_k,
     calibrate_weinberg_k_from_distance,
+    count_strides,
     ins_zupt_increments,
     positions_from_increments,
     positions_from_strides,
@@ -38,6 +42,7 @@ from indoorloc._core.pdr import (
     steps_magnetometer,
     weinberg_features,
     weinberg_stride_lengths,
+    zero_velocity,
     zupt_ekf,
 )
 
@@ -46,6 +51,7 @@ __all__ = [
     "butterworth_sos",
     "calibrate_weinberg_k",
     "calibrate_weinberg_k_from_distance",
+    "count_strides",
     "ins_zupt_increments",
     "positions_from_increments",
     "positions_from_strides",
@@ -58,5 +64,6 @@ __all__ = [
     "steps_magnetometer",
     "weinberg_features",
     "weinberg_stride_lengths",
+    "zero_velocity",
     "zupt_ekf",
 ]

@@ -2,6 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
+#include <utility>
+#include <limits>
+#include <vector>
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
@@ -61,6 +65,136 @@ Eigen::VectorXd ShoeStatistic(const Eigen::Ref<const RowMatrixXd>& acc, const Ei
 BoolVector ShoeDetector(const Eigen::Ref<const RowMatrixXd>& acc, const Eigen::Ref<const RowMatrixXd>& gyro,
                         const ShoeOptions& options) {
   return (ShoeStatistic(acc, gyro, options).array() < options.threshold).matrix();
+}
+
+bool ZeroVelocityOptions::IsValid(std::string* error) const {
+  auto fail = [&](const char* why) {
+    *error = why;
+    return false;
+  };
+  if (!shoe.IsValid(error)) {
+    *error = "shoe: " + *error;
+    return false;
+  }
+  if (!(min_stance_fraction >= 0.0 && min_stance_fraction < 1.0)) return fail("min_stance_fraction must be in [0, 1)");
+  if (!(max_threshold > shoe.threshold) || !std::isfinite(max_threshold)) return fail("max_threshold must be finite and > shoe.threshold");
+  if (!(max_swing_s > 0.0) || !std::isfinite(max_swing_s)) return fail("max_swing_s must be > 0");
+  if (!(max_swing_ratio > 1.0) || !std::isfinite(max_swing_ratio)) return fail("max_swing_ratio must be > 1");
+  if (!(ladder_step_decades > 0.0 && ladder_step_decades <= 2.0)) return fail("ladder_step_decades must be in (0, 2]");
+  if (!(min_stance_s >= 0.0) || !std::isfinite(min_stance_s)) return fail("min_stance_s must be >= 0");
+  if (!(min_stance_share >= 0.0 && min_stance_share < 1.0)) return fail("min_stance_share must be in [0, 1)");
+  return true;
+}
+
+std::string ZeroVelocitySummary::BriefReport() const {
+  std::ostringstream s;
+  s.precision(3);
+  s << "SHOE threshold " << threshold << (guard_raised ? " (raised by the guard from " : " (base ") << base_threshold;
+  if (ladder_rungs > 0) s << ", " << ladder_rungs << " rungs";
+  s << "), stance " << 100.0 * stance_fraction << " % of the recording, " << 100.0 * walking_stance_fraction
+    << " % of the walking span [" << walking_begin << ", " << walking_end << ")";
+  if (max_swing_s > 0.0) s << ", swings median " << median_swing_s << " s / max " << max_swing_s << " s";
+  if (!guard_satisfied) s << "; the guard found no threshold without an overlong swing";
+  return s.str();
+}
+
+namespace {
+
+double MedianOf(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  double m = *mid;
+  if (v.size() % 2 == 0) m = 0.5 * (m + *std::max_element(v.begin(), mid));
+  return m;
+}
+
+// Swings [samples] of T < threshold: runs of non-stance between two stance runs, and the runs
+// before the first and after the last stance (a recording that ends while the foot "moves" has
+// lost its stances), stance runs shorter than min_stance samples inside a swing counted as swing.
+// Returns (max, median); (0, 0) when there is no swing.
+std::pair<double, double> SwingStats(const Eigen::VectorXd& t, double threshold, Eigen::Index min_stance) {
+  const Eigen::Index n = t.size();
+  std::vector<double> swings;
+  Eigen::Index last_stance_end = 0;  // end of the previous (long enough) stance run, 0 at the start
+  for (Eigen::Index k = 0; k < n;) {
+    if (!(t[k] < threshold)) {
+      ++k;
+      continue;
+    }
+    Eigen::Index e = k;
+    while (e < n && t[e] < threshold) ++e;
+    const bool interior_flicker = e - k < min_stance && k > 0 && e < n;
+    if (!interior_flicker) {
+      if (k > last_stance_end) swings.push_back(static_cast<double>(k - last_stance_end));
+      last_stance_end = e;
+    }
+    k = e;
+  }
+  if (n > last_stance_end) swings.push_back(static_cast<double>(n - last_stance_end));
+  if (swings.empty()) return {0.0, 0.0};
+  return {*std::max_element(swings.begin(), swings.end()), MedianOf(swings)};
+}
+
+}  // namespace
+
+ZeroVelocityOutput DetectZeroVelocity(const Eigen::Ref<const RowMatrixXd>& acc, const Eigen::Ref<const RowMatrixXd>& gyro,
+                                      double rate_hz, const ZeroVelocityOptions& options) {
+  ValidateOptions(options);
+  CheckArgument(std::isfinite(rate_hz) && rate_hz > 0.0, "rate_hz", "must be a positive finite rate [Hz]");
+  ZeroVelocityOutput out;
+  out.statistic = ShoeStatistic(acc, gyro, options.shoe);
+  const Eigen::VectorXd& t = out.statistic;
+  const Eigen::Index n = t.size();
+  ZeroVelocitySummary& s = out.summary;
+  s.base_threshold = s.threshold = options.shoe.threshold;
+  // Walking span: first to last sample the base threshold calls moving.
+  Eigen::Index begin = n, end = 0;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    if (t[k] >= options.shoe.threshold) {
+      begin = std::min(begin, k);
+      end = k + 1;
+    }
+  }
+  if (begin >= end) begin = 0, end = n;  // never moving: the whole recording
+  s.walking_begin = begin;
+  s.walking_end = end;
+  if (options.rule == ZeroVelocityRule::kStanceGuard && options.min_stance_fraction > 0.0) {
+    // Q_f(T) over the span: the order statistic at floor(f (m - 1)) (lower quantile).
+    std::vector<double> span(t.data() + begin, t.data() + end);
+    const auto pos = static_cast<std::ptrdiff_t>(std::floor(options.min_stance_fraction * static_cast<double>(span.size() - 1)));
+    std::nth_element(span.begin(), span.begin() + pos, span.end());
+    // T < γ must hold for that sample too: step just above it.
+    const double q = std::nextafter(span[static_cast<size_t>(pos)], std::numeric_limits<double>::infinity());
+    if (q > s.threshold) {
+      s.threshold = std::min(q, options.max_threshold);
+      s.guard_raised = true;
+    }
+  } else if (options.rule == ZeroVelocityRule::kSwingGuard) {
+    const Eigen::Index min_stance = std::max<Eigen::Index>(1, std::lround(options.min_stance_s * rate_hz));
+    const double max_swing = options.max_swing_s * rate_hz;
+    s.guard_satisfied = false;
+    for (int j = 0;; ++j) {
+      const double gamma = std::min(options.shoe.threshold * std::pow(10.0, j * options.ladder_step_decades), options.max_threshold);
+      const auto [longest, median] = SwingStats(t, gamma, min_stance);
+      s.threshold = gamma;
+      s.ladder_rungs = j;
+      s.max_swing_s = longest / rate_hz;
+      s.median_swing_s = median / rate_hz;
+      const double share = static_cast<double>((t.array() < gamma).count()) / static_cast<double>(std::max<Eigen::Index>(n, 1));
+      if (longest <= max_swing && longest <= options.max_swing_ratio * median && share >= options.min_stance_share) {
+        s.guard_satisfied = true;
+        break;
+      }
+      if (gamma >= options.max_threshold) break;
+    }
+    s.guard_raised = s.threshold > options.shoe.threshold;
+  }
+  out.stance = (t.array() < s.threshold).matrix();
+  const Eigen::Index count = out.stance.count();
+  s.stance_fraction = n > 0 ? static_cast<double>(count) / static_cast<double>(n) : 0.0;
+  s.walking_stance_fraction = static_cast<double>(out.stance.segment(begin, end - begin).count()) / static_cast<double>(end - begin);
+  return out;
 }
 
 }  // namespace indoorloc::pdr

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
+#include <sstream>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -50,7 +52,133 @@ bool ZuptEkfOptions::IsValid(std::string* error) const {
   if (!(gravity_mps2 > 0.0)) return fail("gravity_mps2 must be > 0");
   if (init_samples < 1) return fail("init_samples must be >= 1");
   if (!(sigma_stance_heading_rad >= 0.0) || !std::isfinite(sigma_stance_heading_rad)) return fail("sigma_stance_heading_rad must be >= 0");
+  if (!(min_stance_fraction >= 0.0 && min_stance_fraction < 1.0)) return fail("min_stance_fraction must be in [0, 1)");
+  if (!(max_plausible_stride_m > 0.0)) return fail("max_plausible_stride_m must be > 0");
+  if (!(max_stance_speed_mps > 0.0)) return fail("max_stance_speed_mps must be > 0");
+  if (!(speed_rise_factor > 1.0)) return fail("speed_rise_factor must be > 1");
+  if (!(max_plausible_swing_s > 0.0)) return fail("max_plausible_swing_s must be > 0");
+  if (!(max_median_stride_m > 0.0)) return fail("max_median_stride_m must be > 0");
+  if (!(min_rising_speed_mps >= 0.0)) return fail("min_rising_speed_mps must be >= 0");
   return true;
+}
+
+namespace {
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  double m = *mid;
+  if (v.size() % 2 == 0) m = 0.5 * (m + *std::max_element(v.begin(), mid));
+  return m;
+}
+}  // namespace
+
+std::string ZuptEkfSummary::BriefReport() const {
+  std::ostringstream s;
+  s.precision(3);
+  s << "ZUPT EKF: " << n_samples << " samples, stance " << 100.0 * stance_fraction << " % (walking span "
+    << 100.0 * walking_stance_fraction << " %), " << n_stance_phases << " stance phases, swing median " << swing_median_s
+    << " s / max " << swing_max_s << " s, speed at stance median " << speed_at_stance_median_mps << " / max "
+    << speed_at_stance_max_mps << " m/s (rise x" << speed_at_stance_rise << "), stride median " << median_stride_m << " m / longest " << longest_stride_m << " m: "
+    << (implausible ? "IMPLAUSIBLE" : "plausible");
+  for (const std::string& r : reasons) s << "; " << r;
+  return s.str();
+}
+
+ZuptEkfSummary CheckZuptHealth(const Eigen::Ref<const Eigen::VectorXd>& time_s, const Eigen::Ref<const RowMatrixXd>& positions_m,
+                               const BoolVector& stance, const std::vector<double>& speed_at_onset_mps,
+                               const ZuptEkfOptions& options) {
+  ValidateOptions(options);
+  const Eigen::Index n = stance.size();
+  CheckArgument(time_s.size() == n, "time_s", "must have one entry per stance flag");
+  CheckShape(positions_m, n, 3, "positions_m");
+  ZuptEkfSummary h;
+  h.n_samples = static_cast<int>(n);
+  // Runs of stance: [start, end) pairs.
+  std::vector<std::pair<Eigen::Index, Eigen::Index>> runs;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    if (!stance[k]) continue;
+    Eigen::Index e = k;
+    while (e < n && stance[e]) ++e;
+    runs.emplace_back(k, e);
+    h.n_stance_samples += static_cast<int>(e - k);
+    k = e;
+  }
+  h.n_stance_phases = static_cast<int>(runs.size());
+  CheckArgument(speed_at_onset_mps.size() == runs.size(), "speed_at_onset_mps", "must have one entry per stance run");
+  h.stance_fraction = n > 0 ? static_cast<double>(h.n_stance_samples) / static_cast<double>(n) : 0.0;
+  // Walking span: first to last swing sample.
+  Eigen::Index first_swing = -1, last_swing = -1;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    if (!stance[k]) {
+      if (first_swing < 0) first_swing = k;
+      last_swing = k;
+    }
+  }
+  if (first_swing < 0) {
+    h.walking_stance_fraction = 1.0;
+  } else {
+    int in_span = 0;
+    for (Eigen::Index k = first_swing; k <= last_swing; ++k) in_span += stance[k] ? 1 : 0;
+    h.walking_stance_fraction = static_cast<double>(in_span) / static_cast<double>(last_swing - first_swing + 1);
+  }
+  // Swings between consecutive stance runs.
+  std::vector<double> swings;
+  for (size_t i = 1; i < runs.size(); ++i) swings.push_back(time_s[runs[i].first] - time_s[runs[i - 1].second - 1]);
+  // The motion before the first and after the last stance counts too (all stances lost).
+  if (runs.empty() && n > 1) swings.push_back(time_s[n - 1] - time_s[0]);
+  if (!runs.empty() && runs.front().first > 0) swings.push_back(time_s[runs.front().first] - time_s[0]);
+  if (!runs.empty() && runs.back().second < n) swings.push_back(time_s[n - 1] - time_s[runs.back().second - 1]);
+  h.swing_median_s = Median(swings);
+  h.swing_max_s = swings.empty() ? 0.0 : *std::max_element(swings.begin(), swings.end());
+  // Speeds at stance onsets (the initial rest has no swing before it: skipped when it starts at 0).
+  std::vector<double> speeds;
+  for (size_t i = 0; i < runs.size(); ++i) {
+    if (runs[i].first == 0) continue;
+    if (std::isfinite(speed_at_onset_mps[i])) speeds.push_back(speed_at_onset_mps[i]);
+  }
+  h.speed_at_stance_median_mps = Median(speeds);
+  h.speed_at_stance_max_mps = speeds.empty() ? 0.0 : *std::max_element(speeds.begin(), speeds.end());
+  if (speeds.size() >= 6) {
+    const size_t third = speeds.size() / 3;
+    const double first = Median(std::vector<double>(speeds.begin(), speeds.begin() + static_cast<std::ptrdiff_t>(third)));
+    const double last = Median(std::vector<double>(speeds.end() - static_cast<std::ptrdiff_t>(third), speeds.end()));
+    h.speed_at_stance_rise = first > 0 ? last / first : 1.0;
+    if (h.speed_at_stance_rise > options.speed_rise_factor && last > options.min_rising_speed_mps) {
+      h.reasons.push_back("the speed at stance rises over the recording (x" + std::to_string(h.speed_at_stance_rise) +
+                          "): the velocity error grows, the filter diverges");
+    }
+  }
+  std::vector<double> strides;
+  for (size_t i = 1; i < runs.size(); ++i) {
+    const Eigen::Index a = runs[i - 1].first, b = runs[i].first;
+    const double d = (positions_m.row(b).head<2>() - positions_m.row(a).head<2>()).norm();
+    h.longest_stride_m = std::max(h.longest_stride_m, d);
+    strides.push_back(d);
+  }
+  h.median_stride_m = Median(strides);
+  if (first_swing >= 0 && h.walking_stance_fraction < options.min_stance_fraction) {
+    h.reasons.push_back("only " + std::to_string(100.0 * h.walking_stance_fraction) +
+                        " % of the walking span is stance: zero-velocity updates are missing");
+  }
+  if (h.swing_max_s > options.max_plausible_swing_s) {
+    h.reasons.push_back("a swing of " + std::to_string(h.swing_max_s) + " s between stances (limit " +
+                        std::to_string(options.max_plausible_swing_s) + " s): stances are missing");
+  }
+  if (h.longest_stride_m > options.max_plausible_stride_m) {
+    h.reasons.push_back("a stride of " + std::to_string(h.longest_stride_m) + " m (limit " +
+                        std::to_string(options.max_plausible_stride_m) + " m)");
+  }
+  if (h.median_stride_m > options.max_median_stride_m) {
+    h.reasons.push_back("the median stride is " + std::to_string(h.median_stride_m) + " m (limit " +
+                        std::to_string(options.max_median_stride_m) + " m): the path is stretched");
+  }
+  if (h.speed_at_stance_max_mps > options.max_stance_speed_mps) {
+    h.reasons.push_back("a speed of " + std::to_string(h.speed_at_stance_max_mps) + " m/s at a stance onset (limit " +
+                        std::to_string(options.max_stance_speed_mps) + " m/s)");
+  }
+  h.implausible = !h.reasons.empty();
+  return h;
 }
 
 ZuptEkfOutput RunZuptEkf(const Eigen::Ref<const Eigen::VectorXd>& time_s, const Eigen::Ref<const RowMatrixXd>& acc,
@@ -98,6 +226,7 @@ ZuptEkfOutput RunZuptEkf(const Eigen::Ref<const Eigen::VectorXd>& time_s, const 
   out.headings_rad.resize(n);
   out.quaternions_wxyz.resize(n, 4);
   out.position_sd_m.resize(n, 3);
+  std::vector<double> speed_at_onset;  // |v̂⁻| at the first sample of each stance run
   for (Eigen::Index k = 0; k < n; ++k) {
     if (k > 0) {
       const double dt = time_s[k] > time_s[k - 1] ? time_s[k] - time_s[k - 1] : median_dt;
@@ -129,6 +258,7 @@ ZuptEkfOutput RunZuptEkf(const Eigen::Ref<const Eigen::VectorXd>& time_s, const 
         gains[static_cast<size_t>(k - 1)] = (prior.ldlt().solve(F * P_post_prev)).transpose();
       }
     }
+    if (stance[k] && (k == 0 || !stance[k - 1])) speed_at_onset.push_back(v.norm());
     if (stance[k]) {
       // Zero-velocity update: z = 0 - v̂, H = [0 I 0].
       const Eigen::Matrix3d S = P.block<3, 3>(3, 3) + rz * Eigen::Matrix3d::Identity();
@@ -187,7 +317,9 @@ ZuptEkfOutput RunZuptEkf(const Eigen::Ref<const Eigen::VectorXd>& time_s, const 
       out.quaternions_wxyz.row(k) << qs.w(), qs.x(), qs.y(), qs.z();
     }
   }
+  out.summary = CheckZuptHealth(time_s, out.positions_m, stance, speed_at_onset, options);
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  out.summary.seconds = out.seconds;
   return out;
 }
 

@@ -36,7 +36,40 @@ def zupt_ekf(
     init_samples: int = 20,
     smooth: bool = False,
     sigma_stance_heading_rad: float = 0.0,
-) -> Dict[str, np.ndarray]: ...
+    min_stance_fraction: float = 0.02,
+    max_plausible_swing_s: float = 5.0,
+    max_plausible_stride_m: float = 4.0,
+    max_median_stride_m: float = 2.5,
+    max_stance_speed_mps: float = 4.0,
+    speed_rise_factor: float = 3.0,
+    min_rising_speed_mps: float = 1.0,
+) -> Dict[str, Any]: ...
+def zero_velocity(
+    acc_mps2: _ArrayLike,
+    gyro_radps: _ArrayLike,
+    rate_hz: float,
+    rule: str = "swing_guard",
+    threshold: float = 1e4,
+    max_swing_s: float = 2.0,
+    max_swing_ratio: float = 1.5,
+    ladder_step_decades: float = 0.25,
+    min_stance_s: float = 0.02,
+    min_stance_share: float = 0.15,
+    min_stance_fraction: float = 0.3,
+    max_threshold: float = 1e7,
+    window: int = 5,
+    sigma_acc_mps2: float = 0.01,
+    sigma_gyro_radps: float = ...,
+    gravity_mps2: float = 9.81,
+) -> Dict[str, Any]: ...
+def count_strides(
+    stance: _ArrayLike,
+    rate_hz: float,
+    min_stance_s: float = 0.02,
+    min_swing_s: float = 0.1,
+    min_swing_fraction: float = 0.5,
+    long_swing_factor: float = 1.7,
+) -> Dict[str, Any]: ...
 def steps_acceleration(
     acc_mps2: _ArrayLike,
     rate_hz: float,

@@ -10,12 +10,45 @@ import numpy as np
 from indoorloc.registry import default_pdr_root
 
 
+def _summary_lines(doc: dict) -> list:
+    """Markdown summary of an evaluate_json document (recommended method)."""
+    lines = [f"## Recommended method: {doc['default_method']}", "",
+             "| dataset | recordings | ARMSE median / mean / worst [m] | final error median / worst [m] | "
+             "strides off | flagged implausible |", "|---|---:|---|---|---:|---|"]
+    by: dict = {}
+    for r in doc["recordings"]:
+        by.setdefault(r["dataset"], []).append(r)
+    for ds, rows in by.items():
+        a = np.array([r["armse_m"] for r in rows if r["armse_m"] is not None])
+        f = np.array([r["final_error_m"] for r in rows if r["final_error_m"] is not None])
+        st = [(r["strides_truth"], r["strides_detected"]) for r in rows if r["strides_truth"] is not None]
+        off = sum(abs(d - t) for t, d in st)
+        tot = sum(t for t, _ in st)
+        flagged = [r["name"] for r in rows if r["health"].get("implausible")]
+        lines.append(f"| {ds} | {len(rows)} | "
+                     + (f"{np.median(a):.3f} / {a.mean():.3f} / {a.max():.3f}" if a.size else "-") + " | "
+                     + (f"{np.median(f):.3f} / {f.max():.3f}" if f.size else "-") + " | "
+                     + (f"{off} / {tot} ({100.0 * off / max(tot, 1):.2f} %)" if st else "-") + " | "
+                     + (", ".join(flagged) if flagged else "none") + " |")
+    return lines + [""]
+
+
 def cmd_evaluate(args: argparse.Namespace) -> int:
+    import json
+
     from indoorloc.experiments import pdr_evaluate as pe
 
     root = Path(args.data_root) if args.data_root else default_pdr_root()
     if not root.is_dir():
         raise ValueError(f"indoorloc: argument 'data_root': {root} is not a folder")
+    doc = pe.evaluate_json(root, only=args.only)
+    if args.json:
+        Path(args.json).write_text(json.dumps(doc, indent=1) + "\n")
+    print("\n".join(_summary_lines(doc)))
+    if not args.compare:
+        return 0
+    if not all((root / pe.DATASETS[d]).is_dir() for d in ("pyshoe", "xio", "openshoe")):
+        raise ValueError(f"indoorloc: argument 'compare': needs the pyshoe, xio and openshoe folders under {root}")
     methods = (("ZUPT EKF", pe.zupt_ekf_method), ("ZUPT EKF + RTS smoother", pe.zupt_rts_method),
                ("ZUPT EKF, per-recording SHOE threshold (PyShoe rule)", pe.zupt_adaptive_method),
                ("ZUPT EKF + RTS, per-recording SHOE threshold (PyShoe rule)", pe.zupt_adaptive_rts_method),
@@ -51,6 +84,13 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 def add_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
     p = sub.add_parser("pdr", help="pedestrian dead reckoning, foot-mounted IMU (paper 002)")
     psub = p.add_subparsers(dest="pdr_command", required=True)
-    e = psub.add_parser("evaluate", help="SHOE + ZUPT EKF on every recording in ../shared/data/pdr", parents=[quiet_parent()])
+    e = psub.add_parser("evaluate", help="ZUPT EKF + RTS with the adaptive zero-velocity detector on every recording in ../shared/data/pdr", parents=[quiet_parent()])
     e.add_argument("--data-root", default=None, help="folder of the PDR datasets (default ../shared/data/pdr)")
+    e.add_argument("--json", default=None, metavar="FILE",
+                   help="write every recording's figures and health check as JSON (schema in docs/pdr.md)")
+    e.add_argument("--only", nargs="+", default=None, choices=["pyshoe", "xio", "openshoe", "mobgap"],
+                   help="evaluate only these datasets (default: every one present under the data root)")
+    e.add_argument("--compare", action="store_true",
+                   help="also print the comparison tables of the other methods (fixed and per-class thresholds, "
+                        "paper 002's step-wise positioning, Weinberg on mobgap)")
     e.set_defaults(func=cmd_evaluate)

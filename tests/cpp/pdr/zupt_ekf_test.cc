@@ -88,6 +88,38 @@ TEST(ZuptEkf, RecoversTheWalkedPathAndZeroesVelocityAtStance) {
   }
 }
 
+TEST(ZuptEkf, HealthCheckPassesAWalkAndFlagsLostStance) {
+  const Gait g = MakeGait(12, 0.0, 0.0, 2);
+  const BoolVector stance = ShoeDetector(g.acc, g.gyro, ShoeOptions());
+  const ZuptEkfSummary ok = RunZuptEkf(g.time, g.acc, g.gyro, stance).summary;
+  EXPECT_FALSE(ok.implausible) << ok.BriefReport();
+  EXPECT_EQ(ok.n_stance_phases, g.steps + 1);
+  EXPECT_NEAR(ok.walking_stance_fraction, 0.5 / 1.1, 0.05);
+  EXPECT_NEAR(ok.swing_median_s, 0.6, 0.05);
+  EXPECT_NEAR(ok.longest_stride_m, 1.4, 0.05);
+  EXPECT_LT(ok.speed_at_stance_max_mps, 0.2);
+  // Keep one stance phase in six: swings of 6.6 s, the filter drifts between the updates.
+  BoolVector sparse = stance;
+  int phase = -1;
+  for (Eigen::Index k = 0; k < sparse.size(); ++k) {
+    if (stance[k] && (k == 0 || !stance[k - 1])) ++phase;
+    if (phase % 6 != 0) sparse[k] = false;
+  }
+  const ZuptEkfSummary bad = RunZuptEkf(g.time, g.acc, g.gyro, sparse).summary;
+  EXPECT_TRUE(bad.implausible) << bad.BriefReport();
+  EXPECT_GT(bad.swing_max_s, 5.0);
+  ASSERT_FALSE(bad.reasons.empty());
+  EXPECT_NE(bad.BriefReport().find("IMPLAUSIBLE"), std::string::npos);
+  // Only the stance before the first swing: no onset after a swing, the drift shows as a long stride.
+  BoolVector none = BoolVector::Constant(stance.size(), false);
+  none.head(50).setConstant(true);
+  const ZuptEkfSummary lost = RunZuptEkf(g.time, g.acc, g.gyro, none).summary;
+  EXPECT_TRUE(lost.implausible);
+  ZuptEkfOptions o;
+  o.max_plausible_stride_m = 0.0;
+  EXPECT_THROW(RunZuptEkf(g.time, g.acc, g.gyro, stance, o), std::invalid_argument);
+}
+
 TEST(ZuptEkf, NoisySensorsStayWithinAFewPercentOfTheDistance) {
   const Gait g = MakeGait(20, 0.0, 0.02, 3);
   ShoeOptions so;

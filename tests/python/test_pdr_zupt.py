@@ -1,0 +1,236 @@
+"""Zero-velocity detection that holds on recordings it was not tuned on (issue 16).
+
+Each failure mode of the issue is reproduced on a synthetic foot gait
+(:func:`indoorloc.simulate.foot_gait.foot_gait`) and shown handled by the recommended pipeline
+(:func:`pdr_evaluate.run_recommended`: stance-guard detector, EKF + RTS, C++ stride counting):
+
+- a walk whose rest is never fully still (the statistic of its stance is above a low
+  threshold): a threshold of 1e4, as the old per-class rule picked, finds almost no stance and
+  the filter diverges, silently before; the guard finds the stance and the health check flags
+  the broken run;
+- a run (short stances that never come to rest): 3e5 finds no stance; the guard does;
+- a very slow walk (short, gentle swings): the old counter's fixed 0.3 s minimum swing merged
+  stances; the rhythm-based counter counts every stride.
+"""
+
+import json
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+from indoorloc import pdr
+from indoorloc.experiments import pdr_evaluate as pe
+from indoorloc.experiments import pdr_zupt_cv as cv
+from indoorloc.io import IrregularTimestampsWarning, fit_sample_rate, load_pyshoe_trial
+from indoorloc.simulate.foot_gait import foot_gait
+
+
+def _final_error(rec, positions):
+    # Synthetic walks start at the origin heading along +x, as the filter's frame does.
+    return float(np.linalg.norm(positions[-1, :2] - rec.truth_xy_m[-1]))
+
+
+def _fixed_stance(rec, threshold):
+    return np.asarray(pdr.shoe_detector(rec.acc_mps2, rec.gyro_radps, window=pe.SHOE_WINDOW, threshold=threshold,
+                                        sigma_acc_mps2=pe.SHOE_SIGMA_ACC_MPS2,
+                                        sigma_gyro_radps=pe.SHOE_SIGMA_GYRO_RADPS), dtype=bool)
+
+
+# ------------------------------------------------------------------ the three failure modes
+def test_low_motion_walk_keeps_its_stance_and_a_lost_stance_is_flagged():
+    rec = foot_gait(20, stance_rate_radps=0.3, seed=1)
+    stance = _fixed_stance(rec, 1e4)  # what the old rule picked for a low-motion walk
+    bad = pdr.zupt_ekf(rec.time_s, rec.acc_mps2, rec.gyro_radps, stance, smooth=True)
+    assert bad["health"]["walking_stance_fraction"] < 0.15
+    assert bad["health"]["implausible"] and bad["health"]["reasons"]
+    assert _final_error(rec, bad["positions_m"]) > 0.3  # drifting
+    good = pe.run_recommended(rec)
+    assert good["detector"]["guard_raised"] and good["detector"]["guard_satisfied"]
+    assert good["health"]["walking_stance_fraction"] > 0.3
+    assert not good["health"]["implausible"], good["health"]["report"]
+    assert _final_error(rec, good["positions_m"]) < 0.02 * rec.distance_m
+    assert good["stride_indices"].size == 20
+
+
+def test_run_with_never_still_stances_finds_every_stride():
+    rec = foot_gait(26, stance_s=0.2, swing_s=0.45, stride_m=2.0, pitch_deg=45.0, lift_m=0.15,
+                    stance_rate_radps=1.2, seed=2)
+    stance = _fixed_stance(rec, 3e5)
+    lost = pdr.count_strides(stance, rec.rate_hz)["n_strides"]
+    assert lost < 13  # the failure: most stances missed
+    good = pe.run_recommended(rec)
+    assert good["stride_indices"].size == 26
+    assert not good["health"]["implausible"], good["health"]["report"]
+    assert _final_error(rec, good["positions_m"]) < 0.05 * rec.distance_m
+
+
+def test_slow_walk_counts_every_stride():
+    rec = foot_gait(29, stance_s=0.5, swing_s=0.4, stride_m=0.28, pitch_deg=6.0, lift_m=0.03, seed=3)
+    stance = _fixed_stance(rec, 3e5)
+    assert pe.strides_from_stance(stance, rec.rate_hz).size < 29  # the old counter merges stances
+    assert pdr.count_strides(stance, rec.rate_hz)["n_strides"] == 29
+    good = pe.run_recommended(rec)
+    assert good["stride_indices"].size == 29
+    assert not good["health"]["implausible"], good["health"]["report"]
+    assert _final_error(rec, good["positions_m"]) < 0.05 * rec.distance_m
+
+
+def test_a_stretched_path_is_flagged_by_its_median_stride():
+    # The issue's divergent recordings: the path through the strides was 2-3x the walk. Here
+    # the strides really are 2.8 m (twice a walk's): the health check reports it, a walk passes.
+    long = pe.run_recommended(foot_gait(12, stride_m=2.8, seed=11))
+    assert long["health"]["implausible"]
+    assert long["health"]["median_stride_m"] == pytest.approx(2.8, abs=0.1)
+    assert any("median stride" in r for r in long["health"]["reasons"])
+    walk = pe.run_recommended(foot_gait(12, stride_m=1.4, seed=11))
+    assert not walk["health"]["implausible"] and walk["health"]["median_stride_m"] == pytest.approx(1.4, abs=0.05)
+
+
+# ------------------------------------------------------------------ detector and counter
+def test_guard_mirror_in_the_cv_harness_equals_the_cpp_rule():
+    rec = foot_gait(10, stance_rate_radps=0.4, seed=4)
+    st = cv.detector_statistics(rec)
+    for base, frac in ((3e4, 0.3), (1e4, 0.4), (1e6, 0.2)):
+        det = pdr.zero_velocity(rec.acc_mps2, rec.gyro_radps, rec.rate_hz, rule="stance_guard",
+                                threshold=base, min_stance_fraction=frac,
+                                window=pe.SHOE_WINDOW, sigma_acc_mps2=pe.SHOE_SIGMA_ACC_MPS2,
+                                sigma_gyro_radps=pe.SHOE_SIGMA_GYRO_RADPS)
+        mine = cv._stance_guard(rec, st, {"log_gamma": math.log10(base), "min_fraction": frac})
+        assert np.mean(mine != np.asarray(det["stance"])) < 1e-3
+
+
+def test_zero_velocity_options_are_checked_by_name():
+    rec = foot_gait(3, seed=5)
+    acc, gyro, rate = rec.acc_mps2, rec.gyro_radps, rec.rate_hz
+    with pytest.raises(ValueError, match="min_stance_fraction"):
+        pdr.zero_velocity(acc, gyro, rate, min_stance_fraction=1.5)
+    with pytest.raises(ValueError, match="max_threshold"):
+        pdr.zero_velocity(acc, gyro, rate, threshold=1e5, max_threshold=1e4)
+    with pytest.raises(ValueError, match="max_swing_ratio"):
+        pdr.zero_velocity(acc, gyro, rate, max_swing_ratio=0.9)
+    with pytest.raises(ValueError, match="rate_hz"):
+        pdr.zero_velocity(acc, gyro, -1.0)
+    with pytest.raises(ValueError, match="rule"):
+        pdr.zero_velocity(acc, gyro, rate, rule="magic")
+    with pytest.raises(ValueError, match="long_swing_factor"):
+        pdr.count_strides(np.ones(10, bool), 100.0, long_swing_factor=0.5)
+    fixed = pdr.zero_velocity(acc, gyro, rate, rule="fixed", threshold=3e4)
+    np.testing.assert_array_equal(fixed["stance"], pdr.shoe_detector(rec.acc_mps2, rec.gyro_radps, threshold=3e4))
+    assert not fixed["guard_raised"] and "threshold" in fixed["report"]
+
+
+# ------------------------------------------------------------------ loader and time base
+def _write_trial(path, rec, *, truth=True, stamps="regular"):
+    from scipy.io import savemat
+
+    n = rec.n_samples
+    acc = rec.acc_mps2.copy()
+    d = {"imu_data": np.column_stack([acc, rec.gyro_radps]),
+         "strideIndex": rec.stride_indices[None, :].astype(np.int64)}
+    t = rec.time_s + 0.005
+    if stamps == "bursty":  # a logger that stamps pairs of samples with one time
+        t = t.copy()
+        t[1::2] = t[0::2][: t[1::2].size]
+    if stamps is not None:
+        d["timestamps_all"] = t[None, :]
+    d["timestamps"] = (rec.time_s + 0.005)[rec.stride_indices][None, :]
+    if truth:
+        d["gt"] = rec.truth_xy_m * np.array([1.0, -1.0])  # PyShoe's truth is z-down
+    savemat(path, d)
+
+
+def test_loader_reads_a_recording_without_per_sample_truth(tmp_path):
+    rec = foot_gait(6, seed=6)
+    _write_trial(tmp_path / "x_LLIO.mat", rec, truth=False, stamps=None)
+    got = load_pyshoe_trial(tmp_path / "x_LLIO.mat")
+    assert got.truth_xy_m is None and got.distance_m is None
+    np.testing.assert_array_equal(got.stride_indices, rec.stride_indices)
+    assert got.rate_hz == pytest.approx(200.0, rel=1e-9)  # fitted to the stride stamps
+    np.testing.assert_allclose(np.diff(got.time_s), 0.005, rtol=1e-9)
+
+
+def test_irregular_stamps_warn_and_are_replaced_by_the_fitted_grid(tmp_path):
+    rec = foot_gait(6, seed=7)
+    _write_trial(tmp_path / "b_LLIO.mat", rec, stamps="bursty")
+    with pytest.warns(IrregularTimestampsWarning, match="irregular"):
+        got = load_pyshoe_trial(tmp_path / "b_LLIO.mat")
+    assert got.rate_hz == pytest.approx(200.0, rel=1e-3)
+    assert np.all(np.diff(got.time_s) > 0) and "regular grid" in got.source_units
+    _write_trial(tmp_path / "r_LLIO.mat", rec)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        regular = load_pyshoe_trial(tmp_path / "r_LLIO.mat")
+    np.testing.assert_allclose(regular.time_s, rec.time_s + 0.005)
+    # jitter of +-4 % (PyShoe's own) is regular; a median of dt would fail on the bursts
+    jitter = np.arange(1000) * 0.005 + np.random.default_rng(0).uniform(-2e-4, 2e-4, 1000)
+    rate, info = fit_sample_rate(jitter)
+    assert rate == pytest.approx(200.0, rel=1e-3) and not info["irregular"]
+    with pytest.raises(ValueError, match="time_s"):
+        fit_sample_rate(np.ones(10))
+
+
+# ------------------------------------------------------------------ evaluate --json
+def test_evaluate_json_schema_on_a_partial_data_root(tmp_path):
+    folder = tmp_path / "pyshoe_vicon"
+    folder.mkdir()
+    _write_trial(folder / "a_LLIO.mat", foot_gait(8, seed=8))
+    _write_trial(folder / "b_LLIO.mat", foot_gait(8, seed=9), truth=False)
+    doc = pe.evaluate_json(tmp_path)  # only the pyshoe folder exists: the rest is skipped
+    assert doc["default_method"] == pe.DEFAULT_METHOD
+    assert [r["name"] for r in doc["recordings"]] == ["a", "b"]
+    for r in doc["recordings"]:
+        assert tuple(r) == pe.JSON_ROW_KEYS
+        assert r["dataset"] == "pyshoe" and r["strides_truth"] == 8 and r["strides_detected"] == 8
+        assert not r["health"]["implausible"]
+    assert doc["recordings"][0]["armse_m"] < 0.1 and doc["recordings"][1]["armse_m"] is None
+    json.dumps(doc)  # serialisable as is
+    with pytest.raises(ValueError, match="only"):
+        pe.evaluate_json(tmp_path, only=["xio"])
+    with pytest.raises(ValueError, match="only"):
+        pe.evaluate_json(tmp_path, only=["nope"])
+
+
+def test_cli_writes_the_json(tmp_path, capsys):
+    from indoorloc.cli import main
+
+    folder = tmp_path / "pyshoe_vicon"
+    folder.mkdir()
+    _write_trial(folder / "a_LLIO.mat", foot_gait(5, seed=10))
+    out = tmp_path / "res.json"
+    assert main(["pdr", "evaluate", "--data-root", str(tmp_path), "--json", str(out), "--only", "pyshoe",
+                 "--quiet"]) == 0
+    doc = json.loads(out.read_text())
+    assert doc["default_method"] == pe.DEFAULT_METHOD and len(doc["recordings"]) == 1
+    assert "Recommended method" in capsys.readouterr().out
+
+
+# ------------------------------------------------------------------ real data (skips without it)
+def test_recommended_method_on_two_real_trials(shared_data):
+    root = shared_data / "pdr" / "pyshoe_vicon"
+    if not root.is_dir():
+        pytest.skip(f"PyShoe trials not found at {root}")
+    for p in sorted(root.glob("*.mat"))[:2]:
+        rec = load_pyshoe_trial(p)
+        r = pe.run_recommended(rec)
+        sc = pe.score_pyshoe_trial(rec, (r["positions_m"], r["stride_indices"]))
+        assert sc["armse_m"] < 0.4 and abs(sc["stride_count_error"]) <= 1
+        assert not r["health"]["implausible"], r["health"]["report"]
+
+
+# ------------------------------------------------------------------ the CV harness
+def test_leave_one_out_never_scores_a_trial_with_a_setting_chosen_on_it():
+    # Setting "a" is best on trials 0 and 1 but terrible on 2; "b" is mediocre everywhere.
+    # Held out 2, the folds choose "a" (best on 0, 1) and trial 2 scores 5.0: the held-out
+    # figure shows the failure that an in-sample choice would hide.
+    def rows(values):
+        return [{"trial": f"2017-11-2{i}-t", "armse_m": v, "stride_error": 0, "strides_truth": 10,
+                 "stance_fraction": 0.3, "implausible": False} for i, v in enumerate(values)]
+    res = {"a": rows([0.05, 0.05, 5.0]), "b": rows([0.3, 0.3, 0.3])}
+    r = cv.leave_one_out(res)
+    assert r["chosen"] == ["b", "b", "a"]
+    np.testing.assert_allclose(r["armse_m"], [0.3, 0.3, 5.0])
+    assert r["worst_armse_m"] == 5.0 and r["n_over_0_4_m"] == 1
+    by_day = cv.leave_one_out(res, by_session=True)  # three days: the same folds here
+    assert by_day["chosen"] == r["chosen"]
