@@ -82,8 +82,6 @@ def error_cdfs(errors_by_method: Mapping[str, object], path: Path, xmax_m: float
 
 def mapmatch_clouds(network, trajectory, clouds: Mapping[float, tuple], path: Path) -> Path:
     """Particle clouds at several times over the road network (paper 000, Figs. 5-8)."""
-    import numpy as np
-
     times = sorted(clouds)
     fig, axes = plt.subplots(1, len(times), figsize=(4 * len(times), 3), dpi=110, squeeze=False)
     segs = network.segments_m

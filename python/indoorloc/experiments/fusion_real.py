@@ -135,6 +135,7 @@ class FloorData:
     plan: Any
     steps: List[ph.HandheldSteps]
     geojson_path: Path
+    outline_plan: Any = None   #: the outline without shops (the no-walls ablation keeps the extent)
 
 
 @dataclass
@@ -266,7 +267,7 @@ def _score_walk(walk, steps_raw: ph.HandheldSteps, models: FoldModels, settings:
     runs = {
         "fusion_unknown_start": dict(start=None, smoother=smoother, keys=("fusion_unknown_start", "fusion_smoother")),
         "fusion_known_start": dict(start=known, smoother=None, keys=("fusion_known_start",)),
-        "fusion_no_walls": dict(start=None, smoother=smoother, plan=None, keys=(None, "fusion_no_walls")),
+        "fusion_no_walls": dict(start=None, smoother=smoother, keys=(None, "fusion_no_walls")),
         "fusion_no_wifi": dict(start=known, smoother=smoother, fixes=None, keys=(None, "fusion_no_wifi")),
         "fusion_no_heading_offset": dict(start=None, smoother=smoother, keys=(None, "fusion_no_heading_offset"),
                                          options=replace_options(options, heading_offset_walk_rad=0.0,
@@ -276,12 +277,9 @@ def _score_walk(walk, steps_raw: ph.HandheldSteps, models: FoldModels, settings:
         if not want.intersection(k for k in run["keys"] if k):
             continue
         tic = time.perf_counter()
-        if name == "fusion_no_walls":
-            # Without a plan the tracker's floor and candidates come from the fixes' area: the
-            # plan's bounding box as a one-floor outline, no obstacles.
-            run_plan = _outline_plan(fl)
-        else:
-            run_plan = run.get("plan", fl.plan)
+        # No walls: the outline without its shops, so that the start and the fixes' outlier
+        # density still cover the building's extent.
+        run_plan = fl.outline_plan if name == "fusion_no_walls" else fl.plan
         result = fusion.track(pdr_steps, plan=run_plan, start=run["start"], options=run.get("options", options),
                               smoother=run["smoother"], fixes=run.get("fixes", fixes))
         seconds = time.perf_counter() - tic
@@ -307,26 +305,15 @@ def _score_walk(walk, steps_raw: ph.HandheldSteps, models: FoldModels, settings:
     return score
 
 
-_OUTLINE_PLANS: Dict[str, Any] = {}
-
-
-def _outline_plan(floor: FloorData):
-    """The floor's outline without its shops (the no-walls ablation keeps the building's extent)."""
-    key = str(floor.geojson_path)
-    if key not in _OUTLINE_PLANS:
-        geometry = floor.plan.geometry(0)
-        _OUTLINE_PLANS[key] = fusion.FloorPlan([fusion.FloorGeometry(floor.number, list(geometry.outlines), [],
-                                                                      np.zeros((0, 4)))])
-    return _OUTLINE_PLANS[key]
-
-
 def load_floor(root: Path, name: str) -> FloorData:
     """Walks, plan (origin at the outline's south-west corner, the floor frame) and detected steps."""
     floor = read_ilc_floor(Path(root) / name)
     number = floor_number(name)
     walks = [floor.walk(i) for i in range(floor.n_walks)]
     plan = load_floor_plan(floor.geojson_path, floors=[number], origin_lon_lat="outline_sw")
-    return FloorData(name, number, walks, plan, [ph.handheld_steps(w) for w in walks], Path(floor.geojson_path))
+    outline = fusion.FloorPlan([fusion.FloorGeometry(number, list(plan.geometry(0).outlines), [], np.zeros((0, 4)))])
+    return FloorData(name, number, walks, plan, [ph.handheld_steps(w) for w in walks], Path(floor.geojson_path),
+                     outline)
 
 
 def _fold_models(floors: Sequence[FloorData], fold_of: Dict[str, List[np.ndarray]], j: int,
