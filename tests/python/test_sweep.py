@@ -1,0 +1,74 @@
+"""indoorloc.sweep on Dask: the same results in-process and on a LocalCluster with two worker
+processes, seeds from the task keys, failed tasks reported, interrupted sweeps resumed."""
+
+import json
+
+import numpy as np
+import pytest
+
+pytest.importorskip("distributed", reason="the sweep layer needs the sweep extra (dask[distributed])")
+
+from distributed import Client, LocalCluster  # noqa: E402
+
+from indoorloc import sweep  # noqa: E402
+from indoorloc.experiments import sweep_tasks as st  # noqa: E402
+
+MAPMATCH_GRID = {"kappa": [1.0, 4.0], "num_particles": [300], "duration_s": [30.0]}
+ANALOG_GRID = {"m": [1500], "k": [10, 20], "T": [200]}
+
+
+def _flaky(params, seed):
+    if params["x"] == 2:
+        raise RuntimeError("x = 2 is not allowed")
+    return {"y": params["x"] * 10 + seed % 7}
+
+
+def test_task_seeds_depend_only_on_the_key():
+    a = sweep.make_tasks({"a": [1, 2], "b": ["u"]}, runs=2, base_seed=5)
+    b = sweep.make_tasks({"b": ["u"], "a": [2, 1]}, runs=2, base_seed=5)
+    assert {t.key: t.seed for t in a} == {t.key: t.seed for t in b}
+    assert len({t.seed for t in a}) == 4
+    assert sweep.make_tasks({"a": [1]}, base_seed=6)[0].seed != sweep.make_tasks({"a": [1]}, base_seed=5)[0].seed
+    with pytest.raises(ValueError, match="runs"):
+        sweep.make_tasks({"a": [1]}, runs=0)
+    with pytest.raises(ValueError, match="grid"):
+        sweep.make_tasks({"a": [[1, 2]]})
+    with pytest.raises(ValueError, match="grid"):
+        sweep.make_tasks({"a": []})
+
+
+def test_local_cluster_gives_the_in_process_results():
+    local_mm = sweep.run_sweep(st.mapmatch_run, MAPMATCH_GRID, runs=2, base_seed=3)
+    local_an = sweep.run_sweep(st.analog_run, ANALOG_GRID, runs=1, base_seed=3)
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None) as cluster, Client(cluster) as client:
+        from indoorloc import mapmatch
+
+        dist_mm = sweep.run_sweep(st.mapmatch_run, MAPMATCH_GRID, runs=2, base_seed=3, scheduler=client,
+                                  shared={"segments_m": np.asarray(mapmatch.warehouse_network().segments_m)})
+        dist_an = sweep.run_sweep(st.analog_run, ANALOG_GRID, runs=1, base_seed=3, scheduler=client)
+    assert local_mm.rows == dist_mm.rows and len(local_mm.rows) == 4
+    assert local_an.rows == dist_an.rows and len(local_an.rows) == 2
+    assert all(np.isfinite(r["mean_error_m"]) for r in local_mm.rows)
+    assert local_mm.to_structured()["kappa"].tolist() == [1.0, 1.0, 4.0, 4.0]
+
+
+def test_failed_tasks_are_reported_and_an_interrupted_sweep_resumes(tmp_path):
+    out = tmp_path / "sweep.jsonl"
+    grid = {"x": [0, 1, 2, 3]}
+    first = sweep.run_sweep(_flaky, grid, runs=2, out=out, max_tasks=3)
+    assert first.n_run == 3 and len(first.rows) == 3 and first.n_cached == 0
+    lines = [json.loads(s) for s in out.read_text().splitlines()]
+    assert len(lines) == 3
+    # Resume: the three finished tasks are read back, the rest run; x = 2 fails and is reported.
+    second = sweep.run_sweep(_flaky, grid, runs=2, out=out)
+    assert second.n_cached == 3 and second.n_run == 5
+    assert [f["params"]["x"] for f in second.failed] == [2, 2] and "x = 2" in second.failed[0]["error"]
+    assert [r["x"] for r in second.rows] == [0, 0, 1, 1, 3, 3]
+    fresh = sweep.run_sweep(_flaky, grid, runs=2)
+    assert fresh.rows == second.rows
+    # A line cut by an interruption is ignored (its task runs again).
+    with out.open("a") as f:
+        f.write('{"key": "trunc')
+    third = sweep.run_sweep(_flaky, grid, runs=2, out=out)
+    assert third.n_cached == 6 and third.rows == second.rows
