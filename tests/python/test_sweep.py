@@ -72,3 +72,22 @@ def test_failed_tasks_are_reported_and_an_interrupted_sweep_resumes(tmp_path):
         f.write('{"key": "trunc')
     third = sweep.run_sweep(_flaky, grid, runs=2, out=out)
     assert third.n_cached == 6 and third.rows == second.rows
+
+
+def test_cli_runs_a_toml_sweep_and_resumes(tmp_path, capsys):
+    from indoorloc import cli
+
+    spec = tmp_path / "s.toml"
+    spec.write_text('experiment = "mapmatch_run"\nruns = 2\nbase_seed = 1\n[grid]\nkappa = [1.0, 5.0]\n'
+                    'num_particles = 300\nduration_s = [20.0]\n')
+    out, js = tmp_path / "r.jsonl", tmp_path / "r.json"
+    assert cli.main(["sweep", str(spec), "--out", str(out), "--max-tasks", "1", "--quiet"]) == 0
+    assert cli.main(["sweep", str(spec), "--out", str(out), "--json", str(js), "--quiet"]) == 0
+    text = capsys.readouterr().out
+    assert "4 of 4 tasks done (3 run now, 1 read from" in text
+    data = json.loads(js.read_text())
+    assert [e["runs"] for e in data["summary"]] == [2, 2] and "mean_error_m_mean" in data["summary"][0]
+    bad = tmp_path / "bad.toml"
+    bad.write_text('experiment = "nope"\n[grid]\nx = [1]\n')
+    assert cli.main(["sweep", str(bad), "--quiet"]) == 2
+    assert "'experiment' must be one of" in capsys.readouterr().err

@@ -8,6 +8,7 @@
     indoorloc pdr evaluate
     indoorloc wifi evaluate [--dataset uji office ...] [--scans 1 10]
     indoorloc wifi simulate [--runs R] [--noise-db S]
+    indoorloc sweep FILE.toml [--scheduler tcp://host:8786] [--out results.jsonl]
 
 Each subsystem's subcommands live in ``indoorloc/cli/<subsystem>.py`` with an
 ``add_parser(subparsers, quiet_parent)`` function, added to ``_SUBCOMMANDS`` below. CLI modules
@@ -109,6 +110,12 @@ def _add_pdr(sub: argparse._SubParsersAction) -> None:
     pdr.add_parser(sub, quiet_parent)
 
 
+def _add_sweep(sub: argparse._SubParsersAction) -> None:
+    from indoorloc.cli import sweep
+
+    sweep.add_parser(sub, quiet_parent)
+
+
 def _add_wifi(sub: argparse._SubParsersAction) -> None:
     from indoorloc.cli import wifi
 
@@ -116,7 +123,7 @@ def _add_wifi(sub: argparse._SubParsersAction) -> None:
 
 
 # Subsystems register `add(subparsers)` functions here.
-_SUBCOMMANDS: List[Callable[[argparse._SubParsersAction], None]] = [_add_core, _add_analog, _add_fusion, _add_mapmatch, _add_network, _add_pdr, _add_wifi]
+_SUBCOMMANDS: List[Callable[[argparse._SubParsersAction], None]] = [_add_core, _add_analog, _add_fusion, _add_mapmatch, _add_network, _add_pdr, _add_sweep, _add_wifi]
 
 
 def build_parser() -> argparse.ArgumentParser:
