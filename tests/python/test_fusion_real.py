@@ -51,7 +51,12 @@ def test_leave_one_floor_out_choice_never_looks_at_the_held_out_floor(two_floor_
         assert chosen["stats"]["mean_m"] == pytest.approx(point["per_floor"][held_out]["fusion_smoother"]["mean_m"])
     assert result["lofo_overall"]["n_waypoints"] == sum(
         result["points"][0]["per_floor"][f]["fusion_smoother"]["n_waypoints"] for f in ("F1", "F2"))
-    assert "Leave-one-floor-out" in fr.select_markdown(result)
+    ks = result["known_start"]
+    for held_out, chosen in ks["lofo"].items():
+        other = "F2" if held_out == "F1" else "F1"
+        means = [p["per_floor"][other]["fusion_known_start"]["mean_m"] for p in result["points"]]
+        assert chosen["chosen"] == result["points"][int(np.argmin(means))]["values"]
+    assert "known-start filter" in fr.select_markdown(result)
 
 
 def test_walk_snapshot_and_plots(two_floor_site, tmp_path):

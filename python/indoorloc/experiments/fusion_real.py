@@ -98,6 +98,12 @@ class RealSettings:
     fixes: wfx.FixSettings = field(default_factory=wfx.FixSettings)
     fix_outlier_probability: float = 0.1  #: LOFO: ε of the fixes
     fix_tempering: float = 0.6            #: LOFO: τ_fix (consecutive scans share stale readings)
+    #: The known-start filter's own choice (LOFO on ``fusion_known_start`` over the same grid,
+    #: the same point in every fold): with the start known, WiFi fixes only need to stop drift
+    #: and are weighted less.
+    known_start_fix_metric: str = "union"
+    known_start_fix_tempering: float = 0.3
+    known_start_fix_outlier_probability: float = 0.3
     floor_identification: bool = True   #: also run the default with the floor not given
     threads: int = 2                    #: walks tracked in parallel (results do not depend on it)
 
@@ -264,9 +270,16 @@ def _score_walk(walk, steps_raw: ph.HandheldSteps, models: FoldModels, settings:
     known = {"position_m": start_xy, "floor": fl.number, "heading_offset_rad": 0.0, "time_s": float(wt[0])}
     smoother = fusion.SmootherOptions(num_trajectories=settings.smoother_trajectories,
                                       max_particles=settings.smoother_max_particles, seed=settings.seed)
+    known_options = replace_options(options, fix_tempering=settings.known_start_fix_tempering,
+                                    fix_outlier_probability=settings.known_start_fix_outlier_probability)
+    known_fixes = fixes
+    if settings.known_start_fix_metric != models.database.settings.metric and "fusion_known_start" in want:
+        known_db = models.database.with_settings(replace(models.database.settings, metric=settings.known_start_fix_metric))
+        known_fixes = wfx.fixes_for_walk(walk, known_db)
     runs = {
         "fusion_unknown_start": dict(start=None, smoother=smoother, keys=("fusion_unknown_start", "fusion_smoother")),
-        "fusion_known_start": dict(start=known, smoother=None, keys=("fusion_known_start",)),
+        "fusion_known_start": dict(start=known, smoother=None, keys=("fusion_known_start",), options=known_options,
+                                   fixes=known_fixes),
         "fusion_no_walls": dict(start=None, smoother=smoother, keys=(None, "fusion_no_walls")),
         "fusion_no_wifi": dict(start=known, smoother=smoother, fixes=None, keys=(None, "fusion_no_wifi")),
         "fusion_no_heading_offset": dict(start=None, smoother=smoother, keys=(None, "fusion_no_heading_offset"),
@@ -508,10 +521,37 @@ SELECT_GRID: Dict[str, Sequence[Any]] = {
 SELECT_OBJECTIVE = "fusion_smoother"
 
 
+#: Grid keys that the known-start filter has its own field for (it takes the grid point too).
+_KNOWN_START_FIELDS = {"fixes.metric": "known_start_fix_metric", "fix_tempering": "known_start_fix_tempering",
+                       "fix_outlier_probability": "known_start_fix_outlier_probability"}
+
+
 def _with(settings: RealSettings, key: str, value: Any) -> RealSettings:
+    if key in _KNOWN_START_FIELDS:
+        settings = replace(settings, **{_KNOWN_START_FIELDS[key]: value})
     if key.startswith("fixes."):
         return replace(settings, fixes=replace(settings.fixes, **{key.split(".", 1)[1]: value}))
     return replace(settings, **{key: value})
+
+
+def lofo_from_stats(points: Sequence[dict], floors: Sequence[str], objective: str) -> dict:
+    """Leave-one-floor-out choice for ``objective`` from the points' per-floor stats (pooled
+    means weighted by waypoints): ``{"lofo": {floor: {"chosen", "stats"}}, "lofo_pooled_mean_m",
+    "best_all"}``."""
+    def pooled(p, names) -> float:
+        n = sum(p["per_floor"][f][objective]["n_waypoints"] for f in names)
+        return sum(p["per_floor"][f][objective]["mean_m"] * p["per_floor"][f][objective]["n_waypoints"]
+                   for f in names) / n
+    lofo, total, count = {}, 0.0, 0
+    for held_out in floors:
+        others = [f for f in floors if f != held_out] or [held_out]
+        best = min(points, key=lambda p: pooled(p, others))
+        st = best["per_floor"][held_out][objective]
+        lofo[held_out] = {"chosen": best["values"], "stats": st}
+        total += st["mean_m"] * st["n_waypoints"]
+        count += st["n_waypoints"]
+    return {"lofo": lofo, "lofo_pooled_mean_m": total / count,
+            "best_all": min(points, key=lambda p: pooled(p, list(floors)))["values"]}
 
 
 def select_settings(data_root: Optional[Path] = None, floors: Sequence[str] = FLOORS,
@@ -524,8 +564,10 @@ def select_settings(data_root: Optional[Path] = None, floors: Sequence[str] = FL
     :data:`SELECT_OBJECTIVE` over the *other* floors is chosen and scored on that floor: the
     ``lofo`` figures estimate what the choice gives on a floor it has not seen. ``best_all`` is
     the point chosen on all floors (the default for floors and buildings not evaluated here).
-    Returns ``{"grid", "points": [{"settings", "per_floor": {floor: {method: stats}}}], "lofo":
-    {floor: {"chosen", "stats"}}, "lofo_overall": stats, "best_all"}``."""
+    The known-start filter's settings are chosen the same way on its own objective
+    (``known_start``: :func:`lofo_from_stats` on ``fusion_known_start``).
+    Returns ``{"grid", "points": [{"values", "per_floor": {floor: {method: stats}}}], "lofo":
+    {floor: {"chosen", "stats"}}, "lofo_overall": stats, "best_all", "known_start"}``."""
     base = base or RealSettings()
     grid = grid or SELECT_GRID
     base = replace(base, floor_identification=False)
@@ -559,7 +601,8 @@ def select_settings(data_root: Optional[Path] = None, floors: Sequence[str] = FL
         p.pop("_errors")
     return {"grid": {k: [None if isinstance(v, float) and math.isinf(v) else v for v in vs] for k, vs in grid.items()},
             "objective": SELECT_OBJECTIVE, "points": points, "lofo": lofo,
-            "lofo_overall": _stats(np.concatenate(held_out)), "best_all": best_all["values"]}
+            "lofo_overall": _stats(np.concatenate(held_out)), "best_all": best_all["values"],
+            "known_start": lofo_from_stats(points, names, "fusion_known_start")}
 
 
 def select_markdown(result: dict) -> str:
@@ -579,6 +622,15 @@ def select_markdown(result: dict) -> str:
     o = result["lofo_overall"]
     lines += ["", f"Held-out floors pooled: mean {o['mean_m']:.2f} m, median {o['median_m']:.2f} m, p90 {o['p90_m']:.2f} m "
               f"({o['n_waypoints']} waypoints). Chosen on all floors: {result['best_all']}."]
+    ks = result.get("known_start")
+    if ks:
+        lines += ["", "Leave-one-floor-out for the known-start filter (fusion_known_start):", "",
+                  "| held-out floor | chosen | mean [m] | median [m] | p90 [m] |", "|---|---|---|---|---|"]
+        for f, r in ks["lofo"].items():
+            st = r["stats"]
+            lines.append(f"| {f} | {r['chosen']} | {st['mean_m']:.2f} | {st['median_m']:.2f} | {st['p90_m']:.2f} |")
+        lines += ["", f"Held-out floors pooled: mean {ks['lofo_pooled_mean_m']:.2f} m. Chosen on all floors: "
+                  f"{ks['best_all']}."]
     return "\n".join(lines)
 
 
