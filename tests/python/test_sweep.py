@@ -91,3 +91,19 @@ def test_cli_runs_a_toml_sweep_and_resumes(tmp_path, capsys):
     bad.write_text('experiment = "nope"\n[grid]\nx = [1]\n')
     assert cli.main(["sweep", str(bad), "--quiet"]) == 2
     assert "'experiment' must be one of" in capsys.readouterr().err
+
+
+def test_mapmatch_reproduce_on_a_cluster_equals_the_in_process_command(tmp_path):
+    from indoorloc import cli
+
+    args = ["mapmatch", "reproduce", "--runs", "2", "--particles", "300", "--variant", "bias", "--threads", "1",
+            "--quiet"]
+    assert cli.main(args + ["--out", str(tmp_path / "local")]) == 0
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None) as cluster:
+        assert cli.main(args + ["--out", str(tmp_path / "dask"), "--scheduler", cluster.scheduler_address]) == 0
+    local = json.loads((tmp_path / "local" / "mapmatch_results.json").read_text())
+    dist = json.loads((tmp_path / "dask" / "mapmatch_results.json").read_text())
+    for a, b in zip(local["bias"], dist["bias"]):
+        a.pop("seconds"), b.pop("seconds")
+        assert a == b

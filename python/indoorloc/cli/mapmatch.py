@@ -16,7 +16,11 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
     report = {}
     text = []
     for variant in args.variant:
-        results = mr.run_kappas(variant, n_runs=args.runs, num_particles=args.particles, seed=args.seed, n_threads=args.threads)
+        if args.scheduler:
+            results = _kappas_on_dask(args, variant)
+        else:
+            results = mr.run_kappas(variant, n_runs=args.runs, num_particles=args.particles, seed=args.seed,
+                                    n_threads=args.threads)
         text.append(mr.markdown_tables(results, f"variant: {variant}"))
         plots.mapmatch_curves(results, out / f"mapmatch_{variant.replace(' ', '_').replace('+', 'and')}.png")
         report[variant] = [r.row() for r in results.values()]
@@ -41,6 +45,24 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
     return 0
 
 
+def _kappas_on_dask(args: argparse.Namespace, variant: str):
+    """The κ of one variant as Dask tasks (one per κ, the same seed as in-process: identical results)."""
+    import numpy as np
+
+    from indoorloc import mapmatch, sweep
+    from indoorloc.experiments import mapmatch_reproduce as mr
+    from indoorloc.experiments import sweep_tasks
+
+    grid = {"kappa": list(mr.KAPPAS), "variant": [variant], "n_runs": [args.runs], "num_particles": [args.particles],
+            "seed": [args.seed], "threads": [max(1, args.threads)]}
+    segments = np.asarray(mapmatch.warehouse_network().segments_m)
+    result = sweep.run_sweep(sweep_tasks.mapmatch_kappa, grid, scheduler=args.scheduler, shared={"segments_m": segments})
+    if result.failed:
+        raise RuntimeError(f"indoorloc: {len(result.failed)} mapmatch tasks failed: {result.failed[0]['error']}")
+    return {r["kappa"]: mr.KappaResult(r["kappa"], r["error_m"], r["correct"], r["smoothed_error_m"], r["seconds"])
+            for r in result.rows}
+
+
 def add_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
     p = sub.add_parser("mapmatch", help="map matching with a circular particle filter (paper 000)")
     msub = p.add_subparsers(dest="mapmatch_command", required=True)
@@ -52,4 +74,6 @@ def add_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
     r.add_argument("--variant", nargs="+", default=["paper", "bias"], help="paper, bias, 'bias + heading-aware junctions'")
     r.add_argument("--ablation", action="store_true", help="also measure each beyond-the-paper addition at κ_P = 1")
     r.add_argument("--out", default="reports/mapmatch")
+    r.add_argument("--scheduler", default=None,
+                   help="run the κ as Dask tasks on this scheduler (tcp://host:8786; identical results; needs the sweep extra)")
     r.set_defaults(func=cmd_reproduce)

@@ -49,6 +49,19 @@ def mapmatch_run(params: Mapping[str, Any], seed: int, segments_m: Optional[np.n
     return {"mean_error_m": float(np.mean(r["error_m"])), "p_correct": float(np.mean(r["correct_segment"]))}
 
 
+def mapmatch_kappa(params: Mapping[str, Any], seed: int, segments_m: Optional[np.ndarray] = None) -> Dict[str, Any]:
+    """``mapmatch reproduce`` for one κ on a worker: ``n_runs`` runs of ``variant`` with
+    ``num_particles`` from the experiment's own ``seed`` parameter (not the sweep's derived seed,
+    so that the results equal the in-process command's), ``threads`` C++ threads. Returns the
+    per-run curves (R, T) of the experiment's KappaResult and its time [s]."""
+    from indoorloc.experiments import mapmatch_reproduce as mr
+
+    r = mr.run_kappas(str(params["variant"]), kappas=(float(params["kappa"]),), n_runs=int(params["n_runs"]),
+                      num_particles=int(params["num_particles"]), seed=int(params["seed"]),
+                      n_threads=int(params.get("threads", 1)), network=_network(segments_m))[float(params["kappa"])]
+    return {"error_m": r.error_m, "correct": r.correct, "smoothed_error_m": r.smoothed_error_m, "seconds": r.seconds}
+
+
 def analog_run(params: Mapping[str, Any], seed: int) -> Dict[str, Any]:
     """One realisation of the analog (paper 001) Lorenz-63 experiment: a catalog of ``m`` pairs
     and a test sequence of ``T`` steps (default 300) from the seed, exact forward-backward with
@@ -63,4 +76,4 @@ def analog_run(params: Mapping[str, Any], seed: int) -> Dict[str, Any]:
     return {"rmse": al.rmse(out["mean"], truth)}
 
 
-__all__ = ["analog_run", "mapmatch_run"]
+__all__ = ["analog_run", "mapmatch_kappa", "mapmatch_run"]
