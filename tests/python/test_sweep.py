@@ -107,3 +107,17 @@ def test_mapmatch_reproduce_on_a_cluster_equals_the_in_process_command(tmp_path)
     for a, b in zip(local["bias"], dist["bias"]):
         a.pop("seconds"), b.pop("seconds")
         assert a == b
+
+
+def test_fusion_evaluate_on_a_cluster_equals_in_process(tmp_path):
+    from indoorloc.experiments import fusion_real as fr
+    from indoorloc.simulate.ilc_site import write_ilc_site
+
+    site = write_ilc_site(tmp_path / "site", floors=("F1",), walks_per_floor=6, seed=5)
+    settings = fr.RealSettings(num_particles=300, folds=2, smoother_trajectories=5)
+    local = fr.evaluate(site, ["F1"], settings)
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None) as cluster, Client(cluster) as client:
+        dist = fr.evaluate(site, ["F1"], settings, scheduler=client)
+    assert dist["methods"] == local["methods"]
+    assert sorted(map(json.dumps, dist["waypoints"])) == sorted(map(json.dumps, local["waypoints"]))

@@ -50,7 +50,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         result = fr.select_settings(root, args.floors, settings, progress=tick)
         print(fr.select_markdown(result))
     else:
-        result = fr.evaluate(root, args.floors, settings, progress=tick)
+        result = fr.evaluate(root, args.floors, settings, progress=tick, scheduler=args.scheduler)
         print(fr.markdown(result))
     if args.json:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
@@ -107,6 +107,8 @@ def add_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
     e.add_argument("--plots", default=None, metavar="DIR",
                    help="write error CDFs of all methods and one walk per floor on its floor image here")
     e.add_argument("--plot-walk", type=int, default=0, help="index of the walk drawn per floor (default 0)")
+    e.add_argument("--scheduler", default=None,
+                   help="one Dask task per fold on this scheduler (tcp://host:8786; the workers must see --data-root)")
     e.set_defaults(func=cmd_evaluate)
     t = fsub.add_parser("tune", parents=[quiet_parent()],
                         help="grid search of the tracker's settings on tuning seeds (how the defaults were chosen)")

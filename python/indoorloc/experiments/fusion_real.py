@@ -353,14 +353,16 @@ def _fold_models(floors: Sequence[FloorData], fold_of: Dict[str, List[np.ndarray
 
 
 def evaluate_floors(floors: Sequence[FloorData], settings: RealSettings, peer=None, progress=None,
-                    methods: Sequence[str] = METHODS, all_plan=None) -> List[WalkScore]:
+                    methods: Sequence[str] = METHODS, all_plan=None,
+                    only_folds: Optional[Sequence[int]] = None) -> List[WalkScore]:
     """Every method on every walk of the floors, k-fold by walk within each floor (fold j of
-    every floor shares the all-floor database of floor identification)."""
+    every floor shares the all-floor database of floor identification); ``only_folds``: score
+    the test walks of these folds only (one Dask task per fold)."""
     # Fold lists padded with empty folds where a floor has fewer walks than folds.
     fold_of = {fl.name: (_folds(len(fl.walks), settings.folds, settings.seed) + [np.zeros(0, int)] * settings.folds)
                [:settings.folds] for fl in floors}
     scores: List[WalkScore] = []
-    for j in range(settings.folds):
+    for j in range(settings.folds) if only_folds is None else only_folds:
         jobs_idx = [(fl, i) for fl in floors for i in fold_of[fl.name][j]]
         if not jobs_idx:
             continue
@@ -454,14 +456,37 @@ def _all_floor_plan(floors: Sequence[FloorData]):
                            origin_lon_lat="outline_sw")
 
 
-def evaluate(data_root: Optional[Path] = None, floors: Sequence[str] = FLOORS, settings: Optional[RealSettings] = None,
-             progress=None) -> dict:
-    """``indoorloc fusion evaluate``: every method on every floor; the JSON dict of :func:`summarize`."""
-    settings = settings or RealSettings()
-    tic = time.perf_counter()
+def evaluate_folds(data_root: Optional[Path], floors: Sequence[str], settings: RealSettings,
+                   folds: Optional[Sequence[int]] = None, progress=None) -> List[WalkScore]:
+    """The walk scores of the given folds (all by default): what one process or one Dask task does."""
     _, data = load_site(data_root, floors)
     all_plan = _all_floor_plan(data) if settings.floor_identification and len(data) > 1 else None
-    scores = evaluate_floors(data, settings, _peer(), progress, METHODS, all_plan)
+    return evaluate_floors(data, settings, _peer(), progress, METHODS, all_plan, folds)
+
+
+def evaluate(data_root: Optional[Path] = None, floors: Sequence[str] = FLOORS, settings: Optional[RealSettings] = None,
+             progress=None, scheduler: Any = None) -> dict:
+    """``indoorloc fusion evaluate``: every method on every floor; the JSON dict of :func:`summarize`.
+
+    ``scheduler`` (a Dask scheduler address or ``distributed.Client``): one task per fold on the
+    cluster, each worker reading the site from ``data_root`` (a path the workers see); the result
+    equals the in-process one (the ``seconds`` fields aside)."""
+    settings = settings or RealSettings()
+    tic = time.perf_counter()
+    root, _ = load_site(data_root, floors) if scheduler is None else (Path(data_root or default_site_root()), None)
+    if scheduler is None:
+        scores = evaluate_folds(root, floors, settings, None, progress)
+    else:
+        from indoorloc import sweep
+        from indoorloc.experiments import sweep_tasks
+
+        grid = {"fold": list(range(settings.folds))}
+        result = sweep.run_sweep(sweep_tasks.fusion_fold, grid, scheduler=scheduler,
+                                 shared={"data_root": str(root), "floors": list(floors), "settings": settings},
+                                 progress=progress)
+        if result.failed:
+            raise RuntimeError(f"indoorloc: fold {result.failed[0]['params']['fold']} failed: {result.failed[0]['error']}")
+        scores = [s for row in result.rows for s in row["scores"]]
     return summarize(scores, settings, time.perf_counter() - tic)
 
 

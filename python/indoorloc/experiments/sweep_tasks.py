@@ -62,6 +62,14 @@ def mapmatch_kappa(params: Mapping[str, Any], seed: int, segments_m: Optional[np
     return {"error_m": r.error_m, "correct": r.correct, "smoothed_error_m": r.smoothed_error_m, "seconds": r.seconds}
 
 
+def fusion_fold(params: Mapping[str, Any], seed: int, data_root: str, floors: list, settings: Any) -> Dict[str, Any]:
+    """``fusion evaluate`` for fold ``params["fold"]`` on a worker: the walk scores of that fold's
+    test walks (the worker reads the site from ``data_root``; ``settings`` is the RealSettings)."""
+    from indoorloc.experiments import fusion_real
+
+    return {"scores": fusion_real.evaluate_folds(data_root, floors, settings, [int(params["fold"])])}
+
+
 def analog_run(params: Mapping[str, Any], seed: int) -> Dict[str, Any]:
     """One realisation of the analog (paper 001) Lorenz-63 experiment: a catalog of ``m`` pairs
     and a test sequence of ``T`` steps (default 300) from the seed, exact forward-backward with
@@ -76,4 +84,4 @@ def analog_run(params: Mapping[str, Any], seed: int) -> Dict[str, Any]:
     return {"rmse": al.rmse(out["mean"], truth)}
 
 
-__all__ = ["analog_run", "mapmatch_kappa", "mapmatch_run"]
+__all__ = ["analog_run", "fusion_fold", "mapmatch_kappa", "mapmatch_run"]
