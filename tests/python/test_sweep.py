@@ -121,3 +121,20 @@ def test_fusion_evaluate_on_a_cluster_equals_in_process(tmp_path):
         dist = fr.evaluate(site, ["F1"], settings, scheduler=client)
     assert dist["methods"] == local["methods"]
     assert sorted(map(json.dumps, dist["waypoints"])) == sorted(map(json.dumps, local["waypoints"]))
+
+
+def test_analog_table1_merged_from_realisation_tasks_equals_one_run():
+    from indoorloc.experiments import analog_lorenz63 as al
+    from indoorloc.experiments import sweep_tasks
+
+    kwargs = dict(n_realisations=3, catalog_sizes=(1500,), beams=(None, 300), methods=("anfb",), T=200, k=10)
+    whole = al.run_table1(**kwargs)
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None) as cluster, Client(cluster) as client:
+        res = sweep.run_sweep(sweep_tasks.analog_table1_realisation, {"r": [0, 1, 2]}, scheduler=client,
+                              shared={"table1_kwargs": kwargs})
+    merged = al.merge_table1([row["part"] for row in res.rows])
+    assert merged["realisations"] == [0, 1, 2]
+    assert [(r["method"], r["M"], r["beam"], r["rmse"]) for r in merged["rows"]] == \
+        [(r["method"], r["M"], r["beam"], r["rmse"]) for r in whole["rows"]]
+    assert [r["rmse_mean"] for r in merged["rows"]] == [r["rmse_mean"] for r in whole["rows"]]

@@ -12,7 +12,7 @@ from indoorloc.registry import default_pdr_root
 def cmd_lorenz63(args: argparse.Namespace) -> int:
     from indoorloc.experiments import analog_lorenz63 as al
 
-    result = al.run_table1(
+    kwargs = dict(
         k=al.DEFAULT_K if args.k is None else args.k,
         n_realisations=args.realisations,
         catalog_sizes=tuple(args.catalog_sizes),
@@ -25,6 +25,18 @@ def cmd_lorenz63(args: argparse.Namespace) -> int:
         successor_rule=args.successor_rule,
         r_hmm_scale=args.r_hmm_scale,
     )
+    if args.scheduler:
+        # One Dask task per realisation (the experiment's own seeds: the same table as in-process).
+        from indoorloc import sweep
+        from indoorloc.experiments import sweep_tasks
+
+        res = sweep.run_sweep(sweep_tasks.analog_table1_realisation, {"r": list(range(args.realisations))},
+                              scheduler=args.scheduler, shared={"table1_kwargs": kwargs})
+        if res.failed:
+            raise RuntimeError(f"indoorloc: realisation {res.failed[0]['params']['r']} failed: {res.failed[0]['error']}")
+        result = al.merge_table1([row["part"] for row in res.rows])
+    else:
+        result = al.run_table1(**kwargs)
     text = al.markdown_table(result)
     print(text)
     if args.json:
@@ -82,6 +94,8 @@ def add_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
     l63.add_argument("--methods", nargs="+", default=list(al.METHODS), choices=list(al.METHODS))
     l63.add_argument("--seed", type=int, default=0)
     l63.add_argument("--json")
+    l63.add_argument("--scheduler", default=None,
+                     help="one Dask task per realisation on this scheduler (tcp://host:8786; identical table)")
     l63.set_defaults(func=cmd_lorenz63)
     tune = asub.add_parser("lorenz63-tune", help="choose K and the kernel width on validation problems",
                            parents=[quiet_parent()])

@@ -181,6 +181,7 @@ def run_table1(
     kernels: Optional[Dict[int, Tuple[int, float]]] = None,
     successor_rule: str = DEFAULT_SUCCESSOR_RULE,
     r_hmm_scale: float = 1.0,
+    realisations: Optional[Sequence[int]] = None,
 ) -> Dict[str, object]:
     """Run Table 1: RMSE and time of EnKS, AnEnKS and AnFB over seeded realisations.
 
@@ -213,6 +214,9 @@ def run_table1(
         Target of the AnFB transitions (see :data:`SUCCESSOR_RULES`).
     r_hmm_scale : float
         The AnFB's observation variance is r_hmm_scale · R (1: the data's own).
+    realisations : ints or None
+        Run only these realisation indices r (default all of 0 .. n_realisations - 1): one
+        Dask task per realisation, merged by :func:`merge_table1`.
 
     Returns
     -------
@@ -265,7 +269,8 @@ def run_table1(
         for name, v in (extra or {}).items():
             row.setdefault(name, []).append(v)
 
-    for r in progress(range(int(n_realisations)), total=int(n_realisations), desc="Lorenz-63 realisations"):
+    todo = list(range(int(n_realisations))) if realisations is None else [int(r) for r in realisations]
+    for r in progress(todo, total=len(todo), desc="Lorenz-63 realisations"):
         truth, observations = lorenz63.test_problem(seed + r, T=T, dt_obs=dt_obs, R=R)
         if "enks" in methods:
             start = time.perf_counter()
@@ -287,14 +292,7 @@ def run_table1(
                         {"max_dropped_mass": out["max_dropped_mass"], "mean_support": out["mean_support"]},
                     )
 
-    out_rows = []
-    for row in rows.values():
-        values = np.asarray(row["rmse"])
-        row["rmse_mean"] = float(values.mean())
-        row["rmse_median"] = float(np.median(values))
-        row["rmse_std"] = float(values.std(ddof=1)) if values.size > 1 else 0.0
-        row["seconds_mean"] = float(np.mean(row["seconds"]))
-        out_rows.append(row)
+    out_rows = [_row_stats(row) for row in rows.values()]
     return {
         "title": "Lorenz-63 reconstruction from noisy x every dt_obs steps (paper 001, Table 1)",
         "settings": {
@@ -307,7 +305,39 @@ def run_table1(
         },
         "rows": out_rows,
         "build_seconds": {str(M): v for M, v in build.items()},
+        "realisations": todo,
     }
+
+
+def _row_stats(row: Dict[str, object]) -> Dict[str, object]:
+    values = np.asarray(row["rmse"])
+    row["rmse_mean"] = float(values.mean())
+    row["rmse_median"] = float(np.median(values))
+    row["rmse_std"] = float(values.std(ddof=1)) if values.size > 1 else 0.0
+    row["seconds_mean"] = float(np.mean(row["seconds"]))
+    return row
+
+
+def merge_table1(parts: Sequence[Dict[str, object]]) -> Dict[str, object]:
+    """One :func:`run_table1` result from results over disjoint ``realisations`` (e.g. one Dask
+    task each): per row the per-realisation lists concatenated in realisation order and the
+    statistics recomputed; the build times are the first part's."""
+    if not parts:
+        raise ValueError("indoorloc: argument 'parts': no result to merge")
+    parts = sorted(parts, key=lambda p: min(p["realisations"]) if p["realisations"] else -1)
+    merged = {k: v for k, v in parts[0].items() if k not in ("rows", "realisations")}
+    rows: Dict[tuple, Dict[str, object]] = {}
+    for part in parts:
+        for row in part["rows"]:
+            key = (row["method"], row["M"], row["beam"])
+            if key not in rows:
+                rows[key] = {k: ([] if isinstance(v, list) else v) for k, v in row.items()}
+            for name, value in row.items():
+                if isinstance(value, list):
+                    rows[key][name].extend(value)
+    merged["rows"] = [_row_stats(r) for r in rows.values()]
+    merged["realisations"] = [r for p in parts for r in p["realisations"]]
+    return merged
 
 
 def markdown_table(result: Dict[str, object]) -> str:

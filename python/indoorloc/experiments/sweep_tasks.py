@@ -70,6 +70,14 @@ def fusion_fold(params: Mapping[str, Any], seed: int, data_root: str, floors: li
     return {"scores": fusion_real.evaluate_folds(data_root, floors, settings, [int(params["fold"])])}
 
 
+def analog_table1_realisation(params: Mapping[str, Any], seed: int, table1_kwargs: Mapping[str, Any]) -> Dict[str, Any]:
+    """``analog lorenz63`` for realisation ``params["r"]`` on a worker: ``run_table1(**table1_kwargs,
+    realisations=[r])`` (the experiment's own seeds: identical to the in-process run)."""
+    from indoorloc.experiments import analog_lorenz63 as al
+
+    return {"part": al.run_table1(**dict(table1_kwargs), realisations=[int(params["r"])])}
+
+
 def analog_run(params: Mapping[str, Any], seed: int) -> Dict[str, Any]:
     """One realisation of the analog (paper 001) Lorenz-63 experiment: a catalog of ``m`` pairs
     and a test sequence of ``T`` steps (default 300) from the seed, exact forward-backward with
@@ -84,4 +92,4 @@ def analog_run(params: Mapping[str, Any], seed: int) -> Dict[str, Any]:
     return {"rmse": al.rmse(out["mean"], truth)}
 
 
-__all__ = ["analog_run", "fusion_fold", "mapmatch_kappa", "mapmatch_run"]
+__all__ = ["analog_run", "analog_table1_realisation", "fusion_fold", "mapmatch_kappa", "mapmatch_run"]
