@@ -138,3 +138,21 @@ def test_analog_table1_merged_from_realisation_tasks_equals_one_run():
     assert [(r["method"], r["M"], r["beam"], r["rmse"]) for r in merged["rows"]] == \
         [(r["method"], r["M"], r["beam"], r["rmse"]) for r in whole["rows"]]
     assert [r["rmse_mean"] for r in merged["rows"]] == [r["rmse_mean"] for r in whole["rows"]]
+
+
+def test_pdr_evaluate_on_a_cluster_equals_in_process(shared_data):
+    from indoorloc.experiments import pdr_evaluate as pe
+
+    root = shared_data / "pdr"
+    if not (root / pe.DATASETS["xio"]).is_dir():
+        pytest.skip(f"the x-io recordings are not under {root}")
+    local = pe.evaluate_json(root, only=["xio"])
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None) as cluster, Client(cluster) as client:
+        dist = pe.evaluate_json_on_dask(root, ["xio"], client)
+    for doc in (dist, local):  # timings differ from run to run
+        for rec in doc["recordings"]:
+            rec["health"].pop("seconds", None)
+    assert json.dumps(dist, sort_keys=True) == json.dumps(local, sort_keys=True)
+    with pytest.raises(ValueError, match="only"):
+        pe.evaluate_json_on_dask(root, ["nope"], client)

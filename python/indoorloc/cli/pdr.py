@@ -41,7 +41,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     root = Path(args.data_root) if args.data_root else default_pdr_root()
     if not root.is_dir():
         raise ValueError(f"indoorloc: argument 'data_root': {root} is not a folder")
-    doc = pe.evaluate_json(root, only=args.only)
+    doc = pe.evaluate_json_on_dask(root, args.only, args.scheduler) if args.scheduler else pe.evaluate_json(root, only=args.only)
     if args.json:
         Path(args.json).write_text(json.dumps(doc, indent=1) + "\n")
     print("\n".join(_summary_lines(doc)))
@@ -93,4 +93,6 @@ def add_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
     e.add_argument("--compare", action="store_true",
                    help="also print the comparison tables of the other methods (fixed and per-class thresholds, "
                         "paper 002's step-wise positioning, Weinberg on mobgap)")
+    e.add_argument("--scheduler", default=None,
+                   help="one Dask task per dataset on this scheduler (tcp://host:8786; the workers must see --data-root)")
     e.set_defaults(func=cmd_evaluate)

@@ -743,6 +743,22 @@ def _zupt_row(dataset: str, rec: ImuRecording) -> Dict[str, Any]:
             "strides_detected": int(strides.size), "health": _health_json(health)}
 
 
+def _datasets_to_run(r: Path, only: Optional[Sequence[str]]) -> List[str]:
+    """The dataset names to evaluate (``only`` or all); ValueError on a missing root, an unknown
+    name, or an ``only`` naming a dataset whose folder is missing."""
+    if not r.is_dir():
+        raise ValueError(f"indoorloc: argument 'root': {r} is not a folder")
+    names = list(DATASETS) if not only else list(only)
+    for nm in names:
+        if nm not in DATASETS:
+            raise ValueError(f"indoorloc: argument 'only': unknown dataset {nm!r}; one of {', '.join(DATASETS)}")
+    if only:
+        missing = [nm for nm in names if not (r / DATASETS[nm]).is_dir()]
+        if missing:
+            raise ValueError(f"indoorloc: argument 'only': no {', '.join(missing)} folder under {r}")
+    return names
+
+
 def evaluate_json(root: PathLike, only: Optional[Sequence[str]] = None) -> Dict[str, Any]:
     """Every recording under the pdr data folder ``root`` with the recommended method, as the
     stable JSON document of ``indoorloc pdr evaluate --json`` (docs/pdr.md, "JSON output").
@@ -758,16 +774,7 @@ def evaluate_json(root: PathLike, only: Optional[Sequence[str]] = None) -> Dict[
     (``armse_m`` and ``final_error_m`` null, ``health`` empty).
     """
     r = Path(root)
-    if not r.is_dir():
-        raise ValueError(f"indoorloc: argument 'root': {r} is not a folder")
-    names = list(DATASETS) if not only else list(only)
-    for nm in names:
-        if nm not in DATASETS:
-            raise ValueError(f"indoorloc: argument 'only': unknown dataset {nm!r}; one of {', '.join(DATASETS)}")
-    if only:
-        missing = [nm for nm in names if not (r / DATASETS[nm]).is_dir()]
-        if missing:
-            raise ValueError(f"indoorloc: argument 'only': no {', '.join(missing)} folder under {r}")
+    names = _datasets_to_run(r, only)
     rows: List[Dict[str, Any]] = []
     for nm in names:
         folder = r / DATASETS[nm]
@@ -785,6 +792,20 @@ def evaluate_json(root: PathLike, only: Optional[Sequence[str]] = None) -> Dict[
         for rec in progress(recs, total=len(recs), desc=nm):
             rows.append(_zupt_row(nm, rec))
     return {"default_method": DEFAULT_METHOD, "recordings": rows}
+
+
+def evaluate_json_on_dask(root: PathLike, only: Optional[Sequence[str]], scheduler: Any) -> Dict[str, Any]:
+    """:func:`evaluate_json` with one Dask task per dataset (the workers read ``root``, a path
+    they must see); the same document, recordings in the same order."""
+    from indoorloc import sweep
+    from indoorloc.experiments import sweep_tasks
+
+    r = Path(root)
+    names = [nm for nm in _datasets_to_run(r, only) if (r / DATASETS[nm]).is_dir()]
+    res = sweep.run_sweep(sweep_tasks.pdr_dataset, {"dataset": names}, scheduler=scheduler, shared={"root": str(r)})
+    if res.failed:
+        raise RuntimeError(f"indoorloc: dataset {res.failed[0]['params']['dataset']} failed: {res.failed[0]['error']}")
+    return {"default_method": DEFAULT_METHOD, "recordings": [rec for row in res.rows for rec in row["recordings"]]}
 
 
 def _mobgap_rows(folder: Path) -> List[Dict[str, Any]]:

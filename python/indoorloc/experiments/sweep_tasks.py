@@ -78,6 +78,13 @@ def analog_table1_realisation(params: Mapping[str, Any], seed: int, table1_kwarg
     return {"part": al.run_table1(**dict(table1_kwargs), realisations=[int(params["r"])])}
 
 
+def pdr_dataset(params: Mapping[str, Any], seed: int, root: str) -> Dict[str, Any]:
+    """``pdr evaluate --json`` rows of one dataset (``params["dataset"]``) on a worker."""
+    from indoorloc.experiments import pdr_evaluate
+
+    return {"recordings": pdr_evaluate.evaluate_json(root, only=[str(params["dataset"])])["recordings"]}
+
+
 def analog_run(params: Mapping[str, Any], seed: int) -> Dict[str, Any]:
     """One realisation of the analog (paper 001) Lorenz-63 experiment: a catalog of ``m`` pairs
     and a test sequence of ``T`` steps (default 300) from the seed, exact forward-backward with
@@ -92,4 +99,4 @@ def analog_run(params: Mapping[str, Any], seed: int) -> Dict[str, Any]:
     return {"rmse": al.rmse(out["mean"], truth)}
 
 
-__all__ = ["analog_run", "analog_table1_realisation", "fusion_fold", "mapmatch_kappa", "mapmatch_run"]
+__all__ = ["analog_run", "analog_table1_realisation", "fusion_fold", "mapmatch_kappa", "mapmatch_run", "pdr_dataset"]
