@@ -156,3 +156,29 @@ def test_pdr_evaluate_on_a_cluster_equals_in_process(shared_data):
     assert json.dumps(dist, sort_keys=True) == json.dumps(local, sort_keys=True)
     with pytest.raises(ValueError, match="only"):
         pe.evaluate_json_on_dask(root, ["nope"], client)
+
+
+def test_wifi_evaluate_on_a_cluster_equals_in_process(shared_data, tmp_path, capsys):
+    from indoorloc import cli
+
+    root = shared_data / "wifi"
+    if not root.is_dir():
+        pytest.skip(f"no WiFi datasets under {root}")
+    args = ["wifi", "evaluate", "--data-root", str(root), "--dataset", "corridor", "--scans", "1", "--cv-points", "4",
+            "--threads", "1", "--quiet"]
+    assert cli.main(args + ["--json", str(tmp_path / "local.json")]) == 0
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None) as cluster:
+        assert cli.main(args + ["--json", str(tmp_path / "dask.json"), "--scheduler", cluster.scheduler_address]) == 0
+
+    def strip(doc):  # timings differ from run to run
+        for entry in doc.values():
+            for row in entry["results"]:
+                for key in [k for k in row if "second" in k or k.startswith("ms_") or k.endswith("_ms")]:
+                    row.pop(key)
+        return doc
+
+    local = strip(json.loads((tmp_path / "local.json").read_text()))
+    dist = strip(json.loads((tmp_path / "dask.json").read_text()))
+    assert "corridor/k=1" in local
+    assert json.dumps(local, sort_keys=True) == json.dumps(dist, sort_keys=True)  # NaN-safe comparison

@@ -11,24 +11,30 @@ from indoorloc.registry import default_data_root
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
     from indoorloc.experiments import wifi_evaluate as we
-    from indoorloc.io.wifi_datasets import load_wifi_dataset
 
     root = Path(args.data_root) if args.data_root else default_data_root()
     if not root.is_dir():
         raise ValueError(f"indoorloc: argument 'data_root': {root} is not a folder")
+    cases = [(name, k) for name in args.dataset for k in args.scans]
+    if args.scheduler:
+        # One Dask task per (dataset, scans) case; the workers read --data-root.
+        from indoorloc import sweep
+        from indoorloc.experiments import sweep_tasks
+
+        res = sweep.run_sweep(sweep_tasks.wifi_case, {"case": [f"{n}/k={k}" for n, k in cases]},
+                              scheduler=args.scheduler,
+                              shared={"root": str(root), "cv_points": args.cv_points, "cv_seed": args.seed,
+                                      "threads": args.threads})
+        if res.failed:
+            raise RuntimeError(f"indoorloc: case {res.failed[0]['params']['case']} failed: {res.failed[0]['error']}")
+        outputs = [(row["markdown"], row["entry"]) for row in res.rows]
+    else:
+        outputs = [we.evaluate_case(root, name, k, args.cv_points, args.seed, args.threads) for name, k in cases]
     report = {}
-    for name in args.dataset:
-        ds = load_wifi_dataset(name, root)
-        for k in args.scans:
-            hyper = we.cross_validate(
-                ds, k=k, max_points=args.cv_points, seed=args.seed, quiet_label=f"cv {name} k={k}", num_threads=args.threads
-            )
-            results = we.evaluate(ds, scans_per_estimate=k, hyper=hyper, num_threads=args.threads)
-            title = f"{ds.name}, {k} scan(s) per estimate (CV: model (variance floor, cap) {hyper.model}, k {hyper.k})"
-            print(we.markdown(results, title))
-            print()
-            report[f"{name}/k={k}"] = {"hyper": {"model": hyper.model, "k": hyper.k},
-                                      "results": [r.row() for r in results.values()]}
+    for (name, k), (text, entry) in zip(cases, outputs):
+        print(text)
+        print()
+        report[f"{name}/k={k}"] = entry
     if args.json:
         Path(args.json).write_text(json.dumps(report, indent=2, default=float))
     return 0
@@ -62,6 +68,8 @@ def add_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
     e.add_argument("--threads", type=int, default=0, help="0: all cores (results do not depend on it)")
     e.add_argument("--seed", type=int, default=0)
     e.add_argument("--json", help="also write the results as JSON")
+    e.add_argument("--scheduler", default=None,
+                   help="one Dask task per (dataset, scans) case on this scheduler (tcp://host:8786; workers must see --data-root)")
     e.set_defaults(func=cmd_evaluate)
     s = wsub.add_parser("simulate", help="the paper's simulated paths (Monte Carlo)", parents=[quiet_parent()])
     s.add_argument("--runs", type=int, default=200)

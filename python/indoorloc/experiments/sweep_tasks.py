@@ -85,6 +85,17 @@ def pdr_dataset(params: Mapping[str, Any], seed: int, root: str) -> Dict[str, An
     return {"recordings": pdr_evaluate.evaluate_json(root, only=[str(params["dataset"])])["recordings"]}
 
 
+def wifi_case(params: Mapping[str, Any], seed: int, root: str, cv_points: int, cv_seed: int,
+              threads: int = 0) -> Dict[str, Any]:
+    """One ``wifi evaluate`` case ``params["case"]`` = "dataset/k=K" on a worker: its markdown and
+    JSON entry (``wifi_evaluate.evaluate_case``; the experiment's own CV seed)."""
+    from indoorloc.experiments import wifi_evaluate
+
+    name, k = str(params["case"]).split("/k=")
+    text, entry = wifi_evaluate.evaluate_case(root, name, int(k), cv_points, cv_seed, threads)
+    return {"markdown": text, "entry": entry}
+
+
 def analog_run(params: Mapping[str, Any], seed: int) -> Dict[str, Any]:
     """One realisation of the analog (paper 001) Lorenz-63 experiment: a catalog of ``m`` pairs
     and a test sequence of ``T`` steps (default 300) from the seed, exact forward-backward with
@@ -99,4 +110,4 @@ def analog_run(params: Mapping[str, Any], seed: int) -> Dict[str, Any]:
     return {"rmse": al.rmse(out["mean"], truth)}
 
 
-__all__ = ["analog_run", "analog_table1_realisation", "fusion_fold", "mapmatch_kappa", "mapmatch_run", "pdr_dataset"]
+__all__ = ["analog_run", "analog_table1_realisation", "fusion_fold", "mapmatch_kappa", "mapmatch_run", "pdr_dataset", "wifi_case"]

@@ -244,6 +244,21 @@ def evaluate(
     return results
 
 
+def evaluate_case(root, name: str, k: int, cv_points: int, seed: int, num_threads: int = 0):
+    """One case of ``indoorloc wifi evaluate``: dataset ``name`` under ``root`` with ``k`` scans per
+    estimate, hyper-parameters by cross-validation on its training points. Returns (markdown,
+    JSON entry {"hyper", "results"})."""
+    from indoorloc.io.wifi_datasets import load_wifi_dataset
+
+    ds = load_wifi_dataset(name, root)
+    hyper = cross_validate(ds, k=k, max_points=cv_points, seed=seed, quiet_label=f"cv {name} k={k}",
+                           num_threads=num_threads)
+    results = evaluate(ds, scans_per_estimate=k, hyper=hyper, num_threads=num_threads)
+    title = f"{ds.name}, {k} scan(s) per estimate (CV: model (variance floor, cap) {hyper.model}, k {hyper.k})"
+    return markdown(results, title), {"hyper": {"model": hyper.model, "k": hyper.k},
+                                      "results": [r.row() for r in results.values()]}
+
+
 def markdown(results: Dict[str, MethodResult], title: str) -> str:
     lines = [
         f"**{title}**",
