@@ -6,6 +6,7 @@
 #include <pybind11/stl.h>
 
 #include "indoorloc/core.h"
+#include "indoorloc/core/validate.h"
 #include "numpy_args.h"
 
 namespace indoorloc::bindings {
@@ -22,7 +23,10 @@ py::array_t<std::int64_t> ToNumpyIndices(const std::vector<int>& indices) {
 template <typename Fn>
 auto WithStream(const py::object& rng, Fn fn) {
   if (py::isinstance<RandomStream>(rng)) return fn(rng.cast<RandomStream&>());
-  if (py::isinstance<py::int_>(rng)) {
+  if (py::isinstance<py::int_>(rng) && !py::isinstance<py::bool_>(rng)) {
+    // A seed outside uint64 would give pybind11's "Unable to cast ... to C++ type '?'".
+    CheckArgument(rng.attr("__ge__")(0).cast<bool>() && rng.attr("__lt__")(py::int_(1).attr("__lshift__")(64)).cast<bool>(),
+                  "rng", "an int seed must be in [0, 2**64)");
     RandomStream stream(rng.cast<std::uint64_t>());
     return fn(stream);
   }
@@ -32,6 +36,7 @@ auto WithStream(const py::object& rng, Fn fn) {
 template <typename Draw>
 py::array_t<double> DrawMany(RandomStream& rng, py::ssize_t size, const char* name, Draw draw) {
   CheckArgument(size >= 0, name, "must be >= 0");
+  RequireSizeLimit(static_cast<double>(size), sizeof(double), name, "draws");
   py::array_t<double> out(size);
   double* data = out.mutable_data();
   {
@@ -58,6 +63,7 @@ pairs are independent; the same pair always gives the same numbers on every plat
              return DrawMany(r, size, "size", [&] { return r.Normal(); });
            }, py::arg("size"), "Array of `size` standard normal draws.")
       .def("von_mises", [](RandomStream& r, double mu_rad, double kappa, py::ssize_t size) {
+             RequireFinite(mu_rad, "mu_rad");
              CheckNonNegative(kappa, "kappa");
              return DrawMany(r, size, "size", [&] { return r.VonMises(mu_rad, kappa); });
            }, py::arg("mu_rad"), py::arg("kappa"), py::arg("size"),
@@ -65,6 +71,7 @@ pairs are independent; the same pair always gives the same numbers on every plat
       .def("integers", [](RandomStream& r, std::uint64_t n, py::ssize_t size) {
              CheckArgument(n > 0, "n", "must be > 0");
              CheckArgument(size >= 0, "size", "must be >= 0");
+             RequireSizeLimit(static_cast<double>(size), sizeof(std::int64_t), "size", "draws");
              py::array_t<std::int64_t> out(size);
              auto* data = out.mutable_data();
              for (py::ssize_t k = 0; k < size; ++k) data[k] = static_cast<std::int64_t>(r.UniformInt(n));

@@ -10,6 +10,7 @@
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/validate.h"
 #include "imu_timing.h"
 
 namespace indoorloc::pdr {
@@ -42,15 +43,14 @@ Eigen::Quaterniond LevelAttitude(const Eigen::Vector3d& mean_f) {
 }  // namespace
 
 bool ZuptEkfOptions::IsValid(std::string* error) const {
-  auto fail = [&](const char* why) {
-    *error = why;
-    return false;
-  };
-  if (!(sigma_acc_mps2 > 0.0) || !(sigma_gyro_radps > 0.0) || !(sigma_zupt_mps > 0.0)) return fail("noise sds must be > 0");
-  if (!(gravity_mps2 > 0.0)) return fail("gravity_mps2 must be > 0");
-  if (init_samples < 1) return fail("init_samples must be >= 1");
-  if (!(sigma_stance_heading_rad >= 0.0) || !std::isfinite(sigma_stance_heading_rad)) return fail("sigma_stance_heading_rad must be >= 0");
-  return true;
+  // Sds enter the covariances squared: a scale keeps them finite (1e-300 or inf would not).
+  return Validator(error)
+      .Scale(sigma_acc_mps2, "sigma_acc_mps2")
+      .Scale(sigma_gyro_radps, "sigma_gyro_radps")
+      .Scale(sigma_zupt_mps, "sigma_zupt_mps")
+      .InRange(gravity_mps2, 0.1, 100.0, "gravity_mps2")
+      .IntInRange(init_samples, 1, 1000000000, "init_samples")
+      .ZeroOrScale(sigma_stance_heading_rad, "sigma_stance_heading_rad");
 }
 
 ZuptEkfOutput RunZuptEkf(const Eigen::Ref<const Eigen::VectorXd>& time_s, const Eigen::Ref<const RowMatrixXd>& acc,
@@ -66,6 +66,9 @@ ZuptEkfOutput RunZuptEkf(const Eigen::Ref<const Eigen::VectorXd>& time_s, const 
   CheckFinite(time_s, "time_s");
   CheckFinite(acc, "acc_mps2");
   CheckFinite(gyro, "gyro_radps");
+  internal::CheckTimeRange(time_s);
+  internal::CheckAccRange(acc);
+  internal::CheckGyroRange(gyro);
   // Median positive sample period, used where timestamps repeat or go backwards.
   const double median_dt = internal::MedianSamplePeriod(time_s);
 

@@ -3,10 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "rss_limits.h"
 
 namespace indoorloc::wifi {
 namespace {
@@ -102,6 +105,7 @@ WifiFix GridPosterior::Locate(const Eigen::Ref<const RowMatrixXd>& rss_dbm) cons
   }
   CheckArgument(rss_dbm.rows() > 0, "rss_dbm", "no scan");
   CheckFinite(rss_dbm, "rss_dbm");
+  internal::CheckRss(rss_dbm, "rss_dbm");
   const double cap = model_->options().max_term;
   const double n = static_cast<double>(rss_dbm.rows());
   // l at every grid point of every floor, then log-sum-exp weights.
@@ -144,6 +148,14 @@ WifiFix GridPosterior::Locate(const Eigen::Ref<const RowMatrixXd>& rss_dbm) cons
   }
   fix.neg_log_likelihood = best - std::log(total_mass);
   return fix;
+}
+
+const RowMatrixXd& GridPosterior::grid(int floor_index) const {
+  if (floor_index < 0 || floor_index >= num_floors()) {
+    throw std::out_of_range("indoorloc: argument 'floor_index': must be in [0, " + std::to_string(num_floors()) +
+                            "), got " + std::to_string(floor_index));
+  }
+  return floors_[static_cast<size_t>(floor_index)].points;
 }
 
 }  // namespace indoorloc::wifi

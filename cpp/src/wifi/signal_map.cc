@@ -12,6 +12,7 @@
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "rss_limits.h"
 
 namespace indoorloc::wifi {
 namespace {
@@ -79,6 +80,7 @@ void SignalMap::Validate() const {
   CheckShape(mean_dbm_, n, -1, "mean_dbm");
   CheckShape(variance_db2_, n, mean_dbm_.cols(), "variance_db2");
   CheckFinite(mean_dbm_, "mean_dbm");
+  internal::CheckRss(mean_dbm_, "mean_dbm");
   CheckFinite(variance_db2_, "variance_db2");
   for (Eigen::Index i = 0; i < n; ++i) {
     for (Eigen::Index j = 0; j < variance_db2_.cols(); ++j) {
@@ -136,6 +138,10 @@ SignalMap SignalMap::FromScans(const Eigen::Ref<const RowMatrixXd>& scan_positio
       if (!IsNotHeard(raw, options.not_heard_sentinel)) {
         if (!std::isfinite(raw)) {
           ThrowInvalidArgument("rss_dbm", DescribeEntry(r, j, false) + " is infinite");
+        }
+        if (std::abs(raw) > internal::kMaxAbsRssDb) {  // its square would overflow the variance
+          ThrowInvalidArgument("rss_dbm", DescribeEntry(r, j, false) + " must be in [-1e4, 1e4] dB, got " +
+                                              FormatValue(raw));
         }
         v = raw;
         heard(p, j) += 1.0;

@@ -6,6 +6,7 @@ dataclasses in, ``_core`` types out), so that facades may use it inside function
 ``indoorloc.mapmatch.warehouse_network``) without an import cycle; docs/architecture.md, "Layers".
 """
 
+from indoorloc.io.errors import FormatError
 from indoorloc.io.wifi_datasets import (
     RSS_RTT_GRID_M,
     RSS_RTT_ROOMS,
@@ -64,6 +65,7 @@ from indoorloc.io.road_network import (
 )
 
 __all__ = [
+    "FormatError",
     "ILC_SENSOR_TYPES",
     "BssidVocabulary",
     "IlcBeacons",

@@ -59,6 +59,7 @@ from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
+from indoorloc.io.errors import FormatError, reads_file
 from indoorloc._core.fusion import FloorGeometry, FloorPlan, FloorPlanOptions  # io sits below the facades
 
 PathLike = Union[str, os.PathLike]
@@ -276,6 +277,7 @@ def _resolve_origin(origin: Origin, features: List[Any], roles: List[str],
     return lon0, lat0
 
 
+@reads_file("source", argument="path")
 def read_geojson_floor(
     source: Source,
     *,
@@ -369,6 +371,7 @@ _RING_REF = re.compile(r"floors\[(\d+)\]\.(outlines|obstacles)\[(\d+)\]")
 _WALL_REF = re.compile(r"floors\[(\d+)\]\.walls': row (\d+)")
 
 
+@reads_file("sources", argument="path")
 def load_floor_plan(
     sources: Union[Source, Sequence[Source]],
     *,

@@ -56,6 +56,7 @@ from typing import List, Optional, Union
 
 import numpy as np
 
+from indoorloc.io.errors import FormatError, reads_file
 PathLike = Union[str, Path]
 
 #: Standard gravity [m/s^2] used to convert accelerations given in g.
@@ -189,14 +190,15 @@ def check_imu_units(acc_mps2: np.ndarray, gyro_radps: np.ndarray, *, acc_name: s
                               f"values look like deg/s converted to rad/s twice (or a wrong scale)")
 
 
-def _rate_from_time(time_s: np.ndarray, argument: str) -> float:
+def _rate_from_time(time_s: np.ndarray, argument: str, where: str = "") -> float:
+    prefix = f"{where}: " if where else ""
     dt = np.diff(time_s)
     if dt.size == 0:
-        raise _err(argument, "needs at least two samples")
+        raise _err(argument, f"{prefix}needs at least two samples")
     if np.any(dt <= 0):
         k = int(np.argmax(dt <= 0))
-        raise _err(argument, f"time is not strictly increasing at row {k + 1} "
-                             f"({time_s[k]!r} then {time_s[k + 1]!r})")
+        raise _err(argument, f"{prefix}time is not strictly increasing at row {k + 1} "
+                             f"({float(time_s[k])!r} then {float(time_s[k + 1])!r})")
     return float(1.0 / np.median(dt))
 
 
@@ -207,6 +209,7 @@ def _require_file(path: PathLike, argument: str = "path") -> Path:
     return p
 
 
+@reads_file("path")
 def load_xio(path: PathLike, *, gravity_mps2: float = STANDARD_GRAVITY_MPS2) -> ImuRecording:
     """Load an x-io Gait-Tracking csv (``short_walk.csv`` / ``long_walk.csv``).
 
@@ -230,7 +233,7 @@ def load_xio(path: PathLike, *, gravity_mps2: float = STANDARD_GRAVITY_MPS2) -> 
     keep[1:] = np.any(data[1:] != data[:-1], axis=1)  # drop exact repeats of the previous row
     data = data[keep]
     time_s = data[:, 0]
-    rate_hz = _rate_from_time(time_s, "path")
+    rate_hz = _rate_from_time(time_s, "path", str(p))
     gyro = np.deg2rad(data[:, 1:4])
     acc = data[:, 4:7] * float(gravity_mps2)
     check_imu_units(acc, gyro, acc_name="path (accelerometer columns, converted from g)",
@@ -241,6 +244,7 @@ def load_xio(path: PathLike, *, gravity_mps2: float = STANDARD_GRAVITY_MPS2) -> 
                         sensor="xio")
 
 
+@reads_file("path")
 def load_openshoe(path: PathLike, rate_hz: float = 820.0) -> ImuRecording:
     """Load the OpenShoe data set (``OpenShoeDataSet.txt``): headerless, 6 comma-separated
     floats per row, acc x, y, z in m/s^2 then gyro x, y, z in rad/s, sampled at ``rate_hz``.
@@ -265,6 +269,7 @@ def load_openshoe(path: PathLike, rate_hz: float = 820.0) -> ImuRecording:
                         source_units="acc m/s^2, gyro rad/s", sensor="openshoe")
 
 
+@reads_file("path")
 def load_pyshoe_trial(path: PathLike) -> ImuRecording:
     """Load one PyShoe Vicon trial (``*_LLIO.mat`` of LLIO-aided-iPyShoe).
 
@@ -300,7 +305,7 @@ def load_pyshoe_trial(path: PathLike) -> ImuRecording:
     acc, gyro = imu[:, 0:3], imu[:, 3:6]
     check_imu_units(acc, gyro, acc_name="path (imu_data columns 1-3, acc declared m/s^2)",
                     gyro_name="path (imu_data columns 4-6, gyro declared rad/s)")
-    rate_hz = _rate_from_time(time_s, "path")
+    rate_hz = _rate_from_time(time_s, "path", str(p))
     distance = (float(np.sum(np.linalg.norm(np.diff(gt[strides], axis=0), axis=1)))
                 if strides.size >= 2 else None)
     name = p.stem[:-5] if p.stem.endswith("_LLIO") else p.stem
@@ -309,6 +314,7 @@ def load_pyshoe_trial(path: PathLike) -> ImuRecording:
                         distance_m=distance, source_units="acc m/s^2, gyro rad/s", sensor="pyshoe")
 
 
+@reads_file("root")
 def list_pyshoe_trials(root: PathLike) -> List[Path]:
     """Sorted paths of the PyShoe trials (``*.mat``) in the folder ``root``.
 
@@ -370,6 +376,7 @@ def _as_bouts(micro_wb) -> list:
     return [b for b in arr.ravel() if isinstance(b, dict)]
 
 
+@reads_file("path")
 def load_mobgap_trials(path: PathLike, *, gravity_mps2: float = STANDARD_GRAVITY_MPS2) -> List[MobgapTrial]:
     """Load every trial of one mobgap ``data.mat`` (Mobilise-D lower-back example data).
 
@@ -443,6 +450,7 @@ def load_mobgap_trials(path: PathLike, *, gravity_mps2: float = STANDARD_GRAVITY
     return out
 
 
+@reads_file("root")
 def list_mobgap_files(root: PathLike) -> List[Path]:
     """Sorted ``data.mat`` files under the mobgap folder ``root`` (``.../mobgap_lowerback``)."""
     r = Path(root)
