@@ -36,14 +36,15 @@ def group_core() -> None:
     probe(Case("RandomStream.integers", rs.integers, {"n": 10, "size": 5}))
     probe(Case("derive_seed", core.derive_seed, {"seed": 1, "stream": 2}))
     probe(Case("log_sum_exp", core.log_sum_exp, {"log_weights": lw}, minus_inf_ok=True))
-    probe(Case("normalize_log_weights", core.normalize_log_weights, {"log_weights": lw}))
+    # A -inf log-weight is a zero weight and stays -inf once normalised (documented).
+    probe(Case("normalize_log_weights", core.normalize_log_weights, {"log_weights": lw}, minus_inf_ok=True))
     probe(Case("effective_sample_size", core.effective_sample_size, {"log_weights": lw}))
     probe(Case("resample", core.resample,
                {"log_weights": lw, "scheme": "systematic", "rng": 3, "num_out": -1}))
     probe(Case("offspring_counts", core.offspring_counts,
                {"log_weights": lw, "scheme": "residual", "n_runs": 20, "seed": 0, "n_threads": 1}))
     probe(Case("resample_if_needed", core.resample_if_needed,
-               {"log_weights": lw, "options": core.ResamplingOptions(), "rng": 0},
+               {"log_weights": lw, "options": core.ResamplingOptions(), "rng": 0}, minus_inf_ok=True,
                options_fields={"options": (core.ResamplingOptions, ["ess_threshold", "scheme"])}))
     same_for_threads("offspring_counts", lambda n: core.offspring_counts(
         lw, "systematic", n_runs=50, seed=3, n_threads=n))

@@ -182,8 +182,9 @@ AnalogHMM::AnalogHMM(std::shared_ptr<const Catalog> catalog, const AnalogHmmOpti
                 "R", "is not symmetric");
   Eigen::LLT<Eigen::MatrixXd> llt(options_.R);
   CheckArgument(llt.info() == Eigen::Success, "R", "is not positive definite");
-  CheckArgument(catalog_->num_analogs() >= options_.k + 1, "catalog",
-                "has " + std::to_string(catalog_->num_analogs()) + " analogs: needs at least K + 1 = " + std::to_string(options_.k + 1));
+  CheckArgument(catalog_->num_analogs() >= options_.k + 1, "k",
+                "k = " + std::to_string(options_.k) + " needs at least K + 1 = " + std::to_string(options_.k + 1) +
+                    " analogs, argument 'catalog' has " + std::to_string(catalog_->num_analogs()));
   transitions_ = BuildKnnTransitions(*catalog_, options_.k, options_.sigma_scale, options_.successor_rule);
 }
 

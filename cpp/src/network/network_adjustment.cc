@@ -582,6 +582,21 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
         m << "; first undetermined parameter: " << labels[static_cast<size_t>(worst_col)].name << " at epoch "
           << labels[static_cast<size_t>(worst_col)].epoch;
       m << ". Add observations (CUPT for position, GUPT or XOVER for gravity vs accelerometer bias)";
+      // A defect can also be numerical: weights spanning many orders of magnitude. Name the
+      // extreme sds of the options so that a mistyped one is found.
+      const std::pair<const char*, double> sds[] = {
+          {"acc_noise_mps2_rthz", options.acc_noise_mps2_rthz}, {"gyro_noise_radps_rthz", options.gyro_noise_radps_rthz},
+          {"sigma_gps_m", options.sigma_gps_m},                 {"sigma_zupt_mps", options.sigma_zupt_mps},
+          {"sigma_gupt_mps2", options.sigma_gupt_mps2},         {"sigma_xover_mps2", options.sigma_xover_mps2},
+          {"sigma_vel_mps", options.sigma_vel_mps}};
+      const auto* lo = &sds[0];
+      const auto* hi = &sds[0];
+      for (const auto& e : sds) {
+        if (e.second < lo->second) lo = &e;
+        if (e.second > hi->second) hi = &e;
+      }
+      m << ", or check the sds in 'options' (from " << lo->first << " = " << lo->second << " to " << hi->first
+        << " = " << hi->second << ")";
       ThrowInvalidArgument("observations", m.str());
     }
   }

@@ -166,6 +166,9 @@ WeinbergCalibration CalibrateWeinbergK(const Eigen::Ref<const Eigen::VectorXd>& 
   CheckFinite(l, "lengths_m");
   CheckArgument((f.array() >= 0.0).all(), "features", "must be >= 0");
   CheckArgument((l.array() > 0.0).all(), "lengths_m", "must be > 0");
+  // Squared in the fit: bounded so the residual stays finite (1e300 gave an inf RMS).
+  RequireAllInRange(f, 0.0, 1e100, "features");
+  RequireAllInRange(l, 0.0, 1e4, "lengths_m");
   const double ff = f.squaredNorm();
   CheckArgument(ff > 0.0, "features", "are all 0 (no bounce: is the sensor still?)");
   WeinbergCalibration c;
@@ -178,7 +181,8 @@ WeinbergCalibration CalibrateWeinbergK(const Eigen::Ref<const Eigen::VectorXd>& 
 WeinbergCalibration CalibrateWeinbergKFromDistance(const Eigen::Ref<const Eigen::VectorXd>& f, double distance_m) {
   CheckArgument(f.size() >= 1, "features", "is empty");
   CheckFinite(f, "features");
-  CheckArgument(std::isfinite(distance_m) && distance_m > 0.0, "distance_m", "must be finite and > 0");
+  RequireAllInRange(f, 0.0, 1e100, "features");
+  RequirePositive(distance_m, "distance_m");
   const double sum = f.sum();
   CheckArgument(sum > 0.0, "features", "sum to 0 (no bounce: is the sensor still?)");
   WeinbergCalibration c;

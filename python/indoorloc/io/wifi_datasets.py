@@ -532,7 +532,8 @@ def load_rss_rtt_room(root: PathLike, room: str) -> FingerprintDataset:
     tr_xy, tr_rss, names = _rss_rtt_csv(root / f"database_{key}_train.csv")
     te_xy, te_rss, te_names = _rss_rtt_csv(root / f"database_{key}_test.csv")
     if te_names != names:
-        raise _bad(f"database_{key}_test.csv has RSS columns {te_names}, train has {names}")
+        raise _bad(f"database_{key}_test.csv has RSS columns {te_names}, database_{key}_train.csv "
+                   f"has {names}")
     positions = _ap_positions(root / "AP_position.txt")
     if key not in positions:
         raise _bad(f"{root / 'AP_position.txt'} has no room {key!r} (found {sorted(positions)})")
