@@ -256,6 +256,8 @@ def group_wifi() -> None:
                 "method": "wknn", "k": 4}))
     loc = wifi.FingerprintLocator(mean, pos, floors)
     probe(Case("FingerprintLocator.locate", loc.locate, {"scans_dbm": scans, "num_threads": 1}))
+    probe(Case("tracker_options", lambda **kw: wifi.tracker_options(**kw),
+               {"max_step_m": 1.0, "iterations_per_scan": 1, "num_starts": 5, "tolerance_m": 1e-4}))
     same_for_threads("GridPosterior.locate", lambda k: gp.locate(np.repeat(scans, 4, axis=0), num_threads=k))
 
 
@@ -387,6 +389,14 @@ def group_io() -> None:
         fuzz_file(f"load_rss_rtt_room[{damaged}]", lambda: iio.load_rss_rtt_room(rooms, "office"), rooms,
                   damaged, arg_name="root")
 
+    from indoorloc._core.fusion import FloorGeometry
+
+    box = np.array([[0.0, 0.0], [20.0, 0.0], [20.0, 10.0], [0.0, 10.0]])
+    geometry = FloorGeometry(floor=0, outlines=[box], obstacles=[box * 0.2 + 2.0],
+                             walls=np.array([[5.0, 5.0, 8.0, 5.0]]))
+    iio.write_geojson_floor(tmp / "plan.geojson", geometry)
+    fuzz_file("read_geojson_floor", lambda: iio.read_geojson_floor(tmp / "plan.geojson"), tmp, "plan.geojson")
+
     month = tmp / "uji" / "db" / "01"
     month.mkdir(parents=True)
     for stem, first in (("trn01", 101100101), ("tst01", 101200101)):
@@ -399,7 +409,36 @@ def group_io() -> None:
                   damaged, arg_name="root")
 
 
+def group_metrics() -> None:
+    from indoorloc import io as iio
+    from indoorloc import metrics
+
+    est = np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 0.5]])
+    truth = np.array([[0.1, 0.0], [1.0, 1.2], [2.0, 0.0]])
+    probe(Case("position_errors", metrics.position_errors, {"estimated_m": est, "truth_m": truth}))
+    errs = np.array([0.1, 0.2, 0.5, 1.0])
+    probe(Case("error_stats", lambda errors_m: metrics.error_stats(errors_m).__dict__, {"errors_m": errs}))
+    probe(Case("empirical_cdf", metrics.empirical_cdf, {"errors_m": errs}))
+    probe(Case("bootstrap_interval", metrics.bootstrap_interval,
+               {"values": errs, "n_boot": 200, "level": 0.95, "seed": 0}))
+    probe(Case("lonlat_to_local", iio.lonlat_to_local,
+               {"lon_lat_deg": np.array([[2.17, 41.38], [2.171, 41.381]]), "origin_lon_lat": (2.17, 41.38)}))
+    probe(Case("local_to_lonlat", iio.local_to_lonlat,
+               {"east_north_m": np.array([[10.0, 20.0]]), "origin_lon_lat": (2.17, 41.38)}))
+    probe(Case("metres_per_degree", iio.metres_per_degree, {"lat_deg": 41.38}))
+    rng = np.random.default_rng(0)
+    acc = np.tile([0.0, 0.0, 9.81], (50, 1)) + 0.1 * rng.normal(size=(50, 3))
+    gyro = 0.5 * rng.normal(size=(50, 3))
+    probe(Case("check_imu_units", iio.check_imu_units, {"acc_mps2": acc, "gyro_radps": gyro}))
+    seg, ids = iio.grid_with_diagonals_segments(2, 2, 5.0)
+    import tempfile
+    out = Path(tempfile.mkdtemp(prefix="indoorloc_write_")) / "roads.geojson"
+    probe(Case("write_geojson_segments", iio.write_geojson_segments,
+               {"path": str(out), "segments_m": seg, "ids": ids}))
+
+
 GROUPS = {
+    "metrics": group_metrics,
     "io": group_io,
     "core": group_core,
     "pdr": group_pdr,

@@ -57,6 +57,7 @@ from typing import List, Optional, Union
 import numpy as np
 
 from indoorloc.io.errors import FormatError, reads_file
+from indoorloc.validate import real_array
 PathLike = Union[str, Path]
 
 #: Standard gravity [m/s^2] used to convert accelerations given in g.
@@ -154,8 +155,8 @@ def check_imu_units(acc_mps2: np.ndarray, gyro_radps: np.ndarray, *, acc_name: s
 
     The error message names the argument (``acc_name`` / ``gyro_name``) and the likely unit.
     """
-    acc = np.asarray(acc_mps2, dtype=float)
-    gyro = np.asarray(gyro_radps, dtype=float)
+    acc = real_array(acc_mps2, acc_name)  # refuses strings, complex, NaN and inf, naming it
+    gyro = real_array(gyro_radps, gyro_name)
     for name, a in ((acc_name, acc), (gyro_name, gyro)):
         if a.ndim != 2 or a.shape[1] != 3 or a.shape[0] == 0:
             raise _err(name, f"expected a non-empty (N, 3) array, got shape {a.shape}")

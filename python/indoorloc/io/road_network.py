@@ -80,6 +80,7 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 import numpy as np
 
 from indoorloc.io.errors import FormatError, reads_file
+from indoorloc.validate import real_array
 PathLike = Union[str, os.PathLike]
 
 #: Name of the packaged warehouse network in ``indoorloc.data`` (see docs/mapmatch_warehouse.md).
@@ -294,7 +295,7 @@ def read_geojson_segments(path: PathLike) -> Tuple[np.ndarray, np.ndarray]:
 
 
 def _as_segments(segments_m: Any, ids: Any) -> Tuple[np.ndarray, np.ndarray]:
-    seg = np.asarray(segments_m, dtype=np.float64)
+    seg = real_array(segments_m, "segments_m")  # strings, complex, NaN, inf: refused by name
     if seg.ndim != 2 or seg.shape[1] != 4 or seg.shape[0] == 0:
         raise _error("segments_m", f"expected shape (M, 4) with M >= 1, got {seg.shape}")
     bad = np.flatnonzero(~np.isfinite(seg).all(axis=1))
@@ -303,7 +304,10 @@ def _as_segments(segments_m: Any, ids: Any) -> Tuple[np.ndarray, np.ndarray]:
     if ids is None:
         ids_arr = np.arange(1, seg.shape[0] + 1, dtype=np.int64)
     else:
-        raw = np.asarray(ids)
+        try:
+            raw = np.asarray(ids)
+        except ValueError as exc:  # ragged nested lists
+            raise _error("ids", f"cannot be converted to an array ({exc})") from None
         if raw.shape != (seg.shape[0],):
             raise _error("ids", f"expected shape ({seg.shape[0]},), got {raw.shape}")
         if raw.size and not np.issubdtype(raw.dtype, np.integer):
