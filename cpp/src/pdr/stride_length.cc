@@ -96,11 +96,11 @@ Eigen::VectorXd FilterSos(const Eigen::Ref<const RowMatrixXd>& sos, const Eigen:
 }
 
 bool WeinbergOptions::IsValid(std::string* error) const {
-  if (!(std::isfinite(k) && k > 0.0)) return (*error = "k must be finite and > 0", false);
-  if (filter_order < 1 || filter_order > 16) return (*error = "filter_order must be in [1, 16]", false);
-  if (!(std::isfinite(cutoff_hz) && cutoff_hz > 0.0)) return (*error = "cutoff_hz must be > 0", false);
-  if (!(std::isfinite(window_s) && window_s > 0.0)) return (*error = "window_s must be > 0", false);
-  return true;
+  return Validator(error)
+      .Scale(k, "k")
+      .IntInRange(filter_order, 1, 16, "filter_order")
+      .Scale(cutoff_hz, "cutoff_hz")
+      .InRange(window_s, 1e-9, 1e6, "window_s");
 }
 
 Eigen::VectorXd WeinbergFilteredMagnitude(double rate_hz, const Eigen::Ref<const RowMatrixXd>& acc,

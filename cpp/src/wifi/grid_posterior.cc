@@ -9,6 +9,7 @@
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/validate.h"
 #include "rss_limits.h"
 
 namespace indoorloc::wifi {
@@ -38,15 +39,10 @@ double MedianSpacing(const RowMatrixXd& p) {
 }  // namespace
 
 bool GridPosteriorOptions::IsValid(std::string* error) const {
-  if (!std::isfinite(spacing_m)) {
-    *error = "spacing_m must be finite (<= 0 for automatic)";
-    return false;
-  }
-  if (max_points_per_floor < 16) {
-    *error = "max_points_per_floor must be >= 16";
-    return false;
-  }
-  return true;
+  // spacing_m <= 0 picks it automatically; max_points_per_floor bounds the memory (G x K doubles).
+  return Validator(error)
+      .InRange(spacing_m, -kMaxScale, kMaxScale, "spacing_m")
+      .IntInRange(max_points_per_floor, 16, 100000000, "max_points_per_floor");
 }
 
 GridPosterior::GridPosterior(std::shared_ptr<const RssModel> model, GridPosteriorOptions options)

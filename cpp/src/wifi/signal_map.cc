@@ -12,6 +12,7 @@
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/validate.h"
 #include "rss_limits.h"
 
 namespace indoorloc::wifi {
@@ -24,19 +25,10 @@ bool IsNotHeard(double v, double sentinel) { return std::isnan(v) || v == sentin
 }  // namespace
 
 bool SignalMapOptions::IsValid(std::string* error) const {
-  if (!std::isfinite(not_heard_dbm)) {
-    *error = "not_heard_dbm must be finite";
-    return false;
-  }
-  if (!(variance_floor_db2 > 0.0) || !std::isfinite(variance_floor_db2)) {
-    *error = "variance_floor_db2 must be finite and > 0";
-    return false;
-  }
-  if (!(min_point_fraction >= 0.0 && min_point_fraction <= 1.0)) {
-    *error = "min_point_fraction must be in [0, 1]";
-    return false;
-  }
-  return true;
+  return Validator(error)
+      .InRange(not_heard_dbm, -internal::kMaxAbsRssDb, internal::kMaxAbsRssDb, "not_heard_dbm")
+      .Scale(variance_floor_db2, "variance_floor_db2")
+      .InRange(min_point_fraction, 0.0, 1.0, "min_point_fraction");
 }
 
 RowMatrixXd ReplaceNotHeard(const Eigen::Ref<const RowMatrixXd>& rss_dbm, double not_heard_sentinel,
