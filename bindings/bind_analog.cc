@@ -157,6 +157,7 @@ successor_rule : {"catalog", "incremental"}
     analog operator; equal targets merged).)doc")
       .def(py::init([](const std::shared_ptr<Catalog>& catalog, int k, const std::vector<int>& observed, const py::object& R,
                        double sigma_scale, const std::string& successor_rule) {
+             CheckArgument(catalog != nullptr, "catalog", "is None");  // a null holder would crash
              AnalogHmmOptions o;
              o.k = k;
              o.sigma_scale = sigma_scale;

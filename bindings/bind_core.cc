@@ -142,6 +142,8 @@ Returns
           CheckArgument(n_runs >= 0, "n_runs", "must be >= 0");
           const Eigen::Index n = lw.map.size();
           CheckArgument(n > 0, "log_weights", "is empty");
+          RequireSizeLimit(static_cast<double>(n_runs) * static_cast<double>(n), sizeof(std::int64_t), "n_runs",
+                           "counts (n_runs x len(log_weights))");
           py::array_t<std::int64_t> counts({static_cast<py::ssize_t>(n_runs), static_cast<py::ssize_t>(n)});
           std::int64_t* data = counts.mutable_data();
           std::fill(data, data + n_runs * n, 0);

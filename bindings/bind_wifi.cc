@@ -304,6 +304,7 @@ interpolated model, (Q, K) [dBm]. Stream `seed` of indoorloc's generator.)doc");
   py::class_<GradientTracker>(m, "GradientTracker", R"doc(
 Streaming tracker of paper 004 (Algorithm 1, Fisher-scoring steps, no motion model).)doc")
       .def(py::init([](const std::shared_ptr<RssModel>& model, const GradientTrackerOptions& options) {
+             CheckArgument(model != nullptr, "model", "is None");  // a null holder would crash
              return GradientTracker(model, options);
            }),
            py::arg("model"), py::arg("options") = GradientTrackerOptions())
@@ -334,6 +335,7 @@ Streaming tracker of paper 004 (Algorithm 1, Fisher-scoring steps, no motion mod
 Posterior mean and covariance of the position under the interpolated likelihood, on a grid
 over each floor's hull (uniform prior). ``spacing_m <= 0``: a third of the median reference spacing.)doc")
       .def(py::init([](const std::shared_ptr<RssModel>& model, double spacing_m, int max_points_per_floor) {
+             CheckArgument(model != nullptr, "model", "is None");  // a null holder would crash
              wifi::GridPosteriorOptions o;
              o.spacing_m = spacing_m;
              o.max_points_per_floor = max_points_per_floor;
@@ -363,6 +365,7 @@ over each floor's hull (uniform prior). ``spacing_m <= 0``: a third of the media
 
   m.def("locate_ml", [](const std::shared_ptr<RssModel>& model, const py::object& rss_dbm, int group_size,
                         const GradientTrackerOptions& options, int num_threads) {
+          CheckArgument(model != nullptr, "model", "is None");  // a null holder would crash
           MatrixArg scans = ToMatrix(rss_dbm, "rss_dbm", -1, model->num_access_points());
           CheckArgument(group_size >= 1, "group_size", "must be >= 1");
           CheckArgument(scans.map.rows() % group_size == 0, "rss_dbm",

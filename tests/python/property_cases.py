@@ -397,6 +397,11 @@ def group_io() -> None:
     iio.write_geojson_floor(tmp / "plan.geojson", geometry)
     fuzz_file("read_geojson_floor", lambda: iio.read_geojson_floor(tmp / "plan.geojson"), tmp, "plan.geojson")
 
+    from test_io_ilc2020 import _write_walk  # the ILC walk fixture
+
+    _write_walk(tmp / "walk.txt", seed=1, n_epochs=10)
+    fuzz_file("read_ilc_walk", lambda: iio.read_ilc_walk(tmp / "walk.txt"), tmp, "walk.txt")
+
     month = tmp / "uji" / "db" / "01"
     month.mkdir(parents=True)
     for stem, first in (("trn01", 101100101), ("tst01", 101200101)):

@@ -15,7 +15,7 @@ This file is run as a script in a child process by the tests/python/test_propert
 tests (``python property_harness.py <group>``), so that a crash of the extension module fails
 one test instead of killing pytest. It prints one JSON line of counts and the first problems
 found; the exit status is 0 when no problem was found. Hypothesis runs derandomized with a
-fixed number of examples per case (``PROPERTY_EXAMPLES``, default 25) and no example database.
+fixed number of examples per case (``PROPERTY_EXAMPLES``, default 40) and no example database.
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ import numpy as np
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
-EXAMPLES = int(os.environ.get("PROPERTY_EXAMPLES", "25"))
+EXAMPLES = int(os.environ.get("PROPERTY_EXAMPLES", "40"))
 CALL_TIMEOUT_S = float(os.environ.get("PROPERTY_CALL_TIMEOUT_S", "20"))
 STATUS_FILE = os.environ.get("PROPERTY_STATUS_FILE")
 

@@ -191,6 +191,8 @@ void Resample(const Eigen::Ref<const Eigen::VectorXd>& log_weights, ResamplingSc
   CheckArgument(ancestors != nullptr, "ancestors", "is null");
   // Only -1 means "as many as there are weights": -2 is a mistake, not a request for N.
   if (num_out < -1) RequireIntInRange(num_out, -1, INT32_MAX, "num_out");
+  // 4 bytes per ancestor here, 8 more in the caller's int64 copy: 2**31 - 1 asked for 26 GB.
+  if (num_out > 0) RequireSizeLimit(static_cast<double>(num_out), 12.0, "num_out", "ancestors");
   const int m = num_out < 0 ? static_cast<int>(log_weights.size()) : num_out;
   thread_local std::vector<double> weights;  // reused buffer: no allocation in filter loops
   const double total = LinearWeights(log_weights, &weights);

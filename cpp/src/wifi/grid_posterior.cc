@@ -42,7 +42,7 @@ bool GridPosteriorOptions::IsValid(std::string* error) const {
   // spacing_m <= 0 picks it automatically; max_points_per_floor bounds the memory (G x K doubles).
   return Validator(error)
       .InRange(spacing_m, -kMaxScale, kMaxScale, "spacing_m")
-      .IntInRange(max_points_per_floor, 16, 100000000, "max_points_per_floor");
+      .IntInRange(max_points_per_floor, 16, 10000000, "max_points_per_floor");
 }
 
 GridPosterior::GridPosterior(std::shared_ptr<const RssModel> model, GridPosteriorOptions options)
@@ -63,6 +63,9 @@ GridPosterior::GridPosterior(std::shared_ptr<const RssModel> model, GridPosterio
     double h = spacing_m_;
     const Eigen::Vector2d extent = (hi - lo).cwiseMax(1e-9);
     while ((extent[0] / h + 1) * (extent[1] / h + 1) > options.max_points_per_floor) h *= 1.25;
+    // Candidates, interpolated values and the floor's arrays: (2 + 2 K + 3) doubles per point.
+    RequireSizeLimit(static_cast<double>(options.max_points_per_floor) * (5.0 + 2.0 * model_->num_access_points()),
+                     sizeof(double), "max_points_per_floor", "grid values");
     const int nx = static_cast<int>(std::floor(extent[0] / h)) + 1;
     const int ny = static_cast<int>(std::floor(extent[1] / h)) + 1;
     RowMatrixXd candidates(static_cast<Eigen::Index>(nx) * ny, 2);

@@ -64,8 +64,13 @@ def reading(path: PathLike, *, argument: str = "path", what: str = "file") -> It
         raise
     except ValueError as exc:  # UnicodeDecodeError is one too
         message = str(exc)
-        if message.startswith(f"indoorloc: argument '{argument}':") and not isinstance(exc, UnicodeError):
-            # The reader's own message about the file: same text, the library's type.
+        prefix = f"indoorloc: argument '{argument}"
+        if (message.startswith(prefix) and message[len(prefix):len(prefix) + 2] in ("':", " (")
+                and not isinstance(exc, UnicodeError)):
+            # The reader's own message about the file (or a column of it, "'path (gyroscope
+            # columns)'"): the same text, the library's type, and the file named.
+            if os.fspath(path) not in message:
+                message += f" (file {os.fspath(path)})"
             raise FormatError(message, path=path) from exc
         if message.startswith("indoorloc:") and not isinstance(exc, UnicodeError):
             raise  # about another argument (a rate, a name): not the file's fault

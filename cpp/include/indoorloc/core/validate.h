@@ -31,8 +31,9 @@ namespace indoorloc {
 inline constexpr double kMinScale = 1e-12;
 inline constexpr double kMaxScale = 1e12;
 
-/// Default memory budget of one call [bytes]: asking for more is a user error, not a job.
-inline constexpr double kMaxBytes = 8e9;
+/// Default memory budget of one call [bytes]: asking for more is a user error, not a job
+/// (a shared 2-core, 24 GB machine must survive a typo such as num_out = 2**31 - 1).
+inline constexpr double kMaxBytes = 4e9;
 
 /// A value for messages: "inf", "nan", "1e+300", "-7", "0.25".
 std::string FormatValue(double value);
