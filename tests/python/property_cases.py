@@ -162,6 +162,10 @@ def group_network() -> None:
                 "min_separation_s": 10.0}))
     probe(Case("normal_gravity", network.normal_gravity, {"latitude_rad": 0.8, "height_m": np.array([0.0, 100.0])}))
     probe(Case("earth_rate_enu", network.earth_rate_enu, {"latitude_rad": 0.8}))
+    probe(Case("solve_folded_linear_ins_network", network.solve_folded_linear_ins_network,
+               {"imu_rate_hz": 10.0, "duration_s": 20.0, "gps_rate_hz": 1.0, "num_ties": 10, "num_gupts": 2,
+                "sigma_xover_mps2": 1e-5, "sigma_gupt_mps2": 1e-5, "num_threads": 1},
+               long_work_ok=True, solver=True, examples=12))
     from indoorloc.simulate.flight import simulate_flight, small_config
 
     flight = simulate_flight(small_config(line_length_m=400.0, turn_radius_m=100.0, cross_margin_m=100.0,
@@ -176,7 +180,7 @@ def group_network() -> None:
                options_fields={"options": (lambda: network.flight_options(flight.config, max_iterations=3),
                                            ["sigma_gps_m", "acc_noise_mps2_rthz", "latitude_rad",
                                             "slow_parameter_stride", "max_iterations", "num_threads"])},
-               long_work_ok=True))
+               long_work_ok=True, solver=True, examples=12))
 
 
 def group_analog() -> None:

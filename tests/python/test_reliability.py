@@ -365,3 +365,11 @@ def test_loader_column_errors_are_format_errors_naming_the_file(tmp_path):
     p.write_text(header + "\n" + rows + "\n")
     with pytest.raises(io.FormatError, match="walk.csv"):
         io.load_xio(p)
+
+
+def test_linear_ins_network_names_the_rate_not_the_assembler():
+    # Issue 17: a rate of 1e300 made every block NaN and was reported as argument 'assemble'.
+    with pytest.raises(ValueError, match="imu_rate_hz must be finite and in"):
+        network.solve_folded_linear_ins_network(imu_rate_hz=1e300)
+    with pytest.raises(ValueError, match="duration_s"):
+        network.solve_folded_linear_ins_network(duration_s=np.inf)

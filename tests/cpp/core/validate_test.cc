@@ -69,7 +69,7 @@ TEST(Require, ThrowingFormsNameTheArgumentValueAndRule) {
   EXPECT_EQ(MessageOf([] { RequireIntInRange(-2, -1, 100, "num_out"); }),
             "indoorloc: argument 'num_out': must be in [-1, 100], got -2");
   EXPECT_EQ(MessageOf([] { RequireSizeLimit(1e10, 8.0, "size", "draws"); }),
-            "indoorloc: argument 'size': 1e+10 draws would need 80 GB (limit 8 GB)");
+            "indoorloc: argument 'size': 1e+10 draws would need 80 GB (limit 4 GB)");
   EXPECT_NO_THROW(RequireSizeLimit(1e6, 8.0, "size"));
   EXPECT_NO_THROW(RequireScale(1.0, "x"));
   EXPECT_NO_THROW(RequireNonNegative(0.0, "x"));
