@@ -6,6 +6,7 @@
 #include <pybind11/stl.h>
 
 #include "indoorloc/core.h"
+#include "indoorloc/core/interrupt.h"
 #include "indoorloc/core/validate.h"
 #include "numpy_args.h"
 
@@ -41,7 +42,10 @@ py::array_t<double> DrawMany(RandomStream& rng, py::ssize_t size, const char* na
   double* data = out.mutable_data();
   {
     py::gil_scoped_release release;
-    for (py::ssize_t k = 0; k < size; ++k) data[k] = draw();
+    for (py::ssize_t k = 0; k < size; ++k) {
+      if ((k & 0xFFFFF) == 0) CheckInterrupt();  // Ctrl-C every ~1e6 draws
+      data[k] = draw();
+    }
   }
   return out;
 }
@@ -74,7 +78,10 @@ pairs are independent; the same pair always gives the same numbers on every plat
              RequireSizeLimit(static_cast<double>(size), sizeof(std::int64_t), "size", "draws");
              py::array_t<std::int64_t> out(size);
              auto* data = out.mutable_data();
-             for (py::ssize_t k = 0; k < size; ++k) data[k] = static_cast<std::int64_t>(r.UniformInt(n));
+             for (py::ssize_t k = 0; k < size; ++k) {
+               if ((k & 0xFFFFF) == 0) CheckInterrupt();  // Ctrl-C every ~1e6 draws
+               data[k] = static_cast<std::int64_t>(r.UniformInt(n));
+             }
              return out;
            }, py::arg("n"), py::arg("size"), "Array of `size` uniform integers in [0, n).")
       .def("split", &RandomStream::Split, py::arg("child"),

@@ -30,10 +30,12 @@ def group_core() -> None:
     lw = np.log(np.array([0.1, 0.2, 0.3, 0.4]))
     rs = core.RandomStream(1)
     probe(Case("RandomStream", core.RandomStream, {"seed": 1, "stream": 0}))
-    probe(Case("RandomStream.uniform", rs.uniform, {"size": 5}))
-    probe(Case("RandomStream.normal", rs.normal, {"size": 5}))
-    probe(Case("RandomStream.von_mises", rs.von_mises, {"mu_rad": 0.5, "kappa": 2.0, "size": 5}))
-    probe(Case("RandomStream.integers", rs.integers, {"n": 10, "size": 5}))
+    probe(Case("RandomStream.uniform", rs.uniform, {"size": 5}, long_work_ok=True))
+    probe(Case("RandomStream.normal", rs.normal, {"size": 5}, long_work_ok=True))
+    # Up to 4 GB of draws is allowed work: it must stop on Ctrl-C (the alarm) instead.
+    probe(Case("RandomStream.von_mises", rs.von_mises, {"mu_rad": 0.5, "kappa": 2.0, "size": 5},
+               long_work_ok=True))
+    probe(Case("RandomStream.integers", rs.integers, {"n": 10, "size": 5}, long_work_ok=True))
     probe(Case("derive_seed", core.derive_seed, {"seed": 1, "stream": 2}))
     probe(Case("log_sum_exp", core.log_sum_exp, {"log_weights": lw}, minus_inf_ok=True))
     # A -inf log-weight is a zero weight and stays -inf once normalised (documented).
@@ -42,7 +44,8 @@ def group_core() -> None:
     probe(Case("resample", core.resample,
                {"log_weights": lw, "scheme": "systematic", "rng": 3, "num_out": -1}))
     probe(Case("offspring_counts", core.offspring_counts,
-               {"log_weights": lw, "scheme": "residual", "n_runs": 20, "seed": 0, "n_threads": 1}))
+               {"log_weights": lw, "scheme": "residual", "n_runs": 20, "seed": 0, "n_threads": 1},
+               long_work_ok=True))
     probe(Case("resample_if_needed", core.resample_if_needed,
                {"log_weights": lw, "options": core.ResamplingOptions(), "rng": 0}, minus_inf_ok=True,
                options_fields={"options": (core.ResamplingOptions, ["ess_threshold", "scheme"])}))
