@@ -1,5 +1,6 @@
 // Python bindings of the analog subsystem: catalogs, kNN transitions, the analog HMM and the
 // generic sparse forward-backward / Viterbi.
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -13,6 +14,7 @@
 #include "indoorloc/analog/forward_backward.h"
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/validate.h"
 #include "numpy_args.h"
 
 namespace indoorloc::bindings {
@@ -28,6 +30,22 @@ namespace {
 SparseTransitions TransitionsFromNumpy(const py::object& next_idx, const py::object& prob) {
   MatrixArg p = ToMatrix(prob, "prob");
   MatrixArg n = ToMatrix(next_idx, "next_idx", p.map.rows(), p.map.cols());
+  // Checked here with the caller's names (SparseTransitions::Validate can only say 'transitions').
+  const Eigen::Index m = p.map.rows();
+  for (Eigen::Index i = 0; i < m; ++i) {
+    double row = 0.0;
+    for (Eigen::Index j = 0; j < p.map.cols(); ++j) {
+      const double v = n.map(i, j);
+      if (!(v >= 0.0 && v < static_cast<double>(m) && v == std::floor(v)))
+        ThrowInvalidArgument("next_idx", DescribeEntry(i, j, false) + " = " + FormatValue(v) +
+                                             " is not a state index in [0, " + std::to_string(m) + ")");
+      if (!(p.map(i, j) >= 0.0))
+        ThrowInvalidArgument("prob", DescribeEntry(i, j, false) + " is negative: " + FormatValue(p.map(i, j)));
+      row += p.map(i, j);
+    }
+    if (!(std::abs(row - 1.0) <= 1e-9))
+      ThrowInvalidArgument("prob", "row " + std::to_string(i) + " sums to " + FormatValue(row) + ", not 1 (within 1e-9)");
+  }
   SparseTransitions tr;
   tr.num_states = static_cast<int>(p.map.rows());
   tr.k = static_cast<int>(p.map.cols());
@@ -48,8 +66,9 @@ struct GenericHmm {
              const py::object& initial_obj, const py::object& beam)
       : transitions(TransitionsFromNumpy(next_idx, prob)) {
     log_b = ToMatrix(log_emission, "log_emission", -1, transitions.num_states, Finiteness::kAllowMinusInf).map;
+    CheckArgument(log_b.rows() >= 1, "log_emission", "has no time step (0 rows)");
     initial = ToVector(initial_obj, "initial", transitions.num_states).map;
-    options.beam = beam.is_none() ? 0 : beam.cast<int>();
+    options.beam = beam.is_none() ? 0 : ToInt(beam, "beam", 0, 1 << 30);
   }
   int steps() const { return static_cast<int>(log_b.rows()); }
   analog::LogEmission emission() const {
@@ -138,6 +157,7 @@ successor_rule : {"catalog", "incremental"}
     analog operator; equal targets merged).)doc")
       .def(py::init([](const std::shared_ptr<Catalog>& catalog, int k, const std::vector<int>& observed, const py::object& R,
                        double sigma_scale, const std::string& successor_rule) {
+             CheckArgument(catalog != nullptr, "catalog", "is None");  // a null holder would crash
              AnalogHmmOptions o;
              o.k = k;
              o.sigma_scale = sigma_scale;
@@ -168,7 +188,7 @@ successor_rule : {"catalog", "incremental"}
       .def("smooth", [](const AnalogHMM& h, const py::object& observations, const py::object& beam, int beam_unobserved,
                         double max_dropped_mass, int beam_max) {
              MatrixArg obs = ToMatrix(observations, "observations", -1, -1, Finiteness::kAny);
-             const int n = beam.is_none() ? 0 : beam.cast<int>();
+             const int n = beam.is_none() ? 0 : ToInt(beam, "beam", 0, 1 << 30);
              CheckArgument(n >= 0, "beam", "must be >= 0 or None");
              CheckArgument(beam_unobserved >= 0, "beam_unobserved", "must be >= 0");
              CheckArgument(max_dropped_mass >= 0.0 && max_dropped_mass <= 1.0, "max_dropped_mass", "must be in [0, 1]");
@@ -203,7 +223,7 @@ this filtering mass is dropped per step (1: off), capped at beam_max states (0: 
 log_likelihood, dropped_mass (T,), support_size (T,), seconds.)doc")
       .def("viterbi", [](const AnalogHMM& h, const py::object& observations, const py::object& beam) {
              MatrixArg obs = ToMatrix(observations, "observations", -1, -1, Finiteness::kAny);
-             const int n = beam.is_none() ? 0 : beam.cast<int>();
+             const int n = beam.is_none() ? 0 : ToInt(beam, "beam", 0, 1 << 30);
              analog::ViterbiResult v;
              {
                py::gil_scoped_release release;

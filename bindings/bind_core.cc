@@ -6,6 +6,8 @@
 #include <pybind11/stl.h>
 
 #include "indoorloc/core.h"
+#include "indoorloc/core/interrupt.h"
+#include "indoorloc/core/validate.h"
 #include "numpy_args.h"
 
 namespace indoorloc::bindings {
@@ -22,7 +24,10 @@ py::array_t<std::int64_t> ToNumpyIndices(const std::vector<int>& indices) {
 template <typename Fn>
 auto WithStream(const py::object& rng, Fn fn) {
   if (py::isinstance<RandomStream>(rng)) return fn(rng.cast<RandomStream&>());
-  if (py::isinstance<py::int_>(rng)) {
+  if (py::isinstance<py::int_>(rng) && !py::isinstance<py::bool_>(rng)) {
+    // A seed outside uint64 would give pybind11's "Unable to cast ... to C++ type '?'".
+    CheckArgument(rng.attr("__ge__")(0).cast<bool>() && rng.attr("__lt__")(py::int_(1).attr("__lshift__")(64)).cast<bool>(),
+                  "rng", "an int seed must be in [0, 2**64)");
     RandomStream stream(rng.cast<std::uint64_t>());
     return fn(stream);
   }
@@ -32,11 +37,15 @@ auto WithStream(const py::object& rng, Fn fn) {
 template <typename Draw>
 py::array_t<double> DrawMany(RandomStream& rng, py::ssize_t size, const char* name, Draw draw) {
   CheckArgument(size >= 0, name, "must be >= 0");
+  RequireSizeLimit(static_cast<double>(size), sizeof(double), name, "draws");
   py::array_t<double> out(size);
   double* data = out.mutable_data();
   {
     py::gil_scoped_release release;
-    for (py::ssize_t k = 0; k < size; ++k) data[k] = draw();
+    for (py::ssize_t k = 0; k < size; ++k) {
+      if ((k & 0xFFFFF) == 0) CheckInterrupt();  // Ctrl-C every ~1e6 draws
+      data[k] = draw();
+    }
   }
   return out;
 }
@@ -58,6 +67,7 @@ pairs are independent; the same pair always gives the same numbers on every plat
              return DrawMany(r, size, "size", [&] { return r.Normal(); });
            }, py::arg("size"), "Array of `size` standard normal draws.")
       .def("von_mises", [](RandomStream& r, double mu_rad, double kappa, py::ssize_t size) {
+             RequireFinite(mu_rad, "mu_rad");
              CheckNonNegative(kappa, "kappa");
              return DrawMany(r, size, "size", [&] { return r.VonMises(mu_rad, kappa); });
            }, py::arg("mu_rad"), py::arg("kappa"), py::arg("size"),
@@ -65,9 +75,13 @@ pairs are independent; the same pair always gives the same numbers on every plat
       .def("integers", [](RandomStream& r, std::uint64_t n, py::ssize_t size) {
              CheckArgument(n > 0, "n", "must be > 0");
              CheckArgument(size >= 0, "size", "must be >= 0");
+             RequireSizeLimit(static_cast<double>(size), sizeof(std::int64_t), "size", "draws");
              py::array_t<std::int64_t> out(size);
              auto* data = out.mutable_data();
-             for (py::ssize_t k = 0; k < size; ++k) data[k] = static_cast<std::int64_t>(r.UniformInt(n));
+             for (py::ssize_t k = 0; k < size; ++k) {
+               if ((k & 0xFFFFF) == 0) CheckInterrupt();  // Ctrl-C every ~1e6 draws
+               data[k] = static_cast<std::int64_t>(r.UniformInt(n));
+             }
              return out;
            }, py::arg("n"), py::arg("size"), "Array of `size` uniform integers in [0, n).")
       .def("split", &RandomStream::Split, py::arg("child"),
@@ -135,6 +149,8 @@ Returns
           CheckArgument(n_runs >= 0, "n_runs", "must be >= 0");
           const Eigen::Index n = lw.map.size();
           CheckArgument(n > 0, "log_weights", "is empty");
+          RequireSizeLimit(static_cast<double>(n_runs) * static_cast<double>(n), sizeof(std::int64_t), "n_runs",
+                           "counts (n_runs x len(log_weights))");
           py::array_t<std::int64_t> counts({static_cast<py::ssize_t>(n_runs), static_cast<py::ssize_t>(n)});
           std::int64_t* data = counts.mutable_data();
           std::fill(data, data + n_runs * n, 0);

@@ -1,5 +1,6 @@
 // Python bindings of the mapmatch subsystem: road networks, trajectories, the circular particle
 // filter and the Monte Carlo runner of paper 000.
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -8,6 +9,7 @@
 #include <pybind11/stl.h>
 
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/validate.h"
 #include "indoorloc/mapmatch/monte_carlo.h"
 #include "indoorloc/mapmatch/particle_map_matcher.h"
 #include "indoorloc/mapmatch/road_network.h"
@@ -102,13 +104,7 @@ split_at_intersections : bool
                        bool split_at_intersections) {
              MatrixArg seg = ToMatrix(segments_m, "segments_m", -1, 4);
              Eigen::VectorXi id;
-             if (!ids.is_none()) {
-               VectorArg v = ToVector(ids, "ids", seg.map.rows());
-               id = v.map.cast<int>();
-               for (Eigen::Index i = 0; i < v.map.size(); ++i) {
-                 if (v.map[i] != std::floor(v.map[i])) ThrowInvalidArgument("ids", DescribeEntry(i, 0, true) + " is not an integer");
-               }
-             }
+             if (!ids.is_none()) id = ToIntVector(ids, "ids", seg.map.rows());  // 32-bit ids: no wrap-around
              RoadNetworkOptions o;
              o.snap_tolerance_m = snap_tolerance_m;
              o.split_at_intersections = split_at_intersections;
@@ -143,6 +139,7 @@ split_at_intersections : bool
            py::arg("segment"), py::arg("end"), "[(segment, enter_end), ...] reachable from an end.")
       .def("nearest", [](const RoadNetwork& n, const py::object& points_m) {
              MatrixArg p = ToMatrix(points_m, "points_m", -1, 2);
+             RequireAllInRange(p.map, -1e12, 1e12, "points_m");  // squared distances stay finite
              const Eigen::Index q = p.map.rows();
              std::vector<std::int64_t> seg(static_cast<size_t>(q));
              RowMatrixXd proj(q, 2);
@@ -161,7 +158,8 @@ split_at_intersections : bool
            },
            py::arg("points_m"), "Nearest segment of points (Q, 2): (segments, projections (Q, 2), distances, along_m).")
       .def("point_at", [](const RoadNetwork& n, int segment, double along_m) {
-             CheckArgument(segment >= 0 && segment < n.num_segments(), "segment", "out of range");
+             RequireIntInRange(segment, 0, n.num_segments() - 1, "segment");
+             RequireFinite(along_m, "along_m");
              return n.point_at(segment, along_m);
            }, py::arg("segment"), py::arg("along_m"))
       .def("report", &RoadNetwork::Report, "Validation report: sizes, components, dangling ends.")
@@ -271,15 +269,19 @@ Returns a dict of arrays: positions_m (T, 2) (projected estimate), weighted_mean
 recovered.)doc")
       .def("set_particles", [](ParticleMapMatcher& f, const py::object& segments, const py::object& directions,
                                const py::object& along_m) {
-             VectorArg s = ToVector(segments, "segments");
-             VectorArg d = ToVector(directions, "directions", s.map.size());
-             VectorArg u = ToVector(along_m, "along_m", s.map.size());
-             std::vector<int> seg(static_cast<size_t>(s.map.size()));
+             // Whole numbers only: 2.7 is not a segment index and -7 is not a direction.
+             const Eigen::VectorXi s = ToIntVector(segments, "segments");
+             const Eigen::VectorXi d = ToIntVector(directions, "directions", s.size());
+             VectorArg u = ToVector(along_m, "along_m", s.size());
+             std::vector<int> seg(s.data(), s.data() + s.size());
              std::vector<signed char> dir(seg.size());
              std::vector<double> along(seg.size());
              for (size_t i = 0; i < seg.size(); ++i) {
-               seg[i] = static_cast<int>(s.map[static_cast<Eigen::Index>(i)]);
-               dir[i] = static_cast<signed char>(d.map[static_cast<Eigen::Index>(i)] > 0 ? 1 : -1);
+               const int di = d[static_cast<Eigen::Index>(i)];
+               if (di != 1 && di != -1)
+                 ThrowInvalidArgument("directions", DescribeEntry(static_cast<Eigen::Index>(i), 0, true) +
+                                                        " must be +1 or -1, got " + std::to_string(di));
+               dir[i] = static_cast<signed char>(di);
                along[i] = u.map[static_cast<Eigen::Index>(i)];
              }
              f.SetParticles(seg, dir, along);
@@ -299,7 +301,12 @@ recovered.)doc")
 
   m.def("monte_carlo", [](const RoadNetwork& n, const TrajectoryOptions& t, const FilterOptions& f, int n_runs,
                           std::uint64_t seed, int n_threads) {
-          CheckArgument(n_runs >= 1, "n_runs", "must be >= 1");
+          RequireIntInRange(n_runs, 1, 100000000, "n_runs");
+          ValidateOptions(t, "trajectory");
+          // The (R, T) result arrays (and each run's history) must fit in memory: refuse before
+          // running for hours. The loops poll Ctrl-C (KeyboardInterrupt) between steps.
+          RequireSizeLimit(static_cast<double>(n_runs) * std::floor(t.duration_s / t.dt_s + 1.0), 5 * sizeof(double),
+                           "n_runs", "run-steps (n_runs x duration_s / dt_s)");
           std::vector<RunResult> r;
           {
             py::gil_scoped_release release;

@@ -8,6 +8,7 @@
 #include <pybind11/stl.h>
 
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/validate.h"
 #include "indoorloc/network/gravity.h"
 #include "indoorloc/network/kalman_smoother.h"
 #include "indoorloc/network/network_adjustment.h"
@@ -343,15 +344,19 @@ crossing of two passes. time_s (N,) [s], position_m (N, 3) ENU [m].)doc");
   m.def("normal_gravity",
         [](double latitude_rad, const py::object& height_m) {
           VectorArg h = ToVector(height_m, "height_m");
-          CheckArgument(std::isfinite(latitude_rad) && std::abs(latitude_rad) <= 1.5707963267948966, "latitude_rad",
-                        "must be in [-pi/2, pi/2]");
+          RequireInRange(latitude_rad, -1.5707963267948966, 1.5707963267948966, "latitude_rad");
+          // The height term is quadratic: beyond ±1e7 m (far outside the model's validity) it overflows.
+          RequireAllInRange(h.map, -1e7, 1e7, "height_m");
           Eigen::VectorXd g(h.map.size());
           for (Eigen::Index i = 0; i < g.size(); ++i) g[i] = network::NormalGravity(latitude_rad, h.map[i]);
           return ToNumpy(g);
         },
         py::arg("latitude_rad"), py::arg("height_m"),
         "GRS80 normal gravity (Somigliana + second-order height term) [m/s^2] at heights (H,) [m].");
-  m.def("earth_rate_enu", [](double latitude_rad) { return Eigen::Vector3d(network::EarthRateEnu(latitude_rad)); },
+  m.def("earth_rate_enu", [](double latitude_rad) {
+          RequireInRange(latitude_rad, -1.5707963267948966, 1.5707963267948966, "latitude_rad");
+          return Eigen::Vector3d(network::EarthRateEnu(latitude_rad));
+        },
         py::arg("latitude_rad"), "Earth rotation vector (3,) in the local ENU frame [rad/s].");
 }
 

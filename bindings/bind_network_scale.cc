@@ -9,6 +9,7 @@
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/validate.h"
 #include "indoorloc/network/linear_ins_ceres.h"
 #include "indoorloc/network/folded_network.h"
 #include "indoorloc/network/linear_ins_network.h"
@@ -28,6 +29,8 @@ network::LinearInsNetworkOptions MakeOptions(double imu_rate_hz, double duration
   CheckArgument(rule == "leapfrog" || rule == "trapezoidal", "rule", "must be 'leapfrog' or 'trapezoidal', got '" + rule + "'");
   o.rule = rule == "leapfrog" ? network::Discretisation::kLeapFrog : network::Discretisation::kTrapezoidal;
   o.prior_epochs = prior_epochs;
+  // Validated here, before any layout or allocation sized by rate x duration.
+  ValidateOptions(o);
   return o;
 }
 
@@ -41,6 +44,10 @@ void BindNetworkScale(py::module_& m) {
          bool gravity_covariance, bool keep_gravity_estimate, int num_threads) {
         network::LinearInsNetworkOptions o = MakeOptions(imu_rate_hz, duration_s, gps_rate_hz, rule, 2);
         o.gupt_end_epochs = 0;  // every GUPT comes from the layout, so the count is num_gupts
+        // Tie and GUPT sds enter as 1/sigma^2 next to the IMU densities (about 1e-5): beyond
+        // [1e-9, 1e3] the weights leave double precision's range ('ties'/'assemble' errors).
+        RequireInRange(sigma_xover_mps2, 1e-9, 1e3, "sigma_xover_mps2");
+        RequireInRange(sigma_gupt_mps2, 1e-9, 1e3, "sigma_gupt_mps2");
         network::FoldedNetworkOptions fo;
         fo.checkpoint_interval = checkpoint_interval;
         fo.gravity_covariance = gravity_covariance;
@@ -116,6 +123,7 @@ min_relative_pivot, max_abs_error (every unknown, against the noise-free truth),
       "solve_linear_ins_network_with_crossovers",
       [](double imu_rate_hz, double duration_s, double gps_rate_hz, const std::string& rule, int lines, int cross_lines,
          double sigma_xover_mps2, int max_iterations, double relative_tolerance) {
+        RequireInRange(sigma_xover_mps2, 1e-9, 1e3, "sigma_xover_mps2");
         const network::LinearInsNetworkOptions o = MakeOptions(imu_rate_hz, duration_s, gps_rate_hz, rule, 2);
         network::TiedSolveOptions pcg;
         pcg.max_iterations = max_iterations;

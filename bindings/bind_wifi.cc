@@ -11,6 +11,7 @@
 #include "indoorloc/core/options.h"
 #include "indoorloc/core/parallel.h"
 #include "indoorloc/core/random.h"
+#include "indoorloc/core/validate.h"
 #include "indoorloc/wifi/delaunay_interpolator.h"
 #include "indoorloc/wifi/gradient_tracker.h"
 #include "indoorloc/wifi/grid_posterior.h"
@@ -203,6 +204,7 @@ The interpolated Gaussian RSS model of a signal map: l(z, v), its gradient and F
       .def("interpolator", &RssModel::interpolator, py::arg("floor_index"), py::return_value_policy::reference_internal)
       .def("evaluate", [](const RssModel& model, const py::object& rss_dbm, const Eigen::Vector2d& z_m, int floor) {
              MatrixArg scans = ToMatrix(rss_dbm, "rss_dbm", -1, model.num_access_points());
+             RequireAllInRange(scans.map, -1e4, 1e4, "rss_dbm");  // 1e300 dBm gave inf likelihoods
              int hint = -1;
              const wifi::RssLikelihood l = model.Evaluate(scans.map, z_m, model.FloorIndex(floor), &hint);
              return py::make_tuple(l.neg_log_likelihood, l.gradient, l.fisher, l.inside);
@@ -212,6 +214,7 @@ l(z, v) [nats], its gradient (2,) [1/m] and the Fisher information (2, 2) [1/m^2
 (n, K) all taken at z_m, and whether z_m is inside the floor's hull.)doc")
       .def("neg_log_likelihood_at", [](const RssModel& model, const py::object& rss_dbm, const py::object& points_m, int floor) {
              MatrixArg scans = ToMatrix(rss_dbm, "rss_dbm", -1, model.num_access_points());
+             RequireAllInRange(scans.map, -1e4, 1e4, "rss_dbm");  // 1e300 dBm gave inf likelihoods
              MatrixArg pts = ToMatrix(points_m, "points_m", -1, 2);
              const int f = model.FloorIndex(floor);
              Eigen::VectorXd out(pts.map.rows());
@@ -301,6 +304,7 @@ interpolated model, (Q, K) [dBm]. Stream `seed` of indoorloc's generator.)doc");
   py::class_<GradientTracker>(m, "GradientTracker", R"doc(
 Streaming tracker of paper 004 (Algorithm 1, Fisher-scoring steps, no motion model).)doc")
       .def(py::init([](const std::shared_ptr<RssModel>& model, const GradientTrackerOptions& options) {
+             CheckArgument(model != nullptr, "model", "is None");  // a null holder would crash
              return GradientTracker(model, options);
            }),
            py::arg("model"), py::arg("options") = GradientTrackerOptions())
@@ -331,6 +335,7 @@ Streaming tracker of paper 004 (Algorithm 1, Fisher-scoring steps, no motion mod
 Posterior mean and covariance of the position under the interpolated likelihood, on a grid
 over each floor's hull (uniform prior). ``spacing_m <= 0``: a third of the median reference spacing.)doc")
       .def(py::init([](const std::shared_ptr<RssModel>& model, double spacing_m, int max_points_per_floor) {
+             CheckArgument(model != nullptr, "model", "is None");  // a null holder would crash
              wifi::GridPosteriorOptions o;
              o.spacing_m = spacing_m;
              o.max_points_per_floor = max_points_per_floor;
@@ -360,6 +365,7 @@ over each floor's hull (uniform prior). ``spacing_m <= 0``: a third of the media
 
   m.def("locate_ml", [](const std::shared_ptr<RssModel>& model, const py::object& rss_dbm, int group_size,
                         const GradientTrackerOptions& options, int num_threads) {
+          CheckArgument(model != nullptr, "model", "is None");  // a null holder would crash
           MatrixArg scans = ToMatrix(rss_dbm, "rss_dbm", -1, model->num_access_points());
           CheckArgument(group_size >= 1, "group_size", "must be >= 1");
           CheckArgument(scans.map.rows() % group_size == 0, "rss_dbm",

@@ -1,12 +1,36 @@
 // The pybind11 module indoorloc._core: one submodule per subsystem. Each subsystem's bindings
 // live in bind_<subsystem>.cc and are registered here. C++ exceptions map to Python as
 // std::invalid_argument -> ValueError, std::out_of_range -> IndexError,
-// std::runtime_error (and others) -> RuntimeError (pybind11's standard translation).
+// std::runtime_error (and others) -> RuntimeError (pybind11's standard translation);
+// indoorloc::Interrupted (Ctrl-C seen inside a C++ loop) -> KeyboardInterrupt.
 #include <pybind11/pybind11.h>
 
+#include "indoorloc/core/interrupt.h"
 #include "indoorloc/core/version.h"
 
 namespace py = pybind11;
+
+namespace {
+
+// The Python error (KeyboardInterrupt, or whatever a custom SIGINT handler raised) found by
+// the interrupt hook, kept until the Interrupted exception reaches Python.
+PyObject* g_pending_type = nullptr;
+PyObject* g_pending_value = nullptr;
+PyObject* g_pending_traceback = nullptr;
+
+// Called by indoorloc::CheckInterrupt on the main thread, with or without the GIL.
+bool PollPythonSignals() {
+  py::gil_scoped_acquire gil;
+  if (PyErr_CheckSignals() == 0) return false;
+  if (g_pending_type == nullptr) {
+    PyErr_Fetch(&g_pending_type, &g_pending_value, &g_pending_traceback);
+  } else {
+    PyErr_Clear();  // a second Ctrl-C while the first unwinds
+  }
+  return true;
+}
+
+}  // namespace
 
 namespace indoorloc::bindings {
 void BindAnalog(py::module_& m);
@@ -24,6 +48,23 @@ void BindWifiBaselines(py::module_& m);
 PYBIND11_MODULE(_core, m) {
   m.doc() = "indoorloc compiled core (C++17). Use the facades in the indoorloc package.";
   m.attr("__version__") = indoorloc::kVersion;
+
+  // Ctrl-C during C++ loops that release the GIL: they call CheckInterrupt between runs and
+  // steps, which polls PyErr_CheckSignals here and unwinds with indoorloc::Interrupted.
+  indoorloc::SetInterruptHook(&PollPythonSignals);
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const indoorloc::Interrupted&) {
+      indoorloc::ClearInterrupt();
+      if (g_pending_type != nullptr) {
+        PyErr_Restore(g_pending_type, g_pending_value, g_pending_traceback);
+        g_pending_type = g_pending_value = g_pending_traceback = nullptr;
+      } else {
+        PyErr_SetNone(PyExc_KeyboardInterrupt);
+      }
+    }
+  });
 
   py::module_ core = m.def_submodule("core", "Random streams, log-space weights, resampling.");
   indoorloc::bindings::BindCore(core);

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "indoorloc/core/validate.h"
+
 namespace indoorloc::bindings {
 namespace {
 
@@ -24,7 +26,23 @@ void CheckValues(const double* data, Eigen::Index size, Eigen::Index cols, const
 
 DoubleArray ToDoubleArray(const py::handle& obj, const char* name) {
   if (obj.is_none()) ThrowInvalidArgument(name, "is None, expected an array of numbers");
-  DoubleArray array = DoubleArray::ensure(obj);
+  // Look at the dtype before the float64 cast: forcecast would silently drop the imaginary part
+  // of complex input, and turn strings or objects into whatever numpy makes of them.
+  py::array raw = py::array::ensure(obj);
+  if (!raw) {
+    PyErr_Clear();
+    ThrowInvalidArgument(name, "cannot be converted to an array");
+  }
+  const char kind = raw.dtype().kind();
+  const std::string dtype = py::str(raw.dtype());
+  if (kind == 'c') {
+    ThrowInvalidArgument(name, "is complex (dtype " + dtype +
+                                   "): cannot be converted to a float64 array without dropping the imaginary part");
+  }
+  if (kind != 'f' && kind != 'i' && kind != 'u' && kind != 'b') {
+    ThrowInvalidArgument(name, "cannot be converted to a float64 array (dtype " + dtype + ")");
+  }
+  DoubleArray array = DoubleArray::ensure(raw);
   if (!array) {
     PyErr_Clear();
     ThrowInvalidArgument(name, "cannot be converted to a float64 array");
@@ -70,6 +88,24 @@ MatrixArg ToMatrix(const py::handle& obj, const char* name, Eigen::Index rows, E
   return arg;
 }
 
+int ToInt(const py::handle& obj, const char* name, long long lo, long long hi) {
+  if (py::isinstance<py::bool_>(obj) || !(py::isinstance<py::int_>(obj) || py::hasattr(obj, "__index__"))) {
+    ThrowInvalidArgument(name, "expected an integer, got " + std::string(py::str(py::type::handle_of(obj).attr("__name__"))));
+  }
+  const py::int_ value = py::reinterpret_steal<py::int_>(PyNumber_Index(obj.ptr()));
+  if (!value) {
+    PyErr_Clear();
+    ThrowInvalidArgument(name, "expected an integer");
+  }
+  int overflow = 0;
+  const long long v = PyLong_AsLongLongAndOverflow(value.ptr(), &overflow);
+  if (overflow != 0 || v < lo || v > hi) {
+    ThrowInvalidArgument(name, "must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " +
+                                   std::string(py::str(value)));
+  }
+  return static_cast<int>(v);
+}
+
 py::array_t<double> ToNumpy(const Eigen::Ref<const Eigen::VectorXd>& v) {
   py::array_t<double> out(v.size());
   std::copy(v.data(), v.data() + v.size(), out.mutable_data());
@@ -81,8 +117,13 @@ Eigen::VectorXi ToIntVector(const py::handle& obj, const char* name, Eigen::Inde
   Eigen::VectorXi out(v.map.size());
   for (Eigen::Index i = 0; i < v.map.size(); ++i) {
     const double x = v.map[i];
-    if (x != std::floor(x) || std::abs(x) > 2e9) {
-      ThrowInvalidArgument(name, DescribeEntry(i, 0, true) + " is not an integer");
+    if (x != std::floor(x)) {
+      ThrowInvalidArgument(name, DescribeEntry(i, 0, true) + " is not an integer, got " + FormatValue(x));
+    }
+    // Beyond 32 bits a cast would wrap (an id of 2**31 became -2147483648).
+    if (x < -2147483648.0 || x > 2147483647.0) {
+      ThrowInvalidArgument(name, DescribeEntry(i, 0, true) + " = " + FormatValue(x) +
+                                     " does not fit in a 32-bit integer [-2147483648, 2147483647]");
     }
     out[i] = static_cast<int>(x);
   }

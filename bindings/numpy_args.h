@@ -47,9 +47,12 @@ VectorArg ToVector(const py::handle& obj, const char* name, Eigen::Index size = 
 MatrixArg ToMatrix(const py::handle& obj, const char* name, Eigen::Index rows = -1,
                    Eigen::Index cols = -1, Finiteness finiteness = Finiteness::kFinite);
 
-/// 1-D integer argument of length `size` (-1: any): every entry a whole number within ±2e9,
-/// else ValueError naming `name` and the entry.
+/// 1-D integer argument of length `size` (-1: any): every entry a whole number that fits in a
+/// 32-bit int, else ValueError naming `name`, the entry and its value.
 Eigen::VectorXi ToIntVector(const py::handle& obj, const char* name, Eigen::Index size = -1);
+/// A Python int (or integer-valued number) argument in [lo, hi], else ValueError naming `name`
+/// (pybind11's own cast says "Unable to cast Python instance of type int to C++ type '?'").
+int ToInt(const py::handle& obj, const char* name, long long lo, long long hi);
 /// Copies an Eigen vector into a new numpy array.
 py::array_t<double> ToNumpy(const Eigen::Ref<const Eigen::VectorXd>& v);
 

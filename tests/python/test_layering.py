@@ -33,9 +33,9 @@ PACKAGE_DIR = Path(__file__).resolve().parents[2] / "python" / PACKAGE
 #: (layer, what lives there, module-name patterns), lowest layer first. A module may import
 #: modules of its own layer and of the layers below it, never of a layer above.
 LAYERS: Tuple[Tuple[str, str, Tuple[str, ...]], ...] = (
-    ("leaves", "import nothing from indoorloc: demo registry and data folders, progress bars, "
+    ("leaves", "import nothing from indoorloc: demo registry and data folders, progress bars, argument checks, "
                "packaged data files",
-     ("indoorloc.registry", "indoorloc.progress", "indoorloc.data", "indoorloc.data.**")),
+     ("indoorloc.registry", "indoorloc.progress", "indoorloc.validate", "indoorloc.data", "indoorloc.data.**")),
     ("_core", "the compiled module (pybind11) and its stubs",
      ("indoorloc._core", "indoorloc._core.**")),
     ("io, simulate", "file formats and simulated data: plain arrays and dataclasses, may build "

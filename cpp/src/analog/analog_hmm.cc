@@ -12,6 +12,7 @@
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/validate.h"
 
 namespace indoorloc::analog {
 namespace {
@@ -181,8 +182,9 @@ AnalogHMM::AnalogHMM(std::shared_ptr<const Catalog> catalog, const AnalogHmmOpti
                 "R", "is not symmetric");
   Eigen::LLT<Eigen::MatrixXd> llt(options_.R);
   CheckArgument(llt.info() == Eigen::Success, "R", "is not positive definite");
-  CheckArgument(catalog_->num_analogs() >= options_.k + 1, "catalog",
-                "has " + std::to_string(catalog_->num_analogs()) + " analogs: needs at least K + 1 = " + std::to_string(options_.k + 1));
+  CheckArgument(catalog_->num_analogs() >= options_.k + 1, "k",
+                "k = " + std::to_string(options_.k) + " needs at least K + 1 = " + std::to_string(options_.k + 1) +
+                    " analogs, argument 'catalog' has " + std::to_string(catalog_->num_analogs()));
   transitions_ = BuildKnnTransitions(*catalog_, options_.k, options_.sigma_scale, options_.successor_rule);
 }
 
@@ -193,6 +195,10 @@ LogEmission AnalogHMM::Emission(const Eigen::Ref<const RowMatrixXd>& observation
   for (Eigen::Index t = 0; t < observations.rows(); ++t) {
     for (Eigen::Index c = 0; c < m; ++c) {
       if (std::isinf(observations(t, c))) ThrowInvalidArgument("observations", DescribeEntry(t, c, false) + " is infinite");
+      // Squared residuals must stay finite (1e300 gave -inf emissions for every state).
+      if (std::abs(observations(t, c)) > 1e100)
+        ThrowInvalidArgument("observations", DescribeEntry(t, c, false) + " = " + FormatValue(observations(t, c)) +
+                                                 " is beyond +-1e100");
     }
   }
   // Per distinct missingness pattern: the observed sub-covariance's inverse and log-determinant.
@@ -265,6 +271,7 @@ SmoothingOutput AnalogHMM::Smooth(const Eigen::Ref<const RowMatrixXd>& observati
   const LogEmission emission = Emission(observations);
   ForwardBackwardOptions fb;
   fb.beam = beam;
+  fb.emission_argument = "observations";
   fb.max_dropped_mass = options.max_dropped_mass;
   fb.beam_max = options.beam_max;
   if (beam > 0 && beam_unobserved > 0) {
@@ -314,6 +321,7 @@ ViterbiResult AnalogHMM::MapSequence(const Eigen::Ref<const RowMatrixXd>& observ
   const LogEmission emission = Emission(observations);
   ForwardBackwardOptions fb;
   fb.beam = beam;
+  fb.emission_argument = "observations";
   return Viterbi(transitions_, Eigen::VectorXd::Ones(catalog_->num_states()), static_cast<int>(observations.rows()), emission, fb);
 }
 

@@ -2,19 +2,12 @@
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/validate.h"
 
 namespace indoorloc::analog {
 
 bool CatalogOptions::IsValid(std::string* error) const {
-  if (lag < 1) {
-    *error = "lag must be >= 1";
-    return false;
-  }
-  if (stride < 1) {
-    *error = "stride must be >= 1";
-    return false;
-  }
-  return true;
+  return Validator(error).IntInRange(lag, 1, 1000000, "lag").IntInRange(stride, 1, 1000000, "stride");
 }
 
 Catalog::Catalog(const std::vector<RowMatrixXd>& trajectories, const CatalogOptions& options) : options_(options) {

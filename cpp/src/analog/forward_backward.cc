@@ -175,7 +175,7 @@ ForwardBackwardResult ForwardBackward(const SparseTransitions& tr, const Eigen::
     log_emission(static_cast<int>(t), cand.data(), static_cast<int>(cand.size()), log_b.data());
     double bmax = kMinusInf;
     for (double v : log_b) bmax = std::max(bmax, v);
-    if (bmax == kMinusInf) ThrowInvalidArgument("log_emission", "every candidate state has zero likelihood (-inf) at some step");
+    if (bmax == kMinusInf) ThrowInvalidArgument(options.emission_argument, "every candidate state has zero likelihood (-inf) at step " + std::to_string(t));
     std::vector<double> b(cand.size());
     std::vector<double> alpha(cand.size());
     double sum = 0.0;
@@ -183,7 +183,7 @@ ForwardBackwardResult ForwardBackward(const SparseTransitions& tr, const Eigen::
       b[c] = std::exp(log_b[c] - bmax);
       sum += (alpha[c] = prior[c] * b[c]);
     }
-    if (!(sum > 0.0)) ThrowInvalidArgument("log_emission", "the observations have zero likelihood under every predicted state at step " + std::to_string(t));
+    if (!(sum > 0.0)) ThrowInvalidArgument(options.emission_argument, "the observations have zero likelihood under every predicted state at step " + std::to_string(t));
     out.log_likelihood += bmax + std::log(sum);
     const double inv = 1.0 / sum;
     for (double& v : alpha) v *= inv;
@@ -304,6 +304,11 @@ ViterbiResult Viterbi(const SparseTransitions& tr, const Eigen::VectorXd& initia
     log_b.resize(cand.size());
     log_emission(static_cast<int>(t), cand.data(), static_cast<int>(cand.size()), log_b.data());
     for (size_t c = 0; c < cand.size(); ++c) val[c] += log_b[c];
+    // No path left: backtracking would follow -1 pointers (it crashed on observations of 1e300).
+    if (std::none_of(val.begin(), val.end(), [](double v) { return v > kMinusInf; })) {
+      ThrowInvalidArgument(options.emission_argument,
+                           "every candidate state has zero likelihood (-inf) at step " + std::to_string(t));
+    }
     if (options.beam > 0 && cand.size() > static_cast<size_t>(options.beam)) {
       std::vector<size_t> order(cand.size());
       std::iota(order.begin(), order.end(), 0);

@@ -2,12 +2,15 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
+#include <condition_variable>
 #include <exception>
 #include <mutex>
 #include <thread>
 #include <vector>
 
 #include "indoorloc/core/check.h"
+#include "indoorloc/core/interrupt.h"
 
 namespace indoorloc {
 
@@ -32,6 +35,14 @@ void ParallelForRuns(int n_runs, int n_threads, std::uint64_t seed,
     while (!failed.load(std::memory_order_relaxed)) {
       const int run = next_run.fetch_add(1);
       if (run >= n_runs) return;
+      try {
+        CheckInterrupt();  // Ctrl-C between runs (polls the host on its thread)
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(error_mutex);
+        if (!first_error) first_error = std::current_exception();
+        failed.store(true);
+        return;
+      }
       // The stream depends on (seed, run) only: the thread that runs it does not matter.
       RandomStream rng(seed, static_cast<std::uint64_t>(run));
       try {
@@ -49,7 +60,29 @@ void ParallelForRuns(int n_runs, int n_threads, std::uint64_t seed,
   } else {
     std::vector<std::thread> pool;
     pool.reserve(static_cast<size_t>(threads));
-    for (int t = 0; t < threads; ++t) pool.emplace_back(worker);
+    std::mutex done_mutex;
+    std::condition_variable done_cv;
+    int done = 0;
+    for (int t = 0; t < threads; ++t) {
+      pool.emplace_back([&] {
+        worker();
+        std::lock_guard<std::mutex> lock(done_mutex);
+        ++done;
+        done_cv.notify_one();
+      });
+    }
+    // The calling thread (Python's main thread) waits polling for Ctrl-C; a stop makes the
+    // workers' CheckInterrupt throw, so they finish their current step and return.
+    {
+      std::unique_lock<std::mutex> lock(done_mutex);
+      while (done < threads) {
+        if (!done_cv.wait_for(lock, std::chrono::milliseconds(20), [&] { return done == threads; })) {
+          lock.unlock();
+          PollInterrupt();
+          lock.lock();
+        }
+      }
+    }
     for (std::thread& t : pool) t.join();
   }
   if (first_error) std::rethrow_exception(first_error);

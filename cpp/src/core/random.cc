@@ -181,9 +181,17 @@ double RandomStream::Exponential() { return -std::log(UniformOpen01()); }
 
 double RandomStream::VonMises(double mu_rad, double kappa) {
   if (!(kappa >= 0.0) || !std::isfinite(kappa)) {
-    throw std::invalid_argument("indoorloc: argument 'kappa': must be finite and >= 0");
+    throw std::invalid_argument("indoorloc: argument 'kappa': must be finite and >= 0, got " +
+                                std::to_string(kappa));
+  }
+  if (!std::isfinite(mu_rad)) {
+    throw std::invalid_argument("indoorloc: argument 'mu_rad': must be finite, got " + std::to_string(mu_rad));
   }
   if (kappa < 1e-8) return WrapAngle(Uniform(-kPi, kPi));
+  // Large κ: the closed-form limit, a normal of variance 1/κ (the error is O(1/κ) in the
+  // kurtosis, below double precision here). Algorithm VM cannot be used there: r = 1 + 1/(2κ)
+  // rounds to 1 above κ ≈ 3e16, c becomes 0 and the rejection loop never accepts.
+  if (kappa > kVonMisesNormalKappa) return WrapAngle(mu_rad + Normal() / std::sqrt(kappa));
   // Best & Fisher (1979), Applied Statistics 28(2):152-157, algorithm VM.
   const double tau = 1.0 + std::sqrt(1.0 + 4.0 * kappa * kappa);
   const double rho = (tau - std::sqrt(2.0 * tau)) / (2.0 * kappa);

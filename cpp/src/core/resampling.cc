@@ -8,6 +8,7 @@
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/log_weights.h"
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/validate.h"
 
 namespace indoorloc {
 namespace {
@@ -188,6 +189,10 @@ ResamplingScheme ParseResamplingScheme(std::string_view name, std::string_view a
 void Resample(const Eigen::Ref<const Eigen::VectorXd>& log_weights, ResamplingScheme scheme,
               RandomStream& rng, std::vector<int>* ancestors, int num_out) {
   CheckArgument(ancestors != nullptr, "ancestors", "is null");
+  // Only -1 means "as many as there are weights": -2 is a mistake, not a request for N.
+  if (num_out < -1) RequireIntInRange(num_out, -1, INT32_MAX, "num_out");
+  // 4 bytes per ancestor here, 8 more in the caller's int64 copy: 2**31 - 1 asked for 26 GB.
+  if (num_out > 0) RequireSizeLimit(static_cast<double>(num_out), 12.0, "num_out", "ancestors");
   const int m = num_out < 0 ? static_cast<int>(log_weights.size()) : num_out;
   thread_local std::vector<double> weights;  // reused buffer: no allocation in filter loops
   const double total = LinearWeights(log_weights, &weights);
@@ -198,6 +203,7 @@ void ResampleLinear(const double* weights, int n, double total, ResamplingScheme
                     std::vector<int>* ancestors, int num_out) {
   CheckArgument(ancestors != nullptr, "ancestors", "is null");
   CheckArgument(n > 0, "weights", "is empty");
+  if (num_out < -1) RequireIntInRange(num_out, -1, INT32_MAX, "num_out");
   CheckArgument(std::isfinite(total) && total > 0.0, "weights", "must have a finite, positive sum");
   const int m = num_out < 0 ? n : num_out;
   ancestors->clear();

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "indoorloc/core/interrupt.h"
 #include "indoorloc/core/options.h"
 #include "indoorloc/core/parallel.h"
 
@@ -23,6 +24,7 @@ RunResult RunOnce(const RoadNetwork& network, const TrajectoryOptions& trajector
   out.speed_bias_mps = t.speed_bias_mps;
   const int lag = options.smoothing_lag_steps;
   for (Eigen::Index k = 0; k < steps; ++k) {
+    CheckInterrupt();  // a run may be 1e8 steps long: Ctrl-C must not wait for its end
     const StepEstimate e = pf.Step(t.speed_mps[k], t.heading_rad[k], trajectory.dt_s);
     out.error_m[k] = (e.position_m - t.positions_m.row(k).transpose()).norm();
     out.correct_segment[k] = e.segment == t.segments[k];

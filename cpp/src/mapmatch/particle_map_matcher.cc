@@ -8,6 +8,7 @@
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/log_weights.h"
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/validate.h"
 #include "indoorloc/mapmatch/trajectory_simulator.h"
 
 namespace indoorloc::mapmatch {
@@ -23,23 +24,28 @@ double LogVonMisesNormaliser(double kappa) {
 }  // namespace
 
 bool FilterOptions::IsValid(std::string* error) const {
-  auto fail = [&](const std::string& why) {
-    *error = why;
-    return false;
-  };
-  if (num_particles < 1) return fail("num_particles must be >= 1, got " + std::to_string(num_particles));
-  // κ <= 300 keeps every likelihood factor e^{κ (d cos - 1)} >= e^{-600} representable.
-  if (!(kappa >= 0.0) || !std::isfinite(kappa) || kappa > 300.0) return fail("kappa must be in [0, 300]");
-  if (!(noise_halfwidth_m >= 0.0) || !std::isfinite(noise_halfwidth_m)) return fail("noise_halfwidth_m must be finite and >= 0");
+  Validator v(error);
+  // κ <= 300 keeps every likelihood factor e^{κ (d cos - 1)} >= e^{-600} representable; the
+  // junction weights use the same form (1e300 used to surface as "'heading_rad' gives zero
+  // likelihood").
+  v.AtLeast(num_particles, 1, "num_particles")
+      .IntInRange(num_particles, 1, 100000000, "num_particles")
+      .InRange(kappa, 0.0, 300.0, "kappa")
+      .InRange(noise_halfwidth_m, 0.0, 1e6, "noise_halfwidth_m");
+  if (!v) return false;
   std::string inner;
-  if (!resampling.IsValid(&inner)) return fail("resampling: " + inner);
-  if (!(junction_kappa >= 0.0) || !std::isfinite(junction_kappa)) return fail("junction_kappa must be finite and >= 0");
-  if (!(bias_halfwidth_mps >= 0.0) || !(bias_jitter_mps >= 0.0)) return fail("bias settings must be >= 0");
-  if (!(tracking_spread_m > 0.0)) return fail("tracking_spread_m must be > 0");
-  if (!(recovery_window_s > 0.0)) return fail("recovery_window_s must be > 0");
-  if (!(recovery_fraction > 0.0 && recovery_fraction <= 1.0)) return fail("recovery_fraction must be in (0, 1]");
-  if (smoothing_lag_steps < 0 || smoothing_lag_steps > 10000) return fail("smoothing_lag_steps must be in [0, 10000]");
-  return true;
+  if (!resampling.IsValid(&inner)) {
+    if (error) *error = "resampling." + inner;
+    return false;
+  }
+  return v.InRange(junction_kappa, 0.0, 300.0, "junction_kappa")
+      .InRange(bias_halfwidth_mps, 0.0, 1e6, "bias_halfwidth_mps")
+      .InRange(bias_jitter_mps, 0.0, 1e6, "bias_jitter_mps")
+      .Scale(tracking_spread_m, "tracking_spread_m")
+      .Scale(recovery_window_s, "recovery_window_s")
+      .Check(recovery_fraction > 0.0 && recovery_fraction <= 1.0, "recovery_fraction",
+             "must be in (0, 1], got " + FormatValue(recovery_fraction))
+      .IntInRange(smoothing_lag_steps, 0, 10000, "smoothing_lag_steps");
 }
 
 std::string FilterSummary::BriefReport() const {
@@ -186,7 +192,7 @@ double ParticleMapMatcher::Move(int i, double distance, double heading_rad, Rand
 StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, double dt_s) {
   CheckArgument(std::isfinite(speed_mps), "speed_mps", "is not finite");
   CheckArgument(std::isfinite(heading_rad), "heading_rad", "is not finite");
-  CheckArgument(std::isfinite(dt_s) && dt_s > 0.0, "dt_s", "must be finite and > 0");
+  RequireScale(dt_s, "dt_s");  // recovery_window_s / dt_s sizes a buffer: 1e-290 asked for 1e290 slots
   WallTimer timer;
   const int n = options_.num_particles;
   const int num_segments = network_.num_segments();
@@ -352,7 +358,9 @@ StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, doub
   // posterior's heading has disagreed with the compass for a whole window.
   if (est.tracking) was_tracking_ = true;
   if (options_.recovery_disagreement > 0.0) {
-    const size_t window = std::max<size_t>(1, static_cast<size_t>(std::lround(options_.recovery_window_s / dt_s)));
+    const double slots = options_.recovery_window_s / dt_s;
+    RequireSizeLimit(slots, sizeof(double), "dt_s", "recovery-window slots (recovery_window_s / dt_s)", 1e9);
+    const size_t window = std::max<size_t>(1, static_cast<size_t>(std::lround(slots)));
     if (disagreement_window_.size() != window) {
       disagreement_window_.assign(window, 0.0);
       window_pos_ = 0;

@@ -10,6 +10,7 @@
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/validate.h"
 
 namespace indoorloc::mapmatch {
 namespace {
@@ -48,12 +49,12 @@ struct UnionFind {
 
 }  // namespace
 
+namespace {
+constexpr double kMaxCoordinateM = 1e12;  // squared distances stay finite
+}  // namespace
+
 bool RoadNetworkOptions::IsValid(std::string* error) const {
-  if (!(snap_tolerance_m >= 0.0) || !std::isfinite(snap_tolerance_m)) {
-    *error = "snap_tolerance_m must be finite and >= 0";
-    return false;
-  }
-  return true;
+  return Validator(error).InRange(snap_tolerance_m, 0.0, 1e6, "snap_tolerance_m");
 }
 
 RoadNetwork::RoadNetwork(const Eigen::Ref<const RowMatrixXd>& segments_m, const Eigen::VectorXi& ids,
@@ -62,6 +63,7 @@ RoadNetwork::RoadNetwork(const Eigen::Ref<const RowMatrixXd>& segments_m, const 
   CheckArgument(segments_m.rows() > 0, "segments_m", "the network is empty (no segments)");
   CheckShape(segments_m, -1, 4, "segments_m");
   CheckFinite(segments_m, "segments_m");
+  RequireAllInRange(segments_m, -kMaxCoordinateM, kMaxCoordinateM, "segments_m");  // lengths must not overflow
   const Eigen::Index m = segments_m.rows();
   Eigen::VectorXi input_ids = ids;
   if (input_ids.size() == 0) input_ids = Eigen::VectorXi::LinSpaced(m, 1, static_cast<int>(m));
@@ -79,7 +81,10 @@ RoadNetwork::RoadNetwork(const Eigen::Ref<const RowMatrixXd>& segments_m, const 
     const double len = std::hypot(segments_m(i, 2) - segments_m(i, 0), segments_m(i, 3) - segments_m(i, 1));
     if (!(len > tol)) {
       ThrowInvalidArgument("segments_m", "segment id " + std::to_string(input_ids[i]) + " (row " +
-                                             std::to_string(i) + ") has zero length");
+                                             std::to_string(i) + ") has zero length" +
+                                             (len > 0.0 ? " (not longer than snap_tolerance_m = " +
+                                                              FormatValue(options.snap_tolerance_m) + ")"
+                                                        : ""));
     }
   }
 

@@ -5,6 +5,7 @@
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/validate.h"
 
 namespace indoorloc::mapmatch {
 namespace {
@@ -16,18 +17,14 @@ double Wrap(double a) {
 }  // namespace
 
 bool TrajectoryOptions::IsValid(std::string* error) const {
-  auto fail = [&](const char* why) {
-    *error = why;
-    return false;
-  };
-  if (!(duration_s > 0.0) || !std::isfinite(duration_s)) return fail("duration_s must be finite and > 0");
-  if (!(dt_s > 0.0) || !std::isfinite(dt_s)) return fail("dt_s must be finite and > 0");
-  if (duration_s / dt_s > 1e8) return fail("duration_s / dt_s is too large");
-  if (!(speed_mps >= 0.0) || !std::isfinite(speed_mps)) return fail("speed_mps must be finite and >= 0");
-  if (!(speed_noise_sd_mps >= 0.0)) return fail("speed_noise_sd_mps must be >= 0");
-  if (!(speed_bias_halfwidth_mps >= 0.0)) return fail("speed_bias_halfwidth_mps must be >= 0");
-  if (!(heading_kappa >= 0.0) || !std::isfinite(heading_kappa)) return fail("heading_kappa must be finite and >= 0");
-  return true;
+  Validator v(error);
+  v.Scale(duration_s, "duration_s").Scale(dt_s, "dt_s");
+  if (v) v.Check(duration_s / dt_s <= 1e8, "duration_s / dt_s", "must be <= 1e8 steps");
+  // Speeds above 1e6 m/s turn positions into inf after a few steps.
+  return v.InRange(speed_mps, 0.0, 1e6, "speed_mps")
+      .InRange(speed_noise_sd_mps, 0.0, 1e6, "speed_noise_sd_mps")
+      .InRange(speed_bias_halfwidth_mps, 0.0, 1e6, "speed_bias_halfwidth_mps")
+      .NonNegative(heading_kappa, "heading_kappa");
 }
 
 double TravelHeading(const RoadNetwork& network, int segment, int direction) {

@@ -6,9 +6,13 @@
 #include <vector>
 
 #include "indoorloc/core/check.h"
+#include "indoorloc/core/validate.h"
 #include "indoorloc/network/network_adjustment.h"
 
 namespace indoorloc::network {
+namespace {
+constexpr size_t kMaxCandidates = 10000000;  // 16 bytes each: 160 MB
+}  // namespace
 
 RowMatrixX2i FindCrossovers(const Eigen::Ref<const Eigen::VectorXd>& time_s, const Eigen::Ref<const RowMatrixXd>& position_m,
                             const CrossoverOptions& options) {
@@ -50,6 +54,14 @@ RowMatrixX2i FindCrossovers(const Eigen::Ref<const Eigen::VectorXd>& time_s, con
           const double ex = position_m(j, 0) - position_m(i, 0), ey = position_m(j, 1) - position_m(i, 1);
           const double d2 = ex * ex + ey * ey;
           if (d2 > r2 || std::abs(position_m(j, 2) - position_m(i, 2)) > options.max_height_difference_m) continue;
+          // A radius covering the whole trajectory makes every pair a candidate: stop with a
+          // clear error instead of filling the memory.
+          if (candidates.size() >= kMaxCandidates)
+            ThrowInvalidArgument("options", "radius_m = " + FormatValue(options.radius_m) + " gives more than " +
+                                                FormatValue(static_cast<double>(kMaxCandidates)) +
+                                                " candidate pairs (" +
+                                                FormatBytes(static_cast<double>(kMaxCandidates) * sizeof(Candidate)) +
+                                                "); use a smaller radius_m or a larger min_separation_s");
           candidates.push_back({d2, static_cast<int>(i), j});
         }
       }
@@ -67,14 +79,35 @@ RowMatrixX2i FindCrossovers(const Eigen::Ref<const Eigen::VectorXd>& time_s, con
     const double ex = position_m(i, 0) - position_m(j, 0), ey = position_m(i, 1) - position_m(j, 1);
     return std::abs(time_s[i] - time_s[j]) < window && ex * ex + ey * ey < near2;
   };
+  // Accepted pairs indexed by the time buckets (of width `window`) of both epochs: a candidate
+  // can only match a pair in the 3 x 3 neighbouring buckets (|Δt| < window on both passes), so
+  // the test no longer scans every accepted pair (it was quadratic: 800 epochs with
+  // min_separation_s = 0 took 29 s). The same pairs are tested in the same order as before.
+  const double t0 = n > 0 ? time_s[0] : 0.0;
+  auto bucket = [&](int i) {
+    const double b = std::floor((time_s[i] - t0) / window);
+    return static_cast<int64_t>(std::clamp(b, -4e18, 4e18));  // clamping merges buckets: still exact
+  };
+  std::unordered_map<int64_t, std::vector<int>> by_bucket;  // key -> indices into `accepted`
   for (const Candidate& c : candidates) {
+    const int64_t ba = bucket(c.a), bb = bucket(c.b);
     bool same = false;
-    for (const auto& [a, b] : accepted)
-      if (close(c.a, a) && close(c.b, b)) {
-        same = true;
-        break;
+    for (int64_t da = -1; da <= 1 && !same; ++da)
+      for (int64_t db = -1; db <= 1 && !same; ++db) {
+        auto it = by_bucket.find(key(ba + da, bb + db));
+        if (it == by_bucket.end()) continue;
+        for (int k : it->second) {
+          const auto& [a, b] = accepted[static_cast<size_t>(k)];
+          if (close(c.a, a) && close(c.b, b)) {
+            same = true;
+            break;
+          }
+        }
       }
-    if (!same) accepted.emplace_back(c.a, c.b);
+    if (!same) {
+      by_bucket[key(ba, bb)].push_back(static_cast<int>(accepted.size()));
+      accepted.emplace_back(c.a, c.b);
+    }
   }
   std::sort(accepted.begin(), accepted.end());
   RowMatrixX2i out(static_cast<Eigen::Index>(accepted.size()), 2);

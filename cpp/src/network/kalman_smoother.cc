@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 
 #include "indoorloc/core/check.h"
+#include "indoorloc/core/validate.h"
 #include "indoorloc/network/gravity.h"
 
 namespace indoorloc::network {
@@ -81,17 +82,14 @@ Vec16 Update(Mat16& p, const Eigen::Matrix<double, kM, 1>& innovation, const Eig
 }  // namespace
 
 bool KalmanSmootherOptions::IsValid(std::string* error) const {
-  const std::pair<const char*, double> positive[] = {
+  const std::pair<const char*, double> sds[] = {
       {"init_sigma_position_m", init_sigma_position_m},       {"init_sigma_velocity_mps", init_sigma_velocity_mps},
       {"init_sigma_level_rad", init_sigma_level_rad},         {"init_sigma_heading_rad", init_sigma_heading_rad},
       {"init_sigma_acc_bias_mps2", init_sigma_acc_bias_mps2}, {"init_sigma_gyro_bias_radps", init_sigma_gyro_bias_radps},
       {"init_sigma_gravity_mps2", init_sigma_gravity_mps2}};
-  for (const auto& [name, value] : positive)
-    if (!(std::isfinite(value) && value > 0.0)) {
-      if (error) *error = std::string(name) + " must be finite and > 0";
-      return false;
-    }
-  return true;
+  Validator v(error);
+  for (const auto& [name, value] : sds) v.Scale(value, name);  // squared into the covariance
+  return v.ok();
 }
 
 std::string KalmanSmootherSummary::BriefReport() const {

@@ -7,6 +7,7 @@
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/validate.h"
 
 namespace indoorloc::network {
 namespace {
@@ -92,27 +93,24 @@ Eigen::Matrix<double, 18, 1> LinearInsTruth(long long epoch, double imu_rate_hz)
 }
 
 bool LinearInsNetworkOptions::IsValid(std::string* error) const {
-  const double sigmas[] = {velocity_density, accel_density, gyro_density, accel_bias_density,
-                           gyro_bias_density, gravity_density, sigma_gps_m, sigma_prior, sigma_gupt_mps2};
-  for (double s : sigmas) {
-    if (!(std::isfinite(s) && s > 0.0)) {
-      *error = "every density and sigma must be finite and > 0";
-      return false;
-    }
-  }
-  if (!(imu_rate_hz > 0.0 && gps_rate_hz > 0.0 && gps_rate_hz <= imu_rate_hz && duration_s > 0.0)) {
-    *error = "need imu_rate_hz >= gps_rate_hz > 0 and duration_s > 0";
-    return false;
-  }
-  if (prior_epochs < 0 || gupt_end_epochs < 0) {
-    *error = "prior_epochs and gupt_end_epochs must be >= 0";
-    return false;
-  }
-  if (duration_s * imu_rate_hz > 2e9) {
-    *error = "more than 2e9 epochs";
-    return false;
-  }
-  return true;
+  const std::pair<const char*, double> sigmas[] = {
+      {"velocity_density", velocity_density},     {"accel_density", accel_density},
+      {"gyro_density", gyro_density},             {"accel_bias_density", accel_bias_density},
+      {"gyro_bias_density", gyro_bias_density},   {"gravity_density", gravity_density},
+      {"sigma_gps_m", sigma_gps_m},               {"sigma_prior", sigma_prior},
+      {"sigma_gupt_mps2", sigma_gupt_mps2}};
+  Validator v(error);
+  for (const auto& [name, value] : sigmas) v.Scale(value, name);  // enter as 1/sigma^2
+  // Rates and durations as Scales: 1e300 Hz made every block NaN (reported as 'assemble').
+  v.Scale(imu_rate_hz, "imu_rate_hz").Scale(gps_rate_hz, "gps_rate_hz").Scale(duration_s, "duration_s");
+  if (!v) return false;
+  v.Check(gps_rate_hz <= imu_rate_hz, "gps_rate_hz", "must be <= imu_rate_hz, got " + FormatValue(gps_rate_hz))
+      .IntInRange(prior_epochs, 0, 1000000, "prior_epochs")
+      .IntInRange(gupt_end_epochs, 0, 1000000, "gupt_end_epochs")
+      .Check(duration_s * imu_rate_hz <= 2e9, "duration_s",
+             "x imu_rate_hz must be <= 2e9 epochs, got " + FormatValue(duration_s * imu_rate_hz));
+  for (int k = 0; k < 3; ++k) v.InRange(specific_force_mps2[k], -1e4, 1e4, "specific_force_mps2");
+  return v.ok();
 }
 
 NetworkSize LinearInsNetworkSize(const LinearInsNetworkOptions& o) {

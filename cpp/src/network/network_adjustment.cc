@@ -15,14 +15,13 @@
 #include <Eigen/SparseCore>
 
 #include "indoorloc/core/check.h"
+#include "indoorloc/core/validate.h"
 #include "indoorloc/network/gravity.h"
 #include "residuals.h"
 
 namespace indoorloc::network {
 
 namespace {
-
-bool Positive(double x) { return std::isfinite(x) && x > 0.0; }
 
 /// Parameter storage of the whole network: r, v, q per IMU epoch; a, o, δg per slow node
 /// (one per `stride` epochs; stride 1: per epoch).
@@ -40,14 +39,15 @@ struct Blocks {
   double* G(int k) { return &dg[k]; }
   /// First and one-past-last epoch of slow node k.
   int First(int k) const { return k * stride; }
-  int End(int k) const { return std::min((k + 1) * stride, n); }
+  // In 64 bits: a stride near 2**31 would overflow (and abort inside Ceres).
+  int End(int k) const { return static_cast<int>(std::min<long long>((k + 1LL) * stride, n)); }
 };
 
 Blocks FromState(const NetworkState& s, int stride) {
   Blocks b;
   b.n = static_cast<int>(s.position_m.rows());
   b.stride = stride;
-  b.m = (b.n + stride - 1) / stride;
+  b.m = b.n == 0 ? 0 : 1 + (b.n - 1) / stride;  // ⌈n / stride⌉ without overflowing n + stride
   b.r.resize(3 * b.n);
   b.v.resize(3 * b.n);
   b.q.resize(4 * b.n);
@@ -148,39 +148,31 @@ constexpr long kMaxDenseUnknowns = 8000;  // n² doubles: 0.5 GB
 }  // namespace
 
 bool NetworkOptions::IsValid(std::string* error) const {
-  auto fail = [error](const std::string& m) {
-    if (error) *error = m;
-    return false;
-  };
-  if (!std::isfinite(latitude_rad) || std::abs(latitude_rad) > 1.5707963267948966)
-    return fail("latitude_rad must be in [-pi/2, pi/2]");
-  if (!std::isfinite(origin_height_m)) return fail("origin_height_m must be finite");
-  if (!std::isfinite(earth_rate_radps) || earth_rate_radps < 0.0) return fail("earth_rate_radps must be >= 0");
-  const std::pair<const char*, double> positive[] = {
+  Validator v(error);
+  v.InRange(latitude_rad, -1.5707963267948966, 1.5707963267948966, "latitude_rad")
+      .Finite(origin_height_m, "origin_height_m")
+      .InRange(earth_rate_radps, 0.0, 1.0, "earth_rate_radps");
+  // Noise densities and sds enter as 1/sigma: a scale keeps their squares finite.
+  const std::pair<const char*, double> scales[] = {
       {"acc_noise_mps2_rthz", acc_noise_mps2_rthz},       {"gyro_noise_radps_rthz", gyro_noise_radps_rthz},
       {"acc_bias_walk_mps2_rts", acc_bias_walk_mps2_rts}, {"gyro_bias_walk_radps_rts", gyro_bias_walk_radps_rts},
       {"gravity_walk_mps2_rts", gravity_walk_mps2_rts},   {"sigma_vel_mps", sigma_vel_mps},
       {"sigma_gps_m", sigma_gps_m},                       {"sigma_zupt_mps", sigma_zupt_mps},
       {"sigma_gupt_mps2", sigma_gupt_mps2},               {"sigma_xover_mps2", sigma_xover_mps2},
-      {"function_tolerance", function_tolerance},         {"gradient_tolerance", gradient_tolerance},
-      {"parameter_tolerance", parameter_tolerance},       {"datum_pivot_tolerance", datum_pivot_tolerance},
+      {"sigma_vupt_mps", sigma_vupt_mps},                 {"sigma_sgupt_mps2", sigma_sgupt_mps2}};
+  for (const auto& [name, value] : scales) v.Scale(value, name);
+  const std::pair<const char*, double> positive[] = {
+      {"function_tolerance", function_tolerance},   {"gradient_tolerance", gradient_tolerance},
+      {"parameter_tolerance", parameter_tolerance}, {"datum_pivot_tolerance", datum_pivot_tolerance},
       {"initial_trust_region_radius", initial_trust_region_radius}};
-  for (const auto& [name, value] : positive)
-    if (!Positive(value)) return fail(std::string(name) + " must be finite and > 0");
-  if (!std::isfinite(acc_bias_correlation_time_s) || acc_bias_correlation_time_s < 0.0)
-    return fail("acc_bias_correlation_time_s must be >= 0 (0: random walk)");
-  if (!std::isfinite(gyro_bias_correlation_time_s) || gyro_bias_correlation_time_s < 0.0)
-    return fail("gyro_bias_correlation_time_s must be >= 0 (0: random walk)");
-  if (!std::isfinite(gps_huber_threshold) || gps_huber_threshold < 0.0)
-    return fail("gps_huber_threshold must be >= 0 (0: no robust loss)");
-  if (max_iterations < 0) return fail("max_iterations must be >= 0");
-  if (num_threads < 1) return fail("num_threads must be >= 1");
-  if (!std::isfinite(initial_trust_region_radius) || initial_trust_region_radius <= 0.0)
-    return fail("initial_trust_region_radius must be finite and > 0");
-  if (!Positive(sigma_vupt_mps)) return fail("sigma_vupt_mps must be finite and > 0");
-  if (!Positive(sigma_sgupt_mps2)) return fail("sigma_sgupt_mps2 must be finite and > 0");
-  if (slow_parameter_stride < 1) return fail("slow_parameter_stride must be >= 1 (1: every IMU epoch)");
-  return true;
+  for (const auto& [name, value] : positive) v.Positive(value, name);
+  v.NonNegative(acc_bias_correlation_time_s, "acc_bias_correlation_time_s")
+      .NonNegative(gyro_bias_correlation_time_s, "gyro_bias_correlation_time_s")
+      .NonNegative(gps_huber_threshold, "gps_huber_threshold")
+      .IntInRange(max_iterations, 0, 1000000, "max_iterations")
+      .IntInRange(num_threads, 1, 1024, "num_threads")
+      .AtLeast(slow_parameter_stride, 1, "slow_parameter_stride");
+  return v.ok();
 }
 
 NetworkState EstimateVarianceComponents(const NetworkObservations& observations, const NetworkState& initial,
@@ -211,19 +203,10 @@ NetworkState EstimateVarianceComponents(const NetworkObservations& observations,
 }
 
 bool CrossoverOptions::IsValid(std::string* error) const {
-  if (!Positive(radius_m)) {
-    if (error) *error = "radius_m must be > 0";
-    return false;
-  }
-  if (!Positive(max_height_difference_m)) {
-    if (error) *error = "max_height_difference_m must be > 0";
-    return false;
-  }
-  if (!std::isfinite(min_separation_s) || min_separation_s < 0.0) {
-    if (error) *error = "min_separation_s must be >= 0";
-    return false;
-  }
-  return true;
+  return Validator(error)
+      .Scale(radius_m, "radius_m")
+      .Scale(max_height_difference_m, "max_height_difference_m")
+      .NonNegative(min_separation_s, "min_separation_s");
 }
 
 std::string NetworkSummary::BriefReport() const {
@@ -253,10 +236,15 @@ void CheckNetworkInput(const NetworkObservations& obs, const NetworkState& state
   CheckFinite(obs.acc_body_mps2, "acc_body_mps2");
   CheckShape(obs.gyro_body_radps, n, 3, "gyro_body_radps");
   CheckFinite(obs.gyro_body_radps, "gyro_body_radps");
+  // Plausibility bounds: finite but absurd samples (1e300) overflow the residuals to inf/NaN
+  // inside Ceres, or show up as a "datum defect" far from their cause.
+  RequireAllInRange(obs.acc_body_mps2, -1e4, 1e4, "acc_body_mps2");
+  RequireAllInRange(obs.gyro_body_radps, -1e4, 1e4, "gyro_body_radps");
   const Eigen::Index m = obs.gps_time_s.size();
   CheckShape(obs.gps_position_m, m, 3, "gps_position_m");
   CheckFinite(obs.gps_time_s, "gps_time_s");
   CheckFinite(obs.gps_position_m, "gps_position_m");
+  RequireAllInRange(obs.gps_position_m, -1e9, 1e9, "gps_position_m");
   for (Eigen::Index i = 0; i < m; ++i) {
     const double t = obs.gps_time_s[i];
     CheckArgument(t >= obs.imu_time_s[0] - 1e-9 && t <= obs.imu_time_s[n - 1] + 1e-9, "gps_time_s",
@@ -594,6 +582,21 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
         m << "; first undetermined parameter: " << labels[static_cast<size_t>(worst_col)].name << " at epoch "
           << labels[static_cast<size_t>(worst_col)].epoch;
       m << ". Add observations (CUPT for position, GUPT or XOVER for gravity vs accelerometer bias)";
+      // A defect can also be numerical: weights spanning many orders of magnitude. Name the
+      // extreme sds of the options so that a mistyped one is found.
+      const std::pair<const char*, double> sds[] = {
+          {"acc_noise_mps2_rthz", options.acc_noise_mps2_rthz}, {"gyro_noise_radps_rthz", options.gyro_noise_radps_rthz},
+          {"sigma_gps_m", options.sigma_gps_m},                 {"sigma_zupt_mps", options.sigma_zupt_mps},
+          {"sigma_gupt_mps2", options.sigma_gupt_mps2},         {"sigma_xover_mps2", options.sigma_xover_mps2},
+          {"sigma_vel_mps", options.sigma_vel_mps}};
+      const auto* lo = &sds[0];
+      const auto* hi = &sds[0];
+      for (const auto& e : sds) {
+        if (e.second < lo->second) lo = &e;
+        if (e.second > hi->second) hi = &e;
+      }
+      m << ", or check the sds in 'options' (from " << lo->first << " = " << lo->second << " to " << hi->first
+        << " = " << hi->second << ")";
       ThrowInvalidArgument("observations", m.str());
     }
   }

@@ -9,6 +9,7 @@
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/validate.h"
 #include "imu_timing.h"
 
 namespace indoorloc::pdr {
@@ -25,12 +26,16 @@ double Yaw(const Eigen::Matrix3d& r) { return std::atan2(r(1, 0), r(0, 0)); }
 }  // namespace
 
 bool MahonyOptions::IsValid(std::string* error) const {
-  if (!(kp >= 0.0) || !(ki >= 0.0) || !(kp_mag >= 0.0)) return (*error = "gains must be >= 0", false);
-  if (!(gravity_mps2 > 0.0)) return (*error = "gravity_mps2 must be > 0", false);
-  if (!(acc_gate_mps2 > 0.0)) return (*error = "acc_gate_mps2 must be > 0", false);
-  if (!(mag_norm_tolerance > 0.0) || !(mag_dip_tolerance_rad > 0.0)) return (*error = "magnetometer tolerances must be > 0", false);
-  if (init_samples < 1) return (*error = "init_samples must be >= 1", false);
-  return true;
+  // Gains multiply rates and errors every step: inf would make every quaternion NaN.
+  return Validator(error)
+      .InRange(kp, 0.0, 1e6, "kp")
+      .InRange(ki, 0.0, 1e6, "ki")
+      .InRange(kp_mag, 0.0, 1e6, "kp_mag")
+      .InRange(gravity_mps2, 0.1, 100.0, "gravity_mps2")
+      .Scale(acc_gate_mps2, "acc_gate_mps2")
+      .Scale(mag_norm_tolerance, "mag_norm_tolerance")
+      .Scale(mag_dip_tolerance_rad, "mag_dip_tolerance_rad")
+      .IntInRange(init_samples, 1, 1000000000, "init_samples");
 }
 
 AttitudeOutput RunMahony(const Eigen::Ref<const Eigen::VectorXd>& time_s, const Eigen::Ref<const RowMatrixXd>& acc,
@@ -48,7 +53,11 @@ AttitudeOutput RunMahony(const Eigen::Ref<const Eigen::VectorXd>& time_s, const 
   CheckFinite(time_s, "time_s");
   CheckFinite(acc, "acc_mps2");
   CheckFinite(gyro, "gyro_radps");
+  internal::CheckTimeRange(time_s);
+  internal::CheckAccRange(acc);
+  internal::CheckGyroRange(gyro);
   if (use_mag) CheckFinite(mag, "mag");
+  if (use_mag) RequireAllInRange(mag, -internal::kMaxAbsMag, internal::kMaxAbsMag, "mag");
   const double median_dt = internal::MedianSamplePeriod(time_s);
 
   const Eigen::Vector3d mean_f = internal::InitialSpecificForce(acc, options.init_samples, options.gravity_mps2);

@@ -4,14 +4,45 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "indoorloc/core/check.h"
+#include "indoorloc/core/validate.h"
 
 namespace indoorloc::pdr::internal {
+
+/// Plausibility bounds of raw samples: beyond them a finite input (1e300) still overflows the
+/// integration or the squared norms to inf. MEMS sensors saturate far below (16 g, 35 rad/s).
+inline constexpr double kMaxAbsAccMps2 = 1e4;
+inline constexpr double kMaxAbsGyroRadps = 1e4;
+inline constexpr double kMaxAbsMag = 1e7;  // any unit in use (uT, mG, raw counts)
+
+/// Times beyond ±1e15 s (30 million years) make differences overflow or lose all precision.
+template <typename Vector>
+void CheckTimeRange(const Vector& time_s, const char* name = "time_s") {
+  RequireAllInRange(time_s, -1e15, 1e15, name);
+}
+
+template <typename Matrix>
+void CheckAccRange(const Matrix& acc, const char* name = "acc_mps2") {
+  RequireAllInRange(acc, -kMaxAbsAccMps2, kMaxAbsAccMps2, name);
+}
+template <typename Matrix>
+void CheckGyroRange(const Matrix& gyro, const char* name = "gyro_radps") {
+  RequireAllInRange(gyro, -kMaxAbsGyroRadps, kMaxAbsGyroRadps, name);
+}
+
+/// A sample count computed in double (a window in seconds times a rate), rounded and clamped
+/// to [0, 1e9], beyond any recording: casting 3.6e16 to int is undefined behaviour (it crashed
+/// ins_zupt_increments), and NaN counts as 0. Counts below 1e9 are unchanged.
+inline int SampleCount(double samples) {
+  if (!(samples > 0.0)) return 0;
+  return static_cast<int>(std::lround(std::min(samples, 1e9)));
+}
 
 /// Median of the positive differences of time_s [s]; throws (naming time_s) if it never increases.
 inline double MedianSamplePeriod(const Eigen::Ref<const Eigen::VectorXd>& time_s) {

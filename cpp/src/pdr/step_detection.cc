@@ -5,14 +5,16 @@
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/validate.h"
 #include "indoorloc/pdr/stride_length.h"
+#include "imu_timing.h"
 
 namespace indoorloc::pdr {
 namespace {
 
-void CheckRate(double rate_hz) { CheckArgument(std::isfinite(rate_hz) && rate_hz > 0.0, "rate_hz", "must be finite and > 0"); }
+void CheckRate(double rate_hz) { RequireScale(rate_hz, "rate_hz"); }
 
-int Samples(double seconds, double rate_hz) { return std::max(1, static_cast<int>(std::lround(seconds * rate_hz))); }
+int Samples(double seconds, double rate_hz) { return std::max(1, internal::SampleCount(seconds * rate_hz)); }
 
 // Median filter of binary motion flags (window 2 half + 1), then a step at each transition to
 // motionless after a motion run of at least min_swing samples. Rest gaps shorter than min_rest
@@ -56,21 +58,25 @@ std::vector<int> StepsFromMotion(const std::vector<char>& moving, int half, int 
 }  // namespace
 
 bool AccelerationStepOptions::IsValid(std::string* error) const {
-  if (!(window_s > 0.0)) return (*error = "window_s must be > 0", false);
-  if (!(swing_threshold_mps2 > stance_threshold_mps2 && stance_threshold_mps2 > 0.0)) {
-    return (*error = "need swing_threshold_mps2 > stance_threshold_mps2 > 0", false);
+  Validator v(error);
+  v.InRange(window_s, 1e-9, 1e6, "window_s").InRange(min_step_interval_s, 0.0, 1e6, "min_step_interval_s");
+  if (!v) return false;
+  if (!(swing_threshold_mps2 > stance_threshold_mps2 && stance_threshold_mps2 > 0.0 && std::isfinite(swing_threshold_mps2))) {
+    return (*error = "need swing_threshold_mps2 > stance_threshold_mps2 > 0 (finite), got " + FormatValue(swing_threshold_mps2) +
+                     " and " + FormatValue(stance_threshold_mps2), false);
   }
   if (!(swing_fraction > stance_fraction && stance_fraction > 0.0 && swing_fraction < 1.0)) {
-    return (*error = "need 1 > swing_fraction > stance_fraction > 0", false);
+    return (*error = "need 1 > swing_fraction > stance_fraction > 0, got " + FormatValue(swing_fraction) + " and " +
+                     FormatValue(stance_fraction), false);
   }
-  if (!(min_step_interval_s >= 0.0)) return (*error = "min_step_interval_s must be >= 0", false);
   return true;
 }
 
 bool GyroStepOptions::IsValid(std::string* error) const {
-  if (!(threshold_radps > 0.0)) return (*error = "threshold_radps must be > 0", false);
-  if (!(median_window_s > 0.0) || !(min_swing_s >= 0.0)) return (*error = "windows must be > 0", false);
-  return true;
+  return Validator(error)
+      .Scale(threshold_radps, "threshold_radps")
+      .InRange(median_window_s, 1e-9, 1e6, "median_window_s")
+      .InRange(min_swing_s, 0.0, 1e6, "min_swing_s");
 }
 
 std::vector<int> DetectStepsAcceleration(double rate_hz, const Eigen::Ref<const RowMatrixXd>& acc,
@@ -79,9 +85,12 @@ std::vector<int> DetectStepsAcceleration(double rate_hz, const Eigen::Ref<const 
   CheckRate(rate_hz);
   CheckShape(acc, -1, 3, "acc_mps2");
   CheckFinite(acc, "acc_mps2");
+  internal::CheckAccRange(acc);
   const Eigen::Index n = acc.rows();
   const int w = Samples(options.window_s, rate_hz);
-  CheckArgument(n >= 2 * w + 1, "acc_mps2", "the recording is shorter than one window (" + std::to_string(2 * w + 1) + " samples)");
+  CheckArgument(n >= 2 * Eigen::Index{w} + 1, "acc_mps2",
+                "the recording (" + std::to_string(n) + " samples) is shorter than one window (" +
+                    std::to_string(2 * Eigen::Index{w} + 1) + " samples from window_s x rate_hz)");
   const Eigen::VectorXd a = acc.rowwise().norm();  // eq. 1
   // eq. 2 with prefix sums: σ²_i = mean(a²) - mean(a)² over [i - w, i + w] (clamped at the ends).
   Eigen::VectorXd s1(n + 1), s2(n + 1);
@@ -128,20 +137,25 @@ std::vector<int> DetectStepsGyro(double rate_hz, const Eigen::Ref<const RowMatri
   CheckRate(rate_hz);
   CheckShape(gyro, -1, 3, "gyro_radps");
   CheckFinite(gyro, "gyro_radps");
+  internal::CheckGyroRange(gyro);
   const Eigen::Index n = gyro.rows();
   const int half = Samples(options.median_window_s, rate_hz) / 2;
-  CheckArgument(n >= 2 * half + 1, "gyro_radps", "the recording is shorter than one median window");
+  CheckArgument(n >= 2 * Eigen::Index{half} + 1, "gyro_radps",
+                "the recording (" + std::to_string(n) + " samples) is shorter than one median window (median_window_s x rate_hz)");
   std::vector<char> moving(static_cast<size_t>(n));
   for (Eigen::Index i = 0; i < n; ++i) moving[static_cast<size_t>(i)] = gyro.row(i).norm() > options.threshold_radps;
   return StepsFromMotion(moving, half, Samples(options.min_swing_s, rate_hz));
 }
 
 bool MagneticStepOptions::IsValid(std::string* error) const {
-  if (highpass_order < 1 || highpass_order > 8) return (*error = "highpass_order must be in [1, 8]", false);
-  if (!(highpass_hz > 0.0)) return (*error = "highpass_hz must be > 0", false);
-  if (!(threshold_fraction > 0.0 && threshold_fraction < 1.0)) return (*error = "threshold_fraction must be in (0, 1)", false);
-  if (!(median_window_s > 0.0) || !(min_swing_s >= 0.0) || !(min_rest_s >= 0.0)) return (*error = "windows must be > 0", false);
-  return true;
+  return Validator(error)
+      .IntInRange(highpass_order, 1, 8, "highpass_order")
+      .Scale(highpass_hz, "highpass_hz")
+      .Check(threshold_fraction > 0.0 && threshold_fraction < 1.0, "threshold_fraction",
+             "must be in (0, 1), got " + FormatValue(threshold_fraction))
+      .InRange(median_window_s, 1e-9, 1e6, "median_window_s")
+      .InRange(min_swing_s, 0.0, 1e6, "min_swing_s")
+      .InRange(min_rest_s, 0.0, 1e6, "min_rest_s");
 }
 
 std::vector<int> DetectStepsMagnetometer(double rate_hz, const Eigen::Ref<const RowMatrixXd>& mag, const MagneticStepOptions& options,
@@ -150,10 +164,12 @@ std::vector<int> DetectStepsMagnetometer(double rate_hz, const Eigen::Ref<const 
   CheckRate(rate_hz);
   CheckShape(mag, -1, 3, "mag");
   CheckFinite(mag, "mag");
+  RequireAllInRange(mag, -internal::kMaxAbsMag, internal::kMaxAbsMag, "mag");
   CheckArgument(options.highpass_hz < 0.5 * rate_hz, "options", "highpass_hz must be below half of rate_hz");
   const Eigen::Index n = mag.rows();
   const int half = Samples(options.median_window_s, rate_hz) / 2;
-  CheckArgument(n >= std::max(2 * half + 1, 3), "mag", "the recording is shorter than one median window");
+  CheckArgument(n >= std::max<Eigen::Index>(2 * Eigen::Index{half} + 1, 3), "mag",
+                "the recording (" + std::to_string(n) + " samples) is shorter than one median window (median_window_s x rate_hz)");
   const RowMatrixXd sos = ButterworthSos(options.highpass_order, options.highpass_hz, rate_hz, true);
   Eigen::VectorXd sq = Eigen::VectorXd::Zero(n);
   for (int c = 0; c < 3; ++c) {

@@ -7,6 +7,7 @@
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/validate.h"
 #include "imu_timing.h"
 
 namespace indoorloc::pdr {
@@ -24,7 +25,9 @@ void CheckQuaternions(const Eigen::Ref<const RowMatrixXd>& q, Eigen::Index n) {
 
 void CheckSteps(const std::vector<int>& steps, Eigen::Index n) {
   for (size_t k = 0; k < steps.size(); ++k) {
-    CheckArgument(steps[k] >= 0 && steps[k] < n, "step_indices", "entry " + std::to_string(k) + " is outside [0, N)");
+    CheckArgument(steps[k] >= 0 && steps[k] < n, "step_indices",
+                  "entry " + std::to_string(k) + " = " + std::to_string(steps[k]) + " is outside [0, N) for N = " +
+                      std::to_string(n) + " samples (rows of the sample arrays)");
     CheckArgument(k == 0 || steps[k] > steps[k - 1], "step_indices", "must be strictly increasing");
   }
 }
@@ -36,20 +39,16 @@ Eigen::Matrix3d Rotation(const Eigen::Ref<const RowMatrixXd>& q, Eigen::Index k)
 }  // namespace
 
 bool StepCovarianceOptions::IsValid(std::string* error) const {
-  if (!(sigma_stride_length_m >= 0.0) || !(stride_length_sd_fraction >= 0.0) || !(sigma_heading_step_rad >= 0.0) ||
-      !(sigma_heading_initial_rad >= 0.0)) {
-    return (*error = "standard deviations must be finite and >= 0", false);
-  }
-  if (!std::isfinite(sigma_stride_length_m + stride_length_sd_fraction + sigma_heading_step_rad + sigma_heading_initial_rad)) {
-    return (*error = "standard deviations must be finite", false);
-  }
-  return true;
+  // The sds are squared into the covariances: bounded so they stay finite.
+  return Validator(error)
+      .InRange(sigma_stride_length_m, 0.0, 1e6, "sigma_stride_length_m")
+      .InRange(stride_length_sd_fraction, 0.0, 1e6, "stride_length_sd_fraction")
+      .InRange(sigma_heading_step_rad, 0.0, 1e6, "sigma_heading_step_rad")
+      .InRange(sigma_heading_initial_rad, 0.0, 1e6, "sigma_heading_initial_rad");
 }
 
 bool InsZuptOptions::IsValid(std::string* error) const {
-  if (!(std::isfinite(window_s) && window_s >= 0.0)) return (*error = "window_s must be >= 0", false);
-  if (!(gravity_mps2 > 0.0)) return (*error = "gravity_mps2 must be > 0", false);
-  return true;
+  return Validator(error).InRange(window_s, 0.0, 1e6, "window_s").InRange(gravity_mps2, 0.1, 100.0, "gravity_mps2");
 }
 
 StepTrack PositionsFromStrides(const Eigen::Ref<const Eigen::VectorXd>& sl, const Eigen::Ref<const Eigen::VectorXd>& heading,
@@ -57,8 +56,10 @@ StepTrack PositionsFromStrides(const Eigen::Ref<const Eigen::VectorXd>& sl, cons
   ValidateOptions(options);
   CheckArgument(heading.size() == sl.size(), "headings_rad", "must have one entry per stride length");
   CheckFinite(sl, "stride_lengths_m");
+  RequireAllInRange(sl, 0.0, 1e4, "stride_lengths_m");  // squared in the covariance: 1e300 gave inf
   CheckFinite(heading, "headings_rad");
   CheckFinite(start_xy, "start_xy");
+  RequireAllInRange(start_xy, -1e9, 1e9, "start_xy");
   CheckArgument((sl.array() >= 0.0).all(), "stride_lengths_m", "must be >= 0");
   const Eigen::Index m = sl.size();
   StepTrack out;
@@ -93,6 +94,7 @@ StepTrack PositionsFromIncrements(const Eigen::Ref<const RowMatrixXd>& inc, cons
                                   const StepCovarianceOptions& options) {
   CheckArgument(inc.cols() == 2 || inc.cols() == 3, "increments_m", "must have 2 or 3 columns");
   CheckFinite(inc, "increments_m");
+  RequireAllInRange(inc, -1e4, 1e4, "increments_m");
   Eigen::VectorXd sl(inc.rows()), heading(inc.rows());
   for (Eigen::Index k = 0; k < inc.rows(); ++k) {
     sl[k] = std::hypot(inc(k, 0), inc(k, 1));           // eq. 6
@@ -128,12 +130,14 @@ InsZuptIncrements ComputeInsZuptIncrements(const Eigen::Ref<const Eigen::VectorX
   CheckArgument(time_s.size() == n, "time_s", "must have one entry per sample");
   CheckFinite(time_s, "time_s");
   CheckFinite(acc, "acc_mps2");
+  internal::CheckTimeRange(time_s);
+  internal::CheckAccRange(acc);
   CheckQuaternions(q, n);
   CheckArgument(steps.size() >= 2, "step_indices", "needs at least 2 steps");
   CheckSteps(steps, n);
   const double median_dt = internal::MedianSamplePeriod(time_s);
   auto dt_at = [&](Eigen::Index k) { return time_s[k] > time_s[k - 1] ? time_s[k] - time_s[k - 1] : median_dt; };
-  const int w = static_cast<int>(std::lround(options.window_s / median_dt));
+  const int w = internal::SampleCount(options.window_s / median_dt);
   const Eigen::Vector3d g(0.0, 0.0, options.gravity_mps2);
   // Steps 1-2: a^G = R f − g, integrated from the first step sample (v = 0 there).
   RowMatrixXd v = RowMatrixXd::Zero(n, 3);

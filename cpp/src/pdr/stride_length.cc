@@ -7,6 +7,8 @@
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/validate.h"
+#include "imu_timing.h"
 
 namespace indoorloc::pdr {
 namespace {
@@ -15,7 +17,7 @@ constexpr double kPi = 3.14159265358979323846;
 
 RowMatrixXd ButterworthSos(int order, double cutoff_hz, double rate_hz, bool highpass) {
   CheckArgument(order >= 1 && order <= 16, "order", "must be in [1, 16]");
-  CheckArgument(std::isfinite(rate_hz) && rate_hz > 0.0, "rate_hz", "must be finite and > 0");
+  RequireScale(rate_hz, "rate_hz");  // (2 rate_hz)^2 must stay finite (1e300 gave NaN sections)
   CheckArgument(std::isfinite(cutoff_hz) && cutoff_hz > 0.0 && cutoff_hz < 0.5 * rate_hz, "cutoff_hz",
                 "must be in (0, rate_hz / 2)");
   const double c = 2.0 * rate_hz;                                // bilinear s = c (z - 1) / (z + 1)
@@ -42,6 +44,12 @@ RowMatrixXd ButterworthSos(int order, double cutoff_hz, double rate_hz, bool hig
       sos.row(pairs) << wc / d0, wc / d0, 0.0, 1.0, d1 / d0, 0.0;
     }
   }
+  // A cut-off far below the rate rounds the poles onto z = 1 (a1 = -2, a2 = 1): unstable.
+  bool stable = sos.allFinite();
+  for (Eigen::Index k = 0; k < sos.rows() && stable; ++k)
+    stable = std::abs(sos(k, 5)) < 1.0 && std::abs(sos(k, 4)) < 1.0 + sos(k, 5);
+  CheckArgument(stable, "cutoff_hz", "cutoff_hz / rate_hz = " + FormatValue(cutoff_hz / rate_hz) +
+                                         " is too small for a stable filter in double precision");
   return sos;
 }
 
@@ -52,6 +60,13 @@ Eigen::VectorXd FilterSos(const Eigen::Ref<const RowMatrixXd>& sos, const Eigen:
   CheckFinite(x, "x");
   for (Eigen::Index s = 0; s < sos.rows(); ++s) {
     CheckArgument(sos(s, 3) != 0.0, "sos", "a0 of section " + std::to_string(s) + " is 0");
+    // Jury's test for z^2 + a1 z + a2: poles inside the unit circle iff |a2| < 1 and
+    // |a1| < 1 + a2. An unstable section grows without bound (inf/NaN on long inputs), and the
+    // steady-state start divides by 1 + a1 + a2, which is 0 for a pole at z = 1.
+    const double a1 = sos(s, 4) / sos(s, 3), a2 = sos(s, 5) / sos(s, 3);
+    CheckArgument(std::abs(a2) < 1.0 && std::abs(a1) < 1.0 + a2, "sos",
+                  "section " + std::to_string(s) + " is not stable (a1/a0 = " + FormatValue(a1) + ", a2/a0 = " +
+                      FormatValue(a2) + "; poles must lie inside the unit circle)");
   }
   const Eigen::Index n = x.size(), m = sos.rows();
   Eigen::VectorXd y = x;
@@ -76,23 +91,25 @@ Eigen::VectorXd FilterSos(const Eigen::Ref<const RowMatrixXd>& sos, const Eigen:
       y[i] = out;
     }
   }
+  CheckArgument(y.allFinite(), "x", "the filtered output overflows (inputs too large for this filter)");
   return y;
 }
 
 bool WeinbergOptions::IsValid(std::string* error) const {
-  if (!(std::isfinite(k) && k > 0.0)) return (*error = "k must be finite and > 0", false);
-  if (filter_order < 1 || filter_order > 16) return (*error = "filter_order must be in [1, 16]", false);
-  if (!(std::isfinite(cutoff_hz) && cutoff_hz > 0.0)) return (*error = "cutoff_hz must be > 0", false);
-  if (!(std::isfinite(window_s) && window_s > 0.0)) return (*error = "window_s must be > 0", false);
-  return true;
+  return Validator(error)
+      .Scale(k, "k")
+      .IntInRange(filter_order, 1, 16, "filter_order")
+      .Scale(cutoff_hz, "cutoff_hz")
+      .InRange(window_s, 1e-9, 1e6, "window_s");
 }
 
 Eigen::VectorXd WeinbergFilteredMagnitude(double rate_hz, const Eigen::Ref<const RowMatrixXd>& acc,
                                           const WeinbergOptions& options) {
   ValidateOptions(options);
-  CheckArgument(std::isfinite(rate_hz) && rate_hz > 0.0, "rate_hz", "must be finite and > 0");
+  RequireScale(rate_hz, "rate_hz");  // (2 rate_hz)^2 must stay finite (1e300 gave NaN sections)
   CheckShape(acc, -1, 3, "acc_mps2");
   CheckFinite(acc, "acc_mps2");
+  internal::CheckAccRange(acc);  // else the filter's overflow would be blamed on its input 'x'
   CheckArgument(options.cutoff_hz < 0.5 * rate_hz, "options",
                 "cutoff_hz must be below half of rate_hz (" + std::to_string(0.5 * rate_hz) + " Hz)");
   CheckArgument(acc.rows() >= 2, "acc_mps2", "needs at least 2 samples");
@@ -120,10 +137,10 @@ Eigen::VectorXd WeinbergFeatures(double rate_hz, const Eigen::Ref<const RowMatri
 Eigen::VectorXd WeinbergStrideLengths(double rate_hz, const Eigen::Ref<const RowMatrixXd>& acc,
                                       const std::vector<int>& step_indices, const WeinbergOptions& options) {
   ValidateOptions(options);
-  CheckArgument(std::isfinite(rate_hz) && rate_hz > 0.0, "rate_hz", "must be finite and > 0");
+  RequireScale(rate_hz, "rate_hz");  // (2 rate_hz)^2 must stay finite (1e300 gave NaN sections)
   const Eigen::Index n = acc.rows();
-  const int w = std::max(1, static_cast<int>(std::lround(options.window_s * rate_hz)));
-  CheckArgument(n >= 2 * w + 1, "acc_mps2",
+  const int w = std::max(1, internal::SampleCount(options.window_s * rate_hz));
+  CheckArgument(n >= 2 * Eigen::Index{w} + 1, "acc_mps2",
                 "the recording (" + std::to_string(n) + " samples) is shorter than one window (" + std::to_string(2 * w + 1) + ")");
   Eigen::MatrixXi intervals(static_cast<Eigen::Index>(step_indices.size()), 2);
   for (size_t k = 0; k < step_indices.size(); ++k) {
@@ -149,6 +166,9 @@ WeinbergCalibration CalibrateWeinbergK(const Eigen::Ref<const Eigen::VectorXd>& 
   CheckFinite(l, "lengths_m");
   CheckArgument((f.array() >= 0.0).all(), "features", "must be >= 0");
   CheckArgument((l.array() > 0.0).all(), "lengths_m", "must be > 0");
+  // Squared in the fit: bounded so the residual stays finite (1e300 gave an inf RMS).
+  RequireAllInRange(f, 0.0, 1e100, "features");
+  RequireAllInRange(l, 0.0, 1e4, "lengths_m");
   const double ff = f.squaredNorm();
   CheckArgument(ff > 0.0, "features", "are all 0 (no bounce: is the sensor still?)");
   WeinbergCalibration c;
@@ -161,7 +181,8 @@ WeinbergCalibration CalibrateWeinbergK(const Eigen::Ref<const Eigen::VectorXd>& 
 WeinbergCalibration CalibrateWeinbergKFromDistance(const Eigen::Ref<const Eigen::VectorXd>& f, double distance_m) {
   CheckArgument(f.size() >= 1, "features", "is empty");
   CheckFinite(f, "features");
-  CheckArgument(std::isfinite(distance_m) && distance_m > 0.0, "distance_m", "must be finite and > 0");
+  RequireAllInRange(f, 0.0, 1e100, "features");
+  RequirePositive(distance_m, "distance_m");
   const double sum = f.sum();
   CheckArgument(sum > 0.0, "features", "sum to 0 (no bounce: is the sensor still?)");
   WeinbergCalibration c;

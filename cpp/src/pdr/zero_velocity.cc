@@ -9,19 +9,19 @@
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/validate.h"
+#include "imu_timing.h"
 
 namespace indoorloc::pdr {
 
 bool ShoeOptions::IsValid(std::string* error) const {
-  auto fail = [&](const char* why) {
-    *error = why;
-    return false;
-  };
-  if (window < 1) return fail("window must be >= 1");
-  if (!(threshold > 0.0)) return fail("threshold must be > 0");
-  if (!(sigma_acc_mps2 > 0.0) || !(sigma_gyro_radps > 0.0)) return fail("noise sds must be > 0");
-  if (!(gravity_mps2 > 0.0)) return fail("gravity_mps2 must be > 0");
-  return true;
+  // The statistic divides by the squared sds: 1e-290 passed "> 0" and gave inf/NaN.
+  return Validator(error)
+      .IntInRange(window, 1, 1000000, "window")
+      .Positive(threshold, "threshold")
+      .Scale(sigma_acc_mps2, "sigma_acc_mps2")
+      .Scale(sigma_gyro_radps, "sigma_gyro_radps")
+      .InRange(gravity_mps2, 0.1, 100.0, "gravity_mps2");
 }
 
 namespace {
@@ -30,8 +30,10 @@ void CheckImu(const Eigen::Ref<const RowMatrixXd>& acc, const Eigen::Ref<const R
   CheckShape(gyro, acc.rows(), 3, "gyro_radps");
   CheckFinite(acc, "acc_mps2");
   CheckFinite(gyro, "gyro_radps");
+  internal::CheckAccRange(acc);
+  internal::CheckGyroRange(gyro);
   CheckArgument(acc.rows() >= window, "acc_mps2",
-                "the recording (" + std::to_string(acc.rows()) + " samples) is shorter than one window (" +
+                "the recording (" + std::to_string(acc.rows()) + " samples) is shorter than one window (window = " +
                     std::to_string(window) + ")");
 }
 }  // namespace

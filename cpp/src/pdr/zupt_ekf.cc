@@ -12,6 +12,7 @@
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/validate.h"
 #include "imu_timing.h"
 
 namespace indoorloc::pdr {
@@ -44,22 +45,22 @@ Eigen::Quaterniond LevelAttitude(const Eigen::Vector3d& mean_f) {
 }  // namespace
 
 bool ZuptEkfOptions::IsValid(std::string* error) const {
-  auto fail = [&](const char* why) {
-    *error = why;
-    return false;
-  };
-  if (!(sigma_acc_mps2 > 0.0) || !(sigma_gyro_radps > 0.0) || !(sigma_zupt_mps > 0.0)) return fail("noise sds must be > 0");
-  if (!(gravity_mps2 > 0.0)) return fail("gravity_mps2 must be > 0");
-  if (init_samples < 1) return fail("init_samples must be >= 1");
-  if (!(sigma_stance_heading_rad >= 0.0) || !std::isfinite(sigma_stance_heading_rad)) return fail("sigma_stance_heading_rad must be >= 0");
-  if (!(min_stance_fraction >= 0.0 && min_stance_fraction < 1.0)) return fail("min_stance_fraction must be in [0, 1)");
-  if (!(max_plausible_stride_m > 0.0)) return fail("max_plausible_stride_m must be > 0");
-  if (!(max_stance_speed_mps > 0.0)) return fail("max_stance_speed_mps must be > 0");
-  if (!(speed_rise_factor > 1.0)) return fail("speed_rise_factor must be > 1");
-  if (!(max_plausible_swing_s > 0.0)) return fail("max_plausible_swing_s must be > 0");
-  if (!(max_median_stride_m > 0.0)) return fail("max_median_stride_m must be > 0");
-  if (!(min_rising_speed_mps >= 0.0)) return fail("min_rising_speed_mps must be >= 0");
-  return true;
+  // Sds enter the covariances squared: a scale keeps them finite (1e-300 or inf would not).
+  return Validator(error)
+      .Scale(sigma_acc_mps2, "sigma_acc_mps2")
+      .Scale(sigma_gyro_radps, "sigma_gyro_radps")
+      .Scale(sigma_zupt_mps, "sigma_zupt_mps")
+      .InRange(gravity_mps2, 0.1, 100.0, "gravity_mps2")
+      .IntInRange(init_samples, 1, 1000000000, "init_samples")
+      .ZeroOrScale(sigma_stance_heading_rad, "sigma_stance_heading_rad")
+      // Health-check limits (issue 16).
+      .Check(min_stance_fraction >= 0.0 && min_stance_fraction < 1.0, "min_stance_fraction", "must be in [0, 1)")
+      .Scale(max_plausible_stride_m, "max_plausible_stride_m")
+      .Scale(max_stance_speed_mps, "max_stance_speed_mps")
+      .Check(speed_rise_factor > 1.0 && std::isfinite(speed_rise_factor), "speed_rise_factor", "must be finite and > 1")
+      .Scale(max_plausible_swing_s, "max_plausible_swing_s")
+      .Scale(max_median_stride_m, "max_median_stride_m")
+      .NonNegative(min_rising_speed_mps, "min_rising_speed_mps");
 }
 
 namespace {
@@ -194,6 +195,9 @@ ZuptEkfOutput RunZuptEkf(const Eigen::Ref<const Eigen::VectorXd>& time_s, const 
   CheckFinite(time_s, "time_s");
   CheckFinite(acc, "acc_mps2");
   CheckFinite(gyro, "gyro_radps");
+  internal::CheckTimeRange(time_s);
+  internal::CheckAccRange(acc);
+  internal::CheckGyroRange(gyro);
   // Median positive sample period, used where timestamps repeat or go backwards.
   const double median_dt = internal::MedianSamplePeriod(time_s);
 

@@ -27,6 +27,7 @@
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/parallel.h"
+#include "indoorloc/core/validate.h"
 
 namespace indoorloc::wifi {
 namespace {
@@ -253,6 +254,15 @@ DelaunayInterpolator::DelaunayInterpolator(const Eigen::Ref<const RowMatrixXd>& 
     tri.inverse[0][1] = -bx / det;
     tri.inverse[1][0] = -ay / det;
     tri.inverse[1][1] = ax / det;
+    // CGAL's exact predicates accept triangles whose area underflows in double (points 1e-300
+    // apart): the barycentric inverse is then inf and every value NaN. Refuse such positions.
+    if (!(det > 0.0) || !std::isfinite(tri.inverse[0][0]) || !std::isfinite(tri.inverse[0][1]) ||
+        !std::isfinite(tri.inverse[1][0]) || !std::isfinite(tri.inverse[1][1])) {
+      ThrowInvalidArgument("positions_m", "the triangle of rows " + std::to_string(tri.vertex[0]) + ", " +
+                                              std::to_string(tri.vertex[1]) + ", " + std::to_string(tri.vertex[2]) +
+                                              " is too small for double precision (twice its area is " +
+                                              FormatValue(det) + ")");
+    }
   }
   // Hull edges: one per infinite face; neighbours across hull edges are encoded -1 - edge.
   std::map<int, int> edge_from, edge_to;

@@ -14,6 +14,7 @@
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
 #include "indoorloc/core/parallel.h"
+#include "rss_limits.h"
 
 namespace indoorloc::wifi {
 namespace {
@@ -102,6 +103,7 @@ FingerprintLocator::FingerprintLocator(const Eigen::Ref<const RowMatrixXd>& refe
   CheckArgument(num_rows <= Eigen::Index{std::numeric_limits<int>::max()}, "reference_rss_dbm",
                 "has too many rows");
   CheckFinite(reference_rss_dbm, "reference_rss_dbm");
+  internal::CheckRss(reference_rss_dbm, "reference_rss_dbm");
   CheckShape(reference_positions_m, num_rows, 2, "reference_positions_m");
   CheckFinite(reference_positions_m, "reference_positions_m");
   CheckArgument(reference_floors.size() == num_rows, "reference_floors",
@@ -170,6 +172,7 @@ FingerprintEstimates FingerprintLocator::Locate(const Eigen::Ref<const RowMatrix
                              std::to_string(scans_dbm.cols()) + "))");
   }
   CheckFinite(scans_dbm, "scans_dbm");
+  internal::CheckRss(scans_dbm, "scans_dbm");
 
   const Eigen::Index num_scans = scans_dbm.rows();
   FingerprintEstimates out;

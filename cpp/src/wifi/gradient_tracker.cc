@@ -10,6 +10,8 @@
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/validate.h"
+#include "rss_limits.h"
 
 namespace indoorloc::wifi {
 namespace {
@@ -110,26 +112,25 @@ void CheckScans(const RssModel& model, const Eigen::Ref<const RowMatrixXd>& scan
                 "has " + std::to_string(scans.cols()) + " AP columns, the map has " +
                     std::to_string(model.num_access_points()) + " (K mismatch between map and scan)");
   CheckFinite(scans, "rss_dbm");
+  internal::CheckRss(scans, "rss_dbm");
 }
 
 }  // namespace
 
 bool GradientTrackerOptions::IsValid(std::string* error) const {
-  auto fail = [&](const char* why) {
-    *error = why;
-    return false;
-  };
-  if (!(max_step_m > 0.0)) return fail("max_step_m must be > 0");
-  if (!(min_reciprocal_condition > 0.0 && min_reciprocal_condition < 1.0)) {
-    return fail("min_reciprocal_condition must be in (0, 1)");
-  }
-  if (!(fallback_step_m > 0.0)) return fail("fallback_step_m must be > 0");
-  if (iterations_per_scan < 1) return fail("iterations_per_scan must be >= 1");
-  if (num_starts < 1) return fail("num_starts must be >= 1");
-  if (start_iterations < 0) return fail("start_iterations must be >= 0");
-  if (!(tolerance_m >= 0.0)) return fail("tolerance_m must be >= 0");
-  if (!(relocalize_threshold_nats > 0.0)) return fail("relocalize_threshold_nats must be > 0 (inf: off)");
-  return true;
+  // Iteration counts are bounded so one call cannot run for hours (2**31 iterations per scan).
+  Validator v(error);
+  v.Scale(max_step_m, "max_step_m")
+      .Check(min_reciprocal_condition > 0.0 && min_reciprocal_condition < 1.0, "min_reciprocal_condition",
+             "must be in (0, 1), got " + FormatValue(min_reciprocal_condition))
+      .Scale(fallback_step_m, "fallback_step_m")
+      .IntInRange(iterations_per_scan, 1, 10000, "iterations_per_scan")
+      .IntInRange(num_starts, 1, 10000, "num_starts")
+      .IntInRange(start_iterations, 0, 100000, "start_iterations")
+      .NonNegative(tolerance_m, "tolerance_m")
+      .Check(relocalize_threshold_nats > 0.0, "relocalize_threshold_nats",
+             "must be > 0 (inf: off), got " + FormatValue(relocalize_threshold_nats));
+  return v.ok();
 }
 
 WifiFix LocateMaximumLikelihood(const RssModel& model, const Eigen::Ref<const RowMatrixXd>& rss_dbm,
@@ -194,6 +195,7 @@ WifiFix GradientTracker::Update(const Eigen::Ref<const Eigen::VectorXd>& rss_dbm
   }
   scan_.row(0) = rss_dbm.transpose();
   CheckFinite(scan_, "rss_dbm");
+  internal::CheckRss(scan_, "rss_dbm");
   if (!initialized_) {
     last_ = LocateMaximumLikelihood(*model_, scan_, options_);
     floor_index_ = model_->FloorIndex(last_.floor);

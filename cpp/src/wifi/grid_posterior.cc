@@ -3,10 +3,14 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/validate.h"
+#include "rss_limits.h"
 
 namespace indoorloc::wifi {
 namespace {
@@ -35,15 +39,10 @@ double MedianSpacing(const RowMatrixXd& p) {
 }  // namespace
 
 bool GridPosteriorOptions::IsValid(std::string* error) const {
-  if (!std::isfinite(spacing_m)) {
-    *error = "spacing_m must be finite (<= 0 for automatic)";
-    return false;
-  }
-  if (max_points_per_floor < 16) {
-    *error = "max_points_per_floor must be >= 16";
-    return false;
-  }
-  return true;
+  // spacing_m <= 0 picks it automatically; max_points_per_floor bounds the memory (G x K doubles).
+  return Validator(error)
+      .InRange(spacing_m, -kMaxScale, kMaxScale, "spacing_m")
+      .IntInRange(max_points_per_floor, 16, 10000000, "max_points_per_floor");
 }
 
 GridPosterior::GridPosterior(std::shared_ptr<const RssModel> model, GridPosteriorOptions options)
@@ -64,6 +63,9 @@ GridPosterior::GridPosterior(std::shared_ptr<const RssModel> model, GridPosterio
     double h = spacing_m_;
     const Eigen::Vector2d extent = (hi - lo).cwiseMax(1e-9);
     while ((extent[0] / h + 1) * (extent[1] / h + 1) > options.max_points_per_floor) h *= 1.25;
+    // Candidates, interpolated values and the floor's arrays: (2 + 2 K + 3) doubles per point.
+    RequireSizeLimit(static_cast<double>(options.max_points_per_floor) * (5.0 + 2.0 * model_->num_access_points()),
+                     sizeof(double), "max_points_per_floor", "grid values");
     const int nx = static_cast<int>(std::floor(extent[0] / h)) + 1;
     const int ny = static_cast<int>(std::floor(extent[1] / h)) + 1;
     RowMatrixXd candidates(static_cast<Eigen::Index>(nx) * ny, 2);
@@ -102,6 +104,7 @@ WifiFix GridPosterior::Locate(const Eigen::Ref<const RowMatrixXd>& rss_dbm) cons
   }
   CheckArgument(rss_dbm.rows() > 0, "rss_dbm", "no scan");
   CheckFinite(rss_dbm, "rss_dbm");
+  internal::CheckRss(rss_dbm, "rss_dbm");
   const double cap = model_->options().max_term;
   const double n = static_cast<double>(rss_dbm.rows());
   // l at every grid point of every floor, then log-sum-exp weights.
@@ -144,6 +147,14 @@ WifiFix GridPosterior::Locate(const Eigen::Ref<const RowMatrixXd>& rss_dbm) cons
   }
   fix.neg_log_likelihood = best - std::log(total_mass);
   return fix;
+}
+
+const RowMatrixXd& GridPosterior::grid(int floor_index) const {
+  if (floor_index < 0 || floor_index >= num_floors()) {
+    throw std::out_of_range("indoorloc: argument 'floor_index': must be in [0, " + std::to_string(num_floors()) +
+                            "), got " + std::to_string(floor_index));
+  }
+  return floors_[static_cast<size_t>(floor_index)].points;
 }
 
 }  // namespace indoorloc::wifi

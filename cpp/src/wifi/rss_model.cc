@@ -6,6 +6,7 @@
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/validate.h"
 
 namespace indoorloc::wifi {
 
@@ -17,15 +18,9 @@ constexpr double kLog2Pi = 1.8378770664093453;
 }  // namespace
 
 bool RssModelOptions::IsValid(std::string* error) const {
-  if (!(variance_floor_db2 > 0.0) || !std::isfinite(variance_floor_db2)) {
-    *error = "variance_floor_db2 must be finite and > 0";
-    return false;
-  }
-  if (!(max_term > 0.0)) {
-    *error = "max_term must be > 0 (use inf for no cap)";
-    return false;
-  }
-  return true;
+  return Validator(error)
+      .Scale(variance_floor_db2, "variance_floor_db2")  // divides every squared residual
+      .Check(max_term > 0.0, "max_term", "must be > 0 (use inf for no cap), got " + FormatValue(max_term));
 }
 
 RssModel::RssModel(SignalMap map, RssModelOptions options)

@@ -12,6 +12,8 @@
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/validate.h"
+#include "rss_limits.h"
 
 namespace indoorloc::wifi {
 namespace {
@@ -23,19 +25,10 @@ bool IsNotHeard(double v, double sentinel) { return std::isnan(v) || v == sentin
 }  // namespace
 
 bool SignalMapOptions::IsValid(std::string* error) const {
-  if (!std::isfinite(not_heard_dbm)) {
-    *error = "not_heard_dbm must be finite";
-    return false;
-  }
-  if (!(variance_floor_db2 > 0.0) || !std::isfinite(variance_floor_db2)) {
-    *error = "variance_floor_db2 must be finite and > 0";
-    return false;
-  }
-  if (!(min_point_fraction >= 0.0 && min_point_fraction <= 1.0)) {
-    *error = "min_point_fraction must be in [0, 1]";
-    return false;
-  }
-  return true;
+  return Validator(error)
+      .InRange(not_heard_dbm, -internal::kMaxAbsRssDb, internal::kMaxAbsRssDb, "not_heard_dbm")
+      .Scale(variance_floor_db2, "variance_floor_db2")
+      .InRange(min_point_fraction, 0.0, 1.0, "min_point_fraction");
 }
 
 RowMatrixXd ReplaceNotHeard(const Eigen::Ref<const RowMatrixXd>& rss_dbm, double not_heard_sentinel,
@@ -79,6 +72,7 @@ void SignalMap::Validate() const {
   CheckShape(mean_dbm_, n, -1, "mean_dbm");
   CheckShape(variance_db2_, n, mean_dbm_.cols(), "variance_db2");
   CheckFinite(mean_dbm_, "mean_dbm");
+  internal::CheckRss(mean_dbm_, "mean_dbm");
   CheckFinite(variance_db2_, "variance_db2");
   for (Eigen::Index i = 0; i < n; ++i) {
     for (Eigen::Index j = 0; j < variance_db2_.cols(); ++j) {
@@ -136,6 +130,10 @@ SignalMap SignalMap::FromScans(const Eigen::Ref<const RowMatrixXd>& scan_positio
       if (!IsNotHeard(raw, options.not_heard_sentinel)) {
         if (!std::isfinite(raw)) {
           ThrowInvalidArgument("rss_dbm", DescribeEntry(r, j, false) + " is infinite");
+        }
+        if (std::abs(raw) > internal::kMaxAbsRssDb) {  // its square would overflow the variance
+          ThrowInvalidArgument("rss_dbm", DescribeEntry(r, j, false) + " must be in [-1e4, 1e4] dB, got " +
+                                              FormatValue(raw));
         }
         v = raw;
         heard(p, j) += 1.0;

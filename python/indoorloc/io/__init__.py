@@ -6,6 +6,7 @@ dataclasses in, ``_core`` types out), so that facades may use it inside function
 ``indoorloc.mapmatch.warehouse_network``) without an import cycle; docs/architecture.md, "Layers".
 """
 
+from indoorloc.io.errors import FormatError
 from indoorloc.io.wifi_datasets import (
     RSS_RTT_GRID_M,
     RSS_RTT_ROOMS,
@@ -42,9 +43,6 @@ from indoorloc.io.ilc2020 import (
     IlcWifi,
     describe_ilc_floor,
     ilc_floor_origin_lonlat,
-    read_ilc_floor,
-    read_ilc_site,
-    read_ilc_walk,
 )
 from indoorloc.io.floor_plan import (
     GeoJsonFloor,
@@ -65,7 +63,17 @@ from indoorloc.io.road_network import (
     write_geojson_segments,
 )
 
+from indoorloc.io import ilc2020 as _ilc2020
+from indoorloc.io.errors import reads_file as _reads_file
+
+# The ILC readers report a damaged walk or floor folder as FormatError, like the other readers
+# (wrapped here so that ilc2020.py itself stays as it is).
+read_ilc_walk = _reads_file("path")(_ilc2020.read_ilc_walk)
+read_ilc_floor = _reads_file("floor_dir")(_ilc2020.read_ilc_floor)
+read_ilc_site = _reads_file("site_dir")(_ilc2020.read_ilc_site)
+
 __all__ = [
+    "FormatError",
     "ILC_SENSOR_TYPES",
     "BssidVocabulary",
     "IlcBeacons",

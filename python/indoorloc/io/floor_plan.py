@@ -59,6 +59,8 @@ from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
+from indoorloc.io.errors import FormatError, reads_file
+from indoorloc.validate import real_array, real_scalar
 from indoorloc._core.fusion import FloorGeometry, FloorPlan, FloorPlanOptions  # io sits below the facades
 
 PathLike = Union[str, os.PathLike]
@@ -83,32 +85,46 @@ def metres_per_degree(lat_deg: float) -> Tuple[float, float]:
 
     ``(pi/180 * N cos(lat), pi/180 * M)`` with the prime-vertical radius
     ``N = a / sqrt(1 - e^2 sin^2 lat)`` and the meridian radius ``M = a (1 - e^2) /
-    (1 - e^2 sin^2 lat)^(3/2)``.
+    (1 - e^2 sin^2 lat)^(3/2)``. ``lat_deg`` in [-90, 90].
     """
-    phi = math.radians(float(lat_deg))
+    phi = math.radians(real_scalar(lat_deg, "lat_deg", lo=-90.0, hi=90.0))
     w2 = 1.0 - _E2 * math.sin(phi) ** 2
     n = WGS84_A_M / math.sqrt(w2)
     m = WGS84_A_M * (1.0 - _E2) / w2**1.5
     return math.radians(1.0) * n * math.cos(phi), math.radians(1.0) * m
 
 
+def _origin(origin_lon_lat: Any) -> Tuple[float, float]:
+    """A (lon, lat) origin [deg]; the poles are refused (no east direction there)."""
+    o = real_array(origin_lon_lat, "origin_lon_lat", shape=(2,))
+    lon = real_scalar(float(o[0]), "origin_lon_lat", lo=-540.0, hi=540.0)
+    lat = real_scalar(float(o[1]), "origin_lon_lat", lo=-89.999, hi=89.999)
+    return lon, lat
+
+
 def lonlat_to_local(lon_lat_deg: Any, origin_lon_lat: Tuple[float, float]) -> np.ndarray:
     """(N, 2) longitude/latitude [deg] -> (N, 2) east/north [m] of the origin (local frame)."""
-    ll = np.asarray(lon_lat_deg, dtype=float)
-    kx, ky = metres_per_degree(origin_lon_lat[1])
+    ll = real_array(lon_lat_deg, "lon_lat_deg", max_abs=1e3)
+    if ll.ndim == 0 or ll.shape[-1] != 2:
+        raise ValueError(f"indoorloc: argument 'lon_lat_deg': expected shape (..., 2), got {ll.shape}")
+    lon0, lat0 = _origin(origin_lon_lat)
+    kx, ky = metres_per_degree(lat0)
     out = np.empty_like(ll)
-    out[..., 0] = (ll[..., 0] - origin_lon_lat[0]) * kx
-    out[..., 1] = (ll[..., 1] - origin_lon_lat[1]) * ky
+    out[..., 0] = (ll[..., 0] - lon0) * kx
+    out[..., 1] = (ll[..., 1] - lat0) * ky
     return out
 
 
 def local_to_lonlat(east_north_m: Any, origin_lon_lat: Tuple[float, float]) -> np.ndarray:
     """Inverse of :func:`lonlat_to_local`: (N, 2) east/north [m] -> longitude/latitude [deg]."""
-    en = np.asarray(east_north_m, dtype=float)
-    kx, ky = metres_per_degree(origin_lon_lat[1])
+    en = real_array(east_north_m, "east_north_m", max_abs=1e9)
+    if en.ndim == 0 or en.shape[-1] != 2:
+        raise ValueError(f"indoorloc: argument 'east_north_m': expected shape (..., 2), got {en.shape}")
+    lon0, lat0 = _origin(origin_lon_lat)
+    kx, ky = metres_per_degree(lat0)
     out = np.empty_like(en)
-    out[..., 0] = origin_lon_lat[0] + en[..., 0] / kx
-    out[..., 1] = origin_lon_lat[1] + en[..., 1] / ky
+    out[..., 0] = lon0 + en[..., 0] / kx
+    out[..., 1] = lat0 + en[..., 1] / ky
     return out
 
 
@@ -276,6 +292,7 @@ def _resolve_origin(origin: Origin, features: List[Any], roles: List[str],
     return lon0, lat0
 
 
+@reads_file("source", argument="path")
 def read_geojson_floor(
     source: Source,
     *,
@@ -369,6 +386,7 @@ _RING_REF = re.compile(r"floors\[(\d+)\]\.(outlines|obstacles)\[(\d+)\]")
 _WALL_REF = re.compile(r"floors\[(\d+)\]\.walls': row (\d+)")
 
 
+@reads_file("sources", argument="path")
 def load_floor_plan(
     sources: Union[Source, Sequence[Source]],
     *,

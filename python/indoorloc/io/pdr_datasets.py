@@ -57,6 +57,8 @@ from typing import List, Optional, Tuple, Union
 
 import numpy as np
 
+from indoorloc.io.errors import reads_file
+from indoorloc.validate import real_array
 PathLike = Union[str, Path]
 
 #: Standard gravity [m/s^2] used to convert accelerations given in g.
@@ -154,8 +156,8 @@ def check_imu_units(acc_mps2: np.ndarray, gyro_radps: np.ndarray, *, acc_name: s
 
     The error message names the argument (``acc_name`` / ``gyro_name``) and the likely unit.
     """
-    acc = np.asarray(acc_mps2, dtype=float)
-    gyro = np.asarray(gyro_radps, dtype=float)
+    acc = real_array(acc_mps2, acc_name)  # refuses strings, complex, NaN and inf, naming it
+    gyro = real_array(gyro_radps, gyro_name)
     for name, a in ((acc_name, acc), (gyro_name, gyro)):
         if a.ndim != 2 or a.shape[1] != 3 or a.shape[0] == 0:
             raise _err(name, f"expected a non-empty (N, 3) array, got shape {a.shape}")
@@ -247,14 +249,15 @@ def fit_sample_rate(time_s: np.ndarray, *, argument: str = "time_s", warn: bool 
     return 1.0 / period, info
 
 
-def _rate_from_time(time_s: np.ndarray, argument: str) -> float:
+def _rate_from_time(time_s: np.ndarray, argument: str, where: str = "") -> float:
+    prefix = f"{where}: " if where else ""
     dt = np.diff(time_s)
     if dt.size == 0:
-        raise _err(argument, "needs at least two samples")
+        raise _err(argument, f"{prefix}needs at least two samples")
     if np.any(dt <= 0):
         k = int(np.argmax(dt <= 0))
-        raise _err(argument, f"time is not strictly increasing at row {k + 1} "
-                             f"({time_s[k]!r} then {time_s[k + 1]!r})")
+        raise _err(argument, f"{prefix}time is not strictly increasing at row {k + 1} "
+                             f"({float(time_s[k])!r} then {float(time_s[k + 1])!r})")
     return float(1.0 / np.median(dt))
 
 
@@ -265,6 +268,7 @@ def _require_file(path: PathLike, argument: str = "path") -> Path:
     return p
 
 
+@reads_file("path")
 def load_xio(path: PathLike, *, gravity_mps2: float = STANDARD_GRAVITY_MPS2) -> ImuRecording:
     """Load an x-io Gait-Tracking csv (``short_walk.csv`` / ``long_walk.csv``).
 
@@ -288,7 +292,7 @@ def load_xio(path: PathLike, *, gravity_mps2: float = STANDARD_GRAVITY_MPS2) -> 
     keep[1:] = np.any(data[1:] != data[:-1], axis=1)  # drop exact repeats of the previous row
     data = data[keep]
     time_s = data[:, 0]
-    rate_hz = _rate_from_time(time_s, "path")
+    rate_hz = _rate_from_time(time_s, "path", str(p))
     gyro = np.deg2rad(data[:, 1:4])
     acc = data[:, 4:7] * float(gravity_mps2)
     check_imu_units(acc, gyro, acc_name="path (accelerometer columns, converted from g)",
@@ -299,6 +303,7 @@ def load_xio(path: PathLike, *, gravity_mps2: float = STANDARD_GRAVITY_MPS2) -> 
                         sensor="xio")
 
 
+@reads_file("path")
 def load_openshoe(path: PathLike, rate_hz: float = 820.0) -> ImuRecording:
     """Load the OpenShoe data set (``OpenShoeDataSet.txt``): headerless, 6 comma-separated
     floats per row, acc x, y, z in m/s^2 then gyro x, y, z in rad/s, sampled at ``rate_hz``.
@@ -323,6 +328,7 @@ def load_openshoe(path: PathLike, rate_hz: float = 820.0) -> ImuRecording:
                         source_units="acc m/s^2, gyro rad/s", sensor="openshoe")
 
 
+@reads_file("path")
 def load_pyshoe_trial(path: PathLike, *, rate_hz: float = 200.0, regular_time: Optional[bool] = None) -> ImuRecording:
     """Load one PyShoe Vicon trial (``*_LLIO.mat`` of LLIO-aided-iPyShoe), or a recording of the
     same layout without per-sample truth.
@@ -382,7 +388,7 @@ def load_pyshoe_trial(path: PathLike, *, rate_hz: float = 200.0, regular_time: O
         increasing = bool(np.all(np.diff(stamps) > 0))
         use_grid = (not increasing or info["irregular"]) if regular_time is None else bool(regular_time)
         if not use_grid and not increasing:
-            _rate_from_time(stamps, "path")  # raises, naming the first bad row
+            _rate_from_time(stamps, "path", str(p))  # raises, naming the first bad row
         offset = float(np.median(stamps - np.arange(n) / fitted_rate))
         time_s = offset + np.arange(n) / fitted_rate if use_grid else stamps
         units = "acc m/s^2, gyro rad/s" + (", time: regular grid fitted to timestamps_all" if use_grid else "")
@@ -404,6 +410,7 @@ def load_pyshoe_trial(path: PathLike, *, rate_hz: float = 200.0, regular_time: O
                         distance_m=distance, source_units=units, sensor="pyshoe")
 
 
+@reads_file("root")
 def list_pyshoe_trials(root: PathLike) -> List[Path]:
     """Sorted paths of the PyShoe trials (``*.mat``) in the folder ``root``.
 
@@ -465,6 +472,7 @@ def _as_bouts(micro_wb) -> list:
     return [b for b in arr.ravel() if isinstance(b, dict)]
 
 
+@reads_file("path")
 def load_mobgap_trials(path: PathLike, *, gravity_mps2: float = STANDARD_GRAVITY_MPS2) -> List[MobgapTrial]:
     """Load every trial of one mobgap ``data.mat`` (Mobilise-D lower-back example data).
 
@@ -538,6 +546,7 @@ def load_mobgap_trials(path: PathLike, *, gravity_mps2: float = STANDARD_GRAVITY
     return out
 
 
+@reads_file("root")
 def list_mobgap_files(root: PathLike) -> List[Path]:
     """Sorted ``data.mat`` files under the mobgap folder ``root`` (``.../mobgap_lowerback``)."""
     r = Path(root)

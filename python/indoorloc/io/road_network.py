@@ -79,6 +79,8 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
+from indoorloc.io.errors import FormatError, reads_file
+from indoorloc.validate import real_array
 PathLike = Union[str, os.PathLike]
 
 #: Name of the packaged warehouse network in ``indoorloc.data`` (see docs/mapmatch_warehouse.md).
@@ -94,12 +96,15 @@ _MAX_PIECES = _PIECE_ID_FACTOR - 1
 _INT32_MIN, _INT32_MAX = -(2**31), 2**31 - 1
 
 
+_INT64_MAX = 2**63 - 1
+
+
 def _error(arg: str, msg: str) -> ValueError:
     return ValueError(f"indoorloc: argument '{arg}': {msg}")
 
 
 def _path_error(label: str, msg: str) -> ValueError:
-    return _error("path", f"{label}: {msg}")
+    return FormatError(f"indoorloc: argument 'path': {label}: {msg}", path=label)
 
 
 def _read_text(path: PathLike) -> Tuple[str, str]:
@@ -218,6 +223,8 @@ def _feature_id(feature: Dict[str, Any], where: str, label: str) -> Optional[int
         return None
     if not _is_int(value):
         raise _path_error(label, f"{where}: {source} must be an integer (got {value!r})")
+    if not -_INT64_MAX - 1 <= int(value) <= _INT64_MAX:
+        raise _path_error(label, f"{where}: {source} {int(value)} does not fit in int64")
     return int(value)
 
 
@@ -256,6 +263,7 @@ def _parse_geojson(text: str, label: str) -> Tuple[np.ndarray, np.ndarray]:
     return _finish(rows, ids, label)
 
 
+@reads_file("path")
 def read_geojson_segments(path: PathLike) -> Tuple[np.ndarray, np.ndarray]:
     """Read the segments of a GeoJSON FeatureCollection of (Multi)LineString features.
 
@@ -287,7 +295,7 @@ def read_geojson_segments(path: PathLike) -> Tuple[np.ndarray, np.ndarray]:
 
 
 def _as_segments(segments_m: Any, ids: Any) -> Tuple[np.ndarray, np.ndarray]:
-    seg = np.asarray(segments_m, dtype=np.float64)
+    seg = real_array(segments_m, "segments_m")  # strings, complex, NaN, inf: refused by name
     if seg.ndim != 2 or seg.shape[1] != 4 or seg.shape[0] == 0:
         raise _error("segments_m", f"expected shape (M, 4) with M >= 1, got {seg.shape}")
     bad = np.flatnonzero(~np.isfinite(seg).all(axis=1))
@@ -296,11 +304,19 @@ def _as_segments(segments_m: Any, ids: Any) -> Tuple[np.ndarray, np.ndarray]:
     if ids is None:
         ids_arr = np.arange(1, seg.shape[0] + 1, dtype=np.int64)
     else:
-        raw = np.asarray(ids)
+        try:
+            raw = np.asarray(ids)
+        except ValueError as exc:  # ragged nested lists
+            raise _error("ids", f"cannot be converted to an array ({exc})") from None
         if raw.shape != (seg.shape[0],):
             raise _error("ids", f"expected shape ({seg.shape[0]},), got {raw.shape}")
         if raw.size and not np.issubdtype(raw.dtype, np.integer):
             raise _error("ids", f"expected integers, got dtype {raw.dtype}")
+        # uint64 ids above 2**63 - 1 would wrap to negative int64 (2**64 - 1 became -1).
+        if raw.size and raw.dtype.kind == "u" and int(raw.max()) > _INT64_MAX:
+            k = int(np.argmax(raw > _INT64_MAX))
+            raise _error("ids", f"entry {k} = {int(raw[k])} does not fit in int64 "
+                                f"(the readers' id type)")
         ids_arr = raw.astype(np.int64)
         _check_unique_ids(ids_arr, "", arg="ids")
     return seg, ids_arr
@@ -329,6 +345,10 @@ def write_geojson_segments(path: PathLike, segments_m: Any, ids: Any = None) -> 
         (``argument 'path'``).
     """
     seg, ids_arr = _as_segments(segments_m, ids)
+    # What the readers refuse is refused here too, so that every file written reads back.
+    zero = np.flatnonzero((seg[:, 0] == seg[:, 2]) & (seg[:, 1] == seg[:, 3]))
+    if zero.size:
+        raise _error("segments_m", f"row {int(zero[0])} is a zero-length segment")
     if not isinstance(path, (str, os.PathLike)):
         raise _error("path", f"expected a str or os.PathLike, got {type(path).__name__}")
     lines = []
@@ -381,6 +401,8 @@ def _parse_csv(text: str, label: str) -> Tuple[np.ndarray, np.ndarray]:
         except ValueError:
             raise _path_error(label, f"{where}: id {fields[col['id']]!r} is not an integer") \
                 from None
+        if not -_INT64_MAX - 1 <= sid <= _INT64_MAX:
+            raise _path_error(label, f"{where}: id {sid} does not fit in int64")
         seg = []
         for c in CSV_COLUMNS[1:]:
             cell = fields[col[c]].strip()
@@ -397,6 +419,7 @@ def _parse_csv(text: str, label: str) -> Tuple[np.ndarray, np.ndarray]:
     return _finish(rows, ids, label)
 
 
+@reads_file("path")
 def read_csv_segments(path: PathLike) -> Tuple[np.ndarray, np.ndarray]:
     """Read segments from a CSV file with header ``id,x_a,y_a,x_b,y_b``.
 
@@ -441,6 +464,7 @@ def _read_segments_by_suffix(path: PathLike) -> Tuple[np.ndarray, np.ndarray]:
     raise _path_error(str(path), f"unknown suffix {suffix!r}; expected .geojson, .json or .csv")
 
 
+@reads_file("path")
 def load_road_network(path: PathLike, **options: Any) -> Any:
     """Read a road-network file and build an :class:`indoorloc.mapmatch.RoadNetwork`.
 
@@ -508,6 +532,9 @@ def warehouse_segments() -> Tuple[np.ndarray, np.ndarray]:
     return _parse_geojson(text, label)
 
 
+_MAX_GRID_CELLS = 10**6
+
+
 def grid_with_diagonals_segments(nx: int = 4, ny: int = 3,
                                  spacing_m: float = 10.0) -> Tuple[np.ndarray, np.ndarray]:
     """A grid road network with diagonals in every other cell (a test network).
@@ -543,6 +570,12 @@ def grid_with_diagonals_segments(nx: int = 4, ny: int = 3,
             or not math.isfinite(spacing_m) or spacing_m <= 0:
         raise _error("spacing_m", f"expected a finite number > 0, got {spacing_m!r}")
     nx, ny, h = int(nx), int(ny), float(spacing_m)
+    # The rows are built in Python: bound the size so a typo (10**5 x 10**5) fails at once.
+    if nx * ny > _MAX_GRID_CELLS:
+        raise _error("nx", f"nx * ny = {nx * ny} cells exceeds the limit of {_MAX_GRID_CELLS} "
+                           f"(about {2.5 * nx * ny * 32 / 1e9:.3g} GB of segments)")
+    if not math.isfinite(max(nx, ny) * h):
+        raise _error("spacing_m", f"max(nx, ny) * spacing_m = {max(nx, ny)} * {h!r} is not finite")
     rows: List[List[float]] = []
     for j in range(ny + 1):
         rows.extend([i * h, j * h, (i + 1) * h, j * h] for i in range(nx))

@@ -33,6 +33,7 @@ from typing import Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
+from indoorloc.io.errors import FormatError, reads_file
 PathLike = Union[str, Path]
 
 #: Room names accepted by :func:`load_rss_rtt_room`.
@@ -61,6 +62,22 @@ _UJI_LIB_ERRATA: Dict[Tuple[str, str, int], _Erratum] = {
         (12.91385188, 29.21654402, 3.0),
     ),
 }
+
+
+def _as_int64(values: object, name: str) -> np.ndarray:
+    """An integer array; NaN, inf, fractions and values beyond int64 are refused (a plain cast
+    would turn NaN and 1e30 into INT64_MIN without a word)."""
+    a = np.asarray(values)
+    if a.dtype.kind in "iub":
+        return a.astype(np.int64)
+    if a.dtype.kind != "f":
+        raise ValueError(f"indoorloc: argument '{name}': expected integers, got dtype {a.dtype}")
+    bad = ~np.isfinite(a) | (a != np.rint(a)) | (np.abs(a) > 2.0**62)
+    if np.any(bad):
+        k = int(np.flatnonzero(bad)[0])
+        raise ValueError(f"indoorloc: argument '{name}': entry {k} = {a.flat[k]!r} is not a "
+                         f"whole number within +-2**62")
+    return a.astype(np.int64)
 
 
 @dataclass
@@ -93,8 +110,8 @@ class FingerprintSplit:
     def __post_init__(self) -> None:
         self.rss_dbm = np.asarray(self.rss_dbm, dtype=np.float64)
         self.positions_m = np.asarray(self.positions_m, dtype=np.float64)
-        self.floors = np.asarray(self.floors, dtype=np.int64)
-        self.point_ids = np.asarray(self.point_ids, dtype=np.int64)
+        self.floors = _as_int64(self.floors, "floors")
+        self.point_ids = _as_int64(self.point_ids, "point_ids")
         if self.timestamps is not None:
             self.timestamps = np.asarray(self.timestamps, dtype=np.float64)
         s = self.rss_dbm.shape[0] if self.rss_dbm.ndim == 2 else -1
@@ -160,8 +177,8 @@ class FingerprintDataset:
 # Shared helpers
 
 
-def _bad(msg: str) -> ValueError:
-    return ValueError(f"indoorloc: argument 'root': {msg}")
+def _bad(msg: str) -> FormatError:
+    return FormatError(f"indoorloc: argument 'root': {msg}")
 
 
 def _require_file(path: Path) -> Path:
@@ -190,11 +207,18 @@ def _load_matrix(path: Path, dtype: type = np.float64, ncols: Optional[int] = No
     return a
 
 
+_MAX_FLOOR = 10**6  # far beyond any building; keeps floors exact in float64 and int64
+
+
 def _integer_floors(values: np.ndarray, path: Path) -> np.ndarray:
     # A tolerance, because some files store floors computed as z / 3.7 (TUT1: 3.0000000000000004).
     nearest = np.rint(values)
-    if not np.all(np.abs(values - nearest) <= 1e-6):
-        raise _bad(f"file {path} has a non-integer floor")
+    # NaN or 1e30 would cast to INT64_MIN: a floor must be a finite, plausible whole number.
+    bad = ~(np.abs(values - nearest) <= 1e-6) | ~(np.abs(nearest) <= _MAX_FLOOR)
+    if np.any(bad):
+        row = int(np.argwhere(bad)[0, 0])
+        raise _bad(f"file {path} row {row + 1}: floor {values.flat[np.flatnonzero(bad)[0]]!r} is not an "
+                   f"integer within +-{_MAX_FLOOR}")
     return nearest.astype(np.int64)
 
 
@@ -309,6 +333,7 @@ def _uji_set_list(value: Optional[Sequence[int]], available: List[int], arg: str
     return numbers
 
 
+@reads_file("root")
 def load_uji_library(
     root: PathLike,
     month: Union[str, int] = "01",
@@ -454,10 +479,14 @@ def _ap_positions(path: Path) -> Dict[str, np.ndarray]:
     for room, xy in rooms.items():
         if set(xy) != {"X", "Y"} or len(xy["X"]) != len(xy["Y"]):
             raise _bad(f"file {path}: room {room!r} needs 'AP X' and 'AP Y' lines of equal length")
-        out[room] = np.column_stack([xy["X"], xy["Y"]])
+        pos = np.column_stack([xy["X"], xy["Y"]])
+        if not np.all(np.isfinite(pos)):  # float() accepts "nan" and "inf"
+            raise _bad(f"file {path}: room {room!r} has a NaN or infinite AP coordinate")
+        out[room] = pos
     return out
 
 
+@reads_file("root")
 def load_rss_rtt_room(root: PathLike, room: str) -> FingerprintDataset:
     """Load one room of the WiFi RSS/RTT dataset of Feng, Nguyen and Luo (IEEE J-ISPIN 2024).
 
@@ -503,7 +532,8 @@ def load_rss_rtt_room(root: PathLike, room: str) -> FingerprintDataset:
     tr_xy, tr_rss, names = _rss_rtt_csv(root / f"database_{key}_train.csv")
     te_xy, te_rss, te_names = _rss_rtt_csv(root / f"database_{key}_test.csv")
     if te_names != names:
-        raise _bad(f"database_{key}_test.csv has RSS columns {te_names}, train has {names}")
+        raise _bad(f"database_{key}_test.csv has RSS columns {te_names}, database_{key}_train.csv "
+                   f"has {names}")
     positions = _ap_positions(root / "AP_position.txt")
     if key not in positions:
         raise _bad(f"{root / 'AP_position.txt'} has no room {key!r} (found {sorted(positions)})")
@@ -547,6 +577,7 @@ def load_rss_rtt_room(root: PathLike, room: str) -> FingerprintDataset:
 _SURIMI_FIELDS = ("trainingMacs", "testMacs", "trainingLabels", "testLabels")
 
 
+@reads_file("root")
 def load_surimi(root: PathLike, name: str) -> FingerprintDataset:
     """Load one dataset of the SURIMI collection (common ``.mat`` format).
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -143,6 +144,41 @@ TEST(RandomStream, WorksWithStdShuffle) {
   std::shuffle(v.begin(), v.end(), r1);
   std::shuffle(w.begin(), w.end(), r2);
   EXPECT_EQ(v, w);
+}
+
+// Issue 17: κ above about 3e16 made algorithm VM loop forever (r = 1 + 1/(2κ) rounds to 1).
+// Above kVonMisesNormalKappa the draw is the normal limit, variance 1/κ.
+TEST(RandomStream, VonMisesHugeKappaReturnsTheNormalLimit) {
+  RandomStream r(1);
+  // sd 1/sqrt(κ) relative to the mean 0.5 must stay above double precision for the variance
+  // to be measurable: 1e300 (sd 1e-150) returns the mean itself.
+  EXPECT_EQ(r.VonMises(0.5, 1e300), 0.5);
+  for (const double kappa : {1e11, 1e17, 1e24}) {
+    const int n = 20000;
+    double sum = 0.0, sum2 = 0.0;
+    for (int k = 0; k < n; ++k) {
+      const double x = r.VonMises(0.5, kappa);
+      ASSERT_TRUE(std::isfinite(x));
+      sum += x - 0.5;
+      sum2 += (x - 0.5) * (x - 0.5);
+    }
+    const double var = sum2 / n - (sum / n) * (sum / n);
+    EXPECT_NEAR(var * kappa, 1.0, 0.05) << kappa;
+  }
+  // Both sides of the switch give the same spread.
+  double below = 0.0, above = 0.0;
+  for (int k = 0; k < 20000; ++k) {
+    const double a = r.VonMises(0.0, 0.99 * kVonMisesNormalKappa), b = r.VonMises(0.0, 1.01 * kVonMisesNormalKappa);
+    below += a * a;
+    above += b * b;
+  }
+  EXPECT_NEAR(below / above, 1.02, 0.05);
+}
+
+TEST(RandomStream, VonMisesRejectsANonFiniteMean) {
+  RandomStream r(1);
+  EXPECT_THROW(r.VonMises(std::nan(""), 1.0), std::invalid_argument);
+  EXPECT_THROW(r.VonMises(INFINITY, 1.0), std::invalid_argument);
 }
 
 }  // namespace

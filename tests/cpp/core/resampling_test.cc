@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <stdexcept>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -128,6 +130,21 @@ TEST(ResampleIfNeeded, ResamplesOnlyBelowThreshold) {
 
   options.ess_threshold = 1.5;
   EXPECT_THROW(ResampleIfNeeded(skewed, options, rng, &ancestors), std::invalid_argument);
+}
+
+// Issue 17: num_out = -2 silently drew N samples; only -1 means "as many as there are weights".
+TEST(Resample, NumOutBelowMinusOneIsRejected) {
+  RandomStream rng(3);
+  const Eigen::VectorXd lw = Eigen::VectorXd::Zero(5);
+  EXPECT_EQ(Resample(lw, ResamplingScheme::kSystematic, rng, -1).size(), 5u);
+  EXPECT_EQ(Resample(lw, ResamplingScheme::kSystematic, rng, 0).size(), 0u);
+  try {
+    Resample(lw, ResamplingScheme::kSystematic, rng, -2);
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("'num_out'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("got -2"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

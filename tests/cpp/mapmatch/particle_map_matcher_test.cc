@@ -1,8 +1,9 @@
 #include "indoorloc/mapmatch/particle_map_matcher.h"
 
-#include <cmath>
 #include <array>
+#include <cmath>
 #include <set>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -146,6 +147,38 @@ TEST(MonteCarlo, SameSeedSameResultsWhateverTheThreadCount) {
     EXPECT_EQ(one[r].error_m, two[r].error_m);
     EXPECT_EQ(one[r].correct_segment, two[r].correct_segment);
   }
+}
+
+// Issue 17: a huge heading_kappa reached the von Mises rejection loop, which never returned
+// above about 3e16; infinite noise passed ">= 0" and gave inf positions.
+TEST(TrajectorySimulator, HugeKappaIsFastAndNonFiniteNoiseIsRefused) {
+  const RoadNetwork net = Grid();
+  TrajectoryOptions t;
+  t.duration_s = 20.0;
+  t.heading_kappa = 1e300;
+  RandomStream rng(3);
+  const Trajectory tr = SimulateTrajectory(net, t, rng);
+  EXPECT_TRUE(tr.heading_rad.allFinite());
+  for (Eigen::Index k = 0; k < tr.heading_rad.size(); ++k) {
+    const double d = tr.heading_rad[k] - tr.heading_true_rad[k];
+    EXPECT_LT(std::abs(std::atan2(std::sin(d), std::cos(d))), 1e-9) << k;
+  }
+  for (const double bad : {double(INFINITY), std::nan(""), 1e300}) {
+    TrajectoryOptions o;
+    o.speed_noise_sd_mps = bad;
+    std::string error;
+    EXPECT_FALSE(o.IsValid(&error)) << bad;
+    EXPECT_EQ(error.rfind("speed_noise_sd_mps must be in [0, 1e+06], got ", 0), 0u) << error;
+  }
+}
+
+// Issue 17: junction_kappa = 1e300 was reported as "'heading_rad' gives zero likelihood".
+TEST(ParticleMapMatcher, HugeJunctionKappaIsRefusedByName) {
+  FilterOptions o;
+  o.junction_kappa = 1e300;
+  std::string error;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_EQ(error, "junction_kappa must be in [0, 300], got 1e+300");
 }
 
 }  // namespace

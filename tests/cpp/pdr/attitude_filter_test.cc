@@ -1,6 +1,8 @@
 #include "indoorloc/pdr/attitude_filter.h"
 
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
@@ -112,6 +114,24 @@ TEST(Mahony, BadInputGivesClearErrors) {
   EXPECT_THROW(RunMahony(r.time, r.acc / 9.81 / 100.0, r.gyro, RowMatrixXd(0, 3)), std::invalid_argument);
   EXPECT_THROW(RunMahony(r.time.head(10), r.acc, r.gyro, RowMatrixXd(0, 3)), std::invalid_argument);
   EXPECT_THROW(RunMahony(r.time, r.acc, r.gyro, r.mag.topRows(10)), std::invalid_argument);
+}
+
+// Issue 17: gains of inf passed ">= 0" and made every quaternion NaN.
+TEST(Mahony, NonFiniteGainsAreRefusedNamingTheGain) {
+  const Rotation r = MakeRotation(2, false);
+  for (const char* name : {"kp", "ki", "kp_mag", "gravity_mps2"}) {
+    MahonyOptions o;
+    if (std::string(name) == "kp") o.kp = INFINITY;
+    if (std::string(name) == "ki") o.ki = INFINITY;
+    if (std::string(name) == "kp_mag") o.kp_mag = INFINITY;
+    if (std::string(name) == "gravity_mps2") o.gravity_mps2 = INFINITY;
+    try {
+      RunMahony(r.time, r.acc, r.gyro, RowMatrixXd(0, 3), o);
+      ADD_FAILURE() << name << ": no exception";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string("'options': ") + name + " "), std::string::npos) << e.what();
+    }
+  }
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "indoorloc/pdr/stride_length.h"
 
 #include <cmath>
+#include <stdexcept>
 
 #include <gtest/gtest.h>
 
@@ -88,6 +89,23 @@ TEST(Weinberg, BadInputGivesClearErrors) {
   EXPECT_THROW(WeinbergStrideLengths(100.0, acc, {50}, WeinbergOptions()), std::invalid_argument);
   EXPECT_THROW(CalibrateWeinbergK(Eigen::VectorXd::Zero(3), Eigen::VectorXd::Ones(3)), std::invalid_argument);
   EXPECT_THROW(CalibrateWeinbergKFromDistance(Eigen::VectorXd::Ones(3), -1.0), std::invalid_argument);
+}
+
+// Issue 17: rate_hz = 1e300 squared to inf and gave NaN sections; an unstable section (or one
+// with a pole at z = 1, whose steady-state start divides by 0) filled the output with inf/NaN.
+TEST(Butterworth, AbsurdRatesAndUnstableSectionsAreRefused) {
+  EXPECT_THROW(ButterworthSos(4, 3.0, 1e300), std::invalid_argument);
+  RowMatrixXd unstable(1, 6);
+  unstable << 1.0, 0.0, 0.0, 1.0, 0.0, -1.5;  // poles at +-sqrt(1.5)
+  const Eigen::VectorXd x = Eigen::VectorXd::Ones(2000);
+  EXPECT_THROW(FilterSos(unstable, x, false), std::invalid_argument);
+  RowMatrixXd integrator(1, 6);
+  integrator << 1.0, 1.0, 1.0, 1.0, -2.0, 1.0;  // double pole at z = 1
+  EXPECT_THROW(FilterSos(integrator, x, true), std::invalid_argument);
+  // Stable but huge input: the output overflows and is reported, not returned.
+  RowMatrixXd gain(1, 6);
+  gain << 1e10, 0.0, 0.0, 1.0, 0.0, 0.0;
+  EXPECT_THROW(FilterSos(gain, Eigen::VectorXd::Constant(3, 1e300), false), std::invalid_argument);
 }
 
 }  // namespace

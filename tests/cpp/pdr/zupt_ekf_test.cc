@@ -1,6 +1,7 @@
 #include "indoorloc/pdr/zupt_ekf.h"
 
 #include <cmath>
+#include <string>
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
@@ -187,6 +188,28 @@ TEST(ZuptEkf, BadInputGivesClearErrors) {
   Eigen::VectorXd repeated = g.time;
   repeated[7] = repeated[6];  // a repeated timestamp is handled (median period)
   EXPECT_NO_THROW(RunZuptEkf(repeated, g.acc, g.gyro, stance));
+}
+
+// Issue 17: inf or 1e-300 passed "> 0" and turned every state into NaN; the message named no field.
+TEST(ZuptEkf, NonFiniteOrAbsurdOptionsAreRefusedNamingTheField) {
+  const auto field_of = [](ZuptEkfOptions o) {
+    std::string error;
+    EXPECT_FALSE(o.IsValid(&error));
+    return error;
+  };
+  ZuptEkfOptions o;
+  o.sigma_acc_mps2 = INFINITY;
+  EXPECT_EQ(field_of(o), "sigma_acc_mps2 must be finite and in [1e-12, 1e+12], got inf");
+  o = ZuptEkfOptions();
+  o.sigma_gyro_radps = 1e-300;
+  EXPECT_EQ(field_of(o).rfind("sigma_gyro_radps", 0), 0u);
+  o = ZuptEkfOptions();
+  o.sigma_zupt_mps = std::nan("");
+  EXPECT_EQ(field_of(o).rfind("sigma_zupt_mps", 0), 0u);
+  o = ZuptEkfOptions();
+  o.gravity_mps2 = INFINITY;
+  EXPECT_EQ(field_of(o), "gravity_mps2 must be in [0.1, 100], got inf");
+  EXPECT_TRUE(ZuptEkfOptions().IsValid(nullptr));
 }
 
 }  // namespace

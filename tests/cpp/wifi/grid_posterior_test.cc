@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <memory>
+#include <stdexcept>
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
@@ -43,6 +44,15 @@ TEST(GridPosterior, MatchesBruteForcePosteriorFromTheModel) {
   GridPosteriorOptions bad;
   bad.max_points_per_floor = 1;
   EXPECT_THROW(GridPosterior(model, bad), std::invalid_argument);
+}
+
+// Issue 17: grid(floor_index) had no bounds check (grid(100000) segfaulted, grid(-1) read garbage).
+TEST(GridPosterior, GridIndexOutsideTheFloorsThrowsOutOfRange) {
+  auto model = std::make_shared<const RssModel>(testing::LatticeMap(), RssModelOptions());
+  const GridPosterior posterior(model, GridPosteriorOptions());
+  ASSERT_EQ(posterior.num_floors(), 1);
+  EXPECT_GT(posterior.grid(0).rows(), 0);
+  for (const int bad : {-1, 1, 100000}) EXPECT_THROW(posterior.grid(bad), std::out_of_range) << bad;
 }
 
 }  // namespace

@@ -50,6 +50,9 @@ struct ForwardBackwardOptions {
   double max_dropped_mass = 1.0;
   /// Cap of the adaptive beam (0: no cap, up to every candidate).
   int beam_max = 0;
+  /// The argument named when the emissions give every state zero likelihood at a step (the
+  /// caller's name for what produced them: "log_emission", or "observations" for AnalogHMM).
+  const char* emission_argument = "log_emission";
   bool IsValid(std::string* error) const;
 };
 

@@ -25,6 +25,9 @@ std::uint64_t DeriveSeed(std::uint64_t seed, std::uint64_t stream);
 
 /// A seeded xoshiro256++ stream with the distributions indoorloc needs. Satisfies the C++
 /// UniformRandomBitGenerator requirements, so it also works with <algorithm> (std::shuffle).
+/// Above this concentration VonMises draws from its normal limit N(mu, 1/kappa).
+inline constexpr double kVonMisesNormalKappa = 1e10;
+
 class RandomStream {
  public:
   using result_type = std::uint64_t;
@@ -81,7 +84,9 @@ class RandomStream {
   /// Exponential with rate 1.
   double Exponential();
   /// Von Mises on (-pi, pi] with mean direction `mu_rad` and concentration `kappa` >= 0
-  /// (Best & Fisher 1979). kappa = 0 gives the uniform circle.
+  /// (Best & Fisher 1979). kappa = 0 gives the uniform circle; kappa > kVonMisesNormalKappa
+  /// gives the limiting normal of variance 1/kappa. Throws std::invalid_argument for a
+  /// non-finite mu_rad or a negative / non-finite kappa.
   double VonMises(double mu_rad, double kappa);
 
  private:

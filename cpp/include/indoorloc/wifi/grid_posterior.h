@@ -40,8 +40,10 @@ class GridPosterior {
   /// scans (n x K, prepared) all taken at one position.
   WifiFix Locate(const Eigen::Ref<const RowMatrixXd>& rss_dbm) const;
 
-  /// Grid points of a floor (G x 2) [m].
-  const RowMatrixXd& grid(int floor_index) const { return floors_[static_cast<size_t>(floor_index)].points; }
+  /// Grid points of a floor (G x 2) [m]; floor_index in [0, number of floors), else
+  /// std::out_of_range (Python: IndexError).
+  const RowMatrixXd& grid(int floor_index) const;
+  int num_floors() const { return static_cast<int>(floors_.size()); }
   double spacing_m() const { return spacing_m_; }
 
  private:

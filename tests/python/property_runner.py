@@ -1,0 +1,43 @@
+"""Runs one group of property_cases.py in a child process and checks its counts (issue 17).
+
+A crash (the child dies from a signal) or a hang (the child outlives its time budget) fails
+the test with the call that was running; otherwise the child's counts of silent NaN, unclear
+messages, wrong error types and modified inputs must all be 0.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+GROUP_TIMEOUT_S = float(os.environ.get("PROPERTY_GROUP_TIMEOUT_S", "240"))
+
+
+def run_group(group: str) -> dict:
+    with tempfile.TemporaryDirectory() as tmp:
+        status = Path(tmp) / "current_call.txt"
+        env = dict(os.environ, PROPERTY_STATUS_FILE=str(status), PYTHONHASHSEED="0")
+        try:
+            proc = subprocess.run([sys.executable, str(HERE / "property_cases.py"), group],
+                                  capture_output=True, text=True, timeout=GROUP_TIMEOUT_S, env=env)
+        except subprocess.TimeoutExpired:
+            last = status.read_text() if status.exists() else "?"
+            raise AssertionError(f"{group}: hang: no result in {GROUP_TIMEOUT_S} s; last call {last}")
+        last = status.read_text() if status.exists() else "?"
+        assert proc.returncode >= 0, (f"{group}: crash (signal {-proc.returncode}) during {last}\n"
+                                      f"{proc.stderr[-2000:]}")
+        lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("{")]
+        assert lines, f"{group}: no result (exit {proc.returncode}); last call {last}\n{proc.stderr[-2000:]}"
+        counts = json.loads(lines[-1])
+    print(f"{group}: {counts['cases']} cases, {counts['calls']} calls, {counts['returned']} returned, "
+          f"{counts['rejected']} rejected")
+    problems = "\n".join(counts["problems"])
+    for kind in ("hangs", "silent_nan", "unclear", "wrong_type", "mutated"):
+        assert counts[kind] == 0, f"{group}: {counts[kind]} {kind}\n{problems}"
+    assert proc.returncode == 0, problems
+    return counts
