@@ -464,6 +464,13 @@ def evaluate_folds(data_root: Optional[Path], floors: Sequence[str], settings: R
     return evaluate_floors(data, settings, _peer(), progress, METHODS, all_plan, folds)
 
 
+def fold_task(params: Dict[str, Any], seed: int, data_root: str, floors: List[str],
+              settings: RealSettings) -> Dict[str, Any]:
+    """The Dask task of ``evaluate(..., scheduler=...)``: the walk scores of fold ``params["fold"]``
+    (the worker reads the site from ``data_root``)."""
+    return {"scores": evaluate_folds(data_root, floors, settings, [int(params["fold"])])}
+
+
 def evaluate(data_root: Optional[Path] = None, floors: Sequence[str] = FLOORS, settings: Optional[RealSettings] = None,
              progress=None, scheduler: Any = None) -> dict:
     """``indoorloc fusion evaluate``: every method on every floor; the JSON dict of :func:`summarize`.
@@ -478,10 +485,9 @@ def evaluate(data_root: Optional[Path] = None, floors: Sequence[str] = FLOORS, s
         scores = evaluate_folds(root, floors, settings, None, progress)
     else:
         from indoorloc import sweep
-        from indoorloc.experiments import sweep_tasks
 
         grid = {"fold": list(range(settings.folds))}
-        result = sweep.run_sweep(sweep_tasks.fusion_fold, grid, scheduler=scheduler,
+        result = sweep.run_sweep(fold_task, grid, scheduler=scheduler,
                                  shared={"data_root": str(root), "floors": list(floors), "settings": settings},
                                  progress=progress)
         if result.failed:

@@ -794,15 +794,19 @@ def evaluate_json(root: PathLike, only: Optional[Sequence[str]] = None) -> Dict[
     return {"default_method": DEFAULT_METHOD, "recordings": rows}
 
 
+def dataset_task(params: Dict[str, Any], seed: int, root: str) -> Dict[str, Any]:
+    """The Dask task of :func:`evaluate_json_on_dask`: the rows of one dataset."""
+    return {"recordings": evaluate_json(root, only=[str(params["dataset"])])["recordings"]}
+
+
 def evaluate_json_on_dask(root: PathLike, only: Optional[Sequence[str]], scheduler: Any) -> Dict[str, Any]:
     """:func:`evaluate_json` with one Dask task per dataset (the workers read ``root``, a path
     they must see); the same document, recordings in the same order."""
     from indoorloc import sweep
-    from indoorloc.experiments import sweep_tasks
 
     r = Path(root)
     names = [nm for nm in _datasets_to_run(r, only) if (r / DATASETS[nm]).is_dir()]
-    res = sweep.run_sweep(sweep_tasks.pdr_dataset, {"dataset": names}, scheduler=scheduler, shared={"root": str(r)})
+    res = sweep.run_sweep(dataset_task, {"dataset": names}, scheduler=scheduler, shared={"root": str(r)})
     if res.failed:
         raise RuntimeError(f"indoorloc: dataset {res.failed[0]['params']['dataset']} failed: {res.failed[0]['error']}")
     return {"default_method": DEFAULT_METHOD, "recordings": [rec for row in res.rows for rec in row["recordings"]]}

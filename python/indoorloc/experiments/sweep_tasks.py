@@ -1,7 +1,10 @@
 """Task functions for ``indoorloc.sweep`` (module level, so that Dask can send them to workers).
 
-Each takes ``(params, seed, **shared)`` and returns a dict of JSON scalars; the result depends
-only on its arguments (the seed comes from the sweep: ``sweep.task_seed``).
+Each takes ``(params, seed, **shared)`` and returns a dict (JSON scalars, or arrays when no
+JSON-lines file is written); the result depends only on its arguments (the seed comes from the
+sweep: ``sweep.task_seed``). The tasks of ``fusion evaluate`` and ``pdr evaluate`` live in their
+experiment modules (``fusion_real.fold_task``, ``pdr_evaluate.dataset_task``), which dispatch
+them themselves.
 """
 
 from __future__ import annotations
@@ -62,27 +65,12 @@ def mapmatch_kappa(params: Mapping[str, Any], seed: int, segments_m: Optional[np
     return {"error_m": r.error_m, "correct": r.correct, "smoothed_error_m": r.smoothed_error_m, "seconds": r.seconds}
 
 
-def fusion_fold(params: Mapping[str, Any], seed: int, data_root: str, floors: list, settings: Any) -> Dict[str, Any]:
-    """``fusion evaluate`` for fold ``params["fold"]`` on a worker: the walk scores of that fold's
-    test walks (the worker reads the site from ``data_root``; ``settings`` is the RealSettings)."""
-    from indoorloc.experiments import fusion_real
-
-    return {"scores": fusion_real.evaluate_folds(data_root, floors, settings, [int(params["fold"])])}
-
-
 def analog_table1_realisation(params: Mapping[str, Any], seed: int, table1_kwargs: Mapping[str, Any]) -> Dict[str, Any]:
     """``analog lorenz63`` for realisation ``params["r"]`` on a worker: ``run_table1(**table1_kwargs,
     realisations=[r])`` (the experiment's own seeds: identical to the in-process run)."""
     from indoorloc.experiments import analog_lorenz63 as al
 
     return {"part": al.run_table1(**dict(table1_kwargs), realisations=[int(params["r"])])}
-
-
-def pdr_dataset(params: Mapping[str, Any], seed: int, root: str) -> Dict[str, Any]:
-    """``pdr evaluate --json`` rows of one dataset (``params["dataset"]``) on a worker."""
-    from indoorloc.experiments import pdr_evaluate
-
-    return {"recordings": pdr_evaluate.evaluate_json(root, only=[str(params["dataset"])])["recordings"]}
 
 
 def wifi_case(params: Mapping[str, Any], seed: int, root: str, cv_points: int, cv_seed: int,
@@ -110,4 +98,4 @@ def analog_run(params: Mapping[str, Any], seed: int) -> Dict[str, Any]:
     return {"rmse": al.rmse(out["mean"], truth)}
 
 
-__all__ = ["analog_run", "analog_table1_realisation", "fusion_fold", "mapmatch_kappa", "mapmatch_run", "pdr_dataset", "wifi_case"]
+__all__ = ["analog_run", "analog_table1_realisation", "mapmatch_kappa", "mapmatch_run", "wifi_case"]
