@@ -17,7 +17,8 @@ meaningful and the verdict says so.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional, Sequence
+from pathlib import Path
+from typing import Callable, Dict, List, Optional, Sequence
 
 import numpy as np
 
@@ -127,3 +128,40 @@ class Table:
             "paper": self.paper, "name": self.name, "title": self.title, "setup": self.setup,
             "figures": list(self.figures), "cells": [c.summary() for c in self.cells],
         }
+
+
+@dataclass
+class ReproduceContext:
+    """What a paper's reproduce section gets from ``indoorloc reproduce``.
+
+    Attributes
+    ----------
+    out_dir : Path
+        Folder the section writes its figures into (PNG); created by the runner.
+    runs : int or None
+        Monte Carlo runs / realisations per cell; None = the section's full-size default.
+    threads : int
+        Threads for C++ batches (0 = all cores).
+    seed : int
+        Base seed; a section derives every run's seed from it (documented in its Table.setup).
+    scheduler : None, str or distributed.Client
+        None = in process; an address or a Client = run the section's tasks through
+        ``indoorloc.sweep.run_sweep`` on that Dask cluster (issue 19).
+    log : callable(str)
+        Prints one progress line (with the time) whether or not stdout is a terminal.
+    """
+
+    out_dir: Path
+    runs: Optional[int] = None
+    threads: int = 0
+    seed: int = 0
+    scheduler: object = None
+    log: Callable[[str], None] = print
+
+    def figure_path(self, name: str) -> Path:
+        """Path of a PNG figure named ``name`` inside the section's folder."""
+        return Path(self.out_dir) / f"{name}.png"
+
+    def runs_or(self, default: int) -> int:
+        """The requested run count, or ``default`` (the section's full size) when none was given."""
+        return int(self.runs) if self.runs is not None else int(default)
