@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import List, Optional, Sequence
 
 from indoorloc import __version__
+from indoorloc import progress
 from indoorloc.registry import DemoContext, DemoSection, registered_demos
 
 
@@ -57,11 +58,14 @@ def run_demos(out_dir: Path, names: Optional[Sequence[str]] = None, seed: int = 
         + (" (quick mode: fewer Monte Carlo runs)." if quick else "."),
         "",
     ]
-    for name in selected:
+    progress.log(f"demo: {len(selected)} sections ({', '.join(selected)}), report in {out_dir}")
+    for i, name in enumerate(selected, 1):
         entry = demos[name]
+        progress.log(f"demo: [{i}/{len(selected)}] {name} started")
         start = time.perf_counter()
         section: DemoSection = entry.fn(ctx)
         elapsed = time.perf_counter() - start
+        progress.log(f"demo: [{i}/{len(selected)}] {name} done in {elapsed:.1f} s")
         parts += [f"## {entry.title} (`{name}`)", "", section.markdown.strip(), ""]
         for fig in section.figures:
             parts += [f"![{fig.stem}]({fig.name})", ""]

@@ -1,25 +1,47 @@
-"""Progress bars for long Python-level loops (Monte Carlo runs, sweeps, dataset evaluation).
+"""Progress for long Python-level work (Monte Carlo runs, sweeps, dataset evaluation, reports).
 
-Shown on an interactive terminal only: off under ``--quiet`` (``set_quiet(True)``), when the
-``CI`` environment variable is set, or when stderr is not a terminal.
+Two forms, one switch:
+
+- a bar (tqdm) on an interactive terminal;
+- plain lines when output goes to a file or a pipe (``make demo > log``, CI logs, ``nohup``):
+  a loop prints a line at most every ``LINE_INTERVAL_S`` seconds and one when it ends, each
+  with the elapsed time, and :func:`log` / :func:`stage` print a line per finished part.
+
+Lines are printed only when the command line turned them on (``configure(lines=True)``, done by
+``indoorloc`` itself), so that library calls from a user's script or notebook stay silent.
+Everything is off under ``--quiet`` (``set_quiet(True)``). Bars are also off when the ``CI``
+environment variable is set. All output goes to stderr, so stdout stays clean for ``--json -``.
 """
 
 from __future__ import annotations
 
 import os
 import sys
-from typing import Iterable, Optional, TypeVar
+import time
+from contextlib import contextmanager
+from typing import Iterable, Iterator, Optional, TypeVar
 
 from tqdm import tqdm
 
 T = TypeVar("T")
 _quiet = False
+_lines = False
+#: At most one line per this many seconds from a loop in line mode (plus the final line).
+LINE_INTERVAL_S = 30.0
 
 
 def set_quiet(quiet: bool) -> None:
-    """Turn every progress bar of this process off (True) or back to automatic (False)."""
+    """Turn every progress bar and line of this process off (True) or back to automatic (False)."""
     global _quiet
     _quiet = bool(quiet)
+
+
+def configure(quiet: bool = False, lines: bool = True) -> None:
+    """Set by the command line: ``quiet`` silences everything, ``lines`` prints progress lines
+    when no bar can be shown (stderr not a terminal, or ``CI`` set)."""
+    global _lines
+    set_quiet(quiet)
+    _lines = bool(lines)
 
 
 def enabled() -> bool:
@@ -27,6 +49,59 @@ def enabled() -> bool:
     return not _quiet and not os.environ.get("CI") and sys.stderr.isatty()
 
 
+def lines_enabled() -> bool:
+    """True when progress is printed as plain lines (no bar possible, lines turned on)."""
+    return not _quiet and _lines and not enabled()
+
+
+def _format_seconds(seconds: float) -> str:
+    if seconds < 120:
+        return f"{seconds:.1f} s"
+    return f"{seconds / 60:.1f} min"
+
+
+def log(message: str) -> None:
+    """Print one progress line (a finished part, with its time) unless quiet.
+
+    Shown as a line in both modes (through ``tqdm.write`` so that a running bar is not broken);
+    in a library call outside the command line it is shown only on a terminal."""
+    if _quiet or not (_lines or enabled()):
+        return
+    stamp = time.strftime("%H:%M:%S")
+    tqdm.write(f"[{stamp}] {message}", file=sys.stderr)
+    sys.stderr.flush()
+
+
+@contextmanager
+def stage(description: str) -> Iterator[None]:
+    """Time a part of a long command and log ``"<description>: done in <time>"`` when it ends."""
+    start = time.perf_counter()
+    yield
+    log(f"{description}: done in {_format_seconds(time.perf_counter() - start)}")
+
+
+def _lines_progress(iterable: Iterable[T], total: Optional[int], desc: str) -> Iterator[T]:
+    start = last = time.perf_counter()
+    count = 0
+    label = desc or "progress"
+    for item in iterable:
+        yield item
+        count += 1
+        now = time.perf_counter()
+        if now - last >= LINE_INTERVAL_S and (total is None or count < total):
+            of = f"/{total}" if total is not None else ""
+            log(f"{label}: {count}{of} after {_format_seconds(now - start)}")
+            last = now
+    log(f"{label}: {count} done in {_format_seconds(time.perf_counter() - start)}")
+
+
 def progress(iterable: Iterable[T], total: Optional[int] = None, desc: str = "") -> Iterable[T]:
-    """Wrap ``iterable`` in a progress bar when bars are enabled."""
+    """Wrap ``iterable`` in a bar (terminal) or in progress lines (command line, no terminal)."""
+    if lines_enabled():
+        if total is None:
+            try:
+                total = len(iterable)  # type: ignore[arg-type]
+            except TypeError:
+                total = None
+        return _lines_progress(iterable, total, desc)
     return tqdm(iterable, total=total, desc=desc, disable=not enabled(), leave=False)

@@ -8,6 +8,7 @@
     indoorloc pdr evaluate
     indoorloc wifi evaluate [--dataset uji office ...] [--scans 1 10]
     indoorloc wifi simulate [--runs R] [--noise-db S]
+    indoorloc reproduce [--papers 000 ...] [--out DIR] [--runs N] [--quick]
     indoorloc sweep FILE.toml [--scheduler tcp://host:8786] [--out results.jsonl]
 
 Each subsystem's subcommands live in ``indoorloc/cli/<subsystem>.py`` with an
@@ -110,6 +111,12 @@ def _add_pdr(sub: argparse._SubParsersAction) -> None:
     pdr.add_parser(sub, quiet_parent)
 
 
+def _add_reproduce(sub: argparse._SubParsersAction) -> None:
+    from indoorloc.cli import reproduce
+
+    reproduce.add_parser(sub, quiet_parent)
+
+
 def _add_sweep(sub: argparse._SubParsersAction) -> None:
     from indoorloc.cli import sweep
 
@@ -123,7 +130,7 @@ def _add_wifi(sub: argparse._SubParsersAction) -> None:
 
 
 # Subsystems register `add(subparsers)` functions here.
-_SUBCOMMANDS: List[Callable[[argparse._SubParsersAction], None]] = [_add_core, _add_analog, _add_fusion, _add_mapmatch, _add_network, _add_pdr, _add_sweep, _add_wifi]
+_SUBCOMMANDS: List[Callable[[argparse._SubParsersAction], None]] = [_add_core, _add_analog, _add_fusion, _add_mapmatch, _add_network, _add_pdr, _add_reproduce, _add_sweep, _add_wifi]
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -151,7 +158,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Optional[List[str]] = None) -> int:
     args = build_parser().parse_args(argv)
-    progress.set_quiet(args.quiet)
+    # Bars on a terminal, progress lines when output goes to a file or pipe (or under CI).
+    progress.configure(quiet=args.quiet, lines=True)
     try:
         return int(args.func(args) or 0)
     except ValueError as exc:

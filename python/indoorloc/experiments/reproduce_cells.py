@@ -149,6 +149,9 @@ class ReproduceContext:
         ``indoorloc.sweep.run_sweep`` on that Dask cluster (issue 19).
     log : callable(str)
         Prints one progress line (with the time) whether or not stdout is a terminal.
+    quick : bool
+        Shrink every size (runs, durations, catalogs, datasets) to a smoke test of the same code
+        paths, for the tests; the figures are then not comparable with the paper's.
     """
 
     out_dir: Path
@@ -157,6 +160,7 @@ class ReproduceContext:
     seed: int = 0
     scheduler: object = None
     log: Callable[[str], None] = print
+    quick: bool = False
 
     def figure_path(self, name: str) -> Path:
         """Path of a PNG figure named ``name`` inside the section's folder."""
