@@ -4,6 +4,7 @@
 #   make test        set up, build once, run ctest + pytest + the outside C++ app
 #   make test-asan   ctest suite under AddressSanitizer + UndefinedBehaviorSanitizer
 #   make bench       speed benchmarks against peers (writes benchmarks/results/)
+#   make reproduce   every table of the five papers at full size (reports/reproduce/report.{md,html,json})
 #
 # Runs as root on a fresh Debian 12 machine (apt-get installs what is missing); as another
 # user it only checks and names the missing packages. Python packages go into .venv/.
@@ -31,7 +32,7 @@ DEBIAN_PACKAGES := g++ make cmake python3-dev python3-venv \
 # that one persistent build folder serves the wheel, ctest and the C++ install).
 BUILD_REQUIREMENTS := "scikit-build-core>=0.10" "pybind11>=2.10" "cmake>=3.20" ninja
 
-.PHONY: all demo test test-cpp test-python test-cpp-app test-asan bench deps deps-debian \
+.PHONY: all demo reproduce test test-cpp test-python test-cpp-app test-asan bench deps deps-debian \
         deps-python install clean
 
 all: test
@@ -80,6 +81,10 @@ test: install
 
 demo: install
 	$(VENV)/bin/indoorloc demo --out reports/demo
+
+# Resumable: a finished paper section is kept (indoorloc reproduce --rerun PAPER to redo it).
+reproduce: install
+	$(VENV)/bin/indoorloc reproduce --out reports/reproduce
 
 # ctest built with AddressSanitizer + UndefinedBehaviorSanitizer (no Python module: ASan in a
 # dlopen()ed extension needs LD_PRELOAD of the runtime into the interpreter).
