@@ -182,3 +182,17 @@ def test_wifi_evaluate_on_a_cluster_equals_in_process(shared_data, tmp_path, cap
     dist = strip(json.loads((tmp_path / "dask.json").read_text()))
     assert "corridor/k=1" in local
     assert json.dumps(local, sort_keys=True) == json.dumps(dist, sort_keys=True)  # NaN-safe comparison
+
+
+def test_network_reproduce_flights_on_a_cluster_equal_in_process():
+    """`indoorloc reproduce --scheduler`: paper 003's Monte Carlo flights as Dask tasks."""
+    from indoorloc.experiments import network_reproduce as nr
+
+    local = nr.flight_runs([3], slow_stride=5, small=True)
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None) as cluster, Client(cluster) as client:
+        remote = nr.flight_runs([3], slow_stride=5, small=True, scheduler=client)
+    assert len(remote) == 1 and set(remote[0]) == set(local[0])
+    for key, value in local[0].items():
+        if not key.endswith("|seconds"):
+            assert remote[0][key] == value, key

@@ -244,6 +244,23 @@ def flight_task(params, seed: int, slow_stride: int = SLOW_STRIDE, small: bool =
     return {f"{m}|{k}": float(v) for m, s in out["scores"].items() for k, v in s.items()}
 
 
+def flight_runs(seeds, slow_stride: int = SLOW_STRIDE, small: bool = False, scheduler=None) -> list:
+    """:func:`flight_task` for every seed, in process or (``scheduler``) as Dask tasks through
+    ``indoorloc.sweep.run_sweep``; the same list of per-flight dicts either way."""
+    from indoorloc.progress import progress
+
+    if scheduler is None:
+        return [flight_task({"flight_seed": s}, s, slow_stride, small)
+                for s in progress(seeds, total=len(seeds), desc="network flights")]
+    from indoorloc import sweep
+
+    res = sweep.run_sweep(flight_task, {"flight_seed": list(seeds)}, scheduler=scheduler,
+                          shared={"slow_stride": slow_stride, "small": small})
+    if res.failed:
+        raise RuntimeError(f"indoorloc: network flights failed on the cluster: {res.failed[:3]}")
+    return [{k: v for k, v in row.items() if "|" in k} for row in res.rows]
+
+
 def _scale_case(kind: str, args: Dict[str, float], threads: int) -> Dict[str, object]:
     """Solve one Table 2 case in a child process (its own peak memory, VmHWM)."""
     import json
@@ -270,24 +287,13 @@ def reproduce_tables(ctx) -> list:
     """Paper 003 for ``indoorloc reproduce``: NA vs SSA with and without XOVER (and slow
     parameters, §4) over Monte Carlo flights, and the Table 2 cases solved at full size."""
     from indoorloc.experiments.reproduce_cells import Cell, Table
-    from indoorloc.progress import progress
     from indoorloc.simulate.flight import FlightConfig
 
     runs = ctx.runs_or(FULL_FLIGHTS)
     seeds = [ctx.seed + r for r in range(runs)]
     slow_stride = 5 if ctx.quick else SLOW_STRIDE
     start = time.perf_counter()
-    if ctx.scheduler is not None:
-        from indoorloc import sweep
-
-        res = sweep.run_sweep(flight_task, {"flight_seed": seeds}, scheduler=ctx.scheduler,
-                              shared={"slow_stride": slow_stride, "small": bool(ctx.quick)})
-        if res.failed:
-            raise RuntimeError(f"indoorloc: network flights failed on the cluster: {res.failed[:3]}")
-        per_run = [{k: v for k, v in row.items() if "|" in k} for row in res.rows]
-    else:
-        per_run = [flight_task({"flight_seed": s}, s, slow_stride, bool(ctx.quick))
-                   for s in progress(seeds, total=runs, desc="network flights")]
+    per_run = flight_runs(seeds, slow_stride, bool(ctx.quick), ctx.scheduler)
     ctx.log(f"paper 003: {runs} flights (SSA, NA, NA + XOVER, slow s = {slow_stride}) in {time.perf_counter() - start:.0f} s")
     config = tiny_config() if ctx.quick else FlightConfig()
     methods = METHODS + slow_methods(slow_stride)
