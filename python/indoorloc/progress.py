@@ -105,3 +105,34 @@ def progress(iterable: Iterable[T], total: Optional[int] = None, desc: str = "")
                 total = None
         return _lines_progress(iterable, total, desc)
     return tqdm(iterable, total=total, desc=desc, disable=not enabled(), leave=False)
+
+
+class Ticker:
+    """Progress for work that reports completions by callback (Dask tasks, walks of an evaluation):
+    call :meth:`tick` once per finished item and :meth:`close` at the end. A bar on a terminal,
+    lines (at most one per ``LINE_INTERVAL_S`` plus a final one) in line mode, nothing otherwise."""
+
+    def __init__(self, total: Optional[int] = None, desc: str = "") -> None:
+        self.total, self.desc, self.count = total, desc or "progress", 0
+        self._start = self._last = time.perf_counter()
+        self._bar = tqdm(total=total, desc=desc, leave=False) if enabled() else None
+        self._lines = lines_enabled()
+
+    def tick(self) -> None:
+        self.count += 1
+        if self._bar is not None:
+            self._bar.update(1)
+        elif self._lines:
+            now = time.perf_counter()
+            if now - self._last >= LINE_INTERVAL_S:
+                of = f"/{self.total}" if self.total is not None else ""
+                log(f"{self.desc}: {self.count}{of} after {_format_seconds(now - self._start)}")
+                self._last = now
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.close()
+            self._bar = None
+        elif self._lines:
+            log(f"{self.desc}: {self.count} done in {_format_seconds(time.perf_counter() - self._start)}")
+            self._lines = False

@@ -44,13 +44,14 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
     settings = fr.RealSettings(folds=args.folds, seed=args.seed, threads=args.threads)
     root = Path(args.data_root) if args.data_root else fr.default_site_root()
-    bar = progress.progress(iter(int, 1), total=None, desc="walks") if progress.enabled() else None
-    tick = (lambda: next(bar)) if bar is not None else None
+    ticker = progress.Ticker(desc="fusion evaluate: walks")
     if args.select:
-        result = fr.select_settings(root, args.floors, settings, progress=tick)
+        result = fr.select_settings(root, args.floors, settings, progress=ticker.tick)
+        ticker.close()
         print(fr.select_markdown(result))
     else:
-        result = fr.evaluate(root, args.floors, settings, progress=tick, scheduler=args.scheduler)
+        result = fr.evaluate(root, args.floors, settings, progress=ticker.tick, scheduler=args.scheduler)
+        ticker.close()
         print(fr.markdown(result))
     if args.json:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)

@@ -67,10 +67,11 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
     spec = load_sweep_file(Path(args.file))
     n_tasks = len(sweep.make_tasks(spec["grid"], spec["runs"], spec["base_seed"]))
-    bar = progress.progress(iter(int, 1), total=n_tasks, desc="tasks") if progress.enabled() else None
+    ticker = progress.Ticker(total=n_tasks, desc="sweep tasks")
     result = sweep.run_sweep(spec["fn"], spec["grid"], runs=spec["runs"], base_seed=spec["base_seed"], out=args.out,
                              scheduler=args.scheduler, workers=args.workers, max_tasks=args.max_tasks,
-                             progress=(lambda: next(bar)) if bar is not None else None)
+                             progress=ticker.tick)
+    ticker.close()
     table = summarize_rows(result.rows, list(spec["grid"]))
     if table:
         heads = list(table[0])

@@ -29,7 +29,12 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
             raise RuntimeError(f"indoorloc: case {res.failed[0]['params']['case']} failed: {res.failed[0]['error']}")
         outputs = [(row["markdown"], row["entry"]) for row in res.rows]
     else:
-        outputs = [we.evaluate_case(root, name, k, args.cv_points, args.seed, args.threads) for name, k in cases]
+        from indoorloc import progress
+
+        outputs = []
+        for i, (name, k) in enumerate(cases, 1):
+            with progress.stage(f"wifi evaluate: [{i}/{len(cases)}] {name}, {k} scan(s) per estimate"):
+                outputs.append(we.evaluate_case(root, name, k, args.cv_points, args.seed, args.threads))
     report = {}
     for (name, k), (text, entry) in zip(cases, outputs):
         print(text)

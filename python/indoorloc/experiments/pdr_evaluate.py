@@ -45,7 +45,7 @@ from indoorloc.io.pdr_datasets import (
     load_pyshoe_trial,
     load_xio,
 )
-from indoorloc.progress import progress
+from indoorloc.progress import progress, stage
 
 PathLike = Union[str, Path]
 MethodOutput = Union[np.ndarray, Tuple[np.ndarray, Optional[np.ndarray]]]
@@ -787,7 +787,8 @@ def evaluate_json(root: PathLike, only: Optional[Sequence[str]] = None) -> Dict[
         elif nm == "openshoe":
             recs = [load_openshoe(folder / "OpenShoeDataSet.txt")] if (folder / "OpenShoeDataSet.txt").is_file() else []
         else:
-            rows.extend(_mobgap_rows(folder))
+            with stage("mobgap"):
+                rows.extend(_mobgap_rows(folder))
             continue
         for rec in progress(recs, total=len(recs), desc=nm):
             rows.append(_zupt_row(nm, rec))
