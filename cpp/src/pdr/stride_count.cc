@@ -7,6 +7,7 @@
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "median.h"
 
 namespace indoorloc::pdr {
 
@@ -50,14 +51,6 @@ std::vector<Run> Runs(const BoolVector& s) {
   return runs;
 }
 
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  double m = *mid;
-  if (v.size() % 2 == 0) m = 0.5 * (m + *std::max_element(v.begin(), mid));
-  return m;
-}
 
 }  // namespace
 
@@ -83,7 +76,7 @@ StrideCountOutput CountStrides(const BoolVector& stance, double rate_hz, const S
   for (const Run& r : Runs(s)) {
     if (!r.value && r.begin > 0 && r.end < n && r.end - r.begin >= swing_floor) swings.push_back(static_cast<double>(r.end - r.begin));
   }
-  const double rhythm = Median(swings);
+  const double rhythm = internal::Median(swings);
   const double min_swing = std::max(static_cast<double>(swing_floor), options.min_swing_fraction * rhythm);
   for (const Run& r : Runs(s)) {
     if (!r.value && r.begin > 0 && r.end < n && static_cast<double>(r.end - r.begin) < min_swing) {
@@ -106,9 +99,9 @@ StrideCountOutput CountStrides(const BoolVector& stance, double rate_hz, const S
   }
   std::vector<double> lengths;
   for (const auto& o : onsets) lengths.push_back(static_cast<double>(o.second));
-  const double median = Median(lengths);
+  const double median = internal::Median(lengths);
   out.summary.median_swing_s = median / rate_hz;
-  out.summary.median_stance_s = Median(stances) / rate_hz;
+  out.summary.median_stance_s = internal::Median(stances) / rate_hz;
   // 3. Long swings hold missed stances.
   for (const auto& [onset, length] : onsets) {
     if (options.long_swing_factor > 0.0 && median > 0.0 && static_cast<double>(length) > options.long_swing_factor * median) {

@@ -11,6 +11,7 @@
 #include "indoorloc/core/options.h"
 #include "indoorloc/core/validate.h"
 #include "imu_timing.h"
+#include "median.h"
 
 namespace indoorloc::pdr {
 
@@ -102,15 +103,6 @@ std::string ZeroVelocitySummary::BriefReport() const {
 
 namespace {
 
-double MedianOf(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  double m = *mid;
-  if (v.size() % 2 == 0) m = 0.5 * (m + *std::max_element(v.begin(), mid));
-  return m;
-}
-
 // Swings [samples] of T < threshold: runs of non-stance between two stance runs, and the runs
 // before the first and after the last stance (a recording that ends while the foot "moves" has
 // lost its stances), stance runs shorter than min_stance samples inside a swing counted as swing.
@@ -135,7 +127,7 @@ std::pair<double, double> SwingStats(const Eigen::VectorXd& t, double threshold,
   }
   if (n > last_stance_end) swings.push_back(static_cast<double>(n - last_stance_end));
   if (swings.empty()) return {0.0, 0.0};
-  return {*std::max_element(swings.begin(), swings.end()), MedianOf(swings)};
+  return {*std::max_element(swings.begin(), swings.end()), internal::Median(swings)};
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include "indoorloc/core/options.h"
 #include "indoorloc/core/validate.h"
 #include "imu_timing.h"
+#include "median.h"
 
 namespace indoorloc::pdr {
 namespace {
@@ -62,17 +63,6 @@ bool ZuptEkfOptions::IsValid(std::string* error) const {
       .Scale(max_median_stride_m, "max_median_stride_m")
       .NonNegative(min_rising_speed_mps, "min_rising_speed_mps");
 }
-
-namespace {
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  double m = *mid;
-  if (v.size() % 2 == 0) m = 0.5 * (m + *std::max_element(v.begin(), mid));
-  return m;
-}
-}  // namespace
 
 std::string ZuptEkfSummary::BriefReport() const {
   std::ostringstream s;
@@ -130,7 +120,7 @@ ZuptEkfSummary CheckZuptHealth(const Eigen::Ref<const Eigen::VectorXd>& time_s, 
   if (runs.empty() && n > 1) swings.push_back(time_s[n - 1] - time_s[0]);
   if (!runs.empty() && runs.front().first > 0) swings.push_back(time_s[runs.front().first] - time_s[0]);
   if (!runs.empty() && runs.back().second < n) swings.push_back(time_s[n - 1] - time_s[runs.back().second - 1]);
-  h.swing_median_s = Median(swings);
+  h.swing_median_s = internal::Median(swings);
   h.swing_max_s = swings.empty() ? 0.0 : *std::max_element(swings.begin(), swings.end());
   // Speeds at stance onsets (the initial rest has no swing before it: skipped when it starts at 0).
   std::vector<double> speeds;
@@ -138,12 +128,12 @@ ZuptEkfSummary CheckZuptHealth(const Eigen::Ref<const Eigen::VectorXd>& time_s, 
     if (runs[i].first == 0) continue;
     if (std::isfinite(speed_at_onset_mps[i])) speeds.push_back(speed_at_onset_mps[i]);
   }
-  h.speed_at_stance_median_mps = Median(speeds);
+  h.speed_at_stance_median_mps = internal::Median(speeds);
   h.speed_at_stance_max_mps = speeds.empty() ? 0.0 : *std::max_element(speeds.begin(), speeds.end());
   if (speeds.size() >= 6) {
     const size_t third = speeds.size() / 3;
-    const double first = Median(std::vector<double>(speeds.begin(), speeds.begin() + static_cast<std::ptrdiff_t>(third)));
-    const double last = Median(std::vector<double>(speeds.end() - static_cast<std::ptrdiff_t>(third), speeds.end()));
+    const double first = internal::Median(std::vector<double>(speeds.begin(), speeds.begin() + static_cast<std::ptrdiff_t>(third)));
+    const double last = internal::Median(std::vector<double>(speeds.end() - static_cast<std::ptrdiff_t>(third), speeds.end()));
     h.speed_at_stance_rise = first > 0 ? last / first : 1.0;
     if (h.speed_at_stance_rise > options.speed_rise_factor && last > options.min_rising_speed_mps) {
       h.reasons.push_back("the speed at stance rises over the recording (x" + std::to_string(h.speed_at_stance_rise) +
@@ -157,7 +147,7 @@ ZuptEkfSummary CheckZuptHealth(const Eigen::Ref<const Eigen::VectorXd>& time_s, 
     h.longest_stride_m = std::max(h.longest_stride_m, d);
     strides.push_back(d);
   }
-  h.median_stride_m = Median(strides);
+  h.median_stride_m = internal::Median(strides);
   if (first_swing >= 0 && h.walking_stance_fraction < options.min_stance_fraction) {
     h.reasons.push_back("only " + std::to_string(100.0 * h.walking_stance_fraction) +
                         " % of the walking span is stance: zero-velocity updates are missing");
