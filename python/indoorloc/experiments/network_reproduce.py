@@ -191,11 +191,17 @@ def demo(ctx: DemoContext) -> DemoSection:
 # ---------------------------------------------------------------------------------------------
 # `indoorloc reproduce`, paper 003 (issue 18)
 
-#: Paper 003 Table 2: (name, IMU rate [Hz], duration [s], GPS rate [Hz], N*_eq, N_par).
+#: Paper 003 Table 2: (name, IMU rate [Hz], duration [s], GPS rate [Hz], N*_eq, N_par, rule).
+#: Case 3 is tried with the trapezoidal rule: with leap-frog its 5 Hz GPS falls on even epochs
+#: only (every 40th at 200 Hz), the odd chain keeps only the alignment prior as datum, and over
+#: 4 h its pivot reaches 0 at the middle block (the weak stability of §3.3, measured
+#: 2026-11-25). The trapezoidal network fails too, later (relative pivot below 1e-12 at block
+#: 1,837,575 of 2,880,000): case 1 already ran at a minimum relative pivot of 2e-12, so 2.88 M
+#: epochs exceed what the block Cholesky resolves in double precision. Reported, not hidden.
 PAPER_TABLE2 = (
-    ("case 1 (Applanix)", 200.0, 10_800.0, 1.0, 38_912_400, 38_880_000),
-    ("case 2 (CASI)", 50.0, 14_400.0, 1.0, 13_033_200, 12_960_000),
-    ("case 3 (GeoMobil)", 200.0, 14_400.0, 5.0, 52_056_000, 51_840_000),
+    ("case 1 (Applanix)", 200.0, 10_800.0, 1.0, 38_912_400, 38_880_000, "leapfrog"),
+    ("case 2 (CASI)", 50.0, 14_400.0, 1.0, 13_033_200, 12_960_000, "leapfrog"),
+    ("case 3 (GeoMobil)", 200.0, 14_400.0, 5.0, 52_056_000, 51_840_000, "trapezoidal"),
 )
 #: Case 4 (Rockies'95): 565,050 epochs at 50 Hz, 2 Hz GPS, 332,150 cross-overs, 1,907 GUPT.
 PAPER_CASE4 = dict(imu_rate_hz=50.0, duration_s=565049.0 / 50.0, gps_rate_hz=2.0, num_ties=332150, num_gupts=1907)
@@ -214,7 +220,7 @@ from indoorloc import network
 from indoorloc._core import network as core_network
 kind, args = {kind!r}, {args!r}
 if kind == "linear":
-    r = core_network.solve_linear_ins_network(**args, rule="leapfrog", gravity_covariance=True,
+    r = core_network.solve_linear_ins_network(**args, gravity_covariance=True,
                                               checkpoint_interval=2048, num_threads={threads})
 else:
     r = network.solve_repeated_pass_network(**args, checkpoint_interval=2048, num_threads={threads})
@@ -314,18 +320,26 @@ def reproduce_tables(ctx) -> list:
     # Table 2: the network sizes of the paper's operational cases, solved by the streaming
     # block-tridiagonal Cholesky with every δg variance (docs/network_scale.md).
     t2 = Table("003", "Table 2", "the operational network sizes, solved at full size with every δg variance")
-    cases = [(n, "linear", dict(imu_rate_hz=r, duration_s=d, gps_rate_hz=g), eq, par)
-             for n, r, d, g, eq, par in PAPER_TABLE2]
+    cases = [(n, "linear", dict(imu_rate_hz=r, duration_s=d, gps_rate_hz=g, rule=rule), eq, par)
+             for n, r, d, g, eq, par, rule in PAPER_TABLE2]
     cases.append(("case 4 (Rockies'95, 332,150 cross-overs)", "repeated", dict(PAPER_CASE4), *PAPER_CASE4_SIZES))
     if ctx.quick:  # the same solvers on two-minute networks
         cases = [(f"{n} at 2 min", k, {**a, "duration_s": 120.0, **({"num_ties": 1000, "num_gupts": 10} if k == "repeated" else {})},
                   None, None) for n, k, a, _, _ in cases[1:4:2]]
     for name, kind, args, paper_eq, paper_par in cases:
-        row = _scale_case(kind, args, ctx.threads)
+        try:
+            row = _scale_case(kind, args, ctx.threads)
+        except RuntimeError as exc:
+            # A case the solver refuses is a result too: reported in its row, not hidden.
+            reason = str(exc).split("RuntimeError: ")[-1].strip()
+            ctx.log(f"paper 003: Table 2 {name} not solved: {reason}")
+            t2.cells += [Cell(name, "unknowns N_par", [float("nan")], [0], paper_par, "", f"not solved: {reason}"),
+                         Cell(name, "equations N*_eq", [float("nan")], [0], paper_eq, "")]
+            continue
         ctx.log(f"paper 003: Table 2 {name}: {row['unknowns']:,} unknowns in {row['wall_seconds']:.0f} s, "
                 f"{row['peak_rss_gib']:.2f} GiB")
-        note = ("our count: 18 unknowns per IMU epoch (the paper's), equations without the alignment/GUPT "
-                "extras the paper lists as N_al" if kind == "linear" else
+        note = (f"{args['rule']} rule; 18 unknowns per IMU epoch (the paper's), equations without the "
+                "alignment/GUPT extras the paper lists as N_al" if kind == "linear" else
                 "the flight re-flown in reverse over its own track; ties on the vertical δg")
         t2.cells += [
             Cell(name, "unknowns N_par", [row["unknowns"]], [0], paper_par, "", note),
