@@ -100,7 +100,12 @@ class Network:
 
     def move(self, s, d, u, distance, rng: np.random.Generator):
         """Move particles by `distance` (N,) [m] along their direction, choosing a continuation
-        uniformly at each end passed; returns new (s, d, u) (inputs are not modified)."""
+        uniformly at each end passed; returns new (s, d, u) (inputs are not modified).
+
+        A negative distance (v dt + eta < 0, eq. (8)-(9) have no floor) moves a particle back;
+        past the end behind it, it lands on a continuation of that end still facing the junction
+        (it backed over it), or stops at the end if that is a dead end. Past the end ahead, it
+        enters the continuation travelling away from the junction (the paper's psi)."""
         u = u + d * distance
         length = self.length
         idx = np.flatnonzero((u > length[s]) | (u < 0.0))
@@ -110,15 +115,20 @@ class Network:
         for _ in range(MAX_JUNCTION_ITERATIONS):
             if idx.size == 0:
                 break
-            si, ui = s[idx], u[idx]
+            si, ui, di = s[idx], u[idx], d[idx]
             end = (ui > length[si]).astype(np.int64)  # 1: past B, 0: before A
             leftover = np.where(end == 1, ui - length[si], -ui)
+            ahead = (end == 1) == (di > 0)  # crossed the end it was travelling towards
             count = self.cont_count[si, end]
             j = (rng.random(idx.size) * count).astype(np.int64)
             new_s = self.cont_seg[si, end, j]
             enter = self.cont_end[si, end, j]
-            new_d = 1 - 2 * enter  # enter at A: forward, at B: backward
+            # Ahead: enter at A -> forward, at B -> backward. Behind: still facing the end entered.
+            new_d = np.where(ahead, 1 - 2 * enter, 2 * enter - 1)
             new_u = np.where(enter == 0, leftover, length[new_s] - leftover)
+            dead = ~ahead & (new_s == si)  # backed into a dead end: stop there, same direction
+            new_d = np.where(dead, di, new_d)
+            new_u = np.where(dead, np.where(end == 1, length[si], 0.0), new_u)
             s[idx], d[idx], u[idx] = new_s, new_d, new_u
             still = (new_u > length[new_s]) | (new_u < 0.0)
             idx = idx[still]
