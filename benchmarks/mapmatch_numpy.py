@@ -102,10 +102,9 @@ class Network:
         """Move particles by `distance` (N,) [m] along their direction, choosing a continuation
         uniformly at each end passed; returns new (s, d, u) (inputs are not modified).
 
-        A negative distance (v dt + eta < 0, eq. (8)-(9) have no floor) moves a particle back;
-        past the end behind it, it lands on a continuation of that end still facing the junction
-        (it backed over it), or stops at the end if that is a dead end. Past the end ahead, it
-        enters the continuation travelling away from the junction (the paper's psi)."""
+        A negative distance (v dt + eta < 0, eq. (8)-(9) have no floor) moves a particle back
+        within its segment; it stops at the end behind it (as indoorloc's filter). Past the end
+        ahead, it enters the continuation travelling away from the junction (the paper's psi)."""
         u = u + d * distance
         length = self.length
         idx = np.flatnonzero((u > length[s]) | (u < 0.0))
@@ -115,20 +114,18 @@ class Network:
         for _ in range(MAX_JUNCTION_ITERATIONS):
             if idx.size == 0:
                 break
-            si, ui, di = s[idx], u[idx], d[idx]
+            si, ui = s[idx], u[idx]
             end = (ui > length[si]).astype(np.int64)  # 1: past B, 0: before A
+            behind = (end == 1) != (d[idx] > 0)  # a negative step: stop at that end
+            u[idx[behind]] = np.where(end[behind] == 1, length[si[behind]], 0.0)
+            idx, si, ui, end = idx[~behind], si[~behind], ui[~behind], end[~behind]
             leftover = np.where(end == 1, ui - length[si], -ui)
-            ahead = (end == 1) == (di > 0)  # crossed the end it was travelling towards
             count = self.cont_count[si, end]
             j = (rng.random(idx.size) * count).astype(np.int64)
             new_s = self.cont_seg[si, end, j]
             enter = self.cont_end[si, end, j]
-            # Ahead: enter at A -> forward, at B -> backward. Behind: still facing the end entered.
-            new_d = np.where(ahead, 1 - 2 * enter, 2 * enter - 1)
+            new_d = 1 - 2 * enter  # enter at A: forward, at B: backward
             new_u = np.where(enter == 0, leftover, length[new_s] - leftover)
-            dead = ~ahead & (new_s == si)  # backed into a dead end: stop there, same direction
-            new_d = np.where(dead, di, new_d)
-            new_u = np.where(dead, np.where(end == 1, length[si], 0.0), new_u)
             s[idx], d[idx], u[idx] = new_s, new_d, new_u
             still = (new_u > length[new_s]) | (new_u < 0.0)
             idx = idx[still]

@@ -158,18 +158,18 @@ double ParticleMapMatcher::Move(int i, double distance, double heading_rad, Rand
     } else {
       break;
     }
-    // A negative step (v Δt + η < 0: eq. 8-9 have no floor) moves the particle back over the
-    // end behind it: it lands on a continuation of that end still facing the junction, or stops
-    // at a dead end. Ahead, it enters the continuation travelling away from the junction (ψ).
-    const bool ahead = (end == 1) == (d > 0);
-    const std::vector<Continuation>& choices = network_.continuations(s, end);
-    if (!ahead && choices.size() == 1 && choices[0].segment == s) {
-      u = end == 1 ? lengths[s] : 0.0;  // backed into a dead end
+    // A negative step (v Δt + η < 0: eq. 8-9 have no floor) moves the particle back, but not
+    // over the end behind it: it stops there. Backing onto a continuation chosen at random would
+    // put it on a branch it never came from (the filter keeps no history), which cost 7 m of
+    // error at κ_P = 5 in the §III experiment (docs/mapmatch.md).
+    if ((end == 1) != (d > 0)) {
+      u = end == 1 ? lengths[s] : 0.0;
       break;
     }
+    const std::vector<Continuation>& choices = network_.continuations(s, end);
     size_t pick = 0;
     if (choices.size() > 1) {
-      if (options_.junction_policy == JunctionPolicy::kUniform || !ahead) {
+      if (options_.junction_policy == JunctionPolicy::kUniform) {
         pick = static_cast<size_t>(rng.UniformInt(choices.size()));
       } else {
         // Proposal q_j ∝ exp(κ_J cos(φ - heading_j)); the weight is multiplied by
@@ -188,8 +188,7 @@ double ParticleMapMatcher::Move(int i, double distance, double heading_rad, Rand
     }
     const Continuation& c = choices[pick];
     s = c.segment;
-    // Entered at A: away from the junction is forward; backing in, the particle faces A.
-    d = (c.enter_end == 0) == ahead ? 1 : -1;
+    d = c.enter_end == 0 ? 1 : -1;
     u = c.enter_end == 0 ? leftover : lengths[s] - leftover;
   }
   segment_[static_cast<size_t>(i)] = s;
@@ -222,8 +221,9 @@ StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, doub
 
   // Prediction (eq. 8-10) and update (eq. 11) fused in one pass, with the sums needed for the
   // normalisation (eq. 12), the ESS (eq. 14), the estimate (eq. 13), its spread and the
-  // disagreement. A negative step v Δt + η moves a particle back (eq. 8-9 have no floor: a floor
-  // at 0 would bias the move forward by E[max(0, X)] - E[X], 5 % of the speed at 10 Hz, a = 0.27).
+  // disagreement. A negative step v Δt + η moves a particle back within its segment (eq. 8-9
+  // have no floor: a floor at 0 biases the move forward by E[max(0, X)] - E[X], 5 % of the speed
+  // at 10 Hz with a = 0.27 m); it stops at the end behind it.
   // Hoisted into locals so that the compiler keeps them in registers (the loop writes through
   // several pointers, which would otherwise force reloads of every member).
   const double a = options_.noise_halfwidth_m;

@@ -7,8 +7,8 @@
 //    past a segment end the remaining distance is carried onto a continuation chosen uniformly
 //    (paper) or, optionally, with probabilities favouring the measured heading (with the
 //    importance-weight correction that keeps the filter exact). A negative v Δt + η moves the
-//    particle back (no floor at 0, which would bias the move forward); backing over an end, it
-//    lands on a continuation still facing the junction (a dead end stops it).
+//    particle back within its segment (no floor at 0, which would bias the move forward); it
+//    stops at the end behind it (never backs onto another segment).
 //  - Update (eq. 1, 11): log w += κ_P cos(φ - β(S, d)) - log(2π I0(κ_P)), with β(S, -1) = β_S + π,
 //    so the von Mises likelihood compares the compass heading with the particle's direction of
 //    travel on its corridor.
