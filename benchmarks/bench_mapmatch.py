@@ -17,8 +17,8 @@ Issue 18: this benchmark used to report a mean error of 3.0 m for the C++ filter
 for both peers at N = 10^5 (3.4 vs 2.5 m at N = 10^4). The filters did not differ: the peers'
 `run` starts from the initial grid, the C++ `ParticleMapMatcher.run` continues from the current
 particles, so the timed C++ run started where the warm-up run had left its particles (20 steps,
-20 m, later). From the grid the C++ filter gives 2.47 m (10^4) and 2.48 m (10^5) on this
-trajectory. `run_from_grid` resets every filter first; benchmarks/mapmatch_agreement.py compares
+20 m, later). From the grid the C++ filter of the time gave 2.47 m (10^4) and 2.48 m (10^5) on
+this trajectory (2.44 and 2.46 m with issue 18's rule for negative steps). `run_from_grid` resets every filter first; benchmarks/mapmatch_agreement.py compares
 the C++ filter and the numpy peer over many trajectories (docs/mapmatch.md).
 """
 

@@ -41,8 +41,8 @@ PAPER_P_AFTER_120S = {1.0: 0.8, 0.5: 0.8}  # §III: "stays above 0.8 after 120s"
 PAPER_FINAL_ERROR_M = {1.0: 1.0, 0.5: 1.0}  # §IV: "the error is reduced progressively to 1m"
 PAPER_FINAL_P_CORRECT = {1.0: 0.9, 0.5: 0.9}  # §IV: "... of around 0.9"
 FINAL_WINDOW_S = 20.0  # "final" = the last 20 s of a run (10 % of the paper's 200 s)
-# Measured: 1000 runs (2 filters x 5 κ_P x 100) at N = 10^4 took ... s on 2 cores, see
-# expected_seconds.
+# 500 runs at N = 10^4, 10 Hz took about 45 s on 2 idle cores (docs/mapmatch.md); the 1000 runs
+# of the full section took 890 s with one thread on a 2-core machine shared by several jobs.
 SECONDS_PER_RUN_2_CORES = 0.09
 
 
