@@ -100,7 +100,11 @@ class Network:
 
     def move(self, s, d, u, distance, rng: np.random.Generator):
         """Move particles by `distance` (N,) [m] along their direction, choosing a continuation
-        uniformly at each end passed; returns new (s, d, u) (inputs are not modified)."""
+        uniformly at each end passed; returns new (s, d, u) (inputs are not modified).
+
+        A negative distance (v dt + eta < 0, eq. (8)-(9) have no floor) moves a particle back
+        within its segment; it stops at the end behind it (as indoorloc's filter). Past the end
+        ahead, it enters the continuation travelling away from the junction (the paper's psi)."""
         u = u + d * distance
         length = self.length
         idx = np.flatnonzero((u > length[s]) | (u < 0.0))
@@ -112,6 +116,9 @@ class Network:
                 break
             si, ui = s[idx], u[idx]
             end = (ui > length[si]).astype(np.int64)  # 1: past B, 0: before A
+            behind = (end == 1) != (d[idx] > 0)  # a negative step: stop at that end
+            u[idx[behind]] = np.where(end[behind] == 1, length[si[behind]], 0.0)
+            idx, si, ui, end = idx[~behind], si[~behind], ui[~behind], end[~behind]
             leftover = np.where(end == 1, ui - length[si], -ui)
             count = self.cont_count[si, end]
             j = (rng.random(idx.size) * count).astype(np.int64)

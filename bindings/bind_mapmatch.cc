@@ -263,7 +263,9 @@ network.)doc")
              return EstimatesToDict(e);
            },
            py::arg("speed_mps"), py::arg("heading_rad"), py::arg("dt_s"), R"doc(
-Filter odometer speeds (T,) [m/s] and compass headings (T,) [rad] sampled every dt_s [s].
+Filter odometer speeds (T,) [m/s] and compass headings (T,) [rad] sampled every dt_s [s],
+continuing from the filter's current particles (call reset() first to start again from the
+initial grid and seed: a second run without reset() starts where the first ended).
 Returns a dict of arrays: positions_m (T, 2) (projected estimate), weighted_mean_m, smoothed_m
 (fixed-lag, NaN when off), segments (T,), spread_m, ess, log_likelihood, tracking, resampled,
 recovered.)doc")

@@ -1,5 +1,7 @@
 """Python side of mapmatch: network, simulator, filter, Monte Carlo, errors, determinism."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -76,3 +78,62 @@ def test_bad_measurements_raise_value_error():
         pf.run(np.ones(2), np.zeros(2), -0.1)
     with pytest.raises(ValueError, match="heading_rad"):
         pf.run(np.ones(3), np.zeros(2), 0.1)
+
+
+# --- indoorloc reproduce, paper 000 section (experiments/mapmatch_reproduce_tables.py) ---------
+
+
+def _quick_tables(tmp_path, scheduler=None):
+    from indoorloc.experiments import mapmatch_reproduce_tables as mrt
+    from indoorloc.experiments.reproduce_cells import ReproduceContext
+
+    lines = []
+    ctx = ReproduceContext(out_dir=tmp_path, runs=2, threads=1, seed=3, scheduler=scheduler, log=lines.append)
+    return mrt.reproduce_tables(ctx, duration_s=20.0, num_particles=500), lines
+
+
+def test_reproduce_tables_quick_every_cell_present_and_finite(tmp_path):
+    from indoorloc.experiments import mapmatch_reproduce as mr
+    from indoorloc.experiments import mapmatch_reproduce_tables as mrt
+
+    tables, lines = _quick_tables(tmp_path)
+    assert [t.name for t in tables] == ["Table I", "Table II", "Figs. 3-4"]
+    columns = {f"κ_P = {k:g}" for k in mr.KAPPAS}
+    for table, per_filter in zip(tables, (1, 1, 4)):
+        assert table.paper == "000" and table.setup
+        assert len(table.cells) == len(mrt.VARIANTS) * len(mr.KAPPAS) * per_filter
+        assert {c.column for c in table.cells} == columns
+        for cell in table.cells:
+            assert cell.seeds == [0, 1] and len(cell.values) == 2
+            assert np.all(np.isfinite(cell.values)), (table.name, cell.row, cell.column)
+            summary = cell.summary()
+            assert summary["runs"] == 2 and summary["mean"] is not None
+    table1 = {(c.row, c.column): c for c in tables[0].cells}
+    assert table1[(mrt.VARIANTS["paper"], "κ_P = 1")].paper == 3.3
+    assert all(v >= 0 for c in tables[0].cells for v in c.values)
+    assert all(0 <= v <= 1 for c in tables[1].cells for v in c.values)
+    assert len(tables[2].figures) == 2 and all(Path(f).is_file() for f in tables[2].figures)
+    assert len(lines) == len(mrt.VARIANTS) * len(mr.KAPPAS)  # one line per finished part
+    assert mrt.expected_seconds(2) < mrt.expected_seconds(None)
+
+
+def test_reproduce_tables_same_result_through_the_scheduler(tmp_path):
+    pytest.importorskip("distributed", reason="the sweep layer needs the sweep extra (dask[distributed])")
+    from distributed import Client
+
+    local, _ = _quick_tables(tmp_path / "local")
+    with Client(processes=False, n_workers=1, threads_per_worker=2, dashboard_address=None) as client:
+        remote, lines = _quick_tables(tmp_path / "dask", scheduler=client)
+    assert len(lines) == 2 * 5 + 1  # one line per filter and κ_P, one for the sweep
+    for a, b in zip(local, remote):
+        assert [(c.row, c.column, c.seeds) for c in a.cells] == [(c.row, c.column, c.seeds) for c in b.cells]
+        for ca, cb in zip(a.cells, b.cells):
+            np.testing.assert_array_equal(ca.values, cb.values)
+
+
+def test_settle_time_is_the_last_epoch_above_the_threshold():
+    from indoorloc.experiments.mapmatch_reproduce_tables import settle_time_s
+
+    t = np.arange(1, 6, dtype=float)
+    err = np.array([[5, 3, 1, 1, 1], [1, 1, 1, 1, 1], [5, 1, 3, 1, 4.0]])
+    np.testing.assert_array_equal(settle_time_s(err, t), [2.0, 0.0, 5.0])  # never -> duration

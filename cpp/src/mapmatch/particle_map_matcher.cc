@@ -149,13 +149,21 @@ double ParticleMapMatcher::Move(int i, double distance, double heading_rad, Rand
   for (int guard = 0; guard < 100000; ++guard) {
     int end;
     double leftover;
-    if (d > 0 && u > lengths[s]) {
+    if (u > lengths[s]) {
       end = 1;
       leftover = u - lengths[s];
-    } else if (d < 0 && u < 0.0) {
+    } else if (u < 0.0) {
       end = 0;
       leftover = -u;
     } else {
+      break;
+    }
+    // A negative step (v Δt + η < 0: eq. 8-9 have no floor) moves the particle back, but not
+    // over the end behind it: it stops there. Backing onto a continuation chosen at random would
+    // put it on a branch it never came from (the filter keeps no history), which cost 7 m of
+    // error at κ_P = 5 in the §III experiment (docs/mapmatch.md).
+    if ((end == 1) != (d > 0)) {
+      u = end == 1 ? lengths[s] : 0.0;
       break;
     }
     const std::vector<Continuation>& choices = network_.continuations(s, end);
@@ -213,7 +221,9 @@ StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, doub
 
   // Prediction (eq. 8-10) and update (eq. 11) fused in one pass, with the sums needed for the
   // normalisation (eq. 12), the ESS (eq. 14), the estimate (eq. 13), its spread and the
-  // disagreement. Vehicles do not reverse: a negative odometer step leaves a particle in place.
+  // disagreement. A negative step v Δt + η moves a particle back within its segment (eq. 8-9
+  // have no floor: a floor at 0 biases the move forward by E[max(0, X)] - E[X], 5 % of the speed
+  // at 10 Hz with a = 0.27 m); it stops at the end behind it.
   // Hoisted into locals so that the compiler keeps them in registers (the loop writes through
   // several pointers, which would otherwise force reloads of every member).
   const double a = options_.noise_halfwidth_m;
@@ -249,14 +259,12 @@ StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, doub
       distance -= bias[i] * dt_s;
     }
     if (a > 0) distance += two_a * rng.Uniform01() - a;
-    if (distance > 0) {
-      const double u = along[i] + dir[i] * distance;
-      if (u >= 0.0 && u <= length[seg[i]]) {
-        along[i] = u;  // fast path: no junction
-      } else {
-        const double importance = Move(i, distance, heading_rad, rng);
-        if (importance != 1.0) weight[i] *= importance;
-      }
+    const double u = along[i] + dir[i] * distance;
+    if (u >= 0.0 && u <= length[seg[i]]) {
+      along[i] = u;  // fast path: no junction
+    } else {
+      const double importance = Move(i, distance, heading_rad, rng);
+      if (importance != 1.0) weight[i] *= importance;
     }
   }
   rng_ = rng;

@@ -87,7 +87,11 @@ def run_kappas(
     n_threads: int = 0,
     smoothing_lag_steps: int = 0,
     network: Optional[mapmatch.RoadNetwork] = None,
+    duration_s: float = 200.0,
 ) -> Dict[float, KappaResult]:
+    """``n_runs`` Monte Carlo runs of ``duration_s`` [s] per κ_P of ``variant``; run r uses the
+    streams (seed, 2r) for the trajectory and (seed, 2r + 1) for the filter (RunOnce in C++), so
+    the result does not depend on ``n_threads``."""
     import time
 
     network = network or mapmatch.warehouse_network()
@@ -95,7 +99,7 @@ def run_kappas(
     for kappa in progress(kappas, total=len(kappas), desc=f"mapmatch {variant}"):
         f = filter_options(kappa, variant, num_particles, smoothing_lag_steps=smoothing_lag_steps)
         start = time.perf_counter()
-        r = mapmatch.monte_carlo(network, trajectory_options(), f, n_runs=n_runs, seed=seed, n_threads=n_threads)
+        r = mapmatch.monte_carlo(network, trajectory_options(duration_s), f, n_runs=n_runs, seed=seed, n_threads=n_threads)
         out[kappa] = KappaResult(kappa, r["error_m"], r["correct_segment"], r["smoothed_error_m"], time.perf_counter() - start)
     return out
 

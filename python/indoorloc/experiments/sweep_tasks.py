@@ -55,13 +55,15 @@ def mapmatch_run(params: Mapping[str, Any], seed: int, segments_m: Optional[np.n
 def mapmatch_kappa(params: Mapping[str, Any], seed: int, segments_m: Optional[np.ndarray] = None) -> Dict[str, Any]:
     """``mapmatch reproduce`` for one κ on a worker: ``n_runs`` runs of ``variant`` with
     ``num_particles`` from the experiment's own ``seed`` parameter (not the sweep's derived seed,
-    so that the results equal the in-process command's), ``threads`` C++ threads. Returns the
+    so that the results equal the in-process command's), ``threads`` C++ threads, optional
+    ``duration_s`` (default 200 s). Returns the
     per-run curves (R, T) of the experiment's KappaResult and its time [s]."""
     from indoorloc.experiments import mapmatch_reproduce as mr
 
     r = mr.run_kappas(str(params["variant"]), kappas=(float(params["kappa"]),), n_runs=int(params["n_runs"]),
                       num_particles=int(params["num_particles"]), seed=int(params["seed"]),
-                      n_threads=int(params.get("threads", 1)), network=_network(segments_m))[float(params["kappa"])]
+                      n_threads=int(params.get("threads", 1)), network=_network(segments_m),
+                      duration_s=float(params.get("duration_s", 200.0)))[float(params["kappa"])]
     return {"error_m": r.error_m, "correct": r.correct, "smoothed_error_m": r.smoothed_error_m, "seconds": r.seconds}
 
 

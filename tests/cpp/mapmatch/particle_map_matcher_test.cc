@@ -76,6 +76,29 @@ TEST(ParticleMapMatcher, ConservesDistanceAcrossJunctionsAndUsesOnlyConnectedSeg
   EXPECT_GE(reached.size(), 2u);  // several continuations were chosen
 }
 
+// Eq. 8-9 have no floor: a negative step v Δt + η moves a particle back within its segment (a
+// floor at 0 biased the filter forward); it stops at the end behind it, same segment and direction.
+TEST(ParticleMapMatcher, NegativeStepMovesBackAndStopsAtTheEndBehind) {
+  const RoadNetwork net = Grid();
+  FilterOptions options;
+  options.num_particles = 1;
+  options.noise_halfwidth_m = 0.0;
+  options.recovery_disagreement = 0.0;
+  ParticleMapMatcher pf(net, options);
+  pf.SetParticles({1}, {-1}, {2.0});  // segment (10,0)-(20,0), facing A
+  pf.Step(-3.0, 0.0, 1.0);
+  EXPECT_EQ(pf.particle_segments()[0], 1);
+  EXPECT_EQ(pf.particle_directions()[0], -1);
+  EXPECT_NEAR(pf.particle_along_m()[0], 5.0, 1e-12);
+  for (int d : {1, -1}) {
+    pf.SetParticles({1}, {static_cast<signed char>(d)}, {d > 0 ? 2.0 : 8.0});  // 2 m past the end behind
+    pf.Step(-5.0, 0.0, 1.0);
+    EXPECT_EQ(pf.particle_segments()[0], 1);
+    EXPECT_EQ(pf.particle_directions()[0], d);
+    EXPECT_EQ(pf.particle_along_m()[0], d > 0 ? 0.0 : 10.0);
+  }
+}
+
 TEST(ParticleMapMatcher, WeightsNeverNaNWhenEveryLikelihoodUnderflows) {
   const RoadNetwork net = Grid();
   FilterOptions options;

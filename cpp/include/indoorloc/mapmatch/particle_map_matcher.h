@@ -6,7 +6,9 @@
 //  - Prediction (eq. 8-10): u advances by d (v Δt + η), η ~ U(-a, a) (a = noise_halfwidth_m);
 //    past a segment end the remaining distance is carried onto a continuation chosen uniformly
 //    (paper) or, optionally, with probabilities favouring the measured heading (with the
-//    importance-weight correction that keeps the filter exact).
+//    importance-weight correction that keeps the filter exact). A negative v Δt + η moves the
+//    particle back within its segment (no floor at 0, which would bias the move forward); it
+//    stops at the end behind it (never backs onto another segment).
 //  - Update (eq. 1, 11): log w += κ_P cos(φ - β(S, d)) - log(2π I0(κ_P)), with β(S, -1) = β_S + π,
 //    so the von Mises likelihood compares the compass heading with the particle's direction of
 //    travel on its corridor.
@@ -159,7 +161,8 @@ class ParticleMapMatcher {
   FilterSummary summary_;
 };
 
-/// Runs the filter over a whole trajectory; returns per-step estimates.
+/// Runs the filter over a whole trajectory from its current state (no Reset: call Reset() first to
+/// start from the initial grid); returns per-step estimates.
 std::vector<StepEstimate> RunFilter(ParticleMapMatcher& filter, const Eigen::Ref<const Eigen::VectorXd>& speed_mps,
                                     const Eigen::Ref<const Eigen::VectorXd>& heading_rad, double dt_s);
 
