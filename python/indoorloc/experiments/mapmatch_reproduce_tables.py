@@ -127,6 +127,8 @@ def reproduce_tables(ctx: ReproduceContext, duration_s: float = DURATION_S,
     """
     from indoorloc import plots
 
+    if ctx.quick:  # the smoke test of `indoorloc reproduce --quick`: same code paths, tiny sizes
+        duration_s, num_particles = min(duration_s, 20.0), min(num_particles, 1000)
     runs = ctx.runs_or(FULL_RUNS)
     if runs < 1:
         raise ValueError(f"indoorloc: argument 'runs': must be >= 1, got {runs}")

@@ -37,7 +37,7 @@ class Section:
 SECTIONS: Dict[str, Section] = {
     s.paper: s for s in (
         Section("000", "mapmatch: indoor localization by particle map matching (El Mokhtari et al.)",
-                "indoorloc.experiments.mapmatch_reproduce"),
+                "indoorloc.experiments.mapmatch_reproduce_tables"),
         Section("001", "analog: exemplar-based HMM (Lguensat et al., EUSIPCO 2016)",
                 "indoorloc.experiments.analog_reproduce"),
         Section("002", "pdr: pedestrian dead-reckoning with a foot-mounted MEMS IMU (Jiménez et al., WISP 2009)",
