@@ -205,7 +205,9 @@ def run_sweep(fn: Callable[..., Mapping[str, Any]], grid: Mapping[str, Sequence[
 
         client, owned = _client(scheduler, workers)
         try:
-            shared_futures = {k: client.scatter(v, broadcast=True) for k, v in (shared or {}).items()}
+            # hash=False: a key of its own per call. With the default content hash, a second sweep on the
+            # same client re-used the first one's key while its release was pending ("lost dependencies").
+            shared_futures = {k: client.scatter(v, broadcast=True, hash=False) for k, v in (shared or {}).items()}
             futures = [client.submit(_run_task, fn, t, shared_futures, key=f"indoorloc-sweep-{t.seed:x}", pure=False)
                        for t in todo]
             sink = path.open("a") if path is not None else None
