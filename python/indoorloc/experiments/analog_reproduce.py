@@ -430,7 +430,7 @@ def reproduce_tables(ctx: ReproduceContext, quick: bool = False) -> List[Table]:
         base seed, ``scheduler`` (None: in process), ``log`` for the progress lines; the figure is
         written to ``ctx.figure_path("analog_fig2")``.
     quick : bool
-        Small sizes for tests (catalogs 2000 / 5000, T = 200, 20 members, short IMU split); the
+        (or ``ctx.quick``) Small sizes for tests (catalogs 2000 / 5000, T = 200, 20 members, short IMU split); the
         default False is the paper's size.
 
     Returns
@@ -440,6 +440,8 @@ def reproduce_tables(ctx: ReproduceContext, quick: bool = False) -> List[Table]:
     """
     from indoorloc import plots
 
+    # ctx.quick (added to ReproduceContext on main) and the argument both select the small sizes.
+    quick = bool(quick or getattr(ctx, "quick", False))
     scale = Scale.quick() if quick else Scale()
     runs = ctx.runs_or(scale.full_runs)
     if runs < 1:
