@@ -186,7 +186,7 @@ successor_rule : {"catalog", "incremental"}
         return Eigen::Map<const analog::RowMatrixXd>(t.prob.data(), t.num_states, t.k);
       })
       .def("smooth", [](const AnalogHMM& h, const py::object& observations, const py::object& beam, int beam_unobserved,
-                        double max_dropped_mass, int beam_max) {
+                        double max_dropped_mass, int beam_max, const py::object& initial) {
              MatrixArg obs = ToMatrix(observations, "observations", -1, -1, Finiteness::kAny);
              const int n = beam.is_none() ? 0 : ToInt(beam, "beam", 0, 1 << 30);
              CheckArgument(n >= 0, "beam", "must be >= 0 or None");
@@ -198,6 +198,9 @@ successor_rule : {"catalog", "incremental"}
              so.beam_unobserved = beam_unobserved;
              so.max_dropped_mass = max_dropped_mass;
              so.beam_max = beam_max;
+             if (!initial.is_none()) {
+               so.initial = ToVector(initial, "initial", h.catalog().num_states()).map;
+             }
              analog::SmoothingOutput out;
              {
                py::gil_scoped_release release;
@@ -215,11 +218,12 @@ successor_rule : {"catalog", "incremental"}
              return d;
            },
            py::arg("observations"), py::arg("beam") = py::none(), py::arg("beam_unobserved") = 0,
-           py::arg("max_dropped_mass") = 1.0, py::arg("beam_max") = 0, R"doc(
+           py::arg("max_dropped_mass") = 1.0, py::arg("beam_max") = 0, py::arg("initial") = py::none(), R"doc(
 Forward-backward on observations (T, m) (NaN = missing). beam=None: exact; beam=N: truncated
 (paper §2.3); beam_unobserved: a wider beam at steps with no observation (0: same as beam);
 max_dropped_mass: mass-adaptive beam, keep more than N states (most likely first) until at most
-this filtering mass is dropped per step (1: off), capped at beam_max states (0: no cap). Returns a dict: mean (T, D) posterior mean, std (T, D) posterior standard deviation, mpm (T, D), filtering_mean (T, D),
+this filtering mass is dropped per step (1: off), capped at beam_max states (0: no cap);
+initial: prior P(X_1) as non-negative weights, one per catalog state (num_states,), None = uniform. Returns a dict: mean (T, D) posterior mean, std (T, D) posterior standard deviation, mpm (T, D), filtering_mean (T, D),
 log_likelihood, dropped_mass (T,), support_size (T,), seconds.)doc")
       .def("viterbi", [](const AnalogHMM& h, const py::object& observations, const py::object& beam) {
              MatrixArg obs = ToMatrix(observations, "observations", -1, -1, Finiteness::kAny);

@@ -281,7 +281,14 @@ SmoothingOutput AnalogHMM::Smooth(const Eigen::Ref<const RowMatrixXd>& observati
       fb.beam_per_step[static_cast<size_t>(t)] = observed ? beam : beam_unobserved;
     }
   }
-  const Eigen::VectorXd initial = Eigen::VectorXd::Ones(catalog_->num_states());
+  if (options.initial.size() != 0) {
+    CheckArgument(options.initial.size() == catalog_->num_states(), "initial",
+                  "expected " + std::to_string(catalog_->num_states()) + " weights (one per catalog state), got " +
+                      std::to_string(options.initial.size()));
+  }
+  // Uniform prior unless given (ForwardBackward checks non-negative, finite, positive sum).
+  const Eigen::VectorXd initial =
+      options.initial.size() != 0 ? options.initial : Eigen::VectorXd::Ones(catalog_->num_states());
   const ForwardBackwardResult r = ForwardBackward(transitions_, initial, static_cast<int>(observations.rows()), emission, fb);
   const Eigen::Index steps = observations.rows();
   const RowMatrixXd& states = catalog_->states();

@@ -173,8 +173,36 @@ TEST(AnalogHMM, BadInputGivesClearErrors) {
   so.beam = 2;
   so.max_dropped_mass = -0.1;
   EXPECT_THROW(hmm.Smooth(RowMatrixXd::Zero(5, 1), so), std::invalid_argument);
+  so.max_dropped_mass = 1.0;
+  so.initial = Eigen::VectorXd::Ones(3);  // the catalog has 10 states
+  EXPECT_THROW(hmm.Smooth(RowMatrixXd::Zero(5, 1), so), std::invalid_argument);
+  so.initial = Eigen::VectorXd::Ones(hmm.catalog().num_states());
+  so.initial[2] = -1.0;
+  EXPECT_THROW(hmm.Smooth(RowMatrixXd::Zero(5, 1), so), std::invalid_argument);
   o.sigma_scale = -1.0;
   EXPECT_THROW(AnalogHMM(catalog, o), std::invalid_argument);
+}
+
+TEST(AnalogHMM, InitialPriorIsUsedAndUniformIsTheDefault) {
+  auto catalog = std::make_shared<Catalog>(std::vector<RowMatrixXd>{Circle(400, 0.0, 0.01, 3)});
+  AnalogHmmOptions o;
+  o.k = 6;
+  o.observed = {0};
+  o.R = Eigen::MatrixXd::Constant(1, 1, 0.01);
+  const AnalogHMM hmm(catalog, o);
+  RowMatrixXd obs = RowMatrixXd::Constant(20, 1, std::nan(""));
+  obs(0, 0) = 0.5;  // x = cos = 0.5: two equally likely phases (y = +-0.87) under a uniform prior
+  SmoothOptions so;
+  const SmoothingOutput uniform = hmm.Smooth(obs, so);
+  SmoothOptions given = so;
+  given.initial = Eigen::VectorXd::Ones(catalog->num_states());
+  const SmoothingOutput explicit_uniform = hmm.Smooth(obs, given);
+  EXPECT_LT((uniform.mean - explicit_uniform.mean).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT(std::abs(uniform.filtering_mean(0, 1)), 0.15);  // the two phases cancel
+  // A prior on the upper half (y > 0) picks the phase y = +0.87.
+  for (int i = 0; i < catalog->num_states(); ++i) given.initial[i] = catalog->states()(i, 1) > 0.0 ? 1.0 : 0.0;
+  const SmoothingOutput upper = hmm.Smooth(obs, given);
+  EXPECT_NEAR(upper.filtering_mean(0, 1), std::sqrt(0.75), 0.1);
 }
 
 }  // namespace

@@ -63,6 +63,11 @@ struct SmoothOptions {
   int beam_unobserved = 0;         ///< beam at steps without any observation (0: same as beam)
   double max_dropped_mass = 1.0;   ///< mass-adaptive beam: widen until at most this mass is dropped (1: off)
   int beam_max = 0;                ///< cap of the adaptive beam (0: none)
+  /// Prior P(X_1) over the catalog states (num_states weights, non-negative, not all zero; need
+  /// not sum to 1). Empty = uniform, which the paper implies. A prior centred on a known start
+  /// (AnDA's smoothers start from N(x_0, 0.1 I)) keeps a fixed-N truncation from cutting blindly
+  /// at t = 1 (docs/analog.md, "Why the paper's fixed N = 1000 did not lose the truth").
+  Eigen::VectorXd initial;
   bool IsValid(std::string* error) const;
 };
 
