@@ -170,7 +170,7 @@ def test_progress_prints_lines_when_not_a_terminal(monkeypatch):
 
 
 # --- a tiny run of every section --------------------------------------------------------------
-PAPERS = ["000", "002", "003", "004"]  # 001 joins when its section lands (issue 18 helper)
+PAPERS = ["000", "001", "002", "003", "004"]
 
 
 def test_tiny_run_of_every_paper_writes_the_report(tmp_path, capsys):

@@ -167,6 +167,7 @@ def html_page(sections: Sequence[Dict[str, Any]], settings: Dict[str, Any], root
     parts.append("<h2>Verdicts</h2><table><tr><th>paper</th><th>section</th><th>cells</th><th>inside IQR</th>"
                  "<th>paper above</th><th>paper below</th><th>no paper figure</th><th>run time</th></tr>")
     counts = verdict_counts(sections)
+    embedded: set = set()  # a figure shared by two tables is embedded once
     for s in sections:
         k = counts[s["paper"]]
         parts.append(f"<tr><td>{e(s['paper'])}</td><td>{e(s['title'])}</td><td>{sum(k.values())}</td>"
@@ -190,6 +191,10 @@ def html_page(sections: Sequence[Dict[str, Any]], settings: Dict[str, Any], root
             if notes:
                 parts.append("<ul>" + "".join(f"<li>{e(n)}</li>" for n in notes) + "</ul>")
             for fig in t.get("figures", []):
+                if fig in embedded:
+                    parts.append(f"<p>(figure {e(Path(fig).stem)} shown above)</p>")
+                    continue
+                embedded.add(fig)
                 parts.append(_img_tag(root / fig))
     parts.append("</body></html>")
     return "\n".join(parts)
