@@ -36,6 +36,8 @@ def _num(x: Optional[float], digits: int = 3) -> str:
     if x is None or (isinstance(x, float) and not math.isfinite(x)):
         return "—"
     ax = abs(x)
+    if ax >= 1e3 and float(x).is_integer():  # counts (unknowns, equations) in full
+        return f"{x:,.0f}"
     if ax != 0 and (ax >= 1e5 or ax < 1e-3):
         return f"{x:.{digits}g}"
     if ax >= 100:
@@ -108,13 +110,13 @@ EXPLANATION = (
 def markdown(sections: Sequence[Dict[str, Any]], settings: Dict[str, Any]) -> str:
     """The whole report as Markdown (figures linked relative to the report folder)."""
     lines = ["# indoorloc reproduce: the five papers' tables", ""] + _header(settings) + ["", EXPLANATION, ""]
-    lines += ["## Verdicts", "", "| paper | section | cells | inside IQR | paper above | paper below | no paper figure | run time |",
-              "|---|---|---|---|---|---|---|---|"]
+    lines += ["## Verdicts", "", "| paper | section | cells | inside IQR | paper above | paper below | no paper figure | "
+              "other (one run, or no value) | run time |", "|---|---|---|---|---|---|---|---|---|"]
     counts = verdict_counts(sections)
     for s in sections:
         k = counts[s["paper"]]
         lines.append(f"| {s['paper']} | {s['title']} | {sum(k.values())} | {k['inside']} | {k['paper above']} | "
-                     f"{k['paper below']} | {k['no paper figure']} | {s['seconds']:.0f} s |")
+                     f"{k['paper below']} | {k['no paper figure']} | {k['other']} | {s['seconds']:.0f} s |")
     lines.append("")
     for s in sections:
         lines += [f"## Paper {s['paper']}: {s['title']}", ""]
@@ -165,14 +167,15 @@ def html_page(sections: Sequence[Dict[str, Any]], settings: Dict[str, Any], root
              "<h1>indoorloc reproduce: the five papers' tables</h1>"]
     parts += [f"<p>{e(x)}</p>" for x in _header(settings)] + [f"<p>{e(EXPLANATION)}</p>"]
     parts.append("<h2>Verdicts</h2><table><tr><th>paper</th><th>section</th><th>cells</th><th>inside IQR</th>"
-                 "<th>paper above</th><th>paper below</th><th>no paper figure</th><th>run time</th></tr>")
+                 "<th>paper above</th><th>paper below</th><th>no paper figure</th><th>other (one run, or no value)</th>"
+                 "<th>run time</th></tr>")
     counts = verdict_counts(sections)
     embedded: set = set()  # a figure shared by two tables is embedded once
     for s in sections:
         k = counts[s["paper"]]
         parts.append(f"<tr><td>{e(s['paper'])}</td><td>{e(s['title'])}</td><td>{sum(k.values())}</td>"
                      f"<td>{k['inside']}</td><td>{k['paper above']}</td><td>{k['paper below']}</td>"
-                     f"<td>{k['no paper figure']}</td><td>{s['seconds']:.0f} s</td></tr>")
+                     f"<td>{k['no paper figure']}</td><td>{k['other']}</td><td>{s['seconds']:.0f} s</td></tr>")
     parts.append("</table>")
     for s in sections:
         parts.append(f"<h2>Paper {e(s['paper'])}: {e(s['title'])}</h2>")
