@@ -26,6 +26,7 @@ import math
 import os
 import signal
 import sys
+import tempfile
 import time
 import traceback
 from dataclasses import dataclass, field
@@ -358,6 +359,9 @@ def _canonical(x: Any) -> Any:
 
 def main(groups: Dict[str, Callable[[], None]]) -> int:
     signal.signal(signal.SIGALRM, _alarm)
+    # Spoiled path arguments ("x", "") are relative: run in a fresh temporary folder so that
+    # writers never write beside the tests, also when this script is run by hand.
+    os.chdir(tempfile.mkdtemp(prefix="indoorloc_properties_"))
     name = sys.argv[1]
     try:
         groups[name]()
