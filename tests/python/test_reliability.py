@@ -373,3 +373,21 @@ def test_linear_ins_network_names_the_rate_not_the_assembler():
         network.solve_folded_linear_ins_network(imu_rate_hz=1e300)
     with pytest.raises(ValueError, match="duration_s"):
         network.solve_folded_linear_ins_network(duration_s=np.inf)
+
+
+# ------------------------------------------------------- network options (issue 17, second pass)
+
+
+def test_network_scale_solver_options_use_the_validation_vocabulary():
+    from indoorloc._core import network as cn
+
+    # TiedSolveOptions: an iteration count of 2**31 - 1 used to be accepted (hours of PCG).
+    with pytest.raises(ValueError, match=r"max_iterations must be in \[1, 1000000\], got 2147483647"):
+        cn.solve_linear_ins_network_with_crossovers(10.0, 60.0, 1.0, "leapfrog", 3, 3, 1e-5, 2**31 - 1, 1e-8)
+    with pytest.raises(ValueError, match=r"relative_tolerance must be in \(0, 1\), got nan"):
+        cn.solve_linear_ins_network_with_crossovers(10.0, 60.0, 1.0, "leapfrog", 3, 3, 1e-5, 100, float("nan"))
+    # FoldedNetworkOptions: any thread count used to pass.
+    with pytest.raises(ValueError, match=r"num_threads must be in \[-1024, 1024\], got 1000000"):
+        network.solve_repeated_pass_network(10.0, 20.0, 1.0, 10, 2, num_threads=10**6)
+    with pytest.raises(ValueError, match="checkpoint_interval must be >= 0, got -1"):
+        network.solve_repeated_pass_network(10.0, 20.0, 1.0, 10, 2, checkpoint_interval=-1)
