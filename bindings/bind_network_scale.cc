@@ -8,6 +8,7 @@
 #include <pybind11/stl.h>
 
 #include "indoorloc/core/check.h"
+#include "indoorloc/core/interrupt.h"
 #include "indoorloc/core/options.h"
 #include "indoorloc/core/validate.h"
 #include "indoorloc/network/linear_ins_ceres.h"
@@ -204,6 +205,9 @@ truth), linear_solver, report.)doc");
         const network::LinearInsNetworkOptions o = MakeOptions(imu_rate_hz, duration_s, gps_rate_hz, rule, prior_epochs);
         CheckArgument(network::LinearInsNetworkSize(o).unknowns <= 20'000'000, "duration_s",
                       "this export is meant for peers at moderate sizes (<= 2e7 unknowns)");
+        // About three 18-wide equation rows of doubles per unknown (J blocks, observations).
+        RequireSizeLimit(static_cast<double>(network::LinearInsNetworkSize(o).unknowns), 3.0 * 18.0 * 8.0,
+                         "duration_s", "unknowns' equations");
         network::LinearInsEquations e;
         {
           py::gil_scoped_release release;
@@ -242,6 +246,9 @@ sigma_gupt, imu_epochs. Unknowns per epoch: δr, δv, ψ, accelerometer bias, gy
         const network::LinearInsNetworkOptions o = MakeOptions(imu_rate_hz, duration_s, gps_rate_hz, rule, prior_epochs);
         const network::NetworkSize size = network::LinearInsNetworkSize(o);
         CheckArgument(size.unknowns <= 20'000'000, "duration_s", "this dense-block export is meant for peers at moderate sizes (<= 2e7 unknowns)");
+        // Three dense b x b blocks per block row: 2e7 unknowns asked numpy for 34 GB.
+        RequireSizeLimit(static_cast<double>(size.num_blocks), (2.0 * size.block_size + 1.0) * size.block_size * 8.0,
+                         "duration_s", "normal-equation block rows");
         const py::ssize_t n = size.num_blocks, b = size.block_size;
         py::array_t<double> diagonal({n, b, b}), lower({n, b, b}), rhs({n, b});
         {
@@ -256,6 +263,7 @@ sigma_gupt, imu_epochs. Unknowns per epoch: δr, δv, ψ, accelerometer bias, gy
             D.setZero();
             L.setZero();
             r.setZero();
+            if ((j & 1023) == 0) CheckInterrupt();
             assemble(static_cast<int>(j), &D, &L, &r);
             // Row-major copies (numpy's layout).
             for (py::ssize_t i = 0; i < b; ++i)

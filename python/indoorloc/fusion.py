@@ -91,6 +91,11 @@ def _split_polygons(obj: Any, name: str) -> Tuple[List[np.ndarray], List[np.ndar
     """Rings and holes of a ring, a polygon-like object, or a list of them."""
     if obj is None:
         return [], []
+    if isinstance(obj, (str, bytes)):  # list("x") == ["x"]: recursed until RecursionError
+        raise TypeError(f"indoorloc: argument '{name}': expected a ring (M, 2), a polygon, or a list of them, "
+                        f"got {type(obj).__name__}")
+    if isinstance(obj, np.ndarray) and obj.dtype.kind not in "biufc":
+        raise TypeError(f"indoorloc: argument '{name}': expected real vertices, got an array of {obj.dtype}")
     if hasattr(obj, "geoms"):  # MultiPolygon-like
         obj = list(obj.geoms)
     if hasattr(obj, "exterior"):  # Polygon-like

@@ -45,6 +45,9 @@ def run_group(group: str) -> dict:
         lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("{")]
         assert lines, f"{group}: no result (exit {proc.returncode}); last call {last}\n{proc.stderr[-2000:]}"
         counts = json.loads(lines[-1])
+    if os.environ.get("PROPERTY_COUNTS_FILE"):  # one JSON line per group, for the totals in docs
+        with open(os.environ["PROPERTY_COUNTS_FILE"], "a") as f:
+            f.write(json.dumps({"group": group, **{k: v for k, v in counts.items() if k != "problems"}}) + "\n")
     after = _files()
     assert after == before, f"{group}: the probe wrote into {HERE}: {sorted(set(after) - set(before))}"
     print(f"{group}: {counts['cases']} cases, {counts['calls']} calls, {counts['returned']} returned, "

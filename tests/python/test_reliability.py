@@ -391,3 +391,46 @@ def test_network_scale_solver_options_use_the_validation_vocabulary():
         network.solve_repeated_pass_network(10.0, 20.0, 1.0, 10, 2, num_threads=10**6)
     with pytest.raises(ValueError, match="checkpoint_interval must be >= 0, got -1"):
         network.solve_repeated_pass_network(10.0, 20.0, 1.0, 10, 2, checkpoint_interval=-1)
+
+
+def test_network_exports_refuse_more_than_the_memory_limit():
+    from indoorloc._core import network as cn
+
+    # 2e7 unknowns asked numpy for 34 GB of dense blocks.
+    with pytest.raises(ValueError, match="argument 'duration_s': .* would need .* GB"):
+        cn.linear_ins_normal_blocks(18109.0, 60.0, 1.0, "leapfrog", 2)
+
+
+# ------------------------------------------------------------- loaders (issue 17, second pass)
+
+
+def test_mobgap_and_surimi_fields_raise_format_errors(tmp_path):
+    from scipy.io import savemat
+
+    from test_pdr_stride_length import _mobgap_file
+
+    d = tmp_path / "HA" / "009"
+    d.mkdir(parents=True)
+    _mobgap_file(d / "data.mat")
+    from scipy.io import loadmat
+    doc = loadmat(d / "data.mat", simplify_cells=True)
+    doc["data"]["TimeMeasure1"]["Test5"]["Trial1"]["SU"]["LowerBack"]["Timestamp"][3] = np.nan
+    savemat(d / "data.mat", doc)
+    with pytest.raises(io.FormatError, match="data.mat.*Timestamp: holds NaN"):  # NaN times passed through
+        io.load_mobgap_trials(d / "data.mat")
+    root = tmp_path / "surimi"
+    root.mkdir()
+    macs = np.array([[-60, 100], [100, -50]], np.int16)
+    labels = np.array([[1.0, 2.0, 0.0, 0, 0], [3.0, 4.0, 0.0, 0, 0]])
+    cell = np.array([np.ones(2), "x"], dtype=object)
+    savemat(root / "LIB1.mat", {"database": {"trainingMacs": macs, "testMacs": macs, "trainingLabels": labels,
+                                             "testLabels": cell}})
+    with pytest.raises(io.FormatError, match="LIB1.mat: field database.testLabels: expected a real matrix"):
+        io.load_surimi(root, "LIB1")  # named the folder only
+
+
+def test_ilc_floor_origin_of_a_damaged_geojson_is_a_format_error(tmp_path):
+    path = tmp_path / "geojson_map.json"
+    path.write_text("")
+    with pytest.raises(io.FormatError, match="geojson_map.json"):
+        io.ilc_floor_origin_lonlat(path)

@@ -91,3 +91,67 @@ def test_track_start_smoother_and_fixes_arguments_are_named():
         _track(plan="a plan")
     result = _track()
     assert np.isfinite(result["mean_m"]).all()
+
+
+def _in_child(code: str, timeout: float = 60.0) -> str:
+    """Runs `code` in a fresh interpreter (these calls used to hang or fill the memory)."""
+    import subprocess
+    import sys
+    import textwrap
+
+    proc = subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True, text=True,
+                          timeout=timeout)
+    assert proc.returncode == 0, f"exit {proc.returncode}\n{proc.stdout}\n{proc.stderr[-3000:]}"
+    return proc.stdout
+
+
+def test_floor_plan_coordinates_are_bounded_instead_of_hanging():
+    # An outline vertex at 1e300 made the grid registration walk ~1e150 cells.
+    out = _in_child("""
+        import numpy as np
+        from indoorloc import fusion
+        ring = np.array([[0.0, 0.0], [1e300, 0.0], [1.0, 1.0], [0.0, 1.0]])
+        try:
+            fusion.floor_plan_from_polygons(ring)
+        except ValueError as e:
+            assert "outlines" in str(e) and "1e+07" in str(e) and "1e+300" in str(e), e
+            print("ok")
+    """, timeout=30.0)
+    assert out.strip() == "ok"
+
+
+def test_synthetic_building_bounds_its_counts():
+    # num_floors = 2**31 built one FloorGeometry per floor until the memory ran out.
+    out = _in_child("""
+        from indoorloc.simulate.building import BuildingConfig, make_building
+        for field, value in (("num_floors", 2**31), ("num_pillars", 10**9), ("position_jitter_m", float("nan"))):
+            try:
+                make_building(1, BuildingConfig(**{field: value}))
+            except ValueError as e:
+                assert f"config.{field}" in str(e), e
+            else:
+                raise SystemExit(field)
+        print("ok")
+    """, timeout=60.0)
+    assert out.strip() == "ok"
+
+
+def test_polygon_helpers_refuse_strings_instead_of_recursing():
+    for bad in ("x", np.array(["a"] * 8)):
+        with pytest.raises(TypeError, match="argument 'outlines'"):
+            fusion.floor_geometry(bad)  # was RecursionError
+    with pytest.raises(ValueError, match="argument 'outlines'.*complex"):
+        fusion.floor_geometry(np.array([[0, 0], [1, 0], [1, 1]], complex))  # was a silent cast
+
+
+def test_python_helpers_name_their_arguments():
+    with pytest.raises(ValueError, match="argument 'means_m': must be finite where the weight is > 0"):
+        fusion.Fixes.from_arrays([1.0], [[np.nan, 2.0]], [2.0])
+    with pytest.raises(TypeError, match="argument 'steps'"):
+        fusion.track("steps")
+    with pytest.raises(TypeError, match="argument 'floors'"):
+        fusion.floor_plan_from_geometries(3.0)
+    with pytest.raises(ValueError, match=r"argument 'fix.sds_m': entry 0 must be finite and in \[1e-12"):
+        t = cf.ParticleTracker(_plan(), None, None, fusion.tracker_options(num_particles=50))
+        t.initialize_known(0.0, [2.0, 1.5], 0, 0.0)
+        t.fix(1.0, np.array([[2.0, 2.0]]), np.array([1e-300]), np.array([1.0]))  # 1/sd² was inf: NaN mean

@@ -468,6 +468,10 @@ struct FloorPlan::Impl {
 
 namespace {
 
+// Plan coordinates [m] within +-1e7 (any building, also in projected coordinates such as Web
+// Mercator): an outline at 1e300 made the grid registration walk ~1e150 cells (a hang).
+constexpr double kMaxPlanCoordinate = 1e7;
+
 // Ring as given -> vertices without closing or consecutive repeated vertices; checks shape,
 // finiteness, distinct vertices and area. Returns the signed area.
 std::vector<Eigen::Vector2d> CleanRing(const RowMatrixXd& ring, const std::string& name,
@@ -476,6 +480,7 @@ std::vector<Eigen::Vector2d> CleanRing(const RowMatrixXd& ring, const std::strin
                 "expected shape (M, 2), got (" + std::to_string(ring.rows()) + ", " +
                     std::to_string(ring.cols()) + ")");
   CheckFinite(ring, name);
+  RequireAllInRange(ring, -kMaxPlanCoordinate, kMaxPlanCoordinate, name);
   std::vector<Eigen::Vector2d> v;
   v.reserve(static_cast<size_t>(ring.rows()));
   for (Eigen::Index r = 0; r < ring.rows(); ++r) {
@@ -591,6 +596,7 @@ FloorData BuildFloor(const FloorGeometry& input, int floor_index, const FloorPla
                       std::to_string(input.walls.rows()) + ", " +
                       std::to_string(input.walls.cols()) + ")");
     CheckFinite(input.walls, walls_name);
+    RequireAllInRange(input.walls, -kMaxPlanCoordinate, kMaxPlanCoordinate, walls_name);
     d.geometry.walls = input.walls;
     for (Eigen::Index r = 0; r < input.walls.rows(); ++r) {
       const Segment w{input.walls(r, 0), input.walls(r, 1), input.walls(r, 2), input.walls(r, 3)};

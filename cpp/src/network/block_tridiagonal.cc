@@ -18,6 +18,7 @@
 #endif
 
 #include "indoorloc/core/check.h"
+#include "indoorloc/core/interrupt.h"
 #include "indoorloc/core/validate.h"
 #include "indoorloc/core/options.h"
 #include "indoorloc/core/parallel.h"
@@ -94,6 +95,9 @@ class BlockEliminator {
 
 // Calls `assemble` for block i and checks what it returned.
 void AssembleChecked(const BlockRowAssembler& assemble, int i, int b, MatrixXd* diagonal, MatrixXd* lower, VectorXd* rhs) {
+  // Every pass over the band assembles block by block: Ctrl-C is polled here (networks of
+  // millions of epochs run for minutes).
+  CheckInterrupt();
   diagonal->setZero(b, b);
   lower->setZero(b, b);
   rhs->setZero(b);

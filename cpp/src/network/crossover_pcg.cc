@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "indoorloc/core/check.h"
+#include "indoorloc/core/interrupt.h"
 #include "indoorloc/core/validate.h"
 
 namespace indoorloc::network {
@@ -83,6 +84,7 @@ TiedSolution SolveWithTies(const BlockTridiagonalFactor& band, const VectorXd& b
   VectorXd p = z;
   out.summary.termination = Termination::kMaxIterations;
   for (int it = 1; it <= options.max_iterations; ++it) {
+    CheckInterrupt();  // one banded solve per iteration
     const VectorXd q = apply(p);
     const double pq = p.dot(q);
     if (!(pq > 0.0)) {
