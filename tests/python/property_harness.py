@@ -105,6 +105,7 @@ class Tally:
     wrong_type: int = 0
     mutated: int = 0
     problems: List[str] = field(default_factory=list)
+    seconds: Dict[str, float] = field(default_factory=dict)  # per case: where the CI time goes
 
     def problem(self, kind: str, text: str) -> None:
         setattr(self, kind, getattr(self, kind) + 1)
@@ -297,6 +298,14 @@ def probe(case: Case) -> None:
     """Runs the valid call once (must return finite output), then the spoiled calls."""
     if ONLY and not any(o in case.name for o in ONLY):
         return
+    started = time.monotonic()
+    try:
+        _probe(case)
+    finally:
+        TALLY.seconds[case.name] = round(time.monotonic() - started, 2)
+
+
+def _probe(case: Case) -> None:
     TALLY.cases += 1
     valid_out = None
     try:

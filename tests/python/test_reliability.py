@@ -387,7 +387,7 @@ def test_network_scale_solver_options_use_the_validation_vocabulary():
     with pytest.raises(ValueError, match=r"relative_tolerance must be in \(0, 1\), got nan"):
         cn.solve_linear_ins_network_with_crossovers(10.0, 60.0, 1.0, "leapfrog", 3, 3, 1e-5, 100, float("nan"))
     # FoldedNetworkOptions: any thread count used to pass.
-    with pytest.raises(ValueError, match=r"num_threads must be in \[-1024, 1024\], got 1000000"):
+    with pytest.raises(ValueError, match=r"num_threads.: must be in \[-1024, 1024\], got 1000000"):
         network.solve_repeated_pass_network(10.0, 20.0, 1.0, 10, 2, num_threads=10**6)
     with pytest.raises(ValueError, match="checkpoint_interval must be >= 0, got -1"):
         network.solve_repeated_pass_network(10.0, 20.0, 1.0, 10, 2, checkpoint_interval=-1)
@@ -434,3 +434,18 @@ def test_ilc_floor_origin_of_a_damaged_geojson_is_a_format_error(tmp_path):
     path.write_text("")
     with pytest.raises(io.FormatError, match="geojson_map.json"):
         io.ilc_floor_origin_lonlat(path)
+
+
+def test_network_noise_bounds_and_crossover_line_counts():
+    from indoorloc._core import network as cn
+
+    o = network.NetworkOptions()
+    o.gyro_noise_radps_rthz = 2.0**31  # passed as a Scale; kalman_smoother returned NaN positions
+    assert "gyro_noise_radps_rthz must be in [1e-12, 10]" in o.is_valid()
+    ko = network.KalmanSmootherOptions()
+    ko.init_sigma_heading_rad = 2.0**31
+    with pytest.raises(ValueError, match=r"init_sigma_heading_rad must be in \[1e-12, 10\]"):
+        network.kalman_smoother(np.arange(3.0), np.zeros((3, 3)), np.zeros((3, 3)), np.arange(1.0), np.zeros((1, 3)),
+                                {}, options=ko)
+    with pytest.raises(ValueError, match=r"argument 'lines': must be in \[1, 1000000\]"):
+        cn.solve_linear_ins_network_with_crossovers(10.0, 60.0, 1.0, "leapfrog", 2**31 - 1, 3)  # was bad_alloc
