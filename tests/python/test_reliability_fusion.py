@@ -56,7 +56,10 @@ def test_tracker_options_wrong_type_names_the_field():
 
 def test_floor_plan_and_smoother_options_limits():
     with pytest.raises(ValueError, match="cell_size_m must be <= 0 .automatic. or in"):
-        fusion.FloorPlanOptions(cell_size_m=1e-300)
+        fusion.FloorPlanOptions(cell_size_m=1e300)
+    with pytest.raises(ValueError, match="options.cell_size_m.*more than options.max_cells"):
+        fusion.FloorPlan([fusion.FloorGeometry(0, [np.array([[0, 0], [20, 0], [20, 10], [0, 10]], float)])],
+                         fusion.FloorPlanOptions(cell_size_m=1e-300))
     with pytest.raises(ValueError, match="target_edges_per_cell must be in"):
         fusion.FloorPlanOptions(target_edges_per_cell=1e300)
     with pytest.raises(ValueError, match=r"max_cells must be in \[1, 100000000\]"):

@@ -247,12 +247,12 @@ std::string FormatNumber(double v) {
 }  // namespace
 
 bool FloorPlanOptions::IsValid(std::string* error) const {
-  // A positive cell size below 1 mm would ask for more than max_cells cells on any real floor;
-  // it is refused here rather than after the rings have been read.
+  // A tiny positive cell size is refused when the plan is built, against max_cells (the message
+  // then gives the number of cells it would take).
   return Validator(error)
       .Finite(cell_size_m, "cell_size_m")
-      .Check(cell_size_m <= 0.0 || (cell_size_m >= 1e-3 && cell_size_m <= 1e6), "cell_size_m",
-             "must be <= 0 (automatic) or in [0.001, 1e+06] m, got " + FormatValue(cell_size_m))
+      .Check(cell_size_m <= 1e6, "cell_size_m",
+             "must be <= 0 (automatic) or in (0, 1e+06] m, got " + FormatValue(cell_size_m))
       .InRange(target_edges_per_cell, 1e-3, 1e6, "target_edges_per_cell")
       .IntInRange(max_cells, 1, 100000000, "max_cells");
 }
