@@ -84,7 +84,9 @@ demo: install
 # ctest built with AddressSanitizer + UndefinedBehaviorSanitizer, then the Python property suite
 # against an ASan/UBSan build of _core (build/asan-py). A dlopen()ed extension cannot bring the ASan
 # runtime itself (it must be the first library loaded, to intercept malloc), so it is preloaded
-# into the interpreter. detect_leaks=0 for Python only: CPython deliberately never frees its
+# into the interpreter, with libstdc++ (python is a C program: without it ASan cannot resolve the
+# real __cxa_throw at start-up and aborts at the first C++ exception, "CHECK failed:
+# asan_interceptors.cpp:320"). detect_leaks=0 for Python only: CPython deliberately never frees its
 # interned objects, caches and the modules' static state at exit, so LeakSanitizer would report
 # thousands of leaks that are not ours; the C++ suite above keeps detect_leaks=1. Few examples per
 # argument (ASan runs about 3x slower): this run looks for memory errors, not for more inputs.
@@ -109,7 +111,8 @@ test-asan-python: install
 	cp -r python/indoorloc $(ASAN_PY_DIR)/python/ && rm -f $(ASAN_PY_DIR)/python/indoorloc/_core*.so
 	cp $(ASAN_PY_DIR)/bindings/_core*.so $(ASAN_PY_DIR)/python/indoorloc/
 	cd tests/python && export PYTHONPATH=$(abspath $(ASAN_PY_DIR)/python) \
-	  LD_PRELOAD=$$(gcc -print-file-name=libasan.so) PROPERTY_EXAMPLES=$(ASAN_EXAMPLES) \
+	  LD_PRELOAD="$$(gcc -print-file-name=libasan.so) $$(gcc -print-file-name=libstdc++.so)" \
+	  PROPERTY_EXAMPLES=$(ASAN_EXAMPLES) \
 	  PROPERTY_CALL_TIMEOUT_S=60 PROPERTY_GROUP_TIMEOUT_S=900 \
 	  ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 && \
 	  ../../$(PY) -c "import indoorloc._core as c; assert '$(ASAN_PY_DIR)/python' in c.__file__, c.__file__; \
