@@ -2,7 +2,7 @@
 #
 #   make demo        set up (Debian + Python dependencies), build, run `indoorloc demo`
 #   make test        set up, build once, run ctest + pytest + the outside C++ app
-#   make test-asan   ctest suite under AddressSanitizer + UndefinedBehaviorSanitizer
+#   make test-asan   ctest suite and the Python property suite under AddressSanitizer + UBSan
 #   make bench       speed benchmarks against peers (writes benchmarks/results/)
 #   make reproduce   every table of the five papers at full size (reports/reproduce/report.{md,html,json})
 #
@@ -32,7 +32,7 @@ DEBIAN_PACKAGES := g++ make cmake python3-dev python3-venv \
 # that one persistent build folder serves the wheel, ctest and the C++ install).
 BUILD_REQUIREMENTS := "scikit-build-core>=0.10" "pybind11>=2.10" "cmake>=3.20" ninja
 
-.PHONY: all demo reproduce test test-cpp test-python test-cpp-app test-asan bench deps deps-debian \
+.PHONY: all demo reproduce test test-cpp test-python test-cpp-app test-asan test-asan-python bench deps deps-debian \
         deps-python install clean
 
 all: test
@@ -86,14 +86,43 @@ demo: install
 reproduce: install
 	$(VENV)/bin/indoorloc reproduce --out reports/reproduce
 
-# ctest built with AddressSanitizer + UndefinedBehaviorSanitizer (no Python module: ASan in a
-# dlopen()ed extension needs LD_PRELOAD of the runtime into the interpreter).
+# ctest built with AddressSanitizer + UndefinedBehaviorSanitizer, then the Python property suite
+# against an ASan/UBSan build of _core (build/asan-py). A dlopen()ed extension cannot bring the ASan
+# runtime itself (it must be the first library loaded, to intercept malloc), so it is preloaded
+# into the interpreter, with libstdc++ (python is a C program: without it ASan cannot resolve the
+# real __cxa_throw at start-up and aborts at the first C++ exception, "CHECK failed:
+# asan_interceptors.cpp:320"). detect_leaks=0 for Python only: CPython deliberately never frees its
+# interned objects, caches and the modules' static state at exit, so LeakSanitizer would report
+# thousands of leaks that are not ours; the C++ suite above keeps detect_leaks=1. Few examples per
+# argument (ASan runs about 3x slower): this run looks for memory errors, not for more inputs.
+# -O1 -g1: the optimisation level ASan's documentation recommends (and a quicker build than -O2 -g).
+ASAN_PY_DIR := build/asan-py
+ASAN_EXAMPLES ?= 6
 test-asan: deps
 	$(VENV)/bin/cmake -S . -B $(ASAN_DIR) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
 	  -DINDOORLOC_SANITIZE=address,undefined -DINDOORLOC_BUILD_PYTHON=OFF >/dev/null
 	$(VENV)/bin/cmake --build $(ASAN_DIR)
 	ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
 	  ctest --test-dir $(ASAN_DIR) -j$(JOBS) --output-on-failure
+	$(MAKE) --no-print-directory test-asan-python
+
+test-asan-python: install
+	$(VENV)/bin/cmake -S . -B $(ASAN_PY_DIR) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+	  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" \
+	  -DINDOORLOC_SANITIZE=address,undefined -DINDOORLOC_BUILD_PYTHON=ON -DINDOORLOC_BUILD_TESTS=OFF \
+	  -DPython_EXECUTABLE=$(abspath $(PY)) -Dpybind11_DIR=$$($(PY) -m pybind11 --cmakedir) >/dev/null
+	$(VENV)/bin/cmake --build $(ASAN_PY_DIR) --target _core
+	rm -rf $(ASAN_PY_DIR)/python && mkdir -p $(ASAN_PY_DIR)/python
+	cp -r python/indoorloc $(ASAN_PY_DIR)/python/ && rm -f $(ASAN_PY_DIR)/python/indoorloc/_core*.so
+	cp $(ASAN_PY_DIR)/bindings/_core*.so $(ASAN_PY_DIR)/python/indoorloc/
+	cd tests/python && export PYTHONPATH=$(abspath $(ASAN_PY_DIR)/python) \
+	  LD_PRELOAD="$$(gcc -print-file-name=libasan.so) $$(gcc -print-file-name=libstdc++.so)" \
+	  PROPERTY_EXAMPLES=$(ASAN_EXAMPLES) \
+	  PROPERTY_CALL_TIMEOUT_S=60 PROPERTY_GROUP_TIMEOUT_S=900 \
+	  ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 && \
+	  ../../$(PY) -c "import indoorloc._core as c; assert '$(ASAN_PY_DIR)/python' in c.__file__, c.__file__; \
+	    print('property suite against', c.__file__)" && \
+	  ../../$(PY) -m pytest -q -c ../../pyproject.toml --rootdir ../.. test_properties_*.py
 
 # Peers (the `bench` extra: particles, which pins numpy < 2) go into their own venv so that the
 # test venv keeps the versions CI uses.

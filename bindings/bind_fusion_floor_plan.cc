@@ -2,6 +2,7 @@
 // FloorPlan with batched (numpy) queries.
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -11,6 +12,7 @@
 
 #include "indoorloc/core/options.h"
 #include "indoorloc/core/random.h"
+#include "indoorloc/core/validate.h"
 #include "indoorloc/fusion/floor_plan.h"
 #include "numpy_args.h"
 
@@ -45,9 +47,19 @@ std::vector<RowMatrixXd> ToRings(const py::handle& obj, const std::string& name)
 
 Eigen::VectorXi ToFloorIndices(const py::handle& obj, const char* name) {
   if (py::isinstance<py::int_>(obj) && !py::isinstance<py::bool_>(obj)) {
-    return Eigen::VectorXi::Constant(1, obj.cast<int>());
+    // ToInt names the argument (pybind11's cast said "Unable to cast ... to C++ type '?'").
+    return Eigen::VectorXi::Constant(1, ToInt(obj, name, std::numeric_limits<int>::min(),
+                                              std::numeric_limits<int>::max()));
   }
   return ToIntVector(obj, name);
+}
+
+// Query coordinates [m] within +-kMaxScale: beyond, squared distances overflow to inf
+// (distance_to_wall of a point at 1e300 returned inf).
+MatrixArg ToQueries(const py::object& obj, const char* name, Eigen::Index cols) {
+  MatrixArg m = ToMatrix(obj, name, -1, cols);
+  RequireAllInRange(m.map, -kMaxScale, kMaxScale, name);
+  return m;
 }
 
 py::list RingsToList(const std::vector<RowMatrixXd>& rings) {
@@ -266,7 +278,7 @@ ring counter-clockwise), then the walls.)doc")
            "Side of a floor's index cells [m].")
       .def("is_walkable", [](const FloorPlan& plan, const py::object& points_m,
                              const py::object& floor_indices, int num_threads) {
-             MatrixArg p = ToMatrix(points_m, "points_m", -1, 2);
+             MatrixArg p = ToQueries(points_m, "points_m", 2);
              const Eigen::VectorXi f = ToFloorIndices(floor_indices, "floor_indices");
              fusion::VectorXb out;
              {
@@ -279,7 +291,7 @@ ring counter-clockwise), then the walls.)doc")
            is_walkable_doc.c_str())
       .def("crosses_wall", [](const FloorPlan& plan, const py::object& segments_m,
                               const py::object& floor_indices, int num_threads) {
-             MatrixArg s = ToMatrix(segments_m, "segments_m", -1, 4);
+             MatrixArg s = ToQueries(segments_m, "segments_m", 4);
              const Eigen::VectorXi f = ToFloorIndices(floor_indices, "floor_indices");
              fusion::VectorXb out;
              {
@@ -292,7 +304,7 @@ ring counter-clockwise), then the walls.)doc")
            crosses_wall_doc.c_str())
       .def("distance_to_wall", [](const FloorPlan& plan, const py::object& points_m,
                                   const py::object& floor_indices, int num_threads) {
-             MatrixArg p = ToMatrix(points_m, "points_m", -1, 2);
+             MatrixArg p = ToQueries(points_m, "points_m", 2);
              const Eigen::VectorXi f = ToFloorIndices(floor_indices, "floor_indices");
              Eigen::VectorXd out;
              {
@@ -311,8 +323,13 @@ ring counter-clockwise), then the walls.)doc")
                RandomStream& stream = rng.cast<RandomStream&>();
                py::gil_scoped_release release;
                out = plan.SampleWalkable(n, floor_index, stream);
-             } else if (py::isinstance<py::int_>(rng)) {
-               RandomStream stream(rng.cast<std::uint64_t>());
+             } else if (py::isinstance<py::int_>(rng) && !py::isinstance<py::bool_>(rng)) {
+               const unsigned long long seed = PyLong_AsUnsignedLongLong(rng.ptr());
+               if (seed == static_cast<unsigned long long>(-1) && PyErr_Occurred()) {
+                 PyErr_Clear();
+                 ThrowInvalidArgument("rng", "a seed must be an int in [0, 2**64), got " + std::string(py::str(rng)));
+               }
+               RandomStream stream(seed);
                py::gil_scoped_release release;
                out = plan.SampleWalkable(n, floor_index, stream);
              } else {

@@ -9,6 +9,7 @@
 #include <pybind11/stl.h>
 
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/validate.h"
 #include "indoorloc/fusion/backward_smoother.h"
 #include "indoorloc/fusion/floor_plan.h"
 #include "indoorloc/fusion/particle_tracker.h"
@@ -55,6 +56,26 @@ std::vector<StepInput> StepsFromArrays(const py::object& times_s, const py::obje
   MatrixArg d = ToMatrix(displacements_m, "displacements_m", t.map.size(), 2);
   MatrixArg c = ToMatrix(covariances_m2, "covariances_m2", t.map.size(), 3);
   std::vector<StepInput> steps(static_cast<size_t>(t.map.size()));
+  // The rules of CheckStepInput, named by the array the user passed (it names "steps[k]").
+  for (Eigen::Index k = 1; k < t.map.size(); ++k) {
+    if (t.map[k] < t.map[k - 1]) {
+      ThrowInvalidArgument("step_times_s", "must be non-decreasing: entry " + std::to_string(k) + " = " +
+                                               FormatValue(t.map[k]) + " < " + FormatValue(t.map[k - 1]));
+    }
+  }
+  for (Eigen::Index k = 0; k < t.map.size(); ++k) {
+    if (d.map.row(k).norm() > 100.0) {
+      ThrowInvalidArgument("displacements_m", "row " + std::to_string(k) + " is longer than 100 m (not a step), got " +
+                                                  FormatValue(d.map.row(k).norm()) + " m");
+    }
+    const double xx = c.map(k, 0), xy = c.map(k, 1), yy = c.map(k, 2);
+    if (!(std::abs(xx) <= 1e4 && std::abs(xy) <= 1e4 && std::abs(yy) <= 1e4 && xx >= 0.0 && yy >= 0.0 &&
+          xx * yy - xy * xy >= -1e-12 * std::max(1.0, xx * yy))) {
+      ThrowInvalidArgument("covariances_m2", "row " + std::to_string(k) +
+                                                 " (xx, xy, yy) must be a positive semi-definite covariance with "
+                                                 "entries within +-1e4 m^2");
+    }
+  }
   for (Eigen::Index k = 0; k < t.map.size(); ++k) {
     StepInput& s = steps[static_cast<size_t>(k)];
     s.time_s = t.map[k];
@@ -107,14 +128,59 @@ std::vector<PositionFix> FixesFromArrays(const py::tuple& arrays) {
 }
 
 template <typename T>
-const T* OptionalPointer(const py::object& obj, const char* name) {
+const T* OptionalPointer(const py::object& obj, const char* argument, const char* type) {
   if (obj.is_none()) return nullptr;
   try {
     return obj.cast<const T*>();
   } catch (const py::cast_error&) {
-    ThrowInvalidArgument(name, std::string("must be None or a ") + name + " object, got " +
-                                   std::string(Py_TYPE(obj.ptr())->tp_name));
+    ThrowInvalidArgument(argument, std::string("must be None or a ") + type + " object, got " +
+                                       std::string(Py_TYPE(obj.ptr())->tp_name));
   }
+}
+
+// A real number given to a dict entry or a tuple (pybind11's own cast would raise RuntimeError
+// "Unable to cast Python instance ..."): finite, named.
+double ToFiniteDouble(const py::handle& obj, const std::string& name) {
+  if (py::isinstance<py::bool_>(obj) || !(py::isinstance<py::float_>(obj) || py::isinstance<py::int_>(obj) ||
+                                         py::hasattr(obj, "__float__")) || py::isinstance<py::str>(obj)) {
+    ThrowInvalidArgument(name, "expected a real number, got " + std::string(Py_TYPE(obj.ptr())->tp_name));
+  }
+  if (PyComplex_Check(obj.ptr())) ThrowInvalidArgument(name, "expected a real number, got complex");
+  const double v = PyFloat_AsDouble(obj.ptr());
+  if (v == -1.0 && PyErr_Occurred()) {
+    PyErr_Clear();
+    ThrowInvalidArgument(name, "expected a real number");
+  }
+  RequireFinite(v, name);
+  return v;
+}
+
+// The known start of track(): {"position_m": (2,), "floor": int, "heading_offset_rad": float,
+// "time_s": float}; unknown keys are refused (a misspelt key would otherwise be ignored).
+TrackStart StartFromDict(const py::object& start, double first_step_time_s) {
+  TrackStart st;
+  if (start.is_none()) return st;
+  if (!py::isinstance<py::dict>(start)) {
+    ThrowInvalidArgument("start", "expected None or a dict with position_m, floor, heading_offset_rad, time_s; got " +
+                                      std::string(Py_TYPE(start.ptr())->tp_name));
+  }
+  const py::dict s = start.cast<py::dict>();
+  for (const auto& item : s) {
+    const std::string key = py::str(item.first);
+    if (key != "position_m" && key != "floor" && key != "heading_offset_rad" && key != "time_s") {
+      ThrowInvalidArgument("start", "unknown key '" + key + "' (expected position_m, floor, heading_offset_rad, time_s)");
+    }
+  }
+  if (!s.contains("position_m")) ThrowInvalidArgument("start", "a known start needs 'position_m'");
+  st.known = true;
+  VectorArg p = ToVector(s["position_m"], "start['position_m']", 2);
+  RequireAllInRange(p.map, -kMaxScale, kMaxScale, "start['position_m']");
+  st.position_m = p.map;
+  st.time_s = s.contains("time_s") ? ToFiniteDouble(s["time_s"], "start['time_s']") : first_step_time_s;
+  st.floor = s.contains("floor") ? ToInt(s["floor"], "start['floor']", -1000000, 1000000) : 0;
+  st.heading_offset_rad =
+      s.contains("heading_offset_rad") ? ToFiniteDouble(s["heading_offset_rad"], "start['heading_offset_rad']") : 0.0;
+  return st;
 }
 
 }  // namespace
@@ -132,7 +198,14 @@ WiFi (tempering, max_term, max_age_s, use_not_heard, not_heard_dbm) options are 
         for (const auto& item : kwargs) {
           const std::string key = py::str(item.first);
           if (!py::hasattr(self, key.c_str())) ThrowInvalidArgument(key, "is not a TrackerOptions field");
-          self.attr(key.c_str()) = item.second;
+          try {
+            self.attr(key.c_str()) = item.second;
+          } catch (py::error_already_set& e) {
+            // pybind11's setter error names neither the field nor the type it wanted.
+            if (!e.matches(PyExc_TypeError)) throw;
+            throw py::type_error("indoorloc: argument '" + key + "': wrong type " +
+                                 std::string(Py_TYPE(item.second.ptr())->tp_name) + " for TrackerOptions." + key);
+          }
         }
         TrackerOptions out = self.cast<TrackerOptions>();
         ValidateOptions(out);
@@ -286,9 +359,14 @@ options.max_age_s are dropped. Returns (list of WifiObservation sorted by time, 
           VectorArg hs = ToVector(heading_sd_rad, "heading_sd_rad", n);
           RowMatrixXd disp(n, 2), cov(n, 3);
           for (Eigen::Index k = 0; k < n; ++k) {
-            CheckArgument(l.map[k] >= 0.0, "lengths_m", DescribeEntry(k, 0, true) + " is negative");
-            CheckArgument(ls.map[k] >= 0.0, "length_sd_m", DescribeEntry(k, 0, true) + " is negative");
-            CheckArgument(hs.map[k] >= 0.0, "heading_sd_rad", DescribeEntry(k, 0, true) + " is negative");
+            // Bounded so that the propagated covariance stays a step's (sd <= 100 m): 1e300
+            // gave an inf covariance.
+            CheckArgument(l.map[k] >= 0.0 && l.map[k] <= 100.0, "lengths_m",
+                          DescribeEntry(k, 0, true) + " must be in [0, 100] m, got " + FormatValue(l.map[k]));
+            CheckArgument(ls.map[k] >= 0.0 && ls.map[k] <= 100.0, "length_sd_m",
+                          DescribeEntry(k, 0, true) + " must be in [0, 100] m, got " + FormatValue(ls.map[k]));
+            CheckArgument(hs.map[k] >= 0.0 && hs.map[k] <= 1e3, "heading_sd_rad",
+                          DescribeEntry(k, 0, true) + " must be in [0, 1000] rad, got " + FormatValue(hs.map[k]));
             const StepInput s = StepFromPolar(0.0, l.map[k], h.map[k], ls.map[k], hs.map[k]);
             disp.row(k) = s.displacement_m.transpose();
             cov.row(k) << s.covariance_m2(0, 0), s.covariance_m2(0, 1), s.covariance_m2(1, 1);
@@ -312,9 +390,9 @@ corridors : indoorloc.mapmatch.RoadNetwork or None
 options : TrackerOptions)doc")
       .def(py::init([](const py::object& plan, const py::object& wifi_model, const py::object& corridors,
                        const TrackerOptions& options) {
-             return std::make_unique<ParticleTracker>(OptionalPointer<FloorPlan>(plan, "FloorPlan"),
-                                                      OptionalPointer<wifi::RssModel>(wifi_model, "RssModel"),
-                                                      OptionalPointer<mapmatch::RoadNetwork>(corridors, "RoadNetwork"),
+             return std::make_unique<ParticleTracker>(OptionalPointer<FloorPlan>(plan, "plan", "FloorPlan"),
+                                                      OptionalPointer<wifi::RssModel>(wifi_model, "wifi_model", "RssModel"),
+                                                      OptionalPointer<mapmatch::RoadNetwork>(corridors, "corridors", "RoadNetwork"),
                                                       options);
            }),
            py::arg("plan") = py::none(), py::arg("wifi_model") = py::none(), py::arg("corridors") = py::none(),
@@ -325,12 +403,19 @@ options : TrackerOptions)doc")
       .def("initialize_known", [](ParticleTracker& t, double time_s, const py::object& position_m, int floor,
                                   double heading_offset_rad) {
              VectorArg p = ToVector(position_m, "position_m", 2);
+             RequireAllInRange(p.map, -kMaxScale, kMaxScale, "position_m");
+             RequireFinite(time_s, "time_s");
+             RequireFinite(heading_offset_rad, "heading_offset_rad");
              t.InitializeKnown(time_s, p.map, floor, heading_offset_rad);
            },
            py::arg("time_s"), py::arg("position_m"), py::arg("floor") = 0, py::arg("heading_offset_rad") = 0.0,
            "Known start: position (2,) [m] on floor number `floor`, PDR-to-floor yaw [rad].")
       .def("initialize_unknown", [](ParticleTracker& t, const py::object& observation) {
              WifiObservation none;
+             if (!observation.is_none() && !py::isinstance<WifiObservation>(observation)) {
+               ThrowInvalidArgument("observation", "expected None or a WifiObservation, got " +
+                                                       std::string(Py_TYPE(observation.ptr())->tp_name));
+             }
              const WifiObservation& o = observation.is_none() ? none : observation.cast<const WifiObservation&>();
              py::gil_scoped_release release;
              t.InitializeUnknown(o);
@@ -404,23 +489,27 @@ options : TrackerOptions)doc")
           Recording rec;
           rec.steps = StepsFromArrays(step_times_s, displacements_m, covariances_m2);
           rec.observations = observations;
-          if (!fixes.is_none()) rec.fixes = FixesFromArrays(fixes.cast<py::tuple>());
-          TrackStart st;
-          if (!start.is_none()) {
-            const py::dict s = start.cast<py::dict>();
-            st.known = true;
-            VectorArg p = ToVector(s["position_m"], "start['position_m']", 2);
-            st.position_m = p.map;
-            st.time_s = s.contains("time_s") ? s["time_s"].cast<double>() : (rec.steps.empty() ? 0.0 : rec.steps.front().time_s);
-            st.floor = s.contains("floor") ? s["floor"].cast<int>() : 0;
-            st.heading_offset_rad = s.contains("heading_offset_rad") ? s["heading_offset_rad"].cast<double>() : 0.0;
+          if (!fixes.is_none()) {
+            if (!py::isinstance<py::tuple>(fixes)) {
+              ThrowInvalidArgument("fixes", "expected None or (times_s, means_m, sds_m, weights, floors) "
+                                            "(indoorloc.fusion.Fixes.as_arrays()), got " +
+                                                std::string(Py_TYPE(fixes.ptr())->tp_name));
+            }
+            rec.fixes = FixesFromArrays(fixes.cast<py::tuple>());
           }
+          const TrackStart st = StartFromDict(start, rec.steps.empty() ? 0.0 : rec.steps.front().time_s);
           SmootherOptions so;
           const bool smooth = !smoother.is_none();
-          if (smooth) so = smoother.cast<SmootherOptions>();
-          const FloorPlan* p = OptionalPointer<FloorPlan>(plan, "FloorPlan");
-          const wifi::RssModel* w = OptionalPointer<wifi::RssModel>(wifi_model, "RssModel");
-          const mapmatch::RoadNetwork* c = OptionalPointer<mapmatch::RoadNetwork>(corridors, "RoadNetwork");
+          if (smooth) {
+            if (!py::isinstance<SmootherOptions>(smoother)) {
+              ThrowInvalidArgument("smoother", "expected None or a SmootherOptions, got " +
+                                                   std::string(Py_TYPE(smoother.ptr())->tp_name));
+            }
+            so = smoother.cast<SmootherOptions>();
+          }
+          const FloorPlan* p = OptionalPointer<FloorPlan>(plan, "plan", "FloorPlan");
+          const wifi::RssModel* w = OptionalPointer<wifi::RssModel>(wifi_model, "wifi_model", "RssModel");
+          const mapmatch::RoadNetwork* c = OptionalPointer<mapmatch::RoadNetwork>(corridors, "corridors", "RoadNetwork");
           TrackResult r;
           {
             py::gil_scoped_release release;

@@ -55,6 +55,8 @@ NetworkObservations MakeObservations(const py::object& imu_time_s, const py::obj
     o.gupt_gravity_mps2.resize(0);
   } else {
     o.gupt_gravity_mps2 = ToVector(gupt_gravity_mps2, "gupt_gravity_mps2", o.gupt_epochs.size()).map;
+    // Known gravity [m/s^2]: -1e300 passed the finiteness check and the filter's attitude became NaN.
+    RequireAllInRange(o.gupt_gravity_mps2, -100.0, 100.0, "gupt_gravity_mps2");
   }
   CheckArgument(o.gupt_gravity_mps2.size() == o.gupt_epochs.size(), "gupt_gravity_mps2",
                 "needs one value per entry of gupt_epochs");

@@ -8,6 +8,7 @@
 #include <pybind11/stl.h>
 
 #include "indoorloc/core/check.h"
+#include "indoorloc/core/interrupt.h"
 #include "indoorloc/core/options.h"
 #include "indoorloc/core/validate.h"
 #include "indoorloc/network/linear_ins_ceres.h"
@@ -124,7 +125,16 @@ min_relative_pivot, max_abs_error (every unknown, against the noise-free truth),
       [](double imu_rate_hz, double duration_s, double gps_rate_hz, const std::string& rule, int lines, int cross_lines,
          double sigma_xover_mps2, int max_iterations, double relative_tolerance) {
         RequireInRange(sigma_xover_mps2, 1e-9, 1e3, "sigma_xover_mps2");
+        // 2**31 - 1 lines overflowed lines + cross_lines (an int) and ended in std::bad_alloc.
+        RequireIntInRange(lines, 1, 1000000, "lines");
+        RequireIntInRange(cross_lines, 1, 1000000, "cross_lines");
         const network::LinearInsNetworkOptions o = MakeOptions(imu_rate_hz, duration_s, gps_rate_hz, rule, 2);
+        // The PCG keeps the whole banded factor (two b x b blocks per block row). Budget: 16 GB,
+        // which holds Table 2 case 4 (about 6 GB); 1.6e8 epochs used to allocate until the
+        // machine ran out of memory.
+        const network::NetworkSize size = network::LinearInsNetworkSize(o);
+        RequireSizeLimit(static_cast<double>(size.num_blocks), 2.0 * size.block_size * size.block_size * 8.0,
+                         "duration_s", "block rows of the stored factor (duration_s x imu_rate_hz)", 16e9);
         network::TiedSolveOptions pcg;
         pcg.max_iterations = max_iterations;
         pcg.relative_tolerance = relative_tolerance;
@@ -169,6 +179,12 @@ against the noise-free truth, total_seconds, report.)doc");
       [](double imu_rate_hz, double duration_s, double gps_rate_hz, const std::string& rule, int prior_epochs,
          bool one_gauss_newton_step) {
         const network::LinearInsNetworkOptions o = MakeOptions(imu_rate_hz, duration_s, gps_rate_hz, rule, prior_epochs);
+        // Ceres cannot be interrupted inside its sparse factorisation: the peer is bounded to the
+        // benchmark's sizes (50 Hz x 2400 s = 2.16e6 unknowns) instead of running for hours.
+        const long long unknowns = network::LinearInsNetworkSize(o).unknowns;
+        CheckArgument(unknowns <= 2'200'000, "duration_s",
+                      "duration_s x imu_rate_hz gives " + std::to_string(unknowns) +
+                          " unknowns; the Ceres peer is meant for the benchmark's sizes (<= 2.2e6 unknowns)");
         network::LinearInsCeresResult r;
         {
           py::gil_scoped_release release;
@@ -203,7 +219,10 @@ truth), linear_solver, report.)doc");
       [](double imu_rate_hz, double duration_s, double gps_rate_hz, const std::string& rule, int prior_epochs) {
         const network::LinearInsNetworkOptions o = MakeOptions(imu_rate_hz, duration_s, gps_rate_hz, rule, prior_epochs);
         CheckArgument(network::LinearInsNetworkSize(o).unknowns <= 20'000'000, "duration_s",
-                      "this export is meant for peers at moderate sizes (<= 2e7 unknowns)");
+                      "duration_s x imu_rate_hz: this export is meant for peers at moderate sizes (<= 2e7 unknowns)");
+        // About three 18-wide equation rows of doubles per unknown (J blocks, observations).
+        RequireSizeLimit(static_cast<double>(network::LinearInsNetworkSize(o).unknowns), 3.0 * 18.0 * 8.0,
+                         "duration_s", "unknowns' equations");
         network::LinearInsEquations e;
         {
           py::gil_scoped_release release;
@@ -241,7 +260,10 @@ sigma_gupt, imu_epochs. Unknowns per epoch: δr, δv, ψ, accelerometer bias, gy
       [](double imu_rate_hz, double duration_s, double gps_rate_hz, const std::string& rule, int prior_epochs) {
         const network::LinearInsNetworkOptions o = MakeOptions(imu_rate_hz, duration_s, gps_rate_hz, rule, prior_epochs);
         const network::NetworkSize size = network::LinearInsNetworkSize(o);
-        CheckArgument(size.unknowns <= 20'000'000, "duration_s", "this dense-block export is meant for peers at moderate sizes (<= 2e7 unknowns)");
+        CheckArgument(size.unknowns <= 20'000'000, "duration_s", "duration_s x imu_rate_hz: this dense-block export is meant for peers at moderate sizes (<= 2e7 unknowns)");
+        // Three dense b x b blocks per block row: 2e7 unknowns asked numpy for 34 GB.
+        RequireSizeLimit(static_cast<double>(size.num_blocks), (2.0 * size.block_size + 1.0) * size.block_size * 8.0,
+                         "duration_s", "normal-equation block rows");
         const py::ssize_t n = size.num_blocks, b = size.block_size;
         py::array_t<double> diagonal({n, b, b}), lower({n, b, b}), rhs({n, b});
         {
@@ -256,6 +278,7 @@ sigma_gupt, imu_epochs. Unknowns per epoch: δr, δv, ψ, accelerometer bias, gy
             D.setZero();
             L.setZero();
             r.setZero();
+            if ((j & 1023) == 0) CheckInterrupt();
             assemble(static_cast<int>(j), &D, &L, &r);
             // Row-major copies (numpy's layout).
             for (py::ssize_t i = 0; i < b; ++i)
@@ -279,6 +302,13 @@ libraries: diagonal (n, b, b) = A_ii, lower (n, b, b) = A_{i,i-1} (lower[0] is z
          int checkpoint_interval, int prior_epochs, bool keep_gravity_estimate, int num_threads) {
         const network::LinearInsNetworkOptions o = MakeOptions(imu_rate_hz, duration_s, gps_rate_hz, rule, prior_epochs);
         CheckArgument(checkpoint_interval >= 0, "checkpoint_interval", "must be >= 0");
+        // Without checkpoints the whole factor is kept (two b x b blocks per block row): the same
+        // 16 GB budget as the crossover solver (1.6e8 epochs ended in std::bad_alloc).
+        const network::NetworkSize size = network::LinearInsNetworkSize(o);
+        const double per_row = checkpoint_interval == 0 ? 2.0 * size.block_size * size.block_size * 8.0
+                                                        : 4.0 * size.block_size * 8.0;
+        RequireSizeLimit(static_cast<double>(size.num_blocks), per_row, "duration_s",
+                         "block rows (duration_s x imu_rate_hz)", 16e9);
         network::LinearInsNetworkResult r;
         {
           py::gil_scoped_release release;

@@ -50,6 +50,7 @@ from indoorloc._core.fusion import (
     steps_from_polar,
 )
 from indoorloc._core.fusion import track as _core_track
+from indoorloc.validate import integer, real_array, real_scalar
 
 
 def _error(arg: str, msg: str) -> ValueError:
@@ -58,8 +59,13 @@ def _error(arg: str, msg: str) -> ValueError:
 
 def _ring_array(obj: Any, name: str) -> np.ndarray:
     try:
+        raw = np.asarray(obj)
+        if raw.dtype.kind == "c":  # never cast: the imaginary part would be dropped silently
+            raise _error(name, f"is complex (dtype {raw.dtype}), expected real vertices")
         ring = np.asarray(obj, dtype=float)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError) as exc:
+        if str(exc).startswith("indoorloc:"):
+            raise
         raise _error(name, "cannot be converted to an (M, 2) float array") from None
     if ring.ndim != 2 or ring.shape[1] < 2:
         raise _error(name, f"expected an (M, 2) array of vertices, got shape {ring.shape}")
@@ -75,16 +81,21 @@ def _is_single_ring(obj: Any) -> bool:
     if hasattr(obj, "exterior") or hasattr(obj, "geoms"):
         return False
     try:
-        arr = np.asarray(_coords(obj), dtype=float)
+        arr = np.asarray(_coords(obj))
     except (TypeError, ValueError):
         return False
-    return arr.ndim == 2
+    return arr.ndim == 2 and arr.dtype.kind in "biufc"  # complex is refused by _ring_array, by name
 
 
 def _split_polygons(obj: Any, name: str) -> Tuple[List[np.ndarray], List[np.ndarray]]:
     """Rings and holes of a ring, a polygon-like object, or a list of them."""
     if obj is None:
         return [], []
+    if isinstance(obj, (str, bytes)):  # list("x") == ["x"]: recursed until RecursionError
+        raise TypeError(f"indoorloc: argument '{name}': expected a ring (M, 2), a polygon, or a list of them, "
+                        f"got {type(obj).__name__}")
+    if isinstance(obj, np.ndarray) and obj.dtype.kind not in "biufc":
+        raise TypeError(f"indoorloc: argument '{name}': expected real vertices, got an array of {obj.dtype}")
     if hasattr(obj, "geoms"):  # MultiPolygon-like
         obj = list(obj.geoms)
     if hasattr(obj, "exterior"):  # Polygon-like
@@ -130,9 +141,10 @@ def floor_geometry(
     outline_rings, holes = _split_polygons(outlines, "outlines")
     obstacle_rings, _ = _split_polygons(obstacles, "obstacles")
     if walls is not None:
-        walls = np.asarray(walls, dtype=float)
+        walls = real_array(walls, "walls", finite=False)  # NaN is named by FloorGeometry
         if walls.size == 0:
             walls = None
+    floor = integer(floor, "floor", lo=-(2**31), hi=2**31 - 1)
     return FloorGeometry(floor=int(floor), outlines=outline_rings, obstacles=obstacle_rings + holes,
                          walls=walls)
 
@@ -165,11 +177,22 @@ def floor_plan_from_geometries(floors: Iterable[object], options: Optional[Floor
     """A FloorPlan from objects with ``floor`` (int), ``outlines`` and ``obstacles`` (lists of
     (M, 2) rings [m]) and ``walls`` ((W, 4) segments [m] or None): FloorGeometry instances, the
     synthetic building's floors, or your own records."""
+    try:
+        items = list(floors)
+    except TypeError:
+        raise TypeError(f"indoorloc: argument 'floors': expected an iterable of floor geometries, "
+                        f"got {type(floors).__name__}") from None
+    if options is not None and not isinstance(options, FloorPlanOptions):
+        raise TypeError(f"indoorloc: argument 'options': expected None or a FloorPlanOptions, "
+                        f"got {type(options).__name__}")
     geometries = []
-    for g in floors:
+    for k, g in enumerate(items):
         if isinstance(g, FloorGeometry):
             geometries.append(g)
             continue
+        if not (hasattr(g, "floor") and hasattr(g, "outlines")):
+            raise TypeError(f"indoorloc: argument 'floors[{k}]': expected an object with floor, outlines "
+                            f"(and obstacles, walls), got {type(g).__name__}")
         walls = getattr(g, "walls", None)
         if walls is not None and np.asarray(walls).size == 0:
             walls = None
@@ -180,7 +203,7 @@ def floor_plan_from_geometries(floors: Iterable[object], options: Optional[Floor
 
 def covariance_matrix(row) -> np.ndarray:
     """(xx, xy, yy) -> the symmetric 2 x 2 matrix [m²]."""
-    xx, xy, yy = (float(v) for v in row)
+    xx, xy, yy = real_array(row, "row", shape=(3,))
     return np.array([[xx, xy], [xy, yy]])
 
 
@@ -213,12 +236,20 @@ class Steps:
     def from_polar(cls, times_s, lengths_m, headings_rad, length_sd_m, heading_sd_rad) -> "Steps":
         """From step lengths [m] and headings [rad] with their sd (scalars broadcast), by
         first-order propagation (docs/fusion.md)."""
-        times = np.asarray(times_s, dtype=float)
+        times = real_array(times_s, "times_s", ndim=1)
         n = times.shape[0]
-        lengths = np.broadcast_to(np.asarray(lengths_m, dtype=float), (n,))
-        headings = np.broadcast_to(np.asarray(headings_rad, dtype=float), (n,))
-        length_sd = np.broadcast_to(np.asarray(length_sd_m, dtype=float), (n,))
-        heading_sd = np.broadcast_to(np.asarray(heading_sd_rad, dtype=float), (n,))
+
+        def per_step(value: Any, name: str) -> np.ndarray:
+            a = real_array(value, name)
+            if a.ndim > 1 or (a.ndim == 1 and a.shape[0] != n):
+                raise _error(name, f"expected a scalar or shape ({n},) (one entry per step of 'times_s'), "
+                                   f"got {a.shape}")
+            return np.broadcast_to(a, (n,))
+
+        lengths = per_step(lengths_m, "lengths_m")
+        headings = per_step(headings_rad, "headings_rad")
+        length_sd = per_step(length_sd_m, "length_sd_m")
+        heading_sd = per_step(heading_sd_rad, "heading_sd_rad")
         displacements, covariances = steps_from_polar(lengths, headings, length_sd, heading_sd)
         return cls(times.copy(), displacements, covariances)
 
@@ -226,14 +257,18 @@ class Steps:
     def from_increments(cls, times_s, increments_m, covariances_m2) -> "Steps":
         """From foot-mounted ZUPT increments ΔP_k (M, 2 or 3; x, y used) [m] (paper 002 eq. 9) and
         their covariances (M, 2, 2) or (M, 3) [m²]."""
-        inc = np.asarray(increments_m, dtype=float)
+        inc = real_array(increments_m, "increments_m")
         if inc.ndim != 2 or inc.shape[1] not in (2, 3):
             raise ValueError("indoorloc: argument 'increments_m': expected shape (M, 2) or (M, 3), got "
                              f"{inc.shape}")
-        cov = np.asarray(covariances_m2, dtype=float)
-        if cov.ndim == 3:
+        m = inc.shape[0]
+        times = real_array(times_s, "times_s", shape=(m,))
+        cov = real_array(covariances_m2, "covariances_m2")
+        if cov.ndim == 3 and cov.shape[1:] == (2, 2):
             cov = np.stack([cov[:, 0, 0], cov[:, 0, 1], cov[:, 1, 1]], axis=1)
-        return cls(np.asarray(times_s, dtype=float).copy(), inc[:, :2].copy(), cov.copy())
+        if cov.shape != (m, 3):
+            raise _error("covariances_m2", f"expected shape ({m}, 2, 2) or ({m}, 3), got {cov.shape}")
+        return cls(times.copy(), inc[:, :2].copy(), cov.copy())
 
     def __len__(self) -> int:
         return int(self.times_s.shape[0])
@@ -241,8 +276,9 @@ class Steps:
 
 def rotate(displacements_m, angle_rad: float) -> np.ndarray:
     """Displacements (M, 2) rotated by angle_rad (PDR frame -> floor frame for a known yaw)."""
-    d = np.asarray(displacements_m, dtype=float)
-    c, s = np.cos(angle_rad), np.sin(angle_rad)
+    d = real_array(displacements_m, "displacements_m", shape=(None, 2))
+    angle = real_scalar(angle_rad, "angle_rad")
+    c, s = np.cos(angle), np.sin(angle)
     return np.stack([c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1]], axis=1)
 
 
@@ -268,25 +304,29 @@ class Fixes:
         """Checks shapes and copies. means_m (F, K, 2) or (F, 2) (one component each); sds_m
         (F, K), (F,) or a scalar; weights default equal; floors (F, K), (F,) (one floor per fix)
         or a scalar, default ``ANY_FLOOR``."""
-        t = np.array(times_s, dtype=float).reshape(-1)
+        # Means and sds of padding components (weight 0) may be NaN: only complex, strings and
+        # objects are refused here; the C++ side checks the used components by name.
+        t = real_array(times_s, "times_s").reshape(-1)
         f = t.shape[0]
-        m = np.array(means_m, dtype=float)
+        m = real_array(means_m, "means_m", finite=False)
         if m.ndim == 2 and m.shape == (f, 2):
             m = m[:, None, :]
         if m.ndim != 3 or m.shape[0] != f or m.shape[2] != 2:
             raise _error("means_m", f"expected shape ({f}, K, 2) or ({f}, 2), got {m.shape}")
         k = m.shape[1]
-        sd = np.asarray(sds_m, dtype=float)
+        sd = real_array(sds_m, "sds_m", finite=False)
         if sd.ndim == 1 and sd.shape == (f,):
             sd = sd[:, None]
         try:
             sd = np.array(np.broadcast_to(sd, (f, k)))
         except ValueError:
             raise _error("sds_m", f"expected shape ({f}, {k}), ({f},) or a scalar, got {sd.shape}") from None
-        w = np.ones((f, k)) if weights is None else np.array(weights, dtype=float)
+        w = np.ones((f, k)) if weights is None else real_array(weights, "weights")
         if w.shape != (f, k):
             raise _error("weights", f"expected shape ({f}, {k}), got {w.shape}")
-        fl = np.asarray(ANY_FLOOR if floors is None else floors)
+        fl = real_array(ANY_FLOOR if floors is None else floors, "floors")
+        if np.any(fl != np.round(fl)) or np.any(np.abs(fl) > 2**31):
+            raise _error("floors", "must be whole numbers that fit in 32 bits (floor numbers or ANY_FLOOR)")
         if fl.ndim == 1 and fl.shape == (f,):
             fl = fl[:, None]
         try:
@@ -295,6 +335,12 @@ class Fixes:
             raise _error("floors", f"expected shape ({f}, {k}), ({f},) or a scalar, got {fl.shape}") from None
         if f > 1 and np.any(np.diff(t) < 0):
             raise _error("times_s", "must be non-decreasing")
+        # NaN is allowed only in padding (weight 0): a used component must be a number.
+        used = w > 0
+        if not np.all(np.isfinite(m[used])):
+            raise _error("means_m", "must be finite where the weight is > 0 (NaN only in padding)")
+        if not np.all(np.isfinite(sd[used])):
+            raise _error("sds_m", "must be finite where the weight is > 0 (NaN only in padding)")
         return cls(t, m, sd, w, fl)
 
     def __len__(self) -> int:
@@ -346,8 +392,25 @@ def track(steps: Steps, observations: Sequence[WifiObservation] = (), *, plan=No
         ``smoothed_covariance_m2`` (M, 3), ``smoothed_floor_index`` (M,),
         ``smoothed_trajectories_m`` (M, 2T), ``smoother_seconds``.
     """
+    if not isinstance(steps, Steps):
+        raise TypeError(f"indoorloc: argument 'steps': expected indoorloc.fusion.Steps, got {type(steps).__name__}")
+    if fixes is not None and not isinstance(fixes, Fixes):
+        raise TypeError(f"indoorloc: argument 'fixes': expected None or indoorloc.fusion.Fixes, "
+                        f"got {type(fixes).__name__}")
+    if options is not None and not isinstance(options, TrackerOptions):
+        raise TypeError(f"indoorloc: argument 'options': expected None or a TrackerOptions, "
+                        f"got {type(options).__name__}")
+    try:
+        observations = list(observations)
+    except TypeError:
+        raise TypeError(f"indoorloc: argument 'observations': expected a list of WifiObservation, "
+                        f"got {type(observations).__name__}") from None
+    for k, o in enumerate(observations):
+        if not isinstance(o, WifiObservation):
+            raise TypeError(f"indoorloc: argument 'observations[{k}]': expected a WifiObservation, "
+                            f"got {type(o).__name__}")
     return _core_track(plan, wifi_model, corridors, steps.times_s, steps.displacements_m, steps.covariances_m2,
-                       list(observations), start, options if options is not None else TrackerOptions(), smoother,
+                       observations, start, options if options is not None else TrackerOptions(), smoother,
                        None if fixes is None or len(fixes) == 0 else fixes.as_arrays())
 
 

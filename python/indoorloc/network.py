@@ -24,9 +24,12 @@ Examples
 
 from __future__ import annotations
 
+import math
 from typing import Dict, Optional, Tuple
 
 import numpy as np
+
+from indoorloc.validate import integer, real_scalar
 
 from indoorloc._core.network import (
     KalmanSmootherOptions,
@@ -110,8 +113,9 @@ def solve_repeated_pass_network(
         or empty, ``report``.
     """
     return solve_folded_linear_ins_network(
-        imu_rate_hz, duration_s, gps_rate_hz, rule, int(num_ties), int(num_gupts), sigma_xover_mps2,
-        sigma_gupt_mps2, checkpoint_interval, True, keep_gravity_estimate, int(num_threads))
+        imu_rate_hz, duration_s, gps_rate_hz, rule, integer(num_ties, "num_ties", lo=0, hi=2**62),
+        integer(num_gupts, "num_gupts", lo=0, hi=2**62), sigma_xover_mps2, sigma_gupt_mps2, checkpoint_interval, True,
+        keep_gravity_estimate, integer(num_threads, "num_threads", lo=-1024, hi=1024))
 
 
 def flight_options(config, discretization: str = "trapezoidal", **overrides) -> NetworkOptions:
@@ -139,7 +143,11 @@ def start_state(flight, seed: int = 0, level_sd_rad: float = 1e-3, heading_sd_ra
     Stream ``default_rng([seed, 2])``."""
     from scipy.spatial.transform import Rotation
 
-    rng = np.random.default_rng([int(seed), 2])
+    _check_flight(flight)
+    seed = integer(seed, "seed", lo=0, hi=2**64 - 1)
+    level_sd_rad = real_scalar(level_sd_rad, "level_sd_rad", lo=0.0, hi=math.pi)
+    heading_sd_rad = real_scalar(heading_sd_rad, "heading_sd_rad", lo=0.0, hi=math.pi)
+    rng = np.random.default_rng([seed, 2])
     q = flight.truth["attitude_wxyz"][0]
     err = rng.normal(0.0, [level_sd_rad, level_sd_rad, heading_sd_rad])
     r = Rotation.from_rotvec(err) * Rotation.from_quat([q[1], q[2], q[3], q[0]])
@@ -154,6 +162,14 @@ def start_state(flight, seed: int = 0, level_sd_rad: float = 1e-3, heading_sd_ra
     }
 
 
+def _check_flight(flight) -> None:
+    """A simulated flight (indoorloc.simulate.flight.simulate_flight), named when it is not one."""
+    needed = ("config", "truth", "imu_time_s", "acc_body_mps2", "gyro_body_radps", "gps_time_s", "gps_position_m")
+    if not all(hasattr(flight, a) for a in needed):
+        raise TypeError(f"indoorloc: argument 'flight': expected a simulated flight "
+                        f"(indoorloc.simulate.flight.simulate_flight), got {type(flight).__name__}")
+
+
 def _obs(flight) -> dict:
     return dict(imu_time_s=flight.imu_time_s, acc_body_mps2=flight.acc_body_mps2, gyro_body_radps=flight.gyro_body_radps,
                 gps_time_s=flight.gps_time_s, gps_position_m=flight.gps_position_m, zupt_epochs=flight.zupt_epochs,
@@ -163,6 +179,8 @@ def _obs(flight) -> dict:
 def smooth_flight(flight, options: Optional[NetworkOptions] = None, seed: int = 0, smooth: bool = True,
                   kalman_options: Optional[KalmanSmootherOptions] = None) -> Tuple[dict, dict, dict]:
     """SSA on a simulated flight: (smoothed state, filtered state, summary)."""
+    _check_flight(flight)
+    seed = integer(seed, "seed", lo=0, hi=2**64 - 1)
     options = options or flight_options(flight.config)
     ko = kalman_options or KalmanSmootherOptions()
     ko.smooth = smooth
@@ -178,6 +196,12 @@ def solve_flight(flight, options: Optional[NetworkOptions] = None, xover: bool =
     initial trajectory with :func:`find_crossovers` when ``xover``. ``sgupt``: constant gravity
     (SGUPT) over the flight's ZUPT (hover) epochs. Slow parameters: ``options.slow_parameter_stride``.
     """
+    _check_flight(flight)
+    seed = integer(seed, "seed", lo=0, hi=2**64 - 1)
+    if initial is not None and not isinstance(initial, dict):
+        raise TypeError(f"indoorloc: argument 'initial': expected None or a state dict, got {type(initial).__name__}")
+    crossover_radius_m = real_scalar(crossover_radius_m, "crossover_radius_m", lo=1e-12, hi=1e12)
+    min_separation_s = real_scalar(min_separation_s, "min_separation_s", lo=0.0)
     options = options or flight_options(flight.config)
     if initial is None:
         _, initial, _ = smooth_flight(flight, options, seed=seed, smooth=False)

@@ -24,12 +24,13 @@ def _error(name: str, rule: str) -> ValueError:
 
 def real_array(value: Any, name: str, *, ndim: Optional[int] = None,
                shape: Optional[Sequence[Optional[int]]] = None, min_size: int = 0,
-               max_abs: Optional[float] = None) -> np.ndarray:
+               max_abs: Optional[float] = None, finite: bool = True) -> np.ndarray:
     """A finite float64 array (copied when needed; the caller's array is never modified).
 
     Refuses None, strings, objects, complex numbers (their imaginary part would be dropped),
-    NaN and inf, a wrong number of dimensions or shape (``None`` in `shape`: any), fewer than
-    `min_size` entries and, with `max_abs`, entries beyond +-max_abs.
+    NaN and inf (unless ``finite=False``, for arrays where NaN means "missing"), a wrong number
+    of dimensions or shape (``None`` in `shape`: any), fewer than `min_size` entries and, with
+    `max_abs`, entries beyond +-max_abs.
     """
     if value is None:
         raise _error(name, "is None, expected an array of numbers")
@@ -51,12 +52,13 @@ def real_array(value: Any, name: str, *, ndim: Optional[int] = None,
             raise _error(name, f"expected shape {want}, got {a.shape}")
     if a.size < min_size:
         raise _error(name, f"needs at least {min_size} entries, got {a.size}")
-    bad = ~np.isfinite(a)
+    bad = ~np.isfinite(a) if finite else np.zeros(a.shape, bool)
     if bad.any():
         k = int(np.flatnonzero(bad)[0])
         raise _error(name, f"entry {k} is {'NaN' if math.isnan(a.flat[k]) else 'infinite'}")
     if max_abs is not None and a.size:
-        big = np.abs(a) > max_abs
+        with np.errstate(invalid="ignore"):
+            big = np.abs(a) > max_abs
         if big.any():
             k = int(np.flatnonzero(big)[0])
             raise _error(name, f"entry {k} must be in [{-max_abs:g}, {max_abs:g}], got {a.flat[k]:g}")

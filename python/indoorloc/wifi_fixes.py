@@ -35,6 +35,7 @@ import numpy as np
 from indoorloc import fusion
 from indoorloc import pdr_handheld as ph
 from indoorloc import wifi_crowdsource as wc
+from indoorloc.validate import integer, real_array, real_scalar
 
 METRICS = ("strongest", "union")
 
@@ -168,13 +169,27 @@ def build_database(train_walks: Sequence[Any], settings: Optional[FixSettings] =
     return FingerprintDatabase(np.vstack(blocks), np.vstack(positions), vocab, s, np.concatenate(scan_floors))
 
 
+def _rss_pair(queries_dbm: Any, database_dbm: Any) -> Tuple[np.ndarray, np.ndarray]:
+    """(Q, K) and (N, K) RSS [dBm], NaN = not heard; any other value a real RSS within +-1000 dBm
+    (1e300 made the dissimilarities inf)."""
+    q = real_array(queries_dbm, "queries_dbm", ndim=2, finite=False, max_abs=1e3)
+    x = real_array(database_dbm, "database_dbm", ndim=2, finite=False, max_abs=1e3)
+    for a, name in ((q, "queries_dbm"), (x, "database_dbm")):
+        if np.isinf(a).any():
+            raise ValueError(f"indoorloc: argument '{name}': must hold finite RSS or NaN (not heard), got inf")
+    if q.shape[1] != x.shape[1]:
+        raise ValueError(f"indoorloc: argument 'database_dbm': expected shape (N, {q.shape[1]}) "
+                         f"(the columns of 'queries_dbm'), got {x.shape}")
+    return q, x
+
+
 def scan_dissimilarity(queries_dbm: np.ndarray, database_dbm: np.ndarray, unshared_cost_db: float
                        ) -> np.ndarray:
     """d(a, b) of the module docstring for every query (Q, K) against every database scan (N, K)
     (NaN = not heard): (Q, N) [dB]; +inf where the union of heard APs is empty."""
-    q = np.asarray(queries_dbm, dtype=float)
-    x = np.asarray(database_dbm, dtype=float)
-    qh, xh = np.isfinite(q), np.isfinite(x)
+    q, x = _rss_pair(queries_dbm, database_dbm)
+    unshared_cost_db = real_scalar(unshared_cost_db, "unshared_cost_db", lo=0.0, hi=1e3)
+    qh, xh = ~np.isnan(q), ~np.isnan(x)
     q0, x0 = np.where(qh, q, 0.0), np.where(xh, x, 0.0)
     qh_f, xh_f = qh.astype(float), xh.astype(float)
     shared = qh_f @ xh_f.T                                           # |A ∩ B|
@@ -196,8 +211,10 @@ def strongest_ap_dissimilarity(queries_dbm: np.ndarray, database_dbm: np.ndarray
                                not_heard_dbm: float) -> np.ndarray:
     """d(a, b) of ``"strongest"`` (module docstring) for every query (Q, K) against every
     database scan (N, K) (NaN = not heard): (Q, N) [dB]; +inf for a query that heard nothing."""
-    q = np.asarray(queries_dbm, dtype=float)
-    x = np.where(np.isnan(database_dbm), not_heard_dbm, database_dbm)
+    q, x = _rss_pair(queries_dbm, database_dbm)
+    n = integer(n, "n", lo=1, hi=10_000)
+    not_heard_dbm = real_scalar(not_heard_dbm, "not_heard_dbm", lo=-300.0, hi=50.0)
+    x = np.where(np.isnan(x), not_heard_dbm, x)
     out = np.full((q.shape[0], x.shape[0]), np.inf)
     for r in range(q.shape[0]):  # one small (N, n) block per query scan
         heard = np.flatnonzero(np.isfinite(q[r]))

@@ -185,6 +185,64 @@ def group_network() -> None:
                                             "slow_parameter_stride", "max_iterations", "num_threads"])},
                long_work_ok=True, solver=True, examples=12))
 
+    # The state-space baseline and the flight helpers (issue 17, second pass).
+    obs = dict(imu_time_s=flight.imu_time_s, acc_body_mps2=flight.acc_body_mps2,
+               gyro_body_radps=flight.gyro_body_radps, gps_time_s=flight.gps_time_s,
+               gps_position_m=flight.gps_position_m, zupt_epochs=flight.zupt_epochs,
+               gupt_epochs=flight.gupt_epochs, gupt_gravity_mps2=flight.gupt_gravity_mps2, xover_epochs=None)
+    start = network.start_state(flight, 0)
+    probe(Case("kalman_smoother", network.kalman_smoother,
+               {**obs, "initial": start, "model": network.flight_options(flight.config),
+                "options": network.KalmanSmootherOptions()},
+               vary=["acc_body_mps2", "gyro_body_radps", "gps_time_s", "gps_position_m", "zupt_epochs",
+                     "gupt_epochs", "gupt_gravity_mps2", "xover_epochs", "initial", "model", "options"],
+               options_fields={
+                   "options": (network.KalmanSmootherOptions,
+                               ["init_sigma_position_m", "init_sigma_velocity_mps", "init_sigma_level_rad",
+                                "init_sigma_heading_rad", "init_sigma_acc_bias_mps2",
+                                "init_sigma_gyro_bias_radps", "init_sigma_gravity_mps2"]),
+                   "model": (lambda: network.flight_options(flight.config),
+                             ["acc_noise_mps2_rthz", "gyro_noise_radps_rthz", "sigma_gps_m", "latitude_rad",
+                              "gravity_walk_mps2_rts", "acc_bias_correlation_time_s"])},
+               long_work_ok=True, solver=True, examples=8))
+    probe(Case("start_state", network.start_state,
+               {"flight": flight, "seed": 0, "level_sd_rad": 1e-3, "heading_sd_rad": 1e-2}))
+    probe(Case("flight_options", lambda **kw: network.flight_options(flight.config, **kw).is_valid(),
+               {"discretization": "trapezoidal", "sigma_gps_m": 0.1, "max_iterations": 3}))
+    probe(Case("smooth_flight", lambda **kw: network.smooth_flight(flight, **kw)[0],
+               {"options": network.flight_options(flight.config), "seed": 0, "smooth": True,
+                "kalman_options": network.KalmanSmootherOptions()},
+               options_fields={"kalman_options": (network.KalmanSmootherOptions,
+                                                  ["init_sigma_position_m", "init_sigma_heading_rad"])},
+               long_work_ok=True, solver=True, examples=6))
+    probe(Case("solve_flight", lambda **kw: network.solve_flight(flight, **kw)[0],
+               {"options": network.flight_options(flight.config, max_iterations=2), "xover": True, "seed": 0,
+                "initial": None, "crossover_radius_m": 5.0, "min_separation_s": 30.0, "sgupt": False},
+               long_work_ok=True, solver=True, examples=6))
+    probe(Case("solve_repeated_pass_network", network.solve_repeated_pass_network,
+               {"imu_rate_hz": 10.0, "duration_s": 20.0, "gps_rate_hz": 1.0, "num_ties": 10, "num_gupts": 2,
+                "sigma_xover_mps2": 1e-5, "sigma_gupt_mps2": 1e-5, "rule": "leapfrog", "checkpoint_interval": 4,
+                "keep_gravity_estimate": True, "num_threads": 1},
+               long_work_ok=True, solver=True, examples=10))
+    from indoorloc._core import network as cn
+
+    size = {"imu_rate_hz": 10.0, "duration_s": 20.0, "gps_rate_hz": 1.0, "rule": "leapfrog"}
+    probe(Case("solve_linear_ins_network", cn.solve_linear_ins_network,
+               {**size, "gravity_covariance": True, "checkpoint_interval": 0, "prior_epochs": 2,
+                "keep_gravity_estimate": True, "num_threads": 1},
+               long_work_ok=True, solver=True, examples=10))
+    probe(Case("solve_linear_ins_network_with_crossovers", cn.solve_linear_ins_network_with_crossovers,
+               {**size, "duration_s": 60.0, "lines": 3, "cross_lines": 3, "sigma_xover_mps2": 1e-5,
+                "max_iterations": 200, "relative_tolerance": 1e-8},
+               long_work_ok=True, solver=True, examples=10))
+    probe(Case("solve_linear_ins_network_ceres", cn.solve_linear_ins_network_ceres,
+               {**size, "prior_epochs": 2, "one_gauss_newton_step": True},
+               long_work_ok=True, solver=True, examples=10))
+    probe(Case("linear_ins_equations", cn.linear_ins_equations, {**size, "prior_epochs": 2},
+               long_work_ok=True, examples=10))
+    probe(Case("linear_ins_normal_blocks", cn.linear_ins_normal_blocks, {**size, "prior_epochs": 2},
+               long_work_ok=True, examples=10))
+
 
 def group_analog() -> None:
     from indoorloc import analog
@@ -342,6 +400,112 @@ def fuzz_file(name: str, load, folder: Path, damaged: str, arg_name: str = "path
     run()
 
 
+def _bad_field_values():
+    """What a damaged or foreign MAT file may hold where a numeric array belongs."""
+    from hypothesis import strategies as st
+
+    return st.sampled_from([
+        ("nan", lambda v: np.full(np.shape(v), np.nan)), ("inf", lambda v: np.full(np.shape(v), np.inf)),
+        ("1e300", lambda v: np.full(np.shape(v), 1e300)), ("empty", lambda v: np.zeros((0, 0))),
+        ("scalar", lambda v: np.array(3.0)), ("string", lambda v: "text"),
+        ("transposed", lambda v: np.asarray(v).T), ("flat", lambda v: np.asarray(v).reshape(-1)),
+        ("one column", lambda v: np.asarray(v).reshape(np.shape(v)[0], -1)[:, :1] if np.ndim(v) else v),
+        ("int64 huge", lambda v: np.full(np.shape(v), 2**62, dtype=np.int64)),
+        ("complex", lambda v: np.asarray(v, dtype=float) + 1j), ("struct", lambda v: {"a": 1.0}),
+        ("cell", lambda v: np.array([np.ones(2), "x"], dtype=object)),
+        ("negative", lambda v: -np.abs(np.asarray(v, dtype=float)) - 1.0),
+    ])
+
+
+def fuzz_mat_fields(name: str, load, target: Path, build, paths) -> None:
+    """Structural damage of a MATLAB file: one field at `paths` (tuples of keys into the dict
+    `build()` returns) replaced by a bad value. The loader must return or raise FormatError
+    naming the file."""
+    from hypothesis import given
+    from hypothesis import strategies as st
+    from scipy.io import savemat
+
+    from indoorloc.io import FormatError
+    from property_harness import TALLY, Case, call
+
+    valid = target.read_bytes()
+    load()
+
+    def reload(**kwargs):
+        try:
+            return load()
+        except FormatError:
+            raise
+        except ValueError as exc:
+            raise RuntimeError(f"ValueError that is not a FormatError: {exc}") from exc
+
+    case = Case(name, lambda **kwargs: reload(), {target.name: None})
+    TALLY.cases += 1
+
+    @given(where=st.sampled_from(paths), how=_bad_field_values())
+    def run(where, how) -> None:
+        doc = build()
+        node = doc
+        for key in where[:-1]:
+            node = node[key]
+        try:
+            node[where[-1]] = how[1](node[where[-1]])
+        except (TypeError, ValueError):
+            return  # this damage does not apply to that field (e.g. "negative" of a struct)
+        try:
+            savemat(target, doc)
+        except Exception:
+            return  # scipy cannot write it: no file to read
+        try:
+            call(case, target.name, None, shown=f"{'.'.join(where)}={how[0]}")
+        finally:
+            target.write_bytes(valid)
+
+    run()
+
+
+def _mobgap_doc(n: int = 300):
+    rng = np.random.default_rng(3)
+    t = np.arange(n) / 100.0
+    acc_g = np.column_stack([1.0 + 0.2 * np.sin(2 * np.pi * t), 0.01 * rng.normal(size=n),
+                             0.01 * rng.normal(size=n)])
+    gyr = 20.0 * np.sin(2 * np.pi * t)[:, None] * np.ones((1, 3))
+    lb = {"Acc": acc_g, "Gyr": gyr, "Mag": np.tile([10.0, -14.0, -13.0], (n, 1)),
+          "Timestamp": 1.6e9 + t, "Fs": {"Acc": 100, "Gyr": 100, "Mag": 100}}
+    wb = {"Start": 1.0, "End": 2.5, "InitialContact_Event": np.array([1.0, 1.5, 2.0, np.nan]),
+          "Stride_InitialContacts": np.array([[100.0, 200.0], [150.0, 250.0], [200.0, np.nan]]),
+          "Stride_Length": np.array([1.1, 1.2, 1.0])}
+    trial = {"SU": {"LowerBack": lb}, "Standards": {"INDIP": {"MicroWB": wb, "Fs": 100}}}
+    return {"data": {"TimeMeasure1": {"Test5": {"Trial1": trial}}}}
+
+
+def _surimi_doc():
+    macs = np.array([[-60, 100, -70], [-61, 100, -71], [100, -50, -80], [100, -51, 100]], np.int16)
+    labels = np.array([[10.0, 20.0, 3.7, 1, 0], [10.0, 20.0, 3.7, 1, 0],
+                       [10.0, 20.0, 3.7, 1, 0], [15.0, 25.0, 0.0, 0, 0]])
+    return {"database": {"trainingMacs": macs, "testMacs": macs[:2].astype(float),
+                         "trainingLabels": labels, "testLabels": labels[[1, 3]]}}
+
+
+def _ilc_floor_summary(floor):
+    """What opening a floor folder reads: its size, walks and the GeoJSON origin."""
+    return {"n_walks": floor.n_walks, "size": np.asarray([floor.width_m or 0.0, floor.height_m or 0.0]),
+            "origin": np.asarray(floor.origin_lonlat())}
+
+
+def _records(value):
+    """Loader output as plain containers, so that the harness sees every array (NaN checks)."""
+    import dataclasses
+
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return {f.name: _records(getattr(value, f.name)) for f in dataclasses.fields(value)}
+    if isinstance(value, (list, tuple)):
+        return [_records(v) for v in value]
+    if isinstance(value, dict):
+        return {k: _records(v) for k, v in value.items()}
+    return value
+
+
 def group_io() -> None:
     import tempfile
 
@@ -420,6 +584,51 @@ def group_io() -> None:
         fuzz_file(f"load_uji_library[{damaged}]", lambda: iio.load_uji_library(tmp / "uji"), month,
                   damaged, arg_name="root")
 
+    # mobgap (lower-back IMU, MATLAB v5 structs): damaged bytes, then damaged fields.
+    from scipy.io import savemat as _savemat
+
+    subject = tmp / "mobgap" / "HA" / "009"
+    subject.mkdir(parents=True)
+    _savemat(subject / "data.mat", _mobgap_doc())
+    load_mobgap = lambda: _records(iio.load_mobgap_trials(subject / "data.mat"))  # noqa: E731
+    fuzz_file("load_mobgap_trials", load_mobgap, subject, "data.mat")
+    trial = ("data", "TimeMeasure1", "Test5", "Trial1")
+    lower_back = trial + ("SU", "LowerBack")
+    bout = trial + ("Standards", "INDIP", "MicroWB")
+    fuzz_mat_fields("load_mobgap_trials[fields]", load_mobgap, subject / "data.mat", _mobgap_doc,
+                    [lower_back + (k,) for k in ("Acc", "Gyr", "Mag", "Timestamp", "Fs")]
+                    + [lower_back + ("Fs", "Acc")]
+                    + [bout + (k,) for k in ("Start", "End", "InitialContact_Event", "Stride_InitialContacts",
+                                             "Stride_Length")]
+                    + [bout[:-1], trial + ("SU",), trial, ("data", "TimeMeasure1")])
+    fuzz_file("list_mobgap_files", lambda: [str(f) for f in iio.list_mobgap_files(tmp / "mobgap")], subject,
+              "data.mat", arg_name="root")
+
+    # SURIMI (.mat with struct database).
+    surimi = tmp / "surimi"
+    surimi.mkdir()
+    _savemat(surimi / "LIB1.mat", _surimi_doc())
+    load_lib1 = lambda: _records(iio.load_surimi(surimi, "LIB1"))  # noqa: E731
+    fuzz_file("load_surimi", load_lib1, surimi, "LIB1.mat", arg_name="root")
+    fuzz_mat_fields("load_surimi[fields]", load_lib1, surimi / "LIB1.mat", _surimi_doc,
+                    [("database", k) for k in ("trainingMacs", "testMacs", "trainingLabels", "testLabels")]
+                    + [("database",)])
+    fuzz_file("load_wifi_dataset[surimi_LIB1]", lambda: _records(iio.load_wifi_dataset("surimi:LIB1", tmp)),
+              surimi, "LIB1.mat", arg_name="root")
+
+    # The competition's floor folder: its JSON files (the walks are fuzzed above).
+    from test_io_ilc2020 import T0, _write_floor
+
+    floor_dir = tmp / "site" / "F1"
+    _write_floor(floor_dir, [1], [T0])
+    for damaged in ("floor_info.json", "geojson_map.json"):
+        fuzz_file(f"read_ilc_floor[{damaged}]", lambda: _ilc_floor_summary(iio.read_ilc_floor(floor_dir, cache=False)),
+                  floor_dir, damaged, arg_name="floor_dir")
+    fuzz_file("ilc_floor_origin_lonlat", lambda: iio.ilc_floor_origin_lonlat(floor_dir / "geojson_map.json"),
+              floor_dir, "geojson_map.json")
+    fuzz_file("read_ilc_site", lambda: iio.read_ilc_site(tmp / "site"), floor_dir, "geojson_map.json",
+              arg_name="site_dir")
+
 
 def group_metrics() -> None:
     from indoorloc import io as iio
@@ -449,6 +658,217 @@ def group_metrics() -> None:
                {"path": str(out), "segments_m": seg, "ids": ids}))
 
 
+def _room():
+    """A 20 x 10 m room with a block and a wall, a 4-AP signal map over it (test_fusion.py's)."""
+    from indoorloc import fusion, wifi
+
+    outline = np.array([[0, 0], [20, 0], [20, 10], [0, 10]], float)
+    block = np.array([[8, 3], [12, 3], [12, 7], [8, 7]], float)
+    walls = np.array([[16, 0, 16, 7]], float)
+    geometry = fusion.FloorGeometry(0, [outline], [block], walls)
+    xs, ys = np.meshgrid(np.arange(21.0), np.arange(11.0))
+    pos = np.c_[xs.ravel(), ys.ravel()]
+    aps = np.array([[0, 0], [20, 0], [0, 10], [20, 10]], float)
+    mean = -40.0 - 25.0 * np.log10(np.linalg.norm(pos[:, None, :] - aps[None], axis=2) + 1.0)
+    model = wifi.RssModel(wifi.SignalMap(pos, np.zeros(len(pos)), mean, np.full_like(mean, 4.0)))
+    return geometry, fusion.FloorPlan([geometry]), model, outline, block, walls
+
+
+# Every TrackerOptions field as the Python facade names it (flattened), with a valid value.
+TRACKER_FIELDS = {
+    "num_particles": 200, "heading_offset_walk_rad": 0.02, "scale_walk": 0.01, "min_scale": 0.5,
+    "max_scale": 1.8, "position_noise_m": 0.3, "tempering": 0.1, "max_term": 8.0, "max_age_s": 4.0,
+    "use_not_heard": True, "not_heard_dbm": -105.0, "resampling": "systematic", "ess_threshold": 0.5,
+    "fix_outlier_probability": 0.1, "fix_tempering": 0.6, "wall_log_penalty": -20.0,
+    "respread_after_blocked_steps": 3, "respread_sd_m": 3.0, "start_position_sd_m": 1.0,
+    "start_heading_offset_sd_rad": 0.08, "start_scale_sd": 0.1, "unknown_start_heading_sd_rad": 1.0,
+    "candidate_spacing_m": 1.0, "recovery_log_ratio": 6.0, "recovery_scans": 3, "recovery_fraction": 0.2,
+    "floor_change_probability": 0.0, "corridor_kappa": 2.0, "smoothing_lag_steps": 0, "num_threads": 1,
+    "seed": 0,
+}
+
+
+def group_fusion() -> None:
+    from indoorloc import fusion, wifi_fixes
+    from indoorloc import io as iio
+    from indoorloc._core import fusion as cf
+
+    geometry, plan, model, outline, block, walls = _room()
+    probe(Case("FloorGeometry", fusion.FloorGeometry,
+               {"floor": 0, "outlines": [outline], "obstacles": [block], "walls": walls}))
+    probe(Case("FloorPlanOptions", fusion.FloorPlanOptions,
+               {"cell_size_m": 0.5, "target_edges_per_cell": 2.0, "max_cells": 100000,
+                "check_self_intersection": True}))
+    probe(Case("FloorPlan", fusion.FloorPlan, {"floors": [geometry], "options": fusion.FloorPlanOptions()},
+               options_fields={"options": (fusion.FloorPlanOptions,
+                                           ["cell_size_m", "target_edges_per_cell", "max_cells"])}))
+    # The rings inside a FloorGeometry: spoiled through the facade that builds it.
+    probe(Case("floor_plan_from_polygons", fusion.floor_plan_from_polygons,
+               {"outlines": outline, "obstacles": [block], "walls": walls, "floor": 2}))
+    probe(Case("floor_geometry", fusion.floor_geometry,
+               {"outlines": [outline], "obstacles": [block], "walls": walls, "floor": 1}))
+    probe(Case("floor_plan_from_geometries", fusion.floor_plan_from_geometries,
+               {"floors": [geometry], "options": None}))
+    for name in ("floor_index",):
+        probe(Case(f"FloorPlan.{name}", getattr(plan, name), {"floor": 0}))
+    for name in ("geometry", "num_edges", "edges", "bounds", "walkable_area", "cell_size"):
+        probe(Case(f"FloorPlan.{name}", getattr(plan, name), {"floor_index": 0}))
+    pts = np.array([[1.0, 1.0], [10.0, 5.0], [18.0, 2.0]])
+    for name, arg, value in (("is_walkable", "points_m", pts), ("distance_to_wall", "points_m", pts),
+                             ("crosses_wall", "segments_m", np.array([[1.0, 1.0, 5.0, 1.0],
+                                                                      [15.0, 2.0, 17.0, 2.0]]))):
+        probe(Case(f"FloorPlan.{name}", getattr(plan, name), {arg: value, "floor_indices": 0, "num_threads": 1}))
+    probe(Case("FloorPlan.sample_walkable", plan.sample_walkable, {"n": 5, "floor_index": 0, "rng": 1},
+               long_work_ok=True))
+    same_for_threads("FloorPlan.distance_to_wall", lambda k: plan.distance_to_wall(
+        np.random.default_rng(0).uniform(0, 20, size=(500, 2)), 0, k))
+
+    # GeoJSON: writing into a temporary folder (the probe's working directory is one too).
+    import tempfile
+    tmp = Path(tempfile.mkdtemp(prefix="indoorloc_fusion_"))
+    probe(Case("write_geojson_floor", iio.write_geojson_floor,
+               {"path": str(tmp / "plan.geojson"), "geometry": geometry, "origin_lon_lat": None}))
+    probe(Case("floor_geometry_to_geojson", iio.floor_geometry_to_geojson,
+               {"geometry": geometry, "origin_lon_lat": (2.17, 41.38)}))
+    iio.write_geojson_floor(tmp / "plan.geojson", geometry)
+    probe(Case("read_geojson_floor", lambda **kw: iio.read_geojson_floor(**kw).geometry,
+               {"source": str(tmp / "plan.geojson"), "floor": 3, "roles": None, "origin_lon_lat": None}))
+    probe(Case("load_floor_plan", iio.load_floor_plan,
+               {"sources": [str(tmp / "plan.geojson")], "floors": [0], "roles": None, "origin_lon_lat": None,
+                "options": None}))
+
+    # Options: every field of TrackerOptions and SmootherOptions, through their constructors.
+    probe(Case("tracker_options", lambda **kw: fusion.tracker_options(**kw), dict(TRACKER_FIELDS)))
+    probe(Case("SmootherOptions", fusion.SmootherOptions,
+               {"num_trajectories": 20, "max_particles": 500, "seed": 1, "num_threads": 1}))
+
+    def options(**kw):
+        return fusion.tracker_options(**{**TRACKER_FIELDS, **kw})
+
+    fields = [k for k in TRACKER_FIELDS if k not in ("resampling", "use_not_heard")]
+    probe(Case("ParticleTracker", cf.ParticleTracker,
+               {"plan": plan, "wifi_model": model, "corridors": None, "options": options()},
+               options_fields={"options": (options, fields)}, examples=12))
+
+    # The tracker is stateful: every call gets a fresh, initialised one.
+    def tracker():
+        t = cf.ParticleTracker(plan, model, None, options())
+        t.initialize_known(0.0, np.array([2.0, 1.5]), 0, 0.0)
+        return t
+
+    probe(Case("ParticleTracker.initialize_known",
+               lambda **kw: cf.ParticleTracker(plan, model, None, options()).initialize_known(**kw),
+               {"time_s": 0.0, "position_m": np.array([2.0, 1.5]), "floor": 0, "heading_offset_rad": 0.1}))
+    obs = fusion.WifiObservation(1.0, [0, 1, 2, 3], [-60.0, -70.0, -65.0, -75.0])
+    probe(Case("ParticleTracker.initialize_unknown",
+               lambda **kw: cf.ParticleTracker(plan, model, None, options()).initialize_unknown(**kw),
+               {"observation": obs}))
+    probe(Case("ParticleTracker.step", lambda **kw: tracker().step(**kw),
+               {"time_s": 0.5, "displacement_m": np.array([0.0, 0.7]), "covariance_m2": np.eye(2) * 0.01},
+               nan_outputs=("lagged_m",)))
+    probe(Case("ParticleTracker.wifi", lambda **kw: tracker().wifi(**kw), {"observation": obs},
+               nan_outputs=("lagged_m",)))
+    probe(Case("WifiObservation", fusion.WifiObservation,
+               {"time_s": 1.0, "access_points": [0, 1], "rss_dbm": [-60.0, -70.0]}))
+    probe(Case("ParticleTracker.fix", lambda **kw: tracker().fix(**kw),
+               {"time_s": 1.0, "means_m": np.array([[2.0, 2.0], [5.0, 5.0]]), "sds_m": np.array([2.0, 3.0]),
+                "weights": np.array([0.6, 0.4]), "floors": np.array([0, fusion.ANY_FLOOR])},
+               nan_outputs=("lagged_m",)))
+    states = np.tile([2.0, 1.5, 0.0, 1.0], (200, 1))
+    probe(Case("ParticleTracker.set_particles", lambda **kw: tracker().set_particles(**kw),
+               {"states": states, "floor_indices": np.zeros(200, np.int64)}))
+
+    rss = np.array([[-60.0, np.nan, -65.0, -75.0], [-61.0, -70.0, np.nan, -74.0]])
+    probe(Case("make_wifi_observations",
+               lambda **kw: [(o.time_s, o.access_points, o.rss_dbm) for o in cf.make_wifi_observations(**kw)[0]],
+               {"scan_times_s": np.array([1.0, 2.0]), "rss_dbm": rss, "ages_s": np.zeros((2, 4)),
+                "options": options(), "at_own_time": True}))
+    probe(Case("steps_from_polar", cf.steps_from_polar,
+               {"lengths_m": np.array([0.7, 0.7]), "headings_rad": np.array([0.0, 1.0]),
+                "length_sd_m": np.array([0.05, 0.05]), "heading_sd_rad": np.array([0.1, 0.1])}))
+    probe(Case("Steps.from_polar", lambda **kw: fusion.Steps.from_polar(**kw).__dict__,
+               {"times_s": np.array([0.5, 1.0]), "lengths_m": np.array([0.7, 0.7]),
+                "headings_rad": np.array([0.0, 1.0]), "length_sd_m": 0.05, "heading_sd_rad": 0.1}))
+    probe(Case("Steps.from_increments", lambda **kw: fusion.Steps.from_increments(**kw).__dict__,
+               {"times_s": np.array([0.5, 1.0]), "increments_m": np.array([[0.7, 0.0], [0.0, 0.7]]),
+                "covariances_m2": np.array([[0.01, 0.0, 0.01], [0.01, 0.0, 0.01]])}))
+    probe(Case("rotate", fusion.rotate, {"displacements_m": np.array([[0.7, 0.0]]), "angle_rad": 0.5}))
+    probe(Case("covariance_matrix", fusion.covariance_matrix, {"row": np.array([0.01, 0.0, 0.02])}))
+    probe(Case("Fixes.from_arrays", lambda **kw: fusion.Fixes.from_arrays(**kw).as_arrays(),
+               {"times_s": np.array([1.0, 2.0]), "means_m": np.array([[2.0, 2.0], [3.0, 2.0]]),
+                "sds_m": np.array([2.0, 2.0]), "weights": np.ones((2, 1)), "floors": np.array([0, 0])}))
+
+    # The batch API, with the smoother: spoiled one argument at a time.
+    n = 8
+    times = 0.5 * np.arange(1, n + 1)
+    disp = np.tile([0.0, 0.7], (n, 1))
+    cov = np.tile([0.01, 0.0, 0.01], (n, 1))
+    fix_arrays = fusion.Fixes.from_arrays([1.0], [[2.0, 2.5]], [2.0]).as_arrays()
+    start = {"position_m": np.array([2.0, 1.5]), "floor": 0, "heading_offset_rad": 0.0, "time_s": 0.0}
+    smoother = fusion.SmootherOptions(num_trajectories=10, max_particles=100)
+    track_kwargs = {"plan": plan, "wifi_model": model, "corridors": None, "step_times_s": times,
+                    "displacements_m": disp, "covariances_m2": cov, "observations": [obs], "start": start,
+                    "options": options(), "smoother": smoother, "fixes": fix_arrays}
+    probe(Case("track", lambda **kw: _track_arrays(cf.track(**kw)), track_kwargs,
+               vary=["step_times_s", "displacements_m", "covariances_m2", "observations", "start", "smoother",
+                     "fixes"],
+               nan_outputs=("lagged_m",), examples=15))
+    probe(Case("track(start fields)", lambda **kw: _track_arrays(cf.track(**{**track_kwargs, "start": kw})),
+               dict(start), examples=15, nan_outputs=("lagged_m",)))
+    probe(Case("track(smoother)", lambda **kw: _track_arrays(cf.track(**kw)), track_kwargs, vary=["smoother"],
+               options_fields={"smoother": (lambda: fusion.SmootherOptions(num_trajectories=10, max_particles=100),
+                                            ["num_trajectories", "max_particles", "seed", "num_threads"])},
+               nan_outputs=("lagged_m",), examples=15))
+    steps = fusion.Steps(times, disp, cov)
+    probe(Case("fusion.track", lambda **kw: _track_arrays(fusion.track(**kw)),
+               {"steps": steps, "observations": [obs], "plan": plan, "wifi_model": model, "corridors": None,
+                "start": start, "options": options(), "smoother": None,
+                "fixes": fusion.Fixes.from_arrays([1.0], [[2.0, 2.5]], [2.0])},
+               vary=["steps", "observations", "plan", "wifi_model", "corridors", "fixes"],
+               nan_outputs=("lagged_m",), examples=15))
+    same_for_threads("track", lambda k: _track_arrays(cf.track(
+        **{**track_kwargs, "options": options(num_threads=k),
+           "smoother": fusion.SmootherOptions(num_trajectories=10, max_particles=100, num_threads=k)})))
+
+    # Fingerprint fixes (wifi_fixes): the settings and the dissimilarities.
+    q = np.array([[-60.0, np.nan, -70.0], [-50.0, -80.0, np.nan]])
+    db = np.array([[-61.0, -75.0, np.nan], [np.nan, -79.0, -71.0], [-55.0, -60.0, -65.0]])
+    probe(Case("FixSettings", lambda **kw: wifi_fixes.FixSettings(**kw).validate(),
+               {"fresh_age_s": 2.5, "min_scans": 3, "metric": "strongest", "strongest_n": 10,
+                "not_heard_dbm": -100.0, "unshared_cost_db": 20.0, "k": 8, "temperature_db": 2.0, "sd_m": 4.0,
+                "min_aps": 3}))
+    # +inf is their documented "nothing heard in common": only NaN counts as silent.
+    probe(Case("scan_dissimilarity", lambda **kw: _posinf_documented(wifi_fixes.scan_dissimilarity(**kw)),
+               {"queries_dbm": q, "database_dbm": db, "unshared_cost_db": 20.0}))
+    probe(Case("strongest_ap_dissimilarity",
+               lambda **kw: _posinf_documented(wifi_fixes.strongest_ap_dissimilarity(**kw)),
+               {"queries_dbm": q, "database_dbm": db, "n": 2, "not_heard_dbm": -100.0}))
+
+    # The synthetic building and walk (seeded; small configurations).
+    from indoorloc.simulate.building import BuildingConfig, make_building
+    from indoorloc.simulate.walker import simulate_walk
+
+    def building(seed, **config):
+        b = make_building(seed, BuildingConfig(**config))
+        return b.geometry(0).outlines
+    probe(Case("make_building", building,
+               {"seed": 1, "width_m": 40.0, "depth_m": 30.0, "num_floors": 1, "corridor_width_m": 2.5,
+                "num_branches": 2, "rooms_per_side": 6, "door_width_m": 1.0, "num_pillars": 2}, examples=6))
+    b = make_building(1, BuildingConfig(width_m=40.0, depth_m=30.0, num_branches=2, rooms_per_side=6))
+    probe(Case("simulate_walk", lambda **kw: simulate_walk(b, **kw).route_points_m, {"seed": 1, "floor": 0},
+               examples=6))
+
+
+def _posinf_documented(d):
+    """A dissimilarity with its documented +inf entries (no AP in common) set to 0."""
+    return np.where(np.isposinf(d), 0.0, d)
+
+
+def _track_arrays(result):
+    """The arrays of a track result (the summary object and timings left out)."""
+    return {k: v for k, v in result.items() if isinstance(v, np.ndarray)}
+
+
 GROUPS = {
     "metrics": group_metrics,
     "io": group_io,
@@ -458,6 +878,7 @@ GROUPS = {
     "network": group_network,
     "analog": group_analog,
     "wifi": group_wifi,
+    "fusion": group_fusion,
 }
 
 if __name__ == "__main__":

@@ -26,6 +26,7 @@ import math
 import os
 import signal
 import sys
+import tempfile
 import time
 import traceback
 from dataclasses import dataclass, field
@@ -40,6 +41,10 @@ CALL_TIMEOUT_S = float(os.environ.get("PROPERTY_CALL_TIMEOUT_S", "20"))
 # Long work by design is stopped sooner: that it unwinds cleanly on the alarm is what counts.
 LONG_CALL_TIMEOUT_S = float(os.environ.get("PROPERTY_LONG_CALL_TIMEOUT_S", "3"))
 STATUS_FILE = os.environ.get("PROPERTY_STATUS_FILE")
+# Development aids: how many problems to report, and only the cases whose name contains one of
+# the comma-separated PROPERTY_ONLY strings (unset in CI: every case runs).
+MAX_PROBLEMS = int(os.environ.get("PROPERTY_MAX_PROBLEMS", "40"))
+ONLY = [x for x in os.environ.get("PROPERTY_ONLY", "").split(",") if x]
 
 settings.register_profile(
     "ci", max_examples=EXAMPLES, derandomize=True, deadline=None, database=None,
@@ -100,10 +105,11 @@ class Tally:
     wrong_type: int = 0
     mutated: int = 0
     problems: List[str] = field(default_factory=list)
+    seconds: Dict[str, float] = field(default_factory=dict)  # per case: where the CI time goes
 
     def problem(self, kind: str, text: str) -> None:
         setattr(self, kind, getattr(self, kind) + 1)
-        if len(self.problems) < 40:
+        if len(self.problems) < MAX_PROBLEMS:
             self.problems.append(f"{kind}: {text}")
 
 
@@ -167,13 +173,21 @@ def _snapshot(value: Any) -> Any:
     if isinstance(value, np.ndarray):
         return value.copy()
     if isinstance(value, (list, tuple, dict)):
-        return copy.deepcopy(value)
+        try:
+            return copy.deepcopy(value)
+        except Exception:  # holds objects that cannot be copied (bound C++ types): compare items
+            return [_snapshot(v) for v in value] if isinstance(value, (list, tuple)) else None
     return None
 
 
 def _unchanged(before: Any, after: Any) -> bool:
     if before is None:
         return True
+    if isinstance(before, list) and not isinstance(after, list) and isinstance(after, (tuple,)):
+        after = list(after)
+    if isinstance(before, list) and isinstance(after, (list, tuple)) and any(
+            b is None for b in before) and len(before) == len(after):
+        return all(_unchanged(b, a) for b, a in zip(before, after))  # per item, from _snapshot's fallback
     if isinstance(before, np.ndarray):
         return (before.shape == after.shape and before.dtype == after.dtype
                 and np.array_equal(before, after, equal_nan=before.dtype.kind in "fc"))
@@ -282,6 +296,16 @@ def call(case: Case, argument: str, value: Any, fields: Sequence[str] = (), show
 
 def probe(case: Case) -> None:
     """Runs the valid call once (must return finite output), then the spoiled calls."""
+    if ONLY and not any(o in case.name for o in ONLY):
+        return
+    started = time.monotonic()
+    try:
+        _probe(case)
+    finally:
+        TALLY.seconds[case.name] = round(time.monotonic() - started, 2)
+
+
+def _probe(case: Case) -> None:
     TALLY.cases += 1
     valid_out = None
     try:
@@ -358,6 +382,9 @@ def _canonical(x: Any) -> Any:
 
 def main(groups: Dict[str, Callable[[], None]]) -> int:
     signal.signal(signal.SIGALRM, _alarm)
+    # Spoiled path arguments ("x", "") are relative: run in a fresh temporary folder so that
+    # writers never write beside the tests, also when this script is run by hand.
+    os.chdir(tempfile.mkdtemp(prefix="indoorloc_properties_"))
     name = sys.argv[1]
     try:
         groups[name]()

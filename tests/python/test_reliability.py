@@ -373,3 +373,79 @@ def test_linear_ins_network_names_the_rate_not_the_assembler():
         network.solve_folded_linear_ins_network(imu_rate_hz=1e300)
     with pytest.raises(ValueError, match="duration_s"):
         network.solve_folded_linear_ins_network(duration_s=np.inf)
+
+
+# ------------------------------------------------------- network options (issue 17, second pass)
+
+
+def test_network_scale_solver_options_use_the_validation_vocabulary():
+    from indoorloc._core import network as cn
+
+    # TiedSolveOptions: an iteration count of 2**31 - 1 used to be accepted (hours of PCG).
+    with pytest.raises(ValueError, match=r"max_iterations must be in \[1, 1000000\], got 2147483647"):
+        cn.solve_linear_ins_network_with_crossovers(10.0, 60.0, 1.0, "leapfrog", 3, 3, 1e-5, 2**31 - 1, 1e-8)
+    with pytest.raises(ValueError, match=r"relative_tolerance must be in \(0, 1\), got nan"):
+        cn.solve_linear_ins_network_with_crossovers(10.0, 60.0, 1.0, "leapfrog", 3, 3, 1e-5, 100, float("nan"))
+    # FoldedNetworkOptions: any thread count used to pass.
+    with pytest.raises(ValueError, match=r"num_threads.: must be in \[-1024, 1024\], got 1000000"):
+        network.solve_repeated_pass_network(10.0, 20.0, 1.0, 10, 2, num_threads=10**6)
+    with pytest.raises(ValueError, match="checkpoint_interval must be >= 0, got -1"):
+        network.solve_repeated_pass_network(10.0, 20.0, 1.0, 10, 2, checkpoint_interval=-1)
+
+
+def test_network_exports_refuse_more_than_the_memory_limit():
+    from indoorloc._core import network as cn
+
+    # 2e7 unknowns asked numpy for 34 GB of dense blocks.
+    with pytest.raises(ValueError, match="argument 'duration_s': .* would need .* GB"):
+        cn.linear_ins_normal_blocks(18109.0, 60.0, 1.0, "leapfrog", 2)
+
+
+# ------------------------------------------------------------- loaders (issue 17, second pass)
+
+
+def test_mobgap_and_surimi_fields_raise_format_errors(tmp_path):
+    from scipy.io import savemat
+
+    from test_pdr_stride_length import _mobgap_file
+
+    d = tmp_path / "HA" / "009"
+    d.mkdir(parents=True)
+    _mobgap_file(d / "data.mat")
+    from scipy.io import loadmat
+    doc = loadmat(d / "data.mat", simplify_cells=True)
+    doc["data"]["TimeMeasure1"]["Test5"]["Trial1"]["SU"]["LowerBack"]["Timestamp"][3] = np.nan
+    savemat(d / "data.mat", doc)
+    with pytest.raises(io.FormatError, match="data.mat.*Timestamp: holds NaN"):  # NaN times passed through
+        io.load_mobgap_trials(d / "data.mat")
+    root = tmp_path / "surimi"
+    root.mkdir()
+    macs = np.array([[-60, 100], [100, -50]], np.int16)
+    labels = np.array([[1.0, 2.0, 0.0, 0, 0], [3.0, 4.0, 0.0, 0, 0]])
+    cell = np.array([np.ones(2), "x"], dtype=object)
+    savemat(root / "LIB1.mat", {"database": {"trainingMacs": macs, "testMacs": macs, "trainingLabels": labels,
+                                             "testLabels": cell}})
+    with pytest.raises(io.FormatError, match="LIB1.mat: field database.testLabels: expected a real matrix"):
+        io.load_surimi(root, "LIB1")  # named the folder only
+
+
+def test_ilc_floor_origin_of_a_damaged_geojson_is_a_format_error(tmp_path):
+    path = tmp_path / "geojson_map.json"
+    path.write_text("")
+    with pytest.raises(io.FormatError, match="geojson_map.json"):
+        io.ilc_floor_origin_lonlat(path)
+
+
+def test_network_noise_bounds_and_crossover_line_counts():
+    from indoorloc._core import network as cn
+
+    o = network.NetworkOptions()
+    o.gyro_noise_radps_rthz = 2.0**31  # passed as a Scale; kalman_smoother returned NaN positions
+    assert "gyro_noise_radps_rthz must be in [1e-12, 10]" in o.is_valid()
+    ko = network.KalmanSmootherOptions()
+    ko.init_sigma_heading_rad = 2.0**31
+    with pytest.raises(ValueError, match=r"init_sigma_heading_rad must be in \[1e-12, 10\]"):
+        network.kalman_smoother(np.arange(3.0), np.zeros((3, 3)), np.zeros((3, 3)), np.arange(1.0), np.zeros((1, 3)),
+                                {}, options=ko)
+    with pytest.raises(ValueError, match=r"argument 'lines': must be in \[1, 1000000\]"):
+        cn.solve_linear_ins_network_with_crossovers(10.0, 60.0, 1.0, "leapfrog", 2**31 - 1, 3)  # was bad_alloc

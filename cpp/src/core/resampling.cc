@@ -225,11 +225,7 @@ std::vector<int> Resample(const Eigen::Ref<const Eigen::VectorXd>& log_weights,
 }
 
 bool ResamplingOptions::IsValid(std::string* error) const {
-  if (!(ess_threshold >= 0.0 && ess_threshold <= 1.0)) {
-    *error = "ess_threshold must be in [0, 1], got " + std::to_string(ess_threshold);
-    return false;
-  }
-  return true;
+  return Validator(error).InRange(ess_threshold, 0.0, 1.0, "ess_threshold");
 }
 
 std::string ResamplingSummary::BriefReport() const {

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "indoorloc/core/check.h"
+#include "indoorloc/core/validate.h"
 #include "indoorloc/core/log_weights.h"
 #include "indoorloc/core/options.h"
 #include "indoorloc/core/parallel.h"
@@ -15,19 +16,14 @@
 namespace indoorloc::fusion {
 
 bool SmootherOptions::IsValid(std::string* error) const {
-  if (num_trajectories < 1 || num_trajectories > 100000) {
-    *error = "num_trajectories must be in [1, 100000]";
-    return false;
-  }
-  if (max_particles < 1) {
-    *error = "max_particles must be >= 1";
-    return false;
-  }
-  if (num_threads < 0 || num_threads > 1024) {
-    *error = "num_threads must be in [0, 1024] (0: all cores)";
-    return false;
-  }
-  return true;
+  // The backward kernel holds num_trajectories x max_particles log-weights per step.
+  return Validator(error)
+      .IntInRange(num_trajectories, 1, 100000, "num_trajectories")
+      .IntInRange(max_particles, 1, 50000000, "max_particles")
+      .Check(static_cast<double>(num_trajectories) * max_particles * 8.0 <= kMaxBytes, "max_particles",
+             "x num_trajectories x 8 B must be <= " + FormatBytes(kMaxBytes) + ", got " +
+                 FormatBytes(static_cast<double>(num_trajectories) * max_particles * 8.0))
+      .IntInRange(num_threads, 0, 1024, "num_threads");
 }
 
 namespace {

@@ -17,6 +17,8 @@
 #include <vector>
 
 #include "indoorloc/core/check.h"
+#include "indoorloc/core/interrupt.h"
+#include "indoorloc/core/validate.h"
 #include "indoorloc/core/options.h"
 #include "indoorloc/core/parallel.h"
 
@@ -245,19 +247,14 @@ std::string FormatNumber(double v) {
 }  // namespace
 
 bool FloorPlanOptions::IsValid(std::string* error) const {
-  if (!std::isfinite(cell_size_m)) {
-    *error = "cell_size_m must be finite (<= 0 chooses it automatically)";
-    return false;
-  }
-  if (!(std::isfinite(target_edges_per_cell) && target_edges_per_cell > 0.0)) {
-    *error = "target_edges_per_cell must be finite and > 0";
-    return false;
-  }
-  if (max_cells < 1) {
-    *error = "max_cells must be >= 1";
-    return false;
-  }
-  return true;
+  // A tiny positive cell size is refused when the plan is built, against max_cells (the message
+  // then gives the number of cells it would take).
+  return Validator(error)
+      .Finite(cell_size_m, "cell_size_m")
+      .Check(cell_size_m <= 1e6, "cell_size_m",
+             "must be <= 0 (automatic) or in (0, 1e+06] m, got " + FormatValue(cell_size_m))
+      .InRange(target_edges_per_cell, 1e-3, 1e6, "target_edges_per_cell")
+      .IntInRange(max_cells, 1, 100000000, "max_cells");
 }
 
 namespace {
@@ -471,6 +468,10 @@ struct FloorPlan::Impl {
 
 namespace {
 
+// Plan coordinates [m] within +-1e7 (any building, also in projected coordinates such as Web
+// Mercator): an outline at 1e300 made the grid registration walk ~1e150 cells (a hang).
+constexpr double kMaxPlanCoordinate = 1e7;
+
 // Ring as given -> vertices without closing or consecutive repeated vertices; checks shape,
 // finiteness, distinct vertices and area. Returns the signed area.
 std::vector<Eigen::Vector2d> CleanRing(const RowMatrixXd& ring, const std::string& name,
@@ -479,6 +480,7 @@ std::vector<Eigen::Vector2d> CleanRing(const RowMatrixXd& ring, const std::strin
                 "expected shape (M, 2), got (" + std::to_string(ring.rows()) + ", " +
                     std::to_string(ring.cols()) + ")");
   CheckFinite(ring, name);
+  RequireAllInRange(ring, -kMaxPlanCoordinate, kMaxPlanCoordinate, name);
   std::vector<Eigen::Vector2d> v;
   v.reserve(static_cast<size_t>(ring.rows()));
   for (Eigen::Index r = 0; r < ring.rows(); ++r) {
@@ -594,6 +596,7 @@ FloorData BuildFloor(const FloorGeometry& input, int floor_index, const FloorPla
                       std::to_string(input.walls.rows()) + ", " +
                       std::to_string(input.walls.cols()) + ")");
     CheckFinite(input.walls, walls_name);
+    RequireAllInRange(input.walls, -kMaxPlanCoordinate, kMaxPlanCoordinate, walls_name);
     d.geometry.walls = input.walls;
     for (Eigen::Index r = 0; r < input.walls.rows(); ++r) {
       const Segment w{input.walls(r, 0), input.walls(r, 1), input.walls(r, 2), input.walls(r, 3)};
@@ -1161,6 +1164,7 @@ Eigen::VectorXd FloorPlan::DistanceToWallBatch(const Eigen::Ref<const RowMatrixX
 
 RowMatrixXd FloorPlan::SampleWalkable(int n, int floor_index, RandomStream& rng) const {
   CheckArgument(n >= 0, "n", "must be >= 0, got " + std::to_string(n));
+  RequireSizeLimit(static_cast<double>(n), 2.0 * sizeof(double), "n", "points");
   CheckFloorIndex(impl_->floors, floor_index, "floor_index");
   const FloorData& d = impl_->floors[static_cast<size_t>(floor_index)];
   const double box_area = (d.bounds[2] - d.bounds[0]) * (d.bounds[3] - d.bounds[1]);
@@ -1183,6 +1187,8 @@ RowMatrixXd FloorPlan::SampleWalkable(int n, int floor_index, RandomStream& rng)
       out(k, 1) = y;
       ++k;
     }
+    // Up to 4 GB of points is allowed work: poll Ctrl-C every 2^20 draws.
+    if ((static_cast<std::uint64_t>(attempts) & 0xFFFFF) == 0xFFFFF) CheckInterrupt();
     if (++attempts > max_attempts) {
       throw std::runtime_error("indoorloc: FloorPlan::SampleWalkable: too many rejected draws on "
                                "floor " + std::to_string(d.floor));

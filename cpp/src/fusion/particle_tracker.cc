@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "indoorloc/core/check.h"
+#include "indoorloc/core/validate.h"
 #include "indoorloc/core/log_weights.h"
 #include "indoorloc/core/options.h"
 #include "indoorloc/core/parallel.h"
@@ -25,35 +26,42 @@ constexpr std::uint64_t kTrackerStream = 0x7f3a5c11ULL;
 }  // namespace
 
 bool TrackerOptions::IsValid(std::string* error) const {
-  auto fail = [&](const std::string& message) {
-    *error = message;
-    return false;
+  // Nested options are reported by the flattened names of the Python TrackerOptions (the motion,
+  // WiFi and resampling fields keep their names; the fix fields carry a "fix_" prefix).
+  auto nested = [&](bool ok, const std::string& prefix, const std::string& sub) {
+    if (!ok && error) *error = prefix + sub;
+    return ok;
   };
-  if (num_particles < 1 || num_particles > 50'000'000) return fail("num_particles must be in [1, 5e7]");
+  Validator v(error);
+  v.IntInRange(num_particles, 1, 50000000, "num_particles");
+  if (!v) return false;
   std::string sub;
-  if (!motion.IsValid(&sub)) return fail("motion: " + sub);
-  if (!wifi.IsValid(&sub)) return fail("wifi: " + sub);
-  if (!fix.IsValid(&sub)) return fail("fix: " + sub);
-  if (!resampling.IsValid(&sub)) return fail("resampling: " + sub);
-  if (std::isnan(wall_log_penalty) || wall_log_penalty > 0.0) return fail("wall_log_penalty must be <= 0 (-inf drops)");
-  if (respread_after_blocked_steps < 1) return fail("respread_after_blocked_steps must be >= 1");
-  if (!(std::isfinite(respread_sd_m) && respread_sd_m > 0.0)) return fail("respread_sd_m must be finite and > 0");
-  if (!(std::isfinite(start_position_sd_m) && start_position_sd_m >= 0.0)) return fail("start_position_sd_m must be finite and >= 0");
-  if (!(std::isfinite(start_heading_offset_sd_rad) && start_heading_offset_sd_rad >= 0.0))
-    return fail("start_heading_offset_sd_rad must be finite and >= 0");
-  if (!(std::isfinite(start_scale_sd) && start_scale_sd >= 0.0)) return fail("start_scale_sd must be finite and >= 0");
-  if (std::isnan(unknown_start_heading_sd_rad) || unknown_start_heading_sd_rad < 0.0)
-    return fail("unknown_start_heading_sd_rad must be >= 0 (+inf: uniform on the circle)");
-  if (!(std::isfinite(candidate_spacing_m) && candidate_spacing_m >= 0.05 && candidate_spacing_m <= 1000.0))
-    return fail("candidate_spacing_m must be in [0.05, 1000]");
-  if (std::isnan(recovery_log_ratio) || std::isinf(recovery_log_ratio)) return fail("recovery_log_ratio must be finite (<= 0 disables)");
-  if (recovery_scans < 1) return fail("recovery_scans must be >= 1");
-  if (!(recovery_fraction > 0.0 && recovery_fraction <= 1.0)) return fail("recovery_fraction must be in (0, 1]");
-  if (!(floor_change_probability >= 0.0 && floor_change_probability <= 1.0)) return fail("floor_change_probability must be in [0, 1]");
-  if (!(std::isfinite(corridor_kappa) && corridor_kappa >= 0.0 && corridor_kappa <= 500.0)) return fail("corridor_kappa must be in [0, 500]");
-  if (smoothing_lag_steps < 0 || smoothing_lag_steps > 10000) return fail("smoothing_lag_steps must be in [0, 10000]");
-  if (num_threads < 0 || num_threads > 1024) return fail("num_threads must be in [0, 1024] (0: all cores)");
-  return true;
+  if (!nested(motion.IsValid(&sub), "", sub)) return false;
+  if (!nested(wifi.IsValid(&sub), "", sub)) return false;
+  if (!nested(fix.IsValid(&sub), "fix_", sub)) return false;
+  if (!nested(resampling.IsValid(&sub), "", sub)) return false;
+  const double inf = std::numeric_limits<double>::infinity();
+  return v
+      .Check(wall_log_penalty <= 0.0, "wall_log_penalty",
+             "must be <= 0 (-inf drops the particle), got " + FormatValue(wall_log_penalty))
+      .IntInRange(respread_after_blocked_steps, 1, 1000000, "respread_after_blocked_steps")
+      .Scale(respread_sd_m, "respread_sd_m")
+      .ZeroOrScale(start_position_sd_m, "start_position_sd_m")
+      .InRange(start_heading_offset_sd_rad, 0.0, 1e3, "start_heading_offset_sd_rad")
+      .InRange(start_scale_sd, 0.0, 100.0, "start_scale_sd")
+      .Check(unknown_start_heading_sd_rad >= 0.0 && (unknown_start_heading_sd_rad <= 1e3 ||
+                                                     unknown_start_heading_sd_rad == inf),
+             "unknown_start_heading_sd_rad",
+             "must be in [0, 1000] or +inf (uniform on the circle), got " + FormatValue(unknown_start_heading_sd_rad))
+      .InRange(candidate_spacing_m, 0.05, 1000.0, "candidate_spacing_m")
+      .InRange(recovery_log_ratio, -1e6, 1e6, "recovery_log_ratio")
+      .IntInRange(recovery_scans, 1, 1000000, "recovery_scans")
+      .Check(recovery_fraction > 0.0 && recovery_fraction <= 1.0, "recovery_fraction",
+             "must be in (0, 1], got " + FormatValue(recovery_fraction))
+      .InRange(floor_change_probability, 0.0, 1.0, "floor_change_probability")
+      .InRange(corridor_kappa, 0.0, 500.0, "corridor_kappa")
+      .IntInRange(smoothing_lag_steps, 0, 10000, "smoothing_lag_steps")
+      .IntInRange(num_threads, 0, 1024, "num_threads");
 }
 
 std::string TrackerSummary::BriefReport() const {

@@ -6,19 +6,15 @@
 #include <string>
 
 #include "indoorloc/core/check.h"
+#include "indoorloc/core/validate.h"
 
 namespace indoorloc::fusion {
 
 bool FixLikelihoodOptions::IsValid(std::string* error) const {
-  if (!(std::isfinite(outlier_probability) && outlier_probability > 0.0 && outlier_probability < 1.0)) {
-    *error = "outlier_probability must be in (0, 1)";
-    return false;
-  }
-  if (!(std::isfinite(tempering) && tempering > 0.0 && tempering <= 1.0)) {
-    *error = "tempering must be in (0, 1]";
-    return false;
-  }
-  return true;
+  return Validator(error)
+      .Check(outlier_probability > 0.0 && outlier_probability < 1.0, "outlier_probability",
+             "must be in (0, 1), got " + FormatValue(outlier_probability))
+      .Check(tempering > 0.0 && tempering <= 1.0, "tempering", "must be in (0, 1], got " + FormatValue(tempering));
 }
 
 void CheckPositionFix(const PositionFix& fix, const char* argument) {
@@ -34,10 +30,13 @@ void CheckPositionFix(const PositionFix& fix, const char* argument) {
                     " rows (or pass none: any floor)");
   if (k == 0) return;
   CheckFinite(fix.means_m, (arg + ".means_m").c_str());
+  RequireAllInRange(fix.means_m, -kMaxScale, kMaxScale, arg + ".means_m");
   double total = 0.0;
   for (Eigen::Index i = 0; i < k; ++i) {
-    CheckArgument(std::isfinite(fix.sds_m[i]) && fix.sds_m[i] > 0.0, arg + ".sds_m",
-                  "entry " + std::to_string(i) + " = " + std::to_string(fix.sds_m[i]) + " must be finite and > 0");
+    // A Scale: 1e-300 passed "> 0" but 1 / (2 sd²) is inf and the estimate became NaN.
+    CheckArgument(fix.sds_m[i] >= kMinScale && fix.sds_m[i] <= kMaxScale, arg + ".sds_m",
+                  "entry " + std::to_string(i) + " must be finite and in [" + FormatValue(kMinScale) + ", " +
+                      FormatValue(kMaxScale) + "] m, got " + FormatValue(fix.sds_m[i]));
     CheckArgument(std::isfinite(fix.weights[i]) && fix.weights[i] >= 0.0, arg + ".weights",
                   "entry " + std::to_string(i) + " = " + std::to_string(fix.weights[i]) + " must be finite and >= 0");
     total += fix.weights[i];

@@ -6,6 +6,7 @@
 #include <Eigen/LU>
 
 #include "indoorloc/core/check.h"
+#include "indoorloc/core/validate.h"
 
 namespace indoorloc::fusion {
 
@@ -35,19 +36,16 @@ StepInput StepFromPolar(double time_s, double length_m, double heading_rad, doub
 }
 
 bool StepMotionOptions::IsValid(std::string* error) const {
-  auto fail = [&](const std::string& message) {
-    *error = message;
-    return false;
-  };
-  if (!(std::isfinite(heading_offset_walk_rad) && heading_offset_walk_rad >= 0.0 && heading_offset_walk_rad <= M_PI))
-    return fail("heading_offset_walk_rad must be in [0, pi]");
-  if (!(std::isfinite(scale_walk) && scale_walk >= 0.0 && scale_walk <= 1.0)) return fail("scale_walk must be in [0, 1]");
-  if (!(std::isfinite(min_scale) && std::isfinite(max_scale) && min_scale > 0.0 && min_scale <= max_scale &&
-        max_scale <= 100.0))
-    return fail("need 0 < min_scale <= max_scale <= 100");
-  if (!(std::isfinite(position_noise_m) && position_noise_m > 0.0 && position_noise_m <= 100.0))
-    return fail("position_noise_m must be in (0, 100] (the smoother needs a proper density)");
-  return true;
+  // The position noise enters the smoother's Gaussian density as 1/σ²: a lower bound of
+  // kMinScale keeps it finite (1e-300 passed "> 0").
+  return Validator(error)
+      .InRange(heading_offset_walk_rad, 0.0, M_PI, "heading_offset_walk_rad")
+      .InRange(scale_walk, 0.0, 1.0, "scale_walk")
+      .InRange(min_scale, kMinScale, 100.0, "min_scale")
+      .InRange(max_scale, kMinScale, 100.0, "max_scale")
+      .Check(min_scale <= max_scale, "min_scale",
+             "must be <= max_scale = " + FormatValue(max_scale) + ", got " + FormatValue(min_scale))
+      .InRange(position_noise_m, kMinScale, 100.0, "position_noise_m");
 }
 
 void CheckStepInput(const StepInput& step, const char* argument) {
@@ -56,6 +54,9 @@ void CheckStepInput(const StepInput& step, const char* argument) {
   CheckFinite(step.displacement_m, name + ".displacement_m");
   CheckFinite(step.covariance_m2, name + ".covariance_m2");
   const Eigen::Matrix2d& c = step.covariance_m2;
+  // A step's sd beyond 100 m is no step (and 1e300 entries overflowed the determinant).
+  CheckArgument(c.cwiseAbs().maxCoeff() <= 1e4, name + ".covariance_m2",
+                "entries must be within +-1e4 m^2 (sd <= 100 m), got " + FormatValue(c.cwiseAbs().maxCoeff()));
   const double scale = std::max(1.0, c.cwiseAbs().maxCoeff());
   CheckArgument(std::abs(c(0, 1) - c(1, 0)) <= 1e-9 * scale, name + ".covariance_m2", "must be symmetric");
   CheckArgument(c(0, 0) >= 0.0 && c(1, 1) >= 0.0 && c(0, 0) * c(1, 1) - c(0, 1) * c(1, 0) >= -1e-12 * scale * scale,

@@ -6,21 +6,19 @@
 #include <string>
 
 #include "indoorloc/core/check.h"
+#include "indoorloc/core/validate.h"
 #include "indoorloc/core/options.h"
 
 namespace indoorloc::fusion {
 
 bool WifiLikelihoodOptions::IsValid(std::string* error) const {
-  auto fail = [&](const std::string& message) {
-    *error = message;
-    return false;
-  };
-  if (!(std::isfinite(tempering) && tempering > 0.0 && tempering <= 1.0)) return fail("tempering must be in (0, 1]");
-  if (!(max_term > 0.0) || std::isnan(max_term)) return fail("max_term must be > 0 (+inf disables the cap)");
-  if (!(max_age_s >= 0.0) || std::isnan(max_age_s)) return fail("max_age_s must be >= 0 (+inf keeps every reading)");
-  if (!(std::isfinite(not_heard_dbm) && not_heard_dbm > -300.0 && not_heard_dbm < 50.0))
-    return fail("not_heard_dbm must be a finite RSS in (-300, 50) dBm");
-  return true;
+  // max_term and max_age_s accept +inf (no cap, keep every reading); NaN fails every rule.
+  return Validator(error)
+      .Check(tempering > 0.0 && tempering <= 1.0, "tempering", "must be in (0, 1], got " + FormatValue(tempering))
+      .Check(max_term > 0.0, "max_term", "must be > 0 (+inf disables the cap), got " + FormatValue(max_term))
+      .Check(max_age_s >= 0.0, "max_age_s", "must be >= 0 (+inf keeps every reading), got " + FormatValue(max_age_s))
+      .Check(not_heard_dbm > -300.0 && not_heard_dbm < 50.0, "not_heard_dbm",
+             "must be a finite RSS in (-300, 50) dBm, got " + FormatValue(not_heard_dbm));
 }
 
 std::vector<WifiObservation> MakeWifiObservations(const Eigen::Ref<const Eigen::VectorXd>& scan_times_s,

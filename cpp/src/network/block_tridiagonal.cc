@@ -18,6 +18,8 @@
 #endif
 
 #include "indoorloc/core/check.h"
+#include "indoorloc/core/interrupt.h"
+#include "indoorloc/core/validate.h"
 #include "indoorloc/core/options.h"
 #include "indoorloc/core/parallel.h"
 #include "indoorloc/core/random.h"
@@ -93,6 +95,9 @@ class BlockEliminator {
 
 // Calls `assemble` for block i and checks what it returned.
 void AssembleChecked(const BlockRowAssembler& assemble, int i, int b, MatrixXd* diagonal, MatrixXd* lower, VectorXd* rhs) {
+  // Every pass over the band assembles block by block: Ctrl-C is polled here (networks of
+  // millions of epochs run for minutes).
+  CheckInterrupt();
   diagonal->setZero(b, b);
   lower->setZero(b, b);
   rhs->setZero(b);
@@ -327,21 +332,14 @@ void RunChains(int threads, const std::function<void()>& top, const std::functio
 }  // namespace
 
 bool BlockTridiagonalOptions::IsValid(std::string* error) const {
-  if (checkpoint_interval < 0) {
-    *error = "checkpoint_interval must be >= 0 (0: keep the whole factor)";
-    return false;
-  }
-  if (!(pivot_tolerance >= 0.0 && pivot_tolerance < 1.0)) {
-    *error = "pivot_tolerance must be in [0, 1)";
-    return false;
-  }
   std::vector<int> sorted = selected;
   std::sort(sorted.begin(), sorted.end());
-  if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) {
-    *error = "selected has repeated indices";
-    return false;
-  }
-  return true;
+  return Validator(error)
+      .AtLeast(checkpoint_interval, 0, "checkpoint_interval")
+      .Check(pivot_tolerance >= 0.0 && pivot_tolerance < 1.0, "pivot_tolerance",
+             "must be in [0, 1), got " + FormatValue(pivot_tolerance))
+      .Check(std::adjacent_find(sorted.begin(), sorted.end()) == sorted.end(), "selected",
+             "must not repeat an index");
 }
 
 std::string BlockTridiagonalSummary::BriefReport() const {

@@ -4,6 +4,8 @@
 #include <sstream>
 
 #include "indoorloc/core/check.h"
+#include "indoorloc/core/interrupt.h"
+#include "indoorloc/core/validate.h"
 
 namespace indoorloc::network {
 namespace {
@@ -22,15 +24,11 @@ void AddTies(const std::vector<Tie>& ties, const VectorXd& x, VectorXd* y) {
 }  // namespace
 
 bool TiedSolveOptions::IsValid(std::string* error) const {
-  if (max_iterations < 1) {
-    *error = "max_iterations must be >= 1";
-    return false;
-  }
-  if (!(relative_tolerance > 0.0 && relative_tolerance < 1.0)) {
-    *error = "relative_tolerance must be in (0, 1)";
-    return false;
-  }
-  return true;
+  // Each PCG iteration is one banded solve: an upper bound keeps a typo from running for hours.
+  return Validator(error)
+      .IntInRange(max_iterations, 1, 1000000, "max_iterations")
+      .Check(relative_tolerance > 0.0 && relative_tolerance < 1.0, "relative_tolerance",
+             "must be in (0, 1), got " + FormatValue(relative_tolerance));
 }
 
 std::string TiedSolveSummary::BriefReport() const {
@@ -86,6 +84,7 @@ TiedSolution SolveWithTies(const BlockTridiagonalFactor& band, const VectorXd& b
   VectorXd p = z;
   out.summary.termination = Termination::kMaxIterations;
   for (int it = 1; it <= options.max_iterations; ++it) {
+    CheckInterrupt();  // one banded solve per iteration
     const VectorXd q = apply(p);
     const double pq = p.dot(q);
     if (!(pq > 0.0)) {

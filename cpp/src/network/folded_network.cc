@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "indoorloc/core/check.h"
+#include "indoorloc/core/validate.h"
 #include "indoorloc/core/options.h"
 
 namespace indoorloc::network {
@@ -203,12 +204,10 @@ RepeatedPassLayout MakeRepeatedPassLayout(const LinearInsNetworkOptions& network
 }
 
 bool FoldedNetworkOptions::IsValid(std::string* error) const {
-  if (checkpoint_interval < 0) {
-    *error = "checkpoint_interval must be >= 0";
-    return false;
-  }
-  // num_threads: any value (<= 0 means the hardware's), as in BlockTridiagonalOptions.
-  return true;
+  // num_threads <= 0 means the hardware's, as in BlockTridiagonalOptions; above 1024 is a typo.
+  return Validator(error)
+      .AtLeast(checkpoint_interval, 0, "checkpoint_interval")
+      .IntInRange(num_threads, -1024, 1024, "num_threads");
 }
 
 std::string FoldedNetworkResult::BriefReport() const {

@@ -89,7 +89,10 @@ bool KalmanSmootherOptions::IsValid(std::string* error) const {
       {"init_sigma_gravity_mps2", init_sigma_gravity_mps2}};
   Validator v(error);
   for (const auto& [name, value] : sds) v.Scale(value, name);  // squared into the covariance
-  return v.ok();
+  // Attitude sds beyond 10 rad mean "unknown" and overflowed the error-state filter (NaN).
+  return v.InRange(init_sigma_level_rad, kMinScale, 10.0, "init_sigma_level_rad")
+      .InRange(init_sigma_heading_rad, kMinScale, 10.0, "init_sigma_heading_rad")
+      .ok();
 }
 
 std::string KalmanSmootherSummary::BriefReport() const {

@@ -297,12 +297,15 @@ LinearInsNetworkResult SolveLinearInsNetwork(const LinearInsNetworkOptions& o, b
 std::vector<Tie> LinearInsCrossoverTies(const LinearInsNetworkOptions& options, int lines, int cross_lines,
                                         double sigma_xover_mps2) {
   const NetworkSize size = LinearInsNetworkSize(options);
-  CheckArgument(lines >= 1 && cross_lines >= 1, "lines", "need at least one line and one cross line");
+  CheckArgument(lines >= 1 && cross_lines >= 1, "lines",
+                "need at least one line and one cross line, got lines = " + std::to_string(lines) +
+                    ", cross_lines = " + std::to_string(cross_lines));
   CheckArgument(std::isfinite(sigma_xover_mps2) && sigma_xover_mps2 > 0.0, "sigma_xover_mps2", "must be finite and > 0");
   const long long E = size.imu_epochs;
   const long long per_line = E / (lines + cross_lines);
   CheckArgument(per_line >= 2 * std::max(lines, cross_lines), "lines",
-                "too many lines for the flight: each line needs at least two epochs per crossing");
+                "too many lines (and cross_lines) for the flight of duration_s x imu_rate_hz epochs: each line "
+                "needs at least two epochs per crossing");
   const double w = 1.0 / (sigma_xover_mps2 * sigma_xover_mps2);
   std::vector<Tie> ties;
   ties.reserve(static_cast<size_t>(3LL * lines * cross_lines));

@@ -161,6 +161,10 @@ bool NetworkOptions::IsValid(std::string* error) const {
       {"sigma_gupt_mps2", sigma_gupt_mps2},               {"sigma_xover_mps2", sigma_xover_mps2},
       {"sigma_vupt_mps", sigma_vupt_mps},                 {"sigma_sgupt_mps2", sigma_sgupt_mps2}};
   for (const auto& [name, value] : scales) v.Scale(value, name);
+  // Angular noise beyond 10 rad/s/sqrt(Hz) randomises the attitude within one epoch: the filter's
+  // covariance then overflowed (2**31 gave NaN positions in kalman_smoother).
+  v.InRange(gyro_noise_radps_rthz, kMinScale, 10.0, "gyro_noise_radps_rthz")
+      .InRange(gyro_bias_walk_radps_rts, kMinScale, 10.0, "gyro_bias_walk_radps_rts");
   const std::pair<const char*, double> positive[] = {
       {"function_tolerance", function_tolerance},   {"gradient_tolerance", gradient_tolerance},
       {"parameter_tolerance", parameter_tolerance}, {"datum_pivot_tolerance", datum_pivot_tolerance},

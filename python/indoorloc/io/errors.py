@@ -77,6 +77,8 @@ def reading(path: PathLike, *, argument: str = "path", what: str = "file") -> It
         raise format_error(path, f"damaged {what} ({type(exc).__name__}: {exc})",
                            argument=argument) from exc
     except _PARSE_ERRORS as exc:
+        if isinstance(exc, TypeError) and str(exc).startswith("indoorloc:"):
+            raise  # the library's own TypeError about an argument of the wrong type
         detail = str(exc) or type(exc).__name__
         if isinstance(exc, RecursionError):
             detail = "nesting too deep"

@@ -60,7 +60,7 @@ from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple
 import numpy as np
 
 from indoorloc.io.errors import FormatError, reads_file
-from indoorloc.validate import real_array, real_scalar
+from indoorloc.validate import integer, real_array, real_scalar
 from indoorloc._core.fusion import FloorGeometry, FloorPlan, FloorPlanOptions  # io sits below the facades
 
 PathLike = Union[str, os.PathLike]
@@ -149,6 +149,19 @@ class GeoJsonFloor:
 
 def _error(arg: str, msg: str) -> ValueError:
     return ValueError(f"indoorloc: argument '{arg}': {msg}")
+
+
+def _check_source(source: Any, name: str) -> None:
+    """A path or an already parsed GeoJSON dict (named before any file is opened)."""
+    if not isinstance(source, (str, os.PathLike, Mapping)):
+        raise TypeError(f"indoorloc: argument '{name}': expected a path or a GeoJSON dict, "
+                        f"got {type(source).__name__}")
+
+
+def _check_roles(roles: Any) -> None:
+    if not (roles is None or callable(roles) or isinstance(roles, (Mapping, list, tuple))):
+        raise TypeError(f"indoorloc: argument 'roles': expected None, a list, a dict or a callable, "
+                        f"got {type(roles).__name__}")
 
 
 def _load(source: Source) -> Tuple[Any, str]:
@@ -322,6 +335,9 @@ def read_geojson_floor(
         ``geometry`` (a :class:`indoorloc.fusion.FloorGeometry`) and the feature index of every
         ring and wall.
     """
+    _check_source(source, "source")
+    floor = integer(floor, "floor", lo=-(2**31), hi=2**31 - 1)
+    _check_roles(roles)
     doc, label = _load(source)
     features = _features(doc, label)
     for k, f in enumerate(features):
@@ -412,12 +428,24 @@ def load_floor_plan(
     """
     if isinstance(sources, (str, os.PathLike, Mapping)):
         sources = [sources]
+    if not isinstance(sources, (list, tuple)):
+        raise TypeError(f"indoorloc: argument 'sources': expected a path, a GeoJSON dict or a list of them, "
+                        f"got {type(sources).__name__}")
     sources = list(sources)
+    for k, src in enumerate(sources):
+        _check_source(src, f"sources[{k}]")
     if floors is None:
         floors = list(range(len(sources)))
+    if not isinstance(floors, (list, tuple, np.ndarray)):
+        raise TypeError(f"indoorloc: argument 'floors': expected a list of floor numbers, got {type(floors).__name__}")
+    floors = [integer(n, f"floors[{k}]", lo=-(2**31), hi=2**31 - 1) for k, n in enumerate(floors)]
     if len(floors) != len(sources):
         raise _error("floors", f"expected {len(sources)} floor numbers (one per source), got {len(floors)}")
-    read = [read_geojson_floor(s, floor=int(n), roles=roles, origin_lon_lat=origin_lon_lat)
+    _check_roles(roles)
+    if options is not None and not isinstance(options, FloorPlanOptions):
+        raise TypeError(f"indoorloc: argument 'options': expected None or a FloorPlanOptions, "
+                        f"got {type(options).__name__}")
+    read = [read_geojson_floor(s, floor=n, roles=roles, origin_lon_lat=origin_lon_lat)
             for s, n in zip(sources, floors)]
     try:
         return FloorPlan([r.geometry for r in read], options if options is not None else FloorPlanOptions())
@@ -454,6 +482,10 @@ def floor_geometry_to_geojson(
     Reading the result with :func:`read_geojson_floor` (and the same origin) gives back the
     geometry (exactly in metres; to about 1e-9 m through longitude/latitude).
     """
+    if not all(hasattr(geometry, a) for a in ("floor", "outlines", "obstacles", "walls")):
+        raise TypeError(f"indoorloc: argument 'geometry': expected a FloorGeometry (floor, outlines, obstacles, "
+                        f"walls), got {type(geometry).__name__}")
+
     def conv(xy: np.ndarray) -> np.ndarray:
         xy = np.asarray(xy, dtype=float)
         return xy if origin_lon_lat is None else local_to_lonlat(xy, origin_lon_lat)
@@ -476,6 +508,8 @@ def write_geojson_floor(
 ) -> None:
     """Write :func:`floor_geometry_to_geojson` of ``geometry`` to ``path`` (floats in Python's
     shortest round-trip form)."""
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"indoorloc: argument 'path': expected a file path, got {type(path).__name__}")
     doc = floor_geometry_to_geojson(geometry, origin_lon_lat=origin_lon_lat)
     Path(path).write_text(json.dumps(doc), encoding="utf-8")
 

@@ -78,6 +78,8 @@ from typing import Any, Dict, Iterable, Iterator, List, Optional, Sequence, Tupl
 
 import numpy as np
 
+from indoorloc.io.errors import reads_file
+
 PathLike = Union[str, Path]
 
 _TAB = 9
@@ -1056,6 +1058,7 @@ def _lonlat_points(coords: Any) -> Iterator[Tuple[float, float]]:
             yield from _lonlat_points(c)
 
 
+@reads_file("geojson_path")  # a damaged geojson_map.json is a FormatError, as for every reader
 def ilc_floor_origin_lonlat(geojson_path: PathLike) -> Tuple[float, float]:
     """(min lon, min lat) [deg] of the first feature's bounding box in ``geojson_map.json``.
 

@@ -53,7 +53,7 @@ from __future__ import annotations
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
-from typing import List, Optional, Tuple, Union
+from typing import Any, List, Optional, Tuple, Union
 
 import numpy as np
 
@@ -472,6 +472,18 @@ def _as_bouts(micro_wb) -> list:
     return [b for b in arr.ravel() if isinstance(b, dict)]
 
 
+def _mat_numbers(value: Any, where: str) -> np.ndarray:
+    """A finite real array from a MATLAB field (complex, text, structs and NaN refused, naming
+    the file and the field)."""
+    a = np.asarray(value)
+    if a.dtype.kind not in "biuf":
+        raise _err("path", f"{where}: expected real numbers, got {a.dtype} data")
+    a = a.astype(float)
+    if not np.all(np.isfinite(a)):
+        raise _err("path", f"{where}: holds NaN or inf")
+    return a
+
+
 @reads_file("path")
 def load_mobgap_trials(path: PathLike, *, gravity_mps2: float = STANDARD_GRAVITY_MPS2) -> List[MobgapTrial]:
     """Load every trial of one mobgap ``data.mat`` (Mobilise-D lower-back example data).
@@ -501,14 +513,19 @@ def load_mobgap_trials(path: PathLike, *, gravity_mps2: float = STANDARD_GRAVITY
             node = measure[test][trial]
             try:
                 lb = node["SU"]["LowerBack"]
-                acc = np.asarray(lb["Acc"], dtype=float) * float(gravity_mps2)
-                gyro = np.deg2rad(np.asarray(lb["Gyr"], dtype=float))
-                mag = np.asarray(lb["Mag"], dtype=float) if "Mag" in lb else None
-                stamps = np.asarray(lb["Timestamp"], dtype=float).ravel()
+                name = f"{p}: {test}.{trial}.SU.LowerBack"
+                acc = _mat_numbers(lb["Acc"], f"{name}.Acc") * float(gravity_mps2)
+                gyro = np.deg2rad(_mat_numbers(lb["Gyr"], f"{name}.Gyr"))
+                mag = _mat_numbers(lb["Mag"], f"{name}.Mag") if "Mag" in lb else None
+                stamps = _mat_numbers(lb["Timestamp"], f"{name}.Timestamp").ravel()
                 fs = lb.get("Fs", {})
-                rate = float(fs.get("Acc", 100.0)) if isinstance(fs, dict) else 100.0
-            except (KeyError, TypeError) as exc:
+                rate = float(_mat_numbers(fs.get("Acc", 100.0), f"{name}.Fs.Acc").reshape(-1)[0]) \
+                    if isinstance(fs, dict) else 100.0
+            except (KeyError, TypeError, IndexError) as exc:
                 raise _err("path", f"{p}: {test}.{trial}.SU.LowerBack lacks Acc/Gyr/Timestamp") from exc
+            if not (0.1 <= rate <= 1e5):
+                raise _err("path", f"{p}: {test}.{trial}.SU.LowerBack.Fs.Acc must be a rate in [0.1, 1e5] Hz, "
+                                   f"got {rate!r}")
             where = f"path ({test}.{trial})"
             check_imu_units(acc, gyro, acc_name=f"{where} Acc, converted from g",
                             gyro_name=f"{where} Gyr, converted from deg/s")

@@ -632,7 +632,12 @@ def load_surimi(root: PathLike, name: str) -> FingerprintDataset:
     missing = [f for f in _SURIMI_FIELDS if f not in db.dtype.names]
     if missing:
         raise _bad(f"{path}: struct 'database' lacks field(s) {missing}")
-    arrays = {f: np.asarray(db[f].flat[0], dtype=np.float64) for f in _SURIMI_FIELDS}
+    arrays = {}
+    for f in _SURIMI_FIELDS:
+        raw = np.asarray(db[f].flat[0])
+        if raw.dtype.kind not in "biuf":  # cell arrays, text, structs, complex: named, not cast
+            raise _bad(f"{path}: field database.{f}: expected a real matrix, got {raw.dtype} data")
+        arrays[f] = raw.astype(np.float64)
 
     macs = {}
     labels = {}

@@ -36,6 +36,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components, dijkstra
 
 from indoorloc.simulate import _geometry as geo
+from indoorloc.validate import integer, real_array, real_scalar
 from indoorloc.simulate.radio import RadioConfig, RadioModel, Survey, SurveyConfig, make_radio_model, run_survey
 
 _DOMAIN = 0xB1D
@@ -72,15 +73,23 @@ class BuildingConfig:
     approach_m: float = 0.6                #: graph nodes this far from a door on either side
 
     def validate(self) -> None:
-        for name in ("width_m", "depth_m", "floor_height_m", "corridor_width_m", "door_width_m", "pillar_size_m",
-                     "approach_m"):
-            v = getattr(self, name)
-            if not (np.isfinite(v) and v > 0):
-                raise ValueError(f"indoorloc: argument 'config.{name}': must be finite and > 0, got {v}")
-        if self.num_floors < 1:
-            raise ValueError("indoorloc: argument 'config.num_floors': must be >= 1")
-        if self.num_branches < 0 or self.num_shafts < 0 or self.num_pillars < 0:
-            raise ValueError("indoorloc: argument 'config': num_branches, num_shafts, num_pillars must be >= 0")
+        # Every field, with upper bounds: the layout, the graph and one FloorGeometry per floor
+        # grow with these (num_floors = 2**31 used to fill the memory in a list comprehension).
+        for name, hi in (("width_m", 1e4), ("depth_m", 1e4), ("floor_height_m", 100.0),
+                         ("corridor_width_m", 1e3), ("door_width_m", 1e3), ("pillar_size_m", 1e3),
+                         ("approach_m", 1e3)):
+            real_scalar(getattr(self, name), f"config.{name}", lo=1e-3, hi=hi)
+        real_scalar(self.position_jitter_m, "config.position_jitter_m", lo=0.0, hi=1e3)
+        real_scalar(self.pillar_min_room_area_m2, "config.pillar_min_room_area_m2", lo=0.0, hi=1e8)
+        real_scalar(self.room_size_jitter, "config.room_size_jitter", lo=0.0, hi=0.5)
+        real_scalar(self.second_door_probability, "config.second_door_probability", lo=0.0, hi=1.0)
+        for name in ("front_room_depth_m", "back_room_depth_m"):
+            real_array(getattr(self, name), f"config.{name}", shape=(2,), max_abs=1e4)
+        integer(self.num_floors, "config.num_floors", lo=1, hi=200)
+        integer(self.num_branches, "config.num_branches", lo=0, hi=1000)
+        integer(self.rooms_per_side, "config.rooms_per_side", lo=1, hi=10000)
+        integer(self.num_shafts, "config.num_shafts", lo=0, hi=1000)
+        integer(self.num_pillars, "config.num_pillars", lo=0, hi=10000)
         if not (2 * self.approach_m + 0.2 <= self.corridor_width_m):
             raise ValueError("indoorloc: argument 'config.corridor_width_m': must exceed 2 approach_m + 0.2")
         blocks = self.num_branches + 1
@@ -574,7 +583,7 @@ def make_building(seed: int = 0, config: BuildingConfig = BuildingConfig(), radi
     config.validate()
     radio.validate()
     survey.validate()
-    seed = int(seed)
+    seed = integer(seed, "seed", lo=0, hi=2**64 - 1)
 
     def stream(k: int) -> np.random.Generator:
         return np.random.default_rng([seed, _DOMAIN, k])

@@ -43,6 +43,7 @@ import numpy as np
 
 from indoorloc.simulate import _geometry as geo
 from indoorloc.simulate.building import APPROACH, Building
+from indoorloc.validate import integer
 
 _DOMAIN = 0x3A1C
 _ROUTE_STREAM, _GAIT_STREAM, _PDR_STREAM, _SCAN_STREAM = 0, 1, 2, 3
@@ -391,8 +392,8 @@ def simulate_walk(building: Building, seed: int = 0, floor: int = 0, walk: WalkC
     walk.validate()
     pdr.validate()
     scans.validate()
-    plan = building.geometry(floor)
-    seed = int(seed)
+    plan = building.geometry(integer(floor, "floor", lo=-(2**31), hi=2**31 - 1))
+    seed = integer(seed, "seed", lo=0, hi=2**64 - 1)
 
     def stream(k: int) -> np.random.Generator:
         return np.random.default_rng([seed, _DOMAIN, k])

@@ -1,0 +1,160 @@
+"""Regression tests of issue 17 for the fusion subsystem (found by test_properties_fusion.py):
+options checked through the core validation vocabulary, argument names in every message, size
+limits, and the batch API's dict/tuple arguments."""
+
+import numpy as np
+import pytest
+
+from indoorloc import fusion
+from indoorloc._core import fusion as cf
+
+
+def _plan():
+    outline = np.array([[0, 0], [20, 0], [20, 10], [0, 10]], float)
+    block = np.array([[8, 3], [12, 3], [12, 7], [8, 7]], float)
+    return fusion.FloorPlan([fusion.FloorGeometry(0, [outline], [block])])
+
+
+def _track(**changes):
+    n = 4
+    kwargs = dict(plan=_plan(), wifi_model=None, corridors=None, step_times_s=0.5 * np.arange(1, n + 1),
+                  displacements_m=np.tile([0.0, 0.7], (n, 1)), covariances_m2=np.tile([0.01, 0.0, 0.01], (n, 1)),
+                  observations=[], start={"position_m": np.array([2.0, 1.5])},
+                  options=fusion.tracker_options(num_particles=100), smoother=None, fixes=None)
+    kwargs.update(changes)
+    return cf.track(**kwargs)
+
+
+@pytest.mark.parametrize("field, value, rule", [
+    ("position_noise_m", 1e-300, "position_noise_m must be in"),   # 1/σ² was inf
+    ("position_noise_m", float("nan"), "position_noise_m must be in"),
+    ("min_scale", 2.0, "min_scale must be <= max_scale"),
+    ("tempering", float("nan"), "tempering must be in (0, 1]"),
+    ("max_term", float("nan"), "max_term must be > 0"),
+    ("fix_tempering", 2.0, "fix_tempering must be in (0, 1]"),       # was "fix: tempering ..."
+    ("fix_outlier_probability", 1.0, "fix_outlier_probability must be in (0, 1)"),
+    ("ess_threshold", float("nan"), "ess_threshold must be in [0, 1]"),
+    ("respread_sd_m", 1e300, "respread_sd_m must be finite and in"),
+    ("start_position_sd_m", 1e300, "start_position_sd_m must be 0 or in"),
+    ("start_scale_sd", 1e300, "start_scale_sd must be in [0, 100]"),
+    ("unknown_start_heading_sd_rad", float("nan"), "unknown_start_heading_sd_rad must be in"),
+    ("recovery_log_ratio", 1e300, "recovery_log_ratio must be in"),
+    ("recovery_scans", 2**31 - 1, "recovery_scans must be in [1, 1000000]"),
+    ("respread_after_blocked_steps", 2**31 - 1, "respread_after_blocked_steps must be in"),
+])
+def test_tracker_options_name_the_flattened_field_value_and_rule(field, value, rule):
+    with pytest.raises(ValueError) as info:
+        fusion.tracker_options(**{field: value})
+    assert rule in str(info.value)
+    assert "got" in str(info.value)
+
+
+def test_tracker_options_wrong_type_names_the_field():
+    with pytest.raises(TypeError, match="argument 'num_particles'"):
+        fusion.tracker_options(num_particles="many")
+
+
+def test_floor_plan_and_smoother_options_limits():
+    with pytest.raises(ValueError, match="cell_size_m must be <= 0 .automatic. or in"):
+        fusion.FloorPlanOptions(cell_size_m=1e300)
+    with pytest.raises(ValueError, match="options.cell_size_m.*more than options.max_cells"):
+        fusion.FloorPlan([fusion.FloorGeometry(0, [np.array([[0, 0], [20, 0], [20, 10], [0, 10]], float)])],
+                         fusion.FloorPlanOptions(cell_size_m=1e-300))
+    with pytest.raises(ValueError, match="target_edges_per_cell must be in"):
+        fusion.FloorPlanOptions(target_edges_per_cell=1e300)
+    with pytest.raises(ValueError, match=r"max_cells must be in \[1, 100000000\]"):
+        fusion.FloorPlanOptions(max_cells=2**31 - 1)
+    with pytest.raises(ValueError, match="max_particles"):
+        fusion.SmootherOptions(num_trajectories=100000, max_particles=50000000)
+
+
+def test_sample_walkable_refuses_more_than_the_memory_limit():
+    with pytest.raises(ValueError, match="argument 'n': .* points would need .* GB"):
+        _plan().sample_walkable(2**31 - 1)
+
+
+def test_track_start_smoother_and_fixes_arguments_are_named():
+    with pytest.raises(ValueError, match="argument 'start': expected None or a dict"):
+        _track(start="here")
+    with pytest.raises(ValueError, match="argument 'start': a known start needs 'position_m'"):
+        _track(start={"floor": 0})  # was KeyError
+    with pytest.raises(ValueError, match="argument 'start': unknown key 'postion_m'"):
+        _track(start={"postion_m": [2.0, 1.5]})
+    with pytest.raises(ValueError, match=r"argument 'start\['time_s'\]': expected a real number"):
+        _track(start={"position_m": [2.0, 1.5], "time_s": "soon"})  # was RuntimeError (cast)
+    with pytest.raises(ValueError, match=r"argument 'start\['time_s'\]': must be finite"):
+        _track(start={"position_m": [2.0, 1.5], "time_s": float("nan")})
+    with pytest.raises(ValueError, match=r"argument 'start\['floor'\]'"):
+        _track(start={"position_m": [2.0, 1.5], "floor": 2**40})
+    with pytest.raises(ValueError, match="argument 'smoother': expected None or a SmootherOptions"):
+        _track(smoother=3)  # was RuntimeError (cast)
+    with pytest.raises(ValueError, match="argument 'fixes': expected None or"):
+        _track(fixes=[1.0])  # was RuntimeError (cast)
+    with pytest.raises(ValueError, match="argument 'plan': must be None or a FloorPlan"):
+        _track(plan="a plan")
+    result = _track()
+    assert np.isfinite(result["mean_m"]).all()
+
+
+def _in_child(code: str, timeout: float = 60.0) -> str:
+    """Runs `code` in a fresh interpreter (these calls used to hang or fill the memory)."""
+    import subprocess
+    import sys
+    import textwrap
+
+    proc = subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True, text=True,
+                          timeout=timeout)
+    assert proc.returncode == 0, f"exit {proc.returncode}\n{proc.stdout}\n{proc.stderr[-3000:]}"
+    return proc.stdout
+
+
+def test_floor_plan_coordinates_are_bounded_instead_of_hanging():
+    # An outline vertex at 1e300 made the grid registration walk ~1e150 cells.
+    out = _in_child("""
+        import numpy as np
+        from indoorloc import fusion
+        ring = np.array([[0.0, 0.0], [1e300, 0.0], [1.0, 1.0], [0.0, 1.0]])
+        try:
+            fusion.floor_plan_from_polygons(ring)
+        except ValueError as e:
+            assert "outlines" in str(e) and "1e+07" in str(e) and "1e+300" in str(e), e
+            print("ok")
+    """, timeout=30.0)
+    assert out.strip() == "ok"
+
+
+def test_synthetic_building_bounds_its_counts():
+    # num_floors = 2**31 built one FloorGeometry per floor until the memory ran out.
+    out = _in_child("""
+        from indoorloc.simulate.building import BuildingConfig, make_building
+        for field, value in (("num_floors", 2**31), ("num_pillars", 10**9), ("position_jitter_m", float("nan"))):
+            try:
+                make_building(1, BuildingConfig(**{field: value}))
+            except ValueError as e:
+                assert f"config.{field}" in str(e), e
+            else:
+                raise SystemExit(field)
+        print("ok")
+    """, timeout=60.0)
+    assert out.strip() == "ok"
+
+
+def test_polygon_helpers_refuse_strings_instead_of_recursing():
+    for bad in ("x", np.array(["a"] * 8)):
+        with pytest.raises(TypeError, match="argument 'outlines'"):
+            fusion.floor_geometry(bad)  # was RecursionError
+    with pytest.raises(ValueError, match="argument 'outlines'.*complex"):
+        fusion.floor_geometry(np.array([[0, 0], [1, 0], [1, 1]], complex))  # was a silent cast
+
+
+def test_python_helpers_name_their_arguments():
+    with pytest.raises(ValueError, match="argument 'means_m': must be finite where the weight is > 0"):
+        fusion.Fixes.from_arrays([1.0], [[np.nan, 2.0]], [2.0])
+    with pytest.raises(TypeError, match="argument 'steps'"):
+        fusion.track("steps")
+    with pytest.raises(TypeError, match="argument 'floors'"):
+        fusion.floor_plan_from_geometries(3.0)
+    with pytest.raises(ValueError, match=r"argument 'fix.sds_m': entry 0 must be finite and in \[1e-12"):
+        t = cf.ParticleTracker(_plan(), None, None, fusion.tracker_options(num_particles=50))
+        t.initialize_known(0.0, [2.0, 1.5], 0, 0.0)
+        t.fix(1.0, np.array([[2.0, 2.0]]), np.array([1e-300]), np.array([1.0]))  # 1/sd² was inf: NaN mean
