@@ -463,8 +463,13 @@ def reproduce_tables(ctx: ReproduceContext, quick: bool = False) -> List[Table]:
 
     start = time.perf_counter()
     imu_runs = min(runs, scale.full_imu_runs) if ctx.runs is not None else scale.full_imu_runs
-    tables.append(imu_table(ctx, scale, imu_runs))
-    ctx.log(f"analog IMU missing data: {imu_runs} erasure seeds ({time.perf_counter() - start:.0f} s)")
+    from indoorloc.registry import default_pdr_root
+
+    if default_pdr_root().is_dir():
+        tables.append(imu_table(ctx, scale, imu_runs))
+        ctx.log(f"analog IMU missing data: {imu_runs} erasure seeds ({time.perf_counter() - start:.0f} s)")
+    else:  # the other tables need no data; say what is missing instead of failing the section
+        ctx.log(f"paper 001: no PyShoe recordings at {default_pdr_root()}: the IMU missing-data table is left out")
     return tables
 
 
