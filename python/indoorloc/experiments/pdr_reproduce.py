@@ -140,7 +140,7 @@ def _real_tables(ctx, root: Path) -> list:
         t3.cells = [Cell(k, "step count error", v, idx, _PAPER_VALUE[k], "%") for k, v in steps.items()]
         mobgap = root / "mobgap_lowerback"
         if mobgap.is_dir() and not ctx.quick:
-            bouts = _mobgap_magnetometer_bouts(mobgap)
+            bouts = psl.evaluate_step_detectors_mobgap(mobgap)["magnetometer_pct_per_bout"]
             t3.cells.append(Cell("magnetometer (mobgap lower back, per walking bout)", "step count error", bouts,
                                  list(range(len(bouts))), PAPER_TABLE_III["magnetometer"], "%",
                                  "a lower-back unit: the foot-oriented detector does not fit it (docs/pdr.md)"))
@@ -179,26 +179,6 @@ def _real_tables(ctx, root: Path) -> list:
                     + "): distance from the last to the first estimated position, in % of the estimate's path.")
         tables.append(tl)
     return tables
-
-
-def _mobgap_magnetometer_bouts(root: Path) -> List[float]:
-    """Per INDIP walking bout: |magnetometer steps - reference initial contacts| in % of the latter."""
-    from indoorloc import pdr
-    from indoorloc.io.pdr_datasets import list_mobgap_files, load_mobgap_trials
-
-    out = []
-    for f in list_mobgap_files(root):
-        for t in load_mobgap_trials(f):
-            rec = t.recording
-            if t.bout_bounds_s.shape[0] == 0 or rec.mag_uT is None:
-                continue
-            steps = np.asarray(pdr.steps_magnetometer(rec.mag_uT, rec.rate_hz)[0])
-            for (a, b), contacts in zip(t.bout_bounds_s, t.bout_initial_contacts):
-                n_ref = len(contacts)
-                if n_ref:
-                    n = int(np.sum((steps >= a * rec.rate_hz) & (steps <= b * rec.rate_hz)))
-                    out.append(100.0 * abs(n - n_ref) / n_ref)
-    return out
 
 
 def reproduce_tables(ctx) -> list:

@@ -135,10 +135,11 @@ def evaluate_step_detectors_mobgap(root: PathLike, gyro_threshold_radps: float =
     a magnetometer: detected steps inside each INDIP walking bout [Start, End] against the bout's
     reference initial contacts (both feet). Returns ``{"reference_steps", "magnetometer_abs_error",
     "gyro_abs_error", "magnetometer_pct", "gyro_pct", "n_bouts"}`` (sums of per-bout absolute
-    count errors)."""
+    count errors) and ``"magnetometer_pct_per_bout"`` (each bout's error in % of its reference steps)."""
     from indoorloc import pdr
 
     ref = mag_err = gyro_err = bouts = 0
+    per_bout_mag_pct = []
     for f in list_mobgap_files(root):
         for t in load_mobgap_trials(f):
             rec = t.recording
@@ -150,10 +151,14 @@ def evaluate_step_detectors_mobgap(root: PathLike, gyro_threshold_radps: float =
                 lo, hi = a * rec.rate_hz, b * rec.rate_hz
                 n_ref = int(len(contacts))
                 ref += n_ref
-                mag_err += abs(int(np.sum((mag_steps >= lo) & (mag_steps <= hi))) - n_ref)
+                bout_mag_err = abs(int(np.sum((mag_steps >= lo) & (mag_steps <= hi))) - n_ref)
+                mag_err += bout_mag_err
+                if n_ref:
+                    per_bout_mag_pct.append(100.0 * bout_mag_err / n_ref)
                 gyro_err += abs(int(np.sum((gyro_steps >= lo) & (gyro_steps <= hi))) - n_ref)
                 bouts += 1
     if ref == 0:
         raise ValueError(f"indoorloc: argument 'root': no reference walking bout with a magnetometer under {root}")
     return {"reference_steps": ref, "n_bouts": bouts, "magnetometer_abs_error": mag_err, "gyro_abs_error": gyro_err,
-            "magnetometer_pct": 100.0 * mag_err / ref, "gyro_pct": 100.0 * gyro_err / ref}
+            "magnetometer_pct": 100.0 * mag_err / ref, "gyro_pct": 100.0 * gyro_err / ref,
+            "magnetometer_pct_per_bout": per_bout_mag_pct}
