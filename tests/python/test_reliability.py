@@ -144,6 +144,11 @@ def test_ctrl_c_interrupts_a_long_monte_carlo(threads):
         import os, signal, threading, time
         from indoorloc import mapmatch
         from indoorloc.io import grid_with_diagonals_segments
+        # Python installs its KeyboardInterrupt handler only when SIGINT is not ignored at start-up,
+        # and a shell without job control starts background commands (`make test &`, CI runners)
+        # with SIGINT ignored, which the child inherits: os.kill would then do nothing and the run
+        # would go on until the timeout. Install the handler an interactive Python has.
+        signal.signal(signal.SIGINT, signal.default_int_handler)
         net = mapmatch.RoadNetwork(*grid_with_diagonals_segments(3, 2, 10.0))
         threading.Timer(1.0, lambda: os.kill(os.getpid(), signal.SIGINT)).start()
         start = time.time()
