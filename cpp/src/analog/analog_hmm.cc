@@ -182,8 +182,10 @@ AnalogHMM::AnalogHMM(std::shared_ptr<const Catalog> catalog, const AnalogHmmOpti
                 "R", "is not symmetric");
   Eigen::LLT<Eigen::MatrixXd> llt(options_.R);
   CheckArgument(llt.info() == Eigen::Success, "R", "is not positive definite");
-  CheckArgument(catalog_->num_analogs() >= options_.k + 1, "k",
-                "k = " + std::to_string(options_.k) + " needs at least K + 1 = " + std::to_string(options_.k + 1) +
+  // K + 1 in 64 bits: k = INT_MAX overflowed int (UBSan, found by the property suite under ASan).
+  const std::int64_t analogs_needed = static_cast<std::int64_t>(options_.k) + 1;
+  CheckArgument(static_cast<std::int64_t>(catalog_->num_analogs()) >= analogs_needed, "k",
+                "k = " + std::to_string(options_.k) + " needs at least K + 1 = " + std::to_string(analogs_needed) +
                     " analogs, argument 'catalog' has " + std::to_string(catalog_->num_analogs()));
   transitions_ = BuildKnnTransitions(*catalog_, options_.k, options_.sigma_scale, options_.successor_rule);
 }

@@ -1,6 +1,7 @@
 #include "indoorloc/analog/analog_hmm.h"
 
 #include <cmath>
+#include <limits>
 #include <map>
 #include <memory>
 
@@ -159,6 +160,8 @@ TEST(AnalogHMM, BadInputGivesClearErrors) {
   o.k = 20;  // more than the 9 analogs
   o.observed = {0};
   o.R = Eigen::MatrixXd::Identity(1, 1);
+  EXPECT_THROW(AnalogHMM(catalog, o), std::invalid_argument);
+  o.k = std::numeric_limits<int>::max();  // K + 1 overflowed int (UBSan, issue 17)
   EXPECT_THROW(AnalogHMM(catalog, o), std::invalid_argument);
   o.k = 3;
   o.R(0, 0) = -1.0;
