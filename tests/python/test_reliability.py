@@ -441,6 +441,22 @@ def test_ilc_floor_origin_of_a_damaged_geojson_is_a_format_error(tmp_path):
         io.ilc_floor_origin_lonlat(path)
 
 
+def test_ilc_readers_give_format_errors_also_from_their_own_module(tmp_path):
+    # They used to be wrapped only in indoorloc.io: indoorloc.io.ilc2020.read_ilc_walk gave a
+    # plain ValueError (or an IndexError) for the same damaged walk.
+    from indoorloc.io import ilc2020
+
+    walk = tmp_path / "walk.txt"
+    walk.write_text("#\tstartTime:1574147450000\n1574147450100\tTYPE_ACCELEROMETER\t0.1\n")
+    for read in (io.read_ilc_walk, ilc2020.read_ilc_walk):
+        with pytest.raises(io.FormatError, match="walk.txt"):
+            read(walk)
+    (tmp_path / "floor" / "path_data_files").mkdir(parents=True)
+    with pytest.raises(io.FormatError, match="floor"):
+        ilc2020.read_ilc_floor(tmp_path / "floor")
+    assert io.read_ilc_site is ilc2020.read_ilc_site
+
+
 def test_network_noise_bounds_and_crossover_line_counts():
     from indoorloc._core import network as cn
 

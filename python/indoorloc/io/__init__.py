@@ -43,6 +43,9 @@ from indoorloc.io.ilc2020 import (
     IlcWifi,
     describe_ilc_floor,
     ilc_floor_origin_lonlat,
+    read_ilc_floor,
+    read_ilc_site,
+    read_ilc_walk,
 )
 from indoorloc.io.floor_plan import (
     GeoJsonFloor,
@@ -63,14 +66,6 @@ from indoorloc.io.road_network import (
     write_geojson_segments,
 )
 
-from indoorloc.io import ilc2020 as _ilc2020
-from indoorloc.io.errors import reads_file as _reads_file
-
-# The ILC readers report a damaged walk or floor folder as FormatError, like the other readers
-# (wrapped here so that ilc2020.py itself stays as it is).
-read_ilc_walk = _reads_file("path")(_ilc2020.read_ilc_walk)
-read_ilc_floor = _reads_file("floor_dir")(_ilc2020.read_ilc_floor)
-read_ilc_site = _reads_file("site_dir")(_ilc2020.read_ilc_site)
 
 __all__ = [
     "FormatError",

@@ -623,6 +623,7 @@ def _empty_sensor(type_name: str) -> IlcSensor:
                      bias=np.zeros((0, 3)) if len(names) == 6 else None)
 
 
+@reads_file("path")  # a damaged walk or floor folder is a FormatError, as for every reader
 def read_ilc_walk(path: PathLike, *, allow_unsorted: bool = False) -> IlcWalk:
     """Read one walk file (``path_data_files/<walk id>.txt``) into numpy arrays.
 
@@ -1012,6 +1013,7 @@ def _floor_info(path: Path) -> Tuple[float, float]:
     return width, height
 
 
+@reads_file("floor_dir")  # a damaged walk or floor folder is a FormatError, as for every reader
 def read_ilc_floor(floor_dir: PathLike, *, cache: bool = True,
                    allow_unsorted: bool = False) -> IlcFloor:
     """Open one floor folder (``<floor>/path_data_files/*.txt``, ``floor_info.json``,
@@ -1026,6 +1028,7 @@ def read_ilc_floor(floor_dir: PathLike, *, cache: bool = True,
     return IlcFloor(floor_dir, cache=cache, allow_unsorted=allow_unsorted)
 
 
+@reads_file("site_dir")  # a damaged walk or floor folder is a FormatError, as for every reader
 def read_ilc_site(site_dir: PathLike, *, cache: bool = True,
                   allow_unsorted: bool = False) -> Dict[str, IlcFloor]:
     """Open every floor of a site folder: ``{floor folder name: IlcFloor}``, sorted by name.
