@@ -373,13 +373,23 @@ keep_gravity_estimate : bool
     Return the δg estimate (E, 3) too.
 num_threads : int
     Threads for the two chains of the twisted elimination (blocks 0.. and ..n-1 meeting in the
-    middle; 1 or 2; <= 0: all cores). The results are bit-identical on any count.
+    middle; 1 or 2; <= 0: all cores). The results are bit-identical on any count. The QR runs
+    on one thread.
+pivot_tolerance : float or None
+    Rank test on the relative pivot (pivot² / A_kk; QR: R_kk² / A_kk), in [0, 1). None: 1e-12
+    for the Cholesky, 1e-20 for the QR (a datum defect gives about 1e-30 there).
+method : "cholesky" or "qr"
+    "cholesky": the normal equations, twisted order (fast). "qr": Householder QR of the whitened
+    observation equations, one way (about 2.5-3.3x slower), which does not square the condition:
+    Table 2 case 3 (200 Hz x 4 h, 5 Hz GPS) needs it (docs/network_scale.md, "Case 3").
 
 Returns
 -------
 dict: sizes (imu_epochs, gps_epochs, unknowns, equations, block_size, num_blocks), timings
-[s], stored_factor_bytes, min_relative_pivot, max_abs_error against the noise-free truth,
-gravity_rmse [m/s²], gravity_sigma (E, 3) [m/s²], gravity_estimate, report.)doc");
+[s], stored_factor_bytes, min_relative_pivot with min_relative_pivot_block and
+min_relative_pivot_unknown (where it was seen), max_abs_error against the noise-free truth with
+max_abs_error_by_unknown (18,) and max_abs_error_epoch, gravity_rmse [m/s²], gravity_sigma (E, 3)
+[m/s²], gravity_estimate, report.)doc");
 }
 
 }  // namespace indoorloc::bindings

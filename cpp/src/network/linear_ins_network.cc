@@ -5,6 +5,7 @@
 #include <memory>
 #include <sstream>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <Eigen/QR>
@@ -277,7 +278,17 @@ LinearInsNetworkResult SolveLinearInsNetwork(const LinearInsNetworkOptions& o, b
     for (int e = 0; e < g; ++e)
       for (int c = 15; c < 18; ++c) so.selected.push_back(e * kP + c);
   }
-  const BlockTridiagonalSolution sol = SolveBlockTridiagonal(result.size.num_blocks, b, assemble, so);
+  BlockTridiagonalSolution sol;
+  try {
+    sol = SolveBlockTridiagonal(result.size.num_blocks, b, assemble, so);
+  } catch (const std::runtime_error& e) {
+    // Long 200 Hz chains break the normal equations down by round-off where the network is
+    // regular (docs/network_scale.md, "Case 3"): say what tells the two apart.
+    throw std::runtime_error(std::string(e.what()) +
+                             "; if the network has a datum, this can also be round-off: the normal equations square "
+                             "the condition of weak modes of long chains, and SolveLinearInsNetworkQr (method='qr') "
+                             "does not (it separates a defect, relative pivot ~1e-30, from weak information)");
+  }
   result.solver = sol.summary;
 
   double max_err = 0.0, g_sq = 0.0;

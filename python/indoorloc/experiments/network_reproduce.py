@@ -202,10 +202,12 @@ def demo(ctx: DemoContext) -> DemoSection:
 #: defect: its smallest true relative pivot there is 5e-11); the full case failed in the bottom
 #: chain at block 1,837,575. Lowering the rank tolerance does not help (the Cholesky itself breaks
 #: down), nor does any diagonal scaling (Cholesky is invariant to it). The QR keeps the square
-#: root of the condition: max error 2e-9 at 1 h, the case-3 figures in the docs. With leap-frog
-#: the 5 Hz GPS alternates parity (GpsEpoch), so both chains have a datum; its Cholesky fails for
-#: the same round-off reason at the middle block. Cases 1 and 2 stay on the (faster, two-thread)
-#: Cholesky, whose δg are exact there.
+#: root of the condition: max error 2.4e-9 at 1 h; case 3 in 119 s on one thread, 0.24 GiB, max
+#: error 4.1e-9 (ψ_z), δg RMSE 3e-14 m/s². With leap-frog the 5 Hz GPS alternates parity
+#: (GpsEpoch), so both chains have a datum; its Cholesky fails for the same round-off reason at the
+#: middle block, and the leap-frog QR solves case 3 too (393 s, max error 3.0e-8). Cases 1 and 2
+#: stay on the (3.3x faster, two-thread) Cholesky: their δg are exact, but case 1's ψ_z carries a
+#: 1.2e-2 round-off error there (QR: 5.2e-8 in 318 s).
 PAPER_TABLE2 = (
     ("case 1 (Applanix)", 200.0, 10_800.0, 1.0, 38_912_400, 38_880_000, "leapfrog", "cholesky"),
     ("case 2 (CASI)", 50.0, 14_400.0, 1.0, 13_033_200, 12_960_000, "leapfrog", "cholesky"),

@@ -56,6 +56,8 @@ TEST(LinearInsNetwork, LeapFrogWithOnePriorEpochHasADatumDefect) {
     FAIL() << "no exception";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("rank-deficient"), std::string::npos) << e.what();
+    // A breakdown of the normal equations may also be round-off: the message points to the QR.
+    EXPECT_NE(std::string(e.what()).find("method='qr'"), std::string::npos) << e.what();
   }
   o.rule = Discretisation::kTrapezoidal;
   EXPECT_LT(SolveLinearInsNetwork(o, false, 0).max_abs_error, 1e-6);
