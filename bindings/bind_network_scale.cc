@@ -1,5 +1,6 @@
 // Bindings of the network subsystem's scale path: the streaming block-tridiagonal solver on the
 // linearised INS/GPS network (indoorloc/network/linear_ins_network.h), for the Table 2 benchmark.
+#include <optional>
 #include <string>
 
 #include <pybind11/eigen.h>
@@ -299,7 +300,9 @@ libraries: diagonal (n, b, b) = A_ii, lower (n, b, b) = A_{i,i-1} (lower[0] is z
   m.def(
       "solve_linear_ins_network",
       [](double imu_rate_hz, double duration_s, double gps_rate_hz, const std::string& rule, bool gravity_covariance,
-         int checkpoint_interval, int prior_epochs, bool keep_gravity_estimate, int num_threads) {
+         int checkpoint_interval, int prior_epochs, bool keep_gravity_estimate, int num_threads,
+         std::optional<double> pivot_tolerance, const std::string& method) {
+        CheckArgument(method == "cholesky" || method == "qr", "method", "must be 'cholesky' or 'qr', got '" + method + "'");
         const network::LinearInsNetworkOptions o = MakeOptions(imu_rate_hz, duration_s, gps_rate_hz, rule, prior_epochs);
         CheckArgument(checkpoint_interval >= 0, "checkpoint_interval", "must be >= 0");
         // Without checkpoints the whole factor is kept (two b x b blocks per block row): the same
@@ -312,7 +315,13 @@ libraries: diagonal (n, b, b) = A_ii, lower (n, b, b) = A_{i,i-1} (lower[0] is z
         network::LinearInsNetworkResult r;
         {
           py::gil_scoped_release release;
-          r = network::SolveLinearInsNetwork(o, gravity_covariance, checkpoint_interval, keep_gravity_estimate, num_threads);
+          if (method == "qr") {
+            r = network::SolveLinearInsNetworkQr(o, gravity_covariance, checkpoint_interval, keep_gravity_estimate,
+                                                 pivot_tolerance.value_or(1e-20));
+          } else {
+            r = network::SolveLinearInsNetwork(o, gravity_covariance, checkpoint_interval, keep_gravity_estimate,
+                                               num_threads, pivot_tolerance.value_or(1e-12));
+          }
         }
         py::dict d;
         d["imu_epochs"] = r.size.imu_epochs;
@@ -327,7 +336,11 @@ libraries: diagonal (n, b, b) = A_ii, lower (n, b, b) = A_{i,i-1} (lower[0] is z
         d["assembler_calls"] = r.solver.assembler_calls;
         d["stored_factor_bytes"] = r.solver.stored_factor_bytes;
         d["min_relative_pivot"] = r.solver.min_relative_pivot;
+        d["min_relative_pivot_block"] = r.solver.min_relative_pivot_block;
+        d["min_relative_pivot_unknown"] = r.solver.min_relative_pivot_unknown;
         d["max_abs_error"] = r.max_abs_error;
+        d["max_abs_error_by_unknown"] = r.max_abs_error_by_unknown;
+        d["max_abs_error_epoch"] = r.max_abs_error_epoch;
         d["gravity_rmse"] = r.gravity_rmse;
         d["gravity_sigma"] = r.gravity_sigma;
         d["gravity_estimate"] = r.gravity_estimate;
@@ -336,7 +349,8 @@ libraries: diagonal (n, b, b) = A_ii, lower (n, b, b) = A_{i,i-1} (lower[0] is z
       },
       py::arg("imu_rate_hz") = 200.0, py::arg("duration_s") = 60.0, py::arg("gps_rate_hz") = 1.0,
       py::arg("rule") = "leapfrog", py::arg("gravity_covariance") = true, py::arg("checkpoint_interval") = 0,
-      py::arg("prior_epochs") = 2, py::arg("keep_gravity_estimate") = false, py::arg("num_threads") = 1, R"doc(
+      py::arg("prior_epochs") = 2, py::arg("keep_gravity_estimate") = false, py::arg("num_threads") = 1,
+      py::arg("pivot_tolerance") = py::none(), py::arg("method") = "cholesky", R"doc(
 Builds the linearised strapdown INS/GPS network (18 unknowns per IMU epoch, leap-frog or
 trapezoidal dynamic equations, CUPT at the GPS epochs, alignment prior, GUPT at the end) block by
 block and solves it with the streaming block-tridiagonal Cholesky, with the covariances of every
@@ -359,13 +373,23 @@ keep_gravity_estimate : bool
     Return the δg estimate (E, 3) too.
 num_threads : int
     Threads for the two chains of the twisted elimination (blocks 0.. and ..n-1 meeting in the
-    middle; 1 or 2; <= 0: all cores). The results are bit-identical on any count.
+    middle; 1 or 2; <= 0: all cores). The results are bit-identical on any count. The QR runs
+    on one thread.
+pivot_tolerance : float or None
+    Rank test on the relative pivot (pivot² / A_kk; QR: R_kk² / A_kk), in [0, 1). None: 1e-12
+    for the Cholesky, 1e-20 for the QR (a datum defect gives about 1e-30 there).
+method : "cholesky" or "qr"
+    "cholesky": the normal equations, twisted order (fast). "qr": Householder QR of the whitened
+    observation equations, one way (about 2.5-3.3x slower), which does not square the condition:
+    Table 2 case 3 (200 Hz x 4 h, 5 Hz GPS) needs it (docs/network_scale.md, "Case 3").
 
 Returns
 -------
 dict: sizes (imu_epochs, gps_epochs, unknowns, equations, block_size, num_blocks), timings
-[s], stored_factor_bytes, min_relative_pivot, max_abs_error against the noise-free truth,
-gravity_rmse [m/s²], gravity_sigma (E, 3) [m/s²], gravity_estimate, report.)doc");
+[s], stored_factor_bytes, min_relative_pivot with min_relative_pivot_block and
+min_relative_pivot_unknown (where it was seen), max_abs_error against the noise-free truth with
+max_abs_error_by_unknown (18,) and max_abs_error_epoch, gravity_rmse [m/s²], gravity_sigma (E, 3)
+[m/s²], gravity_estimate, report.)doc");
 }
 
 }  // namespace indoorloc::bindings

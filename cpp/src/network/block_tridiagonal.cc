@@ -49,7 +49,7 @@ class BlockEliminator {
   // Returns the smallest relative pivot (see BlockTridiagonalOptions::pivot_tolerance); throws
   // std::runtime_error naming `block` when S is not (numerically) positive definite.
   double Eliminate(int block, const MatrixXd& diagonal, const VectorXd& rhs, const Neighbour* first, MatrixXd* C_first,
-                   const Neighbour* second, MatrixXd* C_second, MatrixXd* L, VectorXd* y) {
+                   const Neighbour* second, MatrixXd* C_second, MatrixXd* L, VectorXd* y, int* min_unknown = nullptr) {
     *L = diagonal;
     r_ = rhs;
     for (auto [n, C] : {std::pair<const Neighbour*, MatrixXd*>{first, C_first}, {second, C_second}}) {
@@ -67,17 +67,24 @@ class BlockEliminator {
     // given the unknowns before it (pivot L_kk²) against its information alone (A_kk). A ratio
     // near zero means the unknown is (numerically) determined by the others: a rank defect.
     double min_ratio = -1.0;
+    int argmin = 0;
     if (llt.info() == Eigen::Success) {
       min_ratio = 1.0;
       for (int k = 0; k < b_; ++k) {
         const double info = std::max(diagonal(k, k), 1e-300);
-        min_ratio = std::min(min_ratio, (*L)(k, k) * (*L)(k, k) / info);
+        const double ratio = (*L)(k, k) * (*L)(k, k) / info;
+        if (ratio < min_ratio) {
+          min_ratio = ratio;
+          argmin = k;
+        }
       }
     }
+    if (min_unknown != nullptr) *min_unknown = argmin;
     if (llt.info() != Eigen::Success || !(min_ratio > tolerance_)) {
       std::ostringstream msg;
-      msg << "indoorloc: the normal matrix is not positive definite at block " << block
-          << " (rank-deficient network: a datum defect or an unobservable parameter there; relative pivot "
+      msg << "indoorloc: the normal matrix is not positive definite at block " << block;
+      if (llt.info() == Eigen::Success) msg << ", unknown " << argmin << " of the block";
+      msg << " (rank-deficient network: a datum defect or an unobservable parameter there; relative pivot "
           << std::max(min_ratio, 0.0) << " < tolerance " << tolerance_ << ")";
       throw std::runtime_error(msg.str());
     }
@@ -189,6 +196,8 @@ class Chain {
   const Carry& last() const { return last_; }
   long long assembler_calls() const { return assembler_calls_; }
   double min_relative_pivot() const { return min_ratio_; }
+  int min_relative_pivot_block() const { return min_block_; }
+  int min_relative_pivot_unknown() const { return min_unknown_; }
   double stored_bytes() const {
     const double block_bytes = 8.0 * (2.0 * b_ * b_ + b_);
     // Stored factor, or one checkpoint (L, y and the bottom chain's lower block) per segment plus
@@ -289,9 +298,15 @@ class Chain {
       previous.L = &carry->L;
       previous.y = &carry->y;
     }
-    const double ratio = eliminator_.Eliminate(i, diagonal_, rhs_, p > 0 ? &previous : nullptr, C, nullptr, nullptr, L, y);
+    int unknown = 0;
+    const double ratio =
+        eliminator_.Eliminate(i, diagonal_, rhs_, p > 0 ? &previous : nullptr, C, nullptr, nullptr, L, y, &unknown);
     if (p == 0) C->setZero(b_, b_);
-    min_ratio_ = std::min(min_ratio_, ratio);
+    if (ratio < min_ratio_) {
+      min_ratio_ = ratio;
+      min_block_ = i;
+      min_unknown_ = unknown;
+    }
     carry->L = *L;
     carry->y = *y;
     if (step_ < 0) carry->lower.swap(lower_);
@@ -310,6 +325,7 @@ class Chain {
   VectorXd rhs_;
   long long assembler_calls_ = 0;
   double min_ratio_ = 1.0;
+  int min_block_ = -1, min_unknown_ = -1;
 };
 
 // Runs top() and bottom() on two threads (or one after the other). Each chain's exception is kept
@@ -346,7 +362,8 @@ std::string BlockTridiagonalSummary::BriefReport() const {
   std::ostringstream s;
   s << "block-tridiagonal: " << num_blocks << " blocks of " << block_size << ", factor " << factor_seconds
     << " s, backward " << backward_seconds << " s, " << assembler_calls << " assembler calls, factor memory "
-    << stored_factor_bytes / (1024.0 * 1024.0) << " MiB, min relative pivot " << min_relative_pivot;
+    << stored_factor_bytes / (1024.0 * 1024.0) << " MiB, min relative pivot " << min_relative_pivot << " (block "
+    << min_relative_pivot_block << ", unknown " << min_relative_pivot_unknown << ")";
   return s.str();
 }
 
@@ -390,9 +407,11 @@ BlockTridiagonalSolution SolveBlockTridiagonal(int num_blocks, int block_size, c
   }
   BlockEliminator eliminator(b, options.pivot_tolerance);
   double mid_ratio = 1.0;
+  int mid_unknown = 0;
   try {
     mid_ratio = eliminator.Eliminate(m, diagonal, rhs, top.length() > 0 ? &from_top : nullptr, &C_top,
-                                     bottom.length() > 0 ? &from_bottom : nullptr, &C_bottom, &L_mid, &y_mid);
+                                     bottom.length() > 0 ? &from_bottom : nullptr, &C_bottom, &L_mid, &y_mid,
+                                     &mid_unknown);
   } catch (const std::runtime_error& e) {
     if (n == 1) throw;
     // Each chain alone can be regular while the whole is not: say so, the block number alone
@@ -403,7 +422,17 @@ BlockTridiagonalSolution SolveBlockTridiagonal(int num_blocks, int block_size, c
   }
   summary.factor_seconds = timer.ElapsedSeconds();
   summary.assembler_calls = top.assembler_calls() + bottom.assembler_calls() + 1;
-  summary.min_relative_pivot = std::min({mid_ratio, top.min_relative_pivot(), bottom.min_relative_pivot()});
+  // Where the smallest pivot is (ties: top chain, bottom chain, middle; independent of the threads).
+  summary.min_relative_pivot = mid_ratio;
+  summary.min_relative_pivot_block = m;
+  summary.min_relative_pivot_unknown = mid_unknown;
+  for (const Chain* c : {&bottom, &top}) {
+    if (c->length() > 0 && c->min_relative_pivot() <= summary.min_relative_pivot) {
+      summary.min_relative_pivot = c->min_relative_pivot();
+      summary.min_relative_pivot_block = c->min_relative_pivot_block();
+      summary.min_relative_pivot_unknown = c->min_relative_pivot_unknown();
+    }
+  }
 
   // Outwards from the middle: x_m = L_m^{-T} y_m, Σ_mm = L_m^{-T} L_m^{-1}.
   timer.Reset();

@@ -191,17 +191,27 @@ def demo(ctx: DemoContext) -> DemoSection:
 # ---------------------------------------------------------------------------------------------
 # `indoorloc reproduce`, paper 003 (issue 18)
 
-#: Paper 003 Table 2: (name, IMU rate [Hz], duration [s], GPS rate [Hz], N*_eq, N_par, rule).
-#: Case 3 is tried with the trapezoidal rule: with leap-frog its 5 Hz GPS falls on even epochs
-#: only (every 40th at 200 Hz), the odd chain keeps only the alignment prior as datum, and over
-#: 4 h its pivot reaches 0 at the middle block (the weak stability of §3.3, measured
-#: 2026-11-25). The trapezoidal network fails too, later (relative pivot below 1e-12 at block
-#: 1,837,575 of 2,880,000): case 1 already ran at a minimum relative pivot of 2e-12, so 2.88 M
-#: epochs exceed what the block Cholesky resolves in double precision. Reported, not hidden.
+#: Paper 003 Table 2: (name, IMU rate [Hz], duration [s], GPS rate [Hz], N*_eq, N_par, rule, method).
+#: Case 3 (200 Hz x 14,400 s, 5 Hz GPS) is solved with method "qr": the streaming Householder QR
+#: of the whitened observation equations (square-root information form), not the Cholesky of the
+#: normal equations. Why (measured 2026-11-26, docs/network_scale.md "Case 3"): the heading error
+#: ψ_z is tied to the data only through the small horizontal specific force, and the normal
+#: equations square the condition of that mode. With the Cholesky (trapezoidal, 5 Hz GPS) the
+#: error of ψ_z at the last epoch grows from 4e-5 (600 s) to 8e-4 (1800 s), and from 3,600 s on the
+#: Schur complement of the middle block is no longer positive definite (round-off, not a datum
+#: defect: its smallest true relative pivot there is 5e-11); the full case failed in the bottom
+#: chain at block 1,837,575. Lowering the rank tolerance does not help (the Cholesky itself breaks
+#: down), nor does any diagonal scaling (Cholesky is invariant to it). The QR keeps the square
+#: root of the condition: max error 2.4e-9 at 1 h; case 3 in 119 s on one thread, 0.24 GiB, max
+#: error 4.1e-9 (ψ_z), δg RMSE 3e-14 m/s². With leap-frog the 5 Hz GPS alternates parity
+#: (GpsEpoch), so both chains have a datum; its Cholesky fails for the same round-off reason at the
+#: middle block, and the leap-frog QR solves case 3 too (393 s, max error 3.0e-8). Cases 1 and 2
+#: stay on the (3.3x faster, two-thread) Cholesky: their δg are exact, but case 1's ψ_z carries a
+#: 1.2e-2 round-off error there (QR: 5.2e-8 in 318 s).
 PAPER_TABLE2 = (
-    ("case 1 (Applanix)", 200.0, 10_800.0, 1.0, 38_912_400, 38_880_000, "leapfrog"),
-    ("case 2 (CASI)", 50.0, 14_400.0, 1.0, 13_033_200, 12_960_000, "leapfrog"),
-    ("case 3 (GeoMobil)", 200.0, 14_400.0, 5.0, 52_056_000, 51_840_000, "trapezoidal"),
+    ("case 1 (Applanix)", 200.0, 10_800.0, 1.0, 38_912_400, 38_880_000, "leapfrog", "cholesky"),
+    ("case 2 (CASI)", 50.0, 14_400.0, 1.0, 13_033_200, 12_960_000, "leapfrog", "cholesky"),
+    ("case 3 (GeoMobil)", 200.0, 14_400.0, 5.0, 52_056_000, 51_840_000, "trapezoidal", "qr"),
 )
 #: Case 4 (Rockies'95): 565,050 epochs at 50 Hz, 2 Hz GPS, 332,150 cross-overs, 1,907 GUPT.
 PAPER_CASE4 = dict(imu_rate_hz=50.0, duration_s=565049.0 / 50.0, gps_rate_hz=2.0, num_ties=332150, num_gupts=1907)
@@ -285,8 +295,8 @@ def _scale_case(kind: str, args: Dict[str, float], threads: int) -> Dict[str, ob
 
 def expected_seconds(runs: Optional[int]) -> float:
     """Full-size run time on 2 cores [s]: ~25 s per flight (SSA, NA, NA + XOVER, two slow rows)
-    and ~3 min for the four Table 2 cases."""
-    return 25.0 * (runs or FULL_FLIGHTS) + 180.0
+    and ~5 min for the four Table 2 cases (case 3's QR alone about 2 min on one thread)."""
+    return 25.0 * (runs or FULL_FLIGHTS) + 300.0
 
 
 def reproduce_tables(ctx) -> list:
@@ -320,8 +330,8 @@ def reproduce_tables(ctx) -> list:
     # Table 2: the network sizes of the paper's operational cases, solved by the streaming
     # block-tridiagonal Cholesky with every δg variance (docs/network_scale.md).
     t2 = Table("003", "Table 2", "the operational network sizes, solved at full size with every δg variance")
-    cases = [(n, "linear", dict(imu_rate_hz=r, duration_s=d, gps_rate_hz=g, rule=rule), eq, par)
-             for n, r, d, g, eq, par, rule in PAPER_TABLE2]
+    cases = [(n, "linear", dict(imu_rate_hz=r, duration_s=d, gps_rate_hz=g, rule=rule, method=method), eq, par)
+             for n, r, d, g, eq, par, rule, method in PAPER_TABLE2]
     cases.append(("case 4 (Rockies'95, 332,150 cross-overs)", "repeated", dict(PAPER_CASE4), *PAPER_CASE4_SIZES))
     if ctx.quick:  # the same solvers on two-minute networks
         cases = [(f"{n} at 2 min", k, {**a, "duration_s": 120.0, **({"num_ties": 1000, "num_gupts": 10} if k == "repeated" else {})},
@@ -338,14 +348,17 @@ def reproduce_tables(ctx) -> list:
             continue
         ctx.log(f"paper 003: Table 2 {name}: {row['unknowns']:,} unknowns in {row['wall_seconds']:.0f} s, "
                 f"{row['peak_rss_gib']:.2f} GiB")
-        note = (f"{args['rule']} rule; 18 unknowns per IMU epoch (the paper's), equations without the "
+        note = (f"{args['rule']} rule, {args['method']} ({'Householder QR of the observation equations' if args['method'] == 'qr' else 'normal-equation Cholesky'}); "
+                "18 unknowns per IMU epoch (the paper's), equations without the "
                 "alignment/GUPT extras the paper lists as N_al" if kind == "linear" else
                 "the flight re-flown in reverse over its own track; ties on the vertical δg")
         t2.cells += [
             Cell(name, "unknowns N_par", [row["unknowns"]], [0], paper_par, "", note),
             Cell(name, "equations N*_eq", [row["equations"]], [0], paper_eq, ""),
             Cell(name, "solve with every δg variance", [row["wall_seconds"]], [0], None, "s",
-                 f"{max(1, ctx.threads) if ctx.threads else 2} threads, child process, checkpoint every 2048 blocks"),
+                 ("1 thread (the QR runs one way)" if args.get("method") == "qr" else
+                  f"{max(1, ctx.threads) if ctx.threads else 2} threads") +
+                 ", child process, checkpoint every 2048 blocks"),
             Cell(name, "peak memory", [row["peak_rss_gib"]], [0], None, "GiB"),
             Cell(name, "largest error of any unknown vs the noise-free truth", [row["max_abs_error"]], [0], None, ""),
         ]

@@ -84,6 +84,8 @@ struct BlockTridiagonalSummary {
   long long assembler_calls = 0;
   double stored_factor_bytes = 0;  ///< peak bytes of factor blocks held at once
   double min_relative_pivot = 0;   ///< smallest pivot² / A_kk seen (conditioning hint; 1 = independent unknowns)
+  int min_relative_pivot_block = -1;    ///< the block where it was seen
+  int min_relative_pivot_unknown = -1;  ///< its index within the block (0 .. b-1)
   std::string BriefReport() const;
 };
 

@@ -108,6 +108,10 @@ struct LinearInsNetworkResult {
   NetworkSize size;
   BlockTridiagonalSummary solver;
   double max_abs_error = 0.0;             ///< max |x - x*| over every unknown
+  /// 18: max |x - x*| per unknown of an epoch (δr 0-2, δv 3-5, ψ 6-8, a 9-11, ω 12-14, δg 15-17),
+  /// each in its own unit: which unknown the round-off of a long chain reaches.
+  Eigen::VectorXd max_abs_error_by_unknown;
+  long long max_abs_error_epoch = -1;     ///< the epoch of max_abs_error
   double gravity_rmse = 0.0;              ///< δg error RMSE [m/s²] (≈ 0: noise-free)
   Eigen::MatrixXd gravity_sigma;          ///< E x 3: sqrt of the diagonal of Σ_δg per epoch [m/s²]
   Eigen::MatrixXd gravity_estimate;       ///< E x 3 [m/s²]; empty unless keep_gravity_estimate
@@ -120,7 +124,22 @@ struct LinearInsNetworkResult {
 /// bit-identical results on any count). Throws std::runtime_error on a rank-deficient network.
 LinearInsNetworkResult SolveLinearInsNetwork(const LinearInsNetworkOptions& options, bool gravity_covariance,
                                              int checkpoint_interval, bool keep_gravity_estimate = false,
-                                             int num_threads = 1);
+                                             int num_threads = 1, double pivot_tolerance = 1e-12);
+
+/// The same network solved from its whitened observation equations by a streaming block
+/// Householder QR (square-root information form: A = RᵀR, R block upper-bidiagonal, built block by
+/// block as [R_j carried; rows of block j] = Q [R_jj R_{j,j+1}; 0 R_{j+1}]), then back substitution
+/// and the Takahashi recursion on R for the δg covariances. The normal matrix is never formed, so
+/// round-off acts on the condition number of the equations, the square root of the normal
+/// matrix's: the long 200 Hz chains whose normal-equation Cholesky breaks down (Table 2 case 3)
+/// stay resolvable. One-way order (one thread), about 2-3x the Cholesky's time. Rank test:
+/// R_kk² / A_kk (the same quantity as the Cholesky's relative pivot, computed without squaring)
+/// below `pivot_tolerance` throws std::runtime_error naming the block and unknown. With
+/// checkpoint_interval k > 0 one carry per k blocks is kept and segments are refactored
+/// backwards (memory O((n/k + k) b²)); 0 keeps the whole factor (2 n b² doubles).
+LinearInsNetworkResult SolveLinearInsNetworkQr(const LinearInsNetworkOptions& options, bool gravity_covariance,
+                                               int checkpoint_interval, bool keep_gravity_estimate = false,
+                                               double pivot_tolerance = 1e-20);
 
 /// Cross-over ties (XOVER) of a survey flown as `lines` East-West lines then `cross_lines`
 /// North-South lines of equal duration: every EW line crosses every NS line once, half-way
