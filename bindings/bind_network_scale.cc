@@ -303,6 +303,10 @@ libraries: diagonal (n, b, b) = A_ii, lower (n, b, b) = A_{i,i-1} (lower[0] is z
          int checkpoint_interval, int prior_epochs, bool keep_gravity_estimate, int num_threads,
          std::optional<double> pivot_tolerance, const std::string& method) {
         CheckArgument(method == "cholesky" || method == "qr", "method", "must be 'cholesky' or 'qr', got '" + method + "'");
+        if (pivot_tolerance) {  // checked here so the message names the argument, whichever solver runs
+          CheckArgument(*pivot_tolerance >= 0.0 && *pivot_tolerance < 1.0, "pivot_tolerance",
+                        "must be in [0, 1), got " + FormatValue(*pivot_tolerance));
+        }
         const network::LinearInsNetworkOptions o = MakeOptions(imu_rate_hz, duration_s, gps_rate_hz, rule, prior_epochs);
         CheckArgument(checkpoint_interval >= 0, "checkpoint_interval", "must be >= 0");
         // Without checkpoints the whole factor is kept (two b x b blocks per block row): the same

@@ -53,9 +53,7 @@ PYBIND11_MODULE(_core, m) {
   // steps, which polls PyErr_CheckSignals here and unwinds with indoorloc::Interrupted.
   indoorloc::SetInterruptHook(&PollPythonSignals);
   py::register_exception_translator([](std::exception_ptr p) {
-    try {
-      if (p) std::rethrow_exception(p);
-    } catch (const indoorloc::Interrupted&) {
+    auto raise_pending_stop = [] {
       indoorloc::ClearInterrupt();
       if (g_pending_type != nullptr) {
         PyErr_Restore(g_pending_type, g_pending_value, g_pending_traceback);
@@ -63,6 +61,18 @@ PYBIND11_MODULE(_core, m) {
       } else {
         PyErr_SetNone(PyExc_KeyboardInterrupt);
       }
+    };
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const indoorloc::Interrupted&) {
+      raise_pending_stop();
+    } catch (...) {
+      // Another error reached Python while a stop was pending (a parallel task failed while
+      // its sibling was interrupted, and the failure was the one rethrown): the stop wins,
+      // and is consumed here. Left pending, it would interrupt the next call with this one's
+      // KeyboardInterrupt (found by the property suite as a stale alarm).
+      if (g_pending_type == nullptr) throw;  // no stop: pybind11's own translation
+      raise_pending_stop();
     }
   });
 

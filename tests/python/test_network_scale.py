@@ -95,6 +95,9 @@ def test_qr_refuses_the_leapfrog_datum_defect_and_bad_method():
         network.solve_linear_ins_network(50.0, 5.0, method="lu")
     with pytest.raises(ValueError, match="pivot_tolerance"):
         network.solve_linear_ins_network(50.0, 5.0, method="qr", pivot_tolerance=2.0)
+    for method in ("cholesky", "qr"):  # the message names the argument, not 'options'
+        with pytest.raises(ValueError, match="argument 'pivot_tolerance': must be in"):
+            network.solve_linear_ins_network(50.0, 5.0, pivot_tolerance=float("nan"), method=method)
     with pytest.raises(ValueError, match="pivot_tolerance"):
         network.solve_linear_ins_network(50.0, 5.0, pivot_tolerance=-1.0)
 

@@ -84,6 +84,11 @@ void ParallelForRuns(int n_runs, int n_threads, std::uint64_t seed,
       }
     }
     for (std::thread& t : pool) t.join();
+    // A stop this thread saw after the workers' last check (they finished their runs without
+    // another one) must not outlive the call: left pending, it would interrupt the next call
+    // with this call's KeyboardInterrupt (seen as a stale alarm in the property suite). Honour
+    // it here; the user asked to stop, so it wins over a worker's error.
+    if (PollInterrupt()) throw Interrupted();
   }
   if (first_error) std::rethrow_exception(first_error);
 }

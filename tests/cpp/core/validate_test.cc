@@ -7,6 +7,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 #include <gtest/gtest.h>
 
@@ -101,6 +102,27 @@ TEST(Interrupt, AHookStopsParallelRunsOnOneAndTwoThreads) {
     ParallelForRuns(50, threads, 1, [&](int, RandomStream&) { ++all; CheckInterrupt(); });
     EXPECT_EQ(all.load(), 50);
   }
+}
+
+std::atomic<int> g_late_polls{0};
+bool StopAtTheSecondPoll() { return ++g_late_polls == 2; }
+
+// The waiting thread sees the stop after the workers' last check (they never check again): the
+// call must still end with Interrupted, and the next call must run undisturbed (the stop used to
+// stay pending and interrupt it).
+TEST(Interrupt, AStopSeenAfterTheWorkersLastCheckEndsThisCallNotTheNext) {
+  g_late_polls = 0;
+  SetInterruptHook(&StopAtTheSecondPoll);
+  EXPECT_THROW(ParallelForRuns(2, 2, 1,
+                               [&](int, RandomStream&) {
+                                 std::this_thread::sleep_for(std::chrono::milliseconds(150));  // no check inside
+                               }),
+               Interrupted);
+  SetInterruptHook(nullptr);
+  ClearInterrupt();
+  std::atomic<int> all{0};
+  EXPECT_NO_THROW(ParallelForRuns(4, 2, 1, [&](int, RandomStream&) { ++all; CheckInterrupt(); }));
+  EXPECT_EQ(all.load(), 4);
 }
 
 }  // namespace
