@@ -259,6 +259,47 @@ LinearInsEquations LinearInsNetworkEquations(const LinearInsNetworkOptions& opti
   return eq;
 }
 
+namespace {
+
+// Scores a solution against the noise-free truth (LinearInsTruth), epoch by epoch in any order:
+// the largest error of any unknown (and its epoch), the largest per unknown, the δg RMSE; keeps
+// the δg estimate when asked. One scorer for every solver of the linearised network.
+class TruthScore {
+ public:
+  TruthScore(long long epochs, double imu_rate_hz, Eigen::MatrixXd* gravity_estimate)
+      : epochs_(epochs), imu_rate_hz_(imu_rate_hz), gravity_estimate_(gravity_estimate) {
+    if (gravity_estimate_ != nullptr) gravity_estimate_->resize(epochs, 3);
+  }
+  void Add(long long epoch, const Eigen::Ref<const Vec18>& x) {
+    const Vec18 error = (x - LinearInsTruth(epoch, imu_rate_hz_)).cwiseAbs();
+    if (error.maxCoeff() > max_error_) {
+      max_error_ = error.maxCoeff();
+      max_error_epoch_ = epoch;
+    }
+    by_unknown_ = by_unknown_.cwiseMax(error);
+    gravity_sq_ += error.tail<3>().squaredNorm();
+    if (gravity_estimate_ != nullptr) gravity_estimate_->row(epoch) = x.tail<3>().transpose();
+  }
+  double max_error() const { return max_error_; }
+  double gravity_rmse() const { return std::sqrt(gravity_sq_ / (3.0 * static_cast<double>(epochs_))); }
+  void Write(LinearInsNetworkResult* result) const {
+    result->max_abs_error = max_error_;
+    result->max_abs_error_epoch = max_error_epoch_;
+    result->max_abs_error_by_unknown = by_unknown_;
+    result->gravity_rmse = gravity_rmse();
+  }
+
+ private:
+  long long epochs_;
+  double imu_rate_hz_;
+  Eigen::MatrixXd* gravity_estimate_;
+  double max_error_ = 0.0, gravity_sq_ = 0.0;
+  long long max_error_epoch_ = -1;
+  Vec18 by_unknown_ = Vec18::Zero();
+};
+
+}  // namespace
+
 LinearInsNetworkResult SolveLinearInsNetwork(const LinearInsNetworkOptions& o, bool gravity_covariance,
                                              int checkpoint_interval, bool keep_gravity_estimate, int num_threads,
                                              double pivot_tolerance) {
@@ -291,30 +332,17 @@ LinearInsNetworkResult SolveLinearInsNetwork(const LinearInsNetworkOptions& o, b
   }
   result.solver = sol.summary;
 
-  double max_err = 0.0, g_sq = 0.0;
-  Vec18 by_unknown = Vec18::Zero();
-  if (keep_gravity_estimate) result.gravity_estimate.resize(E, 3);
+  TruthScore score(E, o.imu_rate_hz, keep_gravity_estimate ? &result.gravity_estimate : nullptr);
   if (gravity_covariance) result.gravity_sigma.resize(E, 3);
   for (long long n = 0; n < E; ++n) {
-    const Vec18 xs = LinearInsTruth(n, o.imu_rate_hz);
-    const auto x = sol.x.segment<kP>(n * kP);
-    const double err = (x - xs).cwiseAbs().maxCoeff();
-    if (err > max_err) {
-      max_err = err;
-      result.max_abs_error_epoch = n;
-    }
-    by_unknown = by_unknown.cwiseMax((x - xs).cwiseAbs());
-    g_sq += (x.tail<3>() - xs.tail<3>()).squaredNorm();
-    if (keep_gravity_estimate) result.gravity_estimate.row(n) = x.tail<3>().transpose();
+    score.Add(n, sol.x.segment<kP>(n * kP));
     if (gravity_covariance) {
       const Eigen::MatrixXd& cov = sol.covariance[static_cast<size_t>(n / g)];
       const int e = static_cast<int>(n % g);
       for (int c = 0; c < 3; ++c) result.gravity_sigma(n, c) = std::sqrt(std::max(0.0, cov(3 * e + c, 3 * e + c)));
     }
   }
-  result.max_abs_error = max_err;
-  result.max_abs_error_by_unknown = by_unknown;
-  result.gravity_rmse = std::sqrt(g_sq / (3.0 * static_cast<double>(E)));
+  score.Write(&result);
   result.total_seconds = total.ElapsedSeconds();
   return result;
 }
@@ -495,10 +523,8 @@ LinearInsNetworkResult SolveLinearInsNetworkQr(const LinearInsNetworkOptions& o,
   if (gravity_covariance)
     for (int e = 0; e < g; ++e)
       for (int c = 15; c < 18; ++c) selected.push_back(e * kP + c);
-  if (keep_gravity_estimate) result.gravity_estimate.resize(E, 3);
+  TruthScore score(E, o.imu_rate_hz, keep_gravity_estimate ? &result.gravity_estimate : nullptr);
   if (gravity_covariance) result.gravity_sigma.resize(E, 3);
-  Vec18 by_unknown = Vec18::Zero();
-  double max_err = 0.0, g_sq = 0.0;
   Eigen::VectorXd x_next, x, r;
   Eigen::MatrixXd sigma_next, sigma_ii, sigma_off, Rinv, CL, R_next_off;
   for (int s = segments - 1; s >= 0; --s) {
@@ -532,16 +558,7 @@ LinearInsNetworkResult SolveLinearInsNetworkQr(const LinearInsNetworkOptions& o,
       }
       for (int e = 0; e < g; ++e) {
         const long long ep = static_cast<long long>(g) * j + e;
-        const Vec18 xs = LinearInsTruth(ep, o.imu_rate_hz);
-        const Vec18 xe = x.segment<kP>(e * kP);
-        const double err = (xe - xs).cwiseAbs().maxCoeff();
-        if (err > max_err) {
-          max_err = err;
-          result.max_abs_error_epoch = ep;
-        }
-        by_unknown = by_unknown.cwiseMax((xe - xs).cwiseAbs());
-        g_sq += (xe.tail<3>() - xs.tail<3>()).squaredNorm();
-        if (keep_gravity_estimate) result.gravity_estimate.row(ep) = xe.tail<3>().transpose();
+        score.Add(ep, x.segment<kP>(e * kP));
         if (gravity_covariance)
           for (int c = 0; c < 3; ++c)
             result.gravity_sigma(ep, c) = std::sqrt(std::max(0.0, sigma_next(e * kP + 15 + c, e * kP + 15 + c)));
@@ -551,9 +568,7 @@ LinearInsNetworkResult SolveLinearInsNetworkQr(const LinearInsNetworkOptions& o,
   }
   summary.backward_seconds = timer.ElapsedSeconds();
   summary.stored_factor_bytes = 8.0 * (static_cast<double>(store.size()) + segments * (b * b + 2.0 * b));
-  result.max_abs_error = max_err;
-  result.max_abs_error_by_unknown = by_unknown;
-  result.gravity_rmse = std::sqrt(g_sq / (3.0 * static_cast<double>(E)));
+  score.Write(&result);
   result.total_seconds = total.ElapsedSeconds();
   return result;
 }
@@ -601,15 +616,10 @@ CrossoverNetworkResult SolveLinearInsNetworkWithCrossovers(const LinearInsNetwor
   out.factor_bytes = factor.bytes();
   const TiedSolution sol = SolveWithTies(factor, factor.rhs(), ties, pcg);
   out.pcg = sol.summary;
-  double max_err = 0.0, g_sq = 0.0;
-  for (long long n = 0; n < out.size.imu_epochs; ++n) {
-    const Vec18 xs = LinearInsTruth(n, options.imu_rate_hz);
-    const auto x = sol.x.segment<kP>(n * kP);
-    max_err = std::max(max_err, (x - xs).cwiseAbs().maxCoeff());
-    g_sq += (x.tail<3>() - xs.tail<3>()).squaredNorm();
-  }
-  out.max_abs_error = max_err;
-  out.gravity_rmse = std::sqrt(g_sq / (3.0 * static_cast<double>(out.size.imu_epochs)));
+  TruthScore score(out.size.imu_epochs, options.imu_rate_hz, nullptr);
+  for (long long n = 0; n < out.size.imu_epochs; ++n) score.Add(n, sol.x.segment<kP>(n * kP));
+  out.max_abs_error = score.max_error();
+  out.gravity_rmse = score.gravity_rmse();
   out.total_seconds = total.ElapsedSeconds();
   return out;
 }
