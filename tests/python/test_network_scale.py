@@ -87,9 +87,7 @@ def test_qr_keeps_the_digits_the_normal_equations_lose():
 
 
 def test_qr_refuses_the_leapfrog_datum_defect_and_bad_method():
-    with pytest.raises(RuntimeError, match="rank-deficient"):
-        network.solve_linear_ins_network(50.0, 5.0, rule="leapfrog", prior_epochs=1, method="qr")
-    with pytest.raises(RuntimeError, match=r"at block \d+, unknown \d+"):
+    with pytest.raises(RuntimeError, match=r"at block \d+, unknown \d+ .*rank-deficient"):
         network.solve_linear_ins_network(50.0, 5.0, rule="leapfrog", prior_epochs=1, method="qr")
     with pytest.raises(ValueError, match="method"):
         network.solve_linear_ins_network(50.0, 5.0, method="lu")

@@ -129,7 +129,7 @@ TEST(LinearInsNetwork, QrKeepsTheDigitsTheNormalEquationsLoseOnALongChain) {
 TEST(LinearInsNetwork, QrRefusesADatumDefectNamingBlockAndUnknown) {
   // The leap-frog odd chain without datum (one prior epoch): R_kk² / A_kk comes out at ε²
   // (measured 2e-30), ten orders below the default tolerance 1e-20, while the weakest genuine
-  // pivot of Table 2 case 3 (200 Hz x 4 h) is about 1e-11.
+  // pivot of Table 2 case 3 (200 Hz x 4 h) is 1.1e-12 (measured, docs/network_scale.md).
   LinearInsNetworkOptions o = Small(Discretisation::kLeapFrog);
   o.prior_epochs = 1;
   try {
