@@ -219,6 +219,29 @@ def test_recommended_method_on_two_real_trials(shared_data):
         assert not r["health"]["implausible"], r["health"]["report"]
 
 
+def test_held_out_paper_tables_use_each_folds_choice_and_match_the_reproduce_rows(shared_data):
+    from indoorloc.experiments import pdr_reproduce
+
+    root = shared_data / "pdr" / "pyshoe_vicon"
+    if not root.is_dir():
+        pytest.skip(f"PyShoe trials not found at {root}")
+    recs = [load_pyshoe_trial(p) for p in sorted(root.glob("*.mat"))[:3]]
+    default = '{"log_gamma": 4.0, "max_swing_ratio": 1.5, "max_swing_s": 2.0}'
+    other = '{"log_gamma": 4.5, "max_swing_ratio": 2.0, "max_swing_s": 3.0}'
+
+    def rows(values):
+        return [{"trial": r.name, "armse_m": v, "stride_error": 0, "strides_truth": 10, "stance_fraction": 0.3,
+                 "implausible": False} for r, v in zip(recs, values)]
+    # Held out trial 1, the others (0, 2) prefer `other` on average (0.05 against 0.1); held out
+    # 0 or 2, the default wins (0.1 against 0.5 or 0.45).
+    h = cv.held_out_paper_tables(recs, {default: rows([0.1, 0.1, 0.1]), other: rows([0.0, 0.9, 0.1])})
+    assert h["chosen"] == [default, other, default]
+    # With the default setting the rows are exactly the reproduce report's (library pipeline).
+    for i in (0, 2):
+        assert h["distance_error_pct"][i] == pytest.approx(pdr_reproduce._distance_error_pct(recs[i]), abs=1e-12)
+    assert all(np.isfinite(h["distance_error_pct"])) and all(c >= 0 for c in h["count_error_pct"])
+
+
 # ------------------------------------------------------------------ the CV harness
 def test_leave_one_out_never_scores_a_trial_with_a_setting_chosen_on_it():
     # Setting "a" is best on trials 0 and 1 but terrible on 2; "b" is mediocre everywhere.
