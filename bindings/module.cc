@@ -36,6 +36,7 @@ namespace indoorloc::bindings {
 void BindAnalog(py::module_& m);
 void BindCore(py::module_& m);
 void BindFusionFloorPlan(py::module_& m);
+void BindFusionGrid(py::module_& m);
 void BindFusionTracker(py::module_& m);
 void BindMapmatch(py::module_& m);
 void BindNetworkScale(py::module_& m);
@@ -95,4 +96,5 @@ PYBIND11_MODULE(_core, m) {
   py::module_ fusion = m.def_submodule("fusion", "Particle-filter fusion of PDR steps, WiFi and a floor plan (issue 14).");
   indoorloc::bindings::BindFusionFloorPlan(fusion);
   indoorloc::bindings::BindFusionTracker(fusion);
+  indoorloc::bindings::BindFusionGrid(fusion);
 }

@@ -43,6 +43,7 @@ from __future__ import annotations
 import itertools
 import math
 import sys
+import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass, field, replace
@@ -66,7 +67,13 @@ METHODS = (
     "fusion_no_walls",
     "fusion_no_wifi",
     "fusion_no_heading_offset",
+    "particle_unknown_start",
+    "particle_smoother",
+    "particle_known_start",
 )
+#: Methods whose estimate comes with a covariance: the 95 % region's coverage is reported.
+COVARIANCE_METHODS = ("fusion_unknown_start", "fusion_smoother", "fusion_known_start", "particle_unknown_start",
+                      "particle_smoother")
 
 
 @dataclass
@@ -106,6 +113,15 @@ class RealSettings:
     known_start_fix_outlier_probability: float = 0.3
     floor_identification: bool = True   #: also run the default with the floor not given
     threads: int = 2                    #: walks tracked in parallel (results do not depend on it)
+    #: Engine of the fusion_* methods: "grid" (exact filter and smoother on floor cells,
+    #: ``fusion.GridTracker``) or "particle" (``fusion.track``). The other engine's default runs
+    #: too, as ``particle_*`` or ``grid_*`` (docs/fusion_real.md: chosen by leave-one-floor-out).
+    engine: str = "grid"
+    #: The grid engine's options (the heading-offset prior sd is the fold's calibrated spread).
+    grid_options: Any = field(default_factory=lambda: fusion.GridTrackerOptions())
+    #: Cells [m] and offset bins of the floor-identification pass (all floors, filter only).
+    floor_identification_cell_m: float = 2.0
+    floor_identification_offset_bins: int = 3
 
     def tracker_options(self, **overrides) -> fusion.TrackerOptions:
         settings = dict(num_particles=self.num_particles, wall_log_penalty=self.wall_log_penalty,
@@ -117,6 +133,8 @@ class RealSettings:
     def to_dict(self) -> Dict[str, Any]:
         d = asdict(self)
         d["wall_log_penalty"] = None if math.isinf(self.wall_log_penalty) else self.wall_log_penalty
+        g = self.grid_options.to_dict()
+        d["grid_options"] = {k: (None if isinstance(v, float) and math.isinf(v) else v) for k, v in g.items()}
         return d
 
 
@@ -129,6 +147,15 @@ class WalkScore:
     seconds: Dict[str, float] = field(default_factory=dict)
     floor_correct: Optional[np.ndarray] = None       #: floor identification at the waypoints
     floor_free_errors_m: Optional[np.ndarray] = None  #: position error of that run
+    #: Distance [m] from each waypoint to the nearest training scan of its floor (survey coverage).
+    coverage_m: Optional[np.ndarray] = None
+    #: Per method with a covariance: whether each waypoint lies in the estimate's 95 % ellipse.
+    in_region95: Dict[str, np.ndarray] = field(default_factory=dict)
+    #: Per method with a heading-offset state: final offset minus the walk's residual [rad].
+    offset_error_rad: Dict[str, float] = field(default_factory=dict)
+    waypoint_t0: float = 0.0                          #: the first waypoint's time [s]
+    waypoint_xy_m: Optional[np.ndarray] = None        #: surveyed waypoints (W, 2) [m]
+    smoothed_track_m: Optional[np.ndarray] = None     #: the default's smoothed track (per step)
 
 
 @dataclass
@@ -229,7 +256,10 @@ def _score_walk(walk, steps_raw: ph.HandheldSteps, models: FoldModels, settings:
     fl = models.floor
     wt = np.asarray(walk.waypoint_t_s, float)
     wxy = np.asarray(walk.waypoint_xy_m, float)
-    score = WalkScore(fl.name, walk.walk_id, wt - wt[0])
+    score = WalkScore(fl.name, walk.walk_id, wt - wt[0], waypoint_t0=float(wt[0]), waypoint_xy_m=wxy)
+    train_xy = models.database.positions_m[models.database.floors == fl.number]
+    if train_xy.size:
+        score.coverage_m = np.sqrt(((wxy[:, None, :] - train_xy[None, :, :]) ** 2).sum(axis=2)).min(axis=1)
     err = score.errors_m
     want = set(methods)
 
@@ -265,6 +295,7 @@ def _score_walk(walk, steps_raw: ph.HandheldSteps, models: FoldModels, settings:
     if len(pdr_steps) == 0:
         return score
     spread = max(cal.yaw_offset_spread_rad, 1e-3)
+    residual = heading_residual_rad(steps, cal.yaw_offset_rad, wt, wxy)
     options = settings.tracker_options(unknown_start_heading_sd_rad=spread, start_heading_offset_sd_rad=spread)
     start_xy = wxy[0] if not math.isinf(settings.wall_log_penalty) else _walkable_start(fl.plan, wxy[0])
     known = {"position_m": start_xy, "floor": fl.number, "heading_offset_rad": 0.0, "time_s": float(wt[0])}
@@ -276,16 +307,22 @@ def _score_walk(walk, steps_raw: ph.HandheldSteps, models: FoldModels, settings:
     if settings.known_start_fix_metric != models.database.settings.metric and "fusion_known_start" in want:
         known_db = models.database.with_settings(replace(models.database.settings, metric=settings.known_start_fix_metric))
         known_fixes = wfx.fixes_for_walk(walk, known_db)
+    particle = settings.engine == "particle"
+    # The particle engine's runs: the fusion_* methods when it is the engine, else particle_*.
+    p_unknown, p_smoother, p_known = (("fusion_unknown_start", "fusion_smoother", "fusion_known_start") if particle
+                                      else ("particle_unknown_start", "particle_smoother", "particle_known_start"))
     runs = {
-        "fusion_unknown_start": dict(start=None, smoother=smoother, keys=("fusion_unknown_start", "fusion_smoother")),
-        "fusion_known_start": dict(start=known, smoother=None, keys=("fusion_known_start",), options=known_options,
-                                   fixes=known_fixes),
-        "fusion_no_walls": dict(start=None, smoother=smoother, keys=(None, "fusion_no_walls")),
-        "fusion_no_wifi": dict(start=known, smoother=smoother, fixes=None, keys=(None, "fusion_no_wifi")),
-        "fusion_no_heading_offset": dict(start=None, smoother=smoother, keys=(None, "fusion_no_heading_offset"),
-                                         options=replace_options(options, heading_offset_walk_rad=0.0,
-                                                                 unknown_start_heading_sd_rad=0.0)),
+        "unknown": dict(start=None, smoother=smoother, keys=(p_unknown, p_smoother)),
+        "known": dict(start=known, smoother=None, keys=(p_known,), options=known_options, fixes=known_fixes),
     }
+    if particle:
+        runs.update({
+            "fusion_no_walls": dict(start=None, smoother=smoother, keys=(None, "fusion_no_walls")),
+            "fusion_no_wifi": dict(start=known, smoother=smoother, fixes=None, keys=(None, "fusion_no_wifi")),
+            "fusion_no_heading_offset": dict(start=None, smoother=smoother, keys=(None, "fusion_no_heading_offset"),
+                                             options=replace_options(options, heading_offset_walk_rad=0.0,
+                                                                     unknown_start_heading_sd_rad=0.0)),
+        })
     for name, run in runs.items():
         if not want.intersection(k for k in run["keys"] if k):
             continue
@@ -297,25 +334,135 @@ def _score_walk(walk, steps_raw: ph.HandheldSteps, models: FoldModels, settings:
                               smoother=run["smoother"], fixes=run.get("fixes", fixes))
         seconds = time.perf_counter() - tic
         filtered, smoothed = run["keys"][0], run["keys"][-1] if len(run["keys"]) > 1 else None
+        idx = np.clip(np.searchsorted(pdr_steps.times_s, wt), 0, len(pdr_steps) - 1)
         if filtered:
             put(filtered, _interp_track(wt, pdr_steps.times_s, result["mean_m"]))
             score.seconds[filtered] = seconds
+            if filtered in COVARIANCE_METHODS:
+                score.in_region95[filtered] = fusion.region95_contains(
+                    _interp_track(wt, pdr_steps.times_s, result["mean_m"]), np.asarray(result["covariance_m2"])[idx], wxy)
         if smoothed:
             put(smoothed, _interp_track(wt, pdr_steps.times_s, result["smoothed_m"]))
             score.seconds[smoothed] = seconds
+            if smoothed in COVARIANCE_METHODS:
+                score.in_region95[smoothed] = fusion.region95_contains(
+                    _interp_track(wt, pdr_steps.times_s, result["smoothed_m"]),
+                    np.asarray(result["smoothed_covariance_m2"])[idx], wxy)
+        if name == "unknown" and smoothed:
+            score.offset_error_rad[smoothed] = _wrap(float(np.asarray(result["heading_offset_rad"])[-1]) - residual)
+    if not particle:
+        _score_walk_grid(score, put, pdr_steps, fixes, known_fixes, known, models, settings, want, residual)
     if settings.floor_identification and models.all_plan is not None and "fusion_smoother" in want:
         all_fixes = wfx.fixes_for_walk(walk, models.all_database)
         tic = time.perf_counter()
-        result = fusion.track(pdr_steps, plan=models.all_plan, options=options, smoother=smoother, fixes=all_fixes)
-        score.seconds["floor_identification"] = time.perf_counter() - tic
         plan_floors = list(models.all_plan.floors)
         step_idx = np.clip(np.searchsorted(pdr_steps.times_s, wt), 0, len(pdr_steps) - 1)
-        est_floor = np.asarray(plan_floors)[np.asarray(result["smoothed_floor_index"])[step_idx]]
+        if particle:
+            result = fusion.track(pdr_steps, plan=models.all_plan, options=options, smoother=smoother, fixes=all_fixes)
+            est_floor = np.asarray(plan_floors)[np.asarray(result["smoothed_floor_index"])[step_idx]]
+            track_m = result["smoothed_m"]
+        else:
+            # All floors, filter only, coarse cells: the floor with the most evidence; then the
+            # floor-given smoother on it (a walk stays on one floor in this model).
+            ident = _grid_tracker(models.all_plan, _identification_options(settings, spread), fl.name + "/all")
+            r = fusion.track_grid(ident, pdr_steps, fixes=all_fixes, smooth=False)
+            best = int(np.argmax(r["smoothed_floor_probabilities"]))
+            est_floor = np.full(wt.size, plan_floors[best])
+            if plan_floors[best] == fl.number:
+                track_m = score.smoothed_track_m
+            else:
+                track_m = np.asarray(r["mean_m"])
+        score.seconds["floor_identification"] = time.perf_counter() - tic
         score.floor_correct = est_floor == fl.number
         score.floor_free_errors_m = np.where(score.floor_correct,
-                                             np.hypot(*(_interp_track(wt, pdr_steps.times_s, result["smoothed_m"]) - wxy).T),
+                                             np.hypot(*(_interp_track(wt, pdr_steps.times_s, track_m) - wxy).T),
                                              np.nan)
     return score
+
+
+def _wrap(angle_rad: float) -> float:
+    return float(math.remainder(angle_rad, 2.0 * math.pi))
+
+
+def heading_residual_rad(steps: ph.HandheldSteps, yaw_offset_rad: float, waypoint_t_s: np.ndarray,
+                         waypoint_xy_m: np.ndarray) -> float:
+    """The walk's residual heading offset [rad]: the rotation that best maps the PDR displacements
+    between consecutive waypoints (headings already rotated by ``yaw_offset_rad``) onto the
+    surveyed ones, in the least-squares sense (Procrustes angle). The truth the trackers' learnt
+    offset is compared with."""
+    pdr = ph.pdr_track(steps, waypoint_xy_m[0], waypoint_t_s, yaw_offset_rad=yaw_offset_rad)
+    p, w = np.diff(pdr, axis=0), np.diff(waypoint_xy_m, axis=0)
+    return float(math.atan2(np.sum(p[:, 0] * w[:, 1] - p[:, 1] * w[:, 0]), np.sum(p * w)))
+
+
+_TRACKERS: Dict[Tuple[str, Tuple], Any] = {}
+_TRACKERS_LOCK = threading.Lock()
+
+
+def _grid_tracker(plan, options, key: str):
+    """The GridTracker of a plan and options, built once (its walkable fractions cost a batch of
+    point queries) and shared by the threads (its runs are thread-safe)."""
+    k = (key, tuple(sorted(options.to_dict().items())))
+    with _TRACKERS_LOCK:
+        tracker = _TRACKERS.get(k)
+        if tracker is None or tracker[0] is not plan:
+            tracker = (plan, fusion.GridTracker(plan, options))
+            _TRACKERS[k] = tracker
+        return tracker[1]
+
+
+def _grid_options(settings: RealSettings, spread_rad: float, **changes):
+    return settings.grid_options.replace(heading_offset_sd_rad=spread_rad, **changes)
+
+
+def _identification_options(settings: RealSettings, spread_rad: float):
+    return _grid_options(settings, spread_rad, cell_size_m=settings.floor_identification_cell_m,
+                         heading_offset_bins=settings.floor_identification_offset_bins)
+
+
+def _score_walk_grid(score: WalkScore, put, pdr_steps, fixes, known_fixes, known: dict, models: FoldModels,
+                     settings: RealSettings, want, residual: float) -> None:
+    """The fusion_* methods on the grid engine (unknown start: filter and smoother; known start;
+    the ablations)."""
+    fl = models.floor
+    wt = score.t_s + score.waypoint_t0
+    wxy = score.waypoint_xy_m
+    idx = np.clip(np.searchsorted(pdr_steps.times_s, wt), 0, len(pdr_steps) - 1)
+    spread = max(models.cal.yaw_offset_spread_rad, 1e-3)
+    base = _grid_options(settings, spread)
+    tracker = _grid_tracker(fl.plan, base, fl.name)
+
+    def run(name_filtered, name_smoothed, tracker_, start, fx, smooth=True):
+        tic = time.perf_counter()
+        r = fusion.track_grid(tracker_, pdr_steps, fixes=fx, start=start, smooth=smooth)
+        seconds = time.perf_counter() - tic
+        for name, key, cov_key in ((name_filtered, "mean_m", "covariance_m2"),
+                                   (name_smoothed, "smoothed_m", "smoothed_covariance_m2")):
+            if not name or key not in r:
+                continue
+            est = _interp_track(wt, pdr_steps.times_s, r[key])
+            put(name, est)
+            score.seconds[name] = seconds
+            if name in COVARIANCE_METHODS:
+                score.in_region95[name] = fusion.region95_contains(est, np.asarray(r[cov_key])[idx], wxy)
+        return r
+
+    if want & {"fusion_unknown_start", "fusion_smoother"} or settings.floor_identification:
+        r = run("fusion_unknown_start", "fusion_smoother", tracker, None, fixes)
+        score.offset_error_rad["fusion_smoother"] = _wrap(float(r["walk_heading_offset_rad"]) - residual)
+        score.smoothed_track_m = np.asarray(r["smoothed_m"])
+    if "fusion_known_start" in want:
+        known_tracker = _grid_tracker(fl.plan, base.replace(
+            fix_tempering=settings.known_start_fix_tempering,
+            fix_outlier_probability=settings.known_start_fix_outlier_probability), fl.name)
+        run("fusion_known_start", None, known_tracker, known, known_fixes, smooth=False)
+    if "fusion_no_walls" in want:
+        run(None, "fusion_no_walls", _grid_tracker(fl.outline_plan, base, fl.name + "/outline"), None, fixes)
+    if "fusion_no_wifi" in want:
+        run(None, "fusion_no_wifi", tracker, known, None)
+    if "fusion_no_heading_offset" in want:
+        run(None, "fusion_no_heading_offset", _grid_tracker(fl.plan, base.replace(heading_offset_sd_rad=0.0), fl.name),
+            None, fixes)
 
 
 def load_floor(root: Path, name: str) -> FloorData:
@@ -382,6 +529,36 @@ def _stats(errors: np.ndarray) -> Dict[str, float]:
             "p90_m": float(np.percentile(errors, 90)), "n_waypoints": int(errors.size)}
 
 
+#: Survey-coverage classes: distance from a test waypoint to the nearest training scan [m].
+COVERAGE_CLASSES = (("within_5m", 0.0, 5.0), ("5_to_10m", 5.0, 10.0), ("beyond_10m", 10.0, math.inf))
+
+
+def _extra_stats(scores: Sequence[WalkScore], name: str) -> Dict[str, Any]:
+    """The keys added beside issue 15's (docs/fusion_real.md): ``first_10s_mean_m`` (mean error
+    at waypoints in the walk's first 10 s), ``by_coverage`` (stats per coverage class),
+    ``region95_coverage`` (fraction of waypoints in the estimate's 95 % ellipse, methods with a
+    covariance), ``offset_error_deg`` (mean and median |final heading offset - the walk's
+    residual|, methods with an offset state)."""
+    sel = [s for s in scores if name in s.errors_m]
+    e = np.concatenate([s.errors_m[name] for s in sel])
+    t = np.concatenate([s.t_s for s in sel])
+    out: Dict[str, Any] = {"first_10s_mean_m": float(e[t < 10.0].mean()) if (t < 10.0).any() else None}
+    cov = [s.coverage_m if s.coverage_m is not None else np.full(s.t_s.size, np.nan) for s in sel]
+    c = np.concatenate(cov)
+    out["by_coverage"] = {}
+    for key, lo, hi in COVERAGE_CLASSES:
+        m = (c >= lo) & (c < hi)
+        out["by_coverage"][key] = _stats(e[m]) if m.any() else None
+    inside = [s.in_region95[name] for s in sel if name in s.in_region95]
+    if inside:
+        out["region95_coverage"] = float(np.concatenate(inside).mean())
+    off = np.array([s.offset_error_rad[name] for s in sel if name in s.offset_error_rad])
+    if off.size:
+        out["offset_error_deg"] = {"mean_abs": float(np.degrees(np.abs(off)).mean()),
+                                   "median_abs": float(np.degrees(np.median(np.abs(off)))), "n_walks": int(off.size)}
+    return out
+
+
 #: Bins of the time since the walk's first waypoint for "error against time" [s].
 TIME_BINS_S = (0.0, 10.0, 20.0, 30.0, 45.0, math.inf)
 
@@ -399,6 +576,7 @@ def summarize(scores: Sequence[WalkScore], settings: RealSettings, seconds: floa
         if not e:
             continue
         methods[name] = _stats(np.concatenate(e))
+        methods[name].update(_extra_stats(scores, name))
         for fl in sorted({s.floor for s in scores}):
             ef = [s.errors_m[name] for s in scores if s.floor == fl and name in s.errors_m]
             if ef:

@@ -414,8 +414,15 @@ def track(steps: Steps, observations: Sequence[WifiObservation] = (), *, plan=No
                        None if fixes is None or len(fixes) == 0 else fixes.as_arrays())
 
 
+from indoorloc.fusion.grid import GridTracker, GridTrackerOptions, GridTrackSummary, region95_contains, track_grid  # noqa: E402
+
 __all__ = [
     "ANY_FLOOR",
+    "GridTracker",
+    "GridTrackerOptions",
+    "GridTrackSummary",
+    "region95_contains",
+    "track_grid",
     "Fixes",
     "FloorGeometry",
     "FloorPlan",

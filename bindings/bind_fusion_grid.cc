@@ -1,0 +1,142 @@
+// Python bindings of the grid tracker (fusion/grid_tracker.h): options, summary, the tracker.
+#include <string>
+#include <vector>
+
+#include <pybind11/eigen.h>
+#include <pybind11/stl.h>
+
+#include "indoorloc/fusion/grid_tracker.h"
+#include "fusion_args.h"
+#include "numpy_args.h"
+#include "options_binding.h"
+
+namespace indoorloc::bindings {
+
+using namespace indoorloc::fusion;  // NOLINT: binding file
+
+namespace {
+
+py::dict ResultToDict(const GridTrackResult& r) {
+  py::dict d;
+  d["times_s"] = r.times_s;
+  d["mean_m"] = r.filtered_mean_m;
+  d["covariance_m2"] = r.filtered_covariance_m2;
+  d["floor_probabilities"] = r.filtered_floor_probabilities;
+  d["heading_offset_rad"] = r.filtered_heading_offset_rad;
+  if (r.smoothed_mean_m.rows() > 0) {
+    d["smoothed_m"] = r.smoothed_mean_m;
+    d["smoothed_covariance_m2"] = r.smoothed_covariance_m2;
+  }
+  d["smoothed_floor_probabilities"] = r.smoothed_floor_probabilities;
+  d["heading_offset_bins_rad"] = r.heading_offset_bins_rad;
+  d["heading_offset_probabilities"] = r.heading_offset_probabilities;
+  d["scale_bins"] = r.scale_bins;
+  d["scale_probabilities"] = r.scale_probabilities;
+  d["walk_heading_offset_rad"] = r.heading_offset_rad;
+  d["walk_heading_offset_sd_rad"] = r.heading_offset_sd_rad;
+  d["walk_scale"] = r.scale;
+  d["summary"] = r.summary;
+  return d;
+}
+
+}  // namespace
+
+void BindFusionGrid(py::module_& m) {
+  py::class_<GridTrackerOptions> options(m, "GridTrackerOptions", R"doc(
+Options of the grid tracker (docs/fusion.md, "Grid tracker"; each default and how it was chosen
+is in cpp/include/indoorloc/fusion/grid_tracker.h). Set fields by keyword:
+``GridTrackerOptions(cell_size_m=1.5, wall_log_penalty=-1.0)``; ``replace``, ``to_dict``,
+equality and pickling as for every Options class. The fix likelihood's ε and τ are flattened as
+``fix_outlier_probability`` and ``fix_tempering``.)doc");
+  options.def_readwrite("cell_size_m", &GridTrackerOptions::cell_size_m, "Side of the square cells [m].")
+      .def_readwrite("walkable_subsamples", &GridTrackerOptions::walkable_subsamples,
+                     "n: a cell's walkable fraction from n x n sub-samples.")
+      .def_readwrite("heading_offset_bins", &GridTrackerOptions::heading_offset_bins, "Heading-offset layers.")
+      .def_readwrite("heading_offset_sd_rad", &GridTrackerOptions::heading_offset_sd_rad,
+                     "Prior sd of the heading offset around the start's [rad]; 0: known.")
+      .def_readwrite("heading_offset_span_sd", &GridTrackerOptions::heading_offset_span_sd,
+                     "The offset bins span ± this many prior sd (the circle beyond ±π).")
+      .def_readwrite("scale_bins", &GridTrackerOptions::scale_bins, "Stride-scale layers (1: scale 1).")
+      .def_readwrite("scale_sd", &GridTrackerOptions::scale_sd, "Prior sd of the stride scale.")
+      .def_readwrite("position_noise_m", &GridTrackerOptions::position_noise_m, "Process noise per step [m].")
+      .def_readwrite("wall_log_penalty", &GridTrackerOptions::wall_log_penalty,
+                     "Log-weight per step outside walkable space; -inf: hard walls.")
+      .def_property("fix_outlier_probability", [](const GridTrackerOptions& o) { return o.fix.outlier_probability; },
+                    [](GridTrackerOptions& o, double v) { o.fix.outlier_probability = v; }, "ε of the position fixes.")
+      .def_property("fix_tempering", [](const GridTrackerOptions& o) { return o.fix.tempering; },
+                    [](GridTrackerOptions& o, double v) { o.fix.tempering = v; }, "τ of the position fixes.")
+      .def_readwrite("start_position_sd_m", &GridTrackerOptions::start_position_sd_m, "Known start: sd [m].")
+      .def_readwrite("max_memory_bytes", &GridTrackerOptions::max_memory_bytes, "Memory limit of a run [bytes].")
+      .def_readwrite("num_threads", &GridTrackerOptions::num_threads, "Layers in parallel (<= 0: all cores).");
+  BindOptionsProtocol(options, "GridTrackerOptions");
+
+  py::class_<GridTrackSummary>(m, "GridTrackSummary", "What a grid tracker run did.")
+      .def_readonly("steps", &GridTrackSummary::steps)
+      .def_readonly("fixes", &GridTrackSummary::fixes)
+      .def_readonly("layers", &GridTrackSummary::layers)
+      .def_readonly("cells", &GridTrackSummary::cells)
+      .def_readonly("dead_layers", &GridTrackSummary::dead_layers)
+      .def_readonly("log_evidence", &GridTrackSummary::log_evidence)
+      .def_readonly("memory_bytes", &GridTrackSummary::memory_bytes)
+      .def_readonly("seconds", &GridTrackSummary::seconds)
+      .def("brief_report", &GridTrackSummary::BriefReport)
+      .def("__repr__", [](const GridTrackSummary& s) { return "<GridTrackSummary " + s.BriefReport() + ">"; });
+
+  py::class_<GridTracker>(m, "GridTracker", R"doc(
+Exact grid filter and forward-backward smoother of a walk (unknown or known start) on a plan's
+floors: cells x heading-offset bins x stride-scale bins (docs/fusion.md, "Grid tracker").
+Build once per plan and options (keeps a reference to the plan); ``run`` is thread-safe.)doc")
+      .def(py::init([](const FloorPlan* plan, const py::object& options) {
+             if (plan == nullptr) ThrowInvalidArgument("plan", "must be a FloorPlan, got None");
+             GridTrackerOptions o;
+             if (!options.is_none()) {
+               if (!py::isinstance<GridTrackerOptions>(options)) {
+                 ThrowInvalidArgument("options", "expected None or a GridTrackerOptions, got " +
+                                                     std::string(Py_TYPE(options.ptr())->tp_name));
+               }
+               o = options.cast<GridTrackerOptions>();
+             }
+             py::gil_scoped_release release;
+             return new GridTracker(plan, o);
+           }),
+           py::arg("plan"), py::arg("options") = py::none(), py::keep_alive<1, 2>())
+      .def_property_readonly("options", &GridTracker::options)
+      .def("grid_geometry", &GridTracker::GridGeometry, py::arg("floor_index"),
+           "(x0, y0, columns, rows): corner of the first cell [m] and the grid's size on a floor.")
+      .def("walkable_fraction", &GridTracker::WalkableFraction, py::arg("floor_index"),
+           "Walkable fraction of every cell (rows, columns), row 0 at the lowest y.")
+      .def("run",
+           [](const GridTracker& t, const py::object& step_times_s, const py::object& displacements_m,
+              const py::object& covariances_m2, const py::object& fixes, const py::object& start, bool smooth) {
+             const std::vector<StepInput> steps = StepsFromArrays(step_times_s, displacements_m, covariances_m2);
+             std::vector<PositionFix> fx;
+             if (!fixes.is_none()) {
+               if (!py::isinstance<py::tuple>(fixes)) {
+                 ThrowInvalidArgument("fixes", "expected None or (times_s, means_m, sds_m, weights, floors) "
+                                               "(indoorloc.fusion.Fixes.as_arrays()), got " +
+                                                   std::string(Py_TYPE(fixes.ptr())->tp_name));
+               }
+               fx = FixesFromArrays(fixes.cast<py::tuple>());
+             }
+             const TrackStart st = StartFromDict(start, steps.empty() ? 0.0 : steps.front().time_s);
+             GridTrackResult r;
+             {
+               py::gil_scoped_release release;
+               r = t.Run(steps, fx, st, smooth);
+             }
+             return ResultToDict(r);
+           },
+           py::arg("step_times_s"), py::arg("displacements_m"), py::arg("covariances_m2"), py::arg("fixes") = py::none(),
+           py::arg("start") = py::none(), py::arg("smooth") = true, R"doc(
+Track one walk (GIL released). Steps as arrays: step_times_s (M,) [s], displacements_m (M, 2) [m]
+in the PDR frame, covariances_m2 (M, 3) = (xx, xy, yy) [m²]; fixes: None or
+indoorloc.fusion.Fixes.as_arrays(); start: None (unknown) or {"position_m", "floor",
+"heading_offset_rad", "time_s"} (its heading offset is also the centre of the offset prior).
+Returns a dict: per step times_s (M,), mean_m (M, 2), covariance_m2 (M, 3) (causal filter),
+floor_probabilities (M, F), heading_offset_rad (M,); with smooth, smoothed_m (M, 2) and
+smoothed_covariance_m2 (M, 3); given the whole walk smoothed_floor_probabilities (F,),
+heading_offset_bins_rad / heading_offset_probabilities (H,), scale_bins / scale_probabilities
+(S,), walk_heading_offset_rad, walk_heading_offset_sd_rad, walk_scale; summary.)doc");
+}
+
+}  // namespace indoorloc::bindings

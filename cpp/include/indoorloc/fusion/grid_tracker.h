@@ -1,0 +1,144 @@
+// Grid tracker: the exact forward filter and forward-backward smoother of the fusion model on a
+// grid of floor cells, for a walk whose start is unknown (or known).
+//
+// Why a grid beside the particle tracker: with an unknown start the particle filter must first
+// find the walker from WiFi fixes whose components are spread over the building; a finite cloud
+// re-drawn from the first fix loses the truth more often than not on a crowdsourced map
+// (docs/fusion_real.md), and FFBSi then collapses to a few trajectories. On a grid nothing is
+// sampled: every cell of every floor keeps its probability, so the posterior holds every mode
+// until motion, walls and later fixes resolve it, and the smoother is the exact forward-backward
+// recursion, whose spread is the posterior's own.
+//
+// State: (cell c, floor f, heading offset bin h, stride scale bin s). The offset o_h and scale
+// s_s are constant over a walk (a walk lasts minutes; the white part of heading and length errors
+// is in each step's covariance), so each (f, h, s) is one layer: an independent hidden Markov
+// model over the cells of floor f whose steps are the PDR steps rotated by o_h and scaled by s_s.
+// The layers' posterior weights are their prior times their evidence, so the mixture over layers
+// is exact for this model, and the heading offset and scale posteriors come out of it.
+//
+// One step k of layer (f, h, s), with d_k, Σ_k the step's displacement and covariance:
+//   predict:  p_k(c) = Σ_c' N(x_c - x_c'; s R(o_h) d_k, v_k I) α_{k-1}(c')
+//             v_k = s² tr(Σ_k)/2 + σ_p² + (s |d_k| δ_h)² / 12     (δ_h: the offset bins' width)
+//   update:   α_k(c) ∝ p_k(c) · m(c) · Π_{fixes j at k} L_j(c)^τ
+//   walls:    m(c) = a(c) + (1 - a(c)) e^{λ}, a(c) the walkable fraction of the cell, λ the
+//             wall log-penalty (-inf: hard walls, shops never entered)
+//   fixes:    L_j(c) = ε / A + (1 - ε) Σ_k w_k N(x_c; μ_k, σ_k² I)  (position_fix.h)
+// The displacement is applied exactly: each layer carries its sub-cell remainder r (|r| < one
+// cell) and shifts by whole cells, so the grid adds no numerical diffusion to the motion; the
+// Gaussian part is applied as a separable blur once its accumulated variance reaches a quarter
+// of a cell² (and before every fix). Positions of a layer are its cell centres plus r.
+//
+// Timing: a fix at time t is applied at the first step with time >= t (at most one step late);
+// fixes before the first step and after the last apply to the first and last step. Estimates:
+// `filtered` after each step (causal: fixes up to that step); `smoothed` given the whole walk.
+//
+// Floors: a walk stays on one floor (no stairs or lifts are modelled); the floor posterior is
+// then the layers' evidence summed per floor. Memory: the smoother keeps the forward grids at
+// about sqrt(M) checkpoints of the M steps (float32) and recomputes each segment once.
+#pragma once
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+#include <Eigen/Core>
+
+#include "indoorloc/fusion/floor_plan.h"
+#include "indoorloc/fusion/position_fix.h"
+#include "indoorloc/fusion/step_motion.h"
+#include "indoorloc/fusion/track.h"
+
+namespace indoorloc::fusion {
+
+struct GridTrackerOptions {
+  /// Side of the grid's square cells [m].
+  double cell_size_m = 1.0;
+  /// Walkable fraction of a cell: the fraction of walkable points among n x n sub-samples.
+  int walkable_subsamples = 3;
+  /// Heading-offset layers: `heading_offset_bins` centres spread evenly over the prior's
+  /// ±`heading_offset_span_sd` sd around the start's offset (the whole circle when that exceeds
+  /// ±π), prior weights N(o; o_start, sd²). sd <= 0 or bins == 1: the offset is known.
+  int heading_offset_bins = 9;
+  double heading_offset_sd_rad = 0.15;
+  double heading_offset_span_sd = 2.5;
+  /// Stride-scale layers: bins spread over 1 ± 2 sd with weights N(s; 1, sd²); 1 bin: s = 1.
+  int scale_bins = 1;
+  double scale_sd = 0.1;
+  /// σ_p: isotropic process noise per step [m] (added to the step's own covariance).
+  double position_noise_m = 0.1;
+  /// λ: log-weight per step of a cell outside walkable space; -inf: hard walls.
+  double wall_log_penalty = -2.0;
+  /// ε and τ of the position fixes (position_fix.h).
+  FixLikelihoodOptions fix;
+  /// Known start: sd of the start position [m] (the offset prior is heading_offset_sd_rad).
+  double start_position_sd_m = 1.0;
+  /// Refuse (std::invalid_argument quoting the bytes) a run whose grids would exceed this.
+  double max_memory_bytes = 4e9;
+  /// Layers run in parallel; results do not depend on the thread count.
+  int num_threads = 1;
+  bool IsValid(std::string* error) const;
+};
+
+struct GridTrackSummary {
+  int steps = 0;
+  int fixes = 0;            ///< fixes applied
+  int layers = 0;           ///< floors x offset bins x scale bins actually run
+  long long cells = 0;      ///< grid cells summed over floors
+  int dead_layers = 0;      ///< layers whose every cell was ruled out (hard walls)
+  double log_evidence = 0;  ///< log p(fixes | steps), tempered fixes, over all layers
+  double memory_bytes = 0;  ///< grids kept at the peak
+  double seconds = 0;
+  std::string BriefReport() const;
+};
+
+/// Per-step output of a run (M steps, F floors, H offset bins, S scale bins).
+struct GridTrackResult {
+  Eigen::VectorXd times_s;                        ///< M
+  RowMatrixXd filtered_mean_m;                    ///< M x 2
+  RowMatrixXd filtered_covariance_m2;             ///< M x 3 (xx, xy, yy)
+  RowMatrixXd filtered_floor_probabilities;       ///< M x F
+  Eigen::VectorXd filtered_heading_offset_rad;    ///< M, posterior circular mean after step k
+  RowMatrixXd smoothed_mean_m;                    ///< M x 2 (empty unless smoothing)
+  RowMatrixXd smoothed_covariance_m2;             ///< M x 3
+  Eigen::VectorXd smoothed_floor_probabilities;   ///< F (constant over the walk)
+  Eigen::VectorXd heading_offset_bins_rad;        ///< H
+  Eigen::VectorXd heading_offset_probabilities;   ///< H, given the whole walk
+  Eigen::VectorXd scale_bins;                     ///< S
+  Eigen::VectorXd scale_probabilities;            ///< S, given the whole walk
+  double heading_offset_rad = 0;                  ///< posterior circular mean given the walk
+  double heading_offset_sd_rad = 0;               ///< posterior circular sd given the walk
+  double scale = 1;                               ///< posterior mean given the walk
+  GridTrackSummary summary;
+};
+
+/// The grid over a plan's floors (cells and their walkable fractions) and the runs on it. Build
+/// once per plan and options (the walkable fractions cost one batch of point queries); Run is
+/// const and thread-safe.
+class GridTracker {
+ public:
+  /// `plan` must outlive the tracker. Throws std::invalid_argument for invalid options or a
+  /// grid above max_memory_bytes.
+  GridTracker(const FloorPlan* plan, const GridTrackerOptions& options);
+  ~GridTracker();
+  GridTracker(GridTracker&&) noexcept;
+  GridTracker& operator=(GridTracker&&) noexcept;
+
+  /// Tracks one walk. `steps` sorted by time (at least one), `fixes` sorted by time (may be
+  /// empty), `start.known`: a known start (position, floor, heading offset, time). Throws
+  /// std::invalid_argument naming the argument for unsorted or malformed input, a start floor
+  /// not in the plan, or memory above the limit; std::runtime_error when every layer was ruled
+  /// out (hard walls with no walkable continuation: use a finite wall_log_penalty).
+  GridTrackResult Run(const std::vector<StepInput>& steps, const std::vector<PositionFix>& fixes,
+                      const TrackStart& start, bool smooth) const;
+
+  const GridTrackerOptions& options() const;
+  /// Grid of a floor: origin (x, y of the first cell's corner) [m], columns, rows.
+  Eigen::Vector4d GridGeometry(int floor_index) const;
+  /// Walkable fraction of every cell of a floor, rows x columns (row 0 at the lowest y).
+  RowMatrixXd WalkableFraction(int floor_index) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace indoorloc::fusion

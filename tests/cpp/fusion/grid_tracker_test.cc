@@ -1,0 +1,200 @@
+// Tests of the grid tracker: dead reckoning from a known start, a single fix placing an unknown
+// start, the smoother carrying a late fix back along the walk, the heading-offset posterior,
+// determinism over thread counts, walls, and the errors it promises.
+#include "indoorloc/fusion/grid_tracker.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace indoorloc::fusion {
+namespace {
+
+RowMatrixXd Box(double x0, double y0, double x1, double y1) {
+  RowMatrixXd r(4, 2);
+  r << x0, y0, x1, y0, x1, y1, x0, y1;
+  return r;
+}
+
+// A 60 x 40 m hall; optionally a 10 x 10 m shop at x 20..30, y 20..30.
+FloorPlan Hall(bool shop = false, int floors = 1) {
+  std::vector<FloorGeometry> g;
+  for (int f = 0; f < floors; ++f) {
+    FloorGeometry fg;
+    fg.floor = f;
+    fg.outlines.push_back(Box(0, 0, 60, 40));
+    if (shop) fg.obstacles.push_back(Box(20, 20, 30, 30));
+    g.push_back(fg);
+  }
+  return FloorPlan(g);
+}
+
+// Steps of length L every 0.5 s along heading h [rad] in the PDR frame.
+std::vector<StepInput> Straight(int n, double length_m, double heading_rad, double t0 = 0.0) {
+  std::vector<StepInput> s;
+  for (int k = 0; k < n; ++k) s.push_back(StepFromPolar(t0 + 0.5 * (k + 1), length_m, heading_rad, 0.05, 0.05));
+  return s;
+}
+
+PositionFix Fix(double t, double x, double y, double sd, int floor = PositionFix::kAnyFloor) {
+  PositionFix f;
+  f.time_s = t;
+  f.means_m.resize(1, 2);
+  f.means_m << x, y;
+  f.sds_m = Eigen::VectorXd::Constant(1, sd);
+  f.weights = Eigen::VectorXd::Ones(1);
+  f.floors = Eigen::VectorXi::Constant(1, floor);
+  return f;
+}
+
+TEST(GridTrackerTest, KnownStartFollowsTheSteps) {
+  const FloorPlan plan = Hall();
+  GridTrackerOptions o;
+  o.heading_offset_sd_rad = 0.0;  // offset known
+  const GridTracker tracker(&plan, o);
+  TrackStart start;
+  start.known = true;
+  start.position_m = Eigen::Vector2d(10, 20);
+  start.time_s = 0.0;
+  const auto steps = Straight(20, 0.7, 0.0);
+  const GridTrackResult r = tracker.Run(steps, {}, start, true);
+  ASSERT_EQ(r.filtered_mean_m.rows(), 20);
+  for (int k = 0; k < 20; ++k) {
+    EXPECT_NEAR(r.filtered_mean_m(k, 0), 10 + 0.7 * (k + 1), 0.05) << k;
+    EXPECT_NEAR(r.filtered_mean_m(k, 1), 20, 0.05) << k;
+    EXPECT_NEAR(r.smoothed_mean_m(k, 0), r.filtered_mean_m(k, 0), 0.05) << k;
+  }
+  // The spread grows with the steps' noise (no fixes).
+  EXPECT_GT(r.filtered_covariance_m2(19, 0), r.filtered_covariance_m2(0, 0));
+  EXPECT_NEAR(r.smoothed_floor_probabilities[0], 1.0, 1e-12);
+}
+
+TEST(GridTrackerTest, UnknownStartPlacedByOneFix) {
+  const FloorPlan plan = Hall();
+  GridTrackerOptions o;
+  o.heading_offset_sd_rad = 0.0;
+  o.fix.tempering = 1.0;
+  o.fix.outlier_probability = 1e-6;  // the Gaussian part alone (the uniform part adds its own spread)
+  const GridTracker tracker(&plan, o);
+  const auto steps = Straight(4, 0.7, 0.0);
+  const GridTrackResult r = tracker.Run(steps, {Fix(0.5, 30, 15, 3.0)}, TrackStart(), true);
+  // After the fix (attached to the first step) the posterior is the fix's Gaussian, its variance
+  // that of the fix plus the within-cell spread (1/12 m²) and the first step's noise.
+  EXPECT_NEAR(r.filtered_mean_m(0, 0), 30, 0.05);
+  EXPECT_NEAR(r.filtered_mean_m(0, 1), 15, 0.05);
+  EXPECT_NEAR(r.filtered_covariance_m2(0, 0), 9.0 + 1.0 / 12.0, 0.3);
+  EXPECT_NEAR(r.filtered_covariance_m2(0, 1), 0.0, 0.05);
+  // Later steps move the mean by the steps.
+  EXPECT_NEAR(r.filtered_mean_m(3, 0) - r.filtered_mean_m(0, 0), 2.1, 0.1);
+}
+
+TEST(GridTrackerTest, SmootherCarriesALateFixBack) {
+  const FloorPlan plan = Hall();
+  GridTrackerOptions o;
+  o.heading_offset_sd_rad = 0.0;
+  o.fix.tempering = 1.0;
+  const GridTracker tracker(&plan, o);
+  const auto steps = Straight(30, 0.7, M_PI / 2);  // north, 21 m
+  const GridTrackResult r = tracker.Run(steps, {Fix(15.0, 40, 30, 1.0)}, TrackStart(), true);
+  // Before the fix the filter knows nothing: its mean is near the hall's centre.
+  EXPECT_GT(r.filtered_covariance_m2(5, 0), 50.0);
+  // The smoother puts the first step 20.3 m south of the fix (29 steps of 0.7 m back).
+  EXPECT_NEAR(r.smoothed_mean_m(0, 0), 40, 0.5);
+  EXPECT_NEAR(r.smoothed_mean_m(0, 1), 30 - 0.7 * 29, 0.7);
+  EXPECT_NEAR(r.smoothed_mean_m(29, 1), 30, 0.5);
+}
+
+TEST(GridTrackerTest, HeadingOffsetLearntFromFixes) {
+  const FloorPlan plan = Hall();
+  GridTrackerOptions o;
+  o.heading_offset_bins = 21;
+  o.heading_offset_sd_rad = 0.3;
+  o.fix.tempering = 1.0;
+  const GridTracker tracker(&plan, o);
+  // PDR says east; the truth is 0.3 rad to the left of it: fixes along the true line.
+  const double truth = 0.3;
+  const auto steps = Straight(40, 0.7, 0.0);
+  std::vector<PositionFix> fixes;
+  for (int k = 4; k <= 40; k += 4) {
+    const double d = 0.7 * k;
+    fixes.push_back(Fix(0.5 * k, 10 + d * std::cos(truth), 10 + d * std::sin(truth), 1.5));
+  }
+  const GridTrackResult r = tracker.Run(steps, fixes, TrackStart(), true);
+  EXPECT_NEAR(r.heading_offset_rad, truth, 0.06);
+  EXPECT_LT(r.heading_offset_sd_rad, 0.1);
+  EXPECT_NEAR(r.heading_offset_probabilities.sum(), 1.0, 1e-9);
+}
+
+TEST(GridTrackerTest, SameResultForAnyThreadCount) {
+  const FloorPlan plan = Hall(true, 2);
+  GridTrackerOptions o;
+  o.heading_offset_bins = 5;
+  o.scale_bins = 3;
+  std::vector<PositionFix> fixes = {Fix(1.0, 10, 10, 4.0, 1), Fix(3.0, 12, 10, 4.0, 1)};
+  const auto steps = Straight(10, 0.7, 0.0);
+  o.num_threads = 1;
+  const GridTrackResult a = GridTracker(&plan, o).Run(steps, fixes, TrackStart(), true);
+  o.num_threads = 3;
+  const GridTrackResult b = GridTracker(&plan, o).Run(steps, fixes, TrackStart(), true);
+  EXPECT_EQ(a.filtered_mean_m, b.filtered_mean_m);
+  EXPECT_EQ(a.smoothed_mean_m, b.smoothed_mean_m);
+  EXPECT_EQ(a.smoothed_floor_probabilities, b.smoothed_floor_probabilities);
+  // The fixes name floor 1: it must win.
+  EXPECT_GT(a.smoothed_floor_probabilities[1], 0.95);
+}
+
+TEST(GridTrackerTest, WallsKeepTheTrackOutOfTheShop) {
+  const FloorPlan plan = Hall(true);
+  GridTrackerOptions o;
+  o.heading_offset_sd_rad = 0.0;
+  o.wall_log_penalty = -std::numeric_limits<double>::infinity();
+  o.fix.tempering = 1.0;
+  const GridTracker tracker(&plan, o);
+  // A fix in the middle of the shop: the posterior mass lies outside it.
+  const GridTrackResult r = tracker.Run(Straight(2, 0.7, 0.0), {Fix(0.5, 25, 25, 3.0)}, TrackStart(), false);
+  const double x = r.filtered_mean_m(0, 0), y = r.filtered_mean_m(0, 1);
+  const double spread = std::sqrt(r.filtered_covariance_m2(0, 0) + r.filtered_covariance_m2(0, 2));
+  EXPECT_GT(spread, 4.0);  // the mass is around the shop, not at its centre
+  (void)x;
+  (void)y;
+  const RowMatrixXd a = tracker.WalkableFraction(0);
+  EXPECT_EQ(a(25, 25), 0.0);
+  EXPECT_EQ(a(5, 5), 1.0);
+  // A known start inside the shop with hard walls cannot have worked: it says so.
+  TrackStart start;
+  start.known = true;
+  start.position_m = Eigen::Vector2d(25, 25);
+  GridTrackerOptions narrow = o;
+  narrow.start_position_sd_m = 0.1;  // e^-1250 at the shop's edge: nothing walkable
+  EXPECT_THROW(GridTracker(&plan, narrow).Run(Straight(2, 0.7, 0.0), {}, start, false), std::runtime_error);
+}
+
+TEST(GridTrackerTest, ErrorsNameTheArgument) {
+  const FloorPlan plan = Hall();
+  GridTrackerOptions o;
+  o.cell_size_m = -1;
+  EXPECT_THROW(GridTracker(&plan, o), std::invalid_argument);
+  o = GridTrackerOptions();
+  o.cell_size_m = 0.05;
+  o.max_memory_bytes = 1e6;
+  try {
+    GridTracker(&plan, o);
+    FAIL() << "a grid above the memory limit was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("max_memory_bytes"), std::string::npos) << e.what();
+  }
+  const GridTracker tracker(&plan, GridTrackerOptions());
+  EXPECT_THROW(tracker.Run({}, {}, TrackStart(), false), std::invalid_argument);
+  auto steps = Straight(3, 0.7, 0.0);
+  steps[2].time_s = 0.1;
+  EXPECT_THROW(tracker.Run(steps, {}, TrackStart(), false), std::invalid_argument);
+  TrackStart start;
+  start.known = true;
+  start.floor = 7;
+  EXPECT_THROW(tracker.Run(Straight(3, 0.7, 0.0), {}, start, false), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace indoorloc::fusion
