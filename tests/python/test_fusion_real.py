@@ -103,6 +103,31 @@ def _fast_settings(**kw):
     return _RealSettings(**{**FAST, **kw})
 
 
+def test_default_floors_are_every_floor_of_the_site(two_floor_site, tmp_path, monkeypatch, capsys):
+    """Issue 28: ``--data-root OTHER_SITE`` needs no ``--floors``: every floor folder with walks
+    and geojson_map.json, in building order."""
+    seen = []
+
+    def fake_evaluate(root, floors, settings, progress=None, scheduler=None):
+        seen.append(list(floors))
+        return {}
+
+    monkeypatch.setattr(fr, "evaluate", fake_evaluate)
+    monkeypatch.setattr(fr, "markdown", lambda result: "table")
+    assert cli.main(["fusion", "evaluate", "--data-root", str(two_floor_site), "--quiet"]) == 0
+    assert cli.main(["fusion", "evaluate", "--data-root", str(two_floor_site), "--floors", "F2", "--quiet"]) == 0
+    assert seen == [["F1", "F2"], ["F2"]]
+    (tmp_path / "B1" / "path_data_files").mkdir(parents=True)  # no walk, no plan: not a floor
+    with pytest.raises(FileNotFoundError, match="data_root"):
+        cli.main(["fusion", "evaluate", "--data-root", str(tmp_path / "nowhere"), "--quiet"])
+    assert cli.main(["fusion", "evaluate", "--data-root", str(tmp_path), "--quiet"]) == 2
+    assert "error: indoorloc: argument 'data_root': no floor folder" in capsys.readouterr().err
+    # The library default is the same rule.
+    assert fr.FLOORS == ()
+    root, data = fr.load_site(two_floor_site, fr.FLOORS)
+    assert [fl.name for fl in data] == ["F1", "F2"] and root == two_floor_site
+
+
 def test_missing_site_and_floor_are_clear_errors(tmp_path, two_floor_site):
     with pytest.raises(FileNotFoundError, match="data_root"):
         fr.evaluate(tmp_path / "nowhere", ["F1"])

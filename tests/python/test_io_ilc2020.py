@@ -1,11 +1,19 @@
 """Indoor Location Competition 2.0 loader (indoorloc.io.ilc2020).
 
-The fixture files are written by the tests themselves in the competition's format; the test on
-the shared site (../shared/data/fusion/ilc2020_site2) skips when it is absent.
+The fixture files are written by the tests themselves in the competition's format; the tests on
+the shared site (../shared/data/fusion/ilc2020_site2) skip when it is absent. The loader rule
+"nothing is lost" (docs/errors.md): damage to a needed field rejects the walk naming file and
+line (test_damaged_line_names_file_and_line); an optional field is dropped for its line with one
+RecordingWarning (test_damaged_optional_field_is_dropped_for_its_line and after); a truncated
+last line is dropped (test_truncated_last_line_is_dropped); floor readers skip a bad walk
+(test_floor_readers_skip_a_bad_walk_and_report_it).
 """
 
+import copy
+import dataclasses
 import json
 import time
+import warnings
 
 import numpy as np
 import pytest
@@ -13,9 +21,13 @@ import pytest
 from indoorloc.io import (
     ILC_SENSOR_TYPES,
     BssidVocabulary,
+    FormatError,
     IlcFloor,
     IlcWalk,
+    RecordingWarning,
     describe_ilc_floor,
+    ilc_floor_level,
+    ilc_floor_names,
     ilc_floor_origin_lonlat,
     read_ilc_floor,
     read_ilc_site,
@@ -183,14 +195,17 @@ def _check_walk(walk, exp, t0=T0):
     np.testing.assert_array_equal(walk.waypoint_t_s, exp["waypoint_t_s"])
     np.testing.assert_array_equal(walk.waypoint_xy_m, exp["waypoint_xy_m"])
     assert walk.unknown_type_counts == exp["unknown"]
-    assert walk.notes == []
+    assert walk.notes == [] and walk.dropped_fields == {}
+    assert not np.any(walk.wifi.last_seen_fallback)
 
 
 # ------------------------------------------------------------------ one walk
 def test_read_walk_parses_every_record_type(tmp_path):
     p = tmp_path / "5dd38ffd27889b0006b76aca.txt"
     exp = _write_walk(p)
-    walk = read_ilc_walk(p)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # an undamaged walk reads without a warning
+        walk = read_ilc_walk(p)
     _check_walk(walk, exp)
     assert walk.walk_id == "5dd38ffd27889b0006b76aca" and walk.path == p
     assert walk.n_waypoints == 3
@@ -314,31 +329,213 @@ def _set_field(k, value):
      r"TYPE_MAGNETIC_FIELD field 5 \(z\) is not a number: ''"),
     ("\tTYPE_ROTATION_VECTOR\t", 0, _set_field(2, "nan"),
      r"TYPE_ROTATION_VECTOR field 3 \(x\) is not a number: 'nan'"),
-    ("\tTYPE_ACCELEROMETER\t", 11, _set_field(5, "2.5"),
-     r"TYPE_ACCELEROMETER field 6 \(accuracy\) must be an integer: '2.5'"),
+    ("\tTYPE_ACCELEROMETER_UNCALIBRATED\t", 11, _set_field(3, "Infinity"),
+     r"TYPE_ACCELEROMETER_UNCALIBRATED field 4 \(y\) is not a number: 'Infinity'"),
+    ("\tTYPE_GYROSCOPE\t", 12, _set_field(2, "1e999"),
+     r"TYPE_GYROSCOPE field 3 \(x\) is not finite: '1e999'"),
     ("\tTYPE_ACCELEROMETER\t", 12, _set_field(0, "1574142012377.5"),
      r"field 1 \(unix_ms\) must be an integer"),
     ("\tTYPE_WIFI\t", 2, _set_field(4, "-7x"),
      r"TYPE_WIFI field 5 \(rssi\) is not a number: '-7x'"),
-    ("\tTYPE_WIFI\t", 5, _set_field(6, "1574142O12000"),
-     r"TYPE_WIFI field 7 \(last_seen_unix_ms\) is not a number"),
+    ("\tTYPE_WIFI\t", 5, _set_field(4, ""), r"TYPE_WIFI field 5 \(rssi\) is not a number: ''"),
     ("\tTYPE_WIFI\t", 1, _set_field(3, ""), r"TYPE_WIFI field 4 \(bssid\) is empty"),
     ("\tTYPE_WIFI\t", 0, _drop_last_field, "TYPE_WIFI has 6 tab-separated fields, expected 7"),
     ("\tTYPE_WAYPOINT\t", 1, _drop_last_field, "TYPE_WAYPOINT has 3 tab-separated fields"),
-    ("\tTYPE_BEACON\t", 1, _set_field(4, "x"), r"TYPE_BEACON field 5 \(minor\) is not a number"),
+    ("\tTYPE_BEACON\t", 1, _set_field(0, "x"), r"TYPE_BEACON field 1 \(unix_ms\) is not a number"),
+    ("\tTYPE_WAYPOINT\t", 2, _set_field(2, "NaN"), r"TYPE_WAYPOINT field 3 \(x\) is not a number"),
     ("\tTYPE_GYROSCOPE\t", 6, lambda s: s.replace("\t", " "), "not a record"),
     ("\tTYPE_GYROSCOPE\t", 8, _set_field(1, "0.25"), "record type '0.25' is not a type name"),
     ("\tTYPE_GYROSCOPE\t", 8, _set_field(1, ""), "empty record type"),
 ])
 def test_damaged_line_names_file_and_line(tmp_path, needle, nth, fix, message):
+    """Damage to what the methods need (times, IMU x/y/z, WiFi RSSI and BSSID, waypoints, the
+    field count) rejects the walk with a FormatError naming the file and the line."""
     p = tmp_path / "damaged.txt"
     _write_walk(p)
     n = _damage(p, needle, fix, nth)
-    with pytest.raises(ValueError, match=message) as info:
+    with pytest.raises(FormatError, match=message) as info:
         read_ilc_walk(p)
     text = str(info.value)
     assert f"{p}, line {n}:" in text, text
     assert text.startswith("indoorloc: argument 'path': ")
+
+
+# ------------------------------------------------------------------ nothing is lost
+def _assert_same(a, b, path="walk"):
+    """Every field of two loader results equal (NaN equal to NaN), notes and paths aside."""
+    if dataclasses.is_dataclass(a):
+        for f in dataclasses.fields(a):
+            if f.name not in ("path", "walk_id", "notes", "dropped_fields"):
+                _assert_same(getattr(a, f.name), getattr(b, f.name), f"{path}.{f.name}")
+    elif isinstance(a, np.ndarray):
+        assert a.dtype == b.dtype, path
+        np.testing.assert_array_equal(a, b, err_msg=path)
+    else:
+        assert a == b, path
+
+
+def _read_warned(p, n_warnings=1):
+    """read_ilc_walk(p) and the RecordingWarnings it gave (exactly n_warnings)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        walk = read_ilc_walk(p)
+    got = [w for w in caught if issubclass(w.category, RecordingWarning)]
+    assert len(got) == len(caught) == n_warnings, [str(w.message) for w in caught]
+    for w in got:
+        assert str(p) in str(w.message)
+    return walk, [str(w.message) for w in got]
+
+
+def _nan_at(attr, index):
+    def edit(walk):
+        obj = walk
+        for a in attr.split("."):
+            obj = getattr(obj, a)
+        obj[index] = -1 if obj.dtype.kind == "i" else np.nan
+    return edit
+
+
+def _last_seen_is_scan_time(r):
+    def edit(walk):
+        walk.wifi.last_seen_s[r] = walk.wifi.scan_time_s[r]
+        walk.wifi.last_seen_fallback[r] = True
+    return edit
+
+
+@pytest.mark.parametrize("needle, nth, k, bad, key, edit, rv_w", [
+    ("\tTYPE_BEACON\t", 1, 7, "Infinity", "TYPE_BEACON distance", _nan_at("beacons.distance_m", 1), False),
+    ("\tTYPE_BEACON\t", 0, 5, "", "TYPE_BEACON tx_power", _nan_at("beacons.tx_power_dbm", 0), False),
+    ("\tTYPE_BEACON\t", 1, 6, "-9e999", "TYPE_BEACON rssi", _nan_at("beacons.rssi_dbm", 1), False),
+    ("\tTYPE_BEACON\t", 0, 3, "x", "TYPE_BEACON major", _nan_at("beacons.major", 0), False),
+    ("\tTYPE_BEACON\t", 1, 4, "2.5", "TYPE_BEACON minor", _nan_at("beacons.minor", 1), False),
+    ("\tTYPE_WIFI\t", 4, 5, "abc", "TYPE_WIFI frequency", _nan_at("wifi.frequency_mhz", 4), False),
+    ("\tTYPE_WIFI\t", 5, 6, "", "TYPE_WIFI last_seen_unix_ms", _last_seen_is_scan_time(5), False),
+    ("\tTYPE_WIFI\t", 2, 6, "1574142O12000", "TYPE_WIFI last_seen_unix_ms", _last_seen_is_scan_time(2),
+     False),
+    ("\tTYPE_ACCELEROMETER\t", 11, 5, "2.5", "TYPE_ACCELEROMETER accuracy",
+     _nan_at("accelerometer.accuracy", 11), False),
+    ("\tTYPE_GYROSCOPE\t", 3, 5, "NaN", "TYPE_GYROSCOPE accuracy", _nan_at("gyroscope.accuracy", 3), False),
+    ("\tTYPE_GYROSCOPE_UNCALIBRATED\t", 7, 5, "nan", "TYPE_GYROSCOPE_UNCALIBRATED bias x",
+     _nan_at("gyroscope_uncalibrated.bias", (7, 0)), False),
+    ("\tTYPE_ROTATION_VECTOR\t", 2, 5, "Infinity", "TYPE_ROTATION_VECTOR w",
+     _nan_at("rotation_vector.values", (2, 3)), True),
+])
+def test_damaged_optional_field_is_dropped_for_its_line(tmp_path, needle, nth, k, bad, key, edit, rv_w):
+    """Loader rule: an optional field's damage drops that field for that line (NaN, -1 or the
+    reading's fallback), with one RecordingWarning and the count in the walk's notes."""
+    clean = tmp_path / "clean.txt"
+    _write_walk(clean, rv_w=rv_w)
+    p = tmp_path / "damaged.txt"
+    _write_walk(p, rv_w=rv_w)
+    n = _damage(p, needle, _set_field(k, bad), nth)
+    walk, messages = _read_warned(p)
+    assert key in messages[0] and "kept" in messages[0]
+    assert walk.dropped_fields == {key: 1}
+    assert len(walk.notes) == 1 and walk.notes[0].startswith(key) and f"line {n} " in walk.notes[0]
+    assert repr(bad) in walk.notes[0]
+    expected = copy.deepcopy(read_ilc_walk(clean))
+    edit(expected)
+    _assert_same(walk, expected)
+
+
+def test_fallback_rotation_w_is_completed(tmp_path):
+    p = tmp_path / "w.txt"
+    _write_walk(p, rv_w=True)
+    _damage(p, "\tTYPE_ROTATION_VECTOR\t", _set_field(5, "Infinity"), 2)
+    walk, _ = _read_warned(p)
+    q = walk.rotation_quaternion_xyzw()
+    assert np.all(np.isfinite(q))
+    np.testing.assert_allclose(np.linalg.norm(q, axis=1), 1.0, atol=1e-12)
+
+
+def test_many_damaged_fields_give_one_warning_with_counts(tmp_path):
+    p = tmp_path / "w.txt"
+    _write_walk(p)
+    _damage(p, "\tTYPE_BEACON\t", _set_field(7, "Infinity"), 0)
+    _damage(p, "\tTYPE_BEACON\t", _set_field(7, "Infinity"), 1)
+    _damage(p, "\tTYPE_WIFI\t", _set_field(5, ""), 3)
+    _damage(p, "\tTYPE_MAGNETIC_FIELD\t", _set_field(5, "x"), 0)
+    walk, messages = _read_warned(p, 1)
+    assert walk.dropped_fields == {"TYPE_BEACON distance": 2, "TYPE_WIFI frequency": 1,
+                                   "TYPE_MAGNETIC_FIELD accuracy": 1}
+    assert "TYPE_BEACON distance x2" in messages[0]
+    assert len(walk.notes) == 3
+    assert np.all(np.isnan(walk.beacons.distance_m))
+    assert walk.magnetometer.accuracy[0] == -1 and np.all(walk.magnetometer.accuracy[1:] >= 0)
+
+
+def test_needed_damage_still_rejects_when_optional_damage_is_present(tmp_path):
+    p = tmp_path / "w.txt"
+    _write_walk(p)
+    _damage(p, "\tTYPE_BEACON\t", _set_field(7, "Infinity"), 0)
+    n = _damage(p, "\tTYPE_WIFI\t", _set_field(4, "Infinity"), 6)
+    with pytest.raises(FormatError, match=rf"line {n}: TYPE_WIFI field 5 \(rssi\) is not a number"):
+        read_ilc_walk(p)
+
+
+def test_beacon_line_with_wrong_field_count_is_dropped(tmp_path):
+    """No method reads iBeacons: a beacon line that cannot be split into its fields is dropped,
+    not the walk."""
+    clean = tmp_path / "clean.txt"
+    _write_walk(clean)
+    p = tmp_path / "w.txt"
+    _write_walk(p)
+    n = _damage(p, "\tTYPE_BEACON\t", _drop_last_field, 0)
+    n = _damage(p, "\tTYPE_BEACON\t", _drop_last_field, 0)  # 8 fields
+    walk, _ = _read_warned(p)
+    assert walk.dropped_fields == {"TYPE_BEACON line": 1}
+    assert f"line {n} " in walk.notes[0] and "8 tab-separated fields" in walk.notes[0]
+    assert walk.beacons.n_readings == 1
+    np.testing.assert_array_equal(walk.beacons.t_s, read_ilc_walk(clean).beacons.t_s[1:])
+
+
+LAST_T = T0 + 900  # after every record of the fixture
+FULL_LAST = {
+    "acc": f"{LAST_T}\tTYPE_ACCELEROMETER\t0.125\t-0.5\t9.75\t3",
+    "wifi": f"{LAST_T}\tTYPE_WIFI\tguest\t00:10:f3:32:7c:ba\t-80\t2462\t{LAST_T - 10}",
+    "wp": f"{LAST_T}\tTYPE_WAYPOINT\t158.5\t91.25",
+    "beacon": f"{LAST_T}\tTYPE_BEACON\tE6E7\t0\t0\t0\t-79\t1.5\tF7:9F:CE:70:3B:60\t{LAST_T}",
+}
+
+
+@pytest.mark.parametrize("kind, cut", [
+    ("acc", lambda s: s[:8]),                                   # the time stamp only
+    ("acc", lambda s: s[:s.index("TYPE")]),                     # "<time>\t"
+    ("acc", lambda s: s[:s.index("TYPE") + 8]),                 # record type cut short
+    ("acc", lambda s: s[:s.index("-0.5") + 2]),                 # fewer fields
+    ("acc", lambda s: s[:-1]),                                  # empty accuracy
+    ("acc", lambda s: s[:-2]),                                  # 5 fields
+    ("wifi", lambda s: s[:s.index("00:10") + 5]),               # cut in the BSSID
+    ("wifi", lambda s: s[:s.rindex("\t") + 1] + "15741e"),      # partial number
+    ("wp", lambda s: s[:-5] + "-"),                             # partial y
+    ("wp", lambda s: s[:-5]),                                   # empty y
+    ("beacon", lambda s: s[:s.rindex("\t") + 1]),               # empty time
+])
+def test_truncated_last_line_is_dropped(tmp_path, kind, cut):
+    """An interrupted recording: the file's last line cut short is dropped with a warning."""
+    lines = HEADER + _walk_records(np.random.default_rng(0))[0]
+    clean = tmp_path / "clean.txt"
+    clean.write_text("\n".join(lines), encoding="utf-8")
+    p = tmp_path / "cut.txt"
+    p.write_text("\n".join(lines + [cut(FULL_LAST[kind])]), encoding="utf-8")
+    walk, messages = _read_warned(p)
+    assert walk.dropped_fields == {"truncated last line": 1}
+    assert "truncated last line" in messages[0]
+    assert f"line {len(lines) + 1} " in walk.notes[0]
+    _assert_same(walk, read_ilc_walk(clean))
+    # The same line complete is read, and a cut line followed by more text is damage.
+    p.write_text("\n".join(lines + [FULL_LAST[kind]]) + "\n", encoding="utf-8")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert read_ilc_walk(p).duration_s == pytest.approx(0.9)
+
+
+def test_cut_line_before_the_end_is_damage(tmp_path):
+    lines = HEADER + _walk_records(np.random.default_rng(0))[0]
+    p = tmp_path / "w.txt"
+    p.write_text("\n".join(lines + [FULL_LAST["acc"][:-2], "#\tendTime:1"]), encoding="utf-8")
+    with pytest.raises(FormatError, match=rf"line {len(lines) + 1}: TYPE_ACCELEROMETER has 5"):
+        read_ilc_walk(p)
 
 
 def test_decreasing_times_raise_or_are_sorted(tmp_path):
@@ -419,6 +616,7 @@ def test_read_site_and_floor(tmp_path):
         f1.walk("nope")
     with pytest.raises(IndexError):
         f1.walk(2)
+    assert f1.walk(np.int64(1)) is w
     uncached = read_ilc_floor(tmp_path / "site9" / "F1", cache=False)
     assert uncached.walk(0) is not uncached.walk(0)
     assert "F1" in repr(f1)
@@ -460,6 +658,8 @@ def test_site_and_floor_errors(tmp_path):
     with pytest.raises(ValueError, match="no floor folder with path_data_files"):
         read_ilc_site(tmp_path / "empty_site")
     with pytest.raises(ValueError, match="argument 'floor_dir': no folder"):
+        read_ilc_floor(tmp_path / "empty_site" / "F9")
+    with pytest.raises(ValueError, match=r"no \*.txt walk file in .*F1 \(and no folder"):
         read_ilc_floor(tmp_path / "empty_site" / "F1")
     (tmp_path / "empty_site" / "F1" / "path_data_files").mkdir()
     with pytest.raises(ValueError, match=r"no \*.txt walk file"):
@@ -478,40 +678,178 @@ def test_site_and_floor_errors(tmp_path):
         ilc_floor_origin_lonlat(floor / "geojson_map.json")
 
 
+def test_walk_keys_are_checked(tmp_path):
+    """Issue 28: walk(1.5) used to return walk 1; walk('nope') raised a bare KeyError."""
+    floor = read_ilc_floor(_site(tmp_path) / "F1")
+    for key in (1.5, 1.0, True, None, [0]):
+        with pytest.raises(TypeError, match=r"argument 'key': a walk index \(int\) or walk id \(str\)"):
+            floor.walk(key)
+    with pytest.raises(KeyError) as info:
+        floor.walk("nope")
+    text = str(info.value)
+    assert text == ("indoorloc: argument 'key': no walk 'nope' on floor F1 (its 2 walks are the *.txt "
+                    f"files of {floor.walk_paths[0].parent}; IlcFloor.walk_ids lists them)")
+    with pytest.raises(IndexError, match="walk -1 outside 0..1"):
+        floor.walk(-1)
+    with pytest.raises(TypeError, match="argument 'key'"):
+        list(floor.walks([0.5]))
+
+
+def test_floor_readers_skip_a_bad_walk_and_report_it(tmp_path):
+    d = tmp_path / "site" / "F2"
+    _write_floor(d, [1, 2, 3], [T0, T0 + 5_000_000, T0 + 9_000_000])
+    bad = d / "path_data_files" / "walk02.txt"
+    n = _damage(bad, "\tTYPE_GYROSCOPE\t", _set_field(3, "abc"), 4)
+    _damage(d / "path_data_files" / "walk03.txt", "\tTYPE_BEACON\t", _set_field(7, "Infinity"), 1)
+    floor = read_ilc_floor(d)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        ids = [w.walk_id for w in floor.walks()]
+    assert ids == ["walk01", "walk03"]
+    assert all(issubclass(w.category, RecordingWarning) for w in caught) and len(caught) == 2
+    skipped = [str(w.message) for w in caught if "skipped" in str(w.message)]
+    assert len(skipped) == 1 and str(bad) in skipped[0]
+    assert f"line {n}: TYPE_GYROSCOPE field 4 (y) is not a number: 'abc'" in skipped[0]
+    assert list(floor.skipped_walks) == ["walk02"]
+    assert f"line {n}:" in floor.skipped_walks["walk02"]
+    report = floor.load_report()
+    assert report == {
+        "floor": "F2", "n_walks": 3, "n_read": 3, "n_loaded": 2, "n_skipped": 1,
+        "skipped_walks": floor.skipped_walks, "n_walks_with_dropped_fields": 1,
+        "dropped_fields": {"TYPE_BEACON distance": 1},
+        "walks_with_dropped_fields": {"walk03": {"TYPE_BEACON distance": 1}}, "n_warnings": 2}
+    # Once reported, a skipped walk is not read (nor reported) again; walk() still raises.
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert [w.walk_id for w in floor.walks()] == ids
+        assert floor.bssid_vocabulary().total_walks == 2
+    with pytest.raises(FormatError, match=rf"walk02.txt, line {n}:"):
+        floor.walk("walk02")
+    d_facts = describe_ilc_floor(floor)
+    assert d_facts["n_walks"] == 2 and d_facts["load_report"]["n_skipped"] == 1
+    # A fresh floor object: the vocabulary and the description skip the walk themselves.
+    for fresh in (lambda: read_ilc_floor(d).bssid_vocabulary().total_walks,
+                  lambda: describe_ilc_floor(read_ilc_floor(d, cache=False))["n_walks"]):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            assert fresh() == 2
+        assert all(issubclass(w.category, RecordingWarning) for w in caught)
+        assert sum("walk02.txt skipped" in str(w.message) for w in caught) == 1  # once per floor
+
+
+def test_origin_refuses_non_finite_coordinates(tmp_path):
+    """Issue 28: a NaN coordinate gave a NaN origin."""
+    d = tmp_path / "F1"
+    _write_floor(d, [1], [T0])
+    doc = json.loads((d / "geojson_map.json").read_text())
+    for bad in (float("nan"), float("inf")):
+        doc["features"][0]["geometry"]["coordinates"][0][0][1][1] = bad
+        (d / "geojson_map.json").write_text(json.dumps(doc))  # writes NaN / Infinity
+        with pytest.raises(FormatError, match=r"argument 'geojson_path': .*geojson_map.json: the first "
+                                              r"feature has 1 coordinate\(s\) that are not finite"):
+            ilc_floor_origin_lonlat(d / "geojson_map.json")
+        with pytest.raises(ValueError, match="not finite"):
+            read_ilc_floor(d).origin_lonlat()
+
+
+def test_floor_folders_in_building_order_and_the_kaggle_layout(tmp_path):
+    site = tmp_path / "site"
+    for name in ("F10", "B1", "F2", "annex", "B2", "G", "F1"):
+        _write_floor(site / name, [1], [T0])
+    (site / "notes").mkdir()  # no walk file: not a floor
+    (site / "notes" / "readme.md").write_text("x")
+    # Kaggle 2021 layout: the walks in the floor folder itself; no plan.
+    _write_walk(site / "3F" / "5d8f0954f0ba1b0006e6ed10.txt")
+    assert ilc_floor_names(site) == ["B2", "B1", "G", "F1", "F2", "3F", "F10", "annex"]
+    assert ilc_floor_names(site, with_plan=True) == ["B2", "B1", "G", "F1", "F2", "F10", "annex"]
+    assert list(read_ilc_site(site)) == ilc_floor_names(site)
+    kaggle = read_ilc_floor(site / "3F")
+    assert kaggle.walk_ids == ["5d8f0954f0ba1b0006e6ed10"] and kaggle.geojson_path is None
+    assert kaggle.walk(0).n_waypoints == 3
+    assert [ilc_floor_level(n) for n in ("B2", "2B", "b1", "G", "GF", "F3", "3F", "L3", "M", "F")] == [
+        -2, -2, -1, 0, 0, 3, 3, 3, None, None]
+    with pytest.raises(ValueError, match="argument 'site_dir': no floor folder with path_data_files/ or "
+                                         r"\*.txt walk files and geojson_map.json"):
+        ilc_floor_names(site / "notes", with_plan=True)
+    with pytest.raises(ValueError, match="argument 'site_dir': folder not found"):
+        ilc_floor_names(site / "none")
+
+
 # ------------------------------------------------------------------ the shared site
-def test_shared_site_loads_with_readme_counts(shared_data):
+# Per floor of the shared site, counted with grep on the files (e.g. grep -c $'\tTYPE_WIFI\t'):
+# walks, waypoints, samples per sensor type, WiFi readings, iBeacon readings, and the loader's
+# BSSID vocabulary size.
+SHARED_FLOORS = {
+    "B1": (65, 444, 102_253, 149_017, 1_499, 1_031),
+    "F1": (82, 639, 159_295, 468_661, 2_004, 2_405),
+    "F3": (37, 224, 49_255, 113_739, 185, 1_800),
+    "F4": (26, 193, 46_514, 105_214, 214, 1_958),
+    "F7": (32, 256, 61_948, 156_346, 1_448, 1_622),
+    "F8": (24, 193, 44_483, 74_633, 467, 840),
+}
+
+
+def _shared_site(shared_data):
     site_dir = shared_data / "fusion" / "ilc2020_site2"
     if not site_dir.is_dir():
         pytest.skip(f"Indoor Location Competition data not found at {site_dir}")
+    return site_dir
+
+
+def test_shared_site_loads_with_readme_counts(shared_data):
+    """The six floors of the data's README; every walk loads (F1's Infinity distances are
+    dropped fields, not rejected walks)."""
+    site_dir = _shared_site(shared_data)
     start = time.perf_counter()
-    site = read_ilc_site(site_dir)
-    walks = {name: list(floor.walks()) for name, floor in site.items()}
+    site = read_ilc_site(site_dir, cache=False)
+    assert list(site) == list(SHARED_FLOORS)  # building order
+    unknown_types = {"TYPE_BLUE", "TYPE_BLU4", "TYPE_DIST1", "TYPE_DIST2",
+                     "TYPE_SENSOR_MAGNETIC_FIELD_ACCURACY_CHANGED"}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RecordingWarning)  # F1's (counted below)
+        for name, floor in site.items():
+            n_walks, n_wp, n_samples, n_wifi, n_beacons, n_bssids = SHARED_FLOORS[name]
+            counts = np.zeros(4, dtype=np.int64)
+            samples = {attr: 0 for attr, _, _ in ILC_SENSOR_TYPES.values()}
+            for w in floor.walks():
+                counts += [1, w.n_waypoints, w.wifi.n_readings, w.beacons.n_readings]
+                for attr in samples:
+                    samples[attr] += getattr(w, attr).n_samples
+                assert w.floor_name == name and w.device == "OPPO PBCM10"
+                assert bool(w.notes) == bool(w.dropped_fields) == (name == "F1" and w.walk_id in
+                                                                   floor.load_report()["walks_with_dropped_fields"])
+                # B1 has 4 walks under 5 s and 5 with one WiFi scan, F1 one with one scan.
+                assert w.duration_s > 2.0 and w.wifi.n_scans >= 1 and w.n_waypoints >= 2
+                assert w.waypoint_t_s[0] == 0.0  # every walk starts at a waypoint
+                assert len({s.n_samples for s in w.sensors.values()}) == 1
+                assert np.all(w.wifi.age_s > 0) and not np.any(w.wifi.last_seen_fallback)
+                assert set(w.unknown_type_counts) <= unknown_types
+                xy = w.waypoint_xy_m
+                assert np.all((xy >= 0) & (xy <= [floor.width_m, floor.height_m]))
+            assert counts.tolist() == [n_walks, n_wp, n_wifi, n_beacons], name
+            assert set(samples.values()) == {n_samples}, name
+            assert floor.load_report()["n_skipped"] == 0
+            assert floor.bssid_vocabulary().size == n_bssids, name
     elapsed = time.perf_counter() - start
-    assert {k: len(v) for k, v in walks.items()} == {"F3": 37, "F4": 26, "F7": 32, "F8": 24}
-    assert sum(w.n_waypoints for ws in walks.values() for w in ws) == 866
-    # Line counts of the files (grep | wc): 202,200 samples per sensor type, 449,932 WiFi
-    # readings, 2,314 iBeacon readings over the 119 walks.
-    every = [w for ws in walks.values() for w in ws]
-    for attr, _, _ in ILC_SENSOR_TYPES.values():
-        assert sum(getattr(w, attr).n_samples for w in every) == 202_200
-    assert sum(w.wifi.n_readings for w in every) == 449_932
-    assert sum(w.beacons.n_readings for w in every) == 2_314
-    assert {k: site[k].bssid_vocabulary().size for k in site} == {
-        "F3": 1800, "F4": 1958, "F7": 1622, "F8": 840}
-    for name, ws in walks.items():
-        for w in ws:
-            assert w.floor_name == name and w.device == "OPPO PBCM10" and not w.notes
-            assert w.duration_s > 5.0 and w.wifi.n_scans >= 2 and w.n_waypoints >= 2
-            assert w.waypoint_t_s[0] == 0.0  # every walk starts at a waypoint
-            assert len({s.n_samples for s in w.sensors.values()}) == 1
-            assert np.all(w.wifi.age_s > 0)
-            assert set(w.unknown_type_counts) <= {"TYPE_BLUE", "TYPE_BLU4", "TYPE_DIST1",
-                                                  "TYPE_DIST2",
-                                                  "TYPE_SENSOR_MAGNETIC_FIELD_ACCURACY_CHANGED"}
-            xy = w.waypoint_xy_m
-            assert np.all((xy >= 0) & (xy <= [site[name].width_m, site[name].height_m]))
-    print(f"\nshared site: 119 walks loaded in {elapsed:.1f} s")
-    assert elapsed < 30.0, f"loading the site took {elapsed:.1f} s (goal: well under 30 s)"
+    print(f"\nshared site: 266 walks loaded in {elapsed:.1f} s")
+    assert elapsed < 60.0, f"loading the site took {elapsed:.1f} s (goal: well under 60 s)"
+
+
+def test_shared_f1_keeps_the_walks_with_infinity_distances(shared_data):
+    """Issue 25 item 8: F1's 27 walks whose iBeacon distance is the text Infinity (341 lines)
+    used to be rejected whole; now all 82 load and the 27 carry one warning each."""
+    floor = read_ilc_floor(_shared_site(shared_data) / "F1", cache=False)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        nan_per_walk = {w.walk_id: int(np.sum(np.isnan(w.beacons.distance_m))) for w in floor.walks()}
+    assert len(nan_per_walk) == 82 == floor.n_walks
+    assert all(issubclass(w.category, RecordingWarning) for w in caught) and len(caught) == 27
+    assert all("TYPE_BEACON distance" in str(w.message) for w in caught)
+    report = floor.load_report()
+    assert report["n_loaded"] == 82 and report["n_skipped"] == 0 and report["n_warnings"] == 27
+    assert report["dropped_fields"] == {"TYPE_BEACON distance": 341}
+    assert report["walks_with_dropped_fields"] == {
+        k: {"TYPE_BEACON distance": v} for k, v in nan_per_walk.items() if v}
 
 
 def test_describe_floor_measures_the_fixture(tmp_path):

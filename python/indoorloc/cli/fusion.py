@@ -41,16 +41,20 @@ def cmd_synthetic(args: argparse.Namespace) -> int:
 def cmd_evaluate(args: argparse.Namespace) -> int:
     from indoorloc import progress
     from indoorloc.experiments import fusion_real as fr
+    from indoorloc.io import ilc_floor_names
 
     settings = fr.RealSettings(folds=args.folds, seed=args.seed, threads=args.threads)
     root = Path(args.data_root) if args.data_root else fr.default_site_root()
+    if not root.is_dir():
+        raise FileNotFoundError(f"indoorloc: argument 'data_root': {root} is not a folder of ILC floors")
+    floors = args.floors or ilc_floor_names(root, with_plan=True, argument="data_root")
     ticker = progress.Ticker(desc="fusion evaluate: walks")
     if args.select:
-        result = fr.select_settings(root, args.floors, settings, progress=ticker.tick)
+        result = fr.select_settings(root, floors, settings, progress=ticker.tick)
         ticker.close()
         print(fr.select_markdown(result))
     else:
-        result = fr.evaluate(root, args.floors, settings, progress=ticker.tick, scheduler=args.scheduler)
+        result = fr.evaluate(root, floors, settings, progress=ticker.tick, scheduler=args.scheduler)
         ticker.close()
         print(fr.markdown(result))
     if args.json:
@@ -66,8 +70,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         for row in result["waypoints"]:
             errors.setdefault(row["method"], []).append(row["error_m"])
         written = [plots.error_cdfs(errors, out / "fusion_real_error_cdfs.png", xmax_m=60.0,
-                                    title=f"Waypoint errors, floors {' '.join(args.floors)}")]
-        for floor in args.floors:
+                                    title=f"Waypoint errors, floors {' '.join(floors)}")]
+        for floor in floors:
             written.append(plots.fusion_real_walk(fr.walk_snapshot(root, floor, args.plot_walk, settings),
                                                   out / f"fusion_real_walk_{floor}.png"))
         print("plots: " + ", ".join(str(p) for p in written))
@@ -98,7 +102,9 @@ def add_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
     e = fsub.add_parser("evaluate", parents=[quiet_parent()],
                         help="real phone walks (ILC 2020 layout): k-fold by walk, every method scored at the waypoints")
     e.add_argument("--data-root", default=None, help="site folder with one sub-folder per floor (default: shared data)")
-    e.add_argument("--floors", nargs="+", default=["F3", "F4", "F7", "F8"])
+    e.add_argument("--floors", nargs="+", default=None,
+                   help="floor folders to evaluate (default: every floor folder under --data-root, i.e. one holding "
+                        "path_data_files/ or *.txt walks plus geojson_map.json, in building order B2, B1, F1, F2, ...)")
     e.add_argument("--folds", type=int, default=4)
     e.add_argument("--seed", type=int, default=0)
     e.add_argument("--threads", type=int, default=2, help="walks tracked in parallel (results do not depend on it)")

@@ -53,9 +53,9 @@ from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 import numpy as np
 
 from indoorloc import fusion, pdr_handheld as ph, wifi, wifi_crowdsource as wc, wifi_fixes as wfx
-from indoorloc.io import load_floor_plan, read_ilc_floor
+from indoorloc.io import ilc_floor_names, load_floor_plan, read_ilc_floor
 
-FLOORS = ("F3", "F4", "F7", "F8")
+FLOORS: Tuple[str, ...] = ()  #: none named: every floor folder under the data root, in building order
 METHODS = (
     "wifi_knn",
     "wifi_model",
@@ -621,8 +621,7 @@ def load_site(data_root: Optional[Path], floors: Sequence[str]) -> Tuple[Path, L
     root = Path(data_root) if data_root else default_site_root()
     if not root.is_dir():
         raise FileNotFoundError(f"indoorloc: argument 'data_root': {root} is not a folder of ILC floors")
-    if not floors:
-        raise ValueError("indoorloc: argument 'floors': no floor given")
+    floors = floors or ilc_floor_names(root, with_plan=True, argument="data_root")
     for name in floors:
         if not (root / name).is_dir():
             raise FileNotFoundError(f"indoorloc: argument 'floors': {root / name} is not a floor folder")

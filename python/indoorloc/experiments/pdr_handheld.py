@@ -86,7 +86,9 @@ def load_walks(data_root: PathLike, floors: Optional[Sequence[str]] = None) -> L
     out: List[_Walk] = []
     items = [(f, i) for f in floors for i in range(site[f].n_walks)]
     for f, i in progress(items, desc="walks"):
-        w = site[f].walk(i)
+        w = next(site[f].walks([i]), None)  # a walk that cannot be read: skipped with a RecordingWarning
+        if w is None:
+            continue
         arrays = ph.as_arrays(w)
         steps = {_key(o): ph.handheld_steps(arrays, o) for o in options}
         h_rv = np.unwrap(ph.rotation_vector_heading(arrays.quat_xyzw))

@@ -6,7 +6,7 @@ dataclasses in, ``_core`` types out), so that facades may use it inside function
 ``indoorloc.mapmatch.warehouse_network``) without an import cycle; docs/architecture.md, "Layers".
 """
 
-from indoorloc.io.errors import FormatError
+from indoorloc.io.errors import FormatError, RecordingWarning
 from indoorloc.io.wifi_datasets import (
     RSS_RTT_GRID_M,
     RSS_RTT_ROOMS,
@@ -41,7 +41,10 @@ from indoorloc.io.ilc2020 import (
     IlcSensor,
     IlcWalk,
     IlcWifi,
+    UnknownWalkError,
     describe_ilc_floor,
+    ilc_floor_level,
+    ilc_floor_names,
     ilc_floor_origin_lonlat,
     read_ilc_floor,
     read_ilc_site,
@@ -69,6 +72,7 @@ from indoorloc.io.road_network import (
 
 __all__ = [
     "FormatError",
+    "RecordingWarning",
     "ILC_SENSOR_TYPES",
     "BssidVocabulary",
     "IlcBeacons",
@@ -76,7 +80,10 @@ __all__ = [
     "IlcSensor",
     "IlcWalk",
     "IlcWifi",
+    "UnknownWalkError",
     "describe_ilc_floor",
+    "ilc_floor_level",
+    "ilc_floor_names",
     "ilc_floor_origin_lonlat",
     "read_ilc_floor",
     "read_ilc_site",

@@ -7,6 +7,11 @@ row or variable, and what was expected, e.g.
 Python's own errors met while parsing a damaged file (IndexError, KeyError, OverflowError,
 RecursionError, UnicodeDecodeError, ...) are re-raised as FormatError by :func:`reading`, so a
 caller needs one ``except ValueError`` (or ``except FormatError``) around any loader.
+
+What a loader keeps despite damage it reports with :class:`RecordingWarning` instead (the rule
+"nothing is lost", docs/errors.md): a damaged optional field is dropped for its line, a truncated
+final line is dropped, and a floor reader skips a walk it cannot read; the warning names the file
+and the reader's notes keep the counts.
 """
 
 from __future__ import annotations
@@ -41,6 +46,16 @@ class FormatError(ValueError):
         super().__init__(message)
         self.path = None if path is None else os.fspath(path)
         self.where = where
+
+
+class RecordingWarning(UserWarning):
+    """A recording was read, but not all of it: a damaged optional field dropped for its line, a
+    truncated final line dropped, or (floor readers) a walk that could not be read skipped.
+
+    The message names the file; the reader's notes give the counts (e.g. ``IlcWalk.notes``,
+    ``IlcWalk.dropped_fields``, ``IlcFloor.load_report()``). Silence it with
+    ``warnings.simplefilter("ignore", RecordingWarning)``; make it an error with ``"error"``.
+    """
 
 
 def format_error(path: PathLike, problem: str, *, where: Optional[str] = None,
@@ -113,4 +128,4 @@ def reads_file(parameter: str = "path", what: str = "file",
     return decorate
 
 
-__all__ = ["FormatError", "format_error", "reading", "reads_file"]
+__all__ = ["FormatError", "RecordingWarning", "format_error", "reading", "reads_file"]

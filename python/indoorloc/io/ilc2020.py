@@ -2,7 +2,8 @@
 
 The Microsoft / XYZ10 Indoor Location Competition 2.0 published smartphone recordings as one
 text file per walk, under ``<site>/<floor>/path_data_files/<walk id>.txt``, beside
-``<site>/<floor>/floor_info.json`` and ``geojson_map.json``. Every data line is
+``<site>/<floor>/floor_info.json`` and ``geojson_map.json`` (the Kaggle 2021 edition keeps the
+walks in the floor folder itself, ``<site>/<floor>/<walk id>.txt``). Every data line is
 tab-separated ``unix_ms  TYPE_...  values...``; ``#`` lines carry the header. This module reads
 any folder in that layout into numpy arrays:
 
@@ -11,7 +12,10 @@ any folder in that layout into numpy arrays:
 - :func:`read_ilc_floor`: one floor folder -> :class:`IlcFloor` (floor extent, GeoJSON path,
   the walk files, loaded on demand, and a floor-level BSSID vocabulary,
   :class:`BssidVocabulary`);
-- :func:`read_ilc_site`: a site folder -> ``{floor name: IlcFloor}``;
+- :func:`read_ilc_site`: a site folder -> ``{floor name: IlcFloor}`` in building order
+  (:func:`ilc_floor_names`: B2, B1, F1, F2, ...);
+- :func:`ilc_floor_names`: the floor folders of a site in building order (what
+  ``indoorloc fusion evaluate`` evaluates when no ``--floors`` is given);
 - :func:`ilc_floor_origin_lonlat`: the (lon, lat) of the floor frame's origin (the south-west
   corner of the first GeoJSON feature's bounding box). The floor polygons themselves are read
   by :mod:`indoorloc.io.floor_plan`.
@@ -44,17 +48,46 @@ started). Times must be non-decreasing within each record type (true of every fi
 shared site); otherwise :func:`read_ilc_walk` raises, or sorts when ``allow_unsorted=True``
 and says so in :attr:`IlcWalk.notes`.
 
-Errors
-------
-A damaged line (a record type that is not a name, a field count that does not match the type,
-a value that is not a finite number where one must be, a non-integer time stamp or accuracy)
-raises ``ValueError("indoorloc: argument 'path': <file>, line <n>: ...")`` with the 1-based
-line number and what is wrong.
+Errors: nothing is lost
+-----------------------
+One rule (docs/errors.md, "Loader rule: nothing is lost"): only damage to what the methods need
+rejects a walk. Needed are the time stamp and record type of every line read, the x, y, z of the
+sensor streams, the BSSID and RSSI of a WiFi reading, and the waypoints. A damaged needed field
+(not a finite number, a non-integer time stamp, an empty BSSID) or a field count that does not
+match the type raises ``FormatError("indoorloc: argument 'path': <file>, line <n>: ...")`` with
+the 1-based line number and what is wrong.
+
+A damaged *optional* field (not a number, ``Infinity``/``NaN``, empty, or not an integer where
+one belongs) is dropped for that line only and the line is kept, with a fallback value:
+
+=====================================  ==================================================
+sensor ``accuracy``                    -1 (no usable status, as Android's NO_CONTACT)
+``_UNCALIBRATED`` bias x, y, z         NaN
+rotation vector ``w``                  NaN (completed as when the file has no w)
+WiFi ``frequency``                     NaN
+WiFi ``last_seen_unix_ms``             the scan time (the reading looks fresh, age 0:
+                                       flagged in :attr:`IlcWifi.last_seen_fallback`)
+iBeacon tx power, RSSI, distance       NaN
+iBeacon major, minor                   -1
+=====================================  ==================================================
+
+An iBeacon line with a wrong field count is dropped (no method reads iBeacons). The file's last
+line, when it is a data line cut short (an interrupted recording: no record type or a record
+type cut short, fewer fields than its type needs, or a last field that is an incomplete number
+such as ``""``, ``"-"`` or ``"1e"``), is dropped. Whatever is dropped is counted in
+:attr:`IlcWalk.dropped_fields` (``"<TYPE> <field>"`` -> lines), described in
+:attr:`IlcWalk.notes`, and reported by ONE :class:`~indoorloc.io.errors.RecordingWarning` per
+walk naming the file. Floor readers (:meth:`IlcFloor.walks`, :meth:`IlcFloor.bssid_vocabulary`,
+:func:`describe_ilc_floor`) skip a walk that cannot be read, with a RecordingWarning naming the
+file and the reason, and list it in :attr:`IlcFloor.skipped_walks` and
+:meth:`IlcFloor.load_report`.
 
 Speed
 -----
 Lines are classified by record type with numpy on the raw bytes (no Python loop per line);
-the numeric fields of each type are gathered into one buffer and parsed by ``np.loadtxt``.
+the numeric fields of each type are gathered into one buffer and parsed by ``np.loadtxt``. Only
+lines holding a byte that cannot be part of a number (or an empty field) are parsed in Python,
+one field at a time (the slow path: e.g. the 341 ``Infinity`` distances of the shared F1).
 A file of 1.3 MB loads in about 40 ms; the 119 walks of the shared site (160 MB) in about 5 s
 on one core.
 
@@ -72,13 +105,14 @@ from __future__ import annotations
 import io
 import json
 import re
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Dict, Iterable, Iterator, List, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, Iterable, Iterator, List, Optional, Sequence, Set, Tuple, Union
 
 import numpy as np
 
-from indoorloc.io.errors import reads_file
+from indoorloc.io.errors import RecordingWarning, reads_file
 
 PathLike = Union[str, Path]
 
@@ -106,6 +140,43 @@ _BEACON = "TYPE_BEACON"
 _WAYPOINT = "TYPE_WAYPOINT"
 _TYPE_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
 _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+#: Bytes that may appear in a tab-separated row of numbers; a row with any other byte (a letter
+#: as in "Infinity", a space) goes to the slow path.
+_NUMBER_BYTES = np.zeros(256, dtype=bool)
+_NUMBER_BYTES[np.frombuffer(b"0123456789+-.eE\t\n", dtype=np.uint8)] = True
+
+#: Field layouts of the record types read: type -> the allowed layouts (field names, the time
+#: and the type included).
+_LAYOUTS: Dict[str, Tuple[Tuple[str, ...], ...]] = {
+    t: (("unix_ms", "type") + names + ("accuracy",),) for t, (_, _, names) in ILC_SENSOR_TYPES.items()}
+_LAYOUTS["TYPE_ROTATION_VECTOR"] += (("unix_ms", "type", "x", "y", "z", "w", "accuracy"),)
+_LAYOUTS[_WIFI] = (("unix_ms", "type", "ssid", "bssid", "rssi", "frequency", "last_seen_unix_ms"),)
+_LAYOUTS[_BEACON] = (("unix_ms", "type", "uuid", "major", "minor", "tx_power", "rssi", "distance",
+                      "mac"),
+                     ("unix_ms", "type", "uuid", "major", "minor", "tx_power", "rssi", "distance",
+                      "mac", "time_unix_ms"))
+_LAYOUTS[_WAYPOINT] = (("unix_ms", "type", "x", "y"),)
+_TEXT_FIELDS = frozenset({"type", "ssid", "bssid", "uuid", "mac"})
+
+#: Optional fields: (record type or "*" for every sensor type, field) -> what replaces a damaged
+#: value. Every other numeric field is needed: damage to it rejects the walk.
+_OPTIONAL: Dict[Tuple[str, str], str] = {
+    ("*", "accuracy"): "-1 (unknown)",
+    ("*", "bias x"): "NaN", ("*", "bias y"): "NaN", ("*", "bias z"): "NaN",
+    ("TYPE_ROTATION_VECTOR", "w"): "NaN (w completed from x, y, z)",
+    (_WIFI, "frequency"): "NaN",
+    (_WIFI, "last_seen_unix_ms"): "the scan time",
+    (_BEACON, "major"): "-1", (_BEACON, "minor"): "-1",
+    (_BEACON, "tx_power"): "NaN", (_BEACON, "rssi"): "NaN", (_BEACON, "distance"): "NaN",
+}
+
+
+def _fallback(type_name: str, name: str) -> Optional[str]:
+    """What replaces a damaged value of field ``name`` of ``type_name``; None if it is needed."""
+    hit = _OPTIONAL.get((type_name, name))
+    if hit is None and type_name in ILC_SENSOR_TYPES:
+        hit = _OPTIONAL.get(("*", name))
+    return hit
 
 
 # --------------------------------------------------------------------------------------------
@@ -131,9 +202,11 @@ class IlcSensor:
         w only when the file stores it (NaN in rows that lack it); see
         :meth:`IlcWalk.rotation_quaternion_xyzw`.
     accuracy : numpy.ndarray, shape (N,), int64
-        Android accuracy status (0 unreliable ... 3 high).
+        Android accuracy status (0 unreliable ... 3 high); -1 where the file's value was
+        damaged (dropped, see :attr:`IlcWalk.dropped_fields`).
     bias : numpy.ndarray, shape (N, 3), float64, or None
-        Estimated bias of the ``_UNCALIBRATED`` types; None for the calibrated ones.
+        Estimated bias of the ``_UNCALIBRATED`` types (NaN where the file's value was damaged);
+        None for the calibrated ones.
     """
 
     type_name: str
@@ -186,6 +259,11 @@ class IlcWifi:
     scan_starts : numpy.ndarray, shape (S,), int64
         Index of each scan's first reading; scan s holds readings
         ``scan_starts[s]:scan_starts[s + 1]`` (the last one up to R).
+    last_seen_fallback : numpy.ndarray, shape (R,), bool
+        True where the file's last-seen time was empty or damaged and ``last_seen_s`` is the
+        scan time instead (all False normally). Such a reading looks fresh (age 0) although
+        Android may have measured it seconds earlier: a method that relies on the age can drop
+        these readings (``wifi.rssi_dbm[~wifi.last_seen_fallback]``).
     """
 
     scan_time_s: np.ndarray
@@ -196,6 +274,11 @@ class IlcWifi:
     bssids: List[str]
     ssids: List[str]
     scan_starts: np.ndarray
+    last_seen_fallback: Optional[np.ndarray] = None
+
+    def __post_init__(self) -> None:
+        if self.last_seen_fallback is None:
+            self.last_seen_fallback = np.zeros(self.scan_time_s.shape[0], dtype=bool)
 
     @property
     def n_readings(self) -> int:
@@ -250,6 +333,10 @@ class IlcWifi:
 class IlcBeacons:
     """The iBeacon readings of one walk (sparse); B readings.
 
+    No method of indoorloc reads them: every field but the time is optional, so a damaged value
+    is dropped (-1 for major and minor, NaN for the float fields), e.g. the distance
+    ``Infinity`` that the phone wrote on 341 lines of the shared F1.
+
     Attributes
     ----------
     t_s : numpy.ndarray, shape (B,), float64
@@ -257,11 +344,11 @@ class IlcBeacons:
     uuid : list of str
         iBeacon proximity UUID.
     major, minor : numpy.ndarray, shape (B,), int64
-        iBeacon major and minor numbers.
+        iBeacon major and minor numbers (-1 where damaged).
     tx_power_dbm, rssi_dbm : numpy.ndarray, shape (B,), float64
-        Calibrated power at 1 m and received strength [dBm].
+        Calibrated power at 1 m and received strength [dBm] (NaN where damaged).
     distance_m : numpy.ndarray, shape (B,), float64
-        The phone's distance estimate [m].
+        The phone's distance estimate [m]; NaN where the file's value was not a finite number.
     mac : list of str
         Beacon MAC address.
     """
@@ -314,7 +401,14 @@ class IlcWalk:
     unknown_type_counts : dict of str to int
         Lines skipped per record type not read by this loader.
     notes : list of str
-        What the loader changed (streams sorted with ``allow_unsorted=True``); empty normally.
+        What the loader changed, one sentence each: damaged optional fields dropped (with the
+        count, the first line and value, and the fallback), a truncated last line dropped,
+        streams sorted with ``allow_unsorted=True``; empty normally.
+    dropped_fields : dict of str to int
+        Lines whose field was dropped, per ``"<TYPE> <field>"`` (e.g. ``"TYPE_BEACON
+        distance"``), plus ``"TYPE_BEACON line"`` (iBeacon lines with a wrong field count) and
+        ``"truncated last line"``; empty normally. A non-empty dict came with one
+        RecordingWarning.
     """
 
     path: Path
@@ -334,6 +428,7 @@ class IlcWalk:
     metadata: Dict[str, Any]
     unknown_type_counts: Dict[str, int] = field(default_factory=dict)
     notes: List[str] = field(default_factory=list)
+    dropped_fields: Dict[str, int] = field(default_factory=dict)
 
     @property
     def sensors(self) -> Dict[str, IlcSensor]:
@@ -407,7 +502,11 @@ def _gather_ranges(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 class _WalkText:
-    """The raw bytes of one walk file with line and tab positions (all numpy)."""
+    """The raw bytes of one walk file with line and tab positions (all numpy).
+
+    A last data line cut short (an interrupted recording, see :func:`_truncation`) is taken out
+    of the data lines and kept in :attr:`truncated` as (line number, text, reason).
+    """
 
     def __init__(self, path: Path) -> None:
         self.path = path
@@ -433,6 +532,14 @@ class _WalkText:
         self.header_lines = [self.line_text(int(s), int(e))
                              for s, e in zip(starts[header], ends[header])]
         data = ~header
+        # The file's last line, when a data line cut short, is an interrupted recording.
+        self.truncated: Optional[Tuple[int, str, str]] = None
+        if starts.size and data[-1]:
+            last = self.line_text(int(starts[-1]), int(ends[-1]))
+            reason = _truncation(last)
+            if reason is not None:
+                self.truncated = (int(line_no[-1]), last, reason)
+                data[-1] = False
         self.starts, self.ends, self.line_no = starts[data], ends[data], line_no[data]
         self.tabs = np.flatnonzero(buf == _TAB).astype(np.int64)
         self.first_tab_index = np.searchsorted(self.tabs, self.starts)
@@ -448,8 +555,7 @@ class _WalkText:
         return f"{self.path}, line {int(self.line_no[i])}"
 
     def shown(self, i: int, limit: int = 120) -> str:
-        text = self.line_text(int(self.starts[i]), int(self.ends[i]))
-        return repr(text if len(text) <= limit else text[:limit] + "...")
+        return _shown(self.line_text(int(self.starts[i]), int(self.ends[i])), limit)
 
     def field_bounds(self, sel: np.ndarray, j: int) -> Tuple[np.ndarray, np.ndarray]:
         """Byte range [a, b) of field j (0 = time, 1 = type, ...) of the data lines ``sel``.
@@ -524,53 +630,171 @@ class _WalkText:
         return names, type_index
 
     def check_field_count(self, sel: np.ndarray, type_name: str,
-                          allowed: Sequence[Tuple[str, ...]]) -> None:
+                          allowed: Sequence[Tuple[str, ...]],
+                          drops: Optional["_Drops"] = None) -> np.ndarray:
+        """The lines of ``sel`` with an allowed field count. A line with another count raises,
+        or, when ``drops`` is given (a record type no method needs), is dropped and counted."""
         counts = self.n_tabs[sel] + 1
         ok = np.isin(counts, [len(f) for f in allowed])
-        if not np.all(ok):
-            i = int(sel[np.argmax(~ok)])
-            expected = " or ".join(f"{len(f)} ({', '.join(f)})" for f in allowed)
-            raise _err(f"{self.where(i)}: {type_name} has {int(self.n_tabs[i]) + 1} "
-                       f"tab-separated fields, expected {expected}: {self.shown(i)}")
+        if np.all(ok):
+            return sel
+        i = int(sel[np.argmax(~ok)])
+        expected = " or ".join(f"{len(f)} ({', '.join(f)})" for f in allowed)
+        problem = (f"{type_name} has {int(self.n_tabs[i]) + 1} tab-separated fields, expected "
+                   f"{expected}")
+        if drops is None:
+            raise _err(f"{self.where(i)}: {problem}: {self.shown(i)}")
+        drops.add(f"{type_name} line", int(np.sum(~ok)), "with a wrong field count",
+                  int(self.line_no[i]), f"{problem}: {self.shown(i)}", "the lines dropped")
+        return sel[ok]
 
     def numbers(self, sel: np.ndarray, fields: Sequence[int], names: Sequence[str],
-                type_name: str, integer: Sequence[bool]) -> np.ndarray:
-        """(len(sel), len(fields)) float64 of numeric fields; ValueError naming the line."""
-        if sel.size == 0:
-            return np.zeros((0, len(fields)), dtype=np.float64)
-        text = self.fields_bytes(sel, fields)
-        try:
-            values = np.loadtxt(io.BytesIO(text), delimiter="\t", comments=None,
-                                dtype=np.float64, ndmin=2, encoding="utf-8")
-        except ValueError:
-            values = None
-        if values is not None and values.shape == (sel.size, len(fields)):
-            bad = ~np.isfinite(values)
-            ints = np.asarray(integer, dtype=bool)
-            if np.any(ints):
-                v = values[:, ints]
-                bad[:, ints] |= np.isfinite(v) & (v != np.round(v))
-            if not np.any(bad):
-                return values
-        self._diagnose(sel, fields, names, type_name, integer)
-        # np.loadtxt refused a field that the line-by-line check accepts (not seen so far).
-        raise _err(f"{self.path}: {type_name}: np.loadtxt could not parse the numeric fields "
-                   f"{list(names)}, and no single line was found at fault")
+                type_name: str, integer: Sequence[bool],
+                drops: Optional["_Drops"] = None) -> Tuple[np.ndarray, np.ndarray]:
+        """Numeric fields of the lines ``sel``: ``(values, dropped)``, both (len(sel),
+        len(fields)); ``values`` float64, ``dropped`` True where an optional field was damaged
+        (NaN in ``values``; counted in ``drops``). Damage to a needed field raises, naming the
+        first such line.
 
-    def _diagnose(self, sel: np.ndarray, fields: Sequence[int], names: Sequence[str],
-                  type_name: str, integer: Sequence[bool]) -> None:
-        """Find the first line of ``sel`` with a bad numeric field and raise (slow path)."""
-        for i in sel:
-            for j, name, is_int in zip(fields, names, integer):
-                s = self.field_str(int(i), j)
-                what = f"{type_name} field {j + 1} ({name})"
-                if not _NUMBER.fullmatch(s.strip()):
-                    raise _err(f"{self.where(int(i))}: {what} is not a number: {s!r}")
-                v = float(s)
-                if not np.isfinite(v):
-                    raise _err(f"{self.where(int(i))}: {what} is not finite: {s!r}")
-                if is_int and v != round(v):
-                    raise _err(f"{self.where(int(i))}: {what} must be an integer: {s!r}")
+        Fast path: one ``np.loadtxt`` over the fields of all the lines (``Infinity`` and
+        ``NaN`` parse there, and are then dropped or refused as non-finite). Only when it
+        refuses the text: the lines holding a byte that cannot be part of a number, or an empty
+        field, are parsed in Python one field at a time, the others by ``np.loadtxt`` again
+        (split in halves until the lines it refuses are isolated, should it refuse more).
+        """
+        n, k = sel.size, len(fields)
+        if n == 0:
+            return np.zeros((0, k), dtype=np.float64), np.zeros((0, k), dtype=bool)
+        text = self.fields_bytes(sel, fields)
+        values = _loadtxt(text, n, k)
+        slow = np.zeros(n, dtype=bool)
+        if values is None:
+            values = np.full((n, k), np.nan)
+            buf = np.frombuffer(text, dtype=np.uint8)
+            sep = (buf == _NL) | (buf == _TAB)
+            empty_field = sep & np.concatenate([[True], sep[:-1]])
+            odd = np.flatnonzero(~_NUMBER_BYTES[buf] | empty_field)
+            slow[np.searchsorted(np.flatnonzero(buf == _NL), odd)] = True
+            pending = [np.flatnonzero(~slow)] if not np.all(slow) else []
+            while pending:
+                rows = pending.pop()
+                parsed = _loadtxt(self.fields_bytes(sel[rows], fields), rows.size, k)
+                if parsed is not None:
+                    values[rows] = parsed
+                elif rows.size == 1:
+                    slow[rows] = True  # e.g. "1e" or "1.2.3": number bytes, not a number
+                else:
+                    pending += [rows[: rows.size // 2], rows[rows.size // 2:]]
+        for r in np.flatnonzero(slow):  # the slow path: only the lines that need it
+            for c, j in enumerate(fields):
+                values[r, c] = _number(self.field_str(int(sel[r]), j))
+        bad = ~np.isfinite(values)
+        ints = np.asarray(integer, dtype=bool)
+        if np.any(ints):
+            v = values[:, ints]
+            bad[:, ints] |= np.isfinite(v) & (v != np.round(v))
+        if not np.any(bad):
+            return values, bad
+        fallbacks = [_fallback(type_name, name) for name in names]
+        needed = np.array([f is None for f in fallbacks])
+        if np.any(bad[:, needed]):
+            r = int(np.argmax(np.any(bad[:, needed], axis=1)))
+            c = int(np.flatnonzero(bad[r] & needed)[0])
+            raise _err(f"{self.where(int(sel[r]))}: "
+                       + _field_problem(self.field_str(int(sel[r]), fields[c]),
+                                        f"{type_name} field {fields[c] + 1} ({names[c]})",
+                                        bool(ints[c])))
+        values[bad] = np.nan
+        if drops is not None:
+            for c in np.flatnonzero(np.any(bad, axis=0)):
+                r = int(np.argmax(bad[:, c]))
+                first = _field_problem(self.field_str(int(sel[r]), fields[c]),
+                                       f"field {fields[c] + 1}", bool(ints[c]))
+                drops.add(f"{type_name} {names[c]}", int(np.sum(bad[:, c])),
+                          "with a damaged value", int(self.line_no[sel[r]]), first,
+                          f"replaced by {fallbacks[c]}")
+        return values, bad
+
+
+def _loadtxt(text: bytes, n: int, k: int) -> Optional[np.ndarray]:
+    """(n, k) float64 of tab-separated rows of numbers, or None when np.loadtxt refuses them."""
+    try:
+        values = np.loadtxt(io.BytesIO(text), delimiter="\t", comments=None, dtype=np.float64,
+                            ndmin=2, encoding="utf-8")
+    except ValueError:
+        return None
+    return values if values.shape == (n, k) else None
+
+
+def _shown(text: str, limit: int = 120) -> str:
+    return repr(text if len(text) <= limit else text[:limit] + "...")
+
+
+def _number(s: str) -> float:
+    """float(s) when s is a number in the file's notation (``Infinity``, ``nan``, ``1_0`` are
+    not), else NaN."""
+    s = s.strip()
+    return float(s) if _NUMBER.fullmatch(s) else float("nan")
+
+
+def _field_problem(s: str, what: str, integer: bool) -> str:
+    """``"<what> is not a number: '...'"`` (or "is not finite", "must be an integer")."""
+    if not _NUMBER.fullmatch(s.strip()):
+        return f"{what} is not a number: {s!r}"
+    if not np.isfinite(float(s)):
+        return f"{what} is not finite: {s!r}"
+    if integer:
+        return f"{what} must be an integer: {s!r}"
+    return f"{what} is damaged: {s!r}"
+
+
+def _truncation(line: str) -> Optional[str]:
+    """Why the file's last line looks cut short by an interrupted recording, or None.
+
+    Cut short: no tab (a time stamp alone), an empty record type or one that is the beginning
+    of a known type's name, fewer fields than the type's shortest layout, or a last field that
+    is not a complete number where a number belongs (``""``, ``"-"``, ``"1e"``).
+    """
+    parts = line.split("\t")
+    if len(parts) < 2 or not parts[1]:
+        return "no record type"
+    type_name = parts[1]
+    layouts = _LAYOUTS.get(type_name)
+    if layouts is None:
+        if any(t.startswith(type_name) for t in _LAYOUTS):
+            return f"record type {type_name!r} cut short"
+        return None  # another record type: skipped and counted like every unknown type
+    shortest = min(len(f) for f in layouts)
+    if len(parts) < shortest:
+        return f"{len(parts)} fields, {type_name} has at least {shortest}"
+    layout = next((f for f in layouts if len(f) == len(parts)), None)
+    if (layout is not None and layout[-1] not in _TEXT_FIELDS
+            and not _NUMBER.fullmatch(parts[-1].strip())):
+        return f"its last field ({layout[-1]}) is not a complete number: {parts[-1]!r}"
+    return None
+
+
+class _Drops:
+    """What the reader dropped from one walk: counts per field and one sentence each."""
+
+    def __init__(self) -> None:
+        self.counts: Dict[str, int] = {}
+        self.notes: List[str] = []
+
+    def __bool__(self) -> bool:
+        return bool(self.counts)
+
+    def add(self, key: str, count: int, what: str, line: int, first: str, action: str) -> None:
+        """``count`` lines ``what`` (e.g. "with a damaged value"), the first at ``line``
+        (``first``: what was wrong there); ``action``: what the reader did."""
+        self.counts[key] = self.counts.get(key, 0) + count
+        self.notes.append(f"{key}: {count} line(s) {what}, first at line {line} ({first}): "
+                          f"{action}")
+
+    def warning(self, path: Path) -> str:
+        what = ", ".join(f"{k} x{v}" for k, v in self.counts.items())
+        return (f"indoorloc: {path}: the walk is kept, damaged data that no method needs was "
+                f"dropped: {what} (lines in walk.notes, counts in walk.dropped_fields)")
 
 
 def _check_sorted(text: _WalkText, sel: np.ndarray, t_ms: np.ndarray, what: str,
@@ -623,6 +847,11 @@ def _empty_sensor(type_name: str) -> IlcSensor:
                      bias=np.zeros((0, 3)) if len(names) == 6 else None)
 
 
+def _int_or(values: np.ndarray, missing: int = -1) -> np.ndarray:
+    """int64 of whole-number floats, ``missing`` where NaN (a dropped field)."""
+    return np.where(np.isnan(values), missing, values).astype(np.int64)
+
+
 @reads_file("path")  # a damaged walk or floor folder is a FormatError, as for every reader
 def read_ilc_walk(path: PathLike, *, allow_unsorted: bool = False) -> IlcWalk:
     """Read one walk file (``path_data_files/<walk id>.txt``) into numpy arrays.
@@ -639,76 +868,84 @@ def read_ilc_walk(path: PathLike, *, allow_unsorted: bool = False) -> IlcWalk:
     -------
     IlcWalk
         Sensor streams, WiFi and iBeacon readings, waypoints and header metadata; every time in
-        seconds since the walk's first record (``t0_unix_ms``).
+        seconds since the walk's first record (``t0_unix_ms``). Damaged optional fields (see
+        the module's "Errors: nothing is lost") are dropped for their line only, with ONE
+        :class:`~indoorloc.io.errors.RecordingWarning` and the counts in
+        :attr:`IlcWalk.dropped_fields`; a truncated last line is dropped the same way.
 
     Raises
     ------
-    ValueError
-        ``indoorloc: argument 'path': <file>, line <n>: ...`` for a damaged line (no record
-        type, a record type that is not a name, a field count that does not match the type, a
-        field that is not a finite number where one must be, a time stamp, accuracy or iBeacon
-        major/minor that is not an integer), and for times that decrease within a record type
-        (unless ``allow_unsorted``); ``... file not found`` when there is no file.
+    FormatError
+        (a ValueError) ``indoorloc: argument 'path': <file>, line <n>: ...`` for damage to what
+        the methods need: a line with no record type, a record type that is not a name, a
+        field count that does not match the type (iBeacon lines are dropped instead), a time
+        stamp, sensor x/y/z, WiFi RSSI or waypoint that is not a finite number, a time stamp
+        that is not an integer, an empty BSSID; and for times that decrease within a record
+        type (unless ``allow_unsorted``); ``... file not found`` when there is no file.
     """
     p = Path(path)
     if not p.is_file():
         raise _err(f"file not found: {p}")
     text = _WalkText(p)
+    drops = _Drops()
+    if text.truncated is not None:
+        line, shown, reason = text.truncated
+        drops.add("truncated last line", 1, "cut short (an interrupted recording)", line,
+                  f"{reason}: {_shown(shown)}", "dropped")
     names, type_index = text.classify()
     by_type = {name: np.flatnonzero(type_index == k) for k, name in enumerate(names)}
-    known = set(ILC_SENSOR_TYPES) | {_WIFI, _BEACON, _WAYPOINT}
-    unknown = {name: int(sel.size) for name, sel in by_type.items() if name not in known}
+    unknown = {name: int(sel.size) for name, sel in by_type.items() if name not in _LAYOUTS}
     empty = np.zeros(0, dtype=np.int64)
     notes: List[str] = []
+
+    def numbers(sel: np.ndarray, layout: Tuple[str, ...], fields: Sequence[int],
+                type_name: str) -> np.ndarray:
+        field_names = [layout[j] for j in fields]
+        integer = [name in ("unix_ms", "accuracy", "major", "minor", "last_seen_unix_ms")
+                   for name in field_names]
+        return text.numbers(sel, fields, field_names, type_name, integer, drops)[0]
 
     # Numeric parse of every known type, times still in unix ms.
     parsed: Dict[str, Tuple[np.ndarray, np.ndarray]] = {}  # type -> (line indices, values)
     for type_name, (_, _, value_names) in ILC_SENSOR_TYPES.items():
         sel = by_type.get(type_name, empty)
-        layout = ("unix_ms", "type") + value_names + ("accuracy",)
+        layouts = _LAYOUTS[type_name]
+        text.check_field_count(sel, type_name, layouts)
         if type_name == "TYPE_ROTATION_VECTOR":
-            with_w = ("unix_ms", "type", "x", "y", "z", "w", "accuracy")
-            text.check_field_count(sel, type_name, (layout, with_w))
+            layout, with_w = layouts
             has_w = text.n_tabs[sel] + 1 == len(with_w)
             rows = np.full((sel.size, len(with_w) - 1), np.nan)
             for mask, lay in ((~has_w, layout), (has_w, with_w)):
                 fields = [0] + list(range(2, len(lay)))
                 cols = [0, 1, 2, 3, 5] if len(lay) == len(layout) else [0, 1, 2, 3, 4, 5]
-                rows[np.ix_(mask, cols)] = text.numbers(
-                    sel[mask], fields, [lay[j] for j in fields], type_name,
-                    [j in (0, len(lay) - 1) for j in fields])
+                rows[np.ix_(mask, cols)] = numbers(sel[mask], lay, fields, type_name)
             if not np.any(has_w):
                 rows = rows[:, [0, 1, 2, 3, 5]]
             parsed[type_name] = (sel, rows)
         else:
-            text.check_field_count(sel, type_name, (layout,))
-            fields = [0] + list(range(2, len(layout)))
-            parsed[type_name] = (sel, text.numbers(
-                sel, fields, [layout[j] for j in fields], type_name,
-                [j in (0, len(layout) - 1) for j in fields]))
+            layout = layouts[0]
+            parsed[type_name] = (sel, numbers(sel, layout, [0] + list(range(2, len(layout))),
+                                              type_name))
 
-    wifi_layout = ("unix_ms", "type", "ssid", "bssid", "rssi", "frequency", "last_seen_unix_ms")
+    wifi_layout = _LAYOUTS[_WIFI][0]
     wifi_sel = by_type.get(_WIFI, empty)
     text.check_field_count(wifi_sel, _WIFI, (wifi_layout,))
-    wifi_num = text.numbers(wifi_sel, [0, 4, 5, 6], [wifi_layout[j] for j in (0, 4, 5, 6)],
-                            _WIFI, [True, False, False, True])
-    parsed[_WIFI] = (wifi_sel, wifi_num)
+    wifi_num = numbers(wifi_sel, wifi_layout, [0, 4, 5, 6], _WIFI)
+    # A damaged last-seen time: the scan time (flagged in a 5th column, kept through sorting).
+    fallback = np.isnan(wifi_num[:, 3])
+    wifi_num[fallback, 3] = wifi_num[fallback, 0]
+    parsed[_WIFI] = (wifi_sel, np.column_stack([wifi_num, fallback]))
 
-    wp_layout = ("unix_ms", "type", "x", "y")
+    wp_layout = _LAYOUTS[_WAYPOINT][0]
     wp_sel = by_type.get(_WAYPOINT, empty)
     text.check_field_count(wp_sel, _WAYPOINT, (wp_layout,))
-    parsed[_WAYPOINT] = (wp_sel, text.numbers(wp_sel, [0, 2, 3], ["unix_ms", "x", "y"],
-                                              _WAYPOINT, [True, False, False]))
+    parsed[_WAYPOINT] = (wp_sel, numbers(wp_sel, wp_layout, [0, 2, 3], _WAYPOINT))
 
-    beacon_layout = ("unix_ms", "type", "uuid", "major", "minor", "tx_power", "rssi",
-                     "distance", "mac")
-    beacon_sel = by_type.get(_BEACON, empty)
-    text.check_field_count(beacon_sel, _BEACON,
-                           (beacon_layout, beacon_layout + ("time_unix_ms",)))
-    beacon_fields = [0, 3, 4, 5, 6, 7]
-    parsed[_BEACON] = (beacon_sel, text.numbers(
-        beacon_sel, beacon_fields, [beacon_layout[j] for j in beacon_fields], _BEACON,
-        [True, True, True, False, False, False]))
+    beacon_layout = _LAYOUTS[_BEACON][0]
+    beacon_sel = text.check_field_count(by_type.get(_BEACON, empty), _BEACON, _LAYOUTS[_BEACON],
+                                        drops)
+    parsed[_BEACON] = (beacon_sel, numbers(beacon_sel, beacon_layout, [0, 3, 4, 5, 6, 7],
+                                           _BEACON))
 
     # The walk's clock: t = 0 at its first parsed record.
     firsts = [int(v[:, 0].min()) for _, v in parsed.values() if v.shape[0]]
@@ -735,7 +972,7 @@ def read_ilc_walk(path: PathLike, *, allow_unsorted: bool = False) -> IlcWalk:
         sensors[attr] = IlcSensor(
             type_name=type_name, unit=unit, t_s=seconds(values[:, 0]),
             values=np.ascontiguousarray(values[:, 1:1 + n_xyz]),
-            accuracy=values[:, -1].astype(np.int64),
+            accuracy=_int_or(values[:, -1]),
             bias=np.ascontiguousarray(values[:, 4:7]) if uncal else None)
 
     wifi_sel, wifi_num = ordered(_WIFI, _WIFI + " scan")
@@ -745,26 +982,31 @@ def read_ilc_walk(path: PathLike, *, allow_unsorted: bool = False) -> IlcWalk:
     beacons = IlcBeacons(
         t_s=seconds(beacon_num[:, 0]),
         uuid=[text.field_str(int(i), 2) for i in beacon_sel],
-        major=beacon_num[:, 1].astype(np.int64), minor=beacon_num[:, 2].astype(np.int64),
+        major=_int_or(beacon_num[:, 1]), minor=_int_or(beacon_num[:, 2]),
         tx_power_dbm=beacon_num[:, 3], rssi_dbm=beacon_num[:, 4], distance_m=beacon_num[:, 5],
         mac=[text.field_str(int(i), 8) for i in beacon_sel])
 
     _, wp = ordered(_WAYPOINT, _WAYPOINT)
+    if drops:
+        # One warning per walk; stacklevel 3: the caller of read_ilc_walk (through reads_file).
+        warnings.warn(drops.warning(p), RecordingWarning, stacklevel=3)
     return IlcWalk(
         path=p, walk_id=p.stem if p.suffix == ".txt" else p.name, t0_unix_ms=t0,
         wifi=wifi, beacons=beacons, waypoint_t_s=seconds(wp[:, 0]),
         waypoint_xy_m=np.ascontiguousarray(wp[:, 1:3]),
-        metadata=_parse_header(text.header_lines), unknown_type_counts=unknown, notes=notes,
-        **sensors)
+        metadata=_parse_header(text.header_lines), unknown_type_counts=unknown,
+        notes=drops.notes + notes, dropped_fields=dict(drops.counts), **sensors)
 
 
 def _wifi_arrays(text: _WalkText, sel: np.ndarray, num: np.ndarray, seconds) -> IlcWifi:
-    """WiFi readings of the lines ``sel`` (scan order) with their numbers (R, 4)."""
+    """WiFi readings of the lines ``sel`` (scan order) with their numbers (R, 5): time, rssi,
+    frequency, last seen, last-seen fallback flag."""
     if sel.size == 0:
         z = np.zeros(0, dtype=np.float64)
         return IlcWifi(scan_time_s=z, bssid_index=np.zeros(0, dtype=np.int64), rssi_dbm=z,
                        frequency_mhz=z, last_seen_s=z, bssids=[], ssids=[],
-                       scan_starts=np.zeros(0, dtype=np.int64))
+                       scan_starts=np.zeros(0, dtype=np.int64),
+                       last_seen_fallback=np.zeros(0, dtype=bool))
     a, b = text.field_bounds(sel, 3)
     length = b - a
     if np.any(length == 0):
@@ -792,7 +1034,8 @@ def _wifi_arrays(text: _WalkText, sel: np.ndarray, num: np.ndarray, seconds) -> 
     scan_starts = np.flatnonzero(np.concatenate([[True], scan_ms[1:] != scan_ms[:-1]]))
     return IlcWifi(scan_time_s=seconds(scan_ms), bssid_index=bssid_index, rssi_dbm=num[:, 1],
                    frequency_mhz=num[:, 2], last_seen_s=seconds(num[:, 3]), bssids=bssids,
-                   ssids=ssids, scan_starts=scan_starts.astype(np.int64))
+                   ssids=ssids, scan_starts=scan_starts.astype(np.int64),
+                   last_seen_fallback=num[:, 4] > 0)
 
 
 # --------------------------------------------------------------------------------------------
@@ -893,10 +1136,24 @@ class BssidVocabulary:
 # Floors and sites
 
 
-class IlcFloor:
-    """One floor folder: ``floor_info.json``, ``geojson_map.json`` and ``path_data_files/``.
+class UnknownWalkError(KeyError):
+    """No walk with the id asked for on a floor (a KeyError whose message reads plainly)."""
 
-    Walks are read on demand (:meth:`walk`, :meth:`walks`) and kept when ``cache`` is True.
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else ""
+
+
+class IlcFloor:
+    """One floor folder: ``floor_info.json``, ``geojson_map.json`` and the walk files.
+
+    The walks are ``path_data_files/*.txt`` (the competition's 2020 layout) or, when that folder
+    is absent, ``*.txt`` in the floor folder itself (the Kaggle 2021 layout). They are read on
+    demand (:meth:`walk`, :meth:`walks`) and kept when ``cache`` is True.
+
+    :meth:`walk` raises for a walk that cannot be read; the readers that iterate over walks
+    (:meth:`walks`, :meth:`bssid_vocabulary`, :func:`describe_ilc_floor`) skip it instead, with a
+    :class:`~indoorloc.io.errors.RecordingWarning` naming the file and the reason, and list it in
+    :attr:`skipped_walks`. :meth:`load_report` counts what was skipped or dropped.
 
     Attributes
     ----------
@@ -919,13 +1176,17 @@ class IlcFloor:
                  allow_unsorted: bool = False) -> None:
         d = Path(floor_dir)
         walk_dir = d / "path_data_files"
+        if not d.is_dir():
+            raise ValueError(f"indoorloc: argument 'floor_dir': no folder {d}")
         if not walk_dir.is_dir():
-            raise ValueError(f"indoorloc: argument 'floor_dir': no folder {walk_dir}")
+            walk_dir = d
         self.name = d.name
         self.floor_dir = d
-        self.walk_paths = sorted(walk_dir.glob("*.txt"))
+        self.walk_paths = sorted(p for p in walk_dir.glob("*.txt") if p.is_file())
         if not self.walk_paths:
-            raise ValueError(f"indoorloc: argument 'floor_dir': no *.txt walk file in {walk_dir}")
+            where = (f"{d} (and no folder {d / 'path_data_files'})" if walk_dir == d
+                     else str(walk_dir))
+            raise ValueError(f"indoorloc: argument 'floor_dir': no *.txt walk file in {where}")
         self.width_m: Optional[float] = None
         self.height_m: Optional[float] = None
         info = d / "floor_info.json"
@@ -939,6 +1200,9 @@ class IlcFloor:
         self._allow_unsorted = allow_unsorted
         self._walks: Dict[int, IlcWalk] = {}
         self._vocabulary: Optional[BssidVocabulary] = None
+        self._skipped: Dict[int, str] = {}       # walk index -> why it could not be read
+        self._dropped: Dict[int, Dict[str, int]] = {}  # walk index -> IlcWalk.dropped_fields
+        self._read: Set[int] = set()             # walk indices read at least once
 
     def __repr__(self) -> str:
         return (f"IlcFloor({self.name!r}, {self.n_walks} walks, width_m={self.width_m}, "
@@ -946,7 +1210,7 @@ class IlcFloor:
 
     @property
     def n_walks(self) -> int:
-        """Number of walk files."""
+        """Number of walk files (readable or not)."""
         return len(self.walk_paths)
 
     @property
@@ -954,33 +1218,114 @@ class IlcFloor:
         """Walk ids (file names without ``.txt``), in :attr:`walk_paths` order."""
         return [p.stem for p in self.walk_paths]
 
-    def walk(self, key: Union[int, str]) -> IlcWalk:
-        """Walk number ``key`` (in :attr:`walk_paths` order) or the walk with id ``key``."""
+    @property
+    def skipped_walks(self) -> Dict[str, str]:
+        """``{walk id: reason}`` of the walks the iterating readers skipped so far (in walk
+        order): files that cannot be read (the reason is the FormatError's message)."""
+        ids = self.walk_ids
+        return {ids[k]: self._skipped[k] for k in sorted(self._skipped)}
+
+    def _index(self, key: Union[int, str]) -> int:
         if isinstance(key, str):
             ids = self.walk_ids
             if key not in ids:
-                raise KeyError(f"indoorloc: argument 'key': no walk {key!r} on floor {self.name}")
-            k = ids.index(key)
-        else:
-            k = int(key)
-            if not 0 <= k < self.n_walks:
-                raise IndexError(f"indoorloc: argument 'key': walk {k} outside "
-                                 f"0..{self.n_walks - 1}")
+                raise UnknownWalkError(
+                    f"indoorloc: argument 'key': no walk {key!r} on floor {self.name} (its "
+                    f"{self.n_walks} walks are the *.txt files of {self.walk_paths[0].parent}; "
+                    f"IlcFloor.walk_ids lists them)")
+            return ids.index(key)
+        if isinstance(key, bool) or not isinstance(key, (int, np.integer)):
+            raise TypeError(f"indoorloc: argument 'key': a walk index (int) or walk id (str), "
+                            f"got {key!r} ({type(key).__name__})")
+        k = int(key)
+        if not 0 <= k < self.n_walks:
+            raise IndexError(f"indoorloc: argument 'key': walk {k} outside "
+                             f"0..{self.n_walks - 1} (floor {self.name} has {self.n_walks} walks)")
+        return k
+
+    def _load(self, k: int) -> IlcWalk:
         if k in self._walks:
             return self._walks[k]
         w = read_ilc_walk(self.walk_paths[k], allow_unsorted=self._allow_unsorted)
+        self._read.add(k)
+        self._skipped.pop(k, None)
+        if w.dropped_fields:
+            self._dropped[k] = dict(w.dropped_fields)
         if self._cache:
             self._walks[k] = w
         return w
 
+    def walk(self, key: Union[int, str]) -> IlcWalk:
+        """Walk number ``key`` (in :attr:`walk_paths` order) or the walk with id ``key``.
+
+        Raises
+        ------
+        TypeError
+            ``key`` is neither an int nor a str (``1.5``, ``True``).
+        IndexError
+            An index outside ``0 .. n_walks - 1``.
+        KeyError
+            (:class:`UnknownWalkError`) no walk has the id ``key``; the message names it and
+            says how many walks the floor has.
+        FormatError
+            The walk file cannot be read (damage to what the methods need): the file and line.
+        """
+        return self._load(self._index(key))
+
     def walks(self, keys: Optional[Iterable[Union[int, str]]] = None) -> Iterator[IlcWalk]:
-        """Iterate over the walks (all, or those of ``keys``), reading each on demand."""
-        for k in (range(self.n_walks) if keys is None else keys):
-            yield self.walk(k)
+        """Iterate over the walks (all, or those of ``keys``), reading each on demand.
+
+        A walk that cannot be read (a FormatError) is skipped with a RecordingWarning naming the
+        file and the reason (once per walk) and listed in :attr:`skipped_walks`; a wrong key
+        raises as in :meth:`walk`.
+        """
+        indices = range(self.n_walks) if keys is None else [self._index(k) for k in keys]
+        for k in indices:
+            if k in self._skipped:
+                continue
+            try:
+                w = self._load(k)
+            except ValueError as exc:  # FormatError: the file's fault, not the caller's
+                self._skipped[k] = str(exc)
+                self._read.add(k)
+                warnings.warn(f"indoorloc: floor {self.name}: walk {self.walk_paths[k]} skipped: "
+                              f"{exc}", RecordingWarning, stacklevel=2)
+                continue
+            yield w
+
+    def load_report(self) -> Dict[str, Any]:
+        """What reading the walks so far skipped or dropped (all of them after :meth:`walks`).
+
+        Returns ``{"floor", "n_walks" (files), "n_read", "n_loaded", "n_skipped",
+        "skipped_walks": {walk id: reason}, "n_walks_with_dropped_fields",
+        "dropped_fields": {"<TYPE> <field>": lines, summed over the walks},
+        "walks_with_dropped_fields": {walk id: {field: lines}}, "n_warnings"}``:
+        ``n_warnings`` is the number of RecordingWarnings those reads gave (one per walk with
+        dropped fields, one per skipped walk).
+        """
+        ids = self.walk_ids
+        total: Dict[str, int] = {}
+        for counts in self._dropped.values():
+            for key, n in counts.items():
+                total[key] = total.get(key, 0) + n
+        return {
+            "floor": self.name,
+            "n_walks": self.n_walks,
+            "n_read": len(self._read),
+            "n_loaded": len(self._read) - len(self._skipped),
+            "n_skipped": len(self._skipped),
+            "skipped_walks": self.skipped_walks,
+            "n_walks_with_dropped_fields": len(self._dropped),
+            "dropped_fields": total,
+            "walks_with_dropped_fields": {ids[k]: dict(self._dropped[k])
+                                          for k in sorted(self._dropped)},
+            "n_warnings": len(self._dropped) + len(self._skipped),
+        }
 
     def bssid_vocabulary(self, keys: Optional[Iterable[Union[int, str]]] = None
                          ) -> BssidVocabulary:
-        """The BSSID vocabulary of all the floor's walks (cached) or of the walks ``keys``."""
+        """The BSSID vocabulary of all the floor's walks (cached) or of the walks ``keys``;
+        walks that cannot be read are skipped as in :meth:`walks`."""
         if keys is not None:
             return BssidVocabulary.from_walks(self.walks(keys))
         if self._vocabulary is None:
@@ -1016,24 +1361,82 @@ def _floor_info(path: Path) -> Tuple[float, float]:
 @reads_file("floor_dir")  # a damaged walk or floor folder is a FormatError, as for every reader
 def read_ilc_floor(floor_dir: PathLike, *, cache: bool = True,
                    allow_unsorted: bool = False) -> IlcFloor:
-    """Open one floor folder (``<floor>/path_data_files/*.txt``, ``floor_info.json``,
-    ``geojson_map.json``); walks are read on demand. See :class:`IlcFloor`.
+    """Open one floor folder (``<floor>/path_data_files/*.txt`` or ``<floor>/*.txt``,
+    ``floor_info.json``, ``geojson_map.json``); walks are read on demand. See :class:`IlcFloor`.
 
     Raises
     ------
     ValueError
-        ``indoorloc: argument 'floor_dir': ...`` when there is no ``path_data_files`` folder or
-        no walk file in it, or ``floor_info.json`` is malformed.
+        ``indoorloc: argument 'floor_dir': ...`` when the folder does not exist or holds no
+        walk file, or ``floor_info.json`` is malformed.
     """
     return IlcFloor(floor_dir, cache=cache, allow_unsorted=allow_unsorted)
+
+
+_FLOOR_LEVEL = (  # (pattern of a floor name, sign of its level)
+    (re.compile(r"B(\d+)|(\d+)B", re.IGNORECASE), -1),
+    (re.compile(r"[FL](\d+)|(\d+)F", re.IGNORECASE), 1),
+)
+
+
+def ilc_floor_level(name: str) -> Optional[int]:
+    """Building level of a floor folder name: ``B2`` / ``2B`` -> -2, ``G`` / ``GF`` -> 0,
+    ``F3`` / ``3F`` / ``L3`` -> 3; None for another name."""
+    if name.upper() in ("G", "GF"):
+        return 0
+    for pattern, sign in _FLOOR_LEVEL:
+        m = pattern.fullmatch(name)
+        if m:
+            return sign * int(m.group(1) or m.group(2))
+    return None
+
+
+def _is_floor_dir(d: Path, with_plan: bool) -> bool:
+    if not d.is_dir() or (with_plan and not (d / "geojson_map.json").is_file()):
+        return False
+    if (d / "path_data_files").is_dir():
+        return True
+    return any(p.is_file() for p in d.glob("*.txt"))
+
+
+def ilc_floor_names(site_dir: PathLike, *, with_plan: bool = False,
+                    argument: str = "site_dir") -> List[str]:
+    """The floor folders of a site folder, in building order (B2, B1, G, F1, F2, ...; names
+    that are not levels (:func:`ilc_floor_level`) last, by name).
+
+    A floor folder is a sub-folder holding ``path_data_files/`` or ``*.txt`` walk files, and,
+    with ``with_plan=True`` (what a tracker needs), ``geojson_map.json``. ``argument`` is the
+    name the error messages give the folder (a caller's own parameter, e.g. ``data_root``).
+
+    Raises
+    ------
+    ValueError
+        ``indoorloc: argument '<argument>': ...`` when the folder does not exist or holds no
+        floor folder.
+    """
+    d = Path(site_dir)
+    if not d.is_dir():
+        raise ValueError(f"indoorloc: argument '{argument}': folder not found: {d}")
+    names = [f.name for f in d.iterdir() if _is_floor_dir(f, with_plan)]
+    if not names:
+        need = " and geojson_map.json" if with_plan else ""
+        raise ValueError(f"indoorloc: argument '{argument}': no floor folder with "
+                         f"path_data_files/ or *.txt walk files{need} in {d}")
+
+    def order(name: str) -> Tuple[int, int, str]:
+        level = ilc_floor_level(name)
+        return (0, level, name) if level is not None else (1, 0, name)
+
+    return sorted(names, key=order)
 
 
 @reads_file("site_dir")  # a damaged walk or floor folder is a FormatError, as for every reader
 def read_ilc_site(site_dir: PathLike, *, cache: bool = True,
                   allow_unsorted: bool = False) -> Dict[str, IlcFloor]:
-    """Open every floor of a site folder: ``{floor folder name: IlcFloor}``, sorted by name.
+    """Open every floor of a site folder: ``{floor folder name: IlcFloor}`` in building order
+    (:func:`ilc_floor_names`: B2, B1, F1, F2, ...).
 
-    A floor is any sub-folder holding ``path_data_files/``.
+    A floor is any sub-folder holding ``path_data_files/`` or ``*.txt`` walk files.
 
     Raises
     ------
@@ -1041,14 +1444,8 @@ def read_ilc_site(site_dir: PathLike, *, cache: bool = True,
         ``indoorloc: argument 'site_dir': ...`` when the folder does not exist or has no floor.
     """
     d = Path(site_dir)
-    if not d.is_dir():
-        raise ValueError(f"indoorloc: argument 'site_dir': folder not found: {d}")
-    floors = {f.name: IlcFloor(f, cache=cache, allow_unsorted=allow_unsorted)
-              for f in sorted(d.iterdir()) if (f / "path_data_files").is_dir()}
-    if not floors:
-        raise ValueError(f"indoorloc: argument 'site_dir': no floor folder with "
-                         f"path_data_files/ in {d}")
-    return floors
+    return {name: IlcFloor(d / name, cache=cache, allow_unsorted=allow_unsorted)
+            for name in ilc_floor_names(d)}
 
 
 def _lonlat_points(coords: Any) -> Iterator[Tuple[float, float]]:
@@ -1072,7 +1469,8 @@ def ilc_floor_origin_lonlat(geojson_path: PathLike) -> Tuple[float, float]:
     ------
     ValueError
         ``indoorloc: argument 'geojson_path': ...`` when the file is missing, not JSON, or its
-        first feature has no coordinates.
+        first feature has no coordinates or a coordinate that is not a finite number (NaN,
+        Infinity: JSON readers accept them).
     """
     p = Path(geojson_path)
     if not p.is_file():
@@ -1087,6 +1485,11 @@ def ilc_floor_origin_lonlat(geojson_path: PathLike) -> Tuple[float, float]:
     if not points:
         raise ValueError(f"indoorloc: argument 'geojson_path': {p}: the first feature has no "
                          f"coordinates")
+    bad = [pt for pt in points if not (np.isfinite(pt[0]) and np.isfinite(pt[1]))]
+    if bad:
+        raise ValueError(f"indoorloc: argument 'geojson_path': {p}: the first feature has "
+                         f"{len(bad)} coordinate(s) that are not finite numbers, first "
+                         f"{list(bad[0])} (the origin would be NaN)")
     lon = min(pt[0] for pt in points)
     lat = min(pt[1] for pt in points)
     return lon, lat
@@ -1130,7 +1533,10 @@ def describe_ilc_floor(floor: IlcFloor, min_scan_fraction: float = 0.10,
       ``after_last_waypoint_s`` (walk end - last waypoint);
     - ``rate_hz``: per sensor type, the spread of the walks' rates; ``wifi_scan_rate_hz``;
       ``max_gap_s``: per sensor type, the longest gap between samples over all walks;
-    - ``n_beacon_readings``, ``unknown_type_counts``.
+    - ``n_beacon_readings``, ``unknown_type_counts``;
+    - ``load_report``: :meth:`IlcFloor.load_report` after reading every walk (walks skipped
+      because they cannot be read, with the reason; optional fields dropped, per field).
+      ``n_walks`` counts the walks read.
     """
     walks = list(floor.walks())
     voc = floor.bssid_vocabulary()
@@ -1220,4 +1626,5 @@ def describe_ilc_floor(floor: IlcFloor, min_scan_fraction: float = 0.10,
         "max_gap_s": gaps,
         "n_beacon_readings": n_beacons,
         "unknown_type_counts": unknown,
+        "load_report": floor.load_report(),
     }
