@@ -23,6 +23,8 @@ py::dict ResultToDict(const GridTrackResult& r) {
   d["covariance_m2"] = r.filtered_covariance_m2;
   d["floor_probabilities"] = r.filtered_floor_probabilities;
   d["heading_offset_rad"] = r.filtered_heading_offset_rad;
+  if (r.filtered_median_m.rows() > 0) d["median_m"] = r.filtered_median_m;
+  if (r.smoothed_median_m.rows() > 0) d["smoothed_median_m"] = r.smoothed_median_m;
   if (r.smoothed_mean_m.rows() > 0) {
     d["smoothed_m"] = r.smoothed_mean_m;
     d["smoothed_covariance_m2"] = r.smoothed_covariance_m2;
@@ -65,6 +67,13 @@ equality and pickling as for every Options class. The fix likelihood's ε and τ
                     [](GridTrackerOptions& o, double v) { o.fix.outlier_probability = v; }, "ε of the position fixes.")
       .def_property("fix_tempering", [](const GridTrackerOptions& o) { return o.fix.tempering; },
                     [](GridTrackerOptions& o, double v) { o.fix.tempering = v; }, "τ of the position fixes.")
+      .def_readwrite("spatial_median", &GridTrackerOptions::spatial_median,
+                     "Also return the spatial medians (filtered_median_m, smoothed_median_m).")
+      .def_readwrite("median_block_m", &GridTrackerOptions::median_block_m,
+                     "Block side of the spatial median's posterior summary [m].")
+      .def_readwrite("fix_tempering_by_variance", &GridTrackerOptions::fix_tempering_by_variance,
+                     "True: τ divides the fix components' variances (outlier floor kept); false: the "
+                     "likelihood to the power τ.")
       .def_readwrite("start_position_sd_m", &GridTrackerOptions::start_position_sd_m, "Known start: sd [m].")
       .def_readwrite("max_memory_bytes", &GridTrackerOptions::max_memory_bytes, "Memory limit of a run [bytes].")
       .def_readwrite("num_threads", &GridTrackerOptions::num_threads, "Layers in parallel (<= 0: all cores).");

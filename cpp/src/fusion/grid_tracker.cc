@@ -136,17 +136,28 @@ struct Moments {
 
 // Of g, or of the product g * weight (the smoother's alpha * beta, formed in double: both are
 // flushed at 1e-30, so the product stays far above double's underflow).
-Moments GridMoments(const std::vector<float>& g, const std::vector<float>* weight, const FloorGrid& fg, double cell) {
+// With `coarse` (nqx * nqy * 3 doubles, zeroed by the caller), also the mass and the mass-weighted
+// cell indices of every block of q x q cells (the summary the spatial median is computed from).
+Moments GridMoments(const std::vector<float>& g, const std::vector<float>* weight, const FloorGrid& fg, double cell,
+                    int q = 1, double* coarse = nullptr) {
   Moments m;
+  const int nqx = (fg.nx + q - 1) / q;
   for (int y = 0; y < fg.ny; ++y) {
     const float* row = g.data() + static_cast<std::size_t>(y) * fg.nx;
     const float* wrow = weight ? weight->data() + static_cast<std::size_t>(y) * fg.nx : nullptr;
     double r_mass = 0, r_sx = 0, r_sxx = 0;
+    double* crow = coarse ? coarse + static_cast<std::size_t>(y / q) * nqx * 3 : nullptr;
     for (int x = 0; x < fg.nx; ++x) {
       const double v = wrow ? static_cast<double>(row[x]) * wrow[x] : row[x];
       r_mass += v;
       r_sx += v * x;
       r_sxx += v * x * static_cast<double>(x);
+      if (crow && v > 0) {
+        double* b = crow + static_cast<std::size_t>(x / q) * 3;
+        b[0] += v;
+        b[1] += v * x;
+        b[2] += v * y;
+      }
     }
     m.mass += r_mass;
     m.sx += r_sx;
@@ -174,6 +185,34 @@ struct LayerStep {
   double log_evidence = 0;
 };
 
+// The spatial median argmin_x Σ m_i |x - p_i| of weighted points (Weiszfeld's iteration from the
+// weighted mean; the objective is convex, so the start only sets the speed). Distances are floored
+// at `floor_m` (the points are block centroids, a block's own spread is of that order).
+Eigen::Vector2d SpatialMedian(const std::vector<Eigen::Vector3d>& points, double floor_m) {
+  double mass = 0;
+  Eigen::Vector2d x = Eigen::Vector2d::Zero();
+  for (const auto& p : points) {
+    mass += p[0];
+    x += p[0] * p.tail<2>();
+  }
+  if (!(mass > 0)) return Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
+  x /= mass;
+  for (int it = 0; it < 100; ++it) {
+    Eigen::Vector2d num = Eigen::Vector2d::Zero();
+    double den = 0;
+    for (const auto& p : points) {
+      const double w = p[0] / std::max(floor_m, (p.tail<2>() - x).norm());
+      num += w * p.tail<2>();
+      den += w;
+    }
+    const Eigen::Vector2d next = num / den;
+    const double moved = (next - x).norm();
+    x = next;
+    if (moved < 1e-3) break;
+  }
+  return x;
+}
+
 }  // namespace
 
 bool GridTrackerOptions::IsValid(std::string* error) const {
@@ -191,6 +230,7 @@ bool GridTrackerOptions::IsValid(std::string* error) const {
       .Check(wall_log_penalty <= 0.0 && !std::isnan(wall_log_penalty), "wall_log_penalty",
              "must be <= 0 or -inf, got " + FormatValue(wall_log_penalty))
       .Check(fix_ok, "fix", fix_error)
+      .InRange(median_block_m, 0.1, 100.0, "median_block_m")
       .InRange(start_position_sd_m, 0.01, 1e4, "start_position_sd_m")
       .InRange(max_memory_bytes, 1e6, 1e13, "max_memory_bytes")
       .IntInRange(num_threads, -1, 4096, "num_threads");
@@ -229,7 +269,8 @@ struct GridTracker::Impl {
         if (w <= 0) continue;
         const int f = fix->floors.size() ? fix->floors[k] : PositionFix::kAnyFloor;
         if (f != PositionFix::kAnyFloor && f != fg.floor_number) continue;
-        const double sd = fix->sds_m[k], inv2v = 0.5 / (sd * sd);
+        const double sd = options.fix_tempering_by_variance ? fix->sds_m[k] / std::sqrt(tau) : fix->sds_m[k];
+        const double inv2v = 0.5 / (sd * sd);
         const double scale = (1.0 - eps) * w / (kTwoPi * sd * sd);
         // 6 sd: beyond it the Gaussian is below 1e-8 of its peak, far under ε / A on any floor.
         const double reach = 6.0 * sd;
@@ -246,7 +287,8 @@ struct GridTracker::Impl {
           }
         }
       }
-      for (std::size_t i = 0; i < acc.size(); ++i) log_l[i] += tau * std::log(floor_density + acc[i]);
+      const double power = options.fix_tempering_by_variance ? 1.0 : tau;
+      for (std::size_t i = 0; i < acc.size(); ++i) log_l[i] += power * std::log(floor_density + acc[i]);
     }
     FixFactor out;
     out.log_scale = *std::max_element(log_l.begin(), log_l.end());
@@ -453,7 +495,15 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
   }
   // Per thread: alpha, beta, gamma, scratch, the layer's fix factors, the checkpoints and a segment.
   const double per_thread = max_cells * 4.0 * (4.0 + fix_steps + (smooth ? (m_run / segment + 1 + segment) : 0));
-  const double bytes = fix_cells * 4.0 + threads * per_thread;
+  // Spatial medians: per layer and step the block summaries (mass, centroid).
+  const int q = std::max(1, static_cast<int>(std::lround(o.median_block_m / c)));
+  double max_blocks = 0;
+  for (int f = 0; f < n_floors; ++f)
+    max_blocks = std::max(max_blocks, std::ceil(im.grids[f].nx / static_cast<double>(q)) *
+                                          std::ceil(im.grids[f].ny / static_cast<double>(q)));
+  const double median_bytes =
+      o.spatial_median ? static_cast<double>(layers.size()) * m_run * max_blocks * 12.0 * (smooth ? 2 : 1) : 0.0;
+  const double bytes = fix_cells * 4.0 + threads * per_thread + median_bytes;
   CheckArgument(bytes <= o.max_memory_bytes, "steps",
                 std::to_string(m_run) + " steps on this grid need " + FormatBytes(bytes) +
                     ", above options.max_memory_bytes = " + FormatBytes(o.max_memory_bytes) +
@@ -475,6 +525,13 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
   std::vector<std::vector<LayerStep>> filtered(n_layers, std::vector<LayerStep>(m_steps));
   std::vector<std::vector<LayerStep>> smoothed(smooth ? n_layers : 0, std::vector<LayerStep>(m_steps));
   std::vector<char> dead(n_layers, 0);
+  // Block summaries per layer: step-major, (mass, x [m], y [m]) per block.
+  std::vector<std::vector<float>> filtered_blocks(o.spatial_median ? n_layers : 0);
+  std::vector<std::vector<float>> smoothed_blocks(o.spatial_median && smooth ? n_layers : 0);
+  auto blocks_of = [&](int floor_index) {
+    const FloorGrid& g = im.grids[floor_index];
+    return static_cast<std::size_t>((g.nx + q - 1) / q) * static_cast<std::size_t>((g.ny + q - 1) / q);
+  };
 
   ParallelForRuns(n_layers, threads, 0, [&](int li, RandomStream&) {
     const Layer& layer = layers[li];
@@ -554,8 +611,28 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
       if (record) log_z += std::log(s) + (has_fix ? factor[k][layer.floor_index].log_scale : 0.0);
       return true;
     };
+    const std::size_t nb = blocks_of(layer.floor_index);
+    const int nqx = (fg.nx + q - 1) / q;
+    std::vector<double> block_sums(o.spatial_median ? nb * 3 : 0);
+    if (o.spatial_median) {
+      filtered_blocks[li].assign(static_cast<std::size_t>(m_steps) * nb * 3, 0.0f);
+      if (smooth) smoothed_blocks[li].assign(static_cast<std::size_t>(m_steps) * nb * 3, 0.0f);
+    }
     auto estimate = [&](const std::vector<float>& g, const std::vector<float>* weight, int k) {
-      const Moments mo = GridMoments(g, weight, fg, c);
+      std::vector<float>* blocks = o.spatial_median ? (weight ? &smoothed_blocks[li] : &filtered_blocks[li]) : nullptr;
+      if (blocks) std::fill(block_sums.begin(), block_sums.end(), 0.0);
+      const Moments mo = GridMoments(g, weight, fg, c, q, blocks ? block_sums.data() : nullptr);
+      if (blocks && mo.mass > 0) {
+        float* out = blocks->data() + static_cast<std::size_t>(k) * nb * 3;
+        for (std::size_t b = 0; b < nb; ++b) {
+          const double m = block_sums[3 * b];
+          if (!(m > 0)) continue;
+          out[3 * b] = static_cast<float>(m / mo.mass);
+          out[3 * b + 1] = static_cast<float>(fg.x0 + (block_sums[3 * b + 1] / m + 0.5) * c + ops[k].rx);
+          out[3 * b + 2] = static_cast<float>(fg.y0 + (block_sums[3 * b + 2] / m + 0.5) * c + ops[k].ry);
+        }
+      }
+      (void)nqx;
       LayerStep e;
       // Positions of the layer are cell centres + the remainder; within-cell spread c²/12.
       e.mx = mo.sx + ops[k].rx;
@@ -719,6 +796,42 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
       mixture(w_all, smoothed, k, mean, cov);
       r.smoothed_mean_m.row(k) << mean[0], mean[1];
       r.smoothed_covariance_m2.row(k) << cov[0], cov[1], cov[2];
+    }
+  }
+  if (o.spatial_median) {
+    // Per step: the blocks of the most probable floor's layers, weighted, then Weiszfeld.
+    auto median_at = [&](const std::vector<double>& w, const std::vector<std::vector<float>>& blocks, int k) {
+      std::vector<double> floor_p(n_floors, 0.0);
+      for (int l = 0; l < n_layers; ++l) floor_p[layers[l].floor_index] += w[l];
+      const int f = static_cast<int>(std::max_element(floor_p.begin(), floor_p.end()) - floor_p.begin());
+      const std::size_t nb = blocks_of(f);
+      std::vector<double> acc(nb * 3, 0.0);
+      for (int l = 0; l < n_layers; ++l) {
+        if (layers[l].floor_index != f || !(w[l] > 0) || dead[l]) continue;
+        const float* b = blocks[l].data() + static_cast<std::size_t>(k) * nb * 3;
+        for (std::size_t i = 0; i < nb; ++i) {
+          const double m = w[l] * b[3 * i];
+          if (!(m > 0)) continue;
+          acc[3 * i] += m;
+          acc[3 * i + 1] += m * b[3 * i + 1];
+          acc[3 * i + 2] += m * b[3 * i + 2];
+        }
+      }
+      std::vector<Eigen::Vector3d> points;
+      for (std::size_t i = 0; i < nb; ++i)
+        if (acc[3 * i] > 1e-12) points.emplace_back(acc[3 * i], acc[3 * i + 1] / acc[3 * i], acc[3 * i + 2] / acc[3 * i]);
+      return SpatialMedian(points, 0.5 * q * c);
+    };
+    r.filtered_median_m.resize(m_steps, 2);
+    if (smooth) r.smoothed_median_m.resize(m_steps, 2);
+    for (int k = 0; k < m_steps; ++k) {
+      if (k < k0) {
+        r.filtered_median_m.row(k) = r.filtered_mean_m.row(k);
+        if (smooth) r.smoothed_median_m.row(k) = r.smoothed_mean_m.row(k);
+        continue;
+      }
+      r.filtered_median_m.row(k) = median_at(layer_weights(k).first, filtered_blocks, k).transpose();
+      if (smooth) r.smoothed_median_m.row(k) = median_at(w_all, smoothed_blocks, k).transpose();
     }
   }
   sum.seconds = timer.ElapsedSeconds();

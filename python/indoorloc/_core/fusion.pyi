@@ -201,6 +201,9 @@ class GridTrackerOptions:
     wall_log_penalty: float
     fix_outlier_probability: float
     fix_tempering: float
+    fix_tempering_by_variance: bool
+    spatial_median: bool
+    median_block_m: float
     start_position_sd_m: float
     max_memory_bytes: float
     num_threads: int

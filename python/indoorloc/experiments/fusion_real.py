@@ -169,6 +169,7 @@ class FloorData:
     steps: List[ph.HandheldSteps]
     geojson_path: Path
     outline_plan: Any = None   #: the outline without shops (the no-walls ablation keeps the extent)
+    load_report: Optional[Dict[str, Any]] = None  #: walks skipped, fields dropped (IlcFloor.load_report)
 
 
 @dataclass
@@ -469,11 +470,15 @@ def load_floor(root: Path, name: str) -> FloorData:
     """Walks, plan (origin at the outline's south-west corner, the floor frame) and detected steps."""
     floor = read_ilc_floor(Path(root) / name)
     number = floor_number(name)
-    walks = [floor.walk(i) for i in range(floor.n_walks)]
+    # walks() reports and skips a walk it cannot read (docs/errors.md, "Loader rule"); what it
+    # skipped or dropped goes into the evaluation's output (``loader``).
+    walks = list(floor.walks())
     plan = load_floor_plan(floor.geojson_path, floors=[number], origin_lon_lat="outline_sw")
     outline = fusion.FloorPlan([fusion.FloorGeometry(number, list(plan.geometry(0).outlines), [], np.zeros((0, 4)))])
+    report = floor.load_report()
+    report.pop("walks_with_dropped_fields", None)
     return FloorData(name, number, walks, plan, [ph.handheld_steps(w) for w in walks], Path(floor.geojson_path),
-                     outline)
+                     outline, report)
 
 
 def _fold_models(floors: Sequence[FloorData], fold_of: Dict[str, List[np.ndarray]], j: int,
@@ -657,9 +662,11 @@ def evaluate(data_root: Optional[Path] = None, floors: Sequence[str] = FLOORS, s
     equals the in-process one (the ``seconds`` fields aside)."""
     settings = settings or RealSettings()
     tic = time.perf_counter()
-    root, _ = load_site(data_root, floors) if scheduler is None else (Path(data_root or default_site_root()), None)
+    root, data = load_site(data_root, floors)
+    floors = [fl.name for fl in data]
     if scheduler is None:
-        scores = evaluate_folds(root, floors, settings, None, progress)
+        all_plan = _all_floor_plan(data) if settings.floor_identification and len(data) > 1 else None
+        scores = evaluate_floors(data, settings, _peer(), progress, METHODS, all_plan, None)
     else:
         from indoorloc import sweep
 
@@ -670,7 +677,10 @@ def evaluate(data_root: Optional[Path] = None, floors: Sequence[str] = FLOORS, s
         if result.failed:
             raise RuntimeError(f"indoorloc: fold {result.failed[0]['params']['fold']} failed: {result.failed[0]['error']}")
         scores = [s for row in result.rows for s in row["scores"]]
-    return summarize(scores, settings, time.perf_counter() - tic)
+    out = summarize(scores, settings, time.perf_counter() - tic)
+    # What the loader skipped or dropped, per floor (docs/errors.md, "Loader rule").
+    out["loader"] = {fl.name: fl.load_report for fl in data}
+    return out
 
 
 def walk_snapshot(data_root: Optional[Path], floor: str, walk_index: int = 0,

@@ -69,6 +69,16 @@ struct GridTrackerOptions {
   double wall_log_penalty = -2.0;
   /// ε and τ of the position fixes (position_fix.h).
   FixLikelihoodOptions fix;
+  /// How τ weakens a fix: false, the whole likelihood to the power τ (position_fix.h, as the
+  /// particle tracker); true, the components' variances divided by τ with the outlier floor kept
+  /// at ε / A (a tempered Gaussian is the Gaussian with variance σ² / τ), so that one fix still
+  /// outweighs the uniform prior of an unknown start.
+  bool fix_tempering_by_variance = false;
+  /// Also return the spatial median of the filtered and smoothed posteriors (the point that
+  /// minimises the expected distance to the walker; robust where the posterior has a far minor
+  /// mode), computed from blocks of about `median_block_m` [m] (each at its mass centroid).
+  bool spatial_median = true;
+  double median_block_m = 4.0;
   /// Known start: sd of the start position [m] (the offset prior is heading_offset_sd_rad).
   double start_position_sd_m = 1.0;
   /// Refuse (std::invalid_argument quoting the bytes) a run whose grids would exceed this.
@@ -97,7 +107,9 @@ struct GridTrackResult {
   RowMatrixXd filtered_covariance_m2;             ///< M x 3 (xx, xy, yy)
   RowMatrixXd filtered_floor_probabilities;       ///< M x F
   Eigen::VectorXd filtered_heading_offset_rad;    ///< M, posterior circular mean after step k
+  RowMatrixXd filtered_median_m;                  ///< M x 2 spatial median (empty unless asked)
   RowMatrixXd smoothed_mean_m;                    ///< M x 2 (empty unless smoothing)
+  RowMatrixXd smoothed_median_m;                  ///< M x 2 (empty unless smoothing and asked)
   RowMatrixXd smoothed_covariance_m2;             ///< M x 3
   Eigen::VectorXd smoothed_floor_probabilities;   ///< F (constant over the walk)
   Eigen::VectorXd heading_offset_bins_rad;        ///< H
