@@ -38,9 +38,11 @@ def test_floor_identification_and_error_against_time(two_floor_site):
 
 
 def test_leave_one_floor_out_choice_never_looks_at_the_held_out_floor(two_floor_site):
-    grid = {"fix_tempering": (0.3, 1.0), "fixes.sd_m": (3.0,)}
+    grid = {"grid.fix_tempering": (0.3, 1.0), "fixes.sd_m": (3.0,)}
     result = fr.select_settings(two_floor_site, ["F1", "F2"], fr.RealSettings(**FAST), grid)
-    assert len(result["points"]) == 2
+    # Two runs, each scored with both point estimates (mean and spatial median).
+    assert len(result["points"]) == 4
+    assert {p["values"]["point_estimate"] for p in result["points"]} == {"mean", "median"}
     for held_out, chosen in result["lofo"].items():
         other = "F2" if held_out == "F1" else "F1"
         means = [p["per_floor"][other]["fusion_smoother"]["mean_m"] for p in result["points"]]

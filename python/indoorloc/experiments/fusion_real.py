@@ -119,6 +119,9 @@ class RealSettings:
     engine: str = "grid"
     #: The grid engine's options (the heading-offset prior sd is the fold's calibrated spread).
     grid_options: Any = field(default_factory=lambda: fusion.GridTrackerOptions())
+    #: Point estimate of the grid engine's unknown-start methods: "mean" or "median" (spatial
+    #: median) of the posterior (LOFO).
+    point_estimate: str = "mean"
     #: Cells [m] and offset bins of the floor-identification pass (all floors, filter only).
     floor_identification_cell_m: float = 2.0
     floor_identification_offset_bins: int = 3
@@ -433,6 +436,8 @@ def _score_walk_grid(score: WalkScore, put, pdr_steps, fixes, known_fixes, known
     base = _grid_options(settings, spread)
     tracker = _grid_tracker(fl.plan, base, fl.name)
 
+    median = settings.point_estimate == "median"
+
     def run(name_filtered, name_smoothed, tracker_, start, fx, smooth=True):
         tic = time.perf_counter()
         r = fusion.track_grid(tracker_, pdr_steps, fixes=fx, start=start, smooth=smooth)
@@ -441,7 +446,14 @@ def _score_walk_grid(score: WalkScore, put, pdr_steps, fixes, known_fixes, known
                                    (name_smoothed, "smoothed_m", "smoothed_covariance_m2")):
             if not name or key not in r:
                 continue
-            est = _interp_track(wt, pdr_steps.times_s, r[key])
+            # Both point estimates are kept (hidden keys) for the leave-one-floor-out choice.
+            median_key = "median_m" if key == "mean_m" else "smoothed_median_m"
+            alternatives = {"mean": _interp_track(wt, pdr_steps.times_s, r[key])}
+            if median_key in r and start is None:
+                alternatives["median"] = _interp_track(wt, pdr_steps.times_s, r[median_key])
+            for pe, est_pe in alternatives.items():
+                put(f"_alt/{name}/{pe}", est_pe)
+            est = alternatives["median"] if median and "median" in alternatives else alternatives["mean"]
             put(name, est)
             score.seconds[name] = seconds
             if name in COVARIANCE_METHODS:
@@ -596,6 +608,8 @@ def summarize(scores: Sequence[WalkScore], settings: RealSettings, seconds: floa
         by_time[name] = bins
     for s in scores:
         for name, e in s.errors_m.items():
+            if name.startswith("_"):  # the alternatives kept for --select
+                continue
             for t, v in zip(s.t_s, e):
                 rows.append({"floor": s.floor, "walk": s.walk, "method": name, "t_s": round(float(t), 3),
                              "error_m": round(float(v), 4)})
@@ -731,17 +745,21 @@ def walk_snapshot(data_root: Optional[Path], floor: str, walk_index: int = 0,
 #: The grid of ``indoorloc fusion evaluate --select``: the settings the real data decides
 #: (the rest are fixed in advance, RealSettings). Objective: the default method's mean error.
 SELECT_GRID: Dict[str, Sequence[Any]] = {
-    "fixes.metric": ("strongest", "union"),
-    "wall_log_penalty": (math.log(0.02), -math.inf),
-    "fix_tempering": (0.3, 0.6, 1.0),
-    "fix_outlier_probability": (0.1, 0.3),
+    "grid.fix_tempering": (0.4, 0.7),
+    "grid.fix_outlier_probability": (0.1, 0.3),
+    "grid.wall_log_penalty": (-1.0, -3.0),
+    "grid.fix_tempering_by_variance": (False, True),
 }
+#: Chosen with the grid without re-running it: every run keeps both point estimates.
+SELECT_POINT_ESTIMATES = ("mean", "median")
 SELECT_OBJECTIVE = "fusion_smoother"
 
 
 #: Grid keys that the known-start filter has its own field for (it takes the grid point too).
 _KNOWN_START_FIELDS = {"fixes.metric": "known_start_fix_metric", "fix_tempering": "known_start_fix_tempering",
-                       "fix_outlier_probability": "known_start_fix_outlier_probability"}
+                       "fix_outlier_probability": "known_start_fix_outlier_probability",
+                       "grid.fix_tempering": "known_start_fix_tempering",
+                       "grid.fix_outlier_probability": "known_start_fix_outlier_probability"}
 
 
 def _with(settings: RealSettings, key: str, value: Any) -> RealSettings:
@@ -749,6 +767,8 @@ def _with(settings: RealSettings, key: str, value: Any) -> RealSettings:
         settings = replace(settings, **{_KNOWN_START_FIELDS[key]: value})
     if key.startswith("fixes."):
         return replace(settings, fixes=replace(settings.fixes, **{key.split(".", 1)[1]: value}))
+    if key.startswith("grid."):
+        return replace(settings, grid_options=settings.grid_options.replace(**{key.split(".", 1)[1]: value}))
     return replace(settings, **{key: value})
 
 
@@ -797,12 +817,19 @@ def select_settings(data_root: Optional[Path] = None, floors: Sequence[str] = FL
         for k, v in zip(keys, values):
             settings = _with(settings, k, v)
         scores = evaluate_floors(data, settings, None, progress, (SELECT_OBJECTIVE, "fusion_known_start"))
-        per_floor = {fl.name: {m: _stats(np.concatenate([s.errors_m[m] for s in scores if s.floor == fl.name]))
-                               for m in (SELECT_OBJECTIVE, "fusion_known_start")} for fl in data}
-        errors = {fl.name: np.concatenate([s.errors_m[SELECT_OBJECTIVE] for s in scores if s.floor == fl.name])
-                  for fl in data}
-        points.append({"values": dict(zip(keys, [None if isinstance(v, float) and math.isinf(v) else v for v in values])),
-                       "per_floor": per_floor, "_errors": errors})
+        estimates = SELECT_POINT_ESTIMATES if settings.engine == "grid" else (None,)
+        for pe in estimates:
+            key = SELECT_OBJECTIVE if pe is None else f"_alt/{SELECT_OBJECTIVE}/{pe}"
+            per_floor = {fl.name: {SELECT_OBJECTIVE: _stats(np.concatenate([s.errors_m[key] for s in scores
+                                                                            if s.floor == fl.name])),
+                                   "fusion_known_start": _stats(np.concatenate([s.errors_m["fusion_known_start"]
+                                                                                for s in scores if s.floor == fl.name]))}
+                         for fl in data}
+            errors = {fl.name: np.concatenate([s.errors_m[key] for s in scores if s.floor == fl.name]) for fl in data}
+            point_values = dict(zip(keys, [None if isinstance(v, float) and math.isinf(v) else v for v in values]))
+            if pe is not None:
+                point_values["point_estimate"] = pe
+            points.append({"values": point_values, "per_floor": per_floor, "_errors": errors})
 
     def pooled_mean(point, names) -> float:
         return float(np.mean(np.concatenate([point["_errors"][n] for n in names])))
@@ -817,7 +844,10 @@ def select_settings(data_root: Optional[Path] = None, floors: Sequence[str] = FL
     best_all = min(points, key=lambda p: pooled_mean(p, names))
     for p in points:
         p.pop("_errors")
-    return {"grid": {k: [None if isinstance(v, float) and math.isinf(v) else v for v in vs] for k, vs in grid.items()},
+    grid_out = {k: [None if isinstance(v, float) and math.isinf(v) else v for v in vs] for k, vs in grid.items()}
+    if base.engine == "grid":
+        grid_out["point_estimate"] = list(SELECT_POINT_ESTIMATES)
+    return {"grid": grid_out,
             "objective": SELECT_OBJECTIVE, "points": points, "lofo": lofo,
             "lofo_overall": _stats(np.concatenate(held_out)), "best_all": best_all["values"],
             "known_start": lofo_from_stats(points, names, "fusion_known_start")}
