@@ -135,3 +135,14 @@ def test_missing_site_and_floor_are_clear_errors(tmp_path, two_floor_site):
         fr.evaluate(tmp_path / "nowhere", ["F1"])
     with pytest.raises(FileNotFoundError, match="floors"):
         fr.evaluate(two_floor_site, ["F9"])
+
+
+def test_leave_one_walk_out_scores_every_walk_once(two_floor_site, tmp_path, monkeypatch):
+    monkeypatch.setattr(fr, "RealSettings", _fast_settings)
+    out = tmp_path / "lowo.json"
+    assert cli.main(["fusion", "evaluate", "--data-root", str(two_floor_site), "--floors", "F1", "--lowo",
+                     "--json", str(out), "--quiet"]) == 0
+    data = json.loads(out.read_text())
+    walks = {(w["floor"], w["walk"]) for w in data["waypoints"] if w["method"] == "fusion_smoother"}
+    assert len(walks) == 6  # every walk of F1, each its own fold
+    assert data["settings"]["folds"] == 0 and "floor_identification" not in data

@@ -43,7 +43,10 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     from indoorloc.experiments import fusion_real as fr
     from indoorloc.io import ilc_floor_names
 
-    settings = fr.RealSettings(folds=args.folds, seed=args.seed, threads=args.threads)
+    # --lowo: leave one walk out (folds = 0); floor identification is then skipped (it would
+    # rebuild every floor's database once per walk).
+    settings = fr.RealSettings(folds=0 if args.lowo else args.folds, seed=args.seed, threads=args.threads,
+                               floor_identification=not args.lowo)
     root = Path(args.data_root) if args.data_root else fr.default_site_root()
     if not root.is_dir():
         raise FileNotFoundError(f"indoorloc: argument 'data_root': {root} is not a folder of ILC floors")
@@ -105,7 +108,9 @@ def add_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
     e.add_argument("--floors", nargs="+", default=None,
                    help="floor folders to evaluate (default: every floor folder under --data-root, i.e. one holding "
                         "path_data_files/ or *.txt walks plus geojson_map.json, in building order B2, B1, F1, F2, ...)")
-    e.add_argument("--folds", type=int, default=4)
+    e.add_argument("--folds", type=int, default=4, help="k of the k-fold by walk within each floor")
+    e.add_argument("--lowo", action="store_true",
+                   help="leave one walk out instead of k-fold (no floor identification)")
     e.add_argument("--seed", type=int, default=0)
     e.add_argument("--threads", type=int, default=2, help="walks tracked in parallel (results do not depend on it)")
     e.add_argument("--json", default=None, help="write the JSON (schema: docs/fusion_real.md)")

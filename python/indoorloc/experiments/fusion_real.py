@@ -500,6 +500,8 @@ def _fold_models(floors: Sequence[FloorData], fold_of: Dict[str, List[np.ndarray
     all_walks, all_steps, all_numbers = [], [], []
     for fl in floors:
         test = set(fold_of[fl.name][j].tolist())
+        if not test and all_plan is None:  # nothing to score on this floor in this fold
+            continue
         train = [w for i, w in enumerate(fl.walks) if i not in test]
         train_steps = [s for i, s in enumerate(fl.steps) if i not in test]
         cal = ph.calibrate_handheld(train, steps_cache=train_steps)
@@ -522,11 +524,13 @@ def evaluate_floors(floors: Sequence[FloorData], settings: RealSettings, peer=No
     """Every method on every walk of the floors, k-fold by walk within each floor (fold j of
     every floor shares the all-floor database of floor identification); ``only_folds``: score
     the test walks of these folds only (one Dask task per fold)."""
-    # Fold lists padded with empty folds where a floor has fewer walks than folds.
-    fold_of = {fl.name: (_folds(len(fl.walks), settings.folds, settings.seed) + [np.zeros(0, int)] * settings.folds)
-               [:settings.folds] for fl in floors}
+    # Fold lists padded with empty folds where a floor has fewer walks than folds; folds <= 0:
+    # leave one walk out (as many folds as the floor has walks).
+    n_folds = settings.folds if settings.folds > 0 else max(len(fl.walks) for fl in floors)
+    fold_of = {fl.name: (_folds(len(fl.walks), n_folds, settings.seed) + [np.zeros(0, int)] * n_folds)[:n_folds]
+               for fl in floors}
     scores: List[WalkScore] = []
-    for j in range(settings.folds) if only_folds is None else only_folds:
+    for j in range(n_folds) if only_folds is None else only_folds:
         jobs_idx = [(fl, i) for fl in floors for i in fold_of[fl.name][j]]
         if not jobs_idx:
             continue
@@ -684,7 +688,7 @@ def evaluate(data_root: Optional[Path] = None, floors: Sequence[str] = FLOORS, s
     else:
         from indoorloc import sweep
 
-        grid = {"fold": list(range(settings.folds))}
+        grid = {"fold": list(range(settings.folds if settings.folds > 0 else max(len(fl.walks) for fl in data)))}
         result = sweep.run_sweep(fold_task, grid, scheduler=scheduler,
                                  shared={"data_root": str(root), "floors": list(floors), "settings": settings},
                                  progress=progress)
@@ -707,8 +711,8 @@ def walk_snapshot(data_root: Optional[Path], floor: str, walk_index: int = 0,
     root, (fl,) = load_site(data_root, [floor])
     if not 0 <= walk_index < len(fl.walks):
         raise ValueError(f"indoorloc: argument 'walk_index': {walk_index} is not in [0, {len(fl.walks)})")
-    fold_of = {fl.name: (_folds(len(fl.walks), settings.folds, settings.seed) + [np.zeros(0, int)] * settings.folds)
-               [:settings.folds]}
+    k = settings.folds if settings.folds > 0 else len(fl.walks)
+    fold_of = {fl.name: (_folds(len(fl.walks), k, settings.seed) + [np.zeros(0, int)] * k)[:k]}
     j = next(k for k, f in enumerate(fold_of[fl.name]) if walk_index in f)
     models = _fold_models([fl], fold_of, j, settings, None)[fl.name]
     walk = fl.walks[walk_index]
