@@ -33,7 +33,11 @@ inline py::list OptionFieldNames(const py::handle& type) {
 /// Sets `fields` on a copy of `base` and validates it; errors name the field.
 template <typename T>
 T OptionsWithFields(const T& base, const py::dict& fields, const char* type_name) {
-  py::object obj = py::cast(base);  // a copy
+  // A new C++ copy: casting `base` itself would return the caller's Python object (pybind11 finds
+  // registered instances by address, whatever the return value policy) and replace() would then
+  // modify the options it was called on.
+  T copy = base;
+  py::object obj = py::cast(std::move(copy));
   const py::list names = OptionFieldNames(py::type::of(obj));
   for (const auto& item : fields) {
     const std::string key = py::str(item.first);

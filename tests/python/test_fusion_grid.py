@@ -1,0 +1,117 @@
+"""The grid tracker (fusion.GridTracker, docs/fusion.md "Grid tracker"): its forward filter equals
+an independent numpy + scipy implementation of the same model (benchmarks/grid_filter_numpy.py),
+the Options protocol (defaults from C++, kwargs, replace, pickling), the region test and the
+errors a user sees."""
+
+import math
+import pickle
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from indoorloc import fusion
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
+
+import grid_filter_numpy  # noqa: E402
+
+
+def _hall():
+    outline = np.array([[0, 0], [40, 0], [40, 30], [0, 30]], float)
+    shop = np.array([[15, 10], [25, 10], [25, 20], [15, 20]], float)
+    return fusion.floor_plan_from_polygons(outline, [shop])
+
+
+def _walk(seed=0):
+    """A walk east along y = 5 then north along x = 35, PDR rotated by 0.1 rad, and noisy fixes
+    with two components (one of them a far decoy)."""
+    rng = np.random.default_rng(seed)
+    n = 40
+    t = 0.5 * np.arange(1, n + 1)
+    heading = np.where(np.arange(n) < 25, 0.0, math.pi / 2)
+    steps = fusion.Steps.from_polar(t, np.full(n, 0.7), heading - 0.1, 0.1, 0.1)
+    truth = np.cumsum(np.c_[0.7 * np.cos(heading), 0.7 * np.sin(heading)], axis=0) + [18.0, 5.0]
+    ft = t[3::4]
+    idx = np.searchsorted(t, ft)
+    means = np.stack([truth[idx] + rng.normal(0, 2, (idx.size, 2)), np.tile([5.0, 25.0], (idx.size, 1))], axis=1)
+    fixes = fusion.Fixes.from_arrays(ft, means, 4.0, np.tile([0.7, 0.3], (idx.size, 1)))
+    return steps, fixes, truth
+
+
+def test_forward_filter_equals_the_numpy_reference():
+    plan = _hall()
+    options = fusion.GridTrackerOptions(heading_offset_bins=3, heading_offset_sd_rad=0.1, fix_tempering=0.7,
+                                        fix_tempering_by_variance=True, wall_log_penalty=-1.5, spatial_median=False)
+    tracker = fusion.GridTracker(plan, options)
+    steps, fixes, truth = _walk()
+    result = fusion.track_grid(tracker, steps, fixes=fixes, smooth=False)
+    x0, y0, nx, ny = tracker.grid_geometry(0)
+    a = tracker.walkable_fraction(0)
+    wall = (a + (1 - a) * math.exp(options.wall_log_penalty)).astype(np.float32)
+    offsets = np.asarray(result["heading_offset_bins_rad"])
+    span = options.heading_offset_span_sd * options.heading_offset_sd_rad
+    ref = grid_filter_numpy.forward_filter(
+        {"x0": x0, "y0": y0, "cell": options.cell_size_m, "wall_factor": wall, "area_m2": plan.walkable_area(0)},
+        (steps.times_s, steps.displacements_m, steps.covariances_m2), fixes.as_arrays(),
+        {"offsets": offsets, "log_prior": -0.5 * (offsets / options.heading_offset_sd_rad) ** 2,
+         "bin_width": 2 * span / offsets.size, "position_noise_m": options.position_noise_m,
+         "eps": options.fix_outlier_probability, "tau": options.fix_tempering, "by_variance": True})
+    np.testing.assert_allclose(result["mean_m"], ref["mean_m"], atol=2e-3)
+    # And the filter found the walk: the last estimates are near the truth.
+    assert np.hypot(*(result["mean_m"][-5:] - truth[-5:]).T).max() < 3.0
+
+
+def test_smoother_is_honest_and_learns_the_offset():
+    plan = _hall()
+    tracker = fusion.GridTracker(plan, fusion.GridTrackerOptions(heading_offset_bins=11, heading_offset_sd_rad=0.15,
+                                                                fix_tempering_by_variance=True))
+    steps, fixes, truth = _walk(1)
+    r = fusion.track_grid(tracker, steps, fixes=fixes)
+    err = np.hypot(*(r["smoothed_m"] - truth).T)
+    assert err.mean() < 2.0
+    inside = fusion.region95_contains(r["smoothed_m"], r["smoothed_covariance_m2"], truth)
+    assert inside.mean() > 0.8
+    # PDR headings were 0.1 rad low: the offset posterior moves from its prior (0) towards +0.1
+    # and holds it within two of its own sd (ten fixes of sd 4 m with a decoy leave it broad).
+    assert r["walk_heading_offset_rad"] > 0.02
+    assert abs(r["walk_heading_offset_rad"] - 0.1) < 2.0 * r["walk_heading_offset_sd_rad"]
+    assert np.isclose(np.sum(r["heading_offset_probabilities"]), 1.0)
+    assert r["smoothed_median_m"].shape == r["smoothed_m"].shape
+
+
+def test_options_protocol_reads_defaults_from_cpp():
+    o = fusion.GridTrackerOptions()
+    assert o.cell_size_m == 1.0 and o.wall_log_penalty == -2.0  # the C++ struct's defaults
+    p = o.replace(cell_size_m=1.5)
+    assert p.cell_size_m == 1.5 and o.cell_size_m == 1.0
+    assert pickle.loads(pickle.dumps(p)) == p and p != o
+    assert set(o.to_dict()) >= {"cell_size_m", "fix_tempering", "fix_outlier_probability", "heading_offset_bins"}
+    with pytest.raises(ValueError, match="cell_size_mm"):
+        fusion.GridTrackerOptions(cell_size_mm=1.0)
+    with pytest.raises(ValueError, match="heading_offset_bins"):
+        fusion.GridTrackerOptions(heading_offset_bins=0)
+    with pytest.raises(ValueError, match="fix tempering"):
+        o.replace(fix_tempering=float("nan"))
+
+
+def test_errors_name_the_argument():
+    tracker = fusion.GridTracker(_hall())
+    steps, fixes, _ = _walk()
+    with pytest.raises(TypeError, match="steps"):
+        fusion.track_grid(tracker, np.zeros((3, 2)))
+    with pytest.raises(ValueError, match="step_times_s"):
+        tracker.run(steps.times_s[::-1], steps.displacements_m, steps.covariances_m2)
+    with pytest.raises(ValueError, match="floor"):
+        fusion.track_grid(tracker, steps, start={"position_m": [5, 5], "floor": 3, "heading_offset_rad": 0.0,
+                                                 "time_s": 0.0})
+    with pytest.raises(ValueError, match="max_memory_bytes"):
+        fusion.GridTracker(_hall(), fusion.GridTrackerOptions(cell_size_m=0.05, max_memory_bytes=1e6))
+
+
+def test_region95_contains():
+    means = np.zeros((3, 2))
+    cov = np.tile([1.0, 0.0, 1.0], (3, 1))
+    truth = np.array([[0.5, 0.5], [2.0, 2.0], [0.0, 2.4]])
+    assert fusion.region95_contains(means, cov, truth).tolist() == [True, False, True]
