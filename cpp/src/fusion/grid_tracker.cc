@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <sstream>
 #include <stdexcept>
 
@@ -80,18 +81,32 @@ void Blur(std::vector<float>& g, std::vector<float>& scratch, int nx, int ny, do
   }
 }
 
-// g(x, y) <- g(x - sx, y - sy), zero where the source is outside the grid.
-void Shift(std::vector<float>& g, std::vector<float>& scratch, int nx, int ny, int sx, int sy) {
+// g(x, y) <- g(x - sx, y - sy), zero where the source is outside the grid; in place (rows moved
+// in the order that never overwrites a row still to be read, only the vacated cells zeroed).
+void Shift(std::vector<float>& g, int nx, int ny, int sx, int sy) {
   if (sx == 0 && sy == 0) return;
-  scratch.assign(g.size(), 0.0f);
-  const int x_lo = std::max(0, sx), x_hi = std::min(nx, nx + sx);  // destination columns
-  if (x_lo < x_hi) {
-    for (int y = std::max(0, sy); y < std::min(ny, ny + sy); ++y) {
-      const float* src = g.data() + static_cast<std::size_t>(y - sy) * nx + (x_lo - sx);
-      std::copy(src, src + (x_hi - x_lo), scratch.data() + static_cast<std::size_t>(y) * nx + x_lo);
-    }
+  float* d = g.data();
+  const std::size_t row = static_cast<std::size_t>(nx);
+  if (std::abs(sx) >= nx || std::abs(sy) >= ny) {
+    std::fill(g.begin(), g.end(), 0.0f);
+    return;
   }
-  g.swap(scratch);
+  const int x_lo = std::max(0, sx), x_hi = std::min(nx, nx + sx);  // destination columns
+  const int width = x_hi - x_lo;
+  auto move_row = [&](int y) {
+    float* dst = d + y * row;
+    const float* src = d + (y - sy) * row + (x_lo - sx);
+    std::memmove(dst + x_lo, src, static_cast<std::size_t>(width) * sizeof(float));
+    std::fill(dst, dst + x_lo, 0.0f);
+    std::fill(dst + x_hi, dst + nx, 0.0f);
+  };
+  if (sy > 0) {
+    for (int y = ny - 1; y >= sy; --y) move_row(y);
+    std::fill(d, d + sy * row, 0.0f);
+  } else {
+    for (int y = 0; y < ny + sy; ++y) move_row(y);
+    std::fill(d + (ny + sy) * row, d + ny * row, 0.0f);
+  }
 }
 
 // out(x, y) = g at (x + fx, y + fy) cells by bilinear interpolation, |fx|, |fy| <= 1, edges
@@ -123,10 +138,42 @@ void ResampleAt(const std::vector<float>& g, std::vector<float>& out, std::vecto
 // 1e-30 set to 0: they are negligible beside the sum or maximum of 1, and float denormals would
 // slow every later pass and let a normalisation overflow.
 void NormaliseAndFlush(std::vector<float>& g, double scale) {
+  if (scale < 1e30) {  // the common case, in float (vectorises): v * scale <= 1 cannot overflow
+    const float f = static_cast<float>(scale);
+    for (float& v : g) {
+      const float x = v * f;
+      v = x < 1e-30f ? 0.0f : x;
+    }
+    return;
+  }
   for (float& v : g) {
     const double x = static_cast<double>(v) * scale;
     v = x < 1e-30 ? 0.0f : static_cast<float>(x);
   }
+}
+
+// g *= wall (and *= fix when given); returns the sum (float per row, double over rows).
+double MultiplyAndSum(std::vector<float>& g, const std::vector<float>& wall, const float* fix, int nx, int ny) {
+  double total = 0;
+  for (int y = 0; y < ny; ++y) {
+    float* row = g.data() + static_cast<std::size_t>(y) * nx;
+    const float* w = wall.data() + static_cast<std::size_t>(y) * nx;
+    float sum = 0.0f;
+    if (fix) {
+      const float* f = fix + static_cast<std::size_t>(y) * nx;
+      for (int x = 0; x < nx; ++x) {
+        row[x] *= w[x] * f[x];
+        sum += row[x];
+      }
+    } else {
+      for (int x = 0; x < nx; ++x) {
+        row[x] *= w[x];
+        sum += row[x];
+      }
+    }
+    total += sum;
+  }
+  return total;
 }
 
 // Mean and second moments of a grid about the cell centres (double accumulation).
@@ -147,16 +194,44 @@ Moments GridMoments(const std::vector<float>& g, const std::vector<float>* weigh
     const float* wrow = weight ? weight->data() + static_cast<std::size_t>(y) * fg.nx : nullptr;
     double r_mass = 0, r_sx = 0, r_sxx = 0;
     double* crow = coarse ? coarse + static_cast<std::size_t>(y / q) * nqx * 3 : nullptr;
-    for (int x = 0; x < fg.nx; ++x) {
-      const double v = wrow ? static_cast<double>(row[x]) * wrow[x] : row[x];
-      r_mass += v;
-      r_sx += v * x;
-      r_sxx += v * x * static_cast<double>(x);
-      if (crow && v > 0) {
-        double* b = crow + static_cast<std::size_t>(x / q) * 3;
-        b[0] += v;
-        b[1] += v * x;
-        b[2] += v * y;
+    if (!crow && !wrow) {  // the filter's common case: float accumulators along the row (vectorises)
+      float f_mass = 0.0f, f_sx = 0.0f, f_sxx = 0.0f;
+      for (int x = 0; x < fg.nx; ++x) {
+        const float v = row[x], fx = static_cast<float>(x);
+        f_mass += v;
+        f_sx += v * fx;
+        f_sxx += v * fx * fx;
+      }
+      r_mass = f_mass;
+      r_sx = f_sx;
+      r_sxx = f_sxx;
+    }
+    if (crow || wrow) {
+      // The row's values (the product alpha * beta in double), then its sums and block sums.
+      thread_local std::vector<double> v;
+      v.resize(static_cast<std::size_t>(fg.nx));
+      if (wrow) {
+        for (int x = 0; x < fg.nx; ++x) v[x] = static_cast<double>(row[x]) * wrow[x];
+      } else {
+        for (int x = 0; x < fg.nx; ++x) v[x] = row[x];
+      }
+      for (int x = 0; x < fg.nx; ++x) {
+        r_mass += v[x];
+        r_sx += v[x] * x;
+        r_sxx += v[x] * x * static_cast<double>(x);
+      }
+      if (crow) {
+        for (int bx = 0; bx < nqx; ++bx) {
+          double bm = 0, bsx = 0;
+          for (int x = bx * q; x < std::min(fg.nx, bx * q + q); ++x) {
+            bm += v[x];
+            bsx += v[x] * x;
+          }
+          double* b = crow + static_cast<std::size_t>(bx) * 3;
+          b[0] += bm;
+          b[1] += bsx;
+          b[2] += bm * y;
+        }
       }
     }
     m.mass += r_mass;
@@ -592,20 +667,13 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
         op.rx = rx;
         op.ry = ry;
       }
-      Shift(alpha, scratch, fg.nx, fg.ny, op.shift_x, op.shift_y);
+      Shift(alpha, fg.nx, fg.ny, op.shift_x, op.shift_y);
       if (op.blur_var_cells2 > 1e-6) Blur(alpha, scratch, fg.nx, fg.ny, op.blur_var_cells2);
       const bool has_fix = !fixes_at[k].empty();
       if (has_fix && record) {
         ResampleAt(factor[k][layer.floor_index].factor, layer_factor[k], scratch, fg.nx, fg.ny, op.rx / c, op.ry / c);
       }
-      const float* fac = has_fix ? layer_factor[k].data() : nullptr;
-      double s = 0;
-      for (std::size_t i = 0; i < n; ++i) {
-        float v = alpha[i] * fg.wall_factor[i];
-        if (fac) v *= fac[i];
-        alpha[i] = v;
-        s += v;
-      }
+      const double s = MultiplyAndSum(alpha, fg.wall_factor, has_fix ? layer_factor[k].data() : nullptr, fg.nx, fg.ny);
       if (!(s > 0)) return false;
       NormaliseAndFlush(alpha, 1.0 / s);
       if (record) log_z += std::log(s) + (has_fix ? factor[k][layer.floor_index].log_scale : 0.0);
@@ -672,14 +740,9 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
       for (int k = k_end - 1; k >= k_begin; --k) {
         smoothed[li][k] = estimate(seg_alpha[k - k_begin], &beta, k);
         // beta_{k-1}
-        const float* fac = fixes_at[k].empty() ? nullptr : layer_factor[k].data();
-        for (std::size_t i = 0; i < n; ++i) {
-          float v = beta[i] * fg.wall_factor[i];
-          if (fac) v *= fac[i];
-          beta[i] = v;
-        }
+        MultiplyAndSum(beta, fg.wall_factor, fixes_at[k].empty() ? nullptr : layer_factor[k].data(), fg.nx, fg.ny);
         if (ops[k].blur_var_cells2 > 1e-6) Blur(beta, scratch, fg.nx, fg.ny, ops[k].blur_var_cells2);
-        Shift(beta, scratch, fg.nx, fg.ny, -ops[k].shift_x, -ops[k].shift_y);
+        Shift(beta, fg.nx, fg.ny, -ops[k].shift_x, -ops[k].shift_y);
         float mx = 0;
         for (float v : beta) mx = std::max(mx, v);
         if (mx > 0) NormaliseAndFlush(beta, 1.0 / static_cast<double>(mx));
