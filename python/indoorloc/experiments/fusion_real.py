@@ -182,7 +182,7 @@ class FoldModels:
 
     floor: FloorData
     cal: ph.HandheldCalibration
-    crowd: wc.CrowdMap
+    crowd: Optional[wc.CrowdMap]  #: None unless the wifi_model method runs
     database: wfx.FingerprintDatabase
     all_plan: Any = None
     all_database: Optional[wfx.FingerprintDatabase] = None
@@ -493,9 +493,29 @@ def load_floor(root: Path, name: str) -> FloorData:
                      outline, report)
 
 
+_FOLD_MODELS: Dict[Tuple, Dict[str, FoldModels]] = {}
+
+
+def _fold_models_cached(floors: Sequence[FloorData], fold_of: Dict[str, List[np.ndarray]], j: int,
+                        settings: RealSettings, all_plan, with_crowd_map: bool) -> Dict[str, FoldModels]:
+    """:func:`_fold_models`, kept for the last few calls with the same floors, fold, fixes and
+    calibration: ``--select`` evaluates every grid point on the same folds, and the models do not
+    depend on the tracker's settings."""
+    key = (tuple(id(fl) for fl in floors), j, tuple(tuple(fold_of[fl.name][j].tolist()) for fl in floors),
+           repr(settings.fixes), all_plan is None, with_crowd_map)
+    models = _FOLD_MODELS.get(key)
+    if models is None:
+        models = _fold_models(floors, fold_of, j, settings, all_plan, with_crowd_map)
+        if len(_FOLD_MODELS) >= 64:
+            _FOLD_MODELS.pop(next(iter(_FOLD_MODELS)))
+        _FOLD_MODELS[key] = models
+    return models
+
+
 def _fold_models(floors: Sequence[FloorData], fold_of: Dict[str, List[np.ndarray]], j: int,
-                 settings: RealSettings, all_plan) -> Dict[str, FoldModels]:
-    """Fold j's training models of every floor (and the all-floor database when identifying floors)."""
+                 settings: RealSettings, all_plan, with_crowd_map: bool = True) -> Dict[str, FoldModels]:
+    """Fold j's training models of every floor (and the all-floor database when identifying
+    floors); the crowdsourced cell map only ``with_crowd_map`` (the ``wifi_model`` method)."""
     out: Dict[str, FoldModels] = {}
     all_walks, all_steps, all_numbers = [], [], []
     for fl in floors:
@@ -505,7 +525,7 @@ def _fold_models(floors: Sequence[FloorData], fold_of: Dict[str, List[np.ndarray
         train = [w for i, w in enumerate(fl.walks) if i not in test]
         train_steps = [s for i, s in enumerate(fl.steps) if i not in test]
         cal = ph.calibrate_handheld(train, steps_cache=train_steps)
-        crowd = wc.build_crowd_map(train, wc.CrowdMapSettings(), fl.number)
+        crowd = wc.build_crowd_map(train, wc.CrowdMapSettings(), fl.number) if with_crowd_map else None
         database = wfx.build_database(train, settings.fixes, train_steps, floors=[fl.number] * len(train))
         out[fl.name] = FoldModels(fl, cal, crowd, database)
         all_walks += train
@@ -534,7 +554,7 @@ def evaluate_floors(floors: Sequence[FloorData], settings: RealSettings, peer=No
         jobs_idx = [(fl, i) for fl in floors for i in fold_of[fl.name][j]]
         if not jobs_idx:
             continue
-        models = _fold_models(floors, fold_of, j, settings, all_plan)
+        models = _fold_models_cached(floors, fold_of, j, settings, all_plan, "wifi_model" in methods)
         jobs = [(fl.walks[i], fl.steps[i], models[fl.name]) for fl, i in jobs_idx]
         with ThreadPoolExecutor(max_workers=max(1, settings.threads)) as pool:
             futures = [pool.submit(_score_walk, w, s, m, settings, peer, methods) for w, s, m in jobs]
