@@ -274,6 +274,22 @@ ring counter-clockwise), then the walls.)doc")
            "Bounding box of a floor's outlines (min_x, min_y, max_x, max_y) [m].")
       .def("walkable_area", &FloorPlan::WalkableArea, py::arg("floor_index") = 0,
            "Walkable area of a floor [m^2] (computed at construction by scanlines).")
+      .def("build_statistics", [](const FloorPlan& plan, int floor_index) {
+             const fusion::FloorBuildStatistics& b = plan.BuildStatistics(floor_index);
+             py::dict d;
+             d["edges"] = b.edges;
+             d["cells"] = b.cells;
+             d["edge_cell_entries"] = b.edge_cell_entries;
+             d["index_bytes"] = b.index_bytes;
+             d["self_intersection_work"] = b.self_intersection_work;
+             d["area_scanlines"] = b.area_scanlines;
+             d["area_edge_visits"] = b.area_edge_visits;
+             d["area_subsampled"] = b.area_subsampled;
+             return d;
+           }, py::arg("floor_index") = 0, R"doc(
+What building a floor's index cost, as a dict: edges, cells, edge_cell_entries (edge-cell
+registrations), index_bytes, self_intersection_work (exact predicate evaluations of the
+self-intersection sweep: O(E log E)), area_scanlines, area_edge_visits, area_subsampled.)doc")
       .def("cell_size", &FloorPlan::CellSize, py::arg("floor_index") = 0,
            "Side of a floor's index cells [m].")
       .def("is_walkable", [](const FloorPlan& plan, const py::object& points_m,

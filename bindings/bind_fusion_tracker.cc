@@ -179,6 +179,17 @@ Usable readings of one scan (or of readings sharing their own time): AP columns 
 map and RSS [dBm]. Build them with make_wifi_observations.)doc")
       .def(py::init([](double time_s, const std::vector<int>& access_points, const std::vector<double>& rss_dbm) {
              CheckArgument(access_points.size() == rss_dbm.size(), "rss_dbm", "must have one entry per access point");
+             RequireFinite(time_s, "time_s");
+             for (size_t k = 0; k < rss_dbm.size(); ++k) {
+               if (!(rss_dbm[k] >= -300.0 && rss_dbm[k] <= 50.0)) {
+                 ThrowInvalidArgument("rss_dbm", DescribeEntry(static_cast<Eigen::Index>(k), 0, true) + " = " +
+                                                     FormatValue(rss_dbm[k]) + " is not an RSS in [-300, 50] dBm");
+               }
+               if (access_points[k] < 0) {
+                 ThrowInvalidArgument("access_points", DescribeEntry(static_cast<Eigen::Index>(k), 0, true) + " = " +
+                                                           std::to_string(access_points[k]) + " is not an AP column (>= 0)");
+               }
+             }
              WifiObservation o;
              o.time_s = time_s;
              o.access_points = access_points;
@@ -200,6 +211,14 @@ map and RSS [dBm]. Build them with make_wifi_observations.)doc")
   m.def("make_wifi_observations",
         [](const py::object& scan_times_s, const py::object& rss_dbm, const py::object& ages_s,
            const TrackerOptions& options, bool at_own_time) {
+          // The memory bound from the array's shape, before converting (copying) it.
+          const py::object shape = py::getattr(rss_dbm, "shape", py::none());
+          if (py::isinstance<py::tuple>(shape) && py::len(shape) == 2) {
+            const py::tuple dims = shape.cast<py::tuple>();
+            if (py::isinstance<py::int_>(dims[0]) && py::isinstance<py::int_>(dims[1])) {
+              RequireWifiReadingsMemory(dims[0].cast<double>(), dims[1].cast<double>());
+            }
+          }
           VectorArg t = ToVector(scan_times_s, "scan_times_s");
           MatrixArg r = ToMatrix(rss_dbm, "rss_dbm", t.map.size(), -1, Finiteness::kAny);
           RowMatrixXd ages(0, 0);

@@ -2,6 +2,8 @@
 options checked through the core validation vocabulary, argument names in every message, size
 limits, and the batch API's dict/tuple arguments."""
 
+import re
+
 import numpy as np
 import pytest
 
@@ -158,3 +160,155 @@ def test_python_helpers_name_their_arguments():
         t = cf.ParticleTracker(_plan(), None, None, fusion.tracker_options(num_particles=50))
         t.initialize_known(0.0, [2.0, 1.5], 0, 0.0)
         t.fix(1.0, np.array([[2.0, 2.0]]), np.array([1e-300]), np.array([1.0]))  # 1/sd² was inf: NaN mean
+
+
+# ---- Issue 28 ------------------------------------------------------------------------------
+
+def _comb(teeth):
+    w = 1.0 / (2 * teeth)
+    pts = [(0.0, 0.0)]
+    for t in range(teeth):
+        x0, x1 = 2 * t * w, (2 * t + 1) * w
+        if t > 0:
+            pts.append((x0, 0.1))
+        pts += [(x0, 1.0), (x1, 1.0), (x1, 0.1)]
+    pts += [(1.0, 0.1), (1.0, 0.0)]
+    return np.array(pts)
+
+
+def _star(n, r_out, r_in=1.0):
+    a = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    r = np.where(np.arange(n) % 2 == 0, r_out, r_in)
+    return np.c_[r * np.cos(a), r * np.sin(a)]
+
+
+@pytest.mark.parametrize("shape", ["comb", "star"])
+def test_floor_plan_construction_work_is_e_log_e(shape):
+    # Work is counted, not timed (build_statistics): the self-intersection sweep's exact
+    # predicate evaluations stay within c E log2 E over a 16x range of sizes, and the index
+    # (registrations) within its budget, where the old per-cell test was quadratic (a comb of
+    # 1e5 teeth in 1 m: 135 s) and a star registered every long edge in hundreds of cells.
+    ratios = []
+    for n in (1000, 4000, 16000):
+        ring = _comb(n // 4) if shape == "comb" else _star(n, 50.0)
+        plan = fusion.FloorPlan([fusion.FloorGeometry(0, [ring], [], None)])
+        s = plan.build_statistics(0)
+        e = s["edges"]
+        ratios.append(s["self_intersection_work"] / (e * np.log2(e)))
+        assert s["index_bytes"] <= max(64e6, 1024 * e)
+        assert s["area_edge_visits"] <= 2e7
+    assert max(ratios) <= 6.0
+    assert ratios[-1] <= 1.5 * ratios[0]  # no growth beyond log E
+
+
+def test_floor_plan_index_memory_is_refused_with_the_bytes():
+    square = np.array([[0, 0], [999.8, 0], [999.8, 999.8], [0, 999.8]], float)
+    opts = fusion.FloorPlanOptions(cell_size_m=0.1, max_cells=100_000_000)
+    with pytest.raises(ValueError, match=r"options.cell_size_m.*GB \(limit 4 GB\)"):
+        fusion.FloorPlan([fusion.FloorGeometry(0, [square], [], None)], opts)
+
+
+def test_memory_bounds_are_checked_before_allocating():
+    plan = _plan()
+    with pytest.raises(ValueError, match=r"'options'.*particles.*GB \(limit 4 GB\)"):
+        fusion.ParticleTracker(plan, None, None, fusion.tracker_options(num_particles=50_000_000))
+    with pytest.raises(ValueError, match=r"smoothing_lag_steps = 10000.*TB"):
+        fusion.ParticleTracker(plan, None, None,
+                               fusion.tracker_options(num_particles=5_000_000, smoothing_lag_steps=10_000))
+    with pytest.raises(ValueError, match=r"recorded particles.*GB"):
+        _track(options=fusion.tracker_options(num_particles=40_000_000), smoother=fusion.SmootherOptions())
+    # 1e8 readings: refused from the shape (a zero-stride view: nothing is copied first).
+    rss = np.broadcast_to(np.float64(-60.0), (10_000, 10_000))
+    with pytest.raises(ValueError, match=r"'rss_dbm'.*1e\+08 readings.*GB"):
+        fusion.make_wifi_observations(np.arange(10_000.0), rss)
+
+
+def test_streaming_events_must_not_go_back_in_time():
+    t = fusion.ParticleTracker(_plan(), None, None, fusion.tracker_options(num_particles=50))
+    with pytest.raises(RuntimeError, match="not initialised"):
+        t.estimate()
+    t.initialize_known(1.0, np.array([2.0, 2.0]), 0, 0.0)
+    assert t.estimate()["time_s"] == 1.0
+    with pytest.raises(ValueError, match=r"'fix.time_s'.*back in time"):
+        t.fix(0.5, np.array([[2.0, 2.0]]), np.array([1.0]), np.array([1.0]))
+    t.step(2.0, np.array([0.5, 0.0]), 0.01 * np.eye(2))
+    t.fix(3.0, np.array([[2.5, 2.0]]), np.array([1.0]), np.array([1.0]))
+    with pytest.raises(ValueError, match=r"'step.time_s'"):
+        t.step(2.5, np.array([0.5, 0.0]), 0.01 * np.eye(2))
+
+
+def test_wifi_observation_refuses_non_finite_time_and_rss():
+    with pytest.raises(ValueError, match="'time_s'"):
+        fusion.WifiObservation(float("nan"), [0], [-50.0])
+    with pytest.raises(ValueError, match="'time_s'"):
+        fusion.WifiObservation(float("inf"), [0], [-50.0])
+    with pytest.raises(ValueError, match=r"'rss_dbm'.*entry 1"):
+        fusion.WifiObservation(1.0, [0, 1], [-50.0, float("nan")])
+    with pytest.raises(ValueError, match=r"'access_points'"):
+        fusion.WifiObservation(1.0, [-1], [-50.0])
+
+
+def test_set_particles_refuses_absurd_states():
+    t = fusion.ParticleTracker(_plan(), None, None, fusion.tracker_options(num_particles=10))
+    good = np.array([[3.0, 3.0, 0.0, 1.0], [4.0, 3.0, 0.1, 1.0]])
+    floors = np.zeros(2, np.int32)
+    t.set_particles(good, floors)
+    for row, col, value, words in [(1, 0, 1e300, "entry (1, 0)"), (0, 2, 1e300, "heading offset"),
+                                   (1, 3, 1e6, "scale"), (0, 3, 0.0, "scale")]:
+        bad = good.copy()
+        bad[row, col] = value
+        with pytest.raises(ValueError, match=r"'states'.*" + re.escape(words)):
+            t.set_particles(bad, floors)
+    inside = good.copy()
+    inside[0, :2] = (10.0, 5.0)  # inside the block, hard walls
+    with pytest.raises(ValueError, match=r"'states'.*not walkable"):
+        t.set_particles(inside, floors)
+    assert np.all(np.isfinite(t.estimate()["covariance_m2"]))
+
+
+def test_track_skips_steps_before_a_known_start():
+    n = 8
+    times = 0.5 * np.arange(1, n + 1)
+    start = {"position_m": np.array([2.0, 1.5]), "time_s": 2.2}
+    r = _track(step_times_s=times, displacements_m=np.tile([0.0, 0.7], (n, 1)),
+               covariances_m2=np.tile([0.01, 0.0, 0.01], (n, 1)), start=start,
+               smoother=fusion.SmootherOptions(num_trajectories=10))
+    assert r["summary"].steps == n - 4
+    np.testing.assert_allclose(r["mean_m"][:4], np.tile([2.0, 1.5], (4, 1)), atol=0.2)
+    np.testing.assert_allclose(r["smoothed_m"][:4], r["mean_m"][:4])
+    assert r["smoothed_m"].shape == (n, 2)
+    assert abs(r["mean_m"][-1, 1] - (1.5 + 0.7 * (n - 4))) < 0.4
+
+
+def test_floor_plan_from_geometries_refuses_lossy_conversions():
+    from types import SimpleNamespace
+    ring = [[0, 0], [5, 0], [5, 5], [0, 5]]
+    ok = fusion.floor_plan_from_geometries([SimpleNamespace(floor=2.0, outlines=[ring], obstacles=[], walls=None)])
+    assert ok.floors == [2]
+    with pytest.raises(ValueError, match=r"'floors\[0\].floor'"):
+        fusion.floor_plan_from_geometries([SimpleNamespace(floor=1.7, outlines=[ring], obstacles=[], walls=None)])
+    with pytest.raises(TypeError, match=r"'floors\[0\].floor'"):
+        fusion.floor_plan_from_geometries([SimpleNamespace(floor="2", outlines=[ring], obstacles=[], walls=None)])
+    complex_ring = np.array(ring, complex) + 1j
+    with pytest.raises(ValueError, match=r"'floors\[0\].outlines\[0\]'.*complex"):
+        fusion.floor_plan_from_geometries([SimpleNamespace(floor=0, outlines=[complex_ring], obstacles=[],
+                                                           walls=None)])
+
+
+def test_write_geojson_floor_refuses_nan_and_writes_atomically(tmp_path):
+    from indoorloc.io.floor_plan import read_geojson_floor, write_geojson_floor
+    ring = np.array([[0, 0], [5, 0], [5, 5], [0, 5]], float)
+    path = tmp_path / "floor.geojson"
+    write_geojson_floor(path, fusion.FloorGeometry(0, [ring], [], None))
+    before = path.read_bytes()
+    bad = ring.copy()
+    bad[1, 0] = np.nan
+
+    class Geometry:  # FloorGeometry itself refuses NaN: a record with the same fields
+        floor, outlines, obstacles, walls = 0, [bad], [], np.zeros((0, 4))
+
+    with pytest.raises(ValueError, match=r"'geometry.outlines\[0\]'.*NaN"):
+        write_geojson_floor(path, Geometry())
+    assert path.read_bytes() == before  # the old file is untouched
+    assert [p.name for p in tmp_path.iterdir()] == ["floor.geojson"]  # no temporary left
+    read_geojson_floor(path)

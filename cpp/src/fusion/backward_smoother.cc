@@ -81,6 +81,14 @@ SmoothedTrack SmoothBackward(const ParticleHistory& history, const FloorPlan* pl
                     history.floor_indices.size() == history.states.size(),
                 "history", "has inconsistent lengths");
   const int m = options.num_trajectories;
+  {
+    // Thinned clouds (44 B per particle), the trajectories (x, y, floor) and the output, per step.
+    double largest = 0.0;
+    for (const auto& c : history.states) largest = std::max(largest, static_cast<double>(c.rows()));
+    const double per_step = std::min(largest, static_cast<double>(options.max_particles)) * 44.0 + m * 40.0;
+    RequireSizeLimit(static_cast<double>(num_steps), per_step, "smoother_options",
+                     "recorded steps (max_particles x 44 B + num_trajectories x 40 B each)");
+  }
 
   RandomStream thin_rng(options.seed, 0x5eedULL);
   std::vector<Cloud> clouds(static_cast<size_t>(num_steps));

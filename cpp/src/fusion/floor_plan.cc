@@ -6,10 +6,12 @@
 #include "indoorloc/fusion/floor_plan.h"
 
 #include <algorithm>
+#include <array>
 #include <cassert>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -244,6 +246,173 @@ std::string FormatNumber(double v) {
   return out.str();
 }
 
+// ------------------------------------------------------------------------------------------
+// Self-intersection of one ring by a sweep line (Shamos & Hoey 1976), O(E log E).
+//
+// The sweep visits the ring's vertices in lexicographic (x, then y) order, which tilts the sweep
+// line infinitesimally so that vertical edges need no special case. An edge is active between
+// its lexicographically smaller ("left") and larger ("right") vertex; the active edges are kept
+// in a balanced tree ordered from below to above along the sweep line. A ring is simple iff no
+// two edges meet except consecutive edges at their shared vertex (consecutive edges that fold
+// back onto each other along a line also meet). If some pair meets, the pair meeting at the
+// lexicographically smallest point is adjacent in the tree just before that point (edges
+// between them would meet one of them there too), so testing only pairs that become adjacent
+// (on insertion, and on removal for the neighbours of the removed edge) finds a meeting pair.
+// Every decision uses the exact orientation predicate, so the verdict is exact for the given
+// doubles and equals that of a test of all pairs. Repeated vertices (two vertices at one
+// point) are found first by sorting.
+struct SweepEdge {
+  double lx, ly, rx, ry;  // left (lexicographically smaller) and right end
+};
+
+inline bool LexLess(double ax, double ay, double bx, double by) {
+  return ax < bx || (ax == bx && ay < by);
+}
+
+struct RingSweepResult {
+  bool found = false;
+  int a = -1, b = -1;  // positions of two meeting edges in the ring
+  double x = 0.0, y = 0.0;  // about where they meet
+  std::int64_t work = 0;  // predicate evaluations: tree comparisons + pair tests
+};
+
+// Closed edges a -> b of a ring of n edges (edge m runs from vertex m to vertex m + 1): do they
+// meet where a simple ring would not?
+bool RingEdgesMeet(const Segment* edges, int n, int a, int b) {
+  const int gap = std::abs(a - b);
+  if (gap == 1 || gap == n - 1) {
+    // Consecutive edges x -> w -> y share w; bad only if they overlap along a line.
+    const bool a_first = (a + 1) % n == b;
+    const Segment& first = edges[a_first ? a : b];
+    const Segment& second = edges[a_first ? b : a];
+    return Orient(first.x0, first.y0, first.x1, first.y1, second.x1, second.y1) == 0 &&
+           (first.x1 - first.x0) * (second.x1 - second.x0) +
+                   (first.y1 - first.y0) * (second.y1 - second.y0) <
+               0.0;
+  }
+  const Segment& s = edges[a];
+  return SegmentsIntersect(s.x0, s.y0, s.x1, s.y1, edges[b]);
+}
+
+// A point where two meeting edges meet (for the message only).
+void MeetingPoint(const Segment& s, const Segment& e, double* x, double* y) {
+  const double dx = s.x1 - s.x0, dy = s.y1 - s.y0, ex = e.x1 - e.x0, ey = e.y1 - e.y0;
+  const double den = dx * ey - dy * ex;
+  if (den != 0.0) {
+    const double t = std::clamp(((e.x0 - s.x0) * ey - (e.y0 - s.y0) * ex) / den, 0.0, 1.0);
+    *x = s.x0 + t * dx;
+    *y = s.y0 + t * dy;
+    return;
+  }
+  // Parallel (overlapping): an end of one inside the other's box.
+  for (const auto& p : {std::array<double, 2>{e.x0, e.y0}, std::array<double, 2>{e.x1, e.y1},
+                        std::array<double, 2>{s.x0, s.y0}}) {
+    if (p[0] >= std::min(s.x0, s.x1) && p[0] <= std::max(s.x0, s.x1) &&
+        p[1] >= std::min(s.y0, s.y1) && p[1] <= std::max(s.y0, s.y1) &&
+        p[0] >= std::min(e.x0, e.x1) && p[0] <= std::max(e.x0, e.x1) &&
+        p[1] >= std::min(e.y0, e.y1) && p[1] <= std::max(e.y0, e.y1)) {
+      *x = p[0];
+      *y = p[1];
+      return;
+    }
+  }
+  *x = s.x1;
+  *y = s.y1;
+}
+
+RingSweepResult FindRingSelfIntersection(const Segment* edges, int n) {
+  RingSweepResult result;
+  auto report = [&](int a, int b) {
+    if (result.found) return;
+    result.found = true;
+    result.a = std::min(a, b);
+    result.b = std::max(a, b);
+    MeetingPoint(edges[a], edges[b], &result.x, &result.y);
+  };
+  // Vertex m is edges[m]'s start. Repeated vertices first.
+  std::vector<int> order(static_cast<size_t>(n));
+  for (int m = 0; m < n; ++m) order[static_cast<size_t>(m)] = m;
+  std::sort(order.begin(), order.end(), [&](int a, int b) {
+    return LexLess(edges[a].x0, edges[a].y0, edges[b].x0, edges[b].y0) ||
+           (edges[a].x0 == edges[b].x0 && edges[a].y0 == edges[b].y0 && a < b);
+  });
+  for (size_t k = 1; k < order.size(); ++k) {
+    const Segment& p = edges[order[k - 1]];
+    const Segment& q = edges[order[k]];
+    if (p.x0 == q.x0 && p.y0 == q.y0) {
+      report(order[k - 1], order[k]);  // both edges start at one point
+      return result;
+    }
+  }
+  std::vector<SweepEdge> sweep(static_cast<size_t>(n));
+  for (int m = 0; m < n; ++m) {
+    const Segment& g = edges[m];
+    const bool forward = LexLess(g.x0, g.y0, g.x1, g.y1);
+    sweep[static_cast<size_t>(m)] = forward ? SweepEdge{g.x0, g.y0, g.x1, g.y1}
+                                            : SweepEdge{g.x1, g.y1, g.x0, g.y0};
+  }
+  // a below b along the sweep line where both are active. The later-starting edge's left end
+  // is located against the other edge's line; edges starting at one vertex (consecutive edges)
+  // are ordered by their right ends. A left end exactly on the other edge means they meet.
+  auto below = [&](int a, int b) {
+    if (a == b) return false;
+    ++result.work;
+    const SweepEdge& A = sweep[static_cast<size_t>(a)];
+    const SweepEdge& B = sweep[static_cast<size_t>(b)];
+    int o;
+    bool a_below_if_positive;
+    if (A.lx == B.lx && A.ly == B.ly) {
+      o = Orient(B.lx, B.ly, B.rx, B.ry, A.rx, A.ry);  // > 0: A's right end above B
+      a_below_if_positive = false;
+    } else if (LexLess(A.lx, A.ly, B.lx, B.ly)) {
+      o = Orient(A.lx, A.ly, A.rx, A.ry, B.lx, B.ly);  // > 0: B starts above A
+      a_below_if_positive = true;
+    } else {
+      o = Orient(B.lx, B.ly, B.rx, B.ry, A.lx, A.ly);  // > 0: A starts above B
+      a_below_if_positive = false;
+    }
+    if (o == 0) {
+      report(a, b);
+      return a < b;  // any order; the sweep stops after this insertion
+    }
+    return (o > 0) == a_below_if_positive;
+  };
+  std::set<int, decltype(below)> active(below);
+  std::vector<std::set<int, decltype(below)>::iterator> where(static_cast<size_t>(n),
+                                                               active.end());
+  auto test = [&](int a, int b) {
+    ++result.work;
+    if (RingEdgesMeet(edges, n, a, b)) report(a, b);
+  };
+  for (const int v : order) {
+    // Vertex v ends edge v - 1 and starts edge v.
+    const int incident[2] = {(v + n - 1) % n, v};
+    const double vx = edges[v].x0, vy = edges[v].y0;
+    for (const int e : incident) {  // removals first
+      const SweepEdge& s = sweep[static_cast<size_t>(e)];
+      if (!(s.rx == vx && s.ry == vy)) continue;
+      auto it = where[static_cast<size_t>(e)];
+      assert(it != active.end());
+      auto next = std::next(it);
+      if (it != active.begin() && next != active.end()) test(*std::prev(it), *next);
+      active.erase(it);
+      where[static_cast<size_t>(e)] = active.end();
+      if (result.found) return result;
+    }
+    for (const int e : incident) {
+      const SweepEdge& s = sweep[static_cast<size_t>(e)];
+      if (!(s.lx == vx && s.ly == vy)) continue;
+      const auto it = active.insert(e).first;
+      if (result.found) return result;
+      where[static_cast<size_t>(e)] = it;
+      if (it != active.begin()) test(*std::prev(it), e);
+      if (std::next(it) != active.end()) test(e, *std::next(it));
+      if (result.found) return result;
+    }
+  }
+  return result;
+}
+
 }  // namespace
 
 bool FloorPlanOptions::IsValid(std::string* error) const {
@@ -269,6 +438,7 @@ struct FloorData {
   int num_outline_edges = 0, num_ring_edges = 0;
   Eigen::Vector4d bounds = Eigen::Vector4d::Zero();  // outlines' box
   double walkable_area = 0.0;
+  FloorBuildStatistics statistics;
 
   // Grid: cell (i, j) covers [gx + i h, gx + (i + 1) h) x [gy + j h, gy + (j + 1) h).
   double gx = 0, gy = 0, h = 1, inv_h = 1;
@@ -607,6 +777,21 @@ FloorData BuildFloor(const FloorGeometry& input, int floor_index, const FloorPla
     }
   }
 
+  // Self-intersection, ring by ring, by a sweep line: O(E log E), before any index memory.
+  if (options.check_self_intersection) {
+    for (const Ring& ring : d.rings) {
+      const RingSweepResult r =
+          FindRingSelfIntersection(d.edges.data() + ring.first_edge, ring.num_edges);
+      d.statistics.self_intersection_work += r.work;
+      if (r.found) {
+        ThrowInvalidArgument(RingName(floor_index, ring),
+                             "is self-intersecting: edges " + std::to_string(r.a) + " and " +
+                                 std::to_string(r.b) + " meet near (" + FormatNumber(r.x) +
+                                 ", " + FormatNumber(r.y) + ")");
+      }
+    }
+  }
+
   // Boxes: the outlines' (Bounds) and all edges' (the grid).
   double ox0 = std::numeric_limits<double>::infinity(), oy0 = ox0, ox1 = -ox0, oy1 = -ox0;
   for (const auto& ring : d.geometry.outlines) {
@@ -643,20 +828,22 @@ FloorData BuildFloor(const FloorGeometry& input, int floor_index, const FloorPla
     h = std::max(h, std::sqrt(width * height / static_cast<double>(options.max_cells)));
     while (cells_for(h) > static_cast<double>(options.max_cells)) h *= 1.05;
   }
-  d.h = h;
-  d.inv_h = 1.0 / h;
-  d.nx = static_cast<int>(std::ceil(width / h + 1.0));
-  d.ny = static_cast<int>(std::ceil(height / h + 1.0));
-  d.gx = ex0 - 0.5 * (d.nx * h - width);
-  d.gy = ey0 - 0.5 * (d.ny * h - height);
-  d.inside_bound = SegmentQuery::InsideBound(d.nx * h, d.ny * h);
-  const size_t num_cells = static_cast<size_t>(d.nx) * static_cast<size_t>(d.ny);
 
   // Registration: an edge goes into every cell whose box, grown by a margin far above rounding
   // of the traversal, it meets (conservative segment-box overlap: box test, then the four
   // corners not all strictly on one side of the edge's line).
-  const double margin = 1e-6 * h + 64.0 * kEpsilon * max_abs;
+  auto set_grid = [&](double side) {
+    d.h = side;
+    d.inv_h = 1.0 / side;
+    d.nx = static_cast<int>(std::ceil(width / side + 1.0));
+    d.ny = static_cast<int>(std::ceil(height / side + 1.0));
+    d.gx = ex0 - 0.5 * (d.nx * side - width);
+    d.gy = ey0 - 0.5 * (d.ny * side - height);
+  };
+  auto margin_for = [&](double side) { return 1e-6 * side + 64.0 * kEpsilon * max_abs; };
   auto for_each_cell = [&](const Segment& g, auto&& fn) {
+    const double margin = margin_for(d.h);
+    const double hh = d.h;
     const int i_lo = std::max(0, static_cast<int>(std::floor((std::min(g.x0, g.x1) - margin - d.gx) * d.inv_h)));
     const int i_hi = std::min(d.nx - 1, static_cast<int>(std::floor((std::max(g.x0, g.x1) + margin - d.gx) * d.inv_h)));
     const int j_lo = std::max(0, static_cast<int>(std::floor((std::min(g.y0, g.y1) - margin - d.gy) * d.inv_h)));
@@ -664,8 +851,8 @@ FloorData BuildFloor(const FloorGeometry& input, int floor_index, const FloorPla
     const double ux = g.x1 - g.x0, uy = g.y1 - g.y0;
     for (int j = j_lo; j <= j_hi; ++j) {
       for (int i = i_lo; i <= i_hi; ++i) {
-        const double bx0 = d.gx + i * h - margin, bx1 = d.gx + (i + 1) * h + margin;
-        const double by0 = d.gy + j * h - margin, by1 = d.gy + (j + 1) * h + margin;
+        const double bx0 = d.gx + i * hh - margin, bx1 = d.gx + (i + 1) * hh + margin;
+        const double by0 = d.gy + j * hh - margin, by1 = d.gy + (j + 1) * hh + margin;
         const double c0 = ux * (by0 - g.y0) - uy * (bx0 - g.x0);
         const double c1 = ux * (by0 - g.y0) - uy * (bx1 - g.x0);
         const double c2 = ux * (by1 - g.y0) - uy * (bx0 - g.x0);
@@ -676,6 +863,80 @@ FloorData BuildFloor(const FloorGeometry& input, int floor_index, const FloorPla
       }
     }
   };
+
+  // Memory of the index, checked before anything is allocated: per cell the registration
+  // counts and fill pointers (construction only), the CSR offsets, the anchor with its winding
+  // counts and the empty-ring distance; per registration the edge's copy and its id. A given
+  // cell size is refused beyond kMaxBytes; an automatic one grows until the index fits in
+  // max(64 MB, 1 kB per edge) (long edges on small cells: a star of 2e5 spikes 100 m long
+  // registered 8e7 times, 3 GB, with 0.25 m cells).
+  constexpr double kBytesPerCell = 3 * sizeof(std::int64_t) + 3 * sizeof(std::int32_t) +
+                                   3 * sizeof(std::int32_t) + sizeof(CellInfo) +
+                                   sizeof(std::int32_t);
+  constexpr double kBytesPerEntry = sizeof(Segment) + sizeof(std::int32_t);
+  const bool automatic = options.cell_size_m <= 0.0;
+  const double num_edges = static_cast<double>(d.edges.size());
+  const double byte_limit =
+      automatic ? std::min(kMaxBytes, std::max(64e6, 1024.0 * num_edges)) : kMaxBytes;
+  // Registrations, counted without storing them; stops once past `limit`.
+  auto count_entries = [&](double limit) {
+    double n = 0.0;
+    for (const Segment& g : d.edges) {
+      for_each_cell(g, [&](int) { n += 1.0; });
+      if (n > limit) break;
+    }
+    return n;
+  };
+  // A lower bound without visiting cells: a segment spanning a columns and b rows of cells
+  // passes through at least a + b - 1 of them.
+  auto entries_lower_bound = [&]() {
+    double n = 0.0;
+    for (const Segment& g : d.edges) {
+      n += std::abs(std::floor((g.x1 - d.gx) * d.inv_h) - std::floor((g.x0 - d.gx) * d.inv_h)) +
+           std::abs(std::floor((g.y1 - d.gy) * d.inv_h) - std::floor((g.y0 - d.gy) * d.inv_h)) +
+           1.0;
+    }
+    return n;
+  };
+  double num_entries = 0.0;
+  for (;;) {
+    set_grid(h);
+    const double cell_bytes = cells_for(h) * kBytesPerCell;
+    const double max_entries = std::min(
+        std::floor((byte_limit - cell_bytes) / kBytesPerEntry),
+        static_cast<double>(std::numeric_limits<std::int32_t>::max()));
+    double counted = -1.0;
+    const double lower = entries_lower_bound();
+    if (max_entries >= 0.0) {
+      if (lower <= max_entries) {
+        counted = count_entries(max_entries);
+        if (counted <= max_entries) {
+          num_entries = counted;
+          break;
+        }
+      }
+    }
+    if (!automatic) {
+      const double at_least = std::max(lower, counted);
+      ThrowInvalidArgument(
+          "options.cell_size_m",
+          "cell size " + FormatNumber(h) + " m gives " + FormatNumber(cells_for(h)) +
+              " cells and at least " + FormatNumber(at_least) + " edge-cell registrations for " +
+              prefix + ": the index would need at least " +
+              FormatBytes(cell_bytes + at_least * kBytesPerEntry) + " (limit " +
+              FormatBytes(byte_limit) + "); choose a larger cell size or a smaller options.max_cells");
+    }
+    CheckInterrupt();
+    h *= 1.25;
+  }
+  d.inside_bound = SegmentQuery::InsideBound(d.nx * h, d.ny * h);
+  const size_t num_cells = static_cast<size_t>(d.nx) * static_cast<size_t>(d.ny);
+  d.statistics.edges = static_cast<std::int64_t>(d.edges.size());
+  d.statistics.cells = static_cast<std::int64_t>(num_cells);
+  d.statistics.edge_cell_entries = static_cast<std::int64_t>(num_entries);
+  d.statistics.index_bytes =
+      static_cast<double>(num_cells) * kBytesPerCell + num_entries * kBytesPerEntry;
+
   // Three classes in order (outline edges, obstacle edges, walls), so a cell's entries come
   // grouped by class when edges are added in index order.
   std::vector<std::int64_t> count(num_cells * 3, 0);
@@ -690,10 +951,8 @@ FloorData BuildFloor(const FloorGeometry& input, int floor_index, const FloorPla
   }
   std::int64_t total = 0;
   for (std::int64_t n : count) total += n;
-  if (total > std::numeric_limits<std::int32_t>::max()) {
-    throw std::runtime_error("indoorloc: FloorPlan: " + prefix +
-                             " has too many edge-cell references; use a larger cell size");
-  }
+  assert(static_cast<double>(total) == num_entries);
+  (void)total;
   d.cell_begin.assign(num_cells + 1, 0);
   d.obstacle_begin.assign(num_cells, 0);
   d.wall_begin.assign(num_cells, 0);
@@ -749,52 +1008,6 @@ FloorData BuildFloor(const FloorGeometry& input, int floor_index, const FloorPla
         relax(i, j, 1, 1);
         relax(i, j, 0, 1);
         relax(i, j, -1, 1);
-      }
-    }
-  }
-
-  // Self-intersection: two edges of one ring that meet (beyond the shared vertex of neighbours)
-  // meet at a point of some cell that both overlap, so only pairs within a cell are tested.
-  if (options.check_self_intersection) {
-    for (size_t c = 0; c < num_cells; ++c) {
-      const std::int32_t begin = d.cell_begin[c], end = d.wall_begin[c];
-      for (std::int32_t a = begin; a < end; ++a) {
-        const EdgeInfo& ia = d.edge_info[static_cast<size_t>(d.entry_edge[static_cast<size_t>(a)])];
-        for (std::int32_t b = a + 1; b < end; ++b) {
-          const EdgeInfo& ib =
-              d.edge_info[static_cast<size_t>(d.entry_edge[static_cast<size_t>(b)])];
-          if (ia.ring != ib.ring) continue;
-          const Ring& ring = d.rings[static_cast<size_t>(ia.ring)];
-          const Segment& sa = d.entries[static_cast<size_t>(a)];
-          const Segment& sb = d.entries[static_cast<size_t>(b)];
-          const int gap = std::abs(ia.position - ib.position);
-          const bool neighbours = gap == 1 || gap == ring.num_edges - 1;
-          bool bad;
-          double wx, wy;
-          if (neighbours) {
-            // Consecutive edges x -> w -> y share w; they are bad only if they overlap along a
-            // line (the ring folds back on itself).
-            const bool a_first = (ia.position + 1) % ring.num_edges == ib.position;
-            const Segment& first = a_first ? sa : sb;
-            const Segment& second = a_first ? sb : sa;
-            wx = first.x1;
-            wy = first.y1;
-            bad = Orient(first.x0, first.y0, first.x1, first.y1, second.x1, second.y1) == 0 &&
-                  (first.x1 - first.x0) * (second.x1 - second.x0) +
-                          (first.y1 - first.y0) * (second.y1 - second.y0) <
-                      0.0;
-          } else {
-            bad = SegmentsIntersect(sa.x0, sa.y0, sa.x1, sa.y1, sb);
-            wx = 0.5 * (sa.x0 + sa.x1);
-            wy = 0.5 * (sa.y0 + sa.y1);
-          }
-          if (bad) {
-            ThrowInvalidArgument(RingName(floor_index, ring),
-                                 "is self-intersecting: edges " + std::to_string(ia.position) +
-                                     " and " + std::to_string(ib.position) + " meet near (" +
-                                     FormatNumber(wx) + ", " + FormatNumber(wy) + ")");
-          }
-        }
       }
     }
   }
@@ -907,7 +1120,7 @@ FloorData BuildFloor(const FloorGeometry& input, int floor_index, const FloorPla
     }
     std::sort(ys.begin(), ys.end());
     ys.erase(std::unique(ys.begin(), ys.end()), ys.end());
-    const double max_slab = (oy1 - oy0) / 1000.0;
+    double max_slab = (oy1 - oy0) / 1000.0;
     std::vector<std::int32_t> stamp(d.edges.size(), -1);
     std::vector<std::int32_t> row_edges;
     int row = -1;
@@ -933,6 +1146,7 @@ FloorData BuildFloor(const FloorGeometry& input, int floor_index, const FloorPla
         }
       }
       crossings.clear();
+      d.statistics.area_edge_visits += static_cast<std::int64_t>(row_edges.size());
       for (const std::int32_t e : row_edges) {
         const Segment& g = d.edges[static_cast<size_t>(e)];
         if ((g.y0 <= y) == (g.y1 <= y)) continue;  // half-open rule at vertices
@@ -957,16 +1171,61 @@ FloorData BuildFloor(const FloorGeometry& input, int floor_index, const FloorPla
       }
       return length;
     };
+    // The work of that rule is bounded before it runs: a line in grid row j visits the ring
+    // entries of that row. Beyond kMaxAreaVisits (a star of 1e5 spikes: 2e5 slabs whose lines
+    // each cross ~1e5 edges) the midpoint rule runs on evenly spaced slabs, as many as the
+    // budget allows (at least 100).
+    constexpr double kMaxAreaVisits = 2e7;
+    std::vector<double> row_entries(static_cast<size_t>(d.ny), 0.0);
+    for (int j = 0; j < d.ny; ++j) {
+      for (int i = 0; i < d.nx; ++i) {
+        const size_t c = static_cast<size_t>(j * d.nx + i);
+        row_entries[static_cast<size_t>(j)] += d.wall_begin[c] - d.cell_begin[c];
+      }
+    }
+    auto row_of = [&](double y) {
+      return static_cast<size_t>(
+          std::clamp(std::floor((y - d.gy) * d.inv_h), 0.0, static_cast<double>(d.ny - 1)));
+    };
+    double planned = 0.0;
+    for (size_t k = 0; k + 1 < ys.size() && planned <= kMaxAreaVisits; ++k) {
+      const double a = ys[k], b = ys[k + 1];
+      const int pieces = std::max(1, static_cast<int>(std::ceil((b - a) / max_slab)));
+      const double step = (b - a) / pieces;
+      for (int m = 0; m < pieces; ++m) planned += row_entries[row_of(a + (m + 0.5) * step)];
+    }
+    const bool one_simple_ring = d.rings.size() == 1 && options.check_self_intersection;
+    if (planned > kMaxAreaVisits && one_simple_ring) {
+      // One outline, checked simple, no obstacle: the shoelace formula is exact (about v[0]).
+      d.statistics.area_subsampled = true;
+      const Segment* e = d.edges.data();
+      double area2 = 0.0;
+      for (int k = 1; k + 1 < d.num_ring_edges; ++k) {
+        area2 += (e[k].x0 - e[0].x0) * (e[k + 1].y0 - e[0].y0) - (e[k + 1].x0 - e[0].x0) * (e[k].y0 - e[0].y0);
+      }
+      ys.clear();  // no scanline
+      d.walkable_area = 0.5 * std::abs(area2);
+    } else if (planned > kMaxAreaVisits) {
+      d.statistics.area_subsampled = true;
+      const double busiest = *std::max_element(row_entries.begin(), row_entries.end());
+      const double slabs = std::max(100.0, std::floor(kMaxAreaVisits / std::max(busiest, 1.0)));
+      ys = {oy0, oy1};
+      // One slab of height (oy1 - oy0) / slabs split in `slabs` pieces below.
+      max_slab = (oy1 - oy0) / slabs * (1.0 + 1e-12);
+    }
     double area = 0.0;
     for (size_t k = 0; k + 1 < ys.size(); ++k) {
       const double a = ys[k], b = ys[k + 1];
       const int pieces = std::max(1, static_cast<int>(std::ceil((b - a) / max_slab)));
       const double step = (b - a) / pieces;
       double length_sum = 0.0;
-      for (int m = 0; m < pieces; ++m) length_sum += walkable_length(a + (m + 0.5) * step);
+      for (int m = 0; m < pieces; ++m) {
+        length_sum += walkable_length(a + (m + 0.5) * step);
+        if ((++d.statistics.area_scanlines & 0xFFF) == 0) CheckInterrupt();
+      }
       area += length_sum * (b - a) / pieces;
     }
-    d.walkable_area = area;
+    if (!ys.empty()) d.walkable_area = area;
   }
   CheckArgument(d.walkable_area > 0.0, prefix,
                 "has no walkable area (its outlines are covered by obstacles)");
@@ -1088,6 +1347,11 @@ Eigen::Vector4d FloorPlan::Bounds(int floor_index) const {
 double FloorPlan::WalkableArea(int floor_index) const {
   CheckFloorIndex(impl_->floors, floor_index, "floor_index");
   return impl_->floors[static_cast<size_t>(floor_index)].walkable_area;
+}
+
+const FloorBuildStatistics& FloorPlan::BuildStatistics(int floor_index) const {
+  CheckFloorIndex(impl_->floors, floor_index, "floor_index");
+  return impl_->floors[static_cast<size_t>(floor_index)].statistics;
 }
 
 double FloorPlan::CellSize(int floor_index) const {

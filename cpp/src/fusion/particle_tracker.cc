@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,30 @@ double WrapAngle(double a) { return std::remainder(a, 2.0 * M_PI); }
 // Systematic resampling stream ids of the tracker's own stream family: the per-event block
 // streams use DeriveSeed(seed, event) instead, so the two never overlap.
 constexpr std::uint64_t kTrackerStream = 0x7f3a5c11ULL;
+
+// Memory of the particle state, checked before it is allocated: per particle six doubles of
+// state, the floor, log-weight, linear weight, ancestor and the temporaries of an update and of
+// resampling (96 B; corridor mode 16 B more), and the fixed-lag ring of (lag + 1) positions with
+// its copy at resampling (32 B per slot).
+void RequireParticleMemory(double num_particles, const TrackerOptions& options, bool corridor_mode,
+                           std::string_view name) {
+  const double lag = options.smoothing_lag_steps;
+  const double per_particle = 96.0 + (corridor_mode ? 16.0 : 0.0) + (lag > 0 ? 32.0 * (lag + 1.0) : 0.0);
+  RequireSizeLimit(num_particles, per_particle, name,
+                   "particles (with smoothing_lag_steps = " + std::to_string(options.smoothing_lag_steps) + ")");
+}
+
+// A recorded cloud (record_history): states, floor and log-weight per particle.
+constexpr double kHistoryBytesPerParticle = 4 * sizeof(double) + sizeof(int) + sizeof(double);
+
+// Plan and particle coordinates are bounded like the floor plan's (+-1e7 m).
+constexpr double kMaxCoordinate = 1e7;
+
+void RequireHistoryMemory(double num_particles, double num_clouds, std::string_view name) {
+  RequireSizeLimit(num_particles * num_clouds, kHistoryBytesPerParticle, name,
+                   "recorded particles (num_particles x " + FormatValue(num_clouds) +
+                       " recorded steps, record_history / the smoother)");
+}
 }  // namespace
 
 bool TrackerOptions::IsValid(std::string* error) const {
@@ -114,6 +139,14 @@ struct ParticleTracker::Impl {
   std::vector<int> ancestors;
 
   bool corridor_mode() const { return corridors != nullptr; }
+
+  // Every event (step, WiFi observation, fix) at or after the previous one (or the start).
+  void CheckTime(double time_s, const char* name) const {
+    if (time_s < last_time) {
+      ThrowInvalidArgument(name, FormatValue(time_s) + " s is before the previous event or the start (" +
+                                     FormatValue(last_time) + " s): negative time step (events must not go back in time)");
+    }
+  }
 
   // Runs fn(begin, end, rng) over fixed particle blocks; the stream of block b depends only on
   // (seed, event, b), never on the thread count.
@@ -488,6 +521,9 @@ struct ParticleTracker::Impl {
 
   void Snapshot(bool replace_last) {
     if (!options.record_history || summary.steps == 0) return;
+    if (!(replace_last && !history.states.empty())) {
+      RequireHistoryMemory(n, static_cast<double>(history.states.size() + 1), "options.record_history");
+    }
     RowMatrixXd states(n, 4);
     Eigen::VectorXi fl(n);
     for (int i = 0; i < n; ++i) {
@@ -596,6 +632,7 @@ ParticleTracker::ParticleTracker(const FloorPlan* plan, const wifi::RssModel* wi
     }
   }
   for (double a : s.floor_area) s.total_area += a;
+  RequireParticleMemory(options.num_particles, options, corridors != nullptr, "options");
   s.Resize(options.num_particles);
 }
 
@@ -671,10 +708,7 @@ TrackerEstimate ParticleTracker::Step(const StepInput& step) {
   WallTimer timer;
   CheckArgument(s.initialized, "step", "the tracker is not initialised (InitializeKnown or InitializeUnknown first)");
   CheckStepInput(step, "step");
-  if (step.time_s < s.last_time) {
-    ThrowInvalidArgument("step.time_s", std::to_string(step.time_s) + " s is before the previous event (" +
-                                            std::to_string(s.last_time) + " s): negative time step");
-  }
+  s.CheckTime(step.time_s, "step.time_s");
   s.last_time = step.time_s;
   const StepMotion motion(step, s.options.motion);
   const Eigen::VectorXd old_log_w = s.log_w;  // normalised (the invariant between events)
@@ -801,8 +835,10 @@ TrackerEstimate ParticleTracker::Wifi(const WifiObservation& observation) {
     est.time_s = observation.time_s;
     return est;
   }
-  // WiFi may arrive late (readings re-timed to their own time): no ordering check against the
-  // steps, whose own order is checked in Step.
+  // Events go forward in time, whatever their kind (a reading re-timed to its own time is
+  // placed in time order by MakeWifiObservations and Track).
+  s.CheckTime(observation.time_s, "observation.time_s");
+  s.last_time = observation.time_s;
   if (observation.empty()) {
     TrackerEstimate est;
     est.time_s = observation.time_s;
@@ -821,13 +857,17 @@ TrackerEstimate ParticleTracker::Fix(const PositionFix& fix) {
   Impl& s = *impl_;
   WallTimer timer;
   CheckPositionFix(fix, "fix");
-  if (!s.initialized) {
+  if (s.initialized) {
+    s.CheckTime(fix.time_s, "fix.time_s");
+    s.last_time = fix.time_s;
+  } else {
     CheckArgument(s.plan || s.model || s.corridors, "fix", "an unknown start needs a floor plan, a signal map or corridors");
     s.UniformCloud();
     s.initialized = true;
     s.awaiting_first_fix = true;
     s.last_time = fix.time_s;
   }
+
   if (fix.empty()) {
     TrackerEstimate est;
     est.time_s = fix.time_s;
@@ -847,6 +887,11 @@ TrackerEstimate ParticleTracker::Fix(const PositionFix& fix) {
 const std::vector<double>& ParticleTracker::floor_areas_m2() const { return impl_->floor_area; }
 
 TrackerEstimate ParticleTracker::Estimate() const {
+  if (!impl_->initialized) {
+    throw std::runtime_error(
+        "indoorloc: ParticleTracker.estimate: the tracker is not initialised (no start, step, scan, fix or "
+        "set_particles yet)");
+  }
   TrackerEstimate est;
   est.time_s = impl_->last_time;
   impl_->FillEstimate(&est);
@@ -882,8 +927,32 @@ void ParticleTracker::SetParticles(const Eigen::Ref<const RowMatrixXd>& states,
       ThrowInvalidArgument("floor_indices", "entry " + std::to_string(i) + " = " + std::to_string(f) +
                                                 " is not a floor index (0.." + std::to_string(num_floors - 1) + ")");
     }
-    if (!(states(i, 3) > 0.0)) ThrowInvalidArgument("states", "scale (column 3) of row " + std::to_string(i) + " must be > 0");
+    for (int c = 0; c < 2; ++c) {
+      if (!(std::abs(states(i, c)) <= kMaxCoordinate)) {
+        ThrowInvalidArgument("states", DescribeEntry(i, c, false) + std::string(c == 0 ? " (x" : " (y") +
+                                           ") must be in [-1e+07, 1e+07] m, got " + FormatValue(states(i, c)));
+      }
+    }
+    if (!(std::abs(states(i, 2)) <= 1e6)) {
+      ThrowInvalidArgument("states", DescribeEntry(i, 2, false) + " (heading offset) must be in [-1e+06, 1e+06] rad, got " +
+                                         FormatValue(states(i, 2)));
+    }
+    const double lo = s.options.motion.min_scale, hi = s.options.motion.max_scale;
+    if (!(states(i, 3) >= lo && states(i, 3) <= hi)) {
+      ThrowInvalidArgument("states", DescribeEntry(i, 3, false) + " (scale) must be in [min_scale, max_scale] = [" +
+                                         FormatValue(lo) + ", " + FormatValue(hi) + "], got " + FormatValue(states(i, 3)));
+    }
+    // With hard walls no particle may stand outside walkable space (the filter's invariant: a
+    // step never ends inside an obstacle); with soft walls it is only unlikely.
+    if (s.plan && std::isinf(s.options.wall_log_penalty) &&
+        !s.plan->IsWalkable(states(i, 0), states(i, 1), s.plan_floor[static_cast<size_t>(f)])) {
+      ThrowInvalidArgument("states", "row " + std::to_string(i) + ": (" + FormatValue(states(i, 0)) + ", " +
+                                         FormatValue(states(i, 1)) + ") is not walkable on floor " +
+                                         std::to_string(s.floors[static_cast<size_t>(f)]) +
+                                         " (hard walls: wall_log_penalty = -inf)");
+    }
   }
+  RequireParticleMemory(static_cast<double>(states.rows()), s.options, false, "states");
   s.options.num_particles = static_cast<int>(states.rows());
   s.Resize(static_cast<int>(states.rows()));
   for (int i = 0; i < s.n; ++i) {

@@ -1,10 +1,12 @@
 #include "indoorloc/fusion/track.h"
 
+#include <cmath>
 #include <limits>
 #include <string>
 
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/validate.h"
 
 namespace indoorloc::fusion {
 
@@ -39,6 +41,21 @@ TrackResult Track(const FloorPlan* plan, const wifi::RssModel* wifi_model, const
   }
   CheckArgument(!obs.empty() ? wifi_model != nullptr : true, "recording.observations",
                 "WiFi observations given but no signal map (wifi_model)");
+  // Before a known start's time the walker is taken to stand at the start: steps before it do
+  // not move the cloud (a prefix, as steps are sorted), observations and fixes before it weigh
+  // the start cloud.
+  size_t skipped = 0;
+  if (start.known) {
+    CheckArgument(std::isfinite(start.time_s), "start['time_s']", "must be finite");
+    while (skipped < steps.size() && steps[skipped].time_s < start.time_s) ++skipped;
+  }
+  if (smooth) {
+    // The recorded clouds (states, floor, log-weight: 44 B per particle and step), checked
+    // before the run instead of failing to allocate in its middle.
+    RequireSizeLimit(static_cast<double>(options.num_particles) * static_cast<double>(steps.size() - skipped), 44.0,
+                     "options", "recorded particles (num_particles x " + std::to_string(steps.size() - skipped) +
+                                    " steps, for the smoother)");
+  }
   TrackerOptions tracker_options = options;
   tracker_options.record_history = smooth;
   ParticleTracker tracker(plan, wifi_model, corridors, tracker_options);
@@ -47,7 +64,9 @@ TrackResult Track(const FloorPlan* plan, const wifi::RssModel* wifi_model, const
     for (size_t k = 0; k < obs.size(); ++k) check.CheckObservation(obs[k], ("recording.observations[" + std::to_string(k) + "]").c_str());
   }
   if (start.known) {
-    const double t0 = steps.empty() ? start.time_s : std::min(start.time_s, steps.front().time_s);
+    double t0 = start.time_s;
+    if (!obs.empty()) t0 = std::min(t0, obs.front().time_s);
+    if (!fixes.empty()) t0 = std::min(t0, fixes.front().time_s);
     tracker.InitializeKnown(t0, start.position_m, start.floor, start.heading_offset_rad);
   } else {
     WifiObservation none;
@@ -77,7 +96,15 @@ TrackResult Track(const FloorPlan* plan, const wifi::RssModel* wifi_model, const
     }
   };
   const double kInf = std::numeric_limits<double>::infinity();
-  for (const StepInput& step : steps) {
+  for (size_t k = 0; k < skipped; ++k) {
+    TrackerEstimate est;
+    apply_until(steps[k].time_s, true, &est);
+    est = tracker.Estimate();
+    est.time_s = steps[k].time_s;
+    result.estimates.push_back(std::move(est));
+  }
+  for (size_t k = skipped; k < steps.size(); ++k) {
+    const StepInput& step = steps[k];
     TrackerEstimate est;
     apply_until(step.time_s, false, &est);
     est = tracker.Step(step);
@@ -88,7 +115,37 @@ TrackResult Track(const FloorPlan* plan, const wifi::RssModel* wifi_model, const
   TrackerEstimate rest;
   apply_until(kInf, true, &rest);
   result.summary = tracker.summary();
-  if (smooth && !steps.empty()) result.smoothed = SmoothBackward(tracker.history(), plan, tracker_options, smoother);
+  if (smooth && skipped < steps.size()) {
+    result.smoothed = SmoothBackward(tracker.history(), plan, tracker_options, smoother);
+  }
+  if (smooth && skipped > 0) {
+    // Steps before the known start: their smoothed values are the filtered ones (the start
+    // cloud), every trajectory at its mean.
+    SmoothedTrack& t = result.smoothed;
+    const Eigen::Index before = static_cast<Eigen::Index>(skipped);
+    const Eigen::Index after = static_cast<Eigen::Index>(steps.size() - skipped);
+    const Eigen::Index m = smoother.num_trajectories;
+    SmoothedTrack full;
+    full.positions_m.resize(before + after, 2);
+    full.covariances_m2.resize(before + after, 3);
+    full.floor_indices.resize(before + after);
+    full.trajectories_m.resize(before + after, 2 * m);
+    for (Eigen::Index k = 0; k < before; ++k) {
+      const TrackerEstimate& e = result.estimates[static_cast<size_t>(k)];
+      full.positions_m.row(k) = e.mean_m.transpose();
+      full.covariances_m2.row(k) << e.covariance_m2(0, 0), e.covariance_m2(0, 1), e.covariance_m2(1, 1);
+      full.floor_indices[k] = e.floor_index;
+      for (Eigen::Index j = 0; j < m; ++j) full.trajectories_m.block(k, 2 * j, 1, 2) = e.mean_m.transpose();
+    }
+    if (after > 0) {
+      full.positions_m.bottomRows(after) = t.positions_m;
+      full.covariances_m2.bottomRows(after) = t.covariances_m2;
+      full.floor_indices.tail(after) = t.floor_indices;
+      full.trajectories_m.bottomRows(after) = t.trajectories_m;
+    }
+    full.seconds = t.seconds;
+    t = std::move(full);
+  }
   return result;
 }
 

@@ -21,6 +21,14 @@ bool WifiLikelihoodOptions::IsValid(std::string* error) const {
              "must be a finite RSS in (-300, 50) dBm, got " + FormatValue(not_heard_dbm));
 }
 
+void RequireWifiReadingsMemory(double scans, double access_points) {
+  // Per reading: the re-timed copy (24 B), the observation's AP and RSS entries (12 B) and their
+  // copies when groups are merged and handed to Python (2 x 12 B); per scan an observation.
+  const double readings = scans * access_points;
+  RequireSizeLimit(readings, 64.0 + 200.0 / std::max(1.0, access_points), "rss_dbm",
+                   "readings (scans x access points)");
+}
+
 std::vector<WifiObservation> MakeWifiObservations(const Eigen::Ref<const Eigen::VectorXd>& scan_times_s,
                                                   const Eigen::Ref<const RowMatrixXd>& rss_dbm,
                                                   const Eigen::Ref<const RowMatrixXd>& ages_s,
@@ -31,6 +39,7 @@ std::vector<WifiObservation> MakeWifiObservations(const Eigen::Ref<const Eigen::
   CheckShape(rss_dbm, num_scans, -1, "rss_dbm");
   const bool have_ages = ages_s.size() > 0;
   if (have_ages) CheckShape(ages_s, num_scans, rss_dbm.cols(), "ages_s");
+  RequireWifiReadingsMemory(static_cast<double>(num_scans), static_cast<double>(rss_dbm.cols()));
   CheckFinite(scan_times_s, "scan_times_s");
   for (Eigen::Index s = 1; s < num_scans; ++s) {
     CheckArgument(scan_times_s[s] >= scan_times_s[s - 1], "scan_times_s",

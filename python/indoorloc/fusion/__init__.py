@@ -31,6 +31,7 @@ The model, its equations and how each default was chosen: docs/fusion.md. Exampl
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any, Iterable, List, Optional, Sequence, Tuple
 
@@ -196,8 +197,24 @@ def floor_plan_from_geometries(floors: Iterable[object], options: Optional[Floor
         walls = getattr(g, "walls", None)
         if walls is not None and np.asarray(walls).size == 0:
             walls = None
-        geometries.append(FloorGeometry(int(g.floor), [np.asarray(r, float) for r in g.outlines],
-                                        [np.asarray(r, float) for r in getattr(g, "obstacles", [])], walls))
+        name = f"floors[{k}]"
+        floor = g.floor
+        if isinstance(floor, (float, np.floating)) and math.isfinite(floor) and float(floor).is_integer():
+            floor = int(floor)  # a whole number given as a float (2.0); 1.7 is refused below
+        if isinstance(floor, (str, bytes)):
+            raise TypeError(f"indoorloc: argument '{name}.floor': expected an integer floor number, "
+                            f"got {type(floor).__name__} {floor!r}")
+        floor = integer(floor, f"{name}.floor", lo=-1_000_000, hi=1_000_000)
+        rings = {}
+        for kind in ("outlines", "obstacles"):
+            value = g.outlines if kind == "outlines" else getattr(g, "obstacles", [])
+            if isinstance(value, (str, bytes)) or not isinstance(value, Iterable):
+                raise TypeError(f"indoorloc: argument '{name}.{kind}': expected a list of (M, 2) rings, "
+                                f"got {type(value).__name__}")
+            rings[kind] = [real_array(r, f"{name}.{kind}[{m}]", shape=(None, 2)) for m, r in enumerate(value)]
+        if walls is not None:
+            walls = real_array(walls, f"{name}.walls", ndim=2)
+        geometries.append(FloorGeometry(floor, rings["outlines"], rings["obstacles"], walls))
     return FloorPlan(geometries, options if options is not None else FloorPlanOptions())
 
 

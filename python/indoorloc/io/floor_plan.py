@@ -507,11 +507,31 @@ def write_geojson_floor(
     path: PathLike, geometry: FloorGeometry, *, origin_lon_lat: Optional[Tuple[float, float]] = None
 ) -> None:
     """Write :func:`floor_geometry_to_geojson` of ``geometry`` to ``path`` (floats in Python's
-    shortest round-trip form)."""
+    shortest round-trip form). Non-finite coordinates are refused (ValueError naming the ring):
+    JSON has no NaN and the reader refuses the token. The file is written to a temporary name in
+    the same folder and renamed, so ``path`` is never left half-written."""
     if not isinstance(path, (str, os.PathLike)):
         raise TypeError(f"indoorloc: argument 'path': expected a file path, got {type(path).__name__}")
+    if all(hasattr(geometry, a) for a in ("outlines", "obstacles", "walls")):
+        for kind in ("outlines", "obstacles"):
+            for k, ring in enumerate(getattr(geometry, kind)):
+                real_array(ring, f"geometry.{kind}[{k}]")
+        real_array(geometry.walls, "geometry.walls")
     doc = floor_geometry_to_geojson(geometry, origin_lon_lat=origin_lon_lat)
-    Path(path).write_text(json.dumps(doc), encoding="utf-8")
+    # allow_nan=False: a non-finite value left after the checks (a conversion overflow) raises
+    # instead of writing the token NaN.
+    try:
+        text = json.dumps(doc, allow_nan=False)
+    except ValueError as exc:
+        raise ValueError(f"indoorloc: argument 'geometry': has a coordinate that is not finite ({exc})") from None
+    target = Path(path)
+    tmp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
+    try:
+        tmp.write_text(text, encoding="utf-8")
+        os.replace(tmp, target)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
 
 
 __all__ = [

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -518,6 +519,135 @@ TEST(Track, SmootherIsCloserToTheTruthThanTheFilterOnAverage) {
   }
   EXPECT_LT(filter_error, 1.0);
   EXPECT_LT(smoother_error, filter_error * 1.05);
+}
+
+// ---- Issue 28 -----------------------------------------------------------------------------
+
+// Expects std::invalid_argument whose message contains every part.
+template <typename Fn>
+void ExpectInvalidWith(Fn fn, std::initializer_list<std::string> parts) {
+  try {
+    fn();
+    ADD_FAILURE() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    for (const std::string& p : parts) {
+      EXPECT_NE(std::string(e.what()).find(p), std::string::npos) << e.what() << " lacks " << p;
+    }
+  }
+}
+
+TEST(ParticleTracker, MemoryIsRefusedBySizeBeforeAllocating) {
+  const FloorPlan plan = RoomPlan();
+  // 5e7 particles: ~4.8 GB of state (the smoother's history would come on top).
+  TrackerOptions o = SmallOptions();
+  o.num_particles = 50000000;
+  o.record_history = true;
+  ExpectInvalidWith([&] { ParticleTracker(&plan, nullptr, nullptr, o); }, {"'options'", "particles", "GB", "limit 4 GB"});
+  // A fixed lag of 1e4 steps with 5e6 particles: 1.6 TB of lag ring.
+  o.num_particles = 5000000;
+  o.record_history = false;
+  o.smoothing_lag_steps = 10000;
+  ExpectInvalidWith([&] { ParticleTracker(&plan, nullptr, nullptr, o); }, {"smoothing_lag_steps = 10000", "TB"});
+  // Track with the smoother: num_particles x steps of recorded clouds, before the run.
+  o = SmallOptions();
+  o.num_particles = 40000000;
+  Recording rec;
+  for (int k = 0; k < 10; ++k) rec.steps.push_back(Step(0.5 * (k + 1), 0.5, 0.0));
+  TrackStart start;
+  start.known = true;
+  start.position_m = Eigen::Vector2d(2.0, 2.0);
+  ExpectInvalidWith([&] { Track(&plan, nullptr, nullptr, rec, start, o, SmootherOptions(), true); },
+                    {"recorded particles", "GB"});
+  // 1e8 readings for MakeWifiObservations: refused from the shape alone (the bindings check the
+  // array's shape before converting it).
+  ExpectInvalidWith([] { RequireWifiReadingsMemory(1e4, 1e4); }, {"'rss_dbm'", "1e+08 readings", "GB"});
+  EXPECT_NO_THROW(RequireWifiReadingsMemory(1e4, 100));
+}
+
+TEST(ParticleTracker, EventsBeforeThePreviousOneAreRefusedWhateverTheirKind) {
+  const FloorPlan plan = RoomPlan();
+  const wifi::RssModel model(RoomMap());
+  ParticleTracker tracker(&plan, &model, nullptr, SmallOptions(200));
+  EXPECT_THROW(tracker.Estimate(), std::runtime_error);  // not initialised
+  try {
+    tracker.Estimate();
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("not initialised"), std::string::npos);
+  }
+  tracker.InitializeKnown(1.0, Eigen::Vector2d(3.0, 3.0), 0, 0.0);
+  EXPECT_EQ(tracker.Estimate().time_s, 1.0);
+  // Before the start.
+  ExpectInvalidWith([&] { tracker.Wifi(ScanAt(model, 0.5, 3.0, 3.0)); }, {"observation.time_s", "back in time"});
+  PositionFix fix;
+  fix.time_s = 0.5;
+  fix.means_m = RowMatrixXd::Constant(1, 2, 3.0);
+  fix.sds_m = Eigen::VectorXd::Constant(1, 1.0);
+  fix.weights = Eigen::VectorXd::Constant(1, 1.0);
+  ExpectInvalidWith([&] { tracker.Fix(fix); }, {"fix.time_s", "back in time"});
+  // After a scan at 3 s, neither a step nor a fix at 2 s.
+  tracker.Step(Step(2.0, 0.5, 0.0));
+  tracker.Wifi(ScanAt(model, 3.0, 3.5, 3.0));
+  ExpectInvalidWith([&] { tracker.Step(Step(2.5, 0.5, 0.0)); }, {"step.time_s"});
+  fix.time_s = 2.5;
+  ExpectInvalidWith([&] { tracker.Fix(fix); }, {"fix.time_s"});
+  fix.time_s = 3.0;  // equal times are fine
+  EXPECT_NO_THROW(tracker.Fix(fix));
+  EXPECT_EQ(tracker.Estimate().time_s, 3.0);
+}
+
+TEST(ParticleTracker, SetParticlesRefusesAbsurdStates) {
+  const FloorPlan plan = RoomPlan();
+  ParticleTracker tracker(&plan, nullptr, nullptr, SmallOptions(10));
+  RowMatrixXd states(2, 4);
+  states << 3.0, 3.0, 0.0, 1.0, 4.0, 3.0, 0.1, 1.0;
+  const Eigen::VectorXi floors = Eigen::VectorXi::Zero(2);
+  EXPECT_NO_THROW(tracker.SetParticles(states, floors));
+  RowMatrixXd bad = states;
+  bad(1, 0) = 1e300;
+  ExpectInvalidWith([&] { tracker.SetParticles(bad, floors); }, {"'states'", "entry (1, 0)", "1e+300"});
+  bad = states;
+  bad(0, 2) = 1e300;
+  ExpectInvalidWith([&] { tracker.SetParticles(bad, floors); }, {"'states'", "entry (0, 2)", "heading offset"});
+  bad = states;
+  bad(1, 3) = 1e6;  // scale outside [min_scale, max_scale]
+  ExpectInvalidWith([&] { tracker.SetParticles(bad, floors); }, {"'states'", "entry (1, 3)", "scale"});
+  bad = states;
+  bad.row(0) << 10.0, 5.0, 0.0, 1.0;  // inside the block, hard walls
+  ExpectInvalidWith([&] { tracker.SetParticles(bad, floors); }, {"'states'", "row 0", "not walkable"});
+  // With soft walls a particle inside an obstacle is only unlikely.
+  TrackerOptions soft = SmallOptions(10);
+  soft.wall_log_penalty = -5.0;
+  ParticleTracker soft_tracker(&plan, nullptr, nullptr, soft);
+  EXPECT_NO_THROW(soft_tracker.SetParticles(bad, floors));
+}
+
+TEST(Track, StepsBeforeAKnownStartDoNotMoveTheCloud) {
+  const FloorPlan plan = RoomPlan();
+  Recording rec;
+  for (int k = 0; k < 10; ++k) rec.steps.push_back(Step(0.5 * (k + 1), 0.5, 0.0));
+  TrackStart start;
+  start.known = true;
+  start.time_s = 2.2;  // after the first four steps
+  start.position_m = Eigen::Vector2d(3.0, 5.0);
+  TrackerOptions o = SmallOptions(500);
+  SmootherOptions so;
+  so.num_trajectories = 20;
+  const TrackResult r = Track(&plan, nullptr, nullptr, rec, start, o, so, true);
+  ASSERT_EQ(r.estimates.size(), 10u);
+  ASSERT_EQ(r.smoothed.positions_m.rows(), 10);
+  ASSERT_EQ(r.smoothed.trajectories_m.rows(), 10);
+  EXPECT_EQ(r.summary.steps, 6);  // four skipped
+  for (int k = 0; k < 4; ++k) {
+    EXPECT_NEAR(r.estimates[k].mean_m.x(), 3.0, 0.1) << k;  // the start cloud
+    EXPECT_EQ(r.estimates[k].time_s, 0.5 * (k + 1));
+    EXPECT_NEAR(r.smoothed.positions_m(k, 0), r.estimates[k].mean_m.x(), 1e-12);
+  }
+  EXPECT_NEAR(r.estimates[9].mean_m.x(), 3.0 + 6 * 0.5, 0.3);  // six steps taken
+  // Every step before the start: nothing to smooth, the start cloud throughout.
+  start.time_s = 100.0;
+  const TrackResult all = Track(&plan, nullptr, nullptr, rec, start, o, so, true);
+  EXPECT_EQ(all.summary.steps, 0);
+  EXPECT_EQ(all.smoothed.positions_m.rows(), 10);
 }
 
 }  // namespace

@@ -25,6 +25,7 @@
 // Paper link: the floor plan constraint of paper 002 §VI (PDR matched with the building's map)
 // and paper 000 §IV (map matching); see docs/fusion.md.
 #pragma once
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -53,14 +54,37 @@ struct FloorGeometry {
 struct FloorPlanOptions {
   /// Side of the index grid's cells [m]; <= 0 chooses it per floor so that a cell holds about
   /// `target_edges_per_cell` edges on average over the floor's box, bounded to [0.25, 1] m (a
-  /// pedestrian step then visits one to three cells) and to at most `max_cells` cells.
+  /// pedestrian step then visits one to three cells), to at most `max_cells` cells, and grown
+  /// further if the index (cells and edge-cell registrations) would take more than
+  /// max(64 MB, 1 kB per edge). A given size whose index would take more than 4 GB
+  /// (kMaxBytes) is refused, naming the bytes, before anything is allocated.
   double cell_size_m = 0.0;
   double target_edges_per_cell = 2.0;
   int max_cells = 4'000'000;
   /// Reject rings whose edges cross each other (a self-intersecting ring has no well-defined
-  /// inside). Costs one indexed pass over the edges at construction.
+  /// inside). Costs a sweep line over each ring's edges at construction, O(E log E).
   bool check_self_intersection = true;
   bool IsValid(std::string* error) const;
+};
+
+/// What building one floor cost: sizes and counts of work (diagnostics, and the evidence that
+/// construction scales as O(E log E) plus the index size).
+struct FloorBuildStatistics {
+  std::int64_t edges = 0;  ///< ring edges + wall segments
+  std::int64_t cells = 0;  ///< cells of the index grid
+  /// Edge-cell registrations of the index (an edge is listed in every cell it overlaps).
+  std::int64_t edge_cell_entries = 0;
+  /// Memory of the index [bytes]: per cell and per registration, as checked before allocating.
+  double index_bytes = 0.0;
+  /// Exact predicate evaluations of the self-intersection sweep (ordered-set comparisons and
+  /// pair tests): O(E log E).
+  std::int64_t self_intersection_work = 0;
+  /// Scanlines and edge visits of the walkable-area computation.
+  std::int64_t area_scanlines = 0;
+  std::int64_t area_edge_visits = 0;
+  /// True when the exact-per-slab area rule would have visited more than 2e7 edges and the
+  /// area came from fewer, evenly spaced scanlines instead (see FloorPlan::WalkableArea).
+  bool area_subsampled = false;
 };
 
 /// A building's walkable space with indexed geometric queries. Immutable after construction and
@@ -97,10 +121,17 @@ class FloorPlan {
   /// Walkable area [m^2], computed once at construction by horizontal scanlines: exact along
   /// each line, one line per slab between consecutive vertex ordinates (slabs split to at most
   /// 1/1000 of the height), hence exact up to rounding for rings that do not overlap, and within
-  /// a second-order error where rings overlap.
+  /// a second-order error where rings overlap. Where that rule would visit more than 2e7 edges
+  /// (tens of thousands of vertices on lines that each cross tens of thousands of edges, such as
+  /// a star of 1e5 spikes), a floor of one outline (checked simple) and no obstacle takes the
+  /// exact shoelace area of its ring; any other floor the midpoint rule on evenly spaced slabs,
+  /// as many as that budget allows (at least 100), which is approximate: a slab line that runs
+  /// along a nearly horizontal edge can over-count a thin strip (BuildStatistics().area_subsampled).
   double WalkableArea(int floor_index) const;
   /// Side of the index grid's cells on a floor [m].
   double CellSize(int floor_index) const;
+  /// What building a floor's index cost.
+  const FloorBuildStatistics& BuildStatistics(int floor_index) const;
 
   // Single queries: the inner-loop form. floor_index must be valid (checked by assert only);
   // the batch forms below check everything.

@@ -6,6 +6,12 @@
 // <= t_k. Unknown start: the cloud starts uniform over the walkable area and is re-drawn from
 // the first observation that has readings (steps before it therefore carry little
 // information: their estimates are those of a uniform cloud).
+// Known start: before the start's time the walker is taken to stand at the start. Steps with
+// time_s < start.time_s (a prefix: a recording usually begins before its first surveyed
+// position) do not move the cloud; their estimates, filtered and smoothed, are the start
+// cloud's (after any observation up to the step's time). WiFi observations and fixes before
+// the start weigh the start cloud. The streaming ParticleTracker instead refuses any event
+// before the previous one or the start.
 #pragma once
 #include <vector>
 #include <Eigen/Core>

@@ -69,6 +69,11 @@ struct WifiReadingCounts {
 /// their scan; otherwise each scan is one observation at its time and readings older than
 /// max_age_s are dropped. Output sorted by time (stable). Throws std::invalid_argument naming
 /// the argument on shape mismatch, infinite RSS, negative or infinite ages, or decreasing times.
+/// Throws std::invalid_argument naming 'rss_dbm' with the bytes it would take if `scans` x
+/// `access_points` readings do not fit MakeWifiObservations' memory limit (4 GB; about 64 B
+/// per reading and 200 B per scan). Checked from the shapes before anything is converted.
+void RequireWifiReadingsMemory(double scans, double access_points);
+
 std::vector<WifiObservation> MakeWifiObservations(const Eigen::Ref<const Eigen::VectorXd>& scan_times_s,
                                                   const Eigen::Ref<const RowMatrixXd>& rss_dbm,
                                                   const Eigen::Ref<const RowMatrixXd>& ages_s,
