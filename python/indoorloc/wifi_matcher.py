@@ -190,33 +190,39 @@ def ap_reliability(rss_dbm: np.ndarray, positions_m: np.ndarray, walk_index: np.
 
 @dataclass
 class ReferenceIndex:
-    """References prepared for :func:`shared_dissimilarity`: columns stored as rows (K, N) so that a
-    query block gathers the rows of its APs contiguously.
+    """References prepared for :func:`shared_dissimilarity`: sparse (K, N) matrices in CSR, one row
+    per AP, so that a query gathers the rows of its own APs (a reference hears a few per cent of
+    a floor's APs).
 
-    ``heard`` (K, N) float32 1/0; ``value`` (K, N) float32 rss + 100 dB (0 where not heard);
+    ``heard`` 1 where heard; ``value`` rss + 100 dB; ``value2`` its square; ``gf`` g_i f(b_i);
     ``g`` (K,) AP weights; ``strength_scale_db`` β (0: off); ``total_b`` (N,) Σ_B g f(b)."""
 
-    heard: np.ndarray
-    value: np.ndarray
+    heard: Any
+    value: Any
+    value2: Any
+    gf: Any
     g: np.ndarray
     strength_scale_db: float
     total_b: np.ndarray
+    n: int
 
     @classmethod
     def build(cls, rss_dbm: np.ndarray, g: Optional[np.ndarray] = None, strength_scale_db: float = 0.0
               ) -> "ReferenceIndex":
-        x = np.asarray(rss_dbm, float)
-        h = np.isfinite(x)
-        v = np.where(h, x + RSS_OFFSET_DB, 0.0)
-        g = np.ones(x.shape[1]) if g is None else np.asarray(g, float)
-        f = _strength(v, strength_scale_db) * h
-        total_b = (f * g[None, :]).sum(axis=1)
-        return cls(np.ascontiguousarray(h.T, dtype=np.float32), np.ascontiguousarray(v.T, dtype=np.float32),
-                   g, float(strength_scale_db), total_b)
+        from scipy import sparse
 
-    @property
-    def n(self) -> int:
-        return int(self.heard.shape[1])
+        x = np.asarray(rss_dbm, float)
+        n, k = x.shape
+        g = np.ones(k) if g is None else np.asarray(g, float)
+        ref, ap = np.nonzero(np.isfinite(x.T).T)          # entries in (reference, AP) order
+        v = x[ref, ap] + RSS_OFFSET_DB
+        gf = g[ap] * _strength(v, strength_scale_db)
+
+        def csr(data):
+            return sparse.csr_matrix((np.asarray(data, np.float64), (ap, ref)), shape=(k, n))
+
+        total_b = np.bincount(ref, weights=gf, minlength=n)
+        return cls(csr(np.ones_like(v)), csr(v), csr(v * v), csr(gf), g, float(strength_scale_db), total_b, n)
 
 
 #: f is evaluated as exp((rss - STRENGTH_PIVOT_DBM) / β): the same ratios as exp((rss + 100) / β), kept
@@ -237,8 +243,8 @@ def shared_dissimilarity(queries_dbm: np.ndarray, index: ReferenceIndex, penalty
     +inf where no AP is shared. With ``parts=True`` returns ``(rms, u)`` instead (d = rms + c u),
     for evaluating several c at once.
 
-    One pass per query over the references' rows of the query's own APs (C of them): a few (C,)
-    by (C, N) products, O(C N) per query (~0.5-1 ms for C ~ 100, N ~ 2000 on one core)."""
+    One pass per query over the references' rows of the query's own APs (C of them): a few sparse
+    (C,) by (C, N) products, O(nonzeros of those rows) per query (timing: docs/fusion_real.md)."""
     q = real_array(queries_dbm, "queries_dbm", ndim=2, finite=False, max_abs=1e3)
     if q.shape[1] != index.heard.shape[0]:
         raise ValueError(f"indoorloc: argument 'queries_dbm': expected {index.heard.shape[0]} columns "
@@ -252,19 +258,19 @@ def shared_dissimilarity(queries_dbm: np.ndarray, index: ReferenceIndex, penalty
         cols = np.flatnonzero(np.isfinite(q[r]))
         if cols.size == 0 or n == 0:
             continue
-        a = (q[r, cols] + RSS_OFFSET_DB).astype(np.float32)
-        g = index.g[cols].astype(np.float32)
+        a = q[r, cols] + RSS_OFFSET_DB
+        g = index.g[cols]
         w = g * _strength(a, beta)                                   # w_i = g_i f(a_i)
-        hb, vb = index.heard[cols], index.value[cols]               # (C, N)
-        sw = (w @ hb).astype(np.float64)                            # Σ_{A∩B} w
-        ms = ((w * a * a) @ hb - 2.0 * ((w * a) @ vb) + w @ (vb * vb)).astype(np.float64)  # Σ_{A∩B} w (a - b)²
-        fb = _strength(vb, beta) * hb if beta > 0 else hb
-        shared_fb = (g @ fb).astype(np.float64)                     # Σ_{A∩B} g f(b)
-        union = float(w.sum(dtype=np.float64)) + index.total_b - shared_fb   # Σ_A + Σ_{B∖A}
+        # (1, C) x (C, N) sparse products: Σ_{A∩B} of w, w a², w a b, w b² and g f(b).
+        sw, s_aa = index.heard[cols].T.dot(np.column_stack([w, w * a * a])).T
+        s_ab = index.value[cols].T.dot(w * a)
+        s_bb = index.value2[cols].T.dot(w)
+        shared_fb = np.asarray(index.gf[cols].sum(axis=0)).ravel()   # Σ_{A∩B} g f(b)
+        ms = s_aa - 2.0 * s_ab + s_bb                                # Σ_{A∩B} w (a - b)²
+        union = float(w.sum()) + index.total_b - shared_fb           # Σ_A + Σ_{B∖A}
         ok = sw > 0
-        with np.errstate(invalid="ignore", divide="ignore"):
-            rms[r, ok] = np.sqrt(np.maximum(ms[ok] / sw[ok], 0.0))
-            u[r, ok] = np.clip(1.0 - sw[ok] / union[ok], 0.0, 1.0)
+        rms[r, ok] = np.sqrt(np.maximum(ms[ok] / sw[ok], 0.0))
+        u[r, ok] = np.clip(1.0 - sw[ok] / union[ok], 0.0, 1.0)
     if parts:
         return rms, u
     return rms + penalty_db * u

@@ -155,16 +155,17 @@ def floor_names(root: Path) -> List[str]:
 # --------------------------------------------------------------------------------------------
 # Evaluation on cached walks
 
-#: The grid, pruned by quick runs on F3, F4, F8 and B1 (docs/fusion_real.md, "WiFi as fixes"):
-#: penalties below 40 dB, the centred query window, "union"/"strongest" on pooled windows and a
-#: per-walk diversity rule were worse or no better there and are not in it.
+#: The grid, pruned by quick runs (docs/fusion_real.md, "WiFi as fixes"): penalties below 80 dB,
+#: windows shorter than 6 / 12 s, the centred query window, "union"/"strongest" on pooled windows
+#: and a per-walk diversity rule were worse or no better there and are not in it; the window
+#: edges were moved out until the choice fell inside the grid.
 GRID = {
-    "ref_window_s": (4.0, 6.0, 10.0),
-    "query_window_s": (8.0, 12.0, 16.0, 24.0),
+    "ref_window_s": (6.0, 10.0, 14.0),
+    "query_window_s": (12.0, 16.0, 24.0),
     "ap_weight_power": (0.0, 1.0),
     "strength_scale_db": (0.0, 3.0, 5.0, 10.0),
-    "penalty_db": (80.0, 160.0, 320.0, 640.0),
-    "k": (5, 8, 12, 20),
+    "penalty_db": (80.0, 160.0, 320.0),
+    "k": (8, 12, 20, 30),
     "temperature_db": (3.0, 10.0, 30.0),
 }
 BUILD_KEYS = ("ref_window_s",)
