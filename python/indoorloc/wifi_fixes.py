@@ -59,7 +59,7 @@ class FixSettings:
     over the six floors of the competition site (docs/fusion_real.md, "WiFi as fixes"); how each
     was chosen is said beside it (LOFO: the point chosen on all six floors; the held-out figures
     are in docs/fusion_real.md). ``FixSettings(pooling="fresh", metric="strongest", k=8,
-    temperature_db=2.0, sd_m=4.0)`` is the previous matcher (fresh scans, strongest 10 APs)."""
+    temperature_db=2.0, sd_m=4.0, sd_per_db=0.0)`` is the previous matcher (fresh scans, strongest 10 APs)."""
 
     #: "window": fingerprints max-pooled over time windows of distinct measurements at their
     #: last-seen time (wifi_matcher); "fresh": one fingerprint per scan from its readings at most
@@ -95,9 +95,14 @@ class FixSettings:
     k: int = 20                     #: components per fix (best references). LOFO over {8, 12, 20, 30}: 20 or 30
     #: T of the component weights exp(-(d - d_min)/T) [dB]. LOFO over {3, 10, 30}: 3 on five of six.
     temperature_db: float = 3.0
-    #: σ of each component [m]: calibrated so that the mixture's 95 % region holds the truth at the
-    #: fix time for 90 % of the fixes over the six floors (12 m; per floor 0.71 (F4) to 1.00 (F1)).
-    sd_m: float = 12.0
+    #: σ of each component of a fix [m]: σ = sd_m + sd_per_db x d_min, d_min the fix's best
+    #: dissimilarity [dB] (a poor best match is a wide fix). Calibrated on the six floors so that
+    #: the mixture's 95 % region holds the truth at the fix time for ~90 % of the fixes, evenly
+    #: over the floors: grid a {1, 2, 3, 4, 6} m x b {0.1 ... 0.5} m/dB, (3, 0.3) on four of six
+    #: held-out floors; coverage 0.88-0.97 per floor (one σ of 12 m: 0.71-1.00). sd_per_db = 0
+    #: gives one σ for every fix.
+    sd_m: float = 3.0
+    sd_per_db: float = 0.3          #: [m/dB], see sd_m (calibrated for the "shared" metric)
     min_aps: int = 3                #: fingerprints with fewer APs known to the database give no fix
 
     def validate(self) -> None:
@@ -115,7 +120,7 @@ class FixSettings:
             v = getattr(self, name)
             if isinstance(v, bool) or not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ValueError(f"indoorloc: FixSettings.{name} must be finite and > 0, got {v!r}")
-        for name in ("ref_window_s", "penalty_db", "ap_weight_power", "strength_scale_db"):
+        for name in ("ref_window_s", "penalty_db", "ap_weight_power", "strength_scale_db", "sd_per_db"):
             v = getattr(self, name)
             if isinstance(v, bool) or not (isinstance(v, (int, float)) and math.isfinite(v) and 0 <= v <= 1e4):
                 raise ValueError(f"indoorloc: FixSettings.{name} must be finite and in [0, 1e4], got {v!r}")
@@ -180,9 +185,10 @@ class FingerprintDatabase:
         self._index: Optional[wm.ReferenceIndex] = None
 
     def with_settings(self, settings: FixSettings) -> "FingerprintDatabase":
-        """The same fingerprints with other fix settings (the pooling, windows, spacing and
-        ``min_scans`` stay those the database was built with; the metric, its constants, k, T
-        and σ are the new ones)."""
+        """The same fingerprints with other fix settings. What was fixed at the build stays: the
+        pooling, the reference spacing and window, ``min_scans``, ``pair_radius_m`` and the AP
+        reliabilities (computed when built with the "shared" metric, else all 1). The query
+        window, the metric and its constants, k, T and σ are the new ones."""
         settings.validate()
         return FingerprintDatabase(self.rss_dbm, self.positions_m, self.bssids, settings, self.floors,
                                    self.walk_index, self.ap_ratio)
@@ -289,7 +295,7 @@ def build_database(train_walks: Sequence[Any], settings: Optional[FixSettings] =
     xy_all = np.vstack([p[1] for p in per_walk])
     walk_idx = np.concatenate([p[4] for p in per_walk])
     ratio = None
-    if s.metric == "shared" and s.ap_weight_power > 0:
+    if s.metric == "shared":  # also when α = 0, so that with_settings can turn the weights on
         ratio = wm.ap_reliability(rss_all, xy_all, walk_idx, 1.0, s.pair_radius_m)
     return FingerprintDatabase(rss_all, xy_all, vocab, s, np.concatenate([p[3] for p in per_walk]), walk_idx, ratio)
 
@@ -396,9 +402,17 @@ def fixes_for_walk(walk: Any, database: FingerprintDatabase, with_floors: bool =
     k = min(s.k, database.n_scans)
     if t.size == 0:
         return fusion.Fixes.from_arrays(np.zeros(0), np.zeros((0, k, 2)), np.zeros((0, k)), np.zeros((0, k)))
-    best, _, weights = wm.knn(dissimilarity(rss, database), k, s.temperature_db)
+    best, d_best, weights = wm.knn(dissimilarity(rss, database), k, s.temperature_db)
     floors = database.floors[best] if with_floors else None
-    return fusion.Fixes.from_arrays(t, database.positions_m[best], s.sd_m, weights, floors)
+    return fusion.Fixes.from_arrays(t, database.positions_m[best], fix_sds(d_best[:, 0], s), weights, floors)
+
+
+def fix_sds(d_min: np.ndarray, settings: FixSettings) -> np.ndarray:
+    """σ (F,) [m] of the components of fixes whose best dissimilarity is ``d_min`` (F,) [dB]:
+    ``sd_m + sd_per_db * d_min`` (``sd_m`` where d_min is not finite)."""
+    d = np.asarray(d_min, float)
+    return np.where(np.isfinite(d), settings.sd_m + settings.sd_per_db * np.where(np.isfinite(d), d, 0.0),
+                    settings.sd_m)
 
 
 def fix_centres(fixes: fusion.Fixes) -> np.ndarray:
@@ -426,6 +440,7 @@ __all__ = [
     "build_database",
     "dissimilarity",
     "fix_centres",
+    "fix_sds",
     "fixes_for_walk",
     "fresh_scans",
     "locate_scans",

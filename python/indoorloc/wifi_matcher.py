@@ -28,8 +28,9 @@ them. :mod:`indoorloc.wifi_fixes` builds the tracker's position fixes on top of 
        d(a, b)   = rms(a, b) + c · u(a, b)
 
    u is the weighted fraction of the APs heard by only one of the two (0: same AP set, 1: no AP
-   in common, d = inf then). Every sum is a matrix product of the query block against the
-   references' columns, so a batch of queries costs a few BLAS calls (no Python loop per pair).
+   in common, d = inf then). Every sum is a sparse product of the query's weights with the
+   references' rows of the query's own APs (:class:`ReferenceIndex`): one pass per query, no
+   Python loop per pair.
 4. **Per-AP reliability** g_i = (σ̄² / σ_i²)^α: σ_i² is the variance of AP i's RSS between
    references of *different* training walks within ``pair_radius_m`` of each other (half the
    mean squared difference; the revisiting noise a query meets), shrunk towards the pooled σ̄²

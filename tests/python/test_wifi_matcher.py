@@ -159,3 +159,11 @@ def test_shared_dissimilarity_refuses_wrong_columns():
     index = wm.ReferenceIndex.build(np.full((3, 4), -60.0))
     with pytest.raises(ValueError, match="queries_dbm"):
         wm.shared_dissimilarity(np.full((1, 5), -60.0), index, 10.0)
+
+
+def test_fix_sd_grows_with_the_best_dissimilarity():
+    s = wfx.FixSettings(sd_m=4.0, sd_per_db=0.2)
+    np.testing.assert_allclose(wfx.fix_sds(np.array([0.0, 10.0, np.inf]), s), [4.0, 6.0, 4.0])
+    np.testing.assert_allclose(wfx.fix_sds(np.array([50.0]), wfx.FixSettings(sd_m=3.0, sd_per_db=0.0)), [3.0])
+    with pytest.raises(ValueError, match="FixSettings.sd_per_db"):
+        wfx.FixSettings(sd_per_db=-0.1).validate()

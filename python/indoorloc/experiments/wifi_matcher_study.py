@@ -173,7 +173,7 @@ QUERY_KEYS = ("query_window_s",)
 INDEX_KEYS = ("ap_weight_power", "strength_scale_db")
 CHEAP_KEYS = ("penalty_db", "k", "temperature_db")
 #: The previous matcher (``wifi_knn`` of ``indoorloc fusion evaluate`` before this study).
-OLD = dict(pooling="fresh", metric="strongest", k=8, temperature_db=2.0, sd_m=4.0)
+OLD = dict(pooling="fresh", metric="strongest", k=8, temperature_db=2.0, sd_m=4.0, sd_per_db=0.0)
 
 
 def _folds(n: int, k: int = 4, seed: int = 0) -> List[np.ndarray]:
@@ -330,28 +330,31 @@ def parse_key(key: str) -> Dict[str, Any]:
 # What the tracker sees, and the component sd
 
 
-def mixture_hpd_coverage(truth: np.ndarray, means: np.ndarray, weights: np.ndarray, sd_m: float,
-                         level: float = 0.95, samples: int = 1000, seed: int = 0) -> np.ndarray:
+def mixture_hpd_coverage(truth: np.ndarray, means: np.ndarray, weights: np.ndarray, sd_m: Any,
+                         level: float = 0.95, samples: int = 500, seed: int = 0) -> np.ndarray:
     """(F,) bool: whether the truth (F, 2) lies in the highest-density region of probability ``level``
-    of each isotropic Gaussian mixture (means (F, k, 2), weights (F, k), sd ``sd_m``), by Monte Carlo
-    (the region's density threshold is the (1 - level) quantile of the density at mixture samples)."""
+    of each isotropic Gaussian mixture (means (F, k, 2), weights (F, k), sd ``sd_m``: a scalar or
+    one per fix (F,)), by Monte Carlo (the region's density threshold is the (1 - level) quantile
+    of the density at ``samples`` mixture samples)."""
     rng = np.random.default_rng(seed)
     f_n, k = weights.shape
     w = weights / weights.sum(axis=1, keepdims=True)
+    sd_all = np.broadcast_to(np.asarray(sd_m, float), (f_n,))
     inside = np.zeros(f_n, bool)
 
-    def density(x, mu, ww):  # x (F, S, 2), mu (F, k, 2) -> (F, S); constant factors dropped
+    def density(x, mu, ww, sd):  # x (F, S, 2), mu (F, k, 2) -> (F, S); factors common to a fix dropped
         d2 = ((x[:, :, None, :] - mu[:, None, :, :]) ** 2).sum(-1)
-        return (ww[:, None, :] * np.exp(-0.5 * d2 / sd_m ** 2)).sum(-1)
+        return (ww[:, None, :] * np.exp(-0.5 * d2 / sd[:, None, None] ** 2)).sum(-1)
 
     for a in range(0, f_n, 200):
         b = min(f_n, a + 200)
-        mu, ww = means[a:b], w[a:b]
+        mu, ww, sd = means[a:b], w[a:b], sd_all[a:b]
         comp = (rng.random((b - a, samples, 1)) > np.cumsum(ww, axis=1)[:, None, :]).sum(-1)
         comp = np.minimum(comp, k - 1)
-        x = np.take_along_axis(mu, comp[..., None].repeat(2, -1), axis=1) + sd_m * rng.standard_normal((b - a, samples, 2))
-        thr = np.quantile(density(x, mu, ww), 1.0 - level, axis=1)
-        inside[a:b] = density(truth[a:b, None, :], mu, ww)[:, 0] >= thr
+        x = (np.take_along_axis(mu, comp[..., None].repeat(2, -1), axis=1)
+             + sd[:, None, None] * rng.standard_normal((b - a, samples, 2)))
+        thr = np.quantile(density(x, mu, ww, sd), 1.0 - level, axis=1)
+        inside[a:b] = density(truth[a:b, None, :], mu, ww, sd)[:, 0] >= thr
     return inside
 
 
@@ -363,8 +366,10 @@ def tracker_view(walks: Sequence[CachedWalk], settings, folds: int = 4, seed: in
 
     from indoorloc import wifi_fixes as wfx
 
-    truth, means, weights, fold_of = [], [], [], []
-    bound, centre_err = [], []
+    from indoorloc import wifi_matcher as wm
+
+    truth, means, weights, fold_of, d_min = [], [], [], [], []
+    bound = []
     for j, test_idx in enumerate(_folds(len(walks), folds, seed)):
         ts = set(test_idx.tolist())
         train = [w for i, w in enumerate(walks) if i not in ts]
@@ -373,26 +378,29 @@ def tracker_view(walks: Sequence[CachedWalk], settings, folds: int = 4, seed: in
         for i in test_idx:
             w = walks[i]
             bound.append(tree.query(w.waypoint_xy_m)[0])
-            fx = wfx.fixes_for_walk(w, db)
-            if len(fx) == 0:
-                continue
-            t = fx.times_s
+            t, rss = wfx.walk_queries(w, db)   # the queries of fixes_for_walk
             wt = w.waypoint_t_s
             ok = (t >= wt[0]) & (t <= wt[-1])
-            tr = np.column_stack([np.interp(t, wt, w.waypoint_xy_m[:, c]) for c in range(2)])
-            truth.append(tr[ok])
-            means.append(fx.means_m[ok])
-            weights.append(fx.weights[ok])
+            if not ok.any():
+                continue
+            best, d, wgt = wm.knn(wfx.dissimilarity(rss[ok], db), settings.k, settings.temperature_db)
+            truth.append(np.column_stack([np.interp(t[ok], wt, w.waypoint_xy_m[:, c]) for c in range(2)]))
+            means.append(db.positions_m[best])
+            weights.append(wgt)
+            d_min.append(d[:, 0])
             fold_of.append(np.full(int(ok.sum()), j))
     truth, means, weights = np.vstack(truth), np.vstack(means), np.vstack(weights)
     w = weights / weights.sum(axis=1, keepdims=True)
     centre = (w[:, :, None] * means).sum(axis=1)
     return {"truth": truth, "means": means, "weights": weights, "fold": np.concatenate(fold_of),
+            "d_min": np.concatenate(d_min),
             "nearest_component_m": np.hypot(*(means - truth[:, None, :]).transpose(2, 0, 1)).min(axis=1),
             "centre_m": np.hypot(*(centre - truth).T), "bound_m": np.concatenate(bound)}
 
 
-SD_GRID = (3.0, 4.0, 5.0, 6.0, 8.0, 10.0, 12.0, 15.0, 20.0, 25.0)
+SD_GRID = (3.0, 4.0, 5.0, 6.0, 8.0, 10.0, 12.0, 15.0, 20.0, 25.0)   #: one σ for every fix [m]
+#: σ = sd_m + sd_per_db x d_min: the grid of (sd_m [m], sd_per_db [m/dB]).
+SD_LINEAR_GRID = tuple((a, b) for a in (1.0, 2.0, 3.0, 4.0, 6.0) for b in (0.1, 0.2, 0.3, 0.4, 0.5))
 
 
 def time_queries(walks: Sequence[CachedWalk], settings, repeats: int = 3) -> Dict[str, float]:
@@ -490,8 +498,27 @@ def run(data_root: Path, floors: Sequence[str], cache_dir: Path, grid: Optional[
         others = [g for g in floors if g != f]
         sd_f = min(SD_GRID, key=lambda sd: abs(rate(others, sd) - 0.9))
         out["sd_calibration"]["lofo"][f] = {"sd_m": sd_f, "held_out_coverage": rate([f], sd_f)}
+    # σ growing with the fix's best dissimilarity: chosen for the most even ~90 % over the floors.
+    lin = {f: {ab: mixture_hpd_coverage(views[f]["truth"], views[f]["means"], views[f]["weights"],
+                                        ab[0] + ab[1] * np.where(np.isfinite(views[f]["d_min"]), views[f]["d_min"], 0.0))
+               for ab in SD_LINEAR_GRID} for f in floors}
+
+    def spread(names, ab):  # mean over the floors of |coverage - 0.9|
+        return float(np.mean([abs(lin[g][ab].mean() - 0.9) for g in names]))
+
+    ab_all = min(SD_LINEAR_GRID, key=lambda ab: spread(floors, ab))
+    out["sd_linear"] = {"grid": [list(ab) for ab in SD_LINEAR_GRID], "chosen": list(ab_all),
+                        "coverage_per_floor": {f: float(lin[f][ab_all].mean()) for f in floors},
+                        "coverage_all_floors": float(np.mean(np.concatenate([lin[f][ab_all] for f in floors]))),
+                        "lofo": {}}
+    for f in floors:
+        others = [g for g in floors if g != f]
+        ab_f = min(SD_LINEAR_GRID, key=lambda ab: spread(others, ab))
+        out["sd_linear"]["lofo"][f] = {"sd_m": ab_f[0], "sd_per_db": ab_f[1], "held_out_coverage": float(lin[f][ab_f].mean())}
+    out["sd_linear"]["lofo_pooled_coverage"] = float(np.mean(np.concatenate(
+        [lin[f][tuple(out["sd_linear"]["lofo"][f][k] for k in ("sd_m", "sd_per_db"))] for f in floors])))
     big = sorted(floors, key=lambda f: -len(data[f]))[:2]
-    out["timing"] = {"floor": "+".join(big), **time_queries([w for f in big for w in data[f]], replace(settings, sd_m=sd_all))}
+    out["timing"] = {"floor": "+".join(big), **time_queries([w for f in big for w in data[f]], settings)}
     out["seconds"] = time.time() - tic
     return out
 
@@ -542,6 +569,13 @@ def markdown(r: Dict[str, Any]) -> str:
         lines.append(f"| {f} | " + " | ".join(f"{sc['coverage_per_floor'][f][str(s)]:.2f}" for s in sc["grid"]) + " |")
     lines += ["", f"Chosen sd (all floors, closest to 0.90): {sc['chosen_sd_m']} m; LOFO: " +
               ", ".join(f"{f} {v['sd_m']} m -> {v['held_out_coverage']:.2f}" for f, v in sc["lofo"].items()), ""]
+    sl = r["sd_linear"]
+    lines += ["σ growing with the fix's best dissimilarity, σ = a + b d_min, (a, b) chosen for the most even "
+              f"~90 % over the floors: a = {sl['chosen'][0]} m, b = {sl['chosen'][1]} m/dB; coverage "
+              + ", ".join(f"{f} {v:.2f}" for f, v in sl["coverage_per_floor"].items())
+              + f", all {sl['coverage_all_floors']:.2f}. LOFO: "
+              + ", ".join(f"{f} ({v['sd_m']}, {v['sd_per_db']}) -> {v['held_out_coverage']:.2f}" for f, v in sl["lofo"].items())
+              + f"; pooled held out {sl['lofo_pooled_coverage']:.2f}.", ""]
     tm = r["timing"]
     lines += [f"Timing ({tm['floor']}, {tm['references']} references, {tm['aps']} APs, {tm['queries']} queries): "
               f"{tm['ms_per_query_batch']:.2f} ms per query in a walk's batch, {tm['ms_per_query_single']:.2f} ms one "
