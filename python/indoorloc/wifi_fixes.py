@@ -1,73 +1,135 @@
-"""WiFi fingerprint fixes for the fusion tracker: each scan of a walk matched against the scans
-of a crowdsourced training set, its best matches turned into a Gaussian-mixture position fix
-(``fusion.Fixes``) with an outlier floor (docs/fusion_real.md, "WiFi as fixes").
+"""WiFi fingerprint fixes for the fusion tracker: each query fingerprint of a walk matched against the
+fingerprints of a crowdsourced training set, its best matches turned into a Gaussian-mixture
+position fix (``fusion.Fixes``) with an outlier floor (docs/fusion_real.md, "WiFi as fixes").
 
-Why scans and not the cell map: on the competition mall the per-cell model of paper 004 and
-Euclidean kNN over every AP with a floor value are 20-30 m off on average
-(docs/fusion_real.md). Two dissimilarities of a query scan a against a training scan b do
-better there (``FixSettings.metric``):
+Fingerprints (``FixSettings.pooling``):
 
+- ``"window"`` (default; :mod:`indoorloc.wifi_matcher`): every distinct measurement at its own
+  last-seen time, whatever its age when reported. References every ``ref_spacing_s`` along each
+  training walk, max-pooled over ``ref_window_s`` centred on that time and placed where the walker
+  was then (``wifi_crowdsource.walk_positions``, PDR between the waypoints). A query per scan of
+  the walk, max-pooled over the ``query_window_s`` before the scan (causal), timed at the mean
+  last-seen time of its measurements.
+- ``"fresh"`` (the previous matcher): one fingerprint per scan from its readings at most
+  ``fresh_age_s`` old, at the scan's measurement epoch (median last-seen time of those readings,
+  ``wifi_crowdsource.scan_epochs``).
+
+Dissimilarities of a query a against a fingerprint b (``FixSettings.metric``):
+
+- ``"shared"`` (default): the RMS RSS difference over the APs both heard plus c times the
+  weighted fraction of APs heard by one only, each AP weighted by its reliability in training
+  and its strength: see :func:`indoorloc.wifi_matcher.shared_dissimilarity`.
 - ``"strongest"``: the RMS difference over the query's n strongest APs, an AP the training scan
   did not hear counting at the floor value v₀:
-  d(a, b) = sqrt(mean_{i ∈ top_n(a)} (a_i - b̃_i)²), b̃_i = b_i or v₀  [dB]. Strong readings are
-  the ones that locate (near APs); weak ones come and go with the body and the crowd.
+  d(a, b) = sqrt(mean_{i ∈ top_n(a)} (a_i - b̃_i)²), b̃_i = b_i or v₀  [dB].
 - ``"union"``: the mean absolute difference over the union of the APs heard, an AP heard in one
   scan only costing c: d(a, b) = (Σ_{i ∈ A∩B} |a_i - b_i| + c |A Δ B|) / |A ∪ B|  [dB].
 
-The k best training scans become the components of the fix, at the positions where they were
-recorded, with weights exp(-(d_j - d_min) / T) and sd σ; the tracker adds the outlier floor ε
-(``TrackerOptions.fix_outlier_probability``). The metric and the tracker's ε and τ_fix are chosen
-by leave-one-floor-out cross-validation (``indoorloc fusion evaluate --select``).
-
-Training scans are placed at their measurement epoch (the median last-seen time of their fresh
-readings, ``wifi_crowdsource.scan_epochs``) by ``wifi_crowdsource.walk_positions`` (PDR between
-the waypoints); the fixes of a walk are timed the same way.
+The k best training fingerprints become the components of the fix, at the positions where they
+were recorded, with weights exp(-(d_j - d_min) / T) and sd σ; the tracker adds the outlier floor ε
+(``TrackerOptions.fix_outlier_probability``). The matcher's settings are chosen by
+leave-one-floor-out cross-validation (``python -m indoorloc.experiments.wifi_matcher_study``); the
+tracker's ε and τ_fix by ``indoorloc fusion evaluate --select``.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Dict, List, Optional, Sequence, Tuple
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
 from indoorloc import fusion
 from indoorloc import pdr_handheld as ph
 from indoorloc import wifi_crowdsource as wc
+from indoorloc import wifi_matcher as wm
 from indoorloc.validate import integer, real_array, real_scalar
 
-METRICS = ("strongest", "union")
+METRICS = ("shared", "strongest", "union")
+POOLINGS = ("window", "fresh")
+ALIGNS = ("end", "centre")
 
 
 @dataclass
 class FixSettings:
-    """Settings of the fingerprint fixes (defaults: leave-one-floor-out choice, docs/fusion_real.md)."""
+    """Settings of the fingerprint fixes.
 
-    fresh_age_s: float = 2.5        #: readings at most this old make a scan's fingerprint [s]
-    min_scans: int = 3              #: keep a BSSID heard in at least this many training scans
-    metric: str = "strongest"       #: "strongest" or "union" (module docstring; LOFO)
+    Defaults: the leave-one-floor-out choice of ``python -m indoorloc.experiments.wifi_matcher_study``
+    over the six floors of the competition site (docs/fusion_real.md, "WiFi as fixes"); how each
+    was chosen is said beside it (LOFO: the point chosen on all six floors; the held-out figures
+    are in docs/fusion_real.md). ``FixSettings(pooling="fresh", metric="strongest", k=8,
+    temperature_db=2.0, sd_m=4.0, sd_per_db=0.0)`` is the previous matcher (fresh scans, strongest 10 APs)."""
+
+    #: "window": fingerprints max-pooled over time windows of distinct measurements at their
+    #: last-seen time (wifi_matcher); "fresh": one fingerprint per scan from its readings at most
+    #: ``fresh_age_s`` old (the previous matcher). "window" was ahead or level on every floor in the quick runs.
+    pooling: str = "window"
+    ref_spacing_s: float = 1.0      #: a reference every this along each training walk [s] (fixed in advance: ~1.2 m of walking)
+    #: Full width of a reference's window, centred on its time [s]. LOFO over {6, 10, 14}: 14 on
+    #: four of six held-out floors; 10 is 0.02 m behind on all floors.
+    ref_window_s: float = 14.0
+    #: A query at scan time t pools the measurements last seen in [t - w, t] [s]. LOFO over
+    #: {12, 16, 24} (after 2-12 in the quick runs): 16 on every held-out floor.
+    query_window_s: float = 16.0
+    #: "end": the query window ends at the scan time and uses only measurements reported by then
+    #: (causal); "centre": [t - w/2, t + w/2], also measurements that later scans report. Fixed
+    #: "end": "centre" was no better in the quick runs and would delay the fixes.
+    query_align: str = "end"
+    fresh_age_s: float = 2.5        #: "fresh" pooling: readings at most this old make a scan's fingerprint [s]
+    min_scans: int = 3              #: keep a BSSID heard in at least this many training fingerprints (fixed in advance)
+    metric: str = "shared"          #: "shared", "strongest" or "union" (wifi_matcher and module docstrings)
+    #: c of "shared": d = weighted RMS over shared APs + c x weighted unshared fraction [dB]. LOFO
+    #: over {80, 160, 320}: 160 on every held-out floor.
+    penalty_db: float = 160.0
+    #: α of the per-AP reliability weights (σ̄²/σ_i²)^α of "shared"; 0 = off. LOFO over {0, 1}: 1 on
+    #: four of six held-out floors (within 0.05 m of 0 on all floors).
+    ap_weight_power: float = 1.0
+    #: β of the strength weights exp((rss + 100)/β) of "shared" [dB]; 0 = off. LOFO over
+    #: {0, 3, 5, 10}: 5 on four of six held-out floors, 10 on F4 and F8; 0 never.
+    strength_scale_db: float = 5.0
+    pair_radius_m: float = 2.0      #: references of two walks this close estimate an AP's noise [m] (fixed in advance)
     strongest_n: int = 10           #: n of "strongest" (fixed in advance: a scan's near APs)
     not_heard_dbm: float = -100.0   #: v₀ of "strongest" (the issue's floor value)
     unshared_cost_db: float = 20.0  #: c of "union": cost of an AP heard in one scan only [dB]
-    k: int = 8                      #: components per fix (best training scans)
-    temperature_db: float = 2.0     #: T of the component weights [dB]
-    sd_m: float = 4.0               #: σ of each component [m]
-    min_aps: int = 3                #: scans with fewer APs known to the database give no fix
+    k: int = 20                     #: components per fix (best references). LOFO over {8, 12, 20, 30}: 20 or 30
+    #: T of the component weights exp(-(d - d_min)/T) [dB]. LOFO over {3, 10, 30}: 3 on five of six.
+    temperature_db: float = 3.0
+    #: σ of each component of a fix [m]: σ = sd_m + sd_per_db x d_min, d_min the fix's best
+    #: dissimilarity [dB] (a poor best match is a wide fix). Calibrated on the six floors so that
+    #: the mixture's 95 % region holds the truth at the fix time for ~90 % of the fixes, evenly
+    #: over the floors: grid a {1, 2, 3, 4, 6} m x b {0.1 ... 0.5} m/dB, (3, 0.3) on four of six
+    #: held-out floors; coverage 0.88-0.97 per floor (one σ of 12 m: 0.71-1.00). sd_per_db = 0
+    #: gives one σ for every fix.
+    sd_m: float = 3.0
+    sd_per_db: float = 0.3          #: [m/dB], see sd_m (calibrated for the "shared" metric)
+    min_aps: int = 3                #: fingerprints with fewer APs known to the database give no fix
 
     def validate(self) -> None:
         """Raises ValueError naming the first invalid field."""
         if self.metric not in METRICS:
             raise ValueError(f"indoorloc: FixSettings.metric must be one of {METRICS}, got {self.metric!r}")
+        if self.query_align not in ALIGNS:
+            raise ValueError(f"indoorloc: FixSettings.query_align must be one of {ALIGNS}, got {self.query_align!r}")
+        if self.pooling not in POOLINGS:
+            raise ValueError(f"indoorloc: FixSettings.pooling must be one of {POOLINGS}, got {self.pooling!r}")
         if not (isinstance(self.not_heard_dbm, (int, float)) and -300 < self.not_heard_dbm < 50):
             raise ValueError(f"indoorloc: FixSettings.not_heard_dbm must be in (-300, 50) dBm, got {self.not_heard_dbm!r}")
-        for name in ("fresh_age_s", "unshared_cost_db", "temperature_db", "sd_m"):
+        for name in ("fresh_age_s", "unshared_cost_db", "temperature_db", "sd_m", "ref_spacing_s",
+                     "query_window_s", "pair_radius_m"):
             v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            if isinstance(v, bool) or not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ValueError(f"indoorloc: FixSettings.{name} must be finite and > 0, got {v!r}")
+        for name in ("ref_window_s", "penalty_db", "ap_weight_power", "strength_scale_db", "sd_per_db"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not (isinstance(v, (int, float)) and math.isfinite(v) and 0 <= v <= 1e4):
+                raise ValueError(f"indoorloc: FixSettings.{name} must be finite and in [0, 1e4], got {v!r}")
+        if 0 < self.strength_scale_db < 1:
+            raise ValueError(f"indoorloc: FixSettings.strength_scale_db must be 0 (off) or >= 1 dB, "
+                             f"got {self.strength_scale_db!r}")
         for name in ("min_scans", "k", "min_aps", "strongest_n"):
             v = getattr(self, name)
-            if not (isinstance(v, (int, np.integer)) and 1 <= v <= 10_000):
+            if isinstance(v, bool) or not (isinstance(v, (int, np.integer)) and 1 <= v <= 10_000):
                 raise ValueError(f"indoorloc: FixSettings.{name} must be an integer in [1, 10000], got {v!r}")
 
 
@@ -99,74 +161,170 @@ def fresh_scans(walk: Any, fresh_age_s: float, bssids: Optional[Sequence[str]] =
 
 @dataclass
 class FingerprintDatabase:
-    """Training scans: fingerprints (N, K) [dBm, NaN = not heard], positions (N, 2) [m], floor
-    number of each scan (N,) and the BSSID of each column."""
+    """Training fingerprints (N, K) [dBm, NaN = not heard] at positions (N, 2) [m], the floor
+    number (N,) and training walk (N,) of each, and the BSSID of each column.
+
+    ``ap_ratio`` (K,): σ̄²/σ_i² of each AP (``wifi_matcher.ap_reliability`` with power 1); the
+    "shared" metric weighs AP i by ``ap_ratio[i] ** settings.ap_weight_power``."""
 
     rss_dbm: np.ndarray
     positions_m: np.ndarray
     bssids: List[str]
     settings: FixSettings
     floors: Optional[np.ndarray] = None
+    walk_index: Optional[np.ndarray] = None
+    ap_ratio: Optional[np.ndarray] = None
 
     def __post_init__(self) -> None:
         if self.floors is None:
             self.floors = np.zeros(self.positions_m.shape[0], dtype=np.int64)
+        if self.walk_index is None:
+            self.walk_index = np.zeros(self.positions_m.shape[0], dtype=np.int64)
+        if self.ap_ratio is None:
+            self.ap_ratio = np.ones(self.rss_dbm.shape[1])
+        self._index: Optional[wm.ReferenceIndex] = None
 
     def with_settings(self, settings: FixSettings) -> "FingerprintDatabase":
-        """The same scans with other fix settings (``min_scans`` and ``fresh_age_s`` are those
-        the database was built with)."""
+        """The same fingerprints with other fix settings. What was fixed at the build stays: the
+        pooling, the reference spacing and window, ``min_scans``, ``pair_radius_m`` and the AP
+        reliabilities (computed when built with the "shared" metric, else all 1). The query
+        window, the metric and its constants, k, T and σ are the new ones."""
         settings.validate()
-        return FingerprintDatabase(self.rss_dbm, self.positions_m, self.bssids, settings, self.floors)
+        return FingerprintDatabase(self.rss_dbm, self.positions_m, self.bssids, settings, self.floors,
+                                   self.walk_index, self.ap_ratio)
 
     @property
     def n_scans(self) -> int:
+        """Number of fingerprints N (scans for "fresh" pooling, path references for "window")."""
         return int(self.positions_m.shape[0])
+
+    @property
+    def index(self) -> wm.ReferenceIndex:
+        """The fingerprints prepared for the "shared" metric (built once)."""
+        if self._index is None:
+            s = self.settings
+            g = self.ap_ratio ** s.ap_weight_power if s.ap_weight_power else None
+            self._index = wm.ReferenceIndex.build(self.rss_dbm, g, s.strength_scale_db)
+        return self._index
+
+
+def _walk_fingerprints(walk: Any, s: FixSettings, positions_at: Callable[[np.ndarray], Tuple[np.ndarray, np.ndarray]]
+                       ) -> Optional[Tuple[np.ndarray, np.ndarray, List[str]]]:
+    """The training fingerprints of one walk: (rss (n, V), xy (n, 2), the walk's BSSIDs), or None."""
+    if s.pooling == "fresh":
+        t, rss, names = fresh_scans(walk, s.fresh_age_s)
+        if t.size == 0:
+            return None
+    else:
+        meas = wm.walk_measurements(walk)
+        names = list(meas.bssids)
+        wt = np.asarray(walk.waypoint_t_s, float)
+        if meas.n == 0 or wt.size == 0:
+            return None
+        # Reference times along the surveyed part of the walk (positions_at drops what it cannot place).
+        t = np.arange(wt[0], wt[-1] + 1e-9, s.ref_spacing_s)
+        rss, _, n_used = wm.pool_windows(meas.t_s, meas.bssid_index, meas.rssi_dbm, len(names), t,
+                                         s.ref_window_s / 2, s.ref_window_s / 2)
+        t, rss = t[n_used > 0], rss[n_used > 0]
+        if t.size == 0:
+            return None
+    xy, valid = positions_at(t)
+    if not np.any(valid):
+        return None
+    return rss[valid], xy[valid], names
 
 
 def build_database(train_walks: Sequence[Any], settings: Optional[FixSettings] = None,
                    steps: Optional[Sequence[ph.HandheldSteps]] = None,
                    map_settings: Optional[wc.CrowdMapSettings] = None,
-                   floors: Optional[Sequence[int]] = None) -> FingerprintDatabase:
-    """Every fresh scan of the training walks, placed at its epoch by PDR between waypoints
-    (``wifi_crowdsource.walk_positions``); BSSIDs heard in fewer than ``min_scans`` scans dropped.
-    ``floors``: the floor number of each walk (default 0), for fixes over several floors.
-    Raises ValueError when no scan can be placed."""
+                   floors: Optional[Sequence[int]] = None,
+                   positions_at: Optional[Sequence[Callable[[np.ndarray], Tuple[np.ndarray, np.ndarray]]]] = None
+                   ) -> FingerprintDatabase:
+    """The training fingerprints of the walks, placed by PDR between waypoints
+    (``wifi_crowdsource.walk_positions``); BSSIDs heard in fewer than ``min_scans`` fingerprints
+    dropped.
+
+    ``settings.pooling == "window"``: one fingerprint every ``ref_spacing_s`` between the first
+    and last waypoint of each walk, max-pooled over the distinct measurements last seen within
+    ``ref_window_s / 2`` of it (``wifi_matcher``); "fresh": every scan's fresh readings at the
+    scan's epoch. ``floors``: the floor number of each walk (default 0), for fixes over several
+    floors. ``positions_at``: per walk, a function t (Q,) [s] -> (xy (Q, 2), valid (Q,)) to use
+    instead of ``walk_positions`` (e.g. positions cached by a study). Raises ValueError when no
+    fingerprint can be placed."""
     s = settings or FixSettings()
     s.validate()
     if floors is not None and len(floors) != len(train_walks):
         raise ValueError(f"indoorloc: argument 'floors': expected {len(train_walks)} floor numbers (one per walk), "
                          f"got {len(floors)}")
+    if positions_at is not None and len(positions_at) != len(train_walks):
+        raise ValueError(f"indoorloc: argument 'positions_at': expected {len(train_walks)} functions (one per walk), "
+                         f"got {len(positions_at)}")
     per_walk = []
     for i, walk in enumerate(train_walks):
-        t, rss, names = fresh_scans(walk, s.fresh_age_s)
-        if t.size == 0:
-            continue
-        pos = wc.walk_positions(walk, t, map_settings, None if steps is None else steps[i])
-        if pos.valid.any():
+        if positions_at is not None:
+            where = positions_at[i]
+        else:
+            def where(t, walk=walk, i=i):
+                pos = wc.walk_positions(walk, t, map_settings, None if steps is None else steps[i])
+                return pos.xy_m, pos.valid
+        got = _walk_fingerprints(walk, s, where)
+        if got is not None:
             fl = 0 if floors is None else int(floors[i])
-            per_walk.append((rss[pos.valid], pos.xy_m[pos.valid], names, np.full(int(pos.valid.sum()), fl)))
+            rss, xy, names = got
+            per_walk.append((rss, xy, names, np.full(xy.shape[0], fl), np.full(xy.shape[0], i)))
     if not per_walk:
-        raise ValueError("indoorloc: argument 'train_walks': no WiFi scan could be placed (no fresh readings "
+        raise ValueError("indoorloc: argument 'train_walks': no WiFi fingerprint could be placed (no readings "
                          "between waypoints)")
     counts: Dict[str, int] = {}
-    for rss, _, names, _ in per_walk:
+    for rss, _, names, _, _ in per_walk:
         heard = np.isfinite(rss).sum(axis=0)
         for name, c in zip(names, heard):
             if c:
                 counts[name] = counts.get(name, 0) + int(c)
     vocab = sorted(b for b, c in counts.items() if c >= s.min_scans)
     col = {b: i for i, b in enumerate(vocab)}
-    blocks, positions, scan_floors = [], [], []
-    for rss, xy, names, fl in per_walk:
+    blocks = []
+    for rss, xy, names, _, _ in per_walk:
         out = np.full((rss.shape[0], len(vocab)), np.nan)
         src = np.array([i for i, b in enumerate(names) if b in col], dtype=np.int64)
         dst = np.array([col[names[i]] for i in src], dtype=np.int64)
         if src.size:
             out[:, dst] = rss[:, src]
         blocks.append(out)
-        positions.append(xy)
-        scan_floors.append(fl)
-    return FingerprintDatabase(np.vstack(blocks), np.vstack(positions), vocab, s, np.concatenate(scan_floors))
+    rss_all = np.vstack(blocks)
+    xy_all = np.vstack([p[1] for p in per_walk])
+    walk_idx = np.concatenate([p[4] for p in per_walk])
+    ratio = None
+    if s.metric == "shared":  # also when α = 0, so that with_settings can turn the weights on
+        ratio = wm.ap_reliability(rss_all, xy_all, walk_idx, 1.0, s.pair_radius_m)
+    return FingerprintDatabase(rss_all, xy_all, vocab, s, np.concatenate([p[3] for p in per_walk]), walk_idx, ratio)
+
+
+def walk_queries(walk: Any, database: FingerprintDatabase) -> Tuple[np.ndarray, np.ndarray]:
+    """The query fingerprints of a walk in the database's columns: ``(t_s (Q,), rss_dbm (Q, K))``,
+    one per scan, sorted by time, with at least ``min_aps`` known APs.
+
+    "window" pooling: the query of the scan at time t max-pools the distinct measurements last
+    seen in [t - query_window_s, t] and reported by scans up to t (causal); its time is the mean
+    last-seen time of those measurements (the time the fingerprint describes). "fresh": the
+    scan's readings at most ``fresh_age_s`` old, timed at their median last-seen time."""
+    s = database.settings
+    if s.pooling == "fresh":
+        t, rss, _ = fresh_scans(walk, s.fresh_age_s, database.bssids)
+    else:
+        meas = wm.walk_measurements(walk)
+        cols = meas.columns({b: i for i, b in enumerate(database.bssids)})
+        scan_t = np.unique(np.asarray(walk.wifi.scan_times_s, float))
+        if s.query_align == "end":
+            rss, t, _ = wm.pool_windows(meas.t_s, cols, meas.rssi_dbm, len(database.bssids), scan_t,
+                                        s.query_window_s, 0.0, meas.reported_s)
+        else:
+            rss, t, _ = wm.pool_windows(meas.t_s, cols, meas.rssi_dbm, len(database.bssids), scan_t,
+                                        s.query_window_s / 2, s.query_window_s / 2)
+    ok = np.isfinite(rss).sum(axis=1) >= s.min_aps
+    t, rss = t[ok], rss[ok]
+    order = np.argsort(t, kind="stable")
+    return t[order], rss[order]
 
 
 def _rss_pair(queries_dbm: Any, database_dbm: Any) -> Tuple[np.ndarray, np.ndarray]:
@@ -226,32 +384,35 @@ def strongest_ap_dissimilarity(queries_dbm: np.ndarray, database_dbm: np.ndarray
 
 
 def dissimilarity(queries_dbm: np.ndarray, database: "FingerprintDatabase") -> np.ndarray:
-    """The database's metric (``settings.metric``) of every query (Q, K) to every scan: (Q, N) [dB]."""
+    """The database's metric (``settings.metric``) of every query (Q, K) to every fingerprint: (Q, N) [dB]."""
     s = database.settings
+    if s.metric == "shared":
+        return wm.shared_dissimilarity(queries_dbm, database.index, s.penalty_db)
     if s.metric == "strongest":
         return strongest_ap_dissimilarity(queries_dbm, database.rss_dbm, s.strongest_n, s.not_heard_dbm)
     return scan_dissimilarity(queries_dbm, database.rss_dbm, s.unshared_cost_db)
 
 
 def fixes_for_walk(walk: Any, database: FingerprintDatabase, with_floors: bool = True) -> fusion.Fixes:
-    """One fix per fresh scan of the walk with at least ``min_aps`` APs of the database: the
-    ``k`` most similar training scans as components (module docstring), each on the floor of
-    its training scan (``with_floors``; else on any floor)."""
+    """One fix per query fingerprint of the walk (``walk_queries``): the ``k`` most similar
+    training fingerprints as components (module docstring), each on the floor of its training
+    walk (``with_floors``; else on any floor)."""
     s = database.settings
-    t, rss, _ = fresh_scans(walk, s.fresh_age_s, database.bssids)
-    ok = np.isfinite(rss).sum(axis=1) >= s.min_aps
-    t, rss = t[ok], rss[ok]
+    t, rss = walk_queries(walk, database)
     k = min(s.k, database.n_scans)
     if t.size == 0:
         return fusion.Fixes.from_arrays(np.zeros(0), np.zeros((0, k, 2)), np.zeros((0, k)), np.zeros((0, k)))
-    d = dissimilarity(rss, database)
-    best = np.argsort(d, axis=1, kind="stable")[:, :k]
-    db = np.take_along_axis(d, best, axis=1)
-    weights = np.exp(-(db - db[:, :1]) / s.temperature_db)
-    weights[~np.isfinite(db)] = 0.0
-    order = np.argsort(t, kind="stable")
-    floors = database.floors[best[order]] if with_floors else None
-    return fusion.Fixes.from_arrays(t[order], database.positions_m[best[order]], s.sd_m, weights[order], floors)
+    best, d_best, weights = wm.knn(dissimilarity(rss, database), k, s.temperature_db)
+    floors = database.floors[best] if with_floors else None
+    return fusion.Fixes.from_arrays(t, database.positions_m[best], fix_sds(d_best[:, 0], s), weights, floors)
+
+
+def fix_sds(d_min: np.ndarray, settings: FixSettings) -> np.ndarray:
+    """σ (F,) [m] of the components of fixes whose best dissimilarity is ``d_min`` (F,) [dB]:
+    ``sd_m + sd_per_db * d_min`` (``sd_m`` where d_min is not finite)."""
+    d = np.asarray(d_min, float)
+    return np.where(np.isfinite(d), settings.sd_m + settings.sd_per_db * np.where(np.isfinite(d), d, 0.0),
+                    settings.sd_m)
 
 
 def fix_centres(fixes: fusion.Fixes) -> np.ndarray:
@@ -262,15 +423,10 @@ def fix_centres(fixes: fusion.Fixes) -> np.ndarray:
 
 
 def locate_scans(rss_dbm: np.ndarray, database: FingerprintDatabase) -> np.ndarray:
-    """WiFi-only positions (Q, 2) [m] of scans (Q, K in the database's columns): the
-    weight-averaged position of each scan's fix components (the kNN baseline on this metric)."""
+    """WiFi-only positions (Q, 2) [m] of fingerprints (Q, K in the database's columns, NaN = not
+    heard): the weight-averaged position of each one's fix components (the kNN estimate)."""
     s = database.settings
-    d = dissimilarity(rss_dbm, database)
-    k = min(s.k, database.n_scans)
-    best = np.argsort(d, axis=1, kind="stable")[:, :k]
-    db = np.take_along_axis(d, best, axis=1)
-    w = np.exp(-(db - db[:, :1]) / s.temperature_db)
-    w = np.where(np.isfinite(db), w, 0.0)
+    best, db, w = wm.knn(dissimilarity(rss_dbm, database), s.k, s.temperature_db)
     w_sum = w.sum(axis=1, keepdims=True)
     pos = (w[:, :, None] * database.positions_m[best]).sum(axis=1) / np.where(w_sum > 0, w_sum, 1.0)
     return np.where(w_sum > 0, pos, np.nan)
@@ -280,12 +436,15 @@ __all__ = [
     "FingerprintDatabase",
     "FixSettings",
     "METRICS",
+    "POOLINGS",
     "build_database",
     "dissimilarity",
     "fix_centres",
+    "fix_sds",
     "fixes_for_walk",
     "fresh_scans",
     "locate_scans",
     "scan_dissimilarity",
     "strongest_ap_dissimilarity",
+    "walk_queries",
 ]

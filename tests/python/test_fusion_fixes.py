@@ -112,7 +112,7 @@ def test_strongest_ap_dissimilarity_by_hand():
     np.testing.assert_allclose(d, [[np.sqrt(2.0), np.sqrt((60.0 ** 2 + 10.0 ** 2) / 2)]])
     assert np.isinf(wfx.strongest_ap_dissimilarity(np.full((1, 4), nan), x, 2, -100.0)).all()
     db = wfx.FingerprintDatabase(x, np.array([[0.0, 0.0], [10.0, 0.0]]), ["a", "b", "c", "d"],
-                                 wfx.FixSettings(strongest_n=2, k=1))
+                                 wfx.FixSettings(metric="strongest", strongest_n=2, k=1))
     np.testing.assert_allclose(wfx.locate_scans(q, db), [[0.0, 0.0]])
     with pytest.raises(ValueError, match="FixSettings.metric"):
         wfx.FixSettings(metric="cosine").validate()

@@ -183,7 +183,8 @@ def test_crowd_map_and_wifi_fixes_run_and_are_accurate(site):
         fixes = wfx.fixes_for_walk(w, db)
         assert len(fixes) >= 0.8 * w.wifi.n_scans
         assert np.all(fixes.floors[fixes.weights > 0] == 1)
-        t, rss, _ = wfx.fresh_scans(w, db.settings.fresh_age_s, db.bssids)
+        t, rss = wfx.walk_queries(w, db)   # the query fingerprints the fixes are made of
+        np.testing.assert_allclose(t, fixes.times_s)
         est = wfx.locate_scans(rss, db)
         at = np.column_stack([np.interp(t, w.waypoint_t_s, w.waypoint_xy_m[:, i]) for i in range(2)])
         inside = (t >= w.waypoint_t_s[0]) & (t <= w.waypoint_t_s[-1])
