@@ -108,7 +108,10 @@ class RealSettings:
     #: The known-start filter's own choice (LOFO on ``fusion_known_start`` over the same grid,
     #: the same point in every fold): with the start known, WiFi fixes only need to stop drift
     #: and are weighted less.
-    known_start_fix_metric: str = "union"
+    #: "shared": the default fixes (the old choice "union" was made for single-scan fixes; with
+    #: the pooled windows of wifi_matcher there is one fix source, weighted by the known start's
+    #: own τ and ε below).
+    known_start_fix_metric: str = "shared"
     known_start_fix_tempering: float = 0.3
     known_start_fix_outlier_probability: float = 0.3
     floor_identification: bool = True   #: also run the default with the floor not given
