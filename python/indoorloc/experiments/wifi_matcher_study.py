@@ -32,6 +32,8 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
+from indoorloc.io.ilc2020 import IlcWifi
+
 GRID_STEP_S = 0.1   #: time step of the cached walker positions [s]
 
 
@@ -40,49 +42,9 @@ GRID_STEP_S = 0.1   #: time step of the cached walker positions [s]
 
 
 @dataclass
-class CachedWifi:
-    """The arrays of ``IlcWifi`` that the matcher reads."""
-
-    scan_time_s: np.ndarray
-    bssid_index: np.ndarray
-    rssi_dbm: np.ndarray
-    last_seen_s: np.ndarray
-    scan_starts: np.ndarray
-    bssids: List[str]
-
-    @property
-    def n_readings(self) -> int:
-        return int(self.scan_time_s.shape[0])
-
-    @property
-    def n_scans(self) -> int:
-        return int(self.scan_starts.shape[0])
-
-    @property
-    def scan_times_s(self) -> np.ndarray:
-        return self.scan_time_s[self.scan_starts]
-
-    @property
-    def scan_index(self) -> np.ndarray:
-        counts = np.diff(np.append(self.scan_starts, self.n_readings))
-        return np.repeat(np.arange(self.n_scans, dtype=np.int64), counts)
-
-    @property
-    def age_s(self) -> np.ndarray:
-        return self.scan_time_s - self.last_seen_s
-
-    def new_measurement_mask(self) -> np.ndarray:
-        mask = np.zeros(self.n_readings, dtype=bool)
-        if self.n_readings:
-            key = np.stack([self.bssid_index, np.round(self.last_seen_s * 1000.0).astype(np.int64)], axis=1)
-            mask[np.unique(key, axis=0, return_index=True)[1]] = True
-        return mask
-
-
-@dataclass
 class CachedWalk:
     walk_id: str
-    wifi: CachedWifi
+    wifi: IlcWifi
     waypoint_t_s: np.ndarray
     waypoint_xy_m: np.ndarray
     grid_t_s: np.ndarray      #: (G,) positions grid [s]
@@ -139,8 +101,12 @@ def cache_floor(root: Path, name: str, cache_dir: Path, log=print) -> Tuple[List
             skipped.append(wid)
             continue
         z = np.load(f)
-        wf = CachedWifi(z["scan_time_s"], z["bssid_index"].astype(np.int64), z["rssi_dbm"], z["last_seen_s"],
-                        z["scan_starts"].astype(np.int64), [str(b) for b in z["bssids"]])
+        bssids = [str(b) for b in z["bssids"]]
+        # The loader's own class on the cached arrays (frequency and SSIDs are not cached: no
+        # matcher reads them).
+        wf = IlcWifi(z["scan_time_s"], z["bssid_index"].astype(np.int64), z["rssi_dbm"],
+                     np.full(z["rssi_dbm"].shape, np.nan), z["last_seen_s"], bssids, [""] * len(bssids),
+                     z["scan_starts"].astype(np.int64))
         out.append(CachedWalk(wid, wf, z["waypoint_t_s"], z["waypoint_xy_m"], z["grid_t_s"], z["grid_xy_m"]))
     skipped = sorted(set(skipped))
     log(f"{name}: {len(out)} walks, {len(skipped)} skipped by the loader")
