@@ -114,6 +114,10 @@ class RealSettings:
     known_start_fix_metric: str = "shared"
     known_start_fix_tempering: float = 0.3
     known_start_fix_outlier_probability: float = 0.3
+    #: The grid engine's known start: its own wall penalty and tempering mode (LOFO on
+    #: fusion_known_start, like its τ and ε).
+    known_start_wall_log_penalty: float = -3.0
+    known_start_fix_tempering_by_variance: bool = False
     floor_identification: bool = True   #: also run the default with the floor not given
     threads: int = 2                    #: walks tracked in parallel (results do not depend on it)
     #: Engine of the fusion_* methods: "grid" (exact filter and smoother on floor cells,
@@ -467,15 +471,18 @@ def _score_walk_grid(score: WalkScore, put, pdr_steps, fixes, known_fixes, known
         r = run("fusion_unknown_start", "fusion_smoother", tracker, None, fixes)
         score.offset_error_rad["fusion_smoother"] = _wrap(float(r["walk_heading_offset_rad"]) - residual)
         score.smoothed_track_m = np.asarray(r["smoothed_m"])
+    # The known start's own choice of τ, ε, walls and tempering mode (LOFO on its own error).
+    known_tracker = _grid_tracker(fl.plan, base.replace(
+        fix_tempering=settings.known_start_fix_tempering,
+        fix_outlier_probability=settings.known_start_fix_outlier_probability,
+        wall_log_penalty=settings.known_start_wall_log_penalty,
+        fix_tempering_by_variance=settings.known_start_fix_tempering_by_variance), fl.name)
     if "fusion_known_start" in want:
-        known_tracker = _grid_tracker(fl.plan, base.replace(
-            fix_tempering=settings.known_start_fix_tempering,
-            fix_outlier_probability=settings.known_start_fix_outlier_probability), fl.name)
         run("fusion_known_start", None, known_tracker, known, known_fixes, smooth=False)
     if "fusion_no_walls" in want:
         run(None, "fusion_no_walls", _grid_tracker(fl.outline_plan, base, fl.name + "/outline"), None, fixes)
     if "fusion_no_wifi" in want:
-        run(None, "fusion_no_wifi", tracker, known, None)
+        run(None, "fusion_no_wifi", known_tracker, known, None)
     if "fusion_no_heading_offset" in want:
         run(None, "fusion_no_heading_offset", _grid_tracker(fl.plan, base.replace(heading_offset_sd_rad=0.0), fl.name),
             None, fixes)
@@ -786,7 +793,9 @@ SELECT_OBJECTIVE = "fusion_smoother"
 _KNOWN_START_FIELDS = {"fixes.metric": "known_start_fix_metric", "fix_tempering": "known_start_fix_tempering",
                        "fix_outlier_probability": "known_start_fix_outlier_probability",
                        "grid.fix_tempering": "known_start_fix_tempering",
-                       "grid.fix_outlier_probability": "known_start_fix_outlier_probability"}
+                       "grid.fix_outlier_probability": "known_start_fix_outlier_probability",
+                       "grid.wall_log_penalty": "known_start_wall_log_penalty",
+                       "grid.fix_tempering_by_variance": "known_start_fix_tempering_by_variance"}
 
 
 def _with(settings: RealSettings, key: str, value: Any) -> RealSettings:
