@@ -83,7 +83,7 @@ def test_smoother_is_honest_and_learns_the_offset():
 
 def test_options_protocol_reads_defaults_from_cpp():
     o = fusion.GridTrackerOptions()
-    assert o.cell_size_m == 1.0 and o.wall_log_penalty == -2.0  # the C++ struct's defaults
+    assert o.cell_size_m == 1.0 and o.wall_log_penalty == -1.0 and o.fix_tempering == 1.0  # the C++ defaults
     p = o.replace(cell_size_m=1.5)
     assert p.cell_size_m == 1.5 and o.cell_size_m == 1.0
     assert pickle.loads(pickle.dumps(p)) == p and p != o

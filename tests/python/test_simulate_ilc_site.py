@@ -204,7 +204,7 @@ def test_fusion_evaluate_end_to_end(site):
     assert set(result["methods"]) == expected
     n_wp = sum(floor.walk(i).n_waypoints for i in range(floor.n_walks))
     for name, stats in result["methods"].items():
-        assert set(stats) == {"mean_m", "median_m", "p90_m", "n_waypoints"}
+        assert {"mean_m", "median_m", "p90_m", "n_waypoints"} <= set(stats)  # issue 15's keys (more beside)
         assert stats["n_waypoints"] == n_wp, name
         assert all(math.isfinite(stats[k]) for k in ("mean_m", "median_m", "p90_m")), name
     assert len(result["waypoints"]) == n_wp * len(expected)

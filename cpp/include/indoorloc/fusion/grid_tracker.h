@@ -49,6 +49,11 @@
 
 namespace indoorloc::fusion {
 
+// Defaults of λ, ε, τ and the tempering mode: the leave-one-floor-out choice on the six floors of
+// the competition mall with the pooled shared-AP WiFi fixes (docs/fusion_real.md, "Settings by
+// leave-one-floor-out"): τ = 1 (no tempering) and ε = 0.1 were chosen for every held-out floor,
+// λ = -1 for five of six. The cell size (1 m), the offset bins (9 over ±2.5 sd) and the process
+// noise were fixed in advance (a cell well below the fixes' spread and the waypoints' 5 m spacing).
 struct GridTrackerOptions {
   /// Side of the grid's square cells [m].
   double cell_size_m = 1.0;
@@ -66,9 +71,9 @@ struct GridTrackerOptions {
   /// σ_p: isotropic process noise per step [m] (added to the step's own covariance).
   double position_noise_m = 0.1;
   /// λ: log-weight per step of a cell outside walkable space; -inf: hard walls.
-  double wall_log_penalty = -2.0;
+  double wall_log_penalty = -1.0;
   /// ε and τ of the position fixes (position_fix.h).
-  FixLikelihoodOptions fix;
+  FixLikelihoodOptions fix{/*outlier_probability=*/0.1, /*tempering=*/1.0};
   /// How τ weakens a fix: false, the whole likelihood to the power τ (position_fix.h, as the
   /// particle tracker); true, the components' variances divided by τ with the outlier floor kept
   /// at ε / A (a tempered Gaussian is the Gaussian with variance σ² / τ), so that one fix still
