@@ -472,6 +472,8 @@ def _score_walk_grid(score: WalkScore, put, pdr_steps, fixes, known_fixes, known
     if want & {"fusion_unknown_start", "fusion_smoother"} or settings.floor_identification:
         r = run("fusion_unknown_start", "fusion_smoother", tracker, None, fixes)
         score.offset_error_rad["fusion_smoother"] = _wrap(float(r["walk_heading_offset_rad"]) - residual)
+        # The offset prior's own error (its centre, 0: the training yaw offset), for comparison.
+        score.offset_error_rad["fusion_no_heading_offset"] = _wrap(0.0 - residual)
         score.smoothed_track_m = np.asarray(r["smoothed_m"])
     # The known start's own choice of τ, ε, walls and tempering mode (LOFO on its own error).
     known_tracker = _grid_tracker(fl.plan, base.replace(
@@ -755,11 +757,18 @@ def walk_snapshot(data_root: Optional[Path], floor: str, walk_index: int = 0,
     pdr_steps = fusion.Steps.from_polar(steps.t_s, steps.length_m, steps.heading_rad + models.cal.yaw_offset_rad,
                                         settings.step_length_sd_fraction * steps.length_m, settings.step_heading_sd_rad)
     spread = max(models.cal.yaw_offset_spread_rad, 1e-3)
-    options = settings.tracker_options(unknown_start_heading_sd_rad=spread, start_heading_offset_sd_rad=spread)
-    result = fusion.track(pdr_steps, plan=fl.plan, options=options, fixes=fixes,
-                          smoother=fusion.SmootherOptions(num_trajectories=settings.smoother_trajectories,
-                                                          max_particles=settings.smoother_max_particles,
-                                                          seed=settings.seed))
+    if settings.engine == "grid":  # the default's engine; a grid has no trajectories to draw
+        result = dict(fusion.track_grid(_grid_tracker(fl.plan, _grid_options(settings, spread), fl.name), pdr_steps,
+                                        fixes=fixes))
+        if settings.point_estimate == "median":
+            result["smoothed_m"], result["mean_m"] = result["smoothed_median_m"], result["median_m"]
+        result["smoothed_trajectories_m"] = np.zeros((0, 2))
+    else:
+        options = settings.tracker_options(unknown_start_heading_sd_rad=spread, start_heading_offset_sd_rad=spread)
+        result = fusion.track(pdr_steps, plan=fl.plan, options=options, fixes=fixes,
+                              smoother=fusion.SmootherOptions(num_trajectories=settings.smoother_trajectories,
+                                                              max_particles=settings.smoother_max_particles,
+                                                              seed=settings.seed))
     t_pdr = np.r_[wt[0], steps.t_s]
     pdr = ph.pdr_track(steps, wxy[0], t_pdr, yaw_offset_rad=models.cal.yaw_offset_rad)
     info = read_ilc_floor(root / floor)
