@@ -10,6 +10,8 @@
 
 #include <gtest/gtest.h>
 
+#include "expect_invalid.h"
+
 #include "indoorloc/core/random.h"
 
 namespace indoorloc::fusion {
@@ -42,18 +44,6 @@ FloorGeometry SquareWithHole() {
   return g;
 }
 
-// Expects `fn` to throw std::invalid_argument whose message contains every string of `parts`.
-template <typename Fn>
-void ExpectInvalid(Fn fn, std::initializer_list<std::string> parts) {
-  try {
-    fn();
-    ADD_FAILURE() << "no exception";
-  } catch (const std::invalid_argument& e) {
-    for (const std::string& p : parts) {
-      EXPECT_NE(std::string(e.what()).find(p), std::string::npos) << e.what() << " lacks " << p;
-    }
-  }
-}
 
 // ---- brute-force references ---------------------------------------------------------------
 
