@@ -66,7 +66,7 @@ def test_forward_filter_equals_the_numpy_reference():
 def test_smoother_is_honest_and_learns_the_offset():
     plan = _hall()
     tracker = fusion.GridTracker(plan, fusion.GridTrackerOptions(heading_offset_bins=11, heading_offset_sd_rad=0.15,
-                                                                fix_tempering_by_variance=True))
+                                                                fix_tempering_by_variance=True, spatial_median=True))
     steps, fixes, truth = _walk(1)
     r = fusion.track_grid(tracker, steps, fixes=fixes)
     err = np.hypot(*(r["smoothed_m"] - truth).T)

@@ -560,7 +560,6 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
   // Memory: fix factors (shared) and per thread the live grids and the smoother's checkpoints.
   const int threads = std::min(ResolveThreadCount(o.num_threads), std::max(1, static_cast<int>(layers.size())));
   const int m_run = m_steps - k0;
-  const int segment = std::max(1, static_cast<int>(std::ceil(std::sqrt(std::max(1, m_run)))));
   double max_cells = 0, fix_cells = 0, fix_steps = 0;
   for (int k = 0; k < m_steps; ++k) fix_steps += fixes_at[k].empty() ? 0 : 1;
   for (int f = 0; f < n_floors; ++f) {
@@ -568,8 +567,14 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
     max_cells = std::max(max_cells, static_cast<double>(im.grids[f].size()));
     fix_cells += fix_steps * static_cast<double>(im.grids[f].size());
   }
-  // Per thread: alpha, beta, gamma, scratch, the layer's fix factors, the checkpoints and a segment.
-  const double per_thread = max_cells * 4.0 * (4.0 + fix_steps + (smooth ? (m_run / segment + 1 + segment) : 0));
+  // The smoother keeps every forward grid of a layer while that fits in 256 MB per thread (a walk
+  // of minutes on a mall floor), else about sqrt(M) checkpoints and recomputes each segment once.
+  const bool store_all = smooth && static_cast<double>(m_run) * max_cells * 4.0 <= 256e6;
+  const int segment = store_all ? std::max(1, m_run)
+                                : std::max(1, static_cast<int>(std::ceil(std::sqrt(std::max(1, m_run)))));
+  // Per thread: alpha, beta, scratch, the layer's fix factors, the checkpoints and a segment.
+  const double per_thread =
+      max_cells * 4.0 * (4.0 + fix_steps + (smooth ? (store_all ? m_run : m_run / segment + 1 + segment) : 0));
   // Spatial medians: per layer and step the block summaries (mass, centroid).
   const int q = std::max(1, static_cast<int>(std::lround(o.median_block_m / c)));
   double max_blocks = 0;
@@ -713,15 +718,18 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
     };
 
     std::vector<std::vector<float>> checkpoints;  // alpha before steps k0, k0 + segment, ...
+    std::vector<std::vector<float>> stored;       // store_all: alpha after every step
     for (int k = k0; k < m_steps; ++k) {
-      if (smooth && (k - k0) % segment == 0) checkpoints.push_back(alpha);
+      if (smooth && !store_all && (k - k0) % segment == 0) checkpoints.push_back(alpha);
       if (!forward(k, true)) {
         dead[li] = 1;
         return;
       }
       filtered[li][k] = estimate(alpha, nullptr, k);
       filtered[li][k].log_evidence = log_z;
+      if (store_all) stored.push_back(alpha);
     }
+    if (store_all) checkpoints.emplace_back();  // one segment, nothing to recompute
     if (!smooth) return;
 
     // Backward: per segment (last first) recompute alpha from its checkpoint, then
@@ -731,11 +739,15 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
     const int n_seg = static_cast<int>(checkpoints.size());
     for (int sidx = n_seg - 1; sidx >= 0; --sidx) {
       const int k_begin = k0 + sidx * segment, k_end = std::min(m_steps, k_begin + segment);
-      alpha = checkpoints[sidx];
-      seg_alpha.clear();
-      for (int k = k_begin; k < k_end; ++k) {
-        forward(k, false);
-        seg_alpha.push_back(alpha);
+      if (store_all) {
+        seg_alpha.swap(stored);
+      } else {
+        alpha = checkpoints[sidx];
+        seg_alpha.clear();
+        for (int k = k_begin; k < k_end; ++k) {
+          forward(k, false);
+          seg_alpha.push_back(alpha);
+        }
       }
       for (int k = k_end - 1; k >= k_begin; --k) {
         smoothed[li][k] = estimate(seg_alpha[k - k_begin], &beta, k);

@@ -131,6 +131,8 @@ class RealSettings:
     #: Point estimate of the grid engine's unknown-start methods: "mean" or "median" (spatial
     #: median) of the posterior (LOFO).
     point_estimate: str = "mean"
+    #: Also score the other point estimate (hidden keys): set by --select, which chooses it.
+    score_both_point_estimates: bool = False
     #: Cells [m] and offset bins of the floor-identification pass (all floors, filter only).
     floor_identification_cell_m: float = 2.0
     floor_identification_offset_bins: int = 3
@@ -425,7 +427,8 @@ def _grid_tracker(plan, options, key: str):
 
 
 def _grid_options(settings: RealSettings, spread_rad: float, **changes):
-    return settings.grid_options.replace(heading_offset_sd_rad=spread_rad, **changes)
+    median = settings.point_estimate == "median" or settings.score_both_point_estimates
+    return settings.grid_options.replace(heading_offset_sd_rad=spread_rad, spatial_median=median, **changes)
 
 
 def _identification_options(settings: RealSettings, spread_rad: float):
@@ -855,7 +858,7 @@ def select_settings(data_root: Optional[Path] = None, floors: Sequence[str] = FL
     {floor: {"chosen", "stats"}}, "lofo_overall": stats, "best_all", "known_start"}``."""
     base = base or RealSettings()
     grid = grid or SELECT_GRID
-    base = replace(base, floor_identification=False)
+    base = replace(base, floor_identification=False, score_both_point_estimates=True)
     _, data = load_site(data_root, floors)
     keys = list(grid)
     points = []

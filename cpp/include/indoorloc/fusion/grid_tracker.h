@@ -33,8 +33,9 @@
 // `filtered` after each step (causal: fixes up to that step); `smoothed` given the whole walk.
 //
 // Floors: a walk stays on one floor (no stairs or lifts are modelled); the floor posterior is
-// then the layers' evidence summed per floor. Memory: the smoother keeps the forward grids at
-// about sqrt(M) checkpoints of the M steps (float32) and recomputes each segment once.
+// then the layers' evidence summed per floor. Memory: the smoother keeps a layer's forward grids
+// (float32) while they fit in 256 MB per thread, else about sqrt(M) checkpoints of the M steps,
+// recomputing each segment once (same results either way).
 #pragma once
 #include <limits>
 #include <memory>
@@ -82,7 +83,7 @@ struct GridTrackerOptions {
   /// Also return the spatial median of the filtered and smoothed posteriors (the point that
   /// minimises the expected distance to the walker; robust where the posterior has a far minor
   /// mode), computed from blocks of about `median_block_m` [m] (each at its mass centroid).
-  bool spatial_median = true;
+  bool spatial_median = false;
   double median_block_m = 4.0;
   /// Known start: sd of the start position [m] (the offset prior is heading_offset_sd_rad).
   double start_position_sd_m = 1.0;
