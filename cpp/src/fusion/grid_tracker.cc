@@ -185,28 +185,37 @@ struct Moments {
 // flushed at 1e-30, so the product stays far above double's underflow).
 // With `coarse` (nqx * nqy * 3 doubles, zeroed by the caller), also the mass and the mass-weighted
 // cell indices of every block of q x q cells (the summary the spatial median is computed from).
-Moments GridMoments(const std::vector<float>& g, const std::vector<float>* weight, const FloorGrid& fg, double cell,
-                    int q = 1, double* coarse = nullptr) {
+Moments GridMoments(const float* g, const float* weight, const FloorGrid& fg, double cell, int q = 1,
+                    double* coarse = nullptr, bool force_double = false) {
   Moments m;
   const int nqx = (fg.nx + q - 1) / q;
   for (int y = 0; y < fg.ny; ++y) {
-    const float* row = g.data() + static_cast<std::size_t>(y) * fg.nx;
-    const float* wrow = weight ? weight->data() + static_cast<std::size_t>(y) * fg.nx : nullptr;
+    const float* row = g + static_cast<std::size_t>(y) * fg.nx;
+    const float* wrow = weight ? weight + static_cast<std::size_t>(y) * fg.nx : nullptr;
     double r_mass = 0, r_sx = 0, r_sxx = 0;
     double* crow = coarse ? coarse + static_cast<std::size_t>(y / q) * nqx * 3 : nullptr;
-    if (!crow && !wrow) {  // the filter's common case: float accumulators along the row (vectorises)
+    const bool in_float = !crow && (!wrow || !force_double);
+    if (in_float) {  // the common case: float accumulators along the row (vectorises)
       float f_mass = 0.0f, f_sx = 0.0f, f_sxx = 0.0f;
-      for (int x = 0; x < fg.nx; ++x) {
-        const float v = row[x], fx = static_cast<float>(x);
-        f_mass += v;
-        f_sx += v * fx;
-        f_sxx += v * fx * fx;
+      if (wrow) {
+        for (int x = 0; x < fg.nx; ++x) {
+          const float v = row[x] * wrow[x], fx = static_cast<float>(x);
+          f_mass += v;
+          f_sx += v * fx;
+          f_sxx += v * fx * fx;
+        }
+      } else {
+        for (int x = 0; x < fg.nx; ++x) {
+          const float v = row[x], fx = static_cast<float>(x);
+          f_mass += v;
+          f_sx += v * fx;
+          f_sxx += v * fx * fx;
+        }
       }
       r_mass = f_mass;
       r_sx = f_sx;
       r_sxx = f_sxx;
-    }
-    if (crow || wrow) {
+    } else {
       // The row's values (the product alpha * beta in double), then its sums and block sums.
       thread_local std::vector<double> v;
       v.resize(static_cast<std::size_t>(fg.nx));
@@ -241,6 +250,9 @@ Moments GridMoments(const std::vector<float>& g, const std::vector<float>* weigh
     m.sxy += r_sx * y;
     m.syy += r_mass * y * static_cast<double>(y);
   }
+  // The smoother's product alpha * beta in float can underflow where both are small: when its
+  // total is that small, redo the sums in double.
+  if (weight && !coarse && !force_double && m.mass < 1e-20) return GridMoments(g, weight, fg, cell, q, coarse, true);
   // Cell indices -> metres (centres).
   Moments out;
   out.mass = m.mass;
@@ -613,6 +625,9 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
     return static_cast<std::size_t>((g.nx + q - 1) / q) * static_cast<std::size_t>((g.ny + q - 1) / q);
   };
 
+  // The smoother's stored forward grids: with one thread, one buffer serves every layer in turn
+  // (its pages are touched once per run, not once per layer).
+  std::vector<float> single_thread_store;
   ParallelForRuns(n_layers, threads, 0, [&](int li, RandomStream&) {
     const Layer& layer = layers[li];
     const FloorGrid& fg = im.grids[layer.floor_index];
@@ -691,10 +706,10 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
       filtered_blocks[li].assign(static_cast<std::size_t>(m_steps) * nb * 3, 0.0f);
       if (smooth) smoothed_blocks[li].assign(static_cast<std::size_t>(m_steps) * nb * 3, 0.0f);
     }
-    auto estimate = [&](const std::vector<float>& g, const std::vector<float>* weight, int k) {
+    auto estimate = [&](const float* g, const std::vector<float>* weight, int k) {
       std::vector<float>* blocks = o.spatial_median ? (weight ? &smoothed_blocks[li] : &filtered_blocks[li]) : nullptr;
       if (blocks) std::fill(block_sums.begin(), block_sums.end(), 0.0);
-      const Moments mo = GridMoments(g, weight, fg, c, q, blocks ? block_sums.data() : nullptr);
+      const Moments mo = GridMoments(g, weight ? weight->data() : nullptr, fg, c, q, blocks ? block_sums.data() : nullptr);
       if (blocks && mo.mass > 0) {
         float* out = blocks->data() + static_cast<std::size_t>(k) * nb * 3;
         for (std::size_t b = 0; b < nb; ++b) {
@@ -718,16 +733,18 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
     };
 
     std::vector<std::vector<float>> checkpoints;  // alpha before steps k0, k0 + segment, ...
-    std::vector<std::vector<float>> stored;       // store_all: alpha after every step
+    std::vector<float> own_store;                  // store_all: alpha after every step, step-major
+    std::vector<float>& stored = threads == 1 ? single_thread_store : own_store;
+    if (store_all) stored.resize(static_cast<std::size_t>(m_run) * n);
     for (int k = k0; k < m_steps; ++k) {
       if (smooth && !store_all && (k - k0) % segment == 0) checkpoints.push_back(alpha);
       if (!forward(k, true)) {
         dead[li] = 1;
         return;
       }
-      filtered[li][k] = estimate(alpha, nullptr, k);
+      filtered[li][k] = estimate(alpha.data(), nullptr, k);
       filtered[li][k].log_evidence = log_z;
-      if (store_all) stored.push_back(alpha);
+      if (store_all) std::copy(alpha.begin(), alpha.end(), stored.begin() + static_cast<std::ptrdiff_t>((k - k0) * n));
     }
     if (store_all) checkpoints.emplace_back();  // one segment, nothing to recompute
     if (!smooth) return;
@@ -739,9 +756,7 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
     const int n_seg = static_cast<int>(checkpoints.size());
     for (int sidx = n_seg - 1; sidx >= 0; --sidx) {
       const int k_begin = k0 + sidx * segment, k_end = std::min(m_steps, k_begin + segment);
-      if (store_all) {
-        seg_alpha.swap(stored);
-      } else {
+      if (!store_all) {
         alpha = checkpoints[sidx];
         seg_alpha.clear();
         for (int k = k_begin; k < k_end; ++k) {
@@ -750,13 +765,15 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
         }
       }
       for (int k = k_end - 1; k >= k_begin; --k) {
-        smoothed[li][k] = estimate(seg_alpha[k - k_begin], &beta, k);
+        const float* a = store_all ? stored.data() + static_cast<std::size_t>(k - k0) * n : seg_alpha[k - k_begin].data();
+        smoothed[li][k] = estimate(a, &beta, k);
         // beta_{k-1}
         MultiplyAndSum(beta, fg.wall_factor, fixes_at[k].empty() ? nullptr : layer_factor[k].data(), fg.nx, fg.ny);
         if (ops[k].blur_var_cells2 > 1e-6) Blur(beta, scratch, fg.nx, fg.ny, ops[k].blur_var_cells2);
         Shift(beta, fg.nx, fg.ny, -ops[k].shift_x, -ops[k].shift_y);
-        float mx = 0;
-        for (float v : beta) mx = std::max(mx, v);
+        // Rescale by the maximum (a branch-free loop that vectorises).
+        float mx = 0.0f;
+        for (const float v : beta) mx = v > mx ? v : mx;
         if (mx > 0) NormaliseAndFlush(beta, 1.0 / static_cast<double>(mx));
       }
     }
