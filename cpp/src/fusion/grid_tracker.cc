@@ -700,7 +700,6 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
       return true;
     };
     const std::size_t nb = blocks_of(layer.floor_index);
-    const int nqx = (fg.nx + q - 1) / q;
     std::vector<double> block_sums(o.spatial_median ? nb * 3 : 0);
     if (o.spatial_median) {
       filtered_blocks[li].assign(static_cast<std::size_t>(m_steps) * nb * 3, 0.0f);
@@ -720,7 +719,6 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
           out[3 * b + 2] = static_cast<float>(fg.y0 + (block_sums[3 * b + 2] / m + 0.5) * c + ops[k].ry);
         }
       }
-      (void)nqx;
       LayerStep e;
       // Positions of the layer are cell centres + the remainder; within-cell spread c²/12.
       e.mx = mo.sx + ops[k].rx;

@@ -510,25 +510,6 @@ def load_floor(root: Path, name: str) -> FloorData:
                      outline, report)
 
 
-_FOLD_MODELS: Dict[Tuple, Dict[str, FoldModels]] = {}
-
-
-def _fold_models_cached(floors: Sequence[FloorData], fold_of: Dict[str, List[np.ndarray]], j: int,
-                        settings: RealSettings, all_plan, with_crowd_map: bool) -> Dict[str, FoldModels]:
-    """:func:`_fold_models`, kept for the last few calls with the same floors, fold, fixes and
-    calibration: ``--select`` evaluates every grid point on the same folds, and the models do not
-    depend on the tracker's settings."""
-    key = (tuple(id(fl) for fl in floors), j, tuple(tuple(fold_of[fl.name][j].tolist()) for fl in floors),
-           repr(settings.fixes), all_plan is None, with_crowd_map)
-    models = _FOLD_MODELS.get(key)
-    if models is None:
-        models = _fold_models(floors, fold_of, j, settings, all_plan, with_crowd_map)
-        if len(_FOLD_MODELS) >= 64:
-            _FOLD_MODELS.pop(next(iter(_FOLD_MODELS)))
-        _FOLD_MODELS[key] = models
-    return models
-
-
 def _fold_models(floors: Sequence[FloorData], fold_of: Dict[str, List[np.ndarray]], j: int,
                  settings: RealSettings, all_plan, with_crowd_map: bool = True) -> Dict[str, FoldModels]:
     """Fold j's training models of every floor (and the all-floor database when identifying
@@ -557,7 +538,8 @@ def _fold_models(floors: Sequence[FloorData], fold_of: Dict[str, List[np.ndarray
 
 def evaluate_floors(floors: Sequence[FloorData], settings: RealSettings, peer=None, progress=None,
                     methods: Sequence[str] = METHODS, all_plan=None,
-                    only_folds: Optional[Sequence[int]] = None) -> List[WalkScore]:
+                    only_folds: Optional[Sequence[int]] = None,
+                    models_cache: Optional[Dict[Tuple, Dict[str, FoldModels]]] = None) -> List[WalkScore]:
     """Every method on every walk of the floors, k-fold by walk within each floor (fold j of
     every floor shares the all-floor database of floor identification); ``only_folds``: score
     the test walks of these folds only (one Dask task per fold)."""
@@ -571,7 +553,14 @@ def evaluate_floors(floors: Sequence[FloorData], settings: RealSettings, peer=No
         jobs_idx = [(fl, i) for fl in floors for i in fold_of[fl.name][j]]
         if not jobs_idx:
             continue
-        models = _fold_models_cached(floors, fold_of, j, settings, all_plan, "wifi_model" in methods)
+        # --select passes one cache for all its grid points (the models do not depend on the
+        # tracker's settings); it lives as long as that call, keyed by fold, fixes and map use.
+        key = (j, repr(settings.fixes), all_plan is None, "wifi_model" in methods)
+        models = None if models_cache is None else models_cache.get(key)
+        if models is None:
+            models = _fold_models(floors, fold_of, j, settings, all_plan, "wifi_model" in methods)
+            if models_cache is not None:
+                models_cache[key] = models
         jobs = [(fl.walks[i], fl.steps[i], models[fl.name]) for fl, i in jobs_idx]
         with ThreadPoolExecutor(max_workers=max(1, settings.threads)) as pool:
             futures = [pool.submit(_score_walk, w, s, m, settings, peer, methods) for w, s, m in jobs]
@@ -862,11 +851,13 @@ def select_settings(data_root: Optional[Path] = None, floors: Sequence[str] = FL
     _, data = load_site(data_root, floors)
     keys = list(grid)
     points = []
+    models_cache: Dict[Tuple, Dict[str, FoldModels]] = {}  # the same folds for every grid point
     for values in itertools.product(*(grid[k] for k in keys)):
         settings = base
         for k, v in zip(keys, values):
             settings = _with(settings, k, v)
-        scores = evaluate_floors(data, settings, None, progress, (SELECT_OBJECTIVE, "fusion_known_start"))
+        scores = evaluate_floors(data, settings, None, progress, (SELECT_OBJECTIVE, "fusion_known_start"),
+                                 models_cache=models_cache)
         estimates = SELECT_POINT_ESTIMATES if settings.engine == "grid" else (None,)
         for pe in estimates:
             key = SELECT_OBJECTIVE if pe is None else f"_alt/{SELECT_OBJECTIVE}/{pe}"
