@@ -200,7 +200,7 @@ def test_fusion_evaluate_end_to_end(site):
     settings = fr.RealSettings(num_particles=500, folds=2, smoother_trajectories=10)
     result = fr.evaluate(data_root=root, floors=["F1"], settings=settings)
     assert set(result) >= {"methods", "waypoints", "settings"}
-    expected = set(fr.METHODS) if fr._peer() is not None else set(fr.METHODS) - {"peer_costmin"}
+    expected = set(fr.METHODS)
     assert set(result["methods"]) == expected
     n_wp = sum(floor.walk(i).n_waypoints for i in range(floor.n_walks))
     for name, stats in result["methods"].items():

@@ -17,7 +17,7 @@ same folds:
     handheld PDR from the first waypoint, headings rotated by the training yaw offset.
 ``peer_costmin``
     the cost-minimisation post-processing of the 2021 competition's public solutions
-    (``benchmarks/ilc_costmin_peer.py``): the kNN WiFi fixes (``wifi_knn``) at every scan plus
+    (:mod:`indoorloc.fusion.costmin_baseline`): the kNN WiFi fixes (``wifi_knn``) at every scan plus
     the PDR displacements by robust least squares with a per-walk rotation. Only when run from a source
     tree (the peer is not part of the package); otherwise absent from the table.
 ``fusion_unknown_start``, ``fusion_known_start``, ``fusion_smoother``
@@ -42,7 +42,6 @@ from __future__ import annotations
 
 import itertools
 import math
-import sys
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -213,17 +212,10 @@ def floor_number(name: str) -> int:
 
 
 def _peer():
-    """The cost-minimisation peer from benchmarks/ (source tree only), or None."""
-    here = Path(__file__).resolve()
-    for parent in here.parents:
-        candidate = parent / "benchmarks" / "ilc_costmin_peer.py"
-        if candidate.is_file():
-            if str(candidate.parent) not in sys.path:
-                sys.path.insert(0, str(candidate.parent))
-            import ilc_costmin_peer  # noqa: E402
+    """The cost-minimisation baseline (:mod:`indoorloc.fusion.costmin_baseline`)."""
+    from indoorloc.fusion import costmin_baseline
 
-            return ilc_costmin_peer
-    return None
+    return costmin_baseline
 
 
 def _folds(n: int, k: int, seed: int) -> List[np.ndarray]:
