@@ -195,6 +195,9 @@ def test_inputs_not_modified_and_write_is_atomic(tmp_path, monkeypatch):
     monkeypatch.undo()
     write_viewer_html(path, _floors(), tracks)
     assert path.stat().st_size > 1_000_000 and sorted(p.name for p in tmp_path.iterdir()) == ["v.html"]
+    umask = os.umask(0o022)
+    os.umask(umask)
+    assert path.stat().st_mode & 0o777 == 0o666 & ~umask  # not the temporary file's 0600
     for tr, xy in zip(tracks, before):
         np.testing.assert_array_equal(tr.xy_m, xy)
 

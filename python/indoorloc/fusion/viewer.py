@@ -345,14 +345,15 @@ def _marker_state(track: ViewerTrack, i: int) -> tuple:
     return xs, ys
 
 
-def _bounds(floor: ViewerFloor, tracks: Sequence[ViewerTrack]) -> tuple:
-    """x and y axis ranges [m] that show the floor and its walks, with a 3 % margin."""
-    pts = [np.vstack(floor.outlines)] + [tr.xy_m for tr in tracks]
-    pts += [tr.waypoints_xy_m for tr in tracks if tr.waypoints_xy_m is not None]
+def _bounds(track: ViewerTrack) -> tuple:
+    """x and y axis ranges [m] around the walk (track and waypoints; fixes may be outliers),
+    15 % margin, at least 30 m wide: the page opens on the walk; plotly's autoscale button (or a
+    double click) shows the whole floor."""
+    pts = [track.xy_m] + ([track.waypoints_xy_m] if track.waypoints_xy_m is not None else [])
     allp = np.vstack(pts)
     lo, hi = allp.min(axis=0), allp.max(axis=0)
-    pad = 0.03 * max(float(np.max(hi - lo)), 1.0)
-    return [float(lo[0] - pad), float(hi[0] + pad)], [float(lo[1] - pad), float(hi[1] + pad)]
+    centre, half = (lo + hi) / 2, np.maximum((hi - lo) * 0.65, 15.0)
+    return [float(centre[0] - half[0]), float(centre[0] + half[0])], [float(centre[1] - half[1]), float(centre[1] + half[1])]
 
 
 def _slider(track: ViewerTrack, k: int, marker_traces: List[int], max_steps: int, visible: bool) -> dict:
@@ -401,10 +402,9 @@ def _figure(floors: List[ViewerFloor], tracks: List[ViewerTrack], title: str, ma
     def shown(k: int) -> List[bool]:
         return [(w == k) if w is not None else (f == tracks[k].floor) for f, w in zip(floor_of_trace, walk_of_trace)]
 
-    floor_by_name = {fl.name: fl for fl in floors}
     buttons = []
     for k, tr in enumerate(tracks):
-        xr, yr = _bounds(floor_by_name[tr.floor], [t for t in tracks if t.floor == tr.floor])
+        xr, yr = _bounds(tr)
         layout_update: Dict[str, Any] = {"xaxis.range": xr, "yaxis.range": yr, "xaxis.autorange": False,
                                          "yaxis.autorange": False}
         for j in range(len(tracks)):
@@ -413,7 +413,7 @@ def _figure(floors: List[ViewerFloor], tracks: List[ViewerTrack], title: str, ma
         buttons.append(dict(method="update", label=f"{tr.name}  ({tr.floor})", args=[{"visible": shown(k)}, layout_update]))
     for idx, vis in enumerate(shown(0)):
         data[idx]["visible"] = vis
-    xr, yr = _bounds(floor_by_name[tracks[0].floor], [t for t in tracks if t.floor == tracks[0].floor])
+    xr, yr = _bounds(tracks[0])
     layout = dict(
         title=dict(text=title, x=0.5, xanchor="center", font=dict(size=18)),
         xaxis=dict(title=dict(text="x [m]"), range=xr, autorange=False, zeroline=False, showgrid=True,
@@ -492,18 +492,26 @@ def write_viewer_html(path: Any, floors: Sequence[ViewerFloor], tracks: Sequence
     config = dict(displaylogo=False, responsive=True, scrollZoom=True,
                   toImageButtonOptions=dict(format="png", filename="indoorloc_track"))
     html = pio.to_html(figure, include_plotlyjs=True, include_mathjax=False, full_html=True, config=config,
-                       div_id="indoorloc-viewer", default_width="100%", default_height="96vh", validate=True)
-    html = html.replace("<head>", f"<head><title>{_html_escape(title)}</title>", 1)
+                       div_id="indoorloc-viewer", default_width="100%", default_height="99vh", validate=True)
+    html = html.replace("<head>", f"<head><title>{_html_escape(title)}</title>"
+                              "<style>html, body {margin: 0; padding: 0;}</style>", 1)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as fh:
             fh.write(html)
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp's file is 0600: give the page ordinary permissions
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
     return path
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
 
 
 def _html_escape(text: str) -> str:
