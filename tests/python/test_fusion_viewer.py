@@ -104,6 +104,16 @@ def test_long_walk_slider_is_decimated_and_file_stays_small(tmp_path):
     assert extra < 2_500_000, extra
 
 
+def test_one_sample_walk_and_markup_in_names(tmp_path):
+    # One sample, zero spread, names with markup: a page all the same, the names escaped in the JSON.
+    floor = ViewerFloor("F<1>", _floors()[0].outlines)
+    walk = ViewerTrack("</script><b>x</b>", "F<1>", np.array([3.0]), np.array([[1.0, 2.0]]), sd_m=np.zeros((1, 2)))
+    html = write_viewer_html(tmp_path / "v.html", [floor], [walk], title="</title><script>x").read_text()
+    assert html.count("<script") == html.count("</script>") == 3  # plotly config, plotly.js, the plot
+    fig = _figure_json(html)
+    assert len(fig["layout"]["sliders"][0]["steps"]) == 1 and fig["layout"]["sliders"][0]["steps"][0]["label"] == "0.0"
+
+
 def test_decimate_spreads_samples_in_time():
     t = np.r_[np.linspace(0, 10, 1000), np.linspace(10.01, 100, 100)]
     idx = decimate(t, 50)
