@@ -381,7 +381,7 @@ def _figure(floors: List[ViewerFloor], tracks: List[ViewerTrack], title: str, ma
         data += new
         floor_of_trace += [fl.name] * len(new)
         walk_of_trace += [None] * len(new)
-    sliders, annotations, markers = [], [], []
+    sliders, annotations = [], []
     for k, tr in enumerate(tracks):
         new = _track_traces(tr, max_ellipses)
         n_marker = 2 if tr.sd_m is not None else 1
@@ -390,7 +390,6 @@ def _figure(floors: List[ViewerFloor], tracks: List[ViewerTrack], title: str, ma
         floor_of_trace += [None] * len(new)
         walk_of_trace += [k] * len(new)
         marker_idx = list(range(first + len(new) - n_marker, first + len(new)))
-        markers.append(marker_idx)
         xs, ys = _marker_state(tr, 0)
         for j, idx in enumerate(marker_idx):
             data[idx]["x"], data[idx]["y"] = xs[j], ys[j]
