@@ -451,8 +451,8 @@ def write_viewer_html(path: Any, floors: Sequence[ViewerFloor], tracks: Sequence
     max_slider_steps : int
         At most this many slider positions per walk (samples spread evenly in time, see
         :func:`decimate`): each position stores the marker and its ellipse (about 0.5 kB), so
-        the page stays a few hundred kB above plotly.js (4.8 MB) however long the walk. The
-        track line itself keeps every sample.
+        the slider adds at most about 200 kB per walk however long the walk. The track line
+        keeps every sample (about 20 B each: 1.3 MB above plotly.js' 4.8 MB for 50 000 samples).
     max_ellipses : int
         At most this many 95 % ellipses per walk make the uncertainty band (spread evenly in time).
 
