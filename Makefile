@@ -24,10 +24,12 @@ ASAN_DIR := build/asan
 export CMAKE_BUILD_PARALLEL_LEVEL := $(JOBS)
 
 # Debian packages: compilers, C++ libraries (Eigen, CGAL + GMP/MPFR/Boost, Ceres + glog/gflags +
-# SuiteSparse, GoogleTest) and Python headers/venv for the system interpreter.
+# SuiteSparse, GoogleTest), Python headers/venv for the system interpreter, and the headless
+# browser of the track viewer's test (chromium + its chromedriver, driven by selenium).
 DEBIAN_PACKAGES := g++ make cmake python3-dev python3-venv \
   libeigen3-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev \
-  libceres-dev libgoogle-glog-dev libgflags-dev libsuitesparse-dev libgtest-dev libnanoflann-dev
+  libceres-dev libgoogle-glog-dev libgflags-dev libsuitesparse-dev libgtest-dev libnanoflann-dev \
+  chromium chromium-driver
 # Build requirements (installed into the venv because the build runs without isolation, so
 # that one persistent build folder serves the wheel, ctest and the C++ install).
 BUILD_REQUIREMENTS := "scikit-build-core>=0.10" "pybind11>=2.10" "cmake>=3.20" ninja

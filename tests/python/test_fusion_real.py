@@ -66,6 +66,10 @@ def test_walk_snapshot_and_plots(two_floor_site, tmp_path):
     assert snap["waypoints_m"].shape[1] == 2 and snap["smoothed_m"].shape[1] == 2
     assert snap["extent_m"] is not None
     assert np.all(np.isfinite(snap["errors"]["fusion_smoother"]))
+    # The track viewer's inputs: the track's times, its smoothed covariances, the fixes' times.
+    assert snap["track_t_s"].shape == (len(snap["smoothed_m"]),) and np.all(np.diff(snap["track_t_s"]) >= 0)
+    assert snap["smoothed_covariance_m2"].shape == (len(snap["smoothed_m"]), 3)
+    assert snap["fix_t_s"].shape == (len(snap["fix_centres_m"]),)
     from indoorloc import plots
 
     png = plots.fusion_real_walk(snap, tmp_path / "walk.png")

@@ -762,6 +762,12 @@ def walk_snapshot(data_root: Optional[Path], floor: str, walk_index: int = 0,
             "fix_centres_m": wfx.fix_centres(fixes) if len(fixes) else np.zeros((0, 2)), "pdr_m": pdr,
             "smoothed_m": np.asarray(result["smoothed_m"]), "filter_m": np.asarray(result["mean_m"]),
             "trajectories_m": np.asarray(result["smoothed_trajectories_m"]),
+            # For the track viewer: the track's times (since the first waypoint, as waypoint_t_s) [s],
+            # its smoothed covariances (xx, xy, yy) [m²] (None where the engine gives none) and the fixes' times.
+            "track_t_s": np.asarray(pdr_steps.times_s, float) - wt[0],
+            "smoothed_covariance_m2": (np.asarray(result["smoothed_covariance_m2"])
+                                       if "smoothed_covariance_m2" in result else None),
+            "fix_t_s": (np.asarray(fixes.times_s, float) - wt[0]) if len(fixes) else np.zeros(0),
             "errors": {"pdr_only": np.hypot(*(ph.pdr_track(steps, wxy[0], wt, yaw_offset_rad=models.cal.yaw_offset_rad) - wxy).T),
                        "fusion_smoother": np.hypot(*(_interp_track(wt, pdr_steps.times_s, result["smoothed_m"]) - wxy).T),
                        "wifi_knn": np.hypot(*(_nearest_rows(wt, fixes.times_s, wfx.fix_centres(fixes)) - wxy).T)
