@@ -12,265 +12,13 @@
 #include "indoorloc/core/options.h"
 #include "indoorloc/core/parallel.h"
 #include "indoorloc/core/validate.h"
+#include "grid_ops.h"
 
 namespace indoorloc::fusion {
 
+using namespace grid_ops;  // NOLINT: the operators shared with the streaming session
+
 namespace {
-
-constexpr double kTwoPi = 2.0 * M_PI;
-
-double WrapAngle(double a) { return std::remainder(a, kTwoPi); }
-
-// One floor's grid: cells of side c over the floor's bounding box, row-major from the lowest y.
-struct FloorGrid {
-  double x0 = 0, y0 = 0;   // corner of cell (0, 0) [m]
-  int nx = 0, ny = 0;
-  int floor_number = 0;
-  std::vector<float> walkable_fraction;  // a(c)
-  std::vector<float> wall_factor;        // m(c) = a + (1 - a) e^λ
-  std::size_t size() const { return static_cast<std::size_t>(nx) * ny; }
-};
-
-// What the forward pass did at one step of a layer, so that the backward pass can apply the
-// transposed operators and the recomputation of a segment repeats the forward pass exactly.
-struct StepOps {
-  int shift_x = 0, shift_y = 0;  // whole-cell shift applied
-  double blur_var_cells2 = 0;    // variance of the blur applied [cells²] (0: none)
-  double pending_var_m2 = 0;     // process variance not yet applied after this step [m²]
-  double rx = 0, ry = 0;         // sub-cell remainder after this step [m]
-};
-
-// Discrete Gaussian kernel of variance var [cells²], normalised, radius ceil(3 sd).
-std::vector<float> GaussianKernel(double var_cells2) {
-  const double sd = std::sqrt(var_cells2);
-  const int radius = std::max(1, static_cast<int>(std::ceil(3.0 * sd)));
-  std::vector<double> k(2 * radius + 1);
-  double sum = 0;
-  for (int j = -radius; j <= radius; ++j) sum += k[j + radius] = std::exp(-0.5 * j * j / var_cells2);
-  std::vector<float> out(k.size());
-  for (std::size_t j = 0; j < k.size(); ++j) out[j] = static_cast<float>(k[j] / sum);
-  return out;
-}
-
-// Separable blur with zero outside the grid: a symmetric operator (its own transpose).
-void Blur(std::vector<float>& g, std::vector<float>& scratch, int nx, int ny, double var_cells2) {
-  const std::vector<float> k = GaussianKernel(var_cells2);
-  const int r = static_cast<int>(k.size() / 2);
-  scratch.assign(g.size(), 0.0f);
-  // Along y: whole rows at a time (vectorises).
-  for (int y = 0; y < ny; ++y) {
-    float* out = scratch.data() + static_cast<std::size_t>(y) * nx;
-    for (int j = -r; j <= r; ++j) {
-      const int ys = y + j;
-      if (ys < 0 || ys >= ny) continue;
-      const float w = k[j + r];
-      const float* in = g.data() + static_cast<std::size_t>(ys) * nx;
-      for (int x = 0; x < nx; ++x) out[x] += w * in[x];
-    }
-  }
-  // Along x.
-  for (int y = 0; y < ny; ++y) {
-    const float* in = scratch.data() + static_cast<std::size_t>(y) * nx;
-    float* out = g.data() + static_cast<std::size_t>(y) * nx;
-    for (int x = 0; x < nx; ++x) {
-      const int lo = std::max(-r, -x), hi = std::min(r, nx - 1 - x);
-      float acc = 0.0f;
-      for (int j = lo; j <= hi; ++j) acc += k[j + r] * in[x + j];
-      out[x] = acc;
-    }
-  }
-}
-
-// g(x, y) <- g(x - sx, y - sy), zero where the source is outside the grid; in place (rows moved
-// in the order that never overwrites a row still to be read, only the vacated cells zeroed).
-void Shift(std::vector<float>& g, int nx, int ny, int sx, int sy) {
-  if (sx == 0 && sy == 0) return;
-  float* d = g.data();
-  const std::size_t row = static_cast<std::size_t>(nx);
-  if (std::abs(sx) >= nx || std::abs(sy) >= ny) {
-    std::fill(g.begin(), g.end(), 0.0f);
-    return;
-  }
-  const int x_lo = std::max(0, sx), x_hi = std::min(nx, nx + sx);  // destination columns
-  const int width = x_hi - x_lo;
-  auto move_row = [&](int y) {
-    float* dst = d + y * row;
-    const float* src = d + (y - sy) * row + (x_lo - sx);
-    std::memmove(dst + x_lo, src, static_cast<std::size_t>(width) * sizeof(float));
-    std::fill(dst, dst + x_lo, 0.0f);
-    std::fill(dst + x_hi, dst + nx, 0.0f);
-  };
-  if (sy > 0) {
-    for (int y = ny - 1; y >= sy; --y) move_row(y);
-    std::fill(d, d + sy * row, 0.0f);
-  } else {
-    for (int y = 0; y < ny + sy; ++y) move_row(y);
-    std::fill(d + (ny + sy) * row, d + ny * row, 0.0f);
-  }
-}
-
-// out(x, y) = g at (x + fx, y + fy) cells by bilinear interpolation, |fx|, |fy| <= 1, edges
-// clamped: the fix factor of a layer whose positions are the cell centres plus a remainder.
-void ResampleAt(const std::vector<float>& g, std::vector<float>& out, std::vector<float>& scratch, int nx, int ny,
-                double fx, double fy) {
-  scratch.resize(g.size());
-  out.resize(g.size());
-  const int dx = fx >= 0 ? 1 : -1, dy = fy >= 0 ? 1 : -1;
-  const float ax = static_cast<float>(std::abs(fx)), ay = static_cast<float>(std::abs(fy));
-  for (int y = 0; y < ny; ++y) {
-    const float* in = g.data() + static_cast<std::size_t>(y) * nx;
-    float* o = scratch.data() + static_cast<std::size_t>(y) * nx;
-    for (int x = 0; x < nx; ++x) {
-      const int x2 = std::min(nx - 1, std::max(0, x + dx));
-      o[x] = (1.0f - ax) * in[x] + ax * in[x2];
-    }
-  }
-  for (int y = 0; y < ny; ++y) {
-    const int y2 = std::min(ny - 1, std::max(0, y + dy));
-    const float* a = scratch.data() + static_cast<std::size_t>(y) * nx;
-    const float* b = scratch.data() + static_cast<std::size_t>(y2) * nx;
-    float* o = out.data() + static_cast<std::size_t>(y) * nx;
-    for (int x = 0; x < nx; ++x) o[x] = (1.0f - ay) * a[x] + ay * b[x];
-  }
-}
-
-// g *= scale (in double: the result is at most 1 and never overflows a float), and entries below
-// 1e-30 set to 0: they are negligible beside the sum or maximum of 1, and float denormals would
-// slow every later pass and let a normalisation overflow.
-void NormaliseAndFlush(std::vector<float>& g, double scale) {
-  if (scale < 1e30) {  // the common case, in float (vectorises): v * scale <= 1 cannot overflow
-    const float f = static_cast<float>(scale);
-    for (float& v : g) {
-      const float x = v * f;
-      v = x < 1e-30f ? 0.0f : x;
-    }
-    return;
-  }
-  for (float& v : g) {
-    const double x = static_cast<double>(v) * scale;
-    v = x < 1e-30 ? 0.0f : static_cast<float>(x);
-  }
-}
-
-// g *= wall (and *= fix when given); returns the sum (float per row, double over rows).
-double MultiplyAndSum(std::vector<float>& g, const std::vector<float>& wall, const float* fix, int nx, int ny) {
-  double total = 0;
-  for (int y = 0; y < ny; ++y) {
-    float* row = g.data() + static_cast<std::size_t>(y) * nx;
-    const float* w = wall.data() + static_cast<std::size_t>(y) * nx;
-    float sum = 0.0f;
-    if (fix) {
-      const float* f = fix + static_cast<std::size_t>(y) * nx;
-      for (int x = 0; x < nx; ++x) {
-        row[x] *= w[x] * f[x];
-        sum += row[x];
-      }
-    } else {
-      for (int x = 0; x < nx; ++x) {
-        row[x] *= w[x];
-        sum += row[x];
-      }
-    }
-    total += sum;
-  }
-  return total;
-}
-
-// Mean and second moments of a grid about the cell centres (double accumulation).
-struct Moments {
-  double mass = 0, sx = 0, sy = 0, sxx = 0, sxy = 0, syy = 0;
-};
-
-// Of g, or of the product g * weight (the smoother's alpha * beta, formed in double: both are
-// flushed at 1e-30, so the product stays far above double's underflow).
-// With `coarse` (nqx * nqy * 3 doubles, zeroed by the caller), also the mass and the mass-weighted
-// cell indices of every block of q x q cells (the summary the spatial median is computed from).
-Moments GridMoments(const float* g, const float* weight, const FloorGrid& fg, double cell, int q = 1,
-                    double* coarse = nullptr, bool force_double = false) {
-  Moments m;
-  const int nqx = (fg.nx + q - 1) / q;
-  for (int y = 0; y < fg.ny; ++y) {
-    const float* row = g + static_cast<std::size_t>(y) * fg.nx;
-    const float* wrow = weight ? weight + static_cast<std::size_t>(y) * fg.nx : nullptr;
-    double r_mass = 0, r_sx = 0, r_sxx = 0;
-    double* crow = coarse ? coarse + static_cast<std::size_t>(y / q) * nqx * 3 : nullptr;
-    const bool in_float = !crow && (!wrow || !force_double);
-    if (in_float) {  // the common case: float accumulators along the row (vectorises)
-      float f_mass = 0.0f, f_sx = 0.0f, f_sxx = 0.0f;
-      if (wrow) {
-        for (int x = 0; x < fg.nx; ++x) {
-          const float v = row[x] * wrow[x], fx = static_cast<float>(x);
-          f_mass += v;
-          f_sx += v * fx;
-          f_sxx += v * fx * fx;
-        }
-      } else {
-        for (int x = 0; x < fg.nx; ++x) {
-          const float v = row[x], fx = static_cast<float>(x);
-          f_mass += v;
-          f_sx += v * fx;
-          f_sxx += v * fx * fx;
-        }
-      }
-      r_mass = f_mass;
-      r_sx = f_sx;
-      r_sxx = f_sxx;
-    } else {
-      // The row's values (the product alpha * beta in double), then its sums and block sums.
-      thread_local std::vector<double> v;
-      v.resize(static_cast<std::size_t>(fg.nx));
-      if (wrow) {
-        for (int x = 0; x < fg.nx; ++x) v[x] = static_cast<double>(row[x]) * wrow[x];
-      } else {
-        for (int x = 0; x < fg.nx; ++x) v[x] = row[x];
-      }
-      for (int x = 0; x < fg.nx; ++x) {
-        r_mass += v[x];
-        r_sx += v[x] * x;
-        r_sxx += v[x] * x * static_cast<double>(x);
-      }
-      if (crow) {
-        for (int bx = 0; bx < nqx; ++bx) {
-          double bm = 0, bsx = 0;
-          for (int x = bx * q; x < std::min(fg.nx, bx * q + q); ++x) {
-            bm += v[x];
-            bsx += v[x] * x;
-          }
-          double* b = crow + static_cast<std::size_t>(bx) * 3;
-          b[0] += bm;
-          b[1] += bsx;
-          b[2] += bm * y;
-        }
-      }
-    }
-    m.mass += r_mass;
-    m.sx += r_sx;
-    m.sy += r_mass * y;
-    m.sxx += r_sxx;
-    m.sxy += r_sx * y;
-    m.syy += r_mass * y * static_cast<double>(y);
-  }
-  // The smoother's product alpha * beta in float can underflow where both are small: when its
-  // total is that small, redo the sums in double.
-  if (weight && !coarse && !force_double && m.mass < 1e-20) return GridMoments(g, weight, fg, cell, q, coarse, true);
-  // Cell indices -> metres (centres).
-  Moments out;
-  out.mass = m.mass;
-  if (m.mass <= 0) return out;
-  const double mx = m.sx / m.mass, my = m.sy / m.mass;
-  out.sx = fg.x0 + (mx + 0.5) * cell;
-  out.sy = fg.y0 + (my + 0.5) * cell;
-  out.sxx = (m.sxx / m.mass - mx * mx) * cell * cell;
-  out.sxy = (m.sxy / m.mass - mx * my) * cell * cell;
-  out.syy = (m.syy / m.mass - my * my) * cell * cell;
-  return out;  // sx, sy: mean [m]; sxx, sxy, syy: covariance [m²]
-}
-
-// A layer's per-step estimate: mean, covariance, cumulative log evidence.
-struct LayerStep {
-  double mx = 0, my = 0, cxx = 0, cxy = 0, cyy = 0;
-  double log_evidence = 0;
-};
 
 // The spatial median argmin_x Σ m_i |x - p_i| of weighted points (Weiszfeld's iteration from the
 // weighted mean; the objective is convex, so the start only sets the speed). Distances are floored
@@ -331,59 +79,6 @@ std::string GridTrackSummary::BriefReport() const {
   return out.str();
 }
 
-struct GridTracker::Impl {
-  const FloorPlan* plan = nullptr;
-  GridTrackerOptions options;
-  std::vector<FloorGrid> grids;
-  double total_area_m2 = 0;
-
-  // Per step with fixes: per floor the factor Π_j L_j(c)^τ / max and the log of that max.
-  struct FixFactor {
-    std::vector<float> factor;
-    double log_scale = 0;
-  };
-
-  FixFactor ComputeFixFactor(const std::vector<const PositionFix*>& fixes, const FloorGrid& fg) const {
-    const double c = options.cell_size_m;
-    const double eps = options.fix.outlier_probability, tau = options.fix.tempering;
-    const double floor_density = eps / total_area_m2;
-    std::vector<double> log_l(fg.size(), 0.0), acc(fg.size());
-    for (const PositionFix* fix : fixes) {
-      std::fill(acc.begin(), acc.end(), 0.0);
-      const double wsum = fix->weights.sum();
-      for (Eigen::Index k = 0; k < fix->means_m.rows(); ++k) {
-        const double w = fix->weights[k] / wsum;
-        if (w <= 0) continue;
-        const int f = fix->floors.size() ? fix->floors[k] : PositionFix::kAnyFloor;
-        if (f != PositionFix::kAnyFloor && f != fg.floor_number) continue;
-        const double sd = options.fix_tempering_by_variance ? fix->sds_m[k] / std::sqrt(tau) : fix->sds_m[k];
-        const double inv2v = 0.5 / (sd * sd);
-        const double scale = (1.0 - eps) * w / (kTwoPi * sd * sd);
-        // 6 sd: beyond it the Gaussian is below 1e-8 of its peak, far under ε / A on any floor.
-        const double reach = 6.0 * sd;
-        const double mx = fix->means_m(k, 0), my = fix->means_m(k, 1);
-        const int x_lo = std::max(0, static_cast<int>(std::floor((mx - reach - fg.x0) / c)));
-        const int x_hi = std::min(fg.nx - 1, static_cast<int>(std::floor((mx + reach - fg.x0) / c)));
-        const int y_lo = std::max(0, static_cast<int>(std::floor((my - reach - fg.y0) / c)));
-        const int y_hi = std::min(fg.ny - 1, static_cast<int>(std::floor((my + reach - fg.y0) / c)));
-        for (int y = y_lo; y <= y_hi; ++y) {
-          const double dy = fg.y0 + (y + 0.5) * c - my;
-          for (int x = x_lo; x <= x_hi; ++x) {
-            const double dx = fg.x0 + (x + 0.5) * c - mx;
-            acc[static_cast<std::size_t>(y) * fg.nx + x] += scale * std::exp(-(dx * dx + dy * dy) * inv2v);
-          }
-        }
-      }
-      const double power = options.fix_tempering_by_variance ? 1.0 : tau;
-      for (std::size_t i = 0; i < acc.size(); ++i) log_l[i] += power * std::log(floor_density + acc[i]);
-    }
-    FixFactor out;
-    out.log_scale = *std::max_element(log_l.begin(), log_l.end());
-    out.factor.resize(fg.size());
-    for (std::size_t i = 0; i < log_l.size(); ++i) out.factor[i] = static_cast<float>(std::exp(log_l[i] - out.log_scale));
-    return out;
-  }
-};
 
 GridTracker::GridTracker(const FloorPlan* plan, const GridTrackerOptions& options) : impl_(new Impl) {
   CheckArgument(plan != nullptr, "plan", "must not be None");
@@ -458,41 +153,10 @@ RowMatrixXd GridTracker::WalkableFraction(int floor_index) const {
   return out;
 }
 
-GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std::vector<PositionFix>& fixes,
-                                 const TrackStart& start, bool smooth) const {
-  WallTimer timer;
-  const Impl& im = *impl_;
-  const GridTrackerOptions& o = im.options;
-  const double c = o.cell_size_m;
-  CheckArgument(!steps.empty(), "steps", "must hold at least one step");
-  for (std::size_t k = 0; k < steps.size(); ++k) {
-    const std::string name = "steps[" + std::to_string(k) + "]";
-    CheckStepInput(steps[k], name.c_str());
-    CheckArgument(k == 0 || steps[k].time_s >= steps[k - 1].time_s, "steps",
-                  "times must be non-decreasing (step " + std::to_string(k) + " goes back in time)");
-  }
-  for (std::size_t j = 0; j < fixes.size(); ++j) {
-    const std::string name = "fixes[" + std::to_string(j) + "]";
-    CheckPositionFix(fixes[j], name.c_str());
-    CheckArgument(j == 0 || fixes[j].time_s >= fixes[j - 1].time_s, "fixes",
-                  "times must be non-decreasing (fix " + std::to_string(j) + " goes back in time)");
-  }
-  int start_floor_index = -1;
-  if (start.known) {
-    RequireFinite(start.time_s, "start.time_s");
-    RequireFinite(start.position_m.x(), "start.position_m");
-    RequireFinite(start.position_m.y(), "start.position_m");
-    RequireFinite(start.heading_offset_rad, "start.heading_offset_rad");
-    start_floor_index = im.plan->FloorIndex(start.floor);
-  }
-  const int m_steps = static_cast<int>(steps.size());
-  // With a known start, steps up to its time are before the start: estimates there are the start.
-  int k0 = 0;
-  if (start.known) {
-    while (k0 < m_steps && steps[k0].time_s <= start.time_s) ++k0;
-  }
+namespace grid_ops {
 
-  // Layers: floors x heading-offset bins x scale bins, with log prior weights.
+GridLayers MakeGridLayers(const GridTrackerOptions& o, const FloorPlan& plan, int n_floors, double total_area_m2,
+                          const TrackStart& start, int start_floor_index) {
   const double o_sd = o.heading_offset_sd_rad;
   std::vector<double> offsets, offset_log_prior;
   double bin_width = 0;
@@ -530,16 +194,11 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
       scale_log_prior.push_back(-0.5 * d * d / (o.scale_sd * o.scale_sd));
     }
   }
-  struct Layer {
-    int floor_index, offset_bin, scale_bin;
-    double log_prior;
-  };
-  std::vector<Layer> layers;
-  const int n_floors = static_cast<int>(im.grids.size());
+  std::vector<GridLayer> layers;
   for (int f = 0; f < n_floors; ++f) {
     if (start.known && f != start_floor_index) continue;
     // Unknown start: uniform over the walkable area of all floors, so a floor's prior is its area.
-    const double floor_log_prior = start.known ? 0.0 : std::log(im.plan->WalkableArea(f) / im.total_area_m2);
+    const double floor_log_prior = start.known ? 0.0 : std::log(plan.WalkableArea(f) / total_area_m2);
     for (std::size_t h = 0; h < offsets.size(); ++h)
       for (std::size_t s = 0; s < scales.size(); ++s)
         layers.push_back({f, static_cast<int>(h), static_cast<int>(s),
@@ -547,11 +206,62 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
   }
   {  // normalise the layer prior
     double mx = -std::numeric_limits<double>::infinity();
-    for (const Layer& l : layers) mx = std::max(mx, l.log_prior);
+    for (const GridLayer& l : layers) mx = std::max(mx, l.log_prior);
     double sum = 0;
-    for (const Layer& l : layers) sum += std::exp(l.log_prior - mx);
-    for (Layer& l : layers) l.log_prior -= mx + std::log(sum);
+    for (const GridLayer& l : layers) sum += std::exp(l.log_prior - mx);
+    for (GridLayer& l : layers) l.log_prior -= mx + std::log(sum);
   }
+
+  GridLayers out;
+  out.offsets = std::move(offsets);
+  out.scales = std::move(scales);
+  out.bin_width = bin_width;
+  out.layers = std::move(layers);
+  return out;
+}
+
+}  // namespace grid_ops
+
+GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std::vector<PositionFix>& fixes,
+                                 const TrackStart& start, bool smooth) const {
+  WallTimer timer;
+  const Impl& im = *impl_;
+  const GridTrackerOptions& o = im.options;
+  const double c = o.cell_size_m;
+  CheckArgument(!steps.empty(), "steps", "must hold at least one step");
+  for (std::size_t k = 0; k < steps.size(); ++k) {
+    const std::string name = "steps[" + std::to_string(k) + "]";
+    CheckStepInput(steps[k], name.c_str());
+    CheckArgument(k == 0 || steps[k].time_s >= steps[k - 1].time_s, "steps",
+                  "times must be non-decreasing (step " + std::to_string(k) + " goes back in time)");
+  }
+  for (std::size_t j = 0; j < fixes.size(); ++j) {
+    const std::string name = "fixes[" + std::to_string(j) + "]";
+    CheckPositionFix(fixes[j], name.c_str());
+    CheckArgument(j == 0 || fixes[j].time_s >= fixes[j - 1].time_s, "fixes",
+                  "times must be non-decreasing (fix " + std::to_string(j) + " goes back in time)");
+  }
+  int start_floor_index = -1;
+  if (start.known) {
+    RequireFinite(start.time_s, "start.time_s");
+    RequireFinite(start.position_m.x(), "start.position_m");
+    RequireFinite(start.position_m.y(), "start.position_m");
+    RequireFinite(start.heading_offset_rad, "start.heading_offset_rad");
+    start_floor_index = im.plan->FloorIndex(start.floor);
+  }
+  const int m_steps = static_cast<int>(steps.size());
+  // With a known start, steps up to its time are before the start: estimates there are the start.
+  int k0 = 0;
+  if (start.known) {
+    while (k0 < m_steps && steps[k0].time_s <= start.time_s) ++k0;
+  }
+
+  const int n_floors = static_cast<int>(im.grids.size());
+  const GridLayers layer_set = MakeGridLayers(o, *im.plan, n_floors, im.total_area_m2, start, start_floor_index);
+  const std::vector<double>& offsets = layer_set.offsets;
+  const std::vector<double>& scales = layer_set.scales;
+  const double bin_width = layer_set.bin_width;
+  const std::vector<GridLayer>& layers = layer_set.layers;
 
   // Fixes attached to steps: the first step at or after the fix (the last step for later fixes);
   // with a known start, fixes before it are not used.
@@ -629,7 +339,7 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
   // (its pages are touched once per run, not once per layer).
   std::vector<float> single_thread_store;
   ParallelForRuns(n_layers, threads, 0, [&](int li, RandomStream&) {
-    const Layer& layer = layers[li];
+    const GridLayer& layer = layers[li];
     const FloorGrid& fg = im.grids[layer.floor_index];
     const double off = offsets[layer.offset_bin], sc = scales[layer.scale_bin];
     const double co = std::cos(off), so = std::sin(off);
@@ -667,25 +377,7 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
     auto forward = [&](int k, bool record) -> bool {
       StepOps& op = ops[k];
       if (record) {
-        const StepInput& st = steps[k];
-        const Eigen::Vector2d d = st.displacement_m;
-        rx += sc * (co * d.x() - so * d.y());
-        ry += sc * (so * d.x() + co * d.y());
-        const double len = sc * d.norm();
-        pending += sc * sc * 0.5 * st.covariance_m2.trace() + o.position_noise_m * o.position_noise_m +
-                   len * len * bin_width * bin_width / 12.0;
-        op.shift_x = static_cast<int>(std::lround(rx / c));
-        op.shift_y = static_cast<int>(std::lround(ry / c));
-        rx -= op.shift_x * c;
-        ry -= op.shift_y * c;
-        op.blur_var_cells2 = 0;
-        if (pending >= 0.25 * c * c || !fixes_at[k].empty()) {
-          op.blur_var_cells2 = pending / (c * c);
-          pending = 0;
-        }
-        op.pending_var_m2 = pending;
-        op.rx = rx;
-        op.ry = ry;
+        op = PlanStep(steps[k], sc, co, so, c, o.position_noise_m, bin_width, !fixes_at[k].empty(), &rx, &ry, &pending);
       }
       Shift(alpha, fg.nx, fg.ny, op.shift_x, op.shift_y);
       if (op.blur_var_cells2 > 1e-6) Blur(alpha, scratch, fg.nx, fg.ny, op.blur_var_cells2);
@@ -719,15 +411,8 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
           out[3 * b + 2] = static_cast<float>(fg.y0 + (block_sums[3 * b + 2] / m + 0.5) * c + ops[k].ry);
         }
       }
-      LayerStep e;
       // Positions of the layer are cell centres + the remainder; within-cell spread c²/12.
-      e.mx = mo.sx + ops[k].rx;
-      e.my = mo.sy + ops[k].ry;
-      const double extra = ops[k].pending_var_m2 + c * c / 12.0;
-      e.cxx = mo.sxx + extra;
-      e.cxy = mo.sxy;
-      e.cyy = mo.syy + extra;
-      return e;
+      return FilteredLayerEstimate(mo, ops[k], c);
     };
 
     std::vector<std::vector<float>> checkpoints;  // alpha before steps k0, k0 + segment, ...

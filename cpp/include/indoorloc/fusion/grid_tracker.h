@@ -155,6 +155,7 @@ class GridTracker {
   RowMatrixXd WalkableFraction(int floor_index) const;
 
  private:
+  friend class GridFilterSession;  // the streaming forward filter (grid_filter_session.h) runs on these grids
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
