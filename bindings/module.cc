@@ -37,6 +37,7 @@ void BindAnalog(py::module_& m);
 void BindCore(py::module_& m);
 void BindFusionFloorPlan(py::module_& m);
 void BindFusionGrid(py::module_& m);
+void BindFusionGridSession(py::module_& m);
 void BindFusionTracker(py::module_& m);
 void BindMapmatch(py::module_& m);
 void BindNetworkScale(py::module_& m);
@@ -97,4 +98,5 @@ PYBIND11_MODULE(_core, m) {
   indoorloc::bindings::BindFusionFloorPlan(fusion);
   indoorloc::bindings::BindFusionTracker(fusion);
   indoorloc::bindings::BindFusionGrid(fusion);
+  indoorloc::bindings::BindFusionGridSession(fusion);
 }

@@ -284,5 +284,6 @@ int GridFilterSession::pending_fixes() const { return static_cast<int>(state_->p
 double GridFilterSession::latest_time_s() const { return std::max(state_->last_step_time, state_->last_fix_time); }
 GridTrackSummary GridFilterSession::Summary() const { return state_->summary; }
 const GridTracker& GridFilterSession::tracker() const { return *state_->tracker; }
+std::vector<int> GridFilterSession::floors() const { return state_->tracker->impl_->plan->floors(); }
 
 }  // namespace indoorloc::fusion

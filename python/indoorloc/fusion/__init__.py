@@ -431,10 +431,11 @@ def track(steps: Steps, observations: Sequence[WifiObservation] = (), *, plan=No
                        None if fixes is None or len(fixes) == 0 else fixes.as_arrays())
 
 
-from indoorloc.fusion.grid import GridTracker, GridTrackerOptions, GridTrackSummary, region95_contains, track_grid  # noqa: E402
+from indoorloc.fusion.grid import GridFilterSession, GridTracker, GridTrackerOptions, GridTrackSummary, region95_contains, track_grid  # noqa: E402
 
 __all__ = [
     "ANY_FLOOR",
+    "GridFilterSession",
     "GridTracker",
     "GridTrackerOptions",
     "GridTrackSummary",

@@ -84,6 +84,8 @@ class GridFilterSession {
   /// memory of the grids, seconds spent in AddStep.
   GridTrackSummary Summary() const;
   const GridTracker& tracker() const;
+  /// Floor numbers of the tracker's plan: the order of GridFilterEstimate::floor_probabilities.
+  std::vector<int> floors() const;
 
  private:
   struct State;

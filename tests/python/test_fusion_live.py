@@ -1,0 +1,204 @@
+"""Live tracking (indoorloc.fusion.live, indoorloc.pdr_streaming, fusion.GridFilterSession): a walk
+replayed event by event gives the batch causal filter's track bit for bit (a synthetic walk, and
+every walk of the shared data's floor F8 with models from the other walks); the streaming step
+detector is causal and close to the batch detector; events out of time order are refused with the
+event's index, type and times, and the tracker is unchanged."""
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from indoorloc import fusion
+from indoorloc import pdr_handheld as ph
+from indoorloc import pdr_streaming as ps
+from indoorloc import wifi_fixes as wfx
+from indoorloc.fusion import live
+from indoorloc.io import load_floor_plan, read_ilc_floor, read_ilc_site
+from indoorloc.simulate.ilc_site import make_ilc_site
+
+SHARED_F8 = Path(__file__).resolve().parents[3] / "shared" / "data" / "fusion" / "ilc2020_site2" / "F8"
+
+
+def _hall(floors=1):
+    box = np.array([[0, 0], [60, 0], [60, 40], [0, 40]], float)
+    shop = np.array([[20, 20], [30, 20], [30, 30], [20, 30]], float)
+    return fusion.FloorPlan([fusion.FloorGeometry(f, [box], [shop], np.zeros((0, 4))) for f in range(floors)])
+
+
+def _models(train, floor_number):
+    """PDR calibration on the training walks' causal steps, fingerprint database (placed by the
+    batch steps: the map is built offline)."""
+    causal = [ps.causal_handheld_steps(w) for w in train]
+    cal = ph.calibrate_handheld(train, steps_cache=causal)
+    db = wfx.build_database(train, wfx.FixSettings(), [ph.handheld_steps(w) for w in train],
+                            floors=[floor_number] * len(train))
+    return cal, db
+
+
+def _replay(tracker, walk, cal, db):
+    """Every event of the walk through a LiveTracker; the estimate after each new step."""
+    lt = live.LiveTracker(tracker, cal, db)
+    out = []
+    for ev in live.walk_events(walk, beacons=True):
+        e = lt.add_event(*ev)
+        if e is not None and (not out or out[-1]["steps"] != e["steps"]):
+            out.append(e)
+    return lt, out
+
+
+def _assert_replay_equals_batch(tracker, walk, cal, db):
+    batch = live.causal_track(tracker, walk, cal, db)
+    lt, out = _replay(tracker, walk, cal, db)
+    assert len(out) == len(batch["times_s"]) > 0, walk.walk_id
+    np.testing.assert_array_equal([e["time_s"] for e in out], batch["times_s"])
+    np.testing.assert_array_equal(np.array([e["mean_m"] for e in out]), batch["mean_m"])
+    np.testing.assert_array_equal(np.array([e["covariance_m2"] for e in out]), batch["covariance_m2"])
+    np.testing.assert_array_equal(np.array([e["floor_probabilities"] for e in out]), batch["floor_probabilities"])
+    np.testing.assert_array_equal([e["heading_offset_rad"] for e in out], batch["heading_offset_rad"])
+    # Every fix the batch used was applied live (the later ones wait for a step).
+    assert lt.session.summary.fixes == batch["summary"].fixes
+    return batch, lt
+
+
+# ------------------------------------------------------------------ the C++ session from Python
+def test_session_equals_batch_filter_and_refuses_out_of_order_events():
+    plan = _hall(2)
+    tracker = fusion.GridTracker(plan, fusion.GridTrackerOptions(heading_offset_bins=5, heading_offset_sd_rad=0.2))
+    rng = np.random.default_rng(3)
+    n = 40
+    t = 1.0 + np.cumsum(rng.uniform(0.45, 0.6, n))
+    h = 0.3 + np.cumsum(rng.normal(0, 0.15, n))
+    steps = fusion.Steps.from_polar(t, rng.normal(0.7, 0.05, n), h, 0.1, 0.15)
+    ft = t[3::5] - 0.1
+    means = np.stack([np.column_stack([10 + 0.4 * np.arange(ft.size), 12 + 0.2 * np.arange(ft.size)]),
+                      np.tile([40.0, 8.0], (ft.size, 1))], axis=1)
+    fixes = fusion.Fixes.from_arrays(ft, means, np.tile([3.0, 5.0], (ft.size, 1)), np.tile([0.8, 0.2], (ft.size, 1)),
+                                     np.tile([0, 1], (ft.size, 1)))
+    batch = fusion.track_grid(tracker, steps, fixes=fixes, smooth=False)
+    session = fusion.GridFilterSession(tracker)
+    assert session.estimate() is None and session.floors == [0, 1]
+    j = 0
+    for k in range(n):
+        while j < ft.size and ft[j] <= t[k]:
+            session.add_fix(ft[j], means[j], [3.0, 5.0], [0.8, 0.2], [0, 1])
+            j += 1
+        e = session.add_step(t[k], steps.displacements_m[k], steps.covariances_m2[k])
+        assert e["steps"] == k + 1
+        np.testing.assert_array_equal(e["mean_m"], batch["mean_m"][k])
+        np.testing.assert_array_equal(e["covariance_m2"], batch["covariance_m2"][k])
+        np.testing.assert_array_equal(e["floor_probabilities"], batch["floor_probabilities"][k])
+    assert session.summary.log_evidence == batch["summary"].log_evidence
+    before = session.estimate()
+    with pytest.raises(ValueError, match=r"'step'.*out of time order.*before the previous step"):
+        session.add_step(t[-1] - 1.0, [0.7, 0.0], [0.01, 0.0, 0.01])
+    with pytest.raises(ValueError, match=r"'fix'.*not after the latest step.*add it before the step"):
+        session.add_fix(t[-1], [[1.0, 1.0]], [3.0])
+    assert session.steps == n and np.array_equal(session.estimate()["mean_m"], before["mean_m"])
+    # The batch-of-steps form gives the same as one at a time.
+    s2 = fusion.GridFilterSession(tracker)
+    got = s2.add_steps(steps.times_s[:3], steps.displacements_m[:3], steps.covariances_m2[:3])
+    s2.add_fixes(tuple(a[:1] for a in fixes.as_arrays()))   # between steps 2 and 3
+    with pytest.raises(ValueError, match=r"'step'.*before the latest fix"):
+        s2.add_step(t[2], steps.displacements_m[2], steps.covariances_m2[2])
+    got4 = s2.add_steps(steps.times_s[3:4], steps.displacements_m[3:4], steps.covariances_m2[3:4])
+    np.testing.assert_array_equal(np.vstack([got["mean_m"], got4["mean_m"]]), batch["mean_m"][:4])
+
+
+# ------------------------------------------------------------------ step detector
+def test_streaming_detector_is_causal_and_close_to_the_batch_detector():
+    truth = make_ilc_site(seed=1, walks_per_floor=2)
+    w = truth.walks["F1"][0]
+    # Through the files (the detector's real input).
+    import tempfile
+    with tempfile.TemporaryDirectory() as d:
+        floor = read_ilc_site(truth.write(Path(d) / "site"))["F1"]
+        walk = floor.walk(w.walk_id)
+        full = ps.causal_handheld_steps(walk)
+        t, acc, gyro, quat = ps.imu_samples(walk)
+        # Causal: the steps of a prefix of the samples are the full run's steps confirmed by then.
+        cut = t.size // 2
+        det = ps.StreamingStepDetector()
+        for k in range(cut):
+            det.add_sample(t[k], acc[k], gyro[k], quat[k])
+        prefix = det.steps()
+        assert 0 < prefix.n_steps < full.n_steps
+        np.testing.assert_array_equal(prefix.t_s, full.t_s[:prefix.n_steps])
+        np.testing.assert_array_equal(prefix.feature, full.feature[:prefix.n_steps])
+        assert np.all(prefix.t_s <= t[cut - 1] - det.latency_s + 1e-9)
+        # Close to the whole-walk detector: the true step count, the same headings.
+        batch = ph.handheld_steps(walk)
+        assert abs(full.n_steps - w.n_steps) <= 2 and abs(batch.n_steps - w.n_steps) <= 2
+        m = min(full.n_steps, batch.n_steps)
+        assert np.median(np.abs(ph.wrap_angle(full.heading_rad[:m] - batch.heading_rad[:m]))) < 0.05
+        with pytest.raises(ValueError, match=r"not after the previous one"):
+            det.add_sample(t[cut - 1], acc[0], gyro[0], quat[0])
+
+
+# ------------------------------------------------------------------ replay = batch causal filter
+@pytest.fixture(scope="module")
+def synthetic_floor(tmp_path_factory):
+    truth = make_ilc_site(seed=0, walks_per_floor=8)
+    root = truth.write(tmp_path_factory.mktemp("ilc_live") / "site")
+    return read_ilc_site(root)["F1"]
+
+
+def test_replay_equals_the_batch_causal_filter_on_synthetic_walks(synthetic_floor):
+    floor = synthetic_floor
+    walks = list(floor.walks())
+    plan = load_floor_plan(floor.geojson_path, floors=[1], origin_lon_lat="outline_sw")
+    cal, db = _models(walks[:6], 1)
+    tracker = fusion.GridTracker(plan, fusion.GridTrackerOptions(heading_offset_sd_rad=max(cal.yaw_offset_spread_rad, 1e-3)))
+    for walk in walks[6:]:
+        batch, lt = _assert_replay_equals_batch(tracker, walk, cal, db)
+        assert batch["summary"].fixes > 0
+        # And the live track is a track: within a few metres of the waypoints once fixed.
+        idx = np.clip(np.searchsorted(batch["times_s"], walk.waypoint_t_s), 0, len(batch["times_s"]) - 1)
+        err = np.hypot(*(batch["mean_m"][idx] - walk.waypoint_xy_m).T)
+        assert np.median(err[len(err) // 2:]) < 8.0, err
+
+
+def test_events_out_of_time_order_are_refused_naming_index_type_and_times(synthetic_floor):
+    floor = synthetic_floor
+    walks = list(floor.walks())
+    plan = load_floor_plan(floor.geojson_path, floors=[1], origin_lon_lat="outline_sw")
+    tracker = fusion.GridTracker(plan, fusion.GridTrackerOptions())
+    lt = live.LiveTracker(tracker)   # no calibration, no WiFi map: defaults
+    events = list(live.walk_events(walks[0]))
+    for ev in events[:2000]:
+        lt.add_event(*ev)
+    before = lt.estimate()
+    assert before is not None and lt.events == 2000
+    kind, t = events[1999][0], events[1999][1]
+    with pytest.raises(ValueError) as info:
+        lt.add_gyroscope(t - 0.5, [0.0, 0.0, 0.0])
+    msg = str(info.value)
+    assert "event 2000 (gyroscope at t = " in msg and f"event 1999 ({kind} at t = {t} s)" in msg
+    with pytest.raises(ValueError, match=r"event 2000 \(wifi\): time must be finite"):
+        lt.add_wifi_scan(float("nan"), [], [], [])
+    with pytest.raises(ValueError, match=r"unknown kind 'magnetometer'"):
+        lt.add_event("magnetometer", t, [0, 0, 0])
+    assert lt.events == 2000 and lt.estimate() is before
+    for ev in events[2000:]:   # continues normally
+        lt.add_event(*ev)
+    assert lt.estimate()["steps"] > before["steps"]
+
+
+@pytest.mark.skipif(not SHARED_F8.is_dir(), reason="the shared ILC 2020 data (../shared/data/fusion) is absent")
+def test_replay_equals_the_batch_causal_filter_on_every_walk_of_a_real_floor():
+    """Every walk of the shared site's F8 (24 walks), models from the other walks (4 folds)."""
+    floor = read_ilc_floor(SHARED_F8)
+    walks = list(floor.walks())
+    plan = load_floor_plan(floor.geojson_path, floors=[8], origin_lon_lat="outline_sw")
+    folds = np.array_split(np.arange(len(walks)), 4)
+    checked = 0
+    for test in folds:
+        train = [w for i, w in enumerate(walks) if i not in set(test.tolist())]
+        cal, db = _models(train, 8)
+        tracker = fusion.GridTracker(plan, fusion.GridTrackerOptions(
+            heading_offset_sd_rad=max(cal.yaw_offset_spread_rad, 1e-3)))
+        for i in test:
+            _assert_replay_equals_batch(tracker, walks[i], cal, db)
+            checked += 1
+    assert checked == len(walks) == 24
