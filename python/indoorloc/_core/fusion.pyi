@@ -206,6 +206,12 @@ class GridTrackerOptions:
     spatial_median: bool
     median_block_m: float
     start_position_sd_m: float
+    filtered_covariance_scale: float
+    filtered_covariance_floor_m: float
+    filtered_covariance_fix_gain: float
+    smoothed_covariance_scale: float
+    smoothed_covariance_floor_m: float
+    smoothed_covariance_fix_gain: float
     max_memory_bytes: float
     num_threads: int
     def __init__(self, **fields: Any) -> None: ...
