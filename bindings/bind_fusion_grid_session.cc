@@ -23,6 +23,8 @@ py::dict EstimateToDict(const GridFilterEstimate& e) {
   d["steps"] = e.steps;
   d["mean_m"] = Eigen::VectorXd(e.mean_m);
   d["covariance_m2"] = Eigen::VectorXd(e.covariance_m2);
+  d["posterior_covariance_m2"] = Eigen::VectorXd(e.posterior_covariance_m2);
+  d["fix_distance_m"] = e.fix_distance_m;
   d["floor_probabilities"] = e.floor_probabilities;
   d["heading_offset_rad"] = e.heading_offset_rad;
   d["log_evidence"] = e.log_evidence;
@@ -111,8 +113,9 @@ not after the latest step.)doc")
           py::arg("time_s"), py::arg("displacement_m"), py::arg("covariance_m2"), R"doc(
 Add a step: time_s [s], displacement_m (2,) [m] in the PDR frame, covariance_m2 (3,) = (xx, xy, yy)
 [m²]; applies the pending fixes with time <= time_s. Returns the estimate after it: a dict with
-time_s, steps, mean_m (2,) [m], covariance_m2 (3,) [m²], floor_probabilities (F,),
-heading_offset_rad, log_evidence. ValueError for a step before the previous step or fix;
+time_s, steps, mean_m (2,) [m], covariance_m2 (3,) [m²] (calibrated as GridTracker.run's),
+posterior_covariance_m2 (3,), fix_distance_m, floor_probabilities (F,), heading_offset_rad,
+log_evidence. ValueError for a step before the previous step or fix;
 RuntimeError when every hypothesis is ruled out (hard walls).)doc")
       .def(
           "add_steps",
@@ -120,7 +123,7 @@ RuntimeError when every hypothesis is ruled out (hard walls).)doc")
              const py::object& covariances_m2) {
             const std::vector<StepInput> st = StepsFromArrays(times_s, displacements_m, covariances_m2);
             const Eigen::Index m = static_cast<Eigen::Index>(st.size());
-            RowMatrixXd mean(m, 2), cov(m, 3), floors;
+            RowMatrixXd mean(m, 2), cov(m, 3), posterior(m, 3), floors;
             Eigen::VectorXd heading(m);
             {
               py::gil_scoped_release release;
@@ -129,6 +132,7 @@ RuntimeError when every hypothesis is ruled out (hard walls).)doc")
                 if (k == 0) floors.resize(m, e.floor_probabilities.size());
                 mean.row(k) = e.mean_m.transpose();
                 cov.row(k) = e.covariance_m2.transpose();
+                posterior.row(k) = e.posterior_covariance_m2.transpose();
                 floors.row(k) = e.floor_probabilities.transpose();
                 heading[k] = e.heading_offset_rad;
               }
@@ -136,6 +140,7 @@ RuntimeError when every hypothesis is ruled out (hard walls).)doc")
             py::dict d;
             d["mean_m"] = mean;
             d["covariance_m2"] = cov;
+            d["posterior_covariance_m2"] = posterior;
             d["floor_probabilities"] = floors;
             d["heading_offset_rad"] = heading;
             return d;

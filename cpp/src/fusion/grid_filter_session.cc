@@ -41,6 +41,8 @@ struct GridFilterSession::State {
   bool failed = false;                      // every layer ruled out
   double last_step_time = -std::numeric_limits<double>::infinity();
   double last_fix_time = -std::numeric_limits<double>::infinity();
+  bool has_fix_centre = false;              // a fix was added (the calibration's d measures from it)
+  Eigen::Vector2d fix_centre = Eigen::Vector2d::Zero();
   GridFilterEstimate current;
   GridTrackSummary summary;
 };
@@ -132,6 +134,9 @@ void GridFilterSession::AddFix(const PositionFix& fix) {
                     Seconds(s.last_step_time) +
                     " (a fix at a step's time belongs to that step: add it before the step)");
   s.last_fix_time = fix.time_s;
+  // The batch's calibration measures from the last fix at or before a step, whatever it is.
+  s.has_fix_centre = true;
+  s.fix_centre = FixCentre(fix);
   if (fix.empty()) return;
   if (s.start.known && fix.time_s < s.start.time_s) return;  // the batch ignores fixes before a known start
   s.pending_fixes.push_back(fix);
@@ -165,6 +170,8 @@ GridFilterEstimate GridFilterSession::AddStep(const StepInput& step) {
     const double var = o.start_position_sd_m * o.start_position_sd_m;
     e.mean_m = s.start.position_m;
     e.covariance_m2 << var, 0.0, var;
+    e.posterior_covariance_m2 = e.covariance_m2;
+    e.fix_distance_m = 0.0;
     e.floor_probabilities = Eigen::VectorXd::Zero(n_floors);
     e.floor_probabilities[s.start_floor_index] = 1.0;
     e.heading_offset_rad = s.start.heading_offset_rad;
@@ -259,7 +266,15 @@ GridFilterEstimate GridFilterSession::AddStep(const StepInput& step) {
     syy += w[l] * (le.cyy + le.my * le.my);
   }
   e.mean_m << m_x, m_y;
-  e.covariance_m2 << sxx - m_x * m_x, sxy - m_x * m_y, syy - m_y * m_y;
+  e.posterior_covariance_m2 << sxx - m_x * m_x, sxy - m_x * m_y, syy - m_y * m_y;
+  // The batch's calibration Σ' = a Σ + (b² + (g d)²) I (grid_tracker.cc, CalibrateRows).
+  const Eigen::Vector2d m = e.mean_m;
+  const double d = s.has_fix_centre ? (m - s.fix_centre).norm() : 0.0;
+  const double a = o.filtered_covariance_scale, b = o.filtered_covariance_floor_m, g = o.filtered_covariance_fix_gain;
+  const double iso = b * b + (g * d) * (g * d);
+  e.fix_distance_m = d;
+  e.covariance_m2 << a * e.posterior_covariance_m2[0] + iso, a * e.posterior_covariance_m2[1],
+      a * e.posterior_covariance_m2[2] + iso;
   e.floor_probabilities = Eigen::VectorXd::Zero(n_floors);
   double cs = 0, sn = 0;
   for (int l = 0; l < n_layers; ++l) {

@@ -328,6 +328,17 @@ inline LayerStep FilteredLayerEstimate(const Moments& mo, const StepOps& op, dou
   return e;
 }
 
+// Weighted mean of a fix's components [m] (the centre the covariance calibration measures from).
+inline Eigen::Vector2d FixCentre(const PositionFix& f) {
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+  double total = 0;
+  for (Eigen::Index i = 0; i < f.means_m.rows(); ++i) {
+    centre += f.weights[i] * f.means_m.row(i).transpose();
+    total += f.weights[i];
+  }
+  return total > 0 ? Eigen::Vector2d(centre / total) : centre;
+}
+
 }  // namespace grid_ops
 
 // The tracker's grids and fix factors (the pimpl of GridTracker, shared with GridFilterSession).

@@ -169,6 +169,9 @@ class WalkScore:
     waypoint_t0: float = 0.0                          #: the first waypoint's time [s]
     waypoint_xy_m: Optional[np.ndarray] = None        #: surveyed waypoints (W, 2) [m]
     smoothed_track_m: Optional[np.ndarray] = None     #: the default's smoothed track (per step)
+    #: Per grid method: what the covariance calibration is fitted on (``fusion_uncertainty``):
+    #: ``error_m`` (W, 2) estimate minus truth, ``posterior_covariance_m2`` (W, 3), ``fix_distance_m`` (W,).
+    calibration_inputs: Dict[str, Dict[str, np.ndarray]] = field(default_factory=dict)
 
 
 @dataclass
@@ -462,6 +465,11 @@ def _score_walk_grid(score: WalkScore, put, pdr_steps, fixes, known_fixes, known
             score.seconds[name] = seconds
             if name in COVARIANCE_METHODS:
                 score.in_region95[name] = fusion.region95_contains(est, np.asarray(r[cov_key])[idx], wxy)
+                prefix = "" if key == "mean_m" else "smoothed_"
+                score.calibration_inputs[name] = {
+                    "error_m": est - wxy,
+                    "posterior_covariance_m2": np.asarray(r[prefix + "posterior_covariance_m2"])[idx],
+                    "fix_distance_m": np.asarray(r[prefix + "fix_distance_m"])[idx]}
         return r
 
     if want & {"fusion_unknown_start", "fusion_smoother"} or settings.floor_identification:

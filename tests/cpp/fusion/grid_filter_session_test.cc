@@ -1,6 +1,7 @@
 // Tests of the grid filter session: after every step its estimate equals the batch run's filtered
 // output bit for bit (unknown start on two floors with a shop, fixes between and at step times;
-// known start with steps before it; several fixes at one step; scale bins; spatial-median option),
+// known start with steps before it; several fixes at one step; scale bins; spatial-median option;
+// calibrated covariances),
 // whatever the thread count; events out of time order are refused with both times named and
 // leave the session unchanged.
 #include "indoorloc/fusion/grid_filter_session.h"
@@ -88,7 +89,11 @@ void ExpectSessionEqualsBatch(const GridTracker& tracker, const std::vector<Step
     // Exact equality: the same operations in the same order.
     EXPECT_EQ(e.mean_m.x(), batch.filtered_mean_m(k, 0)) << "step " << k;
     EXPECT_EQ(e.mean_m.y(), batch.filtered_mean_m(k, 1)) << "step " << k;
-    for (int i = 0; i < 3; ++i) EXPECT_EQ(e.covariance_m2[i], batch.filtered_covariance_m2(k, i)) << "step " << k;
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_EQ(e.covariance_m2[i], batch.filtered_covariance_m2(k, i)) << "step " << k;
+      EXPECT_EQ(e.posterior_covariance_m2[i], batch.filtered_posterior_covariance_m2(k, i)) << "step " << k;
+    }
+    EXPECT_EQ(e.fix_distance_m, batch.filtered_fix_distance_m[k]) << "step " << k;
     ASSERT_EQ(e.floor_probabilities.size(), batch.filtered_floor_probabilities.cols());
     for (int f = 0; f < e.floor_probabilities.size(); ++f)
       EXPECT_EQ(e.floor_probabilities[f], batch.filtered_floor_probabilities(k, f)) << "step " << k;
@@ -119,6 +124,9 @@ TEST(GridFilterSessionTest, KnownStartScaleBinsAndMediansEqualBatch) {
   o.scale_bins = 3;
   o.spatial_median = true;  // the batch then sums the moments in double: the session follows
   o.wall_log_penalty = -3.0;
+  o.filtered_covariance_scale = 1.7;  // the returned covariance calibrated as the batch's
+  o.filtered_covariance_floor_m = 2.0;
+  o.filtered_covariance_fix_gain = 0.3;
   const GridTracker tracker(&plan, o);
   const auto steps = Walk(40, 11);
   TrackStart start;

@@ -45,7 +45,10 @@ struct GridFilterEstimate {
   double time_s = 0;                       ///< time of the latest step [s]
   int steps = 0;                           ///< steps added so far
   Eigen::Vector2d mean_m = Eigen::Vector2d::Zero();               ///< posterior mean [m]
-  Eigen::Vector3d covariance_m2 = Eigen::Vector3d::Zero();        ///< (xx, xy, yy) [m²]
+  /// (xx, xy, yy) [m²], calibrated as the batch's (GridTrackerOptions::filtered_covariance_*)
+  Eigen::Vector3d covariance_m2 = Eigen::Vector3d::Zero();
+  Eigen::Vector3d posterior_covariance_m2 = Eigen::Vector3d::Zero();  ///< the posterior's own [m²]
+  double fix_distance_m = 0;               ///< d of the calibration: to the latest fix's centre [m]
   Eigen::VectorXd floor_probabilities;     ///< per floor of the plan (F)
   double heading_offset_rad = 0;           ///< posterior circular mean of the heading offset
   double log_evidence = 0;                 ///< log p(fixes so far | steps so far), over all layers
