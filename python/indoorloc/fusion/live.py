@@ -151,37 +151,47 @@ def causal_track(tracker: GridTracker, walk: Any, calibration: Optional[ph.Handh
 class _QueryPooler:
     """The "window" query of each scan, built incrementally (``causal_queries`` one scan at a time):
     distinct (BSSID, last-seen ms) measurements at their first report, those last seen within the
-    window kept, max-pooled per database column."""
+    window kept (arrays), max-pooled per database column."""
 
     def __init__(self, database: wfx.FingerprintDatabase):
         self.database = database
         self.column = {b: i for i, b in enumerate(database.bssids)}
         self.window_s = float(database.settings.query_window_s)
         self.seen: Dict[Tuple[str, int], float] = {}         # key -> last-seen time
-        self.kept: deque = deque()                           # (last_seen, column, rssi) of known APs
+        self.t = np.zeros(0)                                 # kept measurements of known APs: last seen [s]
+        self.col = np.zeros(0, np.int64)                     # ... their column
+        self.rss = np.zeros(0)                               # ... their RSSI [dBm]
 
     def query(self, t_s: float, bssids: Sequence[str], rssi_dbm: np.ndarray, last_seen_s: np.ndarray
               ) -> Optional[np.ndarray]:
         """Adds a scan's readings; returns the query fingerprint (K,) of time t_s, or None when it
         has fewer than ``min_aps`` known APs."""
         lo = t_s - self.window_s
-        for b, r, ls in zip(bssids, rssi_dbm, last_seen_s):
-            key = (b, int(np.round(ls * 1000.0)))
+        ms = np.round(last_seen_s * 1000.0).astype(np.int64).tolist()   # the key of new_measurement_mask
+        new = []
+        for j, (b, key_ms) in enumerate(zip(bssids, ms)):
+            key = (b, key_ms)
             if key in self.seen:
                 continue
-            self.seen[key] = ls
+            self.seen[key] = last_seen_s[j]
             col = self.column.get(b, -1)
             if col >= 0:
-                self.kept.append((ls, col, r))
+                new.append((j, col))
+        if new:
+            j, c = np.array(new, dtype=np.int64).T
+            self.t = np.concatenate([self.t, last_seen_s[j]])
+            self.col = np.concatenate([self.col, c])
+            self.rss = np.concatenate([self.rss, rssi_dbm[j]])
         # Forget what no later window can hold (windows only move forward).
-        if len(self.seen) > 4 * max(16, len(self.kept)):
+        keep = self.t >= lo
+        if not keep.all():
+            self.t, self.col, self.rss = self.t[keep], self.col[keep], self.rss[keep]
+        if len(self.seen) > 4096:
             self.seen = {k: v for k, v in self.seen.items() if v >= lo}
-        self.kept = deque(m for m in self.kept if m[0] >= lo)
         q = np.full(len(self.column), np.nan)
-        for ls, col, r in self.kept:
-            if ls <= t_s and not (r <= q[col]):  # max-pool (NaN: not yet heard)
-                q[col] = r
-        if np.isfinite(q).sum() < self.database.settings.min_aps:
+        now = self.t <= t_s
+        np.fmax.at(q, self.col[now], self.rss[now])   # max-pool (NaN: not heard)
+        if np.count_nonzero(~np.isnan(q)) < self.database.settings.min_aps:
             return None
         return q
 
@@ -223,6 +233,7 @@ class LiveTracker:
                 raise ValueError("indoorloc: argument 'database': live tracking needs settings.pooling == 'window' "
                                  f"and query_align == 'end' (got {s.pooling!r}, {s.query_align!r})")
             self._pooler = _QueryPooler(database)
+            database.index  # noqa: B018: build the matcher's index now, not at the first scan
         self._database = database
         self._floors = np.asarray(self._session.floors, dtype=np.int64)
         self._gyro: Optional[np.ndarray] = None
