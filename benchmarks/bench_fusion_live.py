@@ -36,6 +36,7 @@ from indoorloc import fusion
 from indoorloc import pdr_handheld as ph
 from indoorloc import pdr_streaming as ps
 from indoorloc import wifi_fixes as wfx
+from indoorloc import wifi_matcher as wm
 from indoorloc.fusion import live
 from indoorloc.io import load_floor_plan, read_ilc_floor, read_ilc_site
 
@@ -118,6 +119,25 @@ def run_floor(name, number, floor, rng):
         t0 = time.perf_counter_ns()
         probe.add_wifi_scan(t_end + 1.0 + k, names, rssi, seen)
         scan_200.append(time.perf_counter_ns() - t0)
+    # What a 200-reading scan's time goes to (medians over 50 scans): pooling, the shared-AP
+    # dissimilarity to every fingerprint, the k best, the fix's construction.
+    parts = {"pool_us": [], "dissimilarity_us": [], "knn_us": [], "fix_us": []}
+    for k in range(50):
+        pooler = copy.deepcopy(lt._pooler)
+        t = t_end + 500.0 + k
+        names, rssi, seen = _scan_200(db, rng, t)
+        t0 = time.perf_counter_ns()
+        q = pooler.query(t, names, rssi, seen)
+        t1 = time.perf_counter_ns()
+        d = wfx.dissimilarity(q[None, :], db)
+        t2 = time.perf_counter_ns()
+        best, d_best, w = wm.knn(d, db.settings.k, db.settings.temperature_db)
+        t3 = time.perf_counter_ns()
+        fusion.Fixes.from_arrays(np.array([t]), db.positions_m[best], wfx.fix_sds(d_best[:, 0], db.settings), w,
+                                 db.floors[best]).as_arrays()
+        t4 = time.perf_counter_ns()
+        for key, v in zip(parts, (t1 - t0, t2 - t1, t3 - t2, t4 - t3)):
+            parts[key].append(v / 1e3)
     s = lt.session.summary
     x0, y0, nx, ny = tracker.grid_geometry(0)
     return {
@@ -126,6 +146,7 @@ def run_floor(name, number, floor, rng):
         "scan_readings_median": float(np.median(readings)) if readings else 0.0,
         "steps": int(s.steps), "fixes": int(s.fixes), "models_s": models_s,
         "session_s_per_step": s.seconds / max(1, s.steps),
+        "wifi_scan_200_parts_median_us": {k: float(np.median(v)) for k, v in parts.items()},
         "latency": {**{k: _percentiles(v) for k, v in times.items()}, "wifi_scan_200": _percentiles(scan_200)},
     }
 
@@ -163,6 +184,13 @@ def markdown(result: dict) -> str:
         lines.append(f"| {f['floor']} | {f['cells']:,} x {f['layers']} | {f['fingerprints']:,} | {pp(lat['imu'])} | "
                      f"{pp(lat['step'])} | {pp(lat['step_with_fix'])} | {pp(lat['wifi_scan'])} "
                      f"({f['scan_readings_median']:.0f}) | {pp(lat['wifi_scan_200'])} |")
+    lines += ["", "A 200-reading scan's time by part (median µs): pooling / shared-AP dissimilarity to every "
+              "fingerprint / k best / the fix; and the C++ session's mean time per step [ms]:", "",
+              "| floor | pool | dissimilarity | k best | fix | session per step |", "|---|---|---|---|---|---|"]
+    for f in r["floors"]:
+        p = f["wifi_scan_200_parts_median_us"]
+        lines.append(f"| {f['floor']} | {p['pool_us']:.0f} | {p['dissimilarity_us']:.0f} | {p['knn_us']:.0f} | "
+                     f"{p['fix_us']:.0f} | {1e3 * f['session_s_per_step']:.2f} |")
     worst = max(f["latency"]["wifi_scan_200"]["p99_us"] for f in r["floors"])
     lines += ["", f"WiFi scan of 200 readings: worst p99 over the floors **{worst / 1e3:.2f} ms** (goal "
               f"{r['goals']['wifi_scan_200_p99_us'] / 1e3:.0f} ms)."]

@@ -18,7 +18,12 @@ What happens to each event (docs/fusion.md, "Live tracking"):
   seen in [t - query_window_s, t] (exactly ``wifi_fixes.walk_queries``, incrementally); its ``k``
   best fingerprints make a fix **timed at the scan** (when it exists, not at the mean last-seen time
   that ``walk_queries`` stamps it with: a live filter cannot apply a fix before it is made). The
-  fix is applied at the first step at or after its time.
+  fix is applied at the first step at or after its time. **Delay compensation** (default): a
+  16 s pooled query describes where the walker was at its measurements' mean last-seen time,
+  seconds before the scan, so each component of the fix is moved by the PDR displacement
+  (calibrated, in the floor frame of the prior's offset) of the steps between that time and
+  the step that applies it. On the shared floors this takes the live filter's mean error back
+  to the batch filter's (benchmarks/results/fusion_live_accuracy.md).
 - **Beacons**: accepted and ignored (the site has no beacon map yet).
 
 Every method returns the current estimate (a dict: ``time_s``, ``steps``, ``mean_m`` (2,),
@@ -28,7 +33,7 @@ non-decreasing time: otherwise ValueError naming the event's index, type and bot
 tracker is unchanged.
 
 Exactness: :func:`causal_track` is the same filter in one batch call (causal steps of the whole
-walk, fixes at their scan times, ``GridTracker.run`` without smoothing). A walk replayed event by
+walk, fixes at their scan times and delay-compensated, ``GridTracker.run`` without smoothing). A walk replayed event by
 event (:func:`walk_events`) gives its track bit for bit (tests/python/test_fusion_live.py).
 """
 
@@ -82,8 +87,9 @@ def _step_arrays(steps: ph.HandheldSteps, yaw_offset_rad: float, length_sd_fract
 
 
 def _fixes_of_queries(times_s: np.ndarray, rss_dbm: np.ndarray, database: wfx.FingerprintDatabase,
-                      with_floors: bool):
-    """Fixes (fusion.Fixes) of query fingerprints (Q, K) at the given times (``fixes_for_walk``'s rule)."""
+                      with_floors: bool, shifts_m: Optional[np.ndarray] = None):
+    """Fixes (fusion.Fixes) of query fingerprints (Q, K) at the given times (``fixes_for_walk``'s
+    rule), every component of fix q moved by ``shifts_m[q]`` (Q, 2) [m] when given."""
     from indoorloc import fusion
 
     s = database.settings
@@ -92,13 +98,27 @@ def _fixes_of_queries(times_s: np.ndarray, rss_dbm: np.ndarray, database: wfx.Fi
         return fusion.Fixes.from_arrays(np.zeros(0), np.zeros((0, k, 2)), np.zeros((0, k)), np.zeros((0, k)))
     best, d_best, weights = wm.knn(wfx.dissimilarity(rss_dbm, database), k, s.temperature_db)
     floors = database.floors[best] if with_floors else None
-    return fusion.Fixes.from_arrays(times_s, database.positions_m[best], wfx.fix_sds(d_best[:, 0], s), weights, floors)
+    means = database.positions_m[best]
+    if shifts_m is not None:
+        means = means + shifts_m[:, None, :]
+    return fusion.Fixes.from_arrays(times_s, means, wfx.fix_sds(d_best[:, 0], s), weights, floors)
 
 
-def causal_queries(walk: Any, database: wfx.FingerprintDatabase) -> Tuple[np.ndarray, np.ndarray]:
-    """The query fingerprints of a walk's scans timed at the scan (``(t_s (Q,), rss_dbm (Q, K))``):
-    the fingerprints of ``wifi_fixes.walk_queries`` ("window" pooling, causal alignment) with the
-    time at which each exists. Raises ValueError for other pooling settings."""
+def _delay_shift(step_times_s: np.ndarray, displacements_m: np.ndarray, described_s: float, k: int) -> np.ndarray:
+    """The PDR displacement (2,) [m] from the time a fix describes to step k: the sum of the
+    displacements of the steps j with described_s < t_j <= t_k (zero when none)."""
+    lo = int(np.searchsorted(step_times_s, described_s, side="right"))
+    if lo > k:
+        return np.zeros(2)
+    return np.sum(displacements_m[lo:k + 1], axis=0)
+
+
+def causal_queries(walk: Any, database: wfx.FingerprintDatabase) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The query fingerprints of a walk's scans timed at the scan: ``(t_s (Q,), described_s (Q,),
+    rss_dbm (Q, K))``, the fingerprints of ``wifi_fixes.walk_queries`` ("window" pooling, causal
+    alignment) with the time at which each exists and the mean last-seen time of its
+    measurements (the time it describes, walk_queries' timestamp). Raises ValueError for other
+    pooling settings."""
     s = database.settings
     if s.pooling != "window" or s.query_align != "end":
         raise ValueError("indoorloc: argument 'database': live tracking needs settings.pooling == 'window' and "
@@ -106,42 +126,53 @@ def causal_queries(walk: Any, database: wfx.FingerprintDatabase) -> Tuple[np.nda
     meas = wm.walk_measurements(walk)
     cols = meas.columns({b: i for i, b in enumerate(database.bssids)})
     scan_t = np.unique(np.asarray(walk.wifi.scan_times_s, float))
-    rss, _, _ = wm.pool_windows(meas.t_s, cols, meas.rssi_dbm, len(database.bssids), scan_t, s.query_window_s, 0.0,
-                                meas.reported_s)
+    rss, mean_t, _ = wm.pool_windows(meas.t_s, cols, meas.rssi_dbm, len(database.bssids), scan_t, s.query_window_s,
+                                     0.0, meas.reported_s)
     ok = np.isfinite(rss).sum(axis=1) >= s.min_aps
-    return scan_t[ok], rss[ok]
+    return scan_t[ok], mean_t[ok], rss[ok]
 
 
 def causal_inputs(walk: Any, calibration: Optional[ph.HandheldCalibration] = None,
                   database: Optional[wfx.FingerprintDatabase] = None, *,
                   step_length_sd_fraction: float = STEP_LENGTH_SD_FRACTION,
-                  step_heading_sd_rad: float = STEP_HEADING_SD_RAD, with_floors: bool = True):
+                  step_heading_sd_rad: float = STEP_HEADING_SD_RAD, with_floors: bool = True,
+                  delay_compensation: bool = True):
     """The steps (fusion.Steps) and fixes (fusion.Fixes or None) a live tracker derives from a
     recorded walk: causal steps (``pdr_streaming.causal_handheld_steps`` with the calibration's
     options), fixes of the scans timed at the scans, those after the last step dropped (a live
-    filter has not applied them yet)."""
+    filter has not applied them yet). ``delay_compensation``: each fix's components moved by the
+    PDR displacement from the time the fix describes (its measurements' mean last-seen time) to
+    the step that applies it (module docstring)."""
     options = calibration.options if calibration is not None else ph.HandheldOptions()
     yaw = calibration.yaw_offset_rad if calibration is not None else 0.0
     steps = _step_arrays(ps.causal_handheld_steps(walk, options), yaw, step_length_sd_fraction, step_heading_sd_rad)
     fixes = None
     if database is not None:
-        t, rss = causal_queries(walk, database)
+        t, described, rss = causal_queries(walk, database)
         last = steps.times_s[-1] if len(steps) else -math.inf
         keep = t <= last
-        fixes = _fixes_of_queries(t[keep], rss[keep], database, with_floors)
+        t, described, rss = t[keep], described[keep], rss[keep]
+        shifts = None
+        if delay_compensation:
+            at = np.searchsorted(steps.times_s, t, side="left")   # the step that applies each fix
+            shifts = np.array([_delay_shift(steps.times_s, steps.displacements_m, described[q], int(at[q]))
+                               for q in range(t.size)]).reshape(-1, 2)
+        fixes = _fixes_of_queries(t, rss, database, with_floors, shifts)
     return steps, fixes
 
 
 def causal_track(tracker: GridTracker, walk: Any, calibration: Optional[ph.HandheldCalibration] = None,
                  database: Optional[wfx.FingerprintDatabase] = None, *, start: Optional[dict] = None,
                  step_length_sd_fraction: float = STEP_LENGTH_SD_FRACTION,
-                 step_heading_sd_rad: float = STEP_HEADING_SD_RAD, with_floors: bool = True) -> dict:
+                 step_heading_sd_rad: float = STEP_HEADING_SD_RAD, with_floors: bool = True,
+                 delay_compensation: bool = True) -> dict:
     """The live tracker's track of a recorded walk in one batch call: ``GridTracker.run`` (no
     smoothing) on :func:`causal_inputs`. Returns run's dict (``times_s``, ``mean_m``,
     ``covariance_m2``, ``floor_probabilities``, ``heading_offset_rad`` per step; empty arrays for a
     walk without steps)."""
     steps, fixes = causal_inputs(walk, calibration, database, step_length_sd_fraction=step_length_sd_fraction,
-                                 step_heading_sd_rad=step_heading_sd_rad, with_floors=with_floors)
+                                 step_heading_sd_rad=step_heading_sd_rad, with_floors=with_floors,
+                                 delay_compensation=delay_compensation)
     if len(steps) == 0:
         return {"times_s": np.zeros(0), "mean_m": np.zeros((0, 2)), "covariance_m2": np.zeros((0, 3))}
     arrays = None if fixes is None or len(fixes) == 0 else fixes.as_arrays()
@@ -163,8 +194,9 @@ class _QueryPooler:
         self.rss = np.zeros(0)                               # ... their RSSI [dBm]
 
     def query(self, t_s: float, bssids: Sequence[str], rssi_dbm: np.ndarray, last_seen_s: np.ndarray
-              ) -> Optional[np.ndarray]:
-        """Adds a scan's readings; returns the query fingerprint (K,) of time t_s, or None when it
+              ) -> Optional[Tuple[np.ndarray, float]]:
+        """Adds a scan's readings; returns the query fingerprint (K,) of time t_s and the mean
+        last-seen time of its measurements [s] (summed in pool_windows' order), or None when it
         has fewer than ``min_aps`` known APs."""
         lo = t_s - self.window_s
         ms = np.round(last_seen_s * 1000.0).astype(np.int64).tolist()   # the key of new_measurement_mask
@@ -193,7 +225,9 @@ class _QueryPooler:
         np.fmax.at(q, self.col[now], self.rss[now])   # max-pool (NaN: not heard)
         if np.count_nonzero(~np.isnan(q)) < self.database.settings.min_aps:
             return None
-        return q
+        t_used = np.sort(self.t[now], kind="stable")
+        total = np.bincount(np.zeros(t_used.size, np.int64), weights=t_used, minlength=1)[0]
+        return q, total / max(t_used.size, 1)
 
 
 class LiveTracker:
@@ -211,12 +245,16 @@ class LiveTracker:
         The WiFi map ("window" pooling); None: WiFi events are ignored.
     start : dict or None
         None: unknown start; else {"position_m", "floor", "heading_offset_rad", "time_s"}.
+    delay_compensation : bool
+        Move each fix by the PDR displacement from the time it describes to the step that
+        applies it (module docstring).
     """
 
     def __init__(self, tracker: GridTracker, calibration: Optional[ph.HandheldCalibration] = None,
                  database: Optional[wfx.FingerprintDatabase] = None, *, start: Optional[dict] = None,
                  step_length_sd_fraction: float = STEP_LENGTH_SD_FRACTION,
-                 step_heading_sd_rad: float = STEP_HEADING_SD_RAD, with_floors: bool = True):
+                 step_heading_sd_rad: float = STEP_HEADING_SD_RAD, with_floors: bool = True,
+                 delay_compensation: bool = True):
         if not isinstance(tracker, GridTracker):
             raise TypeError(f"indoorloc: argument 'tracker': expected a fusion.GridTracker, got {type(tracker).__name__}")
         self._session = GridFilterSession(tracker, start)
@@ -236,6 +274,9 @@ class LiveTracker:
             database.index  # noqa: B018: build the matcher's index now, not at the first scan
         self._database = database
         self._floors = np.asarray(self._session.floors, dtype=np.int64)
+        self._delay = bool(delay_compensation)
+        self._step_t: List[float] = []          # recent steps: times [s] and displacements (2,) [m]
+        self._step_d: List[np.ndarray] = []
         self._gyro: Optional[np.ndarray] = None
         self._quat: Optional[np.ndarray] = None
         self._fixes: deque = deque()   # (time, fix arrays) waiting for a step at or after them
@@ -280,12 +321,11 @@ class LiveTracker:
         if not (len(bssids) == rssi.size == seen.size):
             raise ValueError(f"indoorloc: LiveTracker.add_wifi_scan: bssids, rssi_dbm and last_seen_s must have one "
                              f"entry per reading, got {len(bssids)}, {rssi.size}, {seen.size}")
-        q = self._pooler.query(t, list(bssids), rssi, seen)
+        got = self._pooler.query(t, list(bssids), rssi, seen)
         if self._fixes and self._fixes[-1][0] == t:  # a second scan at the same time: its pooled query replaces
             self._fixes.pop()
-        if q is not None:
-            fix = _fixes_of_queries(np.array([t]), q[None, :], self._database, self._with_floors)
-            self._fixes.append((t, fix.as_arrays()))
+        if got is not None:
+            self._fixes.append((t, got[1], got[0]))   # (scan time, described time, query)
         return self._estimate
 
     def add_beacon(self, t_s: float, *values: Any) -> Optional[dict]:
@@ -337,10 +377,22 @@ class LiveTracker:
 
     def _add_step(self, step: Tuple) -> None:
         t = step[0]
-        while self._fixes and self._fixes[0][0] <= t:
-            self._session.add_fixes(self._fixes.popleft()[1])
         one = ps._assemble([step], self._detector.options, step[6])
         st = _step_arrays(one, self._yaw, self._length_sd_fraction, self._heading_sd)
+        self._step_t.append(float(st.times_s[0]))
+        self._step_d.append(st.displacements_m[0])
+        if self._fixes and self._fixes[0][0] <= t:
+            times, disp = np.array(self._step_t), np.array(self._step_d)
+            while self._fixes and self._fixes[0][0] <= t:
+                c, described, q = self._fixes.popleft()
+                shift = _delay_shift(times, disp, described, times.size - 1)[None, :] if self._delay else None
+                fix = _fixes_of_queries(np.array([c]), q[None, :], self._database, self._with_floors, shift)
+                self._session.add_fixes(fix.as_arrays())
+        # Keep the steps a later fix can still reach back to (a scan describes at most its window).
+        cutoff = min([self._last[0] - self._pooler.window_s] + [f[1] for f in self._fixes]) if self._pooler else t
+        while len(self._step_t) > 1 and self._step_t[0] < cutoff - 1.0:
+            self._step_t.pop(0)
+            self._step_d.pop(0)
         e = self._session.add_step(st.times_s[0], st.displacements_m[0], st.covariances_m2[0])
         e["floors"] = self._floors
         e["floor"] = int(self._floors[int(np.argmax(e["floor_probabilities"]))])
