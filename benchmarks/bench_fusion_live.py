@@ -127,7 +127,7 @@ def run_floor(name, number, floor, rng):
         t = t_end + 500.0 + k
         names, rssi, seen = _scan_200(db, rng, t)
         t0 = time.perf_counter_ns()
-        q = pooler.query(t, names, rssi, seen)
+        q, _ = pooler.query(t, names, rssi, seen)
         t1 = time.perf_counter_ns()
         d = wfx.dissimilarity(q[None, :], db)
         t2 = time.perf_counter_ns()

@@ -37,9 +37,9 @@ def _models(train, floor_number):
     return cal, db
 
 
-def _replay(tracker, walk, cal, db):
+def _replay(tracker, walk, cal, db, **kw):
     """Every event of the walk through a LiveTracker; the estimate after each new step."""
-    lt = live.LiveTracker(tracker, cal, db)
+    lt = live.LiveTracker(tracker, cal, db, **kw)
     out = []
     for ev in live.walk_events(walk, beacons=True):
         e = lt.add_event(*ev)
@@ -48,9 +48,9 @@ def _replay(tracker, walk, cal, db):
     return lt, out
 
 
-def _assert_replay_equals_batch(tracker, walk, cal, db):
-    batch = live.causal_track(tracker, walk, cal, db)
-    lt, out = _replay(tracker, walk, cal, db)
+def _assert_replay_equals_batch(tracker, walk, cal, db, **kw):
+    batch = live.causal_track(tracker, walk, cal, db, **kw)
+    lt, out = _replay(tracker, walk, cal, db, **kw)
     assert len(out) == len(batch["times_s"]) > 0, walk.walk_id
     np.testing.assert_array_equal([e["time_s"] for e in out], batch["times_s"])
     np.testing.assert_array_equal(np.array([e["mean_m"] for e in out]), batch["mean_m"])
@@ -157,6 +157,9 @@ def test_replay_equals_the_batch_causal_filter_on_synthetic_walks(synthetic_floo
         idx = np.clip(np.searchsorted(batch["times_s"], walk.waypoint_t_s), 0, len(batch["times_s"]) - 1)
         err = np.hypot(*(batch["mean_m"][idx] - walk.waypoint_xy_m).T)
         assert np.median(err[len(err) // 2:]) < 8.0, err
+        # The option that moves each fix by the PDR displacement since the time it describes.
+        moved, _ = _assert_replay_equals_batch(tracker, walk, cal, db, delay_compensation=True)
+        assert not np.array_equal(moved["mean_m"], batch["mean_m"])
 
 
 def test_events_out_of_time_order_are_refused_naming_index_type_and_times(synthetic_floor):

@@ -9,8 +9,9 @@ the errors at its waypoints of
 - ``batch_filter`` / ``batch_smoother``: ``fusion.track_grid`` on ``handheld_steps`` and
   ``fixes_for_walk`` (the fusion_unknown_start / fusion_smoother methods of fusion evaluate);
 - ``live``: ``fusion.live.causal_track`` (equal to a LiveTracker replay, tests/python/test_fusion_live.py):
-  fixes at their scan times, moved by the PDR displacement since the time they describe;
-- ``live_no_delay_compensation``: the same without moving the fixes;
+  fixes at their scan times;
+- ``live_delay_compensation``: the same with each fix moved by the PDR displacement since the
+  time it describes (the option ``delay_compensation``);
 - ``live_backdated_fixes``: causal steps with fusion evaluate's fix times (not realisable live: the
   reference that isolates the effect of the fix timing).
 
@@ -37,7 +38,7 @@ from indoorloc.fusion import live
 from indoorloc.io import load_floor_plan, read_ilc_floor
 
 ROOT = Path(__file__).resolve().parents[4] / "shared" / "data" / "fusion" / "ilc2020_site2"
-METHODS = ("batch_filter", "batch_smoother", "live", "live_no_delay_compensation", "live_backdated_fixes")
+METHODS = ("batch_filter", "batch_smoother", "live", "live_delay_compensation", "live_backdated_fixes")
 
 
 def _number(name: str) -> int:
@@ -81,8 +82,8 @@ def floor_errors(name: str, folds: int = 4) -> Dict[str, List[float]]:
             if len(c["times_s"]) == 0:
                 continue
             errors["live"] += np.hypot(*(_at(wt, c["times_s"], c["mean_m"]) - wxy).T).tolist()
-            n = live.causal_track(trk_c, w, cal_c, db, delay_compensation=False)
-            errors["live_no_delay_compensation"] += np.hypot(*(_at(wt, n["times_s"], n["mean_m"]) - wxy).T).tolist()
+            n = live.causal_track(trk_c, w, cal_c, db, delay_compensation=True)
+            errors["live_delay_compensation"] += np.hypot(*(_at(wt, n["times_s"], n["mean_m"]) - wxy).T).tolist()
             csteps, _ = live.causal_inputs(w, cal_c, None)
             cb = fusion.track_grid(trk_c, csteps, fixes=fixes, smooth=False)
             errors["live_backdated_fixes"] += np.hypot(*(_at(wt, csteps.times_s, cb["mean_m"]) - wxy).T).tolist()

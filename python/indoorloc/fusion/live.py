@@ -18,12 +18,12 @@ What happens to each event (docs/fusion.md, "Live tracking"):
   seen in [t - query_window_s, t] (exactly ``wifi_fixes.walk_queries``, incrementally); its ``k``
   best fingerprints make a fix **timed at the scan** (when it exists, not at the mean last-seen time
   that ``walk_queries`` stamps it with: a live filter cannot apply a fix before it is made). The
-  fix is applied at the first step at or after its time. **Delay compensation** (default): a
-  16 s pooled query describes where the walker was at its measurements' mean last-seen time,
-  seconds before the scan, so each component of the fix is moved by the PDR displacement
-  (calibrated, in the floor frame of the prior's offset) of the steps between that time and
-  the step that applies it. On the shared floors this takes the live filter's mean error back
-  to the batch filter's (benchmarks/results/fusion_live_accuracy.md).
+  fix is applied at the first step at or after its time. ``delay_compensation`` (off by
+  default) moves each component of the fix by the PDR displacement (calibrated, nominal heading
+  offset) of the steps between its measurements' mean last-seen time and the step that applies
+  it. Measured on four shared floors it does not help (mean error +0.6, +0.7, -0.9 m on F8, F3,
+  F4, ...: benchmarks/results/fusion_live_accuracy.md): a max-pooled 16 s query describes the
+  whole stretch walked, not one point of it.
 - **Beacons**: accepted and ignored (the site has no beacon map yet).
 
 Every method returns the current estimate (a dict: ``time_s``, ``steps``, ``mean_m`` (2,),
@@ -33,7 +33,7 @@ non-decreasing time: otherwise ValueError naming the event's index, type and bot
 tracker is unchanged.
 
 Exactness: :func:`causal_track` is the same filter in one batch call (causal steps of the whole
-walk, fixes at their scan times and delay-compensated, ``GridTracker.run`` without smoothing). A walk replayed event by
+walk, fixes at their scan times, ``GridTracker.run`` without smoothing). A walk replayed event by
 event (:func:`walk_events`) gives its track bit for bit (tests/python/test_fusion_live.py).
 """
 
@@ -136,7 +136,7 @@ def causal_inputs(walk: Any, calibration: Optional[ph.HandheldCalibration] = Non
                   database: Optional[wfx.FingerprintDatabase] = None, *,
                   step_length_sd_fraction: float = STEP_LENGTH_SD_FRACTION,
                   step_heading_sd_rad: float = STEP_HEADING_SD_RAD, with_floors: bool = True,
-                  delay_compensation: bool = True):
+                  delay_compensation: bool = False):
     """The steps (fusion.Steps) and fixes (fusion.Fixes or None) a live tracker derives from a
     recorded walk: causal steps (``pdr_streaming.causal_handheld_steps`` with the calibration's
     options), fixes of the scans timed at the scans, those after the last step dropped (a live
@@ -165,7 +165,7 @@ def causal_track(tracker: GridTracker, walk: Any, calibration: Optional[ph.Handh
                  database: Optional[wfx.FingerprintDatabase] = None, *, start: Optional[dict] = None,
                  step_length_sd_fraction: float = STEP_LENGTH_SD_FRACTION,
                  step_heading_sd_rad: float = STEP_HEADING_SD_RAD, with_floors: bool = True,
-                 delay_compensation: bool = True) -> dict:
+                 delay_compensation: bool = False) -> dict:
     """The live tracker's track of a recorded walk in one batch call: ``GridTracker.run`` (no
     smoothing) on :func:`causal_inputs`. Returns run's dict (``times_s``, ``mean_m``,
     ``covariance_m2``, ``floor_probabilities``, ``heading_offset_rad`` per step; empty arrays for a
@@ -247,14 +247,14 @@ class LiveTracker:
         None: unknown start; else {"position_m", "floor", "heading_offset_rad", "time_s"}.
     delay_compensation : bool
         Move each fix by the PDR displacement from the time it describes to the step that
-        applies it (module docstring).
+        applies it (module docstring; off: it did not help on the shared floors).
     """
 
     def __init__(self, tracker: GridTracker, calibration: Optional[ph.HandheldCalibration] = None,
                  database: Optional[wfx.FingerprintDatabase] = None, *, start: Optional[dict] = None,
                  step_length_sd_fraction: float = STEP_LENGTH_SD_FRACTION,
                  step_heading_sd_rad: float = STEP_HEADING_SD_RAD, with_floors: bool = True,
-                 delay_compensation: bool = True):
+                 delay_compensation: bool = False):
         if not isinstance(tracker, GridTracker):
             raise TypeError(f"indoorloc: argument 'tracker': expected a fusion.GridTracker, got {type(tracker).__name__}")
         self._session = GridFilterSession(tracker, start)
