@@ -182,6 +182,10 @@ def test_events_out_of_time_order_are_refused_naming_index_type_and_times(synthe
         lt.add_wifi_scan(float("nan"), [], [], [])
     with pytest.raises(ValueError, match=r"unknown kind 'magnetometer'"):
         lt.add_event("magnetometer", t, [0, 0, 0])
+    with pytest.raises(ValueError, match=r"argument 'acc_mps2'"):
+        lt.add_accelerometer(t + 1.0, [0.0, float("nan"), 9.8])
+    with pytest.raises(ValueError, match=r"one entry per reading"):
+        lt.add_wifi_scan(t + 1.0, ["a", "b"], [-60.0], [t])
     assert lt.events == 2000 and lt.estimate() is before
     for ev in events[2000:]:   # continues normally
         lt.add_event(*ev)

@@ -13,7 +13,9 @@ the errors at its waypoints of
 - ``live_delay_compensation``: the same with each fix moved by the PDR displacement since the
   time it describes (the option ``delay_compensation``);
 - ``live_backdated_fixes``: causal steps with fusion evaluate's fix times (not realisable live: the
-  reference that isolates the effect of the fix timing).
+  reference that isolates the effect of the fix timing);
+- ``live_window_Ws``: the live filter with a query window of W s instead of 16 s (a shorter window
+  lags less); the window is then chosen by leave-one-floor-out over {W..., 16} (``lofo_window``).
 
 Estimates at a waypoint time are interpolated between the step estimates, as fusion evaluate does,
 for every method. Usage: ``python -m indoorloc.experiments.fusion_live_accuracy [FLOOR ...]``;
@@ -25,6 +27,7 @@ from __future__ import annotations
 import json
 import math
 import sys
+from dataclasses import replace
 from pathlib import Path
 from typing import Dict, List
 
@@ -38,7 +41,10 @@ from indoorloc.fusion import live
 from indoorloc.io import load_floor_plan, read_ilc_floor
 
 ROOT = Path(__file__).resolve().parents[4] / "shared" / "data" / "fusion" / "ilc2020_site2"
-METHODS = ("batch_filter", "batch_smoother", "live", "live_delay_compensation", "live_backdated_fixes")
+#: Query windows [s] tried for the live filter (the batch's 16 s was chosen with backdated fixes).
+LIVE_WINDOWS_S = (4.0, 8.0)
+METHODS = ("batch_filter", "batch_smoother", "live", "live_delay_compensation", "live_backdated_fixes") + tuple(
+    f"live_window_{w:g}s" for w in LIVE_WINDOWS_S)
 
 
 def _number(name: str) -> int:
@@ -84,6 +90,10 @@ def floor_errors(name: str, folds: int = 4) -> Dict[str, List[float]]:
             errors["live"] += np.hypot(*(_at(wt, c["times_s"], c["mean_m"]) - wxy).T).tolist()
             n = live.causal_track(trk_c, w, cal_c, db, delay_compensation=True)
             errors["live_delay_compensation"] += np.hypot(*(_at(wt, n["times_s"], n["mean_m"]) - wxy).T).tolist()
+            for win in LIVE_WINDOWS_S:
+                dbw = db.with_settings(replace(db.settings, query_window_s=win))
+                cw = live.causal_track(trk_c, w, cal_c, dbw)
+                errors[f"live_window_{win:g}s"] += np.hypot(*(_at(wt, cw["times_s"], cw["mean_m"]) - wxy).T).tolist()
             csteps, _ = live.causal_inputs(w, cal_c, None)
             cb = fusion.track_grid(trk_c, csteps, fixes=fixes, smooth=False)
             errors["live_backdated_fixes"] += np.hypot(*(_at(wt, csteps.times_s, cb["mean_m"]) - wxy).T).tolist()
@@ -100,17 +110,30 @@ def main(argv: List[str]) -> int:
     floors = argv or ["F8", "F3", "F4", "F7"]
     result = {"floors": {}}
     pooled: Dict[str, List[float]] = {m: [] for m in METHODS}
+    all_errors = {}
     for name in floors:
         e = floor_errors(name)
+        all_errors[name] = e
         result["floors"][name] = {m: _stats(v) for m, v in e.items()}
         for m in METHODS:
             pooled[m] += e[m]
         print(name, {m: round(result["floors"][name][m].get("mean_m", math.nan), 2) for m in METHODS}, flush=True)
     result["pooled"] = {m: _stats(v) for m, v in pooled.items()}
+    # Leave one floor out: the window with the lowest mean error on the other floors' waypoints.
+    cand = {16.0: "live", **{w: f"live_window_{w:g}s" for w in LIVE_WINDOWS_S}}
+    per_floor = {name: floor_errs for name, floor_errs in all_errors.items()}
+    lofo = {}
+    for held in floors:
+        others = {w: np.mean(np.concatenate([per_floor[f][m] for f in floors if f != held])) for w, m in cand.items()}
+        best = min(others, key=others.get)
+        lofo[held] = {"window_s": best, "held_out_mean_m": float(np.mean(per_floor[held][cand[best]]))}
+    result["lofo_window"] = lofo
     lines = ["| floor | " + " | ".join(METHODS) + " |", "|---" * (len(METHODS) + 1) + "|"]
     for name, per in list(result["floors"].items()) + [("pooled", result["pooled"])]:
         lines.append(f"| {name} | " + " | ".join(
             f"{per[m]['mean_m']:.2f} / {per[m]['median_m']:.2f} / {per[m]['p90_m']:.2f}" for m in METHODS) + " |")
+    lines += ["", "Live query window by leave-one-floor-out (chosen on the other floors; held-out mean error):", ""]
+    lines += [f"- {f}: {v['window_s']:g} s, {v['held_out_mean_m']:.2f} m" for f, v in lofo.items()]
     md = ("Waypoint errors [m], mean / median / p90, 4 folds by walk per floor (python -m "
           "indoorloc.experiments.fusion_live_accuracy " + " ".join(floors) + ").\n\n" + "\n".join(lines) + "\n")
     out = Path(__file__).resolve().parents[3] / "benchmarks" / "results"

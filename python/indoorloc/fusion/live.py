@@ -287,8 +287,8 @@ class LiveTracker:
     # ------------------------------------------------------------------ events
     def add_accelerometer(self, t_s: float, acc_mps2: Sequence[float]) -> Optional[dict]:
         """Accelerometer sample: specific force (3,) [m/s²], device frame."""
-        t = self._check("accelerometer", t_s)
         acc = _vector(acc_mps2, "acc_mps2", 3)
+        t = self._check("accelerometer", t_s)
         if self._gyro is not None and self._quat is not None:
             for step in self._detector.add_sample(t, acc, self._gyro, self._quat):
                 self._add_step(step)
@@ -296,16 +296,17 @@ class LiveTracker:
 
     def add_gyroscope(self, t_s: float, gyro_radps: Sequence[float]) -> Optional[dict]:
         """Gyroscope sample: angular rate (3,) [rad/s], device frame."""
+        gyro = _vector(gyro_radps, "gyro_radps", 3)
         self._check("gyroscope", t_s)
-        self._gyro = _vector(gyro_radps, "gyro_radps", 3)
+        self._gyro = gyro
         return self._estimate
 
     def add_rotation_vector(self, t_s: float, values: Sequence[float]) -> Optional[dict]:
         """Android rotation vector (x, y, z[, w]) of the device -> east-north-up rotation."""
-        self._check("rotation_vector", t_s)
         v = np.asarray(values, dtype=np.float64).reshape(1, -1)
         if v.shape[1] not in (3, 4, 5) or not np.all(np.isfinite(v[:, :3])):
             raise ValueError(f"indoorloc: argument 'values': expected 3 or 4 finite rotation-vector values, got {v.ravel()}")
+        self._check("rotation_vector", t_s)
         self._quat = quaternion_from_rotation_vector(v[:, :4])[0]
         return self._estimate
 
@@ -313,14 +314,16 @@ class LiveTracker:
                       last_seen_s: Sequence[float]) -> Optional[dict]:
         """One WiFi scan reported at t_s: per reading its BSSID, RSSI [dBm] and last-seen time [s]
         (on the events' clock). The scan's fix waits for the first step at or after t_s."""
-        t = self._check("wifi", t_s)
-        if self._pooler is None:
-            return self._estimate
         rssi = np.asarray(rssi_dbm, dtype=np.float64).reshape(-1)
         seen = np.asarray(last_seen_s, dtype=np.float64).reshape(-1)
         if not (len(bssids) == rssi.size == seen.size):
             raise ValueError(f"indoorloc: LiveTracker.add_wifi_scan: bssids, rssi_dbm and last_seen_s must have one "
                              f"entry per reading, got {len(bssids)}, {rssi.size}, {seen.size}")
+        if not (np.all(np.isfinite(rssi)) and np.all(np.isfinite(seen))):
+            raise ValueError("indoorloc: LiveTracker.add_wifi_scan: rssi_dbm and last_seen_s must be finite")
+        t = self._check("wifi", t_s)
+        if self._pooler is None:
+            return self._estimate
         got = self._pooler.query(t, list(bssids), rssi, seen)
         if self._fixes and self._fixes[-1][0] == t:  # a second scan at the same time: its pooled query replaces
             self._fixes.pop()
