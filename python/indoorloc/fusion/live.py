@@ -328,7 +328,12 @@ class LiveTracker:
         if self._fixes and self._fixes[-1][0] == t:  # a second scan at the same time: its pooled query replaces
             self._fixes.pop()
         if got is not None:
-            self._fixes.append((t, got[1], got[0]))   # (scan time, described time, query)
+            q, described = got
+            # The fix is matched now; with delay compensation at the step that applies it (its
+            # shift needs the steps up to there).
+            fix = None if self._delay else _fixes_of_queries(np.array([t]), q[None, :], self._database,
+                                                              self._with_floors).as_arrays()
+            self._fixes.append((t, described, q, fix))
         return self._estimate
 
     def add_beacon(self, t_s: float, *values: Any) -> Optional[dict]:
@@ -387,10 +392,12 @@ class LiveTracker:
         if self._fixes and self._fixes[0][0] <= t:
             times, disp = np.array(self._step_t), np.array(self._step_d)
             while self._fixes and self._fixes[0][0] <= t:
-                c, described, q = self._fixes.popleft()
-                shift = _delay_shift(times, disp, described, times.size - 1)[None, :] if self._delay else None
-                fix = _fixes_of_queries(np.array([c]), q[None, :], self._database, self._with_floors, shift)
-                self._session.add_fixes(fix.as_arrays())
+                c, described, q, fix = self._fixes.popleft()
+                if fix is None:
+                    shift = _delay_shift(times, disp, described, times.size - 1)[None, :]
+                    fix = _fixes_of_queries(np.array([c]), q[None, :], self._database, self._with_floors,
+                                            shift).as_arrays()
+                self._session.add_fixes(fix)
         # Keep the steps a later fix can still reach back to (a scan describes at most its window).
         cutoff = min([self._last[0] - self._pooler.window_s] + [f[1] for f in self._fixes]) if self._pooler else t
         while len(self._step_t) > 1 and self._step_t[0] < cutoff - 1.0:
