@@ -119,6 +119,12 @@ class RealSettings:
     #: fusion_known_start, like its τ and ε).
     known_start_wall_log_penalty: float = -3.0
     known_start_fix_tempering_by_variance: bool = False
+    #: The known start's calibration of its returned covariance (a, b [m], g of
+    #: GridTrackerOptions.filtered_covariance_*): the all-floor choice of
+    #: ``experiments/fusion_uncertainty`` (LOFO coverage 0.956, 0.93-0.98 per floor).
+    known_start_covariance_scale: float = 3.0
+    known_start_covariance_floor_m: float = 1.5
+    known_start_covariance_fix_gain: float = 0.0
     floor_identification: bool = True   #: also run the default with the floor not given
     threads: int = 2                    #: walks tracked in parallel (results do not depend on it)
     #: Engine of the fusion_* methods: "grid" (exact filter and smoother on floor cells,
@@ -483,7 +489,10 @@ def _score_walk_grid(score: WalkScore, put, pdr_steps, fixes, known_fixes, known
         fix_tempering=settings.known_start_fix_tempering,
         fix_outlier_probability=settings.known_start_fix_outlier_probability,
         wall_log_penalty=settings.known_start_wall_log_penalty,
-        fix_tempering_by_variance=settings.known_start_fix_tempering_by_variance), fl.name)
+        fix_tempering_by_variance=settings.known_start_fix_tempering_by_variance,
+        filtered_covariance_scale=settings.known_start_covariance_scale,
+        filtered_covariance_floor_m=settings.known_start_covariance_floor_m,
+        filtered_covariance_fix_gain=settings.known_start_covariance_fix_gain), fl.name)
     if "fusion_known_start" in want:
         run("fusion_known_start", None, known_tracker, known, known_fixes, smooth=False)
     if "fusion_no_walls" in want:
