@@ -172,6 +172,8 @@ class WalkScore:
     in_region95: Dict[str, np.ndarray] = field(default_factory=dict)
     #: Per method with a heading-offset state: final offset minus the walk's residual [rad].
     offset_error_rad: Dict[str, float] = field(default_factory=dict)
+    #: The walk's heading residual measured from its waypoints [rad] (``heading_residual_rad``).
+    heading_residual_rad: Optional[float] = None
     waypoint_t0: float = 0.0                          #: the first waypoint's time [s]
     waypoint_xy_m: Optional[np.ndarray] = None        #: surveyed waypoints (W, 2) [m]
     smoothed_track_m: Optional[np.ndarray] = None     #: the default's smoothed track (per step)
@@ -312,6 +314,7 @@ def _score_walk(walk, steps_raw: ph.HandheldSteps, models: FoldModels, settings:
         return score
     spread = max(cal.yaw_offset_spread_rad, 1e-3)
     residual = heading_residual_rad(steps, cal.yaw_offset_rad, wt, wxy)
+    score.heading_residual_rad = residual
     options = settings.tracker_options(unknown_start_heading_sd_rad=spread, start_heading_offset_sd_rad=spread)
     start_xy = wxy[0] if not math.isinf(settings.wall_log_penalty) else _walkable_start(fl.plan, wxy[0])
     known = {"position_m": start_xy, "floor": fl.number, "heading_offset_rad": 0.0, "time_s": float(wt[0])}
@@ -659,6 +662,13 @@ def summarize(scores: Sequence[WalkScore], settings: RealSettings, seconds: floa
             walk_seconds[name] = float(np.mean(v))
     out = {"methods": methods, "waypoints": rows, "settings": settings.to_dict(), "per_floor": per_floor,
            "error_vs_time": by_time, "seconds": round(seconds, 2), "mean_seconds_per_walk": walk_seconds}
+    # Per walk: the final heading offset of each method with an offset state against the walk's
+    # residual measured from its waypoints (both relative to the training yaw offset) [deg].
+    out["heading_offsets"] = [
+        {"floor": s.floor, "walk": s.walk, "residual_deg": round(math.degrees(s.heading_residual_rad), 3),
+         "final_deg": {name: round(math.degrees(_wrap(s.heading_residual_rad + err)), 3)
+                       for name, err in s.offset_error_rad.items() if name != "fusion_no_heading_offset"}}
+        for s in scores if s.heading_residual_rad is not None and math.isfinite(s.heading_residual_rad)]
     ident = [s for s in scores if s.floor_correct is not None]
     if ident:
         correct = np.concatenate([s.floor_correct for s in ident])
