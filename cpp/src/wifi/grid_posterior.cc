@@ -124,14 +124,18 @@ WifiFix GridPosterior::Locate(const Eigen::Ref<const RowMatrixXd>& rss_dbm) cons
   WifiFix fix;
   double best_mass = -1.0, total_mass = 0.0;
   std::vector<int> support;
+  // Only points with exp(best - l) > e^-cutoff are weighted: the best point weighs 1, so the
+  // points left out, at most G of them, change every sum by less than G e^-cutoff = 1e-17 of
+  // its value (below double rounding); on a large map they are most of the grid.
+  Eigen::Index total_points = 0;
+  for (const auto& grid : floors_) total_points += grid->points.rows();
+  const double cutoff = 39.2 + std::log(static_cast<double>(std::max<Eigen::Index>(total_points, 1)));
   for (size_t f = 0; f < floors_.size(); ++f) {
     const FloorGrid& grid = *floors_[f];
-    // exp(best - l) is exactly 0 in double below -745.2: such points add nothing to any sum,
-    // so only the support is weighted (on a large map a small part of the grid).
     support.clear();
     const double* lf = l[f].data();
     for (Eigen::Index g = 0; g < l[f].size(); ++g) {
-      if (best - lf[g] > -746.0) support.push_back(static_cast<int>(g));
+      if (lf[g] - best < cutoff) support.push_back(static_cast<int>(g));
     }
     Eigen::ArrayXd w(static_cast<Eigen::Index>(support.size()));
     for (size_t j = 0; j < support.size(); ++j) w[static_cast<Eigen::Index>(j)] = best - lf[support[j]];
