@@ -120,6 +120,10 @@ def as_arrays(walk_or_arrays: Any) -> HandheldArrays:
     return HandheldArrays(acc.t_s[:n], acc.values[:n, :3], gyro.values[:n, :3], quat[:n])
 
 
+#: Longest window or time constant :class:`HandheldOptions` accepts [s] (one day).
+MAX_WINDOW_S = 86400.0
+
+
 @dataclass
 class HandheldOptions:
     """Settings of :func:`handheld_steps`. Defaults were chosen by cross-validation on the ILC 2020
@@ -161,6 +165,12 @@ class HandheldOptions:
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
                 bad(name, f"must be finite and > 0, got {v}")
+        # Windows become sample counts (int(window x rate)): beyond a day they overflow or exceed
+        # any recording, so they are refused here with their name rather than as an OverflowError.
+        for name in ("rms_window_s", "min_step_interval_s", "max_step_half_window_s", "complementary_tau_s"):
+            v = getattr(self, name)
+            if v > MAX_WINDOW_S:
+                bad(name, f"must be at most {MAX_WINDOW_S:g} s, got {v}")
         for name in ("threshold_fraction", "min_peak_mps2", "length_sd_fraction", "heading_sd_rad"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
@@ -209,7 +219,10 @@ def rotation_vector_heading(quat_xyzw: np.ndarray) -> np.ndarray:
     R(q) rotates device into ENU; its second column is the +y axis in ENU:
     (2(xy - wz), 1 - 2(x^2 + z^2), 2(yz + wx)). Heading = atan2(north, east) of its horizontal part.
     """
-    q = np.asarray(quat_xyzw, dtype=np.float64).reshape(-1, 4)
+    q = np.asarray(quat_xyzw, dtype=np.float64)
+    if q.size % 4 != 0 or q.size == 0:
+        raise ValueError(f"indoorloc: argument 'quat_xyzw': expected (N, 4) quaternions (x, y, z, w), got shape {q.shape}")
+    q = _finite_array(q, "quat_xyzw").reshape(-1, 4)
     x, y, z, w = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
     east = 2.0 * (x * y - w * z)
     north = 1.0 - 2.0 * (x * x + z * z)
@@ -395,7 +408,11 @@ def cumulative_at(steps: HandheldSteps, values: np.ndarray, t_query: np.ndarray)
 
 def step_displacements(steps: HandheldSteps, heading: str = "selected", yaw_offset_rad: float = 0.0) -> np.ndarray:
     """(M, 2) east/north displacement of each step, heading source ``"selected"``,
-    ``"rotation_vector"``, ``"gyro"`` or ``"complementary"``, rotated by ``yaw_offset_rad``."""
+    ``"rotation_vector"``, ``"gyro"`` or ``"complementary"``, rotated by ``yaw_offset_rad`` [rad]
+    (finite)."""
+    if not (isinstance(yaw_offset_rad, (int, float, np.integer, np.floating)) and math.isfinite(yaw_offset_rad)):
+        raise ValueError(f"indoorloc: argument 'yaw_offset_rad': must be a finite angle [rad], got {yaw_offset_rad!r}")
+    _check_finite_steps(steps)
     h = _heading_of(steps, heading) + yaw_offset_rad
     return steps.length_m[:, None] * np.column_stack([np.cos(h), np.sin(h)])
 
@@ -420,9 +437,15 @@ class WaypointIntervals:
 
 
 def waypoint_intervals(steps: HandheldSteps, waypoint_t_s: np.ndarray, waypoint_xy_m: np.ndarray) -> WaypointIntervals:
-    """Per-interval sums of the steps between consecutive waypoints (fractional at the ends)."""
-    wt = np.asarray(waypoint_t_s, dtype=np.float64)
-    wxy = np.asarray(waypoint_xy_m, dtype=np.float64).reshape(-1, 2)
+    """Per-interval sums of the steps between consecutive waypoints (fractional at the ends).
+    ``waypoint_t_s`` (W,) [s] finite and non-decreasing, ``waypoint_xy_m`` (W, 2) [m] finite."""
+    wt = _finite_array(waypoint_t_s, "waypoint_t_s").ravel()
+    wxy = _finite_array(waypoint_xy_m, "waypoint_xy_m")
+    if wxy.ndim != 2 or wxy.shape != (wt.size, 2):
+        raise ValueError(f"indoorloc: argument 'waypoint_xy_m': expected shape ({wt.size}, 2) to match waypoint_t_s, "
+                         f"got {wxy.shape}")
+    if wt.size and np.any(np.diff(wt) < 0):
+        raise ValueError("indoorloc: argument 'waypoint_t_s': times must be non-decreasing")
     d = np.diff(wxy, axis=0)
     vals = np.column_stack([np.ones(steps.n_steps), steps.feature, steps.length_m, steps.length_m ** 2,
                             step_displacements(steps, "rotation_vector"), step_displacements(steps, "gyro"),
@@ -482,6 +505,10 @@ def calibrate_handheld(walks: Iterable[Any], options: Optional[HandheldOptions] 
     options = options or HandheldOptions()
     options.validate()
     walks = list(walks)
+    if not walks:
+        raise ValueError("indoorloc: argument 'walks': no walk to calibrate on (need at least one walk with waypoints)")
+    if steps_cache is not None and len(steps_cache) != len(walks):
+        raise ValueError(f"indoorloc: argument 'steps_cache': {len(steps_cache)} entries for {len(walks)} walks")
     per_walk: List[Tuple[HandheldSteps, WaypointIntervals]] = []
     for i, w in enumerate(walks):
         st = steps_cache[i] if steps_cache is not None else handheld_steps(w, options)
@@ -524,7 +551,10 @@ def calibrate_handheld(walks: Iterable[Any], options: Optional[HandheldOptions] 
 
 def rescale(steps: HandheldSteps, options: HandheldOptions) -> HandheldSteps:
     """The same steps under new K / sds / heading source (no re-detection; detector settings must
-    be equal)."""
+    be equal). ``options`` is validated (a NaN ``k`` raises ValueError)."""
+    if not isinstance(options, HandheldOptions):
+        raise ValueError(f"indoorloc: argument 'options': need a HandheldOptions, got {type(options).__name__}")
+    options.validate()
     length = options.k * steps.feature
     heading = _heading_of(steps, options.heading_source)
     return replace(steps, length_m=length, length_sd_m=options.length_sd_fraction * length,
@@ -532,16 +562,45 @@ def rescale(steps: HandheldSteps, options: HandheldOptions) -> HandheldSteps:
                    options=options)
 
 
-def _heading_of(steps: HandheldSteps, source: str) -> np.ndarray:
-    return {"selected": steps.heading_rad, "rotation_vector": steps.heading_rotation_vector_rad,
-            "gyro": steps.heading_gyro_rad, "complementary": steps.heading_complementary_rad}[source]
+def _heading_of(steps: HandheldSteps, source: str, arg: str = "heading") -> np.ndarray:
+    table = {"selected": steps.heading_rad, "rotation_vector": steps.heading_rotation_vector_rad,
+             "gyro": steps.heading_gyro_rad, "complementary": steps.heading_complementary_rad}
+    if not isinstance(source, str) or source not in table:
+        raise ValueError(f"indoorloc: argument '{arg}': {source!r} is not one of {', '.join(table)}")
+    return table[source]
+
+
+def _check_finite_steps(steps: HandheldSteps) -> None:
+    """ValueError naming the field of ``steps`` that holds NaN or inf (times, lengths, headings)."""
+    for name in ("t_s", "length_m", "heading_rad", "feature", "heading_rotation_vector_rad", "heading_gyro_rad",
+                 "heading_complementary_rad"):
+        v = np.asarray(getattr(steps, name), dtype=np.float64)
+        if not np.all(np.isfinite(v)):
+            raise ValueError(f"indoorloc: argument 'steps': steps.{name} holds NaN or inf")
+    if not math.isfinite(float(steps.start_t_s)):
+        raise ValueError("indoorloc: argument 'steps': steps.start_t_s must be finite")
+
+
+def _finite_array(values: Any, arg: str) -> np.ndarray:
+    a = np.asarray(values, dtype=np.float64)
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"indoorloc: argument '{arg}': values must be finite (no NaN or inf)")
+    return a
 
 
 def pdr_track(steps: HandheldSteps, start_xy_m: Sequence[float], t_query: np.ndarray, heading: str = "selected",
               yaw_offset_rad: float = 0.0) -> np.ndarray:
-    """(Q, 2) PDR positions at the query times from a known start, headings rotated by the offset."""
+    """(Q, 2) PDR positions [m] at the query times ``t_query`` (Q,) [s] from a known start
+    ``start_xy_m`` (2,) [m], headings of source ``heading`` rotated by ``yaw_offset_rad`` [rad].
+    Everything must be finite: NaN steps, times or offsets raise ValueError naming the argument."""
+    start = _finite_array(start_xy_m, "start_xy_m").ravel()
+    if start.shape != (2,):
+        raise ValueError(f"indoorloc: argument 'start_xy_m': expected (x, y), got shape {start.shape}")
+    tq = _finite_array(t_query, "t_query")
+    if tq.ndim > 1:
+        raise ValueError(f"indoorloc: argument 't_query': expected a 1-D array of times, got shape {tq.shape}")
     disp = step_displacements(steps, heading, yaw_offset_rad)
-    return np.asarray(start_xy_m, dtype=np.float64)[None, :] + cumulative_at(steps, disp, t_query)
+    return start[None, :] + cumulative_at(steps, disp, np.atleast_1d(tq))
 
 
 __all__ = [
