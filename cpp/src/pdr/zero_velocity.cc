@@ -161,22 +161,21 @@ struct Rung {
 // One climb of the swing guard's ladder with flicker length min_stance [samples]. Returns true
 // with the first accepted rung in *accepted; rungs whose median swing is shorter than the
 // plausible floor are never accepted (a threshold that high has eaten the swings). *best_plausible
-// receives the plausible rung with the most regular swings: no overlong swing first, then the
-// least longest / median.
+// receives the plausible rung with the most regular swings (least longest / median; chosen over
+// "no overlong swing first" by the low-motion study: docs/pdr.md).
 bool ClimbLadder(const Eigen::VectorXd& t, const ZeroVelocityOptions& options, double rate_hz, Eigen::Index min_stance,
                  Rung* accepted, Rung* best_plausible) {
   const double max_swing = options.max_swing_s * rate_hz;
   const double floor = options.min_plausible_swing_s * rate_hz;
   const double n = static_cast<double>(std::max<Eigen::Index>(t.size(), 1));
-  std::pair<bool, double> best{true, std::numeric_limits<double>::infinity()};  // (overlong, ratio)
+  double best = std::numeric_limits<double>::infinity();  // least longest / median so far
   for (int j = 0;; ++j) {
     const double gamma = std::min(options.shoe.threshold * std::pow(10.0, j * options.ladder_step_decades), options.max_threshold);
     const auto [longest, median] = SwingStats(t, gamma, min_stance);
     const Rung rung{gamma, j, longest, median};
     if (median >= floor && median > 0.0) {
-      const std::pair<bool, double> key{longest > max_swing, longest / median};
-      if (key < best) {
-        best = key;
+      if (longest / median < best) {
+        best = longest / median;
         *best_plausible = rung;
       }
       const double share = static_cast<double>((t.array() < gamma).count()) / n;
