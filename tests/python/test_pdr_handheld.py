@@ -1,4 +1,4 @@
-"""Hand-held phone PDR (indoorloc.pdr_handheld): synthetic steps, K calibration, headings, one
+"""Hand-held phone PDR (indoorloc.pdr.handheld): synthetic steps, K calibration, headings, one
 real walk of the ILC 2020 data when present."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from indoorloc import pdr_handheld as ph
+from indoorloc.pdr import handheld as ph
 
 RATE = 50.0
 G = ph.GRAVITY_MPS2
