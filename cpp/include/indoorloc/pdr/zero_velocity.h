@@ -87,7 +87,9 @@ struct ZeroVelocityOptions {
   double max_swing_ratio = 1.5;
   /// Swing guard: the ladder step [decades]: γ_j = γ₀ 10^(j step).
   double ladder_step_decades = 0.25;
-  /// Swing guard: stance runs shorter than this [s] inside a swing are flicker.
+  /// Swing guard: stance runs shorter than this [s] inside a swing are flicker: ignored by the
+  /// guard and dropped from the returned stance (issue 16's value; tuning it with the issue-28
+  /// constants was unstable: one running trial, whose stances last 0.07-0.1 s, lost 0.6 m).
   double min_stance_s = 0.02;
   /// Swing guard: a rung is accepted only when at least this fraction of all samples is stance
   /// (the issue's diverging walk had 9 %). Not tuned: a safety net that binds on none of the 24
