@@ -25,7 +25,8 @@ Beside the compiled functions, the package holds the Python side of the subsyste
   (:func:`run_recommended`, :func:`detect_stance`, :data:`ZUPT_DETECTOR`) and its health check
   (:func:`gait_plausibility`);
 - :mod:`indoorloc.pdr.metrics`: :func:`align_2d`, :func:`armse`, :func:`path_length`;
-- :mod:`indoorloc.pdr.handheld`: step-and-heading PDR for a hand-held phone.
+- :mod:`indoorloc.pdr.handheld`: step-and-heading PDR for a hand-held phone
+  (:mod:`indoorloc.pdr.orientation`: its rotation-vector and gyroscope headings).
 
 Loaders for the recordings in ../shared/data/pdr are in :mod:`indoorloc.io`. Moves from earlier
 paths are listed in docs/api_changes.md.

@@ -54,8 +54,17 @@ from indoorloc._core.pdr import (
     steps_acceleration,
     weinberg_features,
 )
+from indoorloc.pdr.orientation import (  # noqa: F401  (re-exported: part of this module's API)
+    GRAVITY_MPS2,
+    _finite_array,
+    _up_row,
+    complementary_heading,
+    gyro_heading,
+    rotation_vector_heading,
+    vertical_acceleration,
+    wrap_angle,
+)
 
-GRAVITY_MPS2 = 9.80665
 HEADING_SOURCES = ("rotation_vector", "gyro", "complementary")
 
 # --------------------------------------------------------------------------------------------
@@ -210,58 +219,7 @@ class HandheldSteps:
 
 
 # --------------------------------------------------------------------------------------------
-# Orientation helpers (vectorised numpy; no per-sample Python)
-
-
-def rotation_vector_heading(quat_xyzw: np.ndarray) -> np.ndarray:
-    """Heading [rad] of the device +y axis in the east-north frame (east = 0, north = pi/2).
-
-    R(q) rotates device into ENU; its second column is the +y axis in ENU:
-    (2(xy - wz), 1 - 2(x^2 + z^2), 2(yz + wx)). Heading = atan2(north, east) of its horizontal part.
-    """
-    q = np.asarray(quat_xyzw, dtype=np.float64)
-    if q.size % 4 != 0 or q.size == 0:
-        raise ValueError(f"indoorloc: argument 'quat_xyzw': expected (N, 4) quaternions (x, y, z, w), got shape {q.shape}")
-    q = _finite_array(q, "quat_xyzw").reshape(-1, 4)
-    x, y, z, w = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
-    east = 2.0 * (x * y - w * z)
-    north = 1.0 - 2.0 * (x * x + z * z)
-    return np.arctan2(north, east)
-
-
-def _up_row(quat_xyzw: np.ndarray) -> np.ndarray:
-    """Third row of R(q) (N, 3): the device-frame direction of ENU 'up'."""
-    x, y, z, w = (quat_xyzw[:, i] for i in range(4))
-    return np.column_stack([2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)])
-
-
-def vertical_acceleration(acc_mps2: np.ndarray, quat_xyzw: np.ndarray) -> np.ndarray:
-    """Up component of the specific force minus g [m/s^2] (N,)."""
-    return np.einsum("ij,ij->i", _up_row(quat_xyzw), acc_mps2) - GRAVITY_MPS2
-
-
-def gyro_heading(t_s: np.ndarray, gyro_radps: np.ndarray, quat_xyzw: np.ndarray) -> np.ndarray:
-    """Heading [rad] by integrating the rate about the vertical, omega_up = R(q)[2, :] . omega (the
-    rotation vector gives only the tilt here), trapezoid rule, started at the first
-    rotation-vector heading. Unwrapped (continuous, not folded into (-pi, pi])."""
-    w_up = np.einsum("ij,ij->i", _up_row(quat_xyzw), gyro_radps)
-    dt = np.diff(t_s)
-    inc = 0.5 * (w_up[1:] + w_up[:-1]) * dt
-    h0 = rotation_vector_heading(quat_xyzw[:1])[0]
-    return h0 + np.concatenate([[0.0], np.cumsum(inc)])
-
-
-def complementary_heading(t_s: np.ndarray, heading_rv_rad: np.ndarray, heading_gyro_rad: np.ndarray,
-                          tau_s: float) -> np.ndarray:
-    """Gyro heading corrected towards the rotation vector: h = h_gyro + LP_tau(h_rv - h_gyro), a
-    causal first-order Butterworth low-pass with cut-off 1 / (2 pi tau) started in its steady
-    state (usable on line). tau -> 0 gives the rotation vector, tau -> inf the gyro (unwrapped)."""
-    rate = (t_s.shape[0] - 1) / (t_s[-1] - t_s[0])
-    d = np.unwrap(wrap_angle(np.asarray(heading_rv_rad) - np.asarray(heading_gyro_rad)))
-    fc = 1.0 / (2.0 * np.pi * tau_s)
-    if fc >= 0.45 * rate:
-        return np.asarray(heading_gyro_rad) + d
-    return np.asarray(heading_gyro_rad) + sos_filter(butterworth_sos(1, fc, rate), d, True)
+# Orientation (the helpers live in indoorloc.pdr.orientation and are re-exported here)
 
 
 def step_headings(t_s: np.ndarray, heading_rad: np.ndarray, steps: "HandheldSteps") -> np.ndarray:
@@ -270,11 +228,6 @@ def step_headings(t_s: np.ndarray, heading_rad: np.ndarray, steps: "HandheldStep
         return np.zeros(0)
     prev_t = np.concatenate([[steps.start_t_s], steps.t_s[:-1]])
     return wrap_angle(_interval_mean(np.asarray(t_s), np.asarray(heading_rad), prev_t, steps.t_s))
-
-
-def wrap_angle(a: np.ndarray) -> np.ndarray:
-    """Angles folded into [-pi, pi)."""
-    return (np.asarray(a) + np.pi) % (2.0 * np.pi) - np.pi
 
 
 # --------------------------------------------------------------------------------------------
@@ -579,13 +532,6 @@ def _check_finite_steps(steps: HandheldSteps) -> None:
             raise ValueError(f"indoorloc: argument 'steps': steps.{name} holds NaN or inf")
     if not math.isfinite(float(steps.start_t_s)):
         raise ValueError("indoorloc: argument 'steps': steps.start_t_s must be finite")
-
-
-def _finite_array(values: Any, arg: str) -> np.ndarray:
-    a = np.asarray(values, dtype=np.float64)
-    if not np.all(np.isfinite(a)):
-        raise ValueError(f"indoorloc: argument '{arg}': values must be finite (no NaN or inf)")
-    return a
 
 
 def pdr_track(steps: HandheldSteps, start_xy_m: Sequence[float], t_query: np.ndarray, heading: str = "selected",
