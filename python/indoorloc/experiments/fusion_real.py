@@ -3,7 +3,7 @@
 Data: the Indoor Location Competition 2.0 site-2 walks (``shared/data/fusion/ilc2020_site2``,
 docs/fusion_data.md) or any folder in that layout. Per floor, k-fold by walk (fixed seed): the
 training walks give the handheld-PDR calibration (Weinberg K, the yaw offset between the phone's
-rotation-vector heading and the floor frame, its spread over walks: ``pdr_handheld``) and the
+rotation-vector heading and the floor frame, its spread over walks: ``indoorloc.pdr.handheld``) and the
 crowdsourced signal map (``wifi_crowdsource``); each test walk is then tracked from its own IMU
 and WiFi and the floor plan, and scored at its surveyed waypoints. Methods, side by side on the
 same folds:
@@ -51,7 +51,8 @@ from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from indoorloc import fusion, pdr_handheld as ph, wifi, wifi_crowdsource as wc, wifi_fixes as wfx
+from indoorloc import fusion, wifi, wifi_crowdsource as wc, wifi_fixes as wfx
+from indoorloc.pdr import handheld as ph
 from indoorloc.io import ilc_floor_names, load_floor_plan, read_ilc_floor
 
 FLOORS: Tuple[str, ...] = ()  #: none named: every floor folder under the data root, in building order
