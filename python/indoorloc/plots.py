@@ -80,6 +80,31 @@ def error_cdfs(errors_by_method: Mapping[str, object], path: Path, xmax_m: float
     return Path(path)
 
 
+def heading_offsets(rows, path: Path, method: str = "fusion_smoother") -> Path:
+    """Per walk, the tracker's final heading offset against the walk's residual measured from its
+    waypoints [deg] (rows: ``indoorloc fusion evaluate``'s ``heading_offsets``); the prior's
+    centre is 0 (the training offset)."""
+    r = [row for row in rows if method in row["final_deg"]]
+    x = [row["residual_deg"] for row in r]
+    y = [row["final_deg"][method] for row in r]
+    fig, ax = plt.subplots(figsize=(4.6, 4.2), dpi=120)
+    lim = max([20.0] + [abs(v) for v in x + y]) * 1.05
+    ax.plot([-lim, lim], [-lim, lim], color="#888", lw=0.8, label="final = residual")
+    ax.axhline(0.0, color="#c55", lw=0.8, ls="--", label="prior centre")
+    ax.scatter(x, y, s=9, alpha=0.7, label=f"{method} ({len(r)} walks)")
+    ax.set_xlim(-lim, lim)
+    ax.set_ylim(-lim, lim)
+    ax.set_aspect("equal")
+    ax.set_xlabel("walk's residual from its waypoints [deg]")
+    ax.set_ylabel("tracker's final heading offset [deg]")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return Path(path)
+
+
 def mapmatch_clouds(network, trajectory, clouds: Mapping[float, tuple], path: Path) -> Path:
     """Particle clouds at several times over the road network (paper 000, Figs. 5-8)."""
     times = sorted(clouds)

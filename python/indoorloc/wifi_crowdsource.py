@@ -9,7 +9,7 @@ into the scan matrices the fusion filter reads:
    A reading's RSSI was measured at its last-seen time, not at the scan time (Android reports a
    cache, docs/fusion_data.md), so each distinct measurement (``new_measurement_mask``) is placed
    at the walker's position at its last-seen time. Between consecutive waypoints j, j+1 the
-   position is the hand-held PDR path (:func:`indoorloc.pdr_handheld.handheld_steps`), mapped by
+   position is the hand-held PDR path (:func:`indoorloc.pdr.handheld.handheld_steps`), mapped by
    the 2-D similarity (rotation + scale, one complex factor)
 
        s_j = (w_{j+1} - w_j) / (p(t_{j+1}) - p(t_j)),   x(t) = w_j + s_j (p(t) - p(t_j)),
@@ -53,7 +53,7 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from indoorloc import pdr_handheld as ph
+from indoorloc.pdr import handheld as ph
 from indoorloc import wifi
 
 POSITIONING = ("pdr", "linear")
@@ -64,7 +64,7 @@ class CrowdMapSettings:
     """Settings of the crowdsourced map and of the scan matrices (defaults: docs/fusion_real.md)."""
 
     positioning: str = "pdr"            #: "pdr" (similarity-corrected PDR) or "linear" (in time) between waypoints
-    heading_source: str = "rotation_vector"  #: PDR heading (pdr_handheld.HEADING_SOURCES)
+    heading_source: str = "rotation_vector"  #: PDR heading (pdr.handheld.HEADING_SOURCES)
     min_interval_steps: float = 2.0     #: fewer steps in a waypoint interval -> linear interpolation
     min_pdr_displacement_m: float = 0.5 #: PDR displacement below this over an interval -> linear
     max_scale_ratio: float = 3.0        #: |s_j| outside [1/r, r] -> linear (PDR inconsistent with the waypoints)

@@ -41,7 +41,7 @@ from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 import numpy as np
 
 from indoorloc import fusion
-from indoorloc import pdr_handheld as ph
+from indoorloc.pdr import handheld as ph
 from indoorloc import wifi_crowdsource as wc
 from indoorloc import wifi_matcher as wm
 from indoorloc.validate import integer, real_array, real_scalar

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from indoorloc import pdr_handheld as ph
+from indoorloc.pdr import handheld as ph
 from indoorloc import wifi_crowdsource as wc
 from indoorloc import wifi_fixes as wfx
 from indoorloc.experiments import fusion_real as fr

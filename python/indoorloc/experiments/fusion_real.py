@@ -3,7 +3,7 @@
 Data: the Indoor Location Competition 2.0 site-2 walks (``shared/data/fusion/ilc2020_site2``,
 docs/fusion_data.md) or any folder in that layout. Per floor, k-fold by walk (fixed seed): the
 training walks give the handheld-PDR calibration (Weinberg K, the yaw offset between the phone's
-rotation-vector heading and the floor frame, its spread over walks: ``pdr_handheld``) and the
+rotation-vector heading and the floor frame, its spread over walks: ``indoorloc.pdr.handheld``) and the
 crowdsourced signal map (``wifi_crowdsource``); each test walk is then tracked from its own IMU
 and WiFi and the floor plan, and scored at its surveyed waypoints. Methods, side by side on the
 same folds:
@@ -51,7 +51,8 @@ from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from indoorloc import fusion, pdr_handheld as ph, wifi, wifi_crowdsource as wc, wifi_fixes as wfx
+from indoorloc import fusion, wifi, wifi_crowdsource as wc, wifi_fixes as wfx
+from indoorloc.pdr import handheld as ph
 from indoorloc.io import ilc_floor_names, load_floor_plan, read_ilc_floor
 
 FLOORS: Tuple[str, ...] = ()  #: none named: every floor folder under the data root, in building order
@@ -119,6 +120,12 @@ class RealSettings:
     #: fusion_known_start, like its τ and ε).
     known_start_wall_log_penalty: float = -3.0
     known_start_fix_tempering_by_variance: bool = False
+    #: The known start's calibration of its returned covariance (a, b [m], g of
+    #: GridTrackerOptions.filtered_covariance_*): the all-floor choice of
+    #: ``experiments/fusion_uncertainty`` (LOFO coverage 0.956, 0.93-0.98 per floor).
+    known_start_covariance_scale: float = 3.0
+    known_start_covariance_floor_m: float = 1.5
+    known_start_covariance_fix_gain: float = 0.0
     floor_identification: bool = True   #: also run the default with the floor not given
     threads: int = 2                    #: walks tracked in parallel (results do not depend on it)
     #: Engine of the fusion_* methods: "grid" (exact filter and smoother on floor cells,
@@ -166,6 +173,8 @@ class WalkScore:
     in_region95: Dict[str, np.ndarray] = field(default_factory=dict)
     #: Per method with a heading-offset state: final offset minus the walk's residual [rad].
     offset_error_rad: Dict[str, float] = field(default_factory=dict)
+    #: The walk's heading residual measured from its waypoints [rad] (``heading_residual_rad``).
+    heading_residual_rad: Optional[float] = None
     waypoint_t0: float = 0.0                          #: the first waypoint's time [s]
     waypoint_xy_m: Optional[np.ndarray] = None        #: surveyed waypoints (W, 2) [m]
     smoothed_track_m: Optional[np.ndarray] = None     #: the default's smoothed track (per step)
@@ -306,6 +315,7 @@ def _score_walk(walk, steps_raw: ph.HandheldSteps, models: FoldModels, settings:
         return score
     spread = max(cal.yaw_offset_spread_rad, 1e-3)
     residual = heading_residual_rad(steps, cal.yaw_offset_rad, wt, wxy)
+    score.heading_residual_rad = residual
     options = settings.tracker_options(unknown_start_heading_sd_rad=spread, start_heading_offset_sd_rad=spread)
     start_xy = wxy[0] if not math.isinf(settings.wall_log_penalty) else _walkable_start(fl.plan, wxy[0])
     known = {"position_m": start_xy, "floor": fl.number, "heading_offset_rad": 0.0, "time_s": float(wt[0])}
@@ -483,7 +493,10 @@ def _score_walk_grid(score: WalkScore, put, pdr_steps, fixes, known_fixes, known
         fix_tempering=settings.known_start_fix_tempering,
         fix_outlier_probability=settings.known_start_fix_outlier_probability,
         wall_log_penalty=settings.known_start_wall_log_penalty,
-        fix_tempering_by_variance=settings.known_start_fix_tempering_by_variance), fl.name)
+        fix_tempering_by_variance=settings.known_start_fix_tempering_by_variance,
+        filtered_covariance_scale=settings.known_start_covariance_scale,
+        filtered_covariance_floor_m=settings.known_start_covariance_floor_m,
+        filtered_covariance_fix_gain=settings.known_start_covariance_fix_gain), fl.name)
     if "fusion_known_start" in want:
         run("fusion_known_start", None, known_tracker, known, known_fixes, smooth=False)
     if "fusion_no_walls" in want:
@@ -650,6 +663,13 @@ def summarize(scores: Sequence[WalkScore], settings: RealSettings, seconds: floa
             walk_seconds[name] = float(np.mean(v))
     out = {"methods": methods, "waypoints": rows, "settings": settings.to_dict(), "per_floor": per_floor,
            "error_vs_time": by_time, "seconds": round(seconds, 2), "mean_seconds_per_walk": walk_seconds}
+    # Per walk: the final heading offset of each method with an offset state against the walk's
+    # residual measured from its waypoints (both relative to the training yaw offset) [deg].
+    out["heading_offsets"] = [
+        {"floor": s.floor, "walk": s.walk, "residual_deg": round(math.degrees(s.heading_residual_rad), 3),
+         "final_deg": {name: round(math.degrees(_wrap(s.heading_residual_rad + err)), 3)
+                       for name, err in s.offset_error_rad.items() if name != "fusion_no_heading_offset"}}
+        for s in scores if s.heading_residual_rad is not None and math.isfinite(s.heading_residual_rad)]
     ident = [s for s in scores if s.floor_correct is not None]
     if ident:
         correct = np.concatenate([s.floor_correct for s in ident])

@@ -36,7 +36,7 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
-from indoorloc import pdr_handheld as ph
+from indoorloc.pdr import handheld as ph
 from indoorloc import wifi
 from indoorloc import wifi_crowdsource as wc
 from indoorloc.progress import progress

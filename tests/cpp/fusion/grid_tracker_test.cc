@@ -68,7 +68,7 @@ TEST(GridTrackerTest, KnownStartFollowsTheSteps) {
     EXPECT_NEAR(r.smoothed_mean_m(k, 0), r.filtered_mean_m(k, 0), 0.05) << k;
   }
   // The spread grows with the steps' noise (no fixes).
-  EXPECT_GT(r.filtered_covariance_m2(19, 0), r.filtered_covariance_m2(0, 0));
+  EXPECT_GT(r.filtered_posterior_covariance_m2(19, 0), r.filtered_posterior_covariance_m2(0, 0));
   EXPECT_NEAR(r.smoothed_floor_probabilities[0], 1.0, 1e-12);
 }
 
@@ -85,8 +85,8 @@ TEST(GridTrackerTest, UnknownStartPlacedByOneFix) {
   // that of the fix plus the within-cell spread (1/12 m²) and the first step's noise.
   EXPECT_NEAR(r.filtered_mean_m(0, 0), 30, 0.05);
   EXPECT_NEAR(r.filtered_mean_m(0, 1), 15, 0.05);
-  EXPECT_NEAR(r.filtered_covariance_m2(0, 0), 9.0 + 1.0 / 12.0, 0.3);
-  EXPECT_NEAR(r.filtered_covariance_m2(0, 1), 0.0, 0.05);
+  EXPECT_NEAR(r.filtered_posterior_covariance_m2(0, 0), 9.0 + 1.0 / 12.0, 0.3);
+  EXPECT_NEAR(r.filtered_posterior_covariance_m2(0, 1), 0.0, 0.05);
   // Later steps move the mean by the steps.
   EXPECT_NEAR(r.filtered_mean_m(3, 0) - r.filtered_mean_m(0, 0), 2.1, 0.1);
 }
@@ -100,7 +100,7 @@ TEST(GridTrackerTest, SmootherCarriesALateFixBack) {
   const auto steps = Straight(30, 0.7, M_PI / 2);  // north, 21 m
   const GridTrackResult r = tracker.Run(steps, {Fix(15.0, 40, 30, 1.0)}, TrackStart(), true);
   // Before the fix the filter knows nothing: its mean is near the hall's centre.
-  EXPECT_GT(r.filtered_covariance_m2(5, 0), 50.0);
+  EXPECT_GT(r.filtered_posterior_covariance_m2(5, 0), 50.0);
   // The smoother puts the first step 20.3 m south of the fix (29 steps of 0.7 m back).
   EXPECT_NEAR(r.smoothed_mean_m(0, 0), 40, 0.5);
   EXPECT_NEAR(r.smoothed_mean_m(0, 1), 30 - 0.7 * 29, 0.7);
@@ -112,6 +112,9 @@ TEST(GridTrackerTest, ReturnedCovarianceIsCalibratedByTheFixDistance) {
   GridTrackerOptions o;
   o.heading_offset_sd_rad = 0.0;
   o.fix.tempering = 1.0;
+  o.filtered_covariance_scale = o.smoothed_covariance_scale = 1.0;  // the posterior's own
+  o.filtered_covariance_floor_m = o.smoothed_covariance_floor_m = 0.0;
+  o.filtered_covariance_fix_gain = o.smoothed_covariance_fix_gain = 0.0;
   const GridTracker raw_tracker(&plan, o);
   o.filtered_covariance_scale = 2.0;
   o.filtered_covariance_floor_m = 1.5;
@@ -207,7 +210,7 @@ TEST(GridTrackerTest, WallsKeepTheTrackOutOfTheShop) {
   // A fix in the middle of the shop: the posterior mass lies outside it.
   const GridTrackResult r = tracker.Run(Straight(2, 0.7, 0.0), {Fix(0.5, 25, 25, 3.0)}, TrackStart(), false);
   const double x = r.filtered_mean_m(0, 0), y = r.filtered_mean_m(0, 1);
-  const double spread = std::sqrt(r.filtered_covariance_m2(0, 0) + r.filtered_covariance_m2(0, 2));
+  const double spread = std::sqrt(r.filtered_posterior_covariance_m2(0, 0) + r.filtered_posterior_covariance_m2(0, 2));
   EXPECT_GT(spread, 4.0);  // the mass is around the shop, not at its centre
   (void)x;
   (void)y;
