@@ -34,8 +34,8 @@ from pathlib import Path
 import numpy as np
 
 from indoorloc import fusion
-from indoorloc import pdr_handheld as ph
-from indoorloc import pdr_streaming as ps
+from indoorloc.pdr import handheld as ph
+from indoorloc.pdr import streaming as ps
 from indoorloc import wifi_fixes as wfx
 from indoorloc import wifi_matcher as wm
 from indoorloc.fusion import live

@@ -1,4 +1,4 @@
-"""Live tracking (indoorloc.fusion.live, indoorloc.pdr_streaming, fusion.GridFilterSession): a walk
+"""Live tracking (indoorloc.fusion.live, indoorloc.pdr.streaming, fusion.GridFilterSession): a walk
 replayed event by event gives the batch causal filter's track bit for bit (a synthetic walk, and
 every walk of the shared data's floor F8 with models from the other walks); the streaming step
 detector is causal and close to the batch detector; events out of time order are refused with the
@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from indoorloc import fusion
-from indoorloc import pdr_handheld as ph
-from indoorloc import pdr_streaming as ps
+from indoorloc.pdr import handheld as ph
+from indoorloc.pdr import streaming as ps
 from indoorloc import wifi_fixes as wfx
 from indoorloc.fusion import live
 from indoorloc.io import load_floor_plan, read_ilc_floor, read_ilc_site

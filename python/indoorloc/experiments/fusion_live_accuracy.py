@@ -34,8 +34,8 @@ from typing import Dict, List
 import numpy as np
 
 from indoorloc import fusion
-from indoorloc import pdr_handheld as ph
-from indoorloc import pdr_streaming as ps
+from indoorloc.pdr import handheld as ph
+from indoorloc.pdr import streaming as ps
 from indoorloc import wifi_fixes as wfx
 from indoorloc.fusion import live
 from indoorloc.io import load_floor_plan, read_ilc_floor

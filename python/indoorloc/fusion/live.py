@@ -4,11 +4,11 @@ When to use: a phone app, or a replay of a recorded walk, that feeds acceleromet
 rotation-vector and WiFi-scan events as they happen and wants where the phone is now. The pieces
 are those of a site: the grid tracker of the floor plan (``fusion.GridTracker``), the WiFi
 fingerprint database (``wifi_fixes.FingerprintDatabase``) and the hand-held PDR calibration
-(``pdr_handheld.HandheldCalibration``).
+(``pdr.handheld.HandheldCalibration``).
 
 What happens to each event (docs/fusion.md, "Live tracking"):
 
-- **IMU**: the accelerometer drives the causal step detector (:mod:`indoorloc.pdr_streaming`); the
+- **IMU**: the accelerometer drives the causal step detector (:mod:`indoorloc.pdr.streaming`); the
   gyroscope and rotation vector are held at their latest sample (send them first at equal times).
   A step is confirmed ``min_step_interval_s`` (0.4 s) after its peak; it becomes a
   ``fusion.Steps.from_polar`` step (calibrated length, heading + the calibration's yaw offset,
@@ -46,8 +46,8 @@ from typing import Any, Dict, Iterator, List, Optional, Sequence, Tuple
 import numpy as np
 
 from indoorloc._core.fusion import GridFilterSession, GridTracker
-from indoorloc import pdr_handheld as ph
-from indoorloc import pdr_streaming as ps
+from indoorloc.pdr import handheld as ph
+from indoorloc.pdr import streaming as ps
 from indoorloc import wifi_fixes as wfx
 from indoorloc import wifi_matcher as wm
 
@@ -138,7 +138,7 @@ def causal_inputs(walk: Any, calibration: Optional[ph.HandheldCalibration] = Non
                   step_heading_sd_rad: float = STEP_HEADING_SD_RAD, with_floors: bool = True,
                   delay_compensation: bool = False):
     """The steps (fusion.Steps) and fixes (fusion.Fixes or None) a live tracker derives from a
-    recorded walk: causal steps (``pdr_streaming.causal_handheld_steps`` with the calibration's
+    recorded walk: causal steps (``pdr.streaming.causal_handheld_steps`` with the calibration's
     options), fixes of the scans timed at the scans, those after the last step dropped (a live
     filter has not applied them yet). ``delay_compensation``: each fix's components moved by the
     PDR displacement from the time the fix describes (its measurements' mean last-seen time) to
@@ -237,7 +237,7 @@ class LiveTracker:
     ----------
     tracker : fusion.GridTracker
         Built once per site and options (its grids are shared by every live session).
-    calibration : pdr_handheld.HandheldCalibration or None
+    calibration : pdr.handheld.HandheldCalibration or None
         K, yaw offset and detector settings (fit on causal steps of the survey walks:
         ``calibrate_handheld(walks, steps_cache=[causal_handheld_steps(w) for w in walks])``).
         None: ``HandheldOptions()`` defaults, yaw offset 0.

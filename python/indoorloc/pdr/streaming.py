@@ -1,6 +1,6 @@
 """Causal hand-held step detection, one sensor sample at a time (for live tracking).
 
-Why beside :func:`indoorloc.pdr_handheld.handheld_steps`: that detector looks at the whole walk
+Why beside :func:`indoorloc.pdr.handheld.handheld_steps`: that detector looks at the whole walk
 (zero-phase band-pass, a centred running RMS, ``find_peaks`` taking the largest peaks first, the
 walk's median step interval, the walk's mean sample rate), so the steps it finds at time t depend
 on samples after t. A live tracker needs steps from the past only. :class:`StreamingStepDetector`
@@ -28,7 +28,7 @@ or before it; send them first at equal times):
    heading (rate about the vertical integrated from the first rotation-vector heading) and the
    complementary blend (a causal first-order low-pass of their difference, ``complementary_tau_s``).
 
-The output is a :class:`indoorloc.pdr_handheld.HandheldSteps`, so ``calibrate_handheld`` (K, yaw
+The output is a :class:`indoorloc.pdr.handheld.HandheldSteps`, so ``calibrate_handheld`` (K, yaw
 offset, sds fitted on training walks' causal steps) and ``rescale`` apply unchanged. Calibrate K on
 causal steps for a causal tracker: the forward-only filter changes the feature's amplitude.
 """
@@ -42,7 +42,7 @@ from typing import Any, List, Optional, Sequence, Tuple
 import numpy as np
 
 from indoorloc._core.pdr import butterworth_sos
-from indoorloc.pdr_handheld import GRAVITY_MPS2, HandheldOptions, HandheldSteps, as_arrays
+from indoorloc.pdr.handheld import GRAVITY_MPS2, HandheldOptions, HandheldSteps, as_arrays
 
 #: Accelerometer intervals whose median gives the nominal sample rate.
 RATE_SAMPLES = 25
@@ -50,7 +50,7 @@ _TWO_PI = 2.0 * math.pi
 
 
 def _wrap(a: float) -> float:
-    """Angle folded into [-pi, pi) (as ``pdr_handheld.wrap_angle``)."""
+    """Angle folded into [-pi, pi) (as ``pdr.handheld.wrap_angle``)."""
     return (a + math.pi) % _TWO_PI - math.pi
 
 
