@@ -272,6 +272,28 @@ def build_database(train_walks: Sequence[Any], settings: Optional[FixSettings] =
             fl = 0 if floors is None else int(floors[i])
             rss, xy, names = got
             per_walk.append((rss, xy, names, np.full(xy.shape[0], fl), np.full(xy.shape[0], i)))
+    return assemble_database(per_walk, s)
+
+
+def walk_fingerprints(walk: Any, settings: FixSettings, steps: Optional[ph.HandheldSteps] = None
+                      ) -> Optional[Tuple[np.ndarray, np.ndarray, List[str]]]:
+    """The training fingerprints of one survey walk before any vocabulary filter: ``(rss_dbm (n, V)
+    [NaN = not heard], xy_m (n, 2) placed by PDR between the waypoints, the walk's V BSSIDs)``, or
+    None when none can be placed. :func:`assemble_database` of several walks' fingerprints equals
+    :func:`build_database` of the walks (what lets a site file grow walk by walk)."""
+    settings.validate()
+
+    def where(t):
+        pos = wc.walk_positions(walk, t, None, steps)
+        return pos.xy_m, pos.valid
+    return _walk_fingerprints(walk, settings, where)
+
+
+def assemble_database(per_walk: Sequence[Tuple[np.ndarray, np.ndarray, List[str], np.ndarray, np.ndarray]],
+                      s: FixSettings) -> FingerprintDatabase:
+    """A database from per-walk fingerprints ``(rss (n, V), xy (n, 2), bssids (V), floors (n,),
+    walk index (n,))``: BSSIDs heard in fewer than ``min_scans`` fingerprints dropped, columns in
+    sorted BSSID order, AP reliabilities computed for the "shared" metric."""
     if not per_walk:
         raise ValueError("indoorloc: argument 'train_walks': no WiFi fingerprint could be placed (no readings "
                          "between waypoints)")
