@@ -209,8 +209,8 @@ class FingerprintDatabase:
 
 
 def _walk_fingerprints(walk: Any, s: FixSettings, positions_at: Callable[[np.ndarray], Tuple[np.ndarray, np.ndarray]]
-                       ) -> Optional[Tuple[np.ndarray, np.ndarray, List[str]]]:
-    """The training fingerprints of one walk: (rss (n, V), xy (n, 2), the walk's BSSIDs), or None."""
+                       ) -> Optional[Tuple[np.ndarray, np.ndarray, List[str], np.ndarray]]:
+    """The training fingerprints of one walk: (rss (n, V), xy (n, 2), the walk's BSSIDs, times (n,) [s]), or None."""
     if s.pooling == "fresh":
         t, rss, names = fresh_scans(walk, s.fresh_age_s)
         if t.size == 0:
@@ -231,7 +231,7 @@ def _walk_fingerprints(walk: Any, s: FixSettings, positions_at: Callable[[np.nda
     xy, valid = positions_at(t)
     if not np.any(valid):
         return None
-    return rss[valid], xy[valid], names
+    return rss[valid], xy[valid], names, t[valid]
 
 
 def build_database(train_walks: Sequence[Any], settings: Optional[FixSettings] = None,
@@ -270,15 +270,16 @@ def build_database(train_walks: Sequence[Any], settings: Optional[FixSettings] =
         got = _walk_fingerprints(walk, s, where)
         if got is not None:
             fl = 0 if floors is None else int(floors[i])
-            rss, xy, names = got
+            rss, xy, names, _ = got
             per_walk.append((rss, xy, names, np.full(xy.shape[0], fl), np.full(xy.shape[0], i)))
     return assemble_database(per_walk, s)
 
 
 def walk_fingerprints(walk: Any, settings: FixSettings, steps: Optional[ph.HandheldSteps] = None
-                      ) -> Optional[Tuple[np.ndarray, np.ndarray, List[str]]]:
+                      ) -> Optional[Tuple[np.ndarray, np.ndarray, List[str], np.ndarray]]:
     """The training fingerprints of one survey walk before any vocabulary filter: ``(rss_dbm (n, V)
-    [NaN = not heard], xy_m (n, 2) placed by PDR between the waypoints, the walk's V BSSIDs)``, or
+    [NaN = not heard], xy_m (n, 2) placed by PDR between the waypoints, the walk's V BSSIDs, times
+    (n,) [s, walk clock])``, or
     None when none can be placed. :func:`assemble_database` of several walks' fingerprints equals
     :func:`build_database` of the walks (what lets a site file grow walk by walk)."""
     settings.validate()

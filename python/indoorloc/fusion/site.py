@@ -1,0 +1,462 @@
+"""A site model in one file: built once from survey walks with waypoints, grown walk by walk,
+used to track new walks (docs/your_building.md).
+
+Per floor it keeps the walkable plan, the WiFi fingerprints (iBeacon sightings where present),
+the handheld-PDR calibration and the tracker settings, with provenance (walk ids and files,
+library version, build time). The file format is :mod:`indoorloc.fusion.site_store` (SQLite).
+
+What is stored is per walk (fingerprints before any vocabulary filter, the PDR between
+waypoints), and what depends on all walks of a floor (AP vocabulary and reliabilities, the
+calibration) is derived from it, so :meth:`Site.add` of a walk gives the same site as a build
+that included it. Example::
+
+    from indoorloc.fusion import Site
+    site = Site.build("ilc2020_site2", "site2.db", floors=["F8"])
+    track = Site.open("site2.db").track("walk.txt", floor="auto")
+    track.xy_m, track.errors_m
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import math
+import os
+import sqlite3
+import tempfile
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any, Callable, Dict, List, Optional, Sequence, Union
+
+import numpy as np
+
+import indoorloc
+from indoorloc import pdr_handheld as ph
+from indoorloc import wifi_crowdsource as wc
+from indoorloc import wifi_fixes as wfx
+from indoorloc.fusion import FloorPlan, FloorPlanOptions, site_model
+from indoorloc.fusion import site_store as store
+from indoorloc.fusion.grid import GridTracker
+from indoorloc.io.floor_plan import load_floor_plan, read_geojson_floor
+from indoorloc.io.ilc2020 import read_ilc_walk
+from indoorloc.io.survey_layout import floor_info_size_m, survey_floors
+
+WalkLike = Union[str, os.PathLike, Any]
+
+
+@dataclass
+class FloorModels:
+    """One floor of a site, ready to track: plan, calibration, fingerprints, grid tracker."""
+
+    name: str
+    number: int
+    origin_lon_lat: tuple
+    plan: FloorPlan
+    calibration: ph.HandheldCalibration
+    database: wfx.FingerprintDatabase
+    tracker: GridTracker
+
+
+@dataclass
+class WalkTrack:
+    """A walk tracked on a site: per step (M) times [s since the walk's first record], position
+    (M, 2) [m, floor frame] and covariance (M, 3) = (xx, xy, yy) [m²]; the floor and its
+    probability; the waypoints and the errors at them [m] when the walk has waypoints."""
+
+    walk_id: str
+    source: str
+    floor: str
+    floor_number: int
+    floor_probability: float
+    floor_probabilities: Dict[str, float]
+    smoothed: bool
+    t0_unix_ms: int
+    times_s: np.ndarray
+    xy_m: np.ndarray
+    covariance_m2: np.ndarray
+    origin_lon_lat: tuple
+    waypoint_t_s: np.ndarray
+    waypoint_xy_m: np.ndarray
+    errors_m: Optional[np.ndarray]
+
+
+def _now() -> str:
+    return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+
+
+def _read_walk(walk: WalkLike):
+    return read_ilc_walk(walk) if isinstance(walk, (str, os.PathLike)) else walk
+
+
+class Site:
+    """A site file opened for tracking and growing (:meth:`open`, :meth:`build`)."""
+
+    def __init__(self, path: Path):
+        self.path = Path(path)
+        con = store.connect(self.path)
+        try:
+            self.meta = store.meta(con)
+            row = con.execute("SELECT settings FROM tracker_settings WHERE name = 'default'").fetchone()
+            if row is None:
+                raise store.SiteFileError(f"indoorloc: site file {self.path}: no tracker settings")
+            self.settings = site_model.TrackSettings.from_dict(json.loads(row[0]))
+            self._floors = {name: (int(num), (lon, lat)) for name, num, lon, lat in con.execute(
+                "SELECT name, number, origin_lon, origin_lat FROM floors ORDER BY number")}
+        finally:
+            con.close()
+        self._models: Dict[str, FloorModels] = {}
+        self._all: Optional[tuple] = None
+
+    # ---- opening and building -------------------------------------------------------------
+    @classmethod
+    def open(cls, path: Union[str, os.PathLike]) -> "Site":
+        """Open a site file; SiteFileError (a ValueError) naming the file when it is not one of
+        this format version or is damaged."""
+        return cls(Path(path))
+
+    @classmethod
+    def build(cls, survey_dir: Union[str, os.PathLike], path: Union[str, os.PathLike],
+              floors: Optional[Sequence[str]] = None, settings: Optional[site_model.TrackSettings] = None,
+              progress: Optional[Callable[[str], None]] = None) -> "Site":
+        """Build a site file from a survey folder (ILC 2020 or Kaggle 2021 layout,
+        :func:`indoorloc.io.survey_layout.survey_floors`): every walk of the floors (all by
+        default) must have waypoints. Written to a temporary file and renamed: an existing
+        ``path`` is replaced only when the build succeeded. ``progress(walk_id)`` after each walk."""
+        settings = settings or site_model.TrackSettings()
+        settings.validate()
+        survey = survey_floors(Path(survey_dir), floors)
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
+        os.close(fd)
+        os.unlink(tmp)
+        try:
+            con = store.create(Path(tmp))
+            built = _now()
+            for key, value in (("format", "indoorloc.site"), ("format_version", str(store.FORMAT_VERSION)),
+                               ("library_version", indoorloc.__version__), ("built", built),
+                               ("modified", built), ("survey_dir", str(Path(survey_dir).resolve()))):
+                con.execute("INSERT INTO meta VALUES (?, ?)", (key, value))
+            con.execute("INSERT INTO tracker_settings VALUES ('default', ?)", (json.dumps(settings.to_dict()),))
+            for fl in survey:
+                _insert_floor(con, fl)
+            seq = 0
+            for fl in survey:
+                for wp in fl.walk_paths:
+                    _insert_survey_walk(con, read_ilc_walk(wp), fl.name, seq, settings, str(wp))
+                    seq += 1
+                    if progress:
+                        progress(wp.stem)
+                _recalibrate(con, fl.name)
+            con.execute("COMMIT")
+            con.close()
+            os.replace(tmp, path)
+        except BaseException:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+            raise
+        return cls(path)
+
+    def add(self, walks: Sequence[WalkLike], floor: Optional[str] = None,
+            progress: Optional[Callable[[str], None]] = None) -> List[str]:
+        """Add survey walks (with waypoints) to the site, in one transaction: if any walk fails,
+        the file keeps its old content. The floor of each walk is ``floor`` or the walk's
+        ``FloorName`` header. Returns the walk ids added."""
+        con = store.connect(self.path, write=True)
+        added = []
+        try:
+            con.execute("BEGIN IMMEDIATE")
+            seq = con.execute("SELECT COALESCE(MAX(seq) + 1, 0) FROM walks").fetchone()[0]
+            touched = set()
+            for w in walks:
+                walk = _read_walk(w)
+                name = self._walk_floor(walk, floor)
+                _insert_survey_walk(con, walk, name, seq, self.settings, str(getattr(walk, "path", w)))
+                seq += 1
+                touched.add(name)
+                added.append(walk.walk_id)
+                if progress:
+                    progress(walk.walk_id)
+            for name in sorted(touched):
+                _recalibrate(con, name)
+            con.execute("INSERT OR REPLACE INTO meta VALUES ('modified', ?)", (_now(),))
+            con.execute("COMMIT")
+        except BaseException:
+            if con.in_transaction:
+                con.execute("ROLLBACK")
+            raise
+        finally:
+            con.close()
+        self._models.clear()
+        self._all = None
+        return added
+
+    # ---- reading ------------------------------------------------------------------------
+    @property
+    def floors(self) -> List[str]:
+        """Floor names in building order."""
+        return list(self._floors)
+
+    def _walk_floor(self, walk: Any, floor: Optional[str]) -> str:
+        name = floor or walk.metadata.get("FloorName") or ""
+        if not name:
+            raise ValueError(f"indoorloc: walk {getattr(walk, 'path', walk.walk_id)}: no FloorName in its header; "
+                             f"name the floor (one of {self.floors})")
+        if name not in self._floors:
+            raise ValueError(f"indoorloc: walk {getattr(walk, 'path', walk.walk_id)}: floor {name!r} is not in site "
+                             f"{self.path} (floors: {self.floors})")
+        return name
+
+    def floor_models(self, name: str) -> FloorModels:
+        """The models of one floor, read from the file once."""
+        if name not in self._floors:
+            raise ValueError(f"indoorloc: argument 'floor': {name!r} is not in site {self.path} (floors: {self.floors})")
+        if name not in self._models:
+            con = store.connect(self.path)
+            try:
+                number, origin = self._floors[name]
+                plan = _plan(con, name, number, origin)
+                cal = _calibration(con, name)
+                database = _database(con, [name], self.settings.fixes)
+            finally:
+                con.close()
+            tracker = GridTracker(plan, site_model.floor_grid_options(self.settings, cal))
+            self._models[name] = FloorModels(name, number, origin, plan, cal, database, tracker)
+        return self._models[name]
+
+    def _all_floors(self) -> tuple:
+        """(all-floor identification tracker, floor numbers, database, offset sd) for --floor auto."""
+        if self._all is None:
+            models = [self.floor_models(n) for n in self.floors]
+            plan = FloorPlan([m.plan.geometry(0) for m in models], FloorPlanOptions())
+            # The walk's floor is unknown: the widest calibrated offset spread of the floors.
+            spread = max(site_model.offset_spread_rad(m.calibration) for m in models)
+            tracker = GridTracker(plan, site_model.identification_grid_options(self.settings, spread))
+            con = store.connect(self.path)
+            try:
+                database = _database(con, self.floors, self.settings.fixes)
+            finally:
+                con.close()
+            self._all = (tracker, [m.number for m in models], database)
+        return self._all
+
+    def track(self, walk: WalkLike, floor: Optional[str] = None, smooth: bool = True) -> WalkTrack:
+        """Track one walk (a walk file or an ``IlcWalk``) with the default tracker.
+
+        ``floor``: a floor name, ``"auto"`` (identified from the walk's WiFi and motion over all
+        floors: the floor with the most evidence, then the floor-given tracker on it), or None
+        (the walk header's ``FloorName``; ``auto`` when it has none). ValueError naming the walk
+        and floor when that floor is not in the site."""
+        walk = _read_walk(walk)
+        src = str(getattr(walk, "path", walk.walk_id))
+        if floor is None:
+            floor = walk.metadata.get("FloorName") or "auto"
+            if floor != "auto" and floor not in self._floors:
+                raise ValueError(f"indoorloc: walk {src}: its floor {floor!r} is not in site {self.path} "
+                                 f"(floors: {self.floors}); pass floor='auto' or one of them")
+        steps_raw = ph.handheld_steps(walk)
+        probabilities = {}
+        if floor == "auto":
+            tracker_all, numbers, database = self._all_floors()
+            # Steps rotated with the first floor's calibration for identification; then the floor's own.
+            first = self.floor_models(self.floors[0])
+            ident = site_model.identify_floor(tracker_all, numbers, site_model.tracker_steps(
+                steps_raw, first.calibration, self.settings), wfx.fixes_for_walk(walk, database))
+            by_number = {n: name for name, (n, _) in self._floors.items()}
+            floor = by_number[ident["floor"]]
+            probabilities = {by_number[n]: p for n, p in ident["probabilities"].items()}
+        m = self.floor_models(floor) if floor in self._floors else self._walk_floor(walk, floor)
+        steps = site_model.tracker_steps(steps_raw, m.calibration, self.settings)
+        if len(steps) == 0:
+            raise ValueError(f"indoorloc: walk {src}: no step detected, nothing to track")
+        fixes = wfx.fixes_for_walk(walk, m.database)
+        r = site_model.run_default(m.tracker, steps, fixes, smooth=smooth)
+        median = self.settings.point_estimate == "median"
+        key = ("smoothed_median_m" if median else "smoothed_m") if smooth else ("median_m" if median else "mean_m")
+        cov = np.asarray(r["smoothed_covariance_m2" if smooth else "covariance_m2"], float)
+        wt = np.asarray(walk.waypoint_t_s, float)
+        wxy = np.asarray(walk.waypoint_xy_m, float).reshape(-1, 2)
+        errors = site_model.walk_errors_m(steps.times_s, r[key], wt, wxy) if wt.size else None
+        return WalkTrack(walk.walk_id, src, floor, m.number, probabilities.get(floor, 1.0), probabilities or {floor: 1.0},
+                         bool(smooth), int(walk.t0_unix_ms), np.asarray(steps.times_s, float),
+                         np.asarray(r[key], float), cov, m.origin_lon_lat, wt, wxy, errors)
+
+    def info(self) -> Dict[str, Any]:
+        """Provenance and a per-floor summary: walks, fingerprints, access points, beacons,
+        walkable area [m²], survey coverage (fraction of the walkable area within 5 m of a
+        fingerprint) and the PDR calibration."""
+        con = store.connect(self.path)
+        try:
+            out = {"path": str(self.path), "size_bytes": self.path.stat().st_size, "meta": store.meta(con),
+                   "settings": self.settings.to_dict(), "floors": {}}
+            for name, (number, origin) in self._floors.items():
+                area = con.execute("SELECT walkable_area_m2 FROM floors WHERE name = ?", (name,)).fetchone()[0]
+                n_walks = con.execute("SELECT COUNT(*) FROM walks WHERE floor = ?", (name,)).fetchone()[0]
+                n_fp = con.execute("SELECT COUNT(*) FROM fingerprints WHERE floor = ?", (name,)).fetchone()[0]
+                n_b = con.execute("SELECT COUNT(DISTINCT beacon) FROM beacons WHERE floor = ?", (name,)).fetchone()[0]
+                ids = set()
+                for (blob,) in con.execute("SELECT ap_ids FROM fingerprints WHERE floor = ?", (name,)):
+                    ids.update(np.frombuffer(blob, "<i4").tolist())
+                cal = con.execute("SELECT k, yaw_offset_rad, yaw_offset_spread_rad FROM pdr_calibration WHERE floor = ?",
+                                  (name,)).fetchone()
+                out["floors"][name] = {
+                    "number": number, "origin_lon_lat": list(origin), "walks": n_walks, "fingerprints": n_fp,
+                    "access_points": len(ids), "beacons": n_b, "walkable_area_m2": round(area, 1),
+                    "survey_coverage": round(self.coverage(name)["fraction_within_5m"], 4),
+                    "pdr_calibration": None if cal is None else {
+                        "k": cal[0], "yaw_offset_deg": math.degrees(cal[1]), "yaw_offset_spread_deg": math.degrees(cal[2])}}
+            out["walks"] = [dict(zip(("id", "floor", "source", "kind", "weight", "added"), r)) for r in con.execute(
+                "SELECT id, floor, source, kind, weight, added FROM walks ORDER BY seq")]
+        finally:
+            con.close()
+        return out
+
+    def coverage(self, name: str, cell_m: float = 2.0) -> Dict[str, Any]:
+        """Survey coverage of a floor: on a grid of ``cell_m`` cells over the plan, the distance
+        [m] from each walkable cell centre to the nearest fingerprint (NaN: not walkable), and
+        the fraction of walkable cells within 5 m."""
+        from scipy.spatial import cKDTree
+
+        if name not in self._floors:
+            raise ValueError(f"indoorloc: argument 'floor': {name!r} is not in site {self.path}")
+        con = store.connect(self.path)
+        try:
+            number, origin = self._floors[name]
+            plan = _plan(con, name, number, origin)
+            xy = np.array(con.execute("SELECT x_m, y_m FROM fingerprints WHERE floor = ?", (name,)).fetchall(),
+                          float).reshape(-1, 2)
+        finally:
+            con.close()
+        b = np.asarray(plan.bounds(0), float).ravel()
+        xs = np.arange(b[0] + cell_m / 2, b[2], cell_m)
+        ys = np.arange(b[1] + cell_m / 2, b[3], cell_m)
+        gx, gy = np.meshgrid(xs, ys)
+        pts = np.c_[gx.ravel(), gy.ravel()]
+        walkable = np.asarray(plan.is_walkable(pts, 0), bool)
+        dist = np.full(pts.shape[0], np.nan)
+        if xy.shape[0] and walkable.any():
+            dist[walkable] = cKDTree(xy).query(pts[walkable])[0]
+        frac = float(np.mean(dist[walkable] <= 5.0)) if walkable.any() else 0.0
+        return {"extent_m": (b[0], b[2], b[1], b[3]), "distance_m": dist.reshape(gx.shape), "fingerprints_m": xy,
+                "fraction_within_5m": frac, "edges_m": np.asarray(plan.edges(0))}
+
+
+# ---- writing ---------------------------------------------------------------------------------
+def _insert_floor(con: sqlite3.Connection, fl) -> None:
+    text = Path(fl.geojson_path).read_text()
+    g = read_geojson_floor(json.loads(text), floor=fl.number, origin_lon_lat="outline_sw")
+    plan = load_floor_plan(json.loads(text), floors=[fl.number], origin_lon_lat=g.origin_lon_lat)
+    size = floor_info_size_m(fl.floor_info_path)
+    con.execute("INSERT INTO floors VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                (fl.name, fl.number, text, g.origin_lon_lat[0], g.origin_lon_lat[1], float(plan.walkable_area(0)),
+                 size[0] if size else None, size[1] if size else None, str(fl.geojson_path)))
+    geom = plan.geometry(0)
+    for role, rings in (("outline", geom.outlines), ("obstacle", geom.obstacles)):
+        for i, ring in enumerate(rings):
+            con.execute("INSERT INTO plan_rings VALUES (?, ?, ?, ?)", (fl.name, role, i, store.f8(ring)))
+
+
+def _ap_ids(con: sqlite3.Connection, bssids: Sequence[str]) -> np.ndarray:
+    con.executemany("INSERT OR IGNORE INTO access_points (bssid) VALUES (?)", [(b,) for b in bssids])
+    ids = dict(con.execute(f"SELECT bssid, id FROM access_points WHERE bssid IN ({','.join('?' * len(bssids))})",
+                           list(bssids)).fetchall()) if bssids else {}
+    return np.array([ids[b] for b in bssids], dtype=np.int64)
+
+
+def _insert_survey_walk(con: sqlite3.Connection, walk: Any, floor: str, seq: int,
+                        settings: site_model.TrackSettings, source: str) -> None:
+    wt = np.asarray(walk.waypoint_t_s, float)
+    if wt.size < 2:
+        raise ValueError(f"indoorloc: walk {source}: {wt.size} waypoint(s); a survey walk needs at least 2 "
+                         f"(a walk without waypoints can be tracked, not surveyed)")
+    if con.execute("SELECT 1 FROM walks WHERE id = ?", (walk.walk_id,)).fetchone():
+        raise ValueError(f"indoorloc: walk {source}: walk id {walk.walk_id} is already in the site")
+    wxy = np.asarray(walk.waypoint_xy_m, float).reshape(-1, 2)
+    steps = ph.handheld_steps(walk)
+    con.execute("INSERT INTO walks VALUES (?, ?, ?, ?, 'survey', 1.0, ?, ?, ?)",
+                (walk.walk_id, seq, floor, source, _now(), int(wt.size), float(walk.duration_s)))
+    iv = ph.waypoint_intervals(steps, wt, wxy)
+    con.execute(f"INSERT INTO calibration_intervals VALUES (?, ?, {', '.join('?' * len(store.INTERVAL_FIELDS))})",
+                (walk.walk_id, floor, *[store.f8(getattr(iv, f)) for f in store.INTERVAL_FIELDS]))
+    got = wfx.walk_fingerprints(walk, settings.fixes, steps)
+    if got is not None:
+        rss, xy, names, t_s = got
+        ids = _ap_ids(con, names)
+        heard = np.isfinite(rss)
+        rows = []
+        for i in range(rss.shape[0]):
+            cols = np.flatnonzero(heard[i])
+            rows.append((floor, walk.walk_id, float(t_s[i]), float(xy[i, 0]), float(xy[i, 1]), 1.0,
+                         ids[cols].astype("<i4").tobytes(), rss[i, cols].astype("<f4").tobytes()))
+        con.executemany("INSERT INTO fingerprints (floor, walk, t_s, x_m, y_m, weight, ap_ids, rss_dbm) "
+                        "VALUES (?, ?, ?, ?, ?, ?, ?, ?)", rows)
+    b = walk.beacons
+    if b.n_readings:
+        pos = wc.walk_positions(walk, b.t_s, None, steps)
+        keep = np.flatnonzero(pos.valid & np.isfinite(b.rssi_dbm))
+        con.executemany("INSERT INTO beacons VALUES (?, ?, ?, ?, ?, ?, ?)",
+                        [(floor, walk.walk_id, float(b.t_s[i]), float(pos.xy_m[i, 0]), float(pos.xy_m[i, 1]),
+                          f"{b.uuid[i]}:{b.major[i]}:{b.minor[i]}", float(b.rssi_dbm[i])) for i in keep])
+
+
+def _recalibrate(con: sqlite3.Connection, floor: str) -> None:
+    rows = con.execute(f"SELECT {', '.join(store.INTERVAL_FIELDS)} FROM calibration_intervals c JOIN walks w "
+                       f"ON w.id = c.walk WHERE c.floor = ? AND w.kind = 'survey' ORDER BY w.seq", (floor,)).fetchall()
+    intervals = [ph.WaypointIntervals(*[store.from_f8(v, 2 if f.startswith("disp") else 1)
+                                        for f, v in zip(store.INTERVAL_FIELDS, row)]) for row in rows]
+    try:
+        cal = ph.calibrate_from_intervals(intervals)
+    except ValueError as exc:
+        raise ValueError(f"indoorloc: floor {floor}: cannot calibrate the PDR from its survey walks ({exc})") from None
+    con.execute("INSERT OR REPLACE INTO pdr_calibration VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                (floor, cal.k, cal.yaw_offset_rad, cal.yaw_offset_spread_rad, cal.length_sd_fraction,
+                 cal.heading_sd_rad, cal.k_rms_residual_m, cal.n_intervals, json.dumps(asdict(cal.options))))
+
+
+# ---- reading ---------------------------------------------------------------------------------
+def _plan(con: sqlite3.Connection, name: str, number: int, origin: tuple) -> FloorPlan:
+    text = con.execute("SELECT geojson FROM floors WHERE name = ?", (name,)).fetchone()[0]
+    return load_floor_plan(json.loads(text), floors=[number], origin_lon_lat=origin)
+
+
+def _calibration(con: sqlite3.Connection, name: str) -> ph.HandheldCalibration:
+    row = con.execute("SELECT k, yaw_offset_rad, yaw_offset_spread_rad, length_sd_fraction, heading_sd_rad, "
+                      "k_rms_residual_m, n_intervals, options FROM pdr_calibration WHERE floor = ?", (name,)).fetchone()
+    if row is None:
+        raise store.SiteFileError(f"indoorloc: floor {name}: no PDR calibration in the site file")
+    k, yaw, spread, f, s, rms, n, options = row
+    return ph.HandheldCalibration(ph.HandheldOptions(**json.loads(options)), k, rms, n, yaw, spread, f, s)
+
+
+def _database(con: sqlite3.Connection, floors: Sequence[str], settings: wfx.FixSettings) -> wfx.FingerprintDatabase:
+    """The fingerprint database of the floors, as ``wifi_fixes.build_database`` of their walks."""
+    bssid = dict(con.execute("SELECT id, bssid FROM access_points").fetchall())
+    number = dict(con.execute("SELECT name, number FROM floors").fetchall())
+    per_walk, current, rows = [], None, []
+
+    def flush():
+        if not rows:
+            return
+        ids = sorted({int(a) for r in rows for a in np.frombuffer(r[3], "<i4")})
+        col = {a: j for j, a in enumerate(ids)}
+        rss = np.full((len(rows), len(ids)), np.nan)
+        for i, r in enumerate(rows):
+            a = np.frombuffer(r[3], "<i4")
+            rss[i, [col[int(x)] for x in a]] = np.frombuffer(r[4], "<f4")
+        xy = np.array([(r[1], r[2]) for r in rows], float)
+        per_walk.append((rss, xy, [bssid[a] for a in ids], np.full(len(rows), number[rows[0][5]]),
+                         np.full(len(rows), rows[0][6])))
+
+    marks = ",".join("?" * len(floors))
+    for r in con.execute(f"SELECT f.walk, f.x_m, f.y_m, f.ap_ids, f.rss_dbm, f.floor, w.seq FROM fingerprints f "
+                         f"JOIN walks w ON w.id = f.walk WHERE f.floor IN ({marks}) ORDER BY w.seq, f.id",
+                         list(floors)):
+        if r[0] != current:
+            flush()
+            current, rows = r[0], []
+        rows.append((r[0], r[1], r[2], r[3], r[4], r[5], r[6]))
+    flush()
+    return wfx.assemble_database(per_walk, settings)
+
+
+__all__ = ["FloorModels", "Site", "WalkTrack"]
