@@ -281,6 +281,40 @@ class Site:
                          bool(smooth), int(walk.t0_unix_ms), np.asarray(steps.times_s, float),
                          np.asarray(r[key], float), cov, m.origin_lon_lat, wt, wxy, errors)
 
+    def leave_one_walk_out(self, name: str, progress: Optional[Callable[[str], None]] = None) -> Dict[str, Any]:
+        """The expected error on a floor: each survey walk tracked (default tracker, floor given)
+        on the floor's models without it (calibration and fingerprints rebuilt from the others),
+        re-read from its source file. Returns ``{"points": (W, 3) x, y [m] of every waypoint and
+        its error [m], "stats": mean/median/p90, "walks": n, "missing": [walk files not found]}``."""
+        m = self.floor_models(name)
+        con = store.connect(self.path)
+        try:
+            walks = con.execute("SELECT id, source FROM walks WHERE floor = ? AND kind = 'survey' ORDER BY seq",
+                                (name,)).fetchall()
+            points, missing = [], []
+            for walk_id, source in walks:
+                if not Path(source).is_file():
+                    missing.append(source)
+                    continue
+                walk = read_ilc_walk(source)
+                cal = _calibrate(con, name, exclude_walk=walk_id)
+                database = _database(con, [name], self.settings.fixes, exclude_walk=walk_id)
+                tracker = GridTracker(m.plan, site_model.floor_grid_options(self.settings, cal))
+                steps = site_model.tracker_steps(ph.handheld_steps(walk), cal, self.settings)
+                if len(steps):
+                    r = site_model.run_default(tracker, steps, wfx.fixes_for_walk(walk, database))
+                    key = "smoothed_median_m" if self.settings.point_estimate == "median" else "smoothed_m"
+                    e = site_model.walk_errors_m(steps.times_s, r[key], walk.waypoint_t_s, walk.waypoint_xy_m)
+                    points.append(np.c_[np.asarray(walk.waypoint_xy_m, float).reshape(-1, 2), e])
+                if progress:
+                    progress(walk_id)
+        finally:
+            con.close()
+        p = np.vstack(points) if points else np.zeros((0, 3))
+        stats = None if not p.size else {"mean_m": float(p[:, 2].mean()), "median_m": float(np.median(p[:, 2])),
+                                         "p90_m": float(np.percentile(p[:, 2], 90)), "n_waypoints": int(p.shape[0])}
+        return {"points": p, "stats": stats, "walks": len(points), "missing": missing}
+
     def info(self) -> Dict[str, Any]:
         """Provenance and a per-floor summary: walks, fingerprints, access points, beacons,
         walkable area [m²], survey coverage (fraction of the walkable area within 5 m of a
@@ -399,15 +433,21 @@ def _insert_survey_walk(con: sqlite3.Connection, walk: Any, floor: str, seq: int
                           f"{b.uuid[i]}:{b.major[i]}:{b.minor[i]}", float(b.rssi_dbm[i])) for i in keep])
 
 
-def _recalibrate(con: sqlite3.Connection, floor: str) -> None:
-    rows = con.execute(f"SELECT {', '.join(store.INTERVAL_FIELDS)} FROM calibration_intervals c JOIN walks w "
+def _calibrate(con: sqlite3.Connection, floor: str, exclude_walk: Optional[str] = None) -> ph.HandheldCalibration:
+    """The floor's PDR calibration from the stored intervals of its survey walks (all but ``exclude_walk``)."""
+    rows = con.execute(f"SELECT c.walk, {', '.join(store.INTERVAL_FIELDS)} FROM calibration_intervals c JOIN walks w "
                        f"ON w.id = c.walk WHERE c.floor = ? AND w.kind = 'survey' ORDER BY w.seq", (floor,)).fetchall()
     intervals = [ph.WaypointIntervals(*[store.from_f8(v, 2 if f.startswith("disp") else 1)
-                                        for f, v in zip(store.INTERVAL_FIELDS, row)]) for row in rows]
+                                        for f, v in zip(store.INTERVAL_FIELDS, row[1:])])
+                 for row in rows if row[0] != exclude_walk]
     try:
-        cal = ph.calibrate_from_intervals(intervals)
+        return ph.calibrate_from_intervals(intervals)
     except ValueError as exc:
         raise ValueError(f"indoorloc: floor {floor}: cannot calibrate the PDR from its survey walks ({exc})") from None
+
+
+def _recalibrate(con: sqlite3.Connection, floor: str) -> None:
+    cal = _calibrate(con, floor)
     con.execute("INSERT OR REPLACE INTO pdr_calibration VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
                 (floor, cal.k, cal.yaw_offset_rad, cal.yaw_offset_spread_rad, cal.length_sd_fraction,
                  cal.heading_sd_rad, cal.k_rms_residual_m, cal.n_intervals, json.dumps(asdict(cal.options))))
@@ -428,8 +468,10 @@ def _calibration(con: sqlite3.Connection, name: str) -> ph.HandheldCalibration:
     return ph.HandheldCalibration(ph.HandheldOptions(**json.loads(options)), k, rms, n, yaw, spread, f, s)
 
 
-def _database(con: sqlite3.Connection, floors: Sequence[str], settings: wfx.FixSettings) -> wfx.FingerprintDatabase:
-    """The fingerprint database of the floors, as ``wifi_fixes.build_database`` of their walks."""
+def _database(con: sqlite3.Connection, floors: Sequence[str], settings: wfx.FixSettings,
+              exclude_walk: Optional[str] = None) -> wfx.FingerprintDatabase:
+    """The fingerprint database of the floors, as ``wifi_fixes.build_database`` of their walks
+    (all but ``exclude_walk``)."""
     bssid = dict(con.execute("SELECT id, bssid FROM access_points").fetchall())
     number = dict(con.execute("SELECT name, number FROM floors").fetchall())
     per_walk, current, rows = [], None, []
@@ -451,6 +493,8 @@ def _database(con: sqlite3.Connection, floors: Sequence[str], settings: wfx.FixS
     for r in con.execute(f"SELECT f.walk, f.x_m, f.y_m, f.ap_ids, f.rss_dbm, f.floor, w.seq FROM fingerprints f "
                          f"JOIN walks w ON w.id = f.walk WHERE f.floor IN ({marks}) ORDER BY w.seq, f.id",
                          list(floors)):
+        if r[0] == exclude_walk:
+            continue
         if r[0] != current:
             flush()
             current, rows = r[0], []
