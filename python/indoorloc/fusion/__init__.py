@@ -461,11 +461,3 @@ __all__ = [
     "tracker_options",
 ]
 
-
-def __getattr__(name: str):
-    # The site model (SQLite) loads on first use: ``indoorloc.fusion.Site``.
-    if name in ("Site", "WalkTrack", "FloorModels"):
-        from indoorloc.fusion import site
-
-        return getattr(site, name)
-    raise AttributeError(f"module 'indoorloc.fusion' has no attribute {name!r}")

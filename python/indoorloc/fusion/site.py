@@ -10,7 +10,7 @@ waypoints), and what depends on all walks of a floor (AP vocabulary and reliabil
 calibration) is derived from it, so :meth:`Site.add` of a walk gives the same site as a build
 that included it. Example::
 
-    from indoorloc.fusion import Site
+    from indoorloc.fusion.site import Site
     site = Site.build("ilc2020_site2", "site2.db", floors=["F8"])
     track = Site.open("site2.db").track("walk.txt", floor="auto")
     track.xy_m, track.errors_m
@@ -30,7 +30,7 @@ from typing import Any, Callable, Dict, List, Optional, Sequence, Union
 
 import numpy as np
 
-import indoorloc
+from indoorloc import _core
 from indoorloc import pdr_handheld as ph
 from indoorloc import wifi_crowdsource as wc
 from indoorloc import wifi_fixes as wfx
@@ -134,7 +134,7 @@ class Site:
             con = store.create(Path(tmp))
             built = _now()
             for key, value in (("format", "indoorloc.site"), ("format_version", str(store.FORMAT_VERSION)),
-                               ("library_version", indoorloc.__version__), ("built", built),
+                               ("library_version", _core.__version__), ("built", built),
                                ("modified", built), ("survey_dir", str(Path(survey_dir).resolve()))):
                 con.execute("INSERT INTO meta VALUES (?, ?)", (key, value))
             con.execute("INSERT INTO tracker_settings VALUES ('default', ?)", (json.dumps(settings.to_dict()),))

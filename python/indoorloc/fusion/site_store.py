@@ -101,9 +101,10 @@ def connect(path: Path, write: bool = False) -> sqlite3.Connection:
     if not head.startswith(b"SQLite format 3\x00"):
         raise SiteFileError(f"indoorloc: site file {path}: not an SQLite file (not a site built by "
                             f"'indoorloc site build')")
-    uri = f"file:{path.resolve()}?mode={'rw' if write else 'ro'}"
     try:
-        con = sqlite3.connect(uri, uri=True, isolation_level=None)
+        # Read-write when the file allows it, so that SQLite can roll back the hot journal of a
+        # writer killed mid-transaction (the old content comes back); read-only otherwise.
+        con = sqlite3.connect(str(path), isolation_level=None)
         app = con.execute("PRAGMA application_id").fetchone()[0]
         version = con.execute("PRAGMA user_version").fetchone()[0]
         if app != APPLICATION_ID:
