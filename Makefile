@@ -27,7 +27,8 @@ export CMAKE_BUILD_PARALLEL_LEVEL := $(JOBS)
 # SuiteSparse, GoogleTest) and Python headers/venv for the system interpreter.
 DEBIAN_PACKAGES := g++ make cmake python3-dev python3-venv \
   libeigen3-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev \
-  libceres-dev libgoogle-glog-dev libgflags-dev libsuitesparse-dev libgtest-dev libnanoflann-dev
+  libceres-dev libgoogle-glog-dev libgflags-dev libsuitesparse-dev libgtest-dev libnanoflann-dev \
+  libsqlite3-dev
 # Build requirements (installed into the venv because the build runs without isolation, so
 # that one persistent build folder serves the wheel, ctest and the C++ install).
 BUILD_REQUIREMENTS := "scikit-build-core>=0.10" "pybind11>=2.10" "cmake>=3.20" ninja

@@ -138,6 +138,8 @@ class Site:
                                ("modified", built), ("survey_dir", str(Path(survey_dir).resolve()))):
                 con.execute("INSERT INTO meta VALUES (?, ?)", (key, value))
             con.execute("INSERT INTO tracker_settings VALUES ('default', ?)", (json.dumps(settings.to_dict()),))
+            grid = settings.grid_options.replace(spatial_median=settings.point_estimate == "median").to_dict()
+            con.executemany("INSERT INTO grid_options VALUES (?, ?)", [(k, float(v)) for k, v in sorted(grid.items())])
             for fl in survey:
                 _insert_floor(con, fl)
             seq = 0

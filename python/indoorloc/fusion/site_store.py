@@ -55,6 +55,8 @@ CREATE TABLE pdr_calibration (
   yaw_offset_spread_rad REAL NOT NULL, length_sd_fraction REAL NOT NULL, heading_sd_rad REAL NOT NULL,
   k_rms_residual_m REAL NOT NULL, n_intervals INTEGER NOT NULL, options TEXT NOT NULL);
 CREATE TABLE tracker_settings (name TEXT PRIMARY KEY, settings TEXT NOT NULL);
+CREATE TABLE grid_options (           -- fusion::GridTrackerOptions by field name (booleans 0/1, fix.* as fix_*)
+  name TEXT PRIMARY KEY, value REAL NOT NULL);  -- per floor heading_offset_sd_rad = max(yaw_offset_spread_rad, 1e-3)
 """
 
 INTERVAL_FIELDS = ("distance_m", "direction_rad", "n_steps", "feature_sum", "path_m", "length_sq_sum",
