@@ -76,6 +76,11 @@ test-cpp-app: install
 	  -DCMAKE_PREFIX_PATH=$(abspath $(STAGE_DIR)) >/dev/null
 	$(VENV)/bin/cmake --build build/cpp_app
 	./build/cpp_app/cpp_app
+	# A site file written by the just-installed Python package, read and tracked on by C++ alone.
+	$(PY) examples/cpp_app/export_walk.py survey build/cpp_app_site
+	$(VENV)/bin/indoorloc --quiet site build build/cpp_app_site/survey -o build/cpp_app_site/site.db --no-coverage
+	$(PY) examples/cpp_app/export_walk.py walk build/cpp_app_site
+	./build/cpp_app/site_app build/cpp_app_site/site.db build/cpp_app_site/walk_events.txt
 
 test: install
 	$(MAKE) --no-print-directory test-cpp test-python test-cpp-app
