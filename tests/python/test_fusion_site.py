@@ -188,6 +188,37 @@ def test_unknown_floor_and_walk_without_waypoints(built, tmp_path, floor_dir):
     assert track.errors_m is None and track.xy_m.shape[1] == 2
 
 
+def test_grow_places_walks_without_waypoints(built, tmp_path):
+    """site grow: a walk's fingerprints placed by the track where confident, stored as 'grown' at
+    the given weight; the grown site tracks; bad arguments and a failing walk leave the file as it was."""
+    from indoorloc.fusion.site import Site
+
+    site, paths = built
+    walk = paths[N_SURVEY + 3]
+    bare = tmp_path / "bare.txt"
+    bare.write_text("".join(l for l in walk.read_text().splitlines(keepends=True) if "TYPE_WAYPOINT" not in l))
+    before = site.info()
+    with pytest.raises(ValueError, match="argument 'weight'"):
+        site.grow([bare], weight=0.0)
+    with pytest.raises(ValueError, match="already in the site"):
+        site.grow([bare, paths[0]])
+    assert site.info()["walks"] == before["walks"]
+    added = site.grow([bare], max_sd_m=1e6, weight=0.25)
+    assert list(added) == ["bare"] and added["bare"] > 0
+    info = Site.open(site.path).info()
+    assert info["walks"][-1]["kind"] == "grown" and info["walks"][-1]["weight"] == 0.25
+    assert info["floors"][FLOOR]["fingerprints"] == before["floors"][FLOOR]["fingerprints"] + added["bare"]
+    db = Site.open(site.path).floor_models(FLOOR).database
+    assert db.weights is not None and set(np.unique(db.weights)) == {0.25, 1.0}
+    # A strict threshold places fewer fingerprints than a loose one.
+    strict = tmp_path / "strict.db"
+    strict.write_bytes(site.path.read_bytes())
+    bare2 = tmp_path / "bare2.txt"
+    bare2.write_text(bare.read_text())
+    assert Site.open(strict).grow([bare2], max_sd_m=0.5)["bare2"] < added["bare"]
+    assert np.all(np.isfinite(Site.open(site.path).track(paths[-1]).xy_m))
+
+
 _KILLED_ADD = """
 import sys, time
 from pathlib import Path

@@ -4,6 +4,7 @@ tracked with it (docs/your_building.md). Parse and print only; the work is
 
     indoorloc site build SURVEY_DIR -o SITE.db [--floors F1 F2] [--coverage DIR] [--lowo]
     indoorloc site add SITE.db WALK.txt ... [--floor NAME]
+    indoorloc site grow SITE.db WALK.txt ... [--floor NAME|auto] [--max-sd-m M] [--weight W]
     indoorloc site info SITE.db [--json]
     indoorloc track WALK.txt ... --site SITE.db [--floor NAME|auto] [--smooth|--no-smooth] -o OUT.{geojson,csv,json}
 """
@@ -75,6 +76,21 @@ def cmd_add(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_grow(args: argparse.Namespace) -> int:
+    from indoorloc import progress
+    from indoorloc.fusion.site import Site
+
+    site = Site.open(args.site)
+    ticker = progress.Ticker(total=len(args.walks), desc="site grow: walks")
+    added = site.grow([Path(w) for w in args.walks], floor=args.floor, max_sd_m=args.max_sd_m, weight=args.weight,
+                      progress=lambda _: ticker.tick())
+    ticker.close()
+    for walk_id, n in added.items():
+        print(f"{walk_id}: {n} fingerprints placed by the track")
+    print(_floor_table(site.info()))
+    return 0
+
+
 def cmd_info(args: argparse.Namespace) -> int:
     from indoorloc.fusion.site import Site
 
@@ -110,6 +126,8 @@ def cmd_track(args: argparse.Namespace) -> int:
         tracks.append(tr)
         st = error_stats(tr.errors_m)
         line = f"{tr.walk_id}: floor {tr.floor} (p {tr.floor_probability:.2f}), {tr.times_s.size} steps"
+        if tr.header_floor and tr.header_floor != tr.floor:
+            line += f" (its header says floor {tr.header_floor}: waypoint errors not comparable)"
         if st:
             line += (f", error at {st['n_waypoints']} waypoints: mean {st['mean_m']:.2f} m, median "
                      f"{st['median_m']:.2f} m, p90 {st['p90_m']:.2f} m")
@@ -139,6 +157,17 @@ def add_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
     a.add_argument("walks", nargs="+", metavar="WALK")
     a.add_argument("--floor", default=None, help="floor of the walks (default: each walk's FloorName header)")
     a.set_defaults(func=cmd_add)
+    g = ssub.add_parser("grow", parents=[quiet_parent()],
+                        help="add walks WITHOUT waypoints: fingerprints placed by the smoothed track where confident, "
+                             "at a lower weight")
+    g.add_argument("site")
+    g.add_argument("walks", nargs="+", metavar="WALK")
+    g.add_argument("--floor", default=None, help="floor name or 'auto' (default: each walk's FloorName header, else auto)")
+    g.add_argument("--max-sd-m", type=float, default=None,
+                   help="largest posterior sd [m] of a position used (default: fusion.site.GROW_MAX_SD_M)")
+    g.add_argument("--weight", type=float, default=None,
+                   help="weight of the grown fingerprints in (0, 1] (default: fusion.site.GROW_WEIGHT)")
+    g.set_defaults(func=cmd_grow)
     i = ssub.add_parser("info", parents=[quiet_parent()], help="provenance and per-floor summary of a site")
     i.add_argument("site")
     i.add_argument("--json", action="store_true", help="print the JSON (docs/your_building.md)")

@@ -78,6 +78,28 @@ class WalkTrack:
     waypoint_t_s: np.ndarray
     waypoint_xy_m: np.ndarray
     errors_m: Optional[np.ndarray]
+    header_floor: str = ""   #: the walk header's FloorName ("" when absent)
+
+
+#: Site.grow: largest posterior sd [m] of a smoothed position used to place a fingerprint, and
+#: the weight of grown fingerprints (docs/your_building.md, "Growing the map": how each was chosen).
+GROW_MAX_SD_M = 3.0
+GROW_WEIGHT = 0.5
+
+
+def _confident_positions(track: "WalkTrack", max_sd_m: float):
+    """t (Q,) [s] -> (xy (Q, 2), valid (Q,)): the smoothed track interpolated at t, valid inside
+    the track's span where the largest sd of the interpolated covariance is at most max_sd_m."""
+    t_tr, xy, c = track.times_s, track.xy_m, np.asarray(track.covariance_m2, float)
+    half = 0.5 * (c[:, 0] + c[:, 2])
+    largest_sd = np.sqrt(np.maximum(half + np.sqrt((0.5 * (c[:, 0] - c[:, 2])) ** 2 + c[:, 1] ** 2), 0.0))
+
+    def at(t):
+        t = np.asarray(t, float)
+        pos = np.c_[np.interp(t, t_tr, xy[:, 0]), np.interp(t, t_tr, xy[:, 1])]
+        ok = (t >= t_tr[0]) & (t <= t_tr[-1]) & (np.interp(t, t_tr, largest_sd) <= max_sd_m)
+        return pos, ok
+    return at
 
 
 def _now() -> str:
@@ -193,6 +215,55 @@ class Site:
         self._all = None
         return added
 
+    def grow(self, walks: Sequence[WalkLike], floor: Optional[str] = None, max_sd_m: Optional[float] = None,
+             weight: Optional[float] = None, progress: Optional[Callable[[str], None]] = None) -> Dict[str, int]:
+        """Add walks *without* waypoints: each tracked (default tracker, smoothed; floor as in
+        :meth:`track`) on the current site, and its WiFi fingerprints placed at the smoothed
+        positions where the posterior is confident (largest sd of the smoothed covariance at most
+        ``max_sd_m`` [m], default :data:`GROW_MAX_SD_M`), stored with weight ``weight`` (default
+        :data:`GROW_WEIGHT`; a fix component from them counts that much relative to a surveyed
+        one). All walks are tracked on the site as it was, then written in one transaction.
+        Returns ``{walk id: fingerprints added}``."""
+        max_sd_m = GROW_MAX_SD_M if max_sd_m is None else float(max_sd_m)
+        weight = GROW_WEIGHT if weight is None else float(weight)
+        if not (max_sd_m > 0 and math.isfinite(max_sd_m)):
+            raise ValueError(f"indoorloc: argument 'max_sd_m': must be finite and > 0, got {max_sd_m!r}")
+        if not 0 < weight <= 1:
+            raise ValueError(f"indoorloc: argument 'weight': must be in (0, 1], got {weight!r}")
+        placed = []
+        for w in walks:
+            walk = _read_walk(w)
+            tr = self.track(walk, floor=floor)
+            placed.append((walk, tr, wfx.walk_fingerprints(walk, self.settings.fixes,
+                                                           positions_at=_confident_positions(tr, max_sd_m),
+                                                           span_s=(tr.times_s[0], tr.times_s[-1]))))
+            if progress:
+                progress(walk.walk_id)
+        con = store.connect(self.path, write=True)
+        out = {}
+        try:
+            con.execute("BEGIN IMMEDIATE")
+            seq = con.execute("SELECT COALESCE(MAX(seq) + 1, 0) FROM walks").fetchone()[0]
+            for walk, tr, got in placed:
+                if con.execute("SELECT 1 FROM walks WHERE id = ?", (walk.walk_id,)).fetchone():
+                    raise ValueError(f"indoorloc: walk {tr.source}: walk id {walk.walk_id} is already in the site")
+                con.execute("INSERT INTO walks VALUES (?, ?, ?, ?, 'grown', ?, ?, ?, ?)",
+                            (walk.walk_id, seq, tr.floor, tr.source, weight, _now(), int(np.size(walk.waypoint_t_s)),
+                             float(walk.duration_s)))
+                seq += 1
+                out[walk.walk_id] = _insert_fingerprints(con, tr.floor, walk.walk_id, got, weight)
+            con.execute("INSERT OR REPLACE INTO meta VALUES ('modified', ?)", (_now(),))
+            con.execute("COMMIT")
+        except BaseException:
+            if con.in_transaction:
+                con.execute("ROLLBACK")
+            raise
+        finally:
+            con.close()
+        self._models.clear()
+        self._all = None
+        return out
+
     # ---- reading ------------------------------------------------------------------------
     @property
     def floors(self) -> List[str]:
@@ -278,10 +349,13 @@ class Site:
         cov = np.asarray(r["smoothed_covariance_m2" if smooth else "covariance_m2"], float)
         wt = np.asarray(walk.waypoint_t_s, float)
         wxy = np.asarray(walk.waypoint_xy_m, float).reshape(-1, 2)
-        errors = site_model.walk_errors_m(steps.times_s, r[key], wt, wxy) if wt.size else None
+        # Waypoints are in their own floor's frame: errors only when the walk is on the tracked floor.
+        header_floor = str(walk.metadata.get("FloorName") or "")
+        comparable = wt.size and header_floor in ("", floor)
+        errors = site_model.walk_errors_m(steps.times_s, r[key], wt, wxy) if comparable else None
         return WalkTrack(walk.walk_id, src, floor, m.number, probabilities.get(floor, 1.0), probabilities or {floor: 1.0},
                          bool(smooth), int(walk.t0_unix_ms), np.asarray(steps.times_s, float),
-                         np.asarray(r[key], float), cov, m.origin_lon_lat, wt, wxy, errors)
+                         np.asarray(r[key], float), cov, m.origin_lon_lat, wt, wxy, errors, header_floor)
 
     def leave_one_walk_out(self, name: str, progress: Optional[Callable[[str], None]] = None) -> Dict[str, Any]:
         """The expected error on a floor: each survey walk tracked (default tracker, floor given)
@@ -414,18 +488,7 @@ def _insert_survey_walk(con: sqlite3.Connection, walk: Any, floor: str, seq: int
     iv = ph.waypoint_intervals(steps, wt, wxy)
     con.execute(f"INSERT INTO calibration_intervals VALUES (?, ?, {', '.join('?' * len(store.INTERVAL_FIELDS))})",
                 (walk.walk_id, floor, *[store.f8(getattr(iv, f)) for f in store.INTERVAL_FIELDS]))
-    got = wfx.walk_fingerprints(walk, settings.fixes, steps)
-    if got is not None:
-        rss, xy, names, t_s = got
-        ids = _ap_ids(con, names)
-        heard = np.isfinite(rss)
-        rows = []
-        for i in range(rss.shape[0]):
-            cols = np.flatnonzero(heard[i])
-            rows.append((floor, walk.walk_id, float(t_s[i]), float(xy[i, 0]), float(xy[i, 1]), 1.0,
-                         ids[cols].astype("<i4").tobytes(), rss[i, cols].astype("<f4").tobytes()))
-        con.executemany("INSERT INTO fingerprints (floor, walk, t_s, x_m, y_m, weight, ap_ids, rss_dbm) "
-                        "VALUES (?, ?, ?, ?, ?, ?, ?, ?)", rows)
+    _insert_fingerprints(con, floor, walk.walk_id, wfx.walk_fingerprints(walk, settings.fixes, steps), 1.0)
     b = walk.beacons
     if b.n_readings:
         pos = wc.walk_positions(walk, b.t_s, None, steps)
@@ -446,6 +509,23 @@ def _calibrate(con: sqlite3.Connection, floor: str, exclude_walk: Optional[str] 
         return ph.calibrate_from_intervals(intervals)
     except ValueError as exc:
         raise ValueError(f"indoorloc: floor {floor}: cannot calibrate the PDR from its survey walks ({exc})") from None
+
+
+def _insert_fingerprints(con: sqlite3.Connection, floor: str, walk_id: str, got, weight: float) -> int:
+    """Insert a walk's fingerprints (``wifi_fixes.walk_fingerprints``' tuple or None); their number."""
+    if got is None:
+        return 0
+    rss, xy, names, t_s = got
+    ids = _ap_ids(con, names)
+    heard = np.isfinite(rss)
+    rows = []
+    for i in range(rss.shape[0]):
+        cols = np.flatnonzero(heard[i])
+        rows.append((floor, walk_id, float(t_s[i]), float(xy[i, 0]), float(xy[i, 1]), float(weight),
+                     ids[cols].astype("<i4").tobytes(), rss[i, cols].astype("<f4").tobytes()))
+    con.executemany("INSERT INTO fingerprints (floor, walk, t_s, x_m, y_m, weight, ap_ids, rss_dbm) "
+                    "VALUES (?, ?, ?, ?, ?, ?, ?, ?)", rows)
+    return len(rows)
 
 
 def _recalibrate(con: sqlite3.Connection, floor: str) -> None:
@@ -476,7 +556,7 @@ def _database(con: sqlite3.Connection, floors: Sequence[str], settings: wfx.FixS
     (all but ``exclude_walk``)."""
     bssid = dict(con.execute("SELECT id, bssid FROM access_points").fetchall())
     number = dict(con.execute("SELECT name, number FROM floors").fetchall())
-    per_walk, current, rows = [], None, []
+    per_walk, weights, current, rows = [], [], None, []
 
     def flush():
         if not rows:
@@ -490,9 +570,10 @@ def _database(con: sqlite3.Connection, floors: Sequence[str], settings: wfx.FixS
         xy = np.array([(r[1], r[2]) for r in rows], float)
         per_walk.append((rss, xy, [bssid[a] for a in ids], np.full(len(rows), number[rows[0][5]]),
                          np.full(len(rows), rows[0][6])))
+        weights.append(np.array([r[7] for r in rows], float))
 
     marks = ",".join("?" * len(floors))
-    for r in con.execute(f"SELECT f.walk, f.x_m, f.y_m, f.ap_ids, f.rss_dbm, f.floor, w.seq FROM fingerprints f "
+    for r in con.execute(f"SELECT f.walk, f.x_m, f.y_m, f.ap_ids, f.rss_dbm, f.floor, w.seq, f.weight FROM fingerprints f "
                          f"JOIN walks w ON w.id = f.walk WHERE f.floor IN ({marks}) ORDER BY w.seq, f.id",
                          list(floors)):
         if r[0] == exclude_walk:
@@ -500,9 +581,9 @@ def _database(con: sqlite3.Connection, floors: Sequence[str], settings: wfx.FixS
         if r[0] != current:
             flush()
             current, rows = r[0], []
-        rows.append((r[0], r[1], r[2], r[3], r[4], r[5], r[6]))
+        rows.append(tuple(r))
     flush()
-    return wfx.assemble_database(per_walk, settings)
+    return wfx.assemble_database(per_walk, settings, weights)
 
 
 __all__ = ["FloorModels", "Site", "WalkTrack"]

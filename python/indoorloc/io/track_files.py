@@ -10,8 +10,8 @@ the output's extension:
 - ``.json``: ``{"format": "indoorloc.track", "version": 1, "site": path, "walks": [{"walk",
   "source", "floor", "floor_number", "floor_probability", "floor_probabilities", "smoothed",
   "t0_unix_ms", "origin_lon_lat", "t_s", "x_m", "y_m", "sd_x_m", "sd_y_m", "cov_xy_m2",
-  "waypoints": {"t_s", "x_m", "y_m", "error_m"} or null, "errors": {"mean_m", "median_m",
-  "p90_m"} or null}]}``.
+  "header_floor", "waypoints": {"t_s", "x_m", "y_m", "error_m" (null when the tracked floor is
+  not the header's)} or null, "errors": {"mean_m", "median_m", "p90_m", "n_waypoints"} or null}]}``.
 
 Every file is written to a temporary name and renamed (never half-written).
 """
@@ -85,7 +85,7 @@ def json_document(tracks: Sequence[Any], site_path: str = "") -> Dict[str, Any]:
                       "t_s": _round(tr.times_s, 3), "x_m": _round(tr.xy_m[:, 0], 3), "y_m": _round(tr.xy_m[:, 1], 3),
                       "sd_x_m": _round(sd[:, 0], 3), "sd_y_m": _round(sd[:, 1], 3),
                       "cov_xy_m2": _round(np.asarray(tr.covariance_m2)[:, 1], 4),
-                      "waypoints": wp, "errors": error_stats(tr.errors_m)})
+                      "header_floor": tr.header_floor, "waypoints": wp, "errors": error_stats(tr.errors_m)})
     return {"format": "indoorloc.track", "version": TRACK_FORMAT_VERSION, "site": site_path, "walks": walks}
 
 
