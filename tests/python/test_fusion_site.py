@@ -183,6 +183,19 @@ def test_unknown_floor_and_walk_without_waypoints(built, tmp_path, floor_dir):
     assert site.path.read_bytes() == before
     with pytest.raises(ValueError, match="nowaypoints.txt: 0 waypoint"):
         site.add([bare / "nowaypoints.txt"])
+    # An unreadable walk file is skipped with a warning and listed (the loader rule), not fatal.
+    from indoorloc.io.errors import RecordingWarning
+
+    good = tmp_path / "good" / FLOOR / "path_data_files"
+    good.mkdir(parents=True)
+    for name in ("geojson_map.json", "floor_info.json"):
+        (good.parent / name).write_bytes((floor_dir / name).read_bytes())
+    (good / paths[0].name).symlink_to(paths[0])
+    (good / paths[1].name).symlink_to(paths[1])
+    (good / "broken.txt").write_text("1574231797021\tTYPE_ACCELEROMETER\tnot-a-number\t1\t2\t3\n")
+    with pytest.warns(RecordingWarning, match="broken.txt skipped"):
+        g = Site.build(tmp_path / "good", tmp_path / "good.db")
+    assert "broken.txt" in g.info()["meta"]["skipped_walks"] and len(g.info()["walks"]) == 2
     # ... but it can be tracked (no errors printed for it).
     track = site.track(bare / "nowaypoints.txt")
     assert track.errors_m is None and track.xy_m.shape[1] == 2

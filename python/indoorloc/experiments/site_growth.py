@@ -29,7 +29,7 @@ import numpy as np
 from indoorloc.fusion.site import GROW_WEIGHT, Site
 from indoorloc.io.survey_layout import survey_floors
 
-THRESHOLDS_M = (2.0, 4.0, 8.0)
+THRESHOLDS_M = (2.0, 4.0, 8.0, 16.0, 32.0)
 
 
 def _stats(e: np.ndarray) -> Dict[str, float]:

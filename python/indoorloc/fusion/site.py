@@ -18,13 +18,12 @@ that included it. Example::
 
 from __future__ import annotations
 
-import datetime as _dt
 import json
 import math
 import os
-import sqlite3
 import tempfile
-from dataclasses import asdict, dataclass
+import warnings
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Dict, List, Optional, Sequence, Union
 
@@ -32,14 +31,14 @@ import numpy as np
 
 from indoorloc import _core
 from indoorloc import pdr_handheld as ph
-from indoorloc import wifi_crowdsource as wc
 from indoorloc import wifi_fixes as wfx
 from indoorloc.fusion import FloorPlan, FloorPlanOptions, site_model
 from indoorloc.fusion import site_store as store
+from indoorloc.fusion import site_tables as tables
 from indoorloc.fusion.grid import GridTracker
-from indoorloc.io.floor_plan import load_floor_plan, read_geojson_floor
+from indoorloc.io.errors import FormatError, RecordingWarning
 from indoorloc.io.ilc2020 import read_ilc_walk
-from indoorloc.io.survey_layout import floor_info_size_m, survey_floors
+from indoorloc.io.survey_layout import survey_floors
 
 WalkLike = Union[str, os.PathLike, Any]
 
@@ -102,10 +101,6 @@ def _confident_positions(track: "WalkTrack", max_sd_m: float):
     return at
 
 
-def _now() -> str:
-    return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
-
-
 def _read_walk(walk: WalkLike):
     return read_ilc_walk(walk) if isinstance(walk, (str, os.PathLike)) else walk
 
@@ -142,7 +137,8 @@ class Site:
               progress: Optional[Callable[[str], None]] = None) -> "Site":
         """Build a site file from a survey folder (ILC 2020 or Kaggle 2021 layout,
         :func:`indoorloc.io.survey_layout.survey_floors`): every walk of the floors (all by
-        default) must have waypoints. Written to a temporary file and renamed: an existing
+        default) must have waypoints; a walk file that cannot be read is skipped with a
+        RecordingWarning and listed in the meta table (``skipped_walks``). Written to a temporary file and renamed: an existing
         ``path`` is replaced only when the build succeeded. ``progress(walk_id)`` after each walk."""
         settings = settings or site_model.TrackSettings()
         settings.validate()
@@ -154,7 +150,7 @@ class Site:
         os.unlink(tmp)
         try:
             con = store.create(Path(tmp))
-            built = _now()
+            built = tables.now()
             for key, value in (("format", "indoorloc.site"), ("format_version", str(store.FORMAT_VERSION)),
                                ("library_version", _core.__version__), ("built", built),
                                ("modified", built), ("survey_dir", str(Path(survey_dir).resolve()))):
@@ -163,15 +159,22 @@ class Site:
             grid = settings.grid_options.replace(spatial_median=settings.point_estimate == "median").to_dict()
             con.executemany("INSERT INTO grid_options VALUES (?, ?)", [(k, float(v)) for k, v in sorted(grid.items())])
             for fl in survey:
-                _insert_floor(con, fl)
-            seq = 0
+                tables.insert_floor(con, fl)
+            seq, skipped = 0, {}
             for fl in survey:
                 for wp in fl.walk_paths:
-                    _insert_survey_walk(con, read_ilc_walk(wp), fl.name, seq, settings, str(wp))
+                    try:
+                        walk = read_ilc_walk(wp)
+                    except FormatError as exc:  # the loader rule: an unreadable walk is skipped, said, listed
+                        warnings.warn(f"indoorloc: walk {wp} skipped: {exc}", RecordingWarning, stacklevel=2)
+                        skipped[str(wp)] = str(exc)
+                        continue
+                    tables.insert_survey_walk(con, walk, fl.name, seq, settings, str(wp))
                     seq += 1
                     if progress:
                         progress(wp.stem)
-                _recalibrate(con, fl.name)
+                tables.recalibrate(con, fl.name)
+            con.execute("INSERT INTO meta VALUES ('skipped_walks', ?)", (json.dumps(skipped),))
             con.execute("COMMIT")
             con.close()
             os.replace(tmp, path)
@@ -195,15 +198,15 @@ class Site:
             for w in walks:
                 walk = _read_walk(w)
                 name = self._walk_floor(walk, floor)
-                _insert_survey_walk(con, walk, name, seq, self.settings, str(getattr(walk, "path", w)))
+                tables.insert_survey_walk(con, walk, name, seq, self.settings, str(getattr(walk, "path", w)))
                 seq += 1
                 touched.add(name)
                 added.append(walk.walk_id)
                 if progress:
                     progress(walk.walk_id)
             for name in sorted(touched):
-                _recalibrate(con, name)
-            con.execute("INSERT OR REPLACE INTO meta VALUES ('modified', ?)", (_now(),))
+                tables.recalibrate(con, name)
+            con.execute("INSERT OR REPLACE INTO meta VALUES ('modified', ?)", (tables.now(),))
             con.execute("COMMIT")
         except BaseException:
             if con.in_transaction:
@@ -248,11 +251,11 @@ class Site:
                 if con.execute("SELECT 1 FROM walks WHERE id = ?", (walk.walk_id,)).fetchone():
                     raise ValueError(f"indoorloc: walk {tr.source}: walk id {walk.walk_id} is already in the site")
                 con.execute("INSERT INTO walks VALUES (?, ?, ?, ?, 'grown', ?, ?, ?, ?)",
-                            (walk.walk_id, seq, tr.floor, tr.source, weight, _now(), int(np.size(walk.waypoint_t_s)),
+                            (walk.walk_id, seq, tr.floor, tr.source, weight, tables.now(), int(np.size(walk.waypoint_t_s)),
                              float(walk.duration_s)))
                 seq += 1
-                out[walk.walk_id] = _insert_fingerprints(con, tr.floor, walk.walk_id, got, weight)
-            con.execute("INSERT OR REPLACE INTO meta VALUES ('modified', ?)", (_now(),))
+                out[walk.walk_id] = tables.insert_fingerprints(con, tr.floor, walk.walk_id, got, weight)
+            con.execute("INSERT OR REPLACE INTO meta VALUES ('modified', ?)", (tables.now(),))
             con.execute("COMMIT")
         except BaseException:
             if con.in_transaction:
@@ -288,9 +291,9 @@ class Site:
             con = store.connect(self.path)
             try:
                 number, origin = self._floors[name]
-                plan = _plan(con, name, number, origin)
-                cal = _calibration(con, name)
-                database = _database(con, [name], self.settings.fixes)
+                plan = tables.plan(con, name, number, origin)
+                cal = tables.calibration(con, name)
+                database = tables.database(con, [name], self.settings.fixes)
             finally:
                 con.close()
             tracker = GridTracker(plan, site_model.floor_grid_options(self.settings, cal))
@@ -307,7 +310,7 @@ class Site:
             tracker = GridTracker(plan, site_model.identification_grid_options(self.settings, spread))
             con = store.connect(self.path)
             try:
-                database = _database(con, self.floors, self.settings.fixes)
+                database = tables.database(con, self.floors, self.settings.fixes)
             finally:
                 con.close()
             self._all = (tracker, [m.number for m in models], database)
@@ -373,8 +376,8 @@ class Site:
                     missing.append(source)
                     continue
                 walk = read_ilc_walk(source)
-                cal = _calibrate(con, name, exclude_walk=walk_id)
-                database = _database(con, [name], self.settings.fixes, exclude_walk=walk_id)
+                cal = tables.calibrate(con, name, exclude_walk=walk_id)
+                database = tables.database(con, [name], self.settings.fixes, exclude_walk=walk_id)
                 tracker = GridTracker(m.plan, site_model.floor_grid_options(self.settings, cal))
                 steps = site_model.tracker_steps(ph.handheld_steps(walk), cal, self.settings)
                 if len(steps):
@@ -432,7 +435,7 @@ class Site:
         con = store.connect(self.path)
         try:
             number, origin = self._floors[name]
-            plan = _plan(con, name, number, origin)
+            plan = tables.plan(con, name, number, origin)
             xy = np.array(con.execute("SELECT x_m, y_m FROM fingerprints WHERE floor = ?", (name,)).fetchall(),
                           float).reshape(-1, 2)
         finally:
@@ -449,141 +452,6 @@ class Site:
         frac = float(np.mean(dist[walkable] <= 5.0)) if walkable.any() else 0.0
         return {"extent_m": (b[0], b[2], b[1], b[3]), "distance_m": dist.reshape(gx.shape), "fingerprints_m": xy,
                 "fraction_within_5m": frac, "edges_m": np.asarray(plan.edges(0))}
-
-
-# ---- writing ---------------------------------------------------------------------------------
-def _insert_floor(con: sqlite3.Connection, fl) -> None:
-    text = Path(fl.geojson_path).read_text()
-    g = read_geojson_floor(json.loads(text), floor=fl.number, origin_lon_lat="outline_sw")
-    plan = load_floor_plan(json.loads(text), floors=[fl.number], origin_lon_lat=g.origin_lon_lat)
-    size = floor_info_size_m(fl.floor_info_path)
-    con.execute("INSERT INTO floors VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
-                (fl.name, fl.number, text, g.origin_lon_lat[0], g.origin_lon_lat[1], float(plan.walkable_area(0)),
-                 size[0] if size else None, size[1] if size else None, str(fl.geojson_path)))
-    geom = plan.geometry(0)
-    for role, rings in (("outline", geom.outlines), ("obstacle", geom.obstacles)):
-        for i, ring in enumerate(rings):
-            con.execute("INSERT INTO plan_rings VALUES (?, ?, ?, ?)", (fl.name, role, i, store.f8(ring)))
-
-
-def _ap_ids(con: sqlite3.Connection, bssids: Sequence[str]) -> np.ndarray:
-    con.executemany("INSERT OR IGNORE INTO access_points (bssid) VALUES (?)", [(b,) for b in bssids])
-    ids = dict(con.execute(f"SELECT bssid, id FROM access_points WHERE bssid IN ({','.join('?' * len(bssids))})",
-                           list(bssids)).fetchall()) if bssids else {}
-    return np.array([ids[b] for b in bssids], dtype=np.int64)
-
-
-def _insert_survey_walk(con: sqlite3.Connection, walk: Any, floor: str, seq: int,
-                        settings: site_model.TrackSettings, source: str) -> None:
-    wt = np.asarray(walk.waypoint_t_s, float)
-    if wt.size < 2:
-        raise ValueError(f"indoorloc: walk {source}: {wt.size} waypoint(s); a survey walk needs at least 2 "
-                         f"(a walk without waypoints can be tracked, not surveyed)")
-    if con.execute("SELECT 1 FROM walks WHERE id = ?", (walk.walk_id,)).fetchone():
-        raise ValueError(f"indoorloc: walk {source}: walk id {walk.walk_id} is already in the site")
-    wxy = np.asarray(walk.waypoint_xy_m, float).reshape(-1, 2)
-    steps = ph.handheld_steps(walk)
-    con.execute("INSERT INTO walks VALUES (?, ?, ?, ?, 'survey', 1.0, ?, ?, ?)",
-                (walk.walk_id, seq, floor, source, _now(), int(wt.size), float(walk.duration_s)))
-    iv = ph.waypoint_intervals(steps, wt, wxy)
-    con.execute(f"INSERT INTO calibration_intervals VALUES (?, ?, {', '.join('?' * len(store.INTERVAL_FIELDS))})",
-                (walk.walk_id, floor, *[store.f8(getattr(iv, f)) for f in store.INTERVAL_FIELDS]))
-    _insert_fingerprints(con, floor, walk.walk_id, wfx.walk_fingerprints(walk, settings.fixes, steps), 1.0)
-    b = walk.beacons
-    if b.n_readings:
-        pos = wc.walk_positions(walk, b.t_s, None, steps)
-        keep = np.flatnonzero(pos.valid & np.isfinite(b.rssi_dbm))
-        con.executemany("INSERT INTO beacons VALUES (?, ?, ?, ?, ?, ?, ?)",
-                        [(floor, walk.walk_id, float(b.t_s[i]), float(pos.xy_m[i, 0]), float(pos.xy_m[i, 1]),
-                          f"{b.uuid[i]}:{b.major[i]}:{b.minor[i]}", float(b.rssi_dbm[i])) for i in keep])
-
-
-def _calibrate(con: sqlite3.Connection, floor: str, exclude_walk: Optional[str] = None) -> ph.HandheldCalibration:
-    """The floor's PDR calibration from the stored intervals of its survey walks (all but ``exclude_walk``)."""
-    rows = con.execute(f"SELECT c.walk, {', '.join(store.INTERVAL_FIELDS)} FROM calibration_intervals c JOIN walks w "
-                       f"ON w.id = c.walk WHERE c.floor = ? AND w.kind = 'survey' ORDER BY w.seq", (floor,)).fetchall()
-    intervals = [ph.WaypointIntervals(*[store.from_f8(v, 2 if f.startswith("disp") else 1)
-                                        for f, v in zip(store.INTERVAL_FIELDS, row[1:])])
-                 for row in rows if row[0] != exclude_walk]
-    try:
-        return ph.calibrate_from_intervals(intervals)
-    except ValueError as exc:
-        raise ValueError(f"indoorloc: floor {floor}: cannot calibrate the PDR from its survey walks ({exc})") from None
-
-
-def _insert_fingerprints(con: sqlite3.Connection, floor: str, walk_id: str, got, weight: float) -> int:
-    """Insert a walk's fingerprints (``wifi_fixes.walk_fingerprints``' tuple or None); their number."""
-    if got is None:
-        return 0
-    rss, xy, names, t_s = got
-    ids = _ap_ids(con, names)
-    heard = np.isfinite(rss)
-    rows = []
-    for i in range(rss.shape[0]):
-        cols = np.flatnonzero(heard[i])
-        rows.append((floor, walk_id, float(t_s[i]), float(xy[i, 0]), float(xy[i, 1]), float(weight),
-                     ids[cols].astype("<i4").tobytes(), rss[i, cols].astype("<f4").tobytes()))
-    con.executemany("INSERT INTO fingerprints (floor, walk, t_s, x_m, y_m, weight, ap_ids, rss_dbm) "
-                    "VALUES (?, ?, ?, ?, ?, ?, ?, ?)", rows)
-    return len(rows)
-
-
-def _recalibrate(con: sqlite3.Connection, floor: str) -> None:
-    cal = _calibrate(con, floor)
-    con.execute("INSERT OR REPLACE INTO pdr_calibration VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
-                (floor, cal.k, cal.yaw_offset_rad, cal.yaw_offset_spread_rad, cal.length_sd_fraction,
-                 cal.heading_sd_rad, cal.k_rms_residual_m, cal.n_intervals, json.dumps(asdict(cal.options))))
-
-
-# ---- reading ---------------------------------------------------------------------------------
-def _plan(con: sqlite3.Connection, name: str, number: int, origin: tuple) -> FloorPlan:
-    text = con.execute("SELECT geojson FROM floors WHERE name = ?", (name,)).fetchone()[0]
-    return load_floor_plan(json.loads(text), floors=[number], origin_lon_lat=origin)
-
-
-def _calibration(con: sqlite3.Connection, name: str) -> ph.HandheldCalibration:
-    row = con.execute("SELECT k, yaw_offset_rad, yaw_offset_spread_rad, length_sd_fraction, heading_sd_rad, "
-                      "k_rms_residual_m, n_intervals, options FROM pdr_calibration WHERE floor = ?", (name,)).fetchone()
-    if row is None:
-        raise store.SiteFileError(f"indoorloc: floor {name}: no PDR calibration in the site file")
-    k, yaw, spread, f, s, rms, n, options = row
-    return ph.HandheldCalibration(ph.HandheldOptions(**json.loads(options)), k, rms, n, yaw, spread, f, s)
-
-
-def _database(con: sqlite3.Connection, floors: Sequence[str], settings: wfx.FixSettings,
-              exclude_walk: Optional[str] = None) -> wfx.FingerprintDatabase:
-    """The fingerprint database of the floors, as ``wifi_fixes.build_database`` of their walks
-    (all but ``exclude_walk``)."""
-    bssid = dict(con.execute("SELECT id, bssid FROM access_points").fetchall())
-    number = dict(con.execute("SELECT name, number FROM floors").fetchall())
-    per_walk, weights, current, rows = [], [], None, []
-
-    def flush():
-        if not rows:
-            return
-        ids = sorted({int(a) for r in rows for a in np.frombuffer(r[3], "<i4")})
-        col = {a: j for j, a in enumerate(ids)}
-        rss = np.full((len(rows), len(ids)), np.nan)
-        for i, r in enumerate(rows):
-            a = np.frombuffer(r[3], "<i4")
-            rss[i, [col[int(x)] for x in a]] = np.frombuffer(r[4], "<f4")
-        xy = np.array([(r[1], r[2]) for r in rows], float)
-        per_walk.append((rss, xy, [bssid[a] for a in ids], np.full(len(rows), number[rows[0][5]]),
-                         np.full(len(rows), rows[0][6])))
-        weights.append(np.array([r[7] for r in rows], float))
-
-    marks = ",".join("?" * len(floors))
-    for r in con.execute(f"SELECT f.walk, f.x_m, f.y_m, f.ap_ids, f.rss_dbm, f.floor, w.seq, f.weight FROM fingerprints f "
-                         f"JOIN walks w ON w.id = f.walk WHERE f.floor IN ({marks}) ORDER BY w.seq, f.id",
-                         list(floors)):
-        if r[0] == exclude_walk:
-            continue
-        if r[0] != current:
-            flush()
-            current, rows = r[0], []
-        rows.append(tuple(r))
-    flush()
-    return wfx.assemble_database(per_walk, settings, weights)
 
 
 __all__ = ["FloorModels", "Site", "WalkTrack"]
