@@ -80,9 +80,13 @@ class WalkTrack:
     header_floor: str = ""   #: the walk header's FloorName ("" when absent)
 
 
-#: Site.grow: largest posterior sd [m] of a smoothed position used to place a fingerprint, and
-#: the weight of grown fingerprints (docs/your_building.md, "Growing the map": how each was chosen).
-GROW_MAX_SD_M = 3.0
+#: Site.grow: largest posterior sd [m] of a smoothed position used to place a fingerprint. Chosen
+#: by leave-one-floor-out over {2, 4, 8, 16, 32} m on the shared site (experiments/site_growth.py,
+#: docs/your_building.md "Growing the map"): 8 m for five of six held-out floors (4 m for B1) and
+#: on all six floors pooled.
+GROW_MAX_SD_M = 8.0
+#: Weight of a grown fingerprint's fix component relative to a surveyed one: fixed in advance
+#: (not cross-validated).
 GROW_WEIGHT = 0.5
 
 
