@@ -116,6 +116,20 @@ def test_add_equals_build_with_the_walk(tmp_path, floor_dir):
     assert len(Site.open(small.path).info()["walks"]) == N_SURVEY
 
 
+def test_leave_one_walk_out_and_auto_floor(built):
+    site, paths = built
+    lowo = site.leave_one_walk_out(FLOOR)
+    assert lowo["walks"] == N_SURVEY and not lowo["missing"]
+    assert lowo["points"].shape == (lowo["stats"]["n_waypoints"], 3) and np.all(np.isfinite(lowo["points"]))
+    cov = site.coverage(FLOOR)
+    assert 0 < cov["fraction_within_5m"] < 1 and cov["fingerprints_m"].shape[1] == 2
+    auto = site.track(paths[-1], floor="auto")
+    assert auto.floor == FLOOR and auto.floor_probabilities == {FLOOR: pytest.approx(1.0)}
+    np.testing.assert_array_equal(auto.xy_m, site.track(paths[-1], floor=FLOOR).xy_m)
+    filt = site.track(paths[-1], smooth=False)
+    assert not filt.smoothed and filt.xy_m.shape == auto.xy_m.shape
+
+
 def test_kaggle_layout(tmp_path, floor_dir):
     from indoorloc.fusion.site import Site
 

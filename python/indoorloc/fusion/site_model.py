@@ -61,9 +61,9 @@ class TrackSettings:
 
     def to_dict(self) -> Dict[str, Any]:
         """JSON-ready (an infinite wall penalty becomes None)."""
-        d = asdict(self) if not isinstance(self.grid_options, GridTrackerOptions) else {
-            k: getattr(self, k) for k in ("step_length_sd_fraction", "step_heading_sd_rad", "point_estimate",
-                                          "identification_cell_m", "identification_offset_bins")}
+        d: Dict[str, Any] = {k: getattr(self, k) for k in ("step_length_sd_fraction", "step_heading_sd_rad",
+                                                          "point_estimate", "identification_cell_m",
+                                                          "identification_offset_bins")}
         d["fixes"] = asdict(self.fixes)
         d["grid_options"] = {k: (None if isinstance(v, float) and math.isinf(v) else v)
                              for k, v in self.grid_options.to_dict().items()}
