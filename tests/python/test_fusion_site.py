@@ -311,7 +311,14 @@ def test_cli_build_info_track(tmp_path, floor_dir, capsys):
     assert 120.0 < lon.min() < lon.max() < 120.2 and 30.2 < lat.min() < lat.max() < 30.4
     assert feat["properties"]["smoothed"] is False and feat["properties"]["floor"] == FLOOR
     csv = tmp_path / "t.csv"
-    assert main(["--quiet", "track", str(paths[5]), "--site", str(db), "-o", str(csv)]) == 0
+    html = tmp_path / "view.html"
+    assert main(["--quiet", "track", str(paths[5]), str(paths[6]), "--site", str(db), "-o", str(csv),
+                 "--html", str(html)]) == 0
+    page = html.read_text()
+    # One offline page (the viewer's own browser test drives it): both walks and the floor in it.
+    assert page.startswith("<!DOCTYPE html>") or "<html" in page[:500]
+    assert FLOOR in page and "surveyed waypoints" in page and "WiFi fixes" in page
+    assert 'src="http' not in page
     head = csv.read_text().splitlines()
     assert head[0].startswith("walk,t_s,unix_ms,x_m,y_m,floor,sd_x_m,sd_y_m,floor_probability")
     assert main(["--quiet", "track", str(paths[5]), "--site", str(db), "-o", str(tmp_path / "t.txt")]) == 2

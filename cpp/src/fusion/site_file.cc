@@ -190,6 +190,12 @@ GridTrackerOptions SiteFile::TrackerOptions(const std::string& floor) const {
   o.spatial_median = get("spatial_median", o.spatial_median) != 0.0;
   o.median_block_m = get("median_block_m", o.median_block_m);
   o.start_position_sd_m = get("start_position_sd_m", o.start_position_sd_m);
+  o.filtered_covariance_scale = get("filtered_covariance_scale", o.filtered_covariance_scale);
+  o.filtered_covariance_floor_m = get("filtered_covariance_floor_m", o.filtered_covariance_floor_m);
+  o.filtered_covariance_fix_gain = get("filtered_covariance_fix_gain", o.filtered_covariance_fix_gain);
+  o.smoothed_covariance_scale = get("smoothed_covariance_scale", o.smoothed_covariance_scale);
+  o.smoothed_covariance_floor_m = get("smoothed_covariance_floor_m", o.smoothed_covariance_floor_m);
+  o.smoothed_covariance_fix_gain = get("smoothed_covariance_fix_gain", o.smoothed_covariance_fix_gain);
   o.max_memory_bytes = get("max_memory_bytes", o.max_memory_bytes);
   o.num_threads = static_cast<int>(get("num_threads", o.num_threads));
   const double spread = std::isfinite(cal.yaw_offset_spread_rad) ? cal.yaw_offset_spread_rad : 0.0;

@@ -6,7 +6,7 @@ tracked with it (docs/your_building.md). Parse and print only; the work is
     indoorloc site add SITE.db WALK.txt ... [--floor NAME]
     indoorloc site grow SITE.db WALK.txt ... [--floor NAME|auto] [--max-sd-m M] [--weight W]
     indoorloc site info SITE.db [--json]
-    indoorloc track WALK.txt ... --site SITE.db [--floor NAME|auto] [--smooth|--no-smooth] -o OUT.{geojson,csv,json}
+    indoorloc track WALK.txt ... --site SITE.db [--floor NAME|auto] [--smooth|--no-smooth] -o OUT.{geojson,csv,json} [--html VIEW.html]
 """
 
 from __future__ import annotations
@@ -134,6 +134,8 @@ def cmd_track(args: argparse.Namespace) -> int:
         print(line)
     write_tracks(args.output, tracks, str(args.site))
     print(f"written: {args.output}")
+    if args.html:
+        print(f"viewer: {site.write_viewer_html(args.html, tracks, title=f'indoorloc track: {Path(args.site).name}')}")
     return 0
 
 
@@ -184,4 +186,6 @@ def add_track_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
     t.add_argument("--smooth", action=argparse.BooleanOptionalAction, default=True,
                    help="forward-backward smoother (default); --no-smooth: the causal filter")
     t.add_argument("-o", "--output", required=True, help="OUT.geojson, OUT.csv or OUT.json")
+    t.add_argument("--html", default=None, metavar="VIEW.html",
+                   help="also write the browser viewer: one offline HTML page with the tracks on the floor plan")
     t.set_defaults(func=cmd_track)

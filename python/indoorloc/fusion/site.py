@@ -78,6 +78,12 @@ class WalkTrack:
     waypoint_xy_m: np.ndarray
     errors_m: Optional[np.ndarray]
     header_floor: str = ""   #: the walk header's FloorName ("" when absent)
+    #: The posterior's own covariance (M, 3) [m²]; ``covariance_m2`` is the calibrated one
+    #: (GridTrackerOptions, "Calibration of the returned covariances").
+    posterior_covariance_m2: Optional[np.ndarray] = None
+    #: The WiFi fixes' centres (the kNN estimate of each pooled scan): times [s] and (F, 2) [m].
+    fix_t_s: Optional[np.ndarray] = None
+    fix_xy_m: Optional[np.ndarray] = None
 
 
 #: Site.grow: largest posterior sd [m] of a smoothed position used to place a fingerprint. Chosen
@@ -92,8 +98,10 @@ GROW_WEIGHT = 0.5
 
 def _confident_positions(track: "WalkTrack", max_sd_m: float):
     """t (Q,) [s] -> (xy (Q, 2), valid (Q,)): the smoothed track interpolated at t, valid inside
-    the track's span where the largest sd of the interpolated covariance is at most max_sd_m."""
-    t_tr, xy, c = track.times_s, track.xy_m, np.asarray(track.covariance_m2, float)
+    the track's span where the largest sd of the interpolated posterior covariance (the model's own
+    spread, on which GROW_MAX_SD_M was chosen) is at most max_sd_m."""
+    c = track.posterior_covariance_m2 if track.posterior_covariance_m2 is not None else track.covariance_m2
+    t_tr, xy, c = track.times_s, track.xy_m, np.asarray(c, float)
     half = 0.5 * (c[:, 0] + c[:, 2])
     largest_sd = np.sqrt(np.maximum(half + np.sqrt((0.5 * (c[:, 0] - c[:, 2])) ** 2 + c[:, 1] ** 2), 0.0))
 
@@ -354,6 +362,7 @@ class Site:
         median = self.settings.point_estimate == "median"
         key = ("smoothed_median_m" if median else "smoothed_m") if smooth else ("median_m" if median else "mean_m")
         cov = np.asarray(r["smoothed_covariance_m2" if smooth else "covariance_m2"], float)
+        posterior = np.asarray(r["smoothed_posterior_covariance_m2" if smooth else "posterior_covariance_m2"], float)
         wt = np.asarray(walk.waypoint_t_s, float)
         wxy = np.asarray(walk.waypoint_xy_m, float).reshape(-1, 2)
         # Waypoints are in their own floor's frame: errors only when the walk is on the tracked floor.
@@ -362,7 +371,31 @@ class Site:
         errors = site_model.walk_errors_m(steps.times_s, r[key], wt, wxy) if comparable else None
         return WalkTrack(walk.walk_id, src, floor, m.number, probabilities.get(floor, 1.0), probabilities or {floor: 1.0},
                          bool(smooth), int(walk.t0_unix_ms), np.asarray(steps.times_s, float),
-                         np.asarray(r[key], float), cov, m.origin_lon_lat, wt, wxy, errors, header_floor)
+                         np.asarray(r[key], float), cov, m.origin_lon_lat, wt, wxy, errors, header_floor, posterior,
+                         np.asarray(fixes.times_s, float), wfx.fix_centres(fixes) if len(fixes) else np.zeros((0, 2)))
+
+    def write_viewer_html(self, path: Union[str, os.PathLike], tracks: Sequence[WalkTrack],
+                          title: str = "indoorloc track") -> Path:
+        """The browser viewer (:mod:`indoorloc.fusion.viewer`) of tracks from :meth:`track`: each
+        track on its floor's plan with its 95 % region, waypoints and WiFi fix centres; one
+        self-contained offline HTML file, written atomically."""
+        from indoorloc.fusion import viewer
+
+        floors = [viewer.viewer_floor_from_plan(self.floor_models(name).plan, 0, name)
+                  for name in dict.fromkeys(t.floor for t in tracks)]
+        views = []
+        for t in tracks:
+            c = np.asarray(t.covariance_m2, float)
+            sd = np.sqrt(np.maximum(c[:, [0, 2]], 0.0))
+            with np.errstate(invalid="ignore", divide="ignore"):
+                rho = np.clip(np.nan_to_num(c[:, 1] / (sd[:, 0] * sd[:, 1])), -1.0, 1.0)
+            on_floor = t.errors_m is not None and t.waypoint_t_s.size > 0
+            views.append(viewer.ViewerTrack(
+                name=t.walk_id, floor=t.floor, t_s=t.times_s, xy_m=t.xy_m, sd_m=sd, xy_correlation=rho,
+                waypoints_t_s=t.waypoint_t_s if on_floor else None, waypoints_xy_m=t.waypoint_xy_m if on_floor else None,
+                fixes_t_s=t.fix_t_s if t.fix_t_s is not None and t.fix_t_s.size else None,
+                fixes_xy_m=t.fix_xy_m if t.fix_t_s is not None and t.fix_t_s.size else None))
+        return viewer.write_viewer_html(path, floors, views, title=title)
 
     def leave_one_walk_out(self, name: str, progress: Optional[Callable[[str], None]] = None) -> Dict[str, Any]:
         """The expected error on a floor: each survey walk tracked (default tracker, floor given)
