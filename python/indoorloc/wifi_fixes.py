@@ -180,6 +180,9 @@ class FingerprintDatabase:
     floors: Optional[np.ndarray] = None
     walk_index: Optional[np.ndarray] = None
     ap_ratio: Optional[np.ndarray] = None
+    #: Weight (N,) of each fingerprint in (0, 1] (None: all 1): a fix component from a fingerprint
+    #: of a walk placed by the tracker (``fusion.Site.grow``) counts less than a surveyed one.
+    weights: Optional[np.ndarray] = None
 
     def __post_init__(self) -> None:
         if self.floors is None:
@@ -197,7 +200,7 @@ class FingerprintDatabase:
         window, the metric and its constants, k, T and σ are the new ones."""
         settings.validate()
         return FingerprintDatabase(self.rss_dbm, self.positions_m, self.bssids, settings, self.floors,
-                                   self.walk_index, self.ap_ratio)
+                                   self.walk_index, self.ap_ratio, self.weights)
 
     @property
     def n_scans(self) -> int:
@@ -214,9 +217,10 @@ class FingerprintDatabase:
         return self._index
 
 
-def _walk_fingerprints(walk: Any, s: FixSettings, positions_at: Callable[[np.ndarray], Tuple[np.ndarray, np.ndarray]]
-                       ) -> Optional[Tuple[np.ndarray, np.ndarray, List[str]]]:
-    """The training fingerprints of one walk: (rss (n, V), xy (n, 2), the walk's BSSIDs), or None."""
+def _walk_fingerprints(walk: Any, s: FixSettings, positions_at: Callable[[np.ndarray], Tuple[np.ndarray, np.ndarray]],
+                       span_s: Optional[Tuple[float, float]] = None
+                       ) -> Optional[Tuple[np.ndarray, np.ndarray, List[str], np.ndarray]]:
+    """The training fingerprints of one walk: (rss (n, V), xy (n, 2), the walk's BSSIDs, times (n,) [s]), or None."""
     if s.pooling == "fresh":
         t, rss, names = fresh_scans(walk, s.fresh_age_s)
         if t.size == 0:
@@ -224,7 +228,7 @@ def _walk_fingerprints(walk: Any, s: FixSettings, positions_at: Callable[[np.nda
     else:
         meas = wm.walk_measurements(walk, beacons=s.beacons)
         names = list(meas.bssids)
-        wt = np.asarray(walk.waypoint_t_s, float)
+        wt = np.asarray(walk.waypoint_t_s, float) if span_s is None else np.asarray(span_s, float)
         if meas.n == 0 or wt.size == 0:
             return None
         # Reference times along the surveyed part of the walk (positions_at drops what it cannot place).
@@ -237,7 +241,7 @@ def _walk_fingerprints(walk: Any, s: FixSettings, positions_at: Callable[[np.nda
     xy, valid = positions_at(t)
     if not np.any(valid):
         return None
-    return rss[valid], xy[valid], names
+    return rss[valid], xy[valid], names, t[valid]
 
 
 def build_database(train_walks: Sequence[Any], settings: Optional[FixSettings] = None,
@@ -276,8 +280,37 @@ def build_database(train_walks: Sequence[Any], settings: Optional[FixSettings] =
         got = _walk_fingerprints(walk, s, where)
         if got is not None:
             fl = 0 if floors is None else int(floors[i])
-            rss, xy, names = got
+            rss, xy, names, _ = got
             per_walk.append((rss, xy, names, np.full(xy.shape[0], fl), np.full(xy.shape[0], i)))
+    return assemble_database(per_walk, s)
+
+
+def walk_fingerprints(walk: Any, settings: FixSettings, steps: Optional[ph.HandheldSteps] = None,
+                      positions_at: Optional[Callable[[np.ndarray], Tuple[np.ndarray, np.ndarray]]] = None,
+                      span_s: Optional[Tuple[float, float]] = None
+                      ) -> Optional[Tuple[np.ndarray, np.ndarray, List[str], np.ndarray]]:
+    """The training fingerprints of one survey walk before any vocabulary filter: ``(rss_dbm (n, V)
+    [NaN = not heard], xy_m (n, 2) placed by PDR between the waypoints, the walk's V BSSIDs, times
+    (n,) [s, walk clock])``, or
+    None when none can be placed. :func:`assemble_database` of several walks' fingerprints equals
+    :func:`build_database` of the walks (what lets a site file grow walk by walk).
+
+    A walk without waypoints: ``positions_at`` t (Q,) [s] -> (xy (Q, 2), valid (Q,)) places the
+    references (e.g. a tracked walk's smoothed positions where confident) and ``span_s`` = (first,
+    last) [s] is the part of the walk they cover (instead of the waypoints')."""
+    settings.validate()
+
+    def where(t):
+        pos = wc.walk_positions(walk, t, None, steps)
+        return pos.xy_m, pos.valid
+    return _walk_fingerprints(walk, settings, positions_at or where, span_s)
+
+
+def assemble_database(per_walk: Sequence[Tuple[np.ndarray, np.ndarray, List[str], np.ndarray, np.ndarray]],
+                      s: FixSettings, weights: Optional[Sequence[np.ndarray]] = None) -> FingerprintDatabase:
+    """A database from per-walk fingerprints ``(rss (n, V), xy (n, 2), bssids (V), floors (n,),
+    walk index (n,))``: BSSIDs heard in fewer than ``min_scans`` fingerprints dropped, columns in
+    sorted BSSID order, AP reliabilities computed for the "shared" metric."""
     if not per_walk:
         raise ValueError("indoorloc: argument 'train_walks': no WiFi fingerprint could be placed (no readings "
                          "between waypoints)")
@@ -303,7 +336,11 @@ def build_database(train_walks: Sequence[Any], settings: Optional[FixSettings] =
     ratio = None
     if s.metric == "shared":  # also when α = 0, so that with_settings can turn the weights on
         ratio = wm.ap_reliability(rss_all, xy_all, walk_idx, 1.0, s.pair_radius_m)
-    return FingerprintDatabase(rss_all, xy_all, vocab, s, np.concatenate([p[3] for p in per_walk]), walk_idx, ratio)
+    w_all = None
+    if weights is not None and any(np.any(np.asarray(w) != 1.0) for w in weights):
+        w_all = np.concatenate([np.asarray(w, float) for w in weights])
+    return FingerprintDatabase(rss_all, xy_all, vocab, s, np.concatenate([p[3] for p in per_walk]), walk_idx, ratio,
+                               w_all)
 
 
 def walk_queries(walk: Any, database: FingerprintDatabase) -> Tuple[np.ndarray, np.ndarray]:
@@ -409,6 +446,8 @@ def fixes_for_walk(walk: Any, database: FingerprintDatabase, with_floors: bool =
     if t.size == 0:
         return fusion.Fixes.from_arrays(np.zeros(0), np.zeros((0, k, 2)), np.zeros((0, k)), np.zeros((0, k)))
     best, d_best, weights = wm.knn(dissimilarity(rss, database), k, s.temperature_db)
+    if database.weights is not None:  # grown fingerprints count less
+        weights = weights * database.weights[best]
     floors = database.floors[best] if with_floors else None
     return fusion.Fixes.from_arrays(t, database.positions_m[best], fix_sds(d_best[:, 0], s), weights, floors)
 

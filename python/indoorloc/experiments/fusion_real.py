@@ -52,6 +52,7 @@ from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 import numpy as np
 
 from indoorloc import fusion, wifi, wifi_crowdsource as wc, wifi_fixes as wfx
+from indoorloc.fusion import site_model
 from indoorloc.pdr import handheld as ph
 from indoorloc.io import ilc_floor_names, load_floor_plan, read_ilc_floor
 
@@ -149,6 +150,14 @@ class RealSettings:
                         fix_outlier_probability=self.fix_outlier_probability, fix_tempering=self.fix_tempering)
         settings.update(overrides)
         return fusion.tracker_options(**settings)
+
+    def track_settings(self) -> site_model.TrackSettings:
+        """The settings a site model's default tracker takes (``fusion.site_model``)."""
+        return site_model.TrackSettings(
+            step_length_sd_fraction=self.step_length_sd_fraction, step_heading_sd_rad=self.step_heading_sd_rad,
+            fixes=self.fixes, grid_options=self.grid_options, point_estimate=self.point_estimate,
+            identification_cell_m=self.floor_identification_cell_m,
+            identification_offset_bins=self.floor_identification_offset_bins)
 
     def to_dict(self) -> Dict[str, Any]:
         d = asdict(self)
@@ -299,9 +308,7 @@ def _score_walk(walk, steps_raw: ph.HandheldSteps, models: FoldModels, settings:
     # PDR: calibrated steps, headings rotated into the floor frame by the training yaw offset.
     cal = models.cal
     steps = ph.rescale(steps_raw, cal.options)
-    heading = steps.heading_rad + cal.yaw_offset_rad
-    length_sd = settings.step_length_sd_fraction * steps.length_m
-    pdr_steps = fusion.Steps.from_polar(steps.t_s, steps.length_m, heading, length_sd, settings.step_heading_sd_rad)
+    pdr_steps = site_model.tracker_steps(steps_raw, cal, settings.track_settings())
     if "pdr_only" in want:
         put("pdr_only", ph.pdr_track(steps, wxy[0], wt, yaw_offset_rad=cal.yaw_offset_rad))
     if peer is not None and "peer_costmin" in want and len(fixes) and len(pdr_steps):
@@ -437,8 +444,8 @@ def _grid_options(settings: RealSettings, spread_rad: float, **changes):
 
 
 def _identification_options(settings: RealSettings, spread_rad: float):
-    return _grid_options(settings, spread_rad, cell_size_m=settings.floor_identification_cell_m,
-                         heading_offset_bins=settings.floor_identification_offset_bins)
+    median = settings.point_estimate == "median" or settings.score_both_point_estimates
+    return site_model.identification_grid_options(settings.track_settings(), spread_rad, median)
 
 
 def _score_walk_grid(score: WalkScore, put, pdr_steps, fixes, known_fixes, known: dict, models: FoldModels,
@@ -535,9 +542,9 @@ def _fold_models(floors: Sequence[FloorData], fold_of: Dict[str, List[np.ndarray
             continue
         train = [w for i, w in enumerate(fl.walks) if i not in test]
         train_steps = [s for i, s in enumerate(fl.steps) if i not in test]
-        cal = ph.calibrate_handheld(train, steps_cache=train_steps)
+        cal = site_model.calibrate_floor(train, train_steps)
         crowd = wc.build_crowd_map(train, wc.CrowdMapSettings(), fl.number) if with_crowd_map else None
-        database = wfx.build_database(train, settings.fixes, train_steps, floors=[fl.number] * len(train))
+        database = site_model.build_fingerprints(train, train_steps, fl.number, settings.fixes)
         out[fl.name] = FoldModels(fl, cal, crowd, database)
         all_walks += train
         all_steps += train_steps

@@ -461,3 +461,4 @@ __all__ = [
     "track",
     "tracker_options",
 ]
+

@@ -462,10 +462,24 @@ def calibrate_handheld(walks: Iterable[Any], options: Optional[HandheldOptions] 
         raise ValueError("indoorloc: argument 'walks': no walk to calibrate on (need at least one walk with waypoints)")
     if steps_cache is not None and len(steps_cache) != len(walks):
         raise ValueError(f"indoorloc: argument 'steps_cache': {len(steps_cache)} entries for {len(walks)} walks")
-    per_walk: List[Tuple[HandheldSteps, WaypointIntervals]] = []
+    intervals: List[WaypointIntervals] = []
     for i, w in enumerate(walks):
         st = steps_cache[i] if steps_cache is not None else handheld_steps(w, options)
-        per_walk.append((st, waypoint_intervals(st, w.waypoint_t_s, w.waypoint_xy_m)))
+        intervals.append(waypoint_intervals(st, w.waypoint_t_s, w.waypoint_xy_m))
+    return calibrate_from_intervals(intervals, options, min_distance_m)
+
+
+def calibrate_from_intervals(intervals: Sequence[WaypointIntervals], options: Optional[HandheldOptions] = None,
+                             min_distance_m: float = 1.0) -> HandheldCalibration:
+    """:func:`calibrate_handheld` from each walk's :func:`waypoint_intervals` (steps detected with
+    ``options``): what a site file keeps per survey walk, so that adding a walk recalibrates the
+    floor without re-reading the others."""
+    options = options or HandheldOptions()
+    options.validate()
+    per_walk = [(None, iv) for iv in intervals]
+    if not per_walk:
+        raise ValueError("indoorloc: argument 'intervals': no walk to calibrate on (need at least one walk with "
+                         "waypoints)")
     F = np.concatenate([iv.feature_sum for _, iv in per_walk])
     D = np.concatenate([iv.distance_m for _, iv in per_walk])
     keep = D >= min_distance_m
@@ -557,6 +571,7 @@ __all__ = [
     "WaypointIntervals",
     "as_arrays",
     "best_yaw_offset",
+    "calibrate_from_intervals",
     "calibrate_handheld",
     "complementary_heading",
     "cumulative_at",
