@@ -209,3 +209,30 @@ def test_replay_equals_the_batch_causal_filter_on_every_walk_of_a_real_floor():
             _assert_replay_equals_batch(tracker, walks[i], cal, db)
             checked += 1
     assert checked == len(walks) == 24
+
+
+def test_live_queries_are_walk_queries_and_weighted_maps_replay_equal(synthetic_floor):
+    """The live queries are wifi_fixes.walk_queries' fingerprints (timed at their scans); a map
+    with lower-weight (grown) fingerprints replays equal too; a map with beacon columns is refused."""
+    from dataclasses import replace
+
+    floor = synthetic_floor
+    walks = list(floor.walks())
+    plan = load_floor_plan(floor.geojson_path, floors=[1], origin_lon_lat="outline_sw")
+    cal, db = _models(walks[:6], 1)
+    walk = walks[7]
+    t_mean, rss = wfx.walk_queries(walk, db)
+    scan_t, described, rss_live = live.causal_queries(walk, db)
+    order = np.argsort(described, kind="stable")
+    np.testing.assert_array_equal(described[order], t_mean)
+    np.testing.assert_array_equal(rss_live[order], rss)
+    assert np.all(scan_t >= described)
+    weighted = wfx.FingerprintDatabase(db.rss_dbm, db.positions_m, db.bssids, db.settings, db.floors, db.walk_index,
+                                       db.ap_ratio, np.random.default_rng(0).uniform(0.3, 1.0, db.n_scans))
+    tracker = fusion.GridTracker(plan, fusion.GridTrackerOptions(heading_offset_sd_rad=max(cal.yaw_offset_spread_rad, 1e-3)))
+    w_batch, _ = _assert_replay_equals_batch(tracker, walk, cal, weighted)
+    plain = live.causal_track(tracker, walk, cal, db)
+    assert not np.array_equal(w_batch["mean_m"], plain["mean_m"])   # the weights reached the fixes
+    if hasattr(db.settings, "beacons"):
+        with pytest.raises(ValueError, match=r"beacons off"):
+            live.LiveTracker(tracker, cal, db.with_settings(replace(db.settings, beacons=True)))

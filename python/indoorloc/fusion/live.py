@@ -97,6 +97,8 @@ def _fixes_of_queries(times_s: np.ndarray, rss_dbm: np.ndarray, database: wfx.Fi
     if times_s.size == 0:
         return fusion.Fixes.from_arrays(np.zeros(0), np.zeros((0, k, 2)), np.zeros((0, k)), np.zeros((0, k)))
     best, d_best, weights = wm.knn(wfx.dissimilarity(rss_dbm, database), k, s.temperature_db)
+    if database.weights is not None:  # grown fingerprints count less (as fixes_for_walk)
+        weights = weights * database.weights[best]
     floors = database.floors[best] if with_floors else None
     means = database.positions_m[best]
     if shifts_m is not None:
@@ -113,16 +115,24 @@ def _delay_shift(step_times_s: np.ndarray, displacements_m: np.ndarray, describe
     return np.sum(displacements_m[lo:k + 1], axis=0)
 
 
+def _check_live_settings(database: wfx.FingerprintDatabase) -> None:
+    """ValueError unless the database's fixes can be reproduced live ("window" pooling, causal
+    alignment, WiFi columns only)."""
+    s = database.settings
+    if s.pooling != "window" or s.query_align != "end" or getattr(s, "beacons", False):
+        raise ValueError("indoorloc: argument 'database': live tracking needs settings.pooling == 'window', "
+                         f"query_align == 'end' and beacons off (got {s.pooling!r}, {s.query_align!r}, "
+                         f"beacons={getattr(s, 'beacons', False)!r})")
+
+
 def causal_queries(walk: Any, database: wfx.FingerprintDatabase) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The query fingerprints of a walk's scans timed at the scan: ``(t_s (Q,), described_s (Q,),
     rss_dbm (Q, K))``, the fingerprints of ``wifi_fixes.walk_queries`` ("window" pooling, causal
     alignment) with the time at which each exists and the mean last-seen time of its
     measurements (the time it describes, walk_queries' timestamp). Raises ValueError for other
     pooling settings."""
+    _check_live_settings(database)
     s = database.settings
-    if s.pooling != "window" or s.query_align != "end":
-        raise ValueError("indoorloc: argument 'database': live tracking needs settings.pooling == 'window' and "
-                         f"query_align == 'end' (got {s.pooling!r}, {s.query_align!r})")
     meas = wm.walk_measurements(walk)
     cols = meas.columns({b: i for i, b in enumerate(database.bssids)})
     scan_t = np.unique(np.asarray(walk.wifi.scan_times_s, float))
@@ -266,10 +276,7 @@ class LiveTracker:
         self._with_floors = with_floors
         self._pooler = None
         if database is not None:
-            s = database.settings
-            if s.pooling != "window" or s.query_align != "end":
-                raise ValueError("indoorloc: argument 'database': live tracking needs settings.pooling == 'window' "
-                                 f"and query_align == 'end' (got {s.pooling!r}, {s.query_align!r})")
+            _check_live_settings(database)
             self._pooler = _QueryPooler(database)
             database.index  # noqa: B018: build the matcher's index now, not at the first scan
         self._database = database
