@@ -323,3 +323,28 @@ def test_cli_build_info_track(tmp_path, floor_dir, capsys):
     assert head[0].startswith("walk,t_s,unix_ms,x_m,y_m,floor,sd_x_m,sd_y_m,floor_probability")
     assert main(["--quiet", "track", str(paths[5]), "--site", str(db), "-o", str(tmp_path / "t.txt")]) == 2
     assert "extension" in capsys.readouterr().err
+
+
+def test_site_live_replays_the_causal_track(built):
+    """Site.live(): a held-out walk replayed event by event gives the causal track of the site's
+    own models (fusion.live.causal_track), step for step, bit for bit."""
+    from indoorloc.fusion import live
+    from indoorloc.io import read_ilc_walk
+
+    site, paths = built
+    walk = read_ilc_walk(paths[-1])
+    m = site.floor_models(FLOOR)
+    batch = live.causal_track(m.tracker, walk, m.calibration, m.database,
+                              step_length_sd_fraction=site.settings.step_length_sd_fraction,
+                              step_heading_sd_rad=site.settings.step_heading_sd_rad)
+    tracker = site.live(FLOOR)
+    out = []
+    for ev in live.walk_events(walk):
+        e = tracker.add_event(*ev)
+        if e is not None and (not out or out[-1]["steps"] != e["steps"]):
+            out.append(e)
+    assert len(out) == len(batch["times_s"]) > 10
+    np.testing.assert_array_equal(np.array([e["mean_m"] for e in out]), batch["mean_m"])
+    np.testing.assert_array_equal(np.array([e["covariance_m2"] for e in out]), batch["covariance_m2"])
+    with pytest.raises(ValueError, match="floor"):
+        site.live("F99")

@@ -374,6 +374,19 @@ class Site:
                          np.asarray(r[key], float), cov, m.origin_lon_lat, wt, wxy, errors, header_floor, posterior,
                          np.asarray(fixes.times_s, float), wfx.fix_centres(fixes) if len(fixes) else np.zeros((0, 2)))
 
+    def live(self, floor: str, start: Optional[dict] = None):
+        """A live tracker on one floor of the site (:class:`indoorloc.fusion.live.LiveTracker`):
+        raw sensor events in time order (accelerometer, gyroscope, rotation vector, WiFi scans) in,
+        the causal filter's estimate after each out; a recorded walk replayed event by event gives
+        the track of :func:`indoorloc.fusion.live.causal_track` on the same models. ``start``: None
+        (unknown start) or a known start as in :func:`indoorloc.fusion.track_grid`."""
+        from indoorloc.fusion.live import LiveTracker
+
+        m = self.floor_models(floor)
+        return LiveTracker(m.tracker, m.calibration, m.database, start=start,
+                           step_length_sd_fraction=self.settings.step_length_sd_fraction,
+                           step_heading_sd_rad=self.settings.step_heading_sd_rad)
+
     def write_viewer_html(self, path: Union[str, os.PathLike], tracks: Sequence[WalkTrack],
                           title: str = "indoorloc track") -> Path:
         """The browser viewer (:mod:`indoorloc.fusion.viewer`) of tracks from :meth:`track`: each
