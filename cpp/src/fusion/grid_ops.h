@@ -339,6 +339,24 @@ inline Eigen::Vector2d FixCentre(const PositionFix& f) {
   return total > 0 ? Eigen::Vector2d(centre / total) : centre;
 }
 
+// A layer's prior on its floor's grid: uniform, or a Gaussian of sd start_position_sd_m around a
+// known start (unnormalised; the walls and the first step's normalisation follow).
+inline void FillStartPrior(const FloorGrid& fg, const TrackStart& start, double start_position_sd_m, double cell,
+                           std::vector<float>* alpha) {
+  alpha->resize(fg.size());
+  if (!start.known) {
+    std::fill(alpha->begin(), alpha->end(), 1.0f);
+    return;
+  }
+  const double sd = start_position_sd_m;
+  for (int y = 0; y < fg.ny; ++y)
+    for (int x = 0; x < fg.nx; ++x) {
+      const double dx = fg.x0 + (x + 0.5) * cell - start.position_m.x();
+      const double dy = fg.y0 + (y + 0.5) * cell - start.position_m.y();
+      (*alpha)[static_cast<std::size_t>(y) * fg.nx + x] = static_cast<float>(std::exp(-0.5 * (dx * dx + dy * dy) / (sd * sd)));
+    }
+}
+
 }  // namespace grid_ops
 
 // The tracker's grids and fix factors (the pimpl of GridTracker, shared with GridFilterSession).

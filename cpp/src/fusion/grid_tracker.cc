@@ -407,17 +407,7 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
     const std::size_t n = fg.size();
     std::vector<float> alpha(n), scratch(n);
     // Prior: uniform over the walkable cells, or a Gaussian around the known start.
-    if (start.known) {
-      const double sd = o.start_position_sd_m;
-      for (int y = 0; y < fg.ny; ++y)
-        for (int x = 0; x < fg.nx; ++x) {
-          const double dx = fg.x0 + (x + 0.5) * c - start.position_m.x();
-          const double dy = fg.y0 + (y + 0.5) * c - start.position_m.y();
-          alpha[static_cast<std::size_t>(y) * fg.nx + x] = static_cast<float>(std::exp(-0.5 * (dx * dx + dy * dy) / (sd * sd)));
-        }
-    } else {
-      std::fill(alpha.begin(), alpha.end(), 1.0f);
-    }
+    grid_ops::FillStartPrior(fg, start, o.start_position_sd_m, c, &alpha);
     for (std::size_t i = 0; i < n; ++i) alpha[i] *= fg.wall_factor[i];
     {
       double s = 0;

@@ -18,6 +18,7 @@ that included it. Example::
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
@@ -201,10 +202,8 @@ class Site:
         """Add survey walks (with waypoints) to the site, in one transaction: if any walk fails,
         the file keeps its old content. The floor of each walk is ``floor`` or the walk's
         ``FloorName`` header. Returns the walk ids added."""
-        con = store.connect(self.path, write=True)
         added = []
-        try:
-            con.execute("BEGIN IMMEDIATE")
+        with self._write_transaction() as con:
             seq = con.execute("SELECT COALESCE(MAX(seq) + 1, 0) FROM walks").fetchone()[0]
             touched = set()
             for w in walks:
@@ -218,6 +217,17 @@ class Site:
                     progress(walk.walk_id)
             for name in sorted(touched):
                 tables.recalibrate(con, name)
+        return added
+
+    @contextlib.contextmanager
+    def _write_transaction(self):
+        """One write transaction on the file (BEGIN IMMEDIATE ... COMMIT, with the modified time):
+        on any exception it is rolled back and the file keeps its old content. The models read
+        from the file are dropped afterwards."""
+        con = store.connect(self.path, write=True)
+        try:
+            con.execute("BEGIN IMMEDIATE")
+            yield con
             con.execute("INSERT OR REPLACE INTO meta VALUES ('modified', ?)", (tables.now(),))
             con.execute("COMMIT")
         except BaseException:
@@ -226,9 +236,8 @@ class Site:
             raise
         finally:
             con.close()
-        self._models.clear()
-        self._all = None
-        return added
+            self._models.clear()
+            self._all = None
 
     def grow(self, walks: Sequence[WalkLike], floor: Optional[str] = None, max_sd_m: Optional[float] = None,
              weight: Optional[float] = None, progress: Optional[Callable[[str], None]] = None) -> Dict[str, int]:
@@ -254,10 +263,8 @@ class Site:
                                                            span_s=(tr.times_s[0], tr.times_s[-1]))))
             if progress:
                 progress(walk.walk_id)
-        con = store.connect(self.path, write=True)
         out = {}
-        try:
-            con.execute("BEGIN IMMEDIATE")
+        with self._write_transaction() as con:
             seq = con.execute("SELECT COALESCE(MAX(seq) + 1, 0) FROM walks").fetchone()[0]
             for walk, tr, got in placed:
                 if con.execute("SELECT 1 FROM walks WHERE id = ?", (walk.walk_id,)).fetchone():
@@ -267,16 +274,6 @@ class Site:
                              float(walk.duration_s)))
                 seq += 1
                 out[walk.walk_id] = tables.insert_fingerprints(con, tr.floor, walk.walk_id, got, weight)
-            con.execute("INSERT OR REPLACE INTO meta VALUES ('modified', ?)", (tables.now(),))
-            con.execute("COMMIT")
-        except BaseException:
-            if con.in_transaction:
-                con.execute("ROLLBACK")
-            raise
-        finally:
-            con.close()
-        self._models.clear()
-        self._all = None
         return out
 
     # ---- reading ------------------------------------------------------------------------
