@@ -333,14 +333,17 @@ def assemble_database(per_walk: Sequence[Tuple[np.ndarray, np.ndarray, List[str]
     rss_all = np.vstack(blocks)
     xy_all = np.vstack([p[1] for p in per_walk])
     walk_idx = np.concatenate([p[4] for p in per_walk])
+    floors_all = np.concatenate([p[3] for p in per_walk])
     ratio = None
     if s.metric == "shared":  # also when α = 0, so that with_settings can turn the weights on
-        ratio = wm.ap_reliability(rss_all, xy_all, walk_idx, 1.0, s.pair_radius_m)
+        # Pairs of references only within a floor: floors' frames share coordinates, and an AP
+        # heard strongly on its own floor and weakly above it is a floor's signature, not noise.
+        where = np.c_[xy_all, 1e6 * floors_all.astype(float)]
+        ratio = wm.ap_reliability(rss_all, where, walk_idx, 1.0, s.pair_radius_m)
     w_all = None
     if weights is not None and any(np.any(np.asarray(w) != 1.0) for w in weights):
         w_all = np.concatenate([np.asarray(w, float) for w in weights])
-    return FingerprintDatabase(rss_all, xy_all, vocab, s, np.concatenate([p[3] for p in per_walk]), walk_idx, ratio,
-                               w_all)
+    return FingerprintDatabase(rss_all, xy_all, vocab, s, floors_all, walk_idx, ratio, w_all)
 
 
 def walk_queries(walk: Any, database: FingerprintDatabase) -> Tuple[np.ndarray, np.ndarray]:

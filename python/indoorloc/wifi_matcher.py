@@ -187,7 +187,8 @@ def ap_reliability(rss_dbm: np.ndarray, positions_m: np.ndarray, walk_index: np.
                    seed: int = 0) -> np.ndarray:
     """Per-AP weights g (K,) = (σ̄² / σ_i²)^power from the references (module docstring, 4).
 
-    ``rss_dbm`` (N, K) NaN = not heard, ``positions_m`` (N, 2), ``walk_index`` (N,) the training
+    ``rss_dbm`` (N, K) NaN = not heard, ``positions_m`` (N, D) (x, y [m], and e.g. a large floor
+    offset so that pairs stay within a floor), ``walk_index`` (N,) the training
     walk of each reference. Pairs of references of different walks within ``pair_radius_m`` [m]
     (at most ``max_pairs``, drawn with ``seed``) give σ_i² = Σ (a_i - b_i)² / (2 n_i) over the
     pairs that heard AP i, shrunk to the pooled σ̄² with ``prior_pairs`` pseudo-pairs."""
