@@ -244,7 +244,11 @@ class PlacedReadings:
 
 def scan_epochs(wf: Any, fresh_age_s: float) -> np.ndarray:
     """(S,) measurement time of each scan: the median last-seen time of its readings at most
-    ``fresh_age_s`` old, NaN for a scan without such a reading."""
+    ``fresh_age_s`` old, NaN for a scan without such a reading (documented: that scan has no
+    epoch)."""
+    if not (isinstance(fresh_age_s, (int, float, np.floating, np.integer)) and math.isfinite(fresh_age_s)
+            and fresh_age_s >= 0):
+        raise ValueError(f"indoorloc: argument 'fresh_age_s': must be a finite number >= 0 [s], got {fresh_age_s!r}")
     age = wf.age_s
     fresh = age <= fresh_age_s
     sid = wf.scan_index
@@ -524,9 +528,15 @@ def scan_matrix(walk: Any, bssids: Sequence[str], settings: Optional[CrowdMapSet
 
 
 def prepare(rss_dbm: np.ndarray, not_heard_dbm: float) -> np.ndarray:
-    """NaN (not heard) -> the floor value: the prepared scans of the locators."""
+    """NaN (not heard) -> the floor value ``not_heard_dbm`` (finite) [dBm]: the prepared scans of
+    the locators. An infinite RSS is refused (NaN is the only 'not heard')."""
+    v = float(not_heard_dbm)
+    if not math.isfinite(v):
+        raise ValueError(f"indoorloc: argument 'not_heard_dbm': must be finite, got {not_heard_dbm!r}")
     r = np.asarray(rss_dbm, dtype=np.float64)
-    return np.where(np.isnan(r), not_heard_dbm, r)
+    if np.isinf(r).any():
+        raise ValueError("indoorloc: argument 'rss_dbm': holds an infinite value (NaN marks 'not heard')")
+    return np.where(np.isnan(r), v, r)
 
 
 __all__ = [

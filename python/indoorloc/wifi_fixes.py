@@ -472,9 +472,17 @@ def fix_centres(fixes: fusion.Fixes) -> np.ndarray:
 
 def locate_scans(rss_dbm: np.ndarray, database: FingerprintDatabase) -> np.ndarray:
     """WiFi-only positions (Q, 2) [m] of fingerprints (Q, K in the database's columns, NaN = not
-    heard): the weight-averaged position of each one's fix components (the kNN estimate)."""
+    heard): the weight-averaged position of each one's fix components (the kNN estimate). A
+    fingerprint that shares no AP with any reference cannot be placed: its row is NaN (documented
+    result, not an error, so that a batch keeps its rows aligned)."""
     s = database.settings
-    best, db, w = wm.knn(dissimilarity(rss_dbm, database), s.k, s.temperature_db)
+    q = np.asarray(rss_dbm, dtype=np.float64)
+    if q.ndim != 2 or q.shape[1] != len(database.bssids):
+        raise ValueError(f"indoorloc: argument 'rss_dbm': expected shape (Q, {len(database.bssids)}) (the "
+                         f"database's columns), got {q.shape}")
+    if np.isinf(q).any():
+        raise ValueError("indoorloc: argument 'rss_dbm': holds an infinite value (NaN marks 'not heard')")
+    best, db, w = wm.knn(dissimilarity(q, database), s.k, s.temperature_db)
     w_sum = w.sum(axis=1, keepdims=True)
     pos = (w[:, :, None] * database.positions_m[best]).sum(axis=1) / np.where(w_sum > 0, w_sum, 1.0)
     return np.where(w_sum > 0, pos, np.nan)

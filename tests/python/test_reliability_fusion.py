@@ -312,3 +312,29 @@ def test_write_geojson_floor_refuses_nan_and_writes_atomically(tmp_path):
     assert path.read_bytes() == before  # the old file is untouched
     assert [p.name for p in tmp_path.iterdir()] == ["floor.geojson"]  # no temporary left
     read_geojson_floor(path)
+
+
+def test_wifi_helpers_refuse_non_finite_arguments_and_name_the_query():
+    from types import SimpleNamespace
+
+    from indoorloc import wifi_crowdsource, wifi_fixes
+
+    with pytest.raises(ValueError, match="not_heard_dbm"):
+        wifi_crowdsource.prepare(np.array([[-60.0, np.nan]]), np.nan)
+    with pytest.raises(ValueError, match="rss_dbm"):
+        wifi_crowdsource.prepare(np.array([[-np.inf, -50.0]]), -100.0)
+    assert wifi_crowdsource.prepare(np.array([[np.nan, -50.0]]), -100.0).tolist() == [[-100.0, -50.0]]
+    for bad in (np.nan, -1.0, "2"):
+        with pytest.raises(ValueError, match="fresh_age_s"):
+            wifi_crowdsource.scan_epochs(SimpleNamespace(), bad)
+    rss = np.array([[-50.0, -60.0], [-70.0, np.nan], [-55.0, -65.0], [-52.0, -61.0]])
+    xy = np.array([[0.0, 0.0], [5.0, 0.0], [10.0, 0.0], [0.5, 0.0]])
+    db = wifi_fixes.assemble_database([(rss, xy, ["a", "b"], np.zeros(4, int), np.arange(4))],
+                                      wifi_fixes.FixSettings(k=2))
+    with pytest.raises(ValueError, match="'rss_dbm'.*\\(Q, 2\\)"):
+        wifi_fixes.locate_scans(np.array([[-50.0, -60.0, -70.0]]), db)
+    with pytest.raises(ValueError, match="rss_dbm"):
+        wifi_fixes.locate_scans(np.array([[np.inf, -60.0]]), db)
+    # A scan that heard none of the database's APs cannot be placed: NaN (documented), the rest finite.
+    out = wifi_fixes.locate_scans(np.array([[-50.0, -60.0], [np.nan, np.nan]]), db)
+    assert np.isfinite(out[0]).all() and np.isnan(out[1]).all()
