@@ -261,3 +261,13 @@ def test_reproduce_adds_slow_rows():
     text = nr.markdown(res)
     assert "NA + XOVER, slow s=25" in text and "9 N + 7 M" in text
     assert res["info"]["unknowns_slow"][0] < 0.6 * res["info"]["unknowns"][0]
+
+
+def test_kalman_smoother_refuses_absurd_times_instead_of_returning_nan(small_problem):
+    flight, init = small_problem
+    kw = _obs(flight)
+    for times in (kw["imu_time_s"] + 1e300, kw["imu_time_s"] * 1e6):
+        bad = dict(kw, imu_time_s=times, gps_time_s=times[:: max(1, len(times) // max(1, len(kw["gps_time_s"])))][
+            :len(kw["gps_time_s"])])
+        with pytest.raises(ValueError, match="'imu_time_s'"):
+            network.kalman_smoother(initial={k: v[:1] for k, v in init.items()}, **bad)

@@ -470,3 +470,15 @@ def test_network_noise_bounds_and_crossover_line_counts():
                                 {}, options=ko)
     with pytest.raises(ValueError, match=r"argument 'lines': must be in \[1, 1000000\]"):
         cn.solve_linear_ins_network_with_crossovers(10.0, 60.0, 1.0, "leapfrog", 2**31 - 1, 3)  # was bad_alloc
+
+
+def test_grid_posterior_refuses_reference_points_at_absurd_coordinates():
+    from indoorloc import wifi
+
+    pos = np.array([[x, y] for x in np.arange(0, 11, 2.0) for y in np.arange(0, 11, 2.0)])
+    d = np.linalg.norm(pos[:, None, :] - np.array([[-1, -1], [11, -1], [-1, 11]])[None], axis=2)
+    far = pos.copy()
+    far[0] = [1e300, 0.0]
+    for p in (far, pos * 1e7):
+        with pytest.raises(ValueError, match="'model'.*1e7 m"):
+            wifi.GridPosterior(wifi.RssModel(wifi.SignalMap(p, None, -40 - 20 * np.log10(d + .5), 4 + d)))

@@ -227,7 +227,11 @@ void CheckNetworkInput(const NetworkObservations& obs, const NetworkState& state
   const Eigen::Index n = obs.imu_time_s.size();
   CheckArgument(n >= 3, "imu_time_s", "needs at least 3 epochs, got " + std::to_string(n));
   CheckFinite(obs.imu_time_s, "imu_time_s");
+  // Finite but absurd times (1e300) overflow the propagation to inf/NaN without an error.
+  RequireAllInRange(obs.imu_time_s, -1e10, 1e10, "imu_time_s");
   const double dt = (obs.imu_time_s[n - 1] - obs.imu_time_s[0]) / static_cast<double>(n - 1);
+  CheckArgument(dt <= 1e3, "imu_time_s",
+                "mean sample interval " + std::to_string(dt) + " s is longer than 1000 s (not an IMU's rate)");
   for (Eigen::Index i = 1; i < n; ++i) {
     const double step = obs.imu_time_s[i] - obs.imu_time_s[i - 1];
     CheckArgument(step > 0.0, "imu_time_s",

@@ -69,6 +69,11 @@ GridPosterior::GridPosterior(std::shared_ptr<const RssModel> model, GridPosterio
     }
     double h = spacing_m_;
     const Eigen::Vector2d extent = (hi - lo).cwiseMax(1e-9);
+    // Finite but absurd coordinates (1e300) would make the grid's extent overflow (or the spacing
+    // loop below never end): a floor is at most 1e7 m across.
+    CheckArgument(std::isfinite(lo.norm()) && std::isfinite(hi.norm()) && extent.maxCoeff() <= 1e7, "model",
+                  "reference points of floor index " + std::to_string(f) + " span more than 1e7 m (or lie at "
+                  "|x| > 1e154 m): not a floor");
     while ((extent[0] / h + 1) * (extent[1] / h + 1) > options.max_points_per_floor) h *= 1.25;
     // The table's worst case (no AP at its background anywhere): 3.5 K doubles per point.
     RequireSizeLimit(static_cast<double>(options.max_points_per_floor) * (5.0 + 3.5 * model_->num_access_points()),
