@@ -185,3 +185,112 @@ def test_ibeacon_readings_become_fingerprint_columns_at_their_own_time():
     rss, _, n = wm.pool_windows(meas.t_s, meas.bssid_index, meas.rssi_dbm, len(meas.bssids), [20.0], 2.5, 0.0,
                                 meas.reported_s)
     assert rss[0, 1] == -65.0 and rss[0, 2] == -80.0 and n[0] == 4
+
+
+# --- the compiled matcher (indoorloc._core.wifi.SharedApMatcher) against the numpy reference ---
+
+
+def _sparse_fingerprints(rng, rows, aps, heard):
+    x = rng.uniform(-95, -30, (rows, aps))
+    x[rng.random(x.shape) > heard] = nan
+    return x
+
+
+@pytest.mark.parametrize("beta", [0.0, 5.0])
+def test_compiled_dissimilarity_equals_the_numpy_reference(beta):
+    rng = np.random.default_rng(11)
+    x = _sparse_fingerprints(rng, 400, 60, 0.12)
+    q = _sparse_fingerprints(rng, 50, 60, 0.15)
+    q[3] = nan                                   # a query that heard nothing: d = inf everywhere
+    index = wm.ReferenceIndex.build(x, rng.uniform(0.3, 2.0, 60), beta)
+    rms_c, u_c = wm.shared_dissimilarity(q, index, 0.0, parts=True)
+    rms_n, u_n = wm.shared_dissimilarity_numpy(q, index, 0.0, parts=True)
+    assert np.array_equal(np.isinf(rms_c), np.isinf(rms_n)) and np.isinf(rms_c[3]).all()
+    fin = np.isfinite(rms_n)
+    assert fin.mean() > 0.3                      # the comparison is not vacuous
+    np.testing.assert_allclose(rms_c[fin], rms_n[fin], rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(u_c, u_n, rtol=0, atol=1e-12)
+    d = wm.shared_dissimilarity(q, index, 160.0)
+    np.testing.assert_allclose(d[fin], (rms_n + 160.0 * u_n)[fin], rtol=1e-9, atol=1e-9)
+
+
+def test_compiled_knn_equals_numpy_knn_and_does_not_depend_on_threads():
+    rng = np.random.default_rng(12)
+    x = _sparse_fingerprints(rng, 600, 80, 0.1)
+    q = _sparse_fingerprints(rng, 70, 80, 0.12)
+    index = wm.ReferenceIndex.build(x, rng.uniform(0.3, 2.0, 80), 5.0)
+    best_n, d_n, w_n = wm.knn(wm.shared_dissimilarity_numpy(q, index, 160.0), 20, 3.0)
+    best_c, d_c, w_c = wm.shared_knn(q, index, 160.0, 20, 3.0)
+    assert best_c.shape == (70, 20) and best_c.dtype == np.int64
+    fin = np.isfinite(d_n)
+    assert np.array_equal(fin, np.isfinite(d_c)) and fin.mean() > 0.5
+    np.testing.assert_allclose(d_c[fin], d_n[fin], rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(w_c, w_n, rtol=0, atol=1e-9)
+    assert np.array_equal(best_c[fin], best_n[fin])  # random RSS: no exact ties
+    assert np.all(w_c[~fin] == 0) and np.all((best_c >= 0) & (best_c < 600))
+    for threads in (2, 3, 0):
+        b, d, w = wm.shared_knn(q, index, 160.0, 20, 3.0, num_threads=threads)
+        assert np.array_equal(b, best_c) and np.array_equal(d, d_c) and np.array_equal(w, w_c)
+        assert np.array_equal(wm.shared_dissimilarity(q, index, 160.0, num_threads=threads),
+                              wm.shared_dissimilarity(q, index, 160.0))
+
+
+def test_fixes_for_walk_components_equal_the_numpy_knn():
+    """The fixes fusion uses (compiled kNN) hold the components the numpy kNN gives."""
+    rng = np.random.default_rng(13)
+    x = _sparse_fingerprints(rng, 300, 40, 0.2)
+    positions = rng.uniform(0, 60, (300, 2))
+    db = wfx.FingerprintDatabase(x, positions, [f"ap{i}" for i in range(40)], wfx.FixSettings(),
+                                 ap_ratio=rng.uniform(0.5, 2.0, 40))
+    q = _sparse_fingerprints(rng, 25, 40, 0.25)
+    s = db.settings
+    best_n, d_n, w_n = wm.knn(wm.shared_dissimilarity_numpy(q, db.index, s.penalty_db), s.k, s.temperature_db)
+    best_c, d_c, w_c = wfx.nearest(q, db)
+    np.testing.assert_allclose(w_c, w_n, atol=1e-9)
+    np.testing.assert_allclose(wfx.fix_sds(d_c[:, 0], s), wfx.fix_sds(d_n[:, 0], s), atol=1e-9)
+    np.testing.assert_allclose(positions[best_c][w_n > 0], positions[best_n][w_n > 0])
+    expected = (w_n[:, :, None] * positions[best_n]).sum(1) / w_n.sum(1, keepdims=True)
+    np.testing.assert_allclose(wfx.locate_scans(q, db), expected, atol=1e-9)
+
+
+def test_fix_settings_defaults_are_the_compiled_matcher_defaults():
+    from indoorloc.wifi import SharedApMatcherOptions
+
+    o, s = SharedApMatcherOptions(), wfx.FixSettings()
+    assert (s.penalty_db, s.strength_scale_db, s.k, s.temperature_db) == (
+        o.penalty_db, o.strength_scale_db, o.k, o.temperature_db) == (160.0, 5.0, 20, 3.0)
+    assert o.replace(k=5).k == 5 and o.to_dict()["penalty_db"] == 160.0
+    with pytest.raises(ValueError, match="temperature_db"):
+        o.replace(temperature_db=0.0)
+    with pytest.raises(ValueError, match="strength_scale_db"):
+        SharedApMatcherOptions(strength_scale_db=0.5)
+
+
+@pytest.mark.parametrize("bad, match", [
+    (np.full((2, 3), np.inf), "reference_rss_dbm"),
+    (np.full((2, 3), 5e3), "reference_rss_dbm"),
+    ("abc", "reference_rss_dbm"),
+])
+def test_compiled_matcher_rejects_bad_references(bad, match):
+    from indoorloc.wifi import SharedApMatcher
+
+    with pytest.raises(ValueError, match=match):
+        SharedApMatcher(bad)
+
+
+def test_compiled_matcher_rejects_bad_queries_and_weights():
+    from indoorloc.wifi import SharedApMatcher
+
+    x = np.full((4, 3), -60.0)
+    m = SharedApMatcher(x)
+    with pytest.raises(ValueError, match="queries_dbm"):
+        m.nearest(np.full((1, 4), -60.0))
+    with pytest.raises(ValueError, match="queries_dbm"):
+        m.parts(np.array([[-60.0, np.inf, nan]]))
+    with pytest.raises(ValueError, match="ap_weights"):
+        SharedApMatcher(x, np.array([1.0, -1.0, 1.0]))
+    with pytest.raises(ValueError, match="num_threads"):
+        m.nearest(x, num_threads=1.5)
+    q = x.copy()
+    m.nearest(q, num_threads=2)
+    assert np.array_equal(q, x)                   # inputs not modified
