@@ -294,3 +294,90 @@ def test_compiled_matcher_rejects_bad_queries_and_weights():
     q = x.copy()
     m.nearest(q, num_threads=2)
     assert np.array_equal(q, x)                   # inputs not modified
+
+
+# --- the WiFi-only baseline of `indoorloc wifi evaluate` ("shared_knn") ---
+
+
+def test_knn_positions_votes_the_floor_then_averages_on_it():
+    positions = np.array([[0.0, 0.0], [10.0, 0.0], [0.0, 10.0], [5.0, 5.0]])
+    floors = np.array([1, 2, 2, 1])
+    best = np.array([[0, 1, 2, 3], [3, 0, 1, 2], [1, 2, 0, 3]])
+    w = np.array([[1.0, 0.4, 0.4, 0.1],        # floor 1: 1.1, floor 2: 0.8 -> floor 1, mean of refs 0 and 3
+                  [0.0, 0.0, 0.0, 0.0],        # nothing shared: mean position, the commonest floor (tie: lowest)
+                  [1.0, 1.0, 0.5, 0.5]])       # floor 2: 2.0
+    pos, fl = wm.knn_positions(best, w, positions, floors)
+    np.testing.assert_allclose(pos[0], (1.0 * positions[0] + 0.1 * positions[3]) / 1.1)
+    np.testing.assert_allclose(pos[1], positions.mean(axis=0))
+    np.testing.assert_allclose(pos[2], (positions[1] + positions[2]) / 2)
+    assert fl.tolist() == [1, 1, 2] and fl.dtype == np.int64
+
+
+def test_block_mean_averages_only_the_readings_heard():
+    from indoorloc.experiments import wifi_evaluate as we
+
+    x = np.array([[-50.0, nan, nan], [-60.0, -70.0, nan], [nan, nan, nan], [-40.0, nan, nan]])
+    out = we.block_mean(x, 2)
+    np.testing.assert_allclose(out[0, :2], [-55.0, -70.0])
+    assert np.isnan(out[0, 2]) and np.isnan(out[1, 1:]).all() and out[1, 0] == -40.0
+
+
+def test_shared_knn_in_wifi_evaluate_on_a_synthetic_two_floor_dataset():
+    """Evaluation of "shared_knn" beside "wknn": same test scans, CV on the training points only."""
+    from indoorloc.experiments import wifi_evaluate as we
+    from indoorloc.io.wifi_datasets import FingerprintDataset, FingerprintSplit
+
+    rng = np.random.default_rng(5)
+    aps = rng.uniform(0, 30, (12, 2))
+    ap_floor = np.repeat([0, 1], 6)
+
+    def scans(points, floors, reps):
+        xy = np.repeat(points, reps, axis=0)
+        fl = np.repeat(floors, reps)
+        d = np.hypot(*(xy[:, None] - aps[None]).transpose(2, 0, 1))
+        rss = -40 - 25 * np.log10(np.maximum(d, 1)) - 15 * (fl[:, None] != ap_floor[None]) + rng.normal(0, 2, d.shape)
+        rss = np.where(rss > -85, rss, 100.0)          # UJI-style sentinel for "not heard"
+        ids = np.repeat(np.arange(len(points)), reps)
+        return FingerprintSplit(rss, xy, fl, ids)
+
+    grid = np.array([[x, y] for x in range(0, 30, 5) for y in range(0, 30, 5)], float)
+    train_pts = np.vstack([grid, grid])
+    train_fl = np.repeat([0, 1], len(grid))
+    test_pts = rng.uniform(0, 25, (20, 2))
+    test_fl = rng.integers(0, 2, 20)
+    ds = FingerprintDataset("synthetic", scans(train_pts, train_fl, 4), scans(test_pts, test_fl, 2), 100.0,
+                            [f"ap{i}" for i in range(12)])
+    hyper = we.cross_validate(ds, k=1, max_points=6, methods=["shared_knn"])
+    assert hyper.shared["k"] in we.SHARED_GRID["k"] and hyper.shared["penalty_db"] in we.SHARED_GRID["penalty_db"]
+    res = we.evaluate(ds, 1, hyper, methods=["wknn", "shared_knn"])
+    assert set(res) == {"wknn", "shared_knn"}
+    r = res["shared_knn"]
+    assert r.errors_m.shape == (40,) and np.isfinite(r.errors_m).all()
+    assert r.errors_m.mean() < 6.0 and r.floor_hit.mean() > 0.9     # points 5 m apart, floors 15 dB apart
+    assert "shared_knn" in we.markdown(res, "t")
+
+
+def test_wifi_evaluate_cli_reports_shared_knn_beside_wknn(shared_data, tmp_path, capsys):
+    """`indoorloc wifi evaluate --methods wknn shared_knn --json`: the old keys stay, shared_knn is added."""
+    import json
+
+    from indoorloc import cli
+
+    root = shared_data / "wifi"
+    if not root.is_dir():
+        pytest.skip(f"no WiFi datasets under {root}")
+    out = tmp_path / "w.json"
+    assert cli.main(["wifi", "evaluate", "--data-root", str(root), "--dataset", "corridor", "--scans", "1",
+                     "--cv-points", "4", "--threads", "1", "--quiet", "--methods", "wknn", "shared_knn",
+                     "--json", str(out)]) == 0
+    entry = json.loads(out.read_text())["corridor/k=1"]
+    assert set(entry["hyper"]) == {"model", "k", "shared_knn"}
+    assert set(entry["hyper"]["shared_knn"]) == {"penalty_db", "strength_scale_db", "k", "temperature_db"}
+    rows = {r["method"]: r for r in entry["results"]}
+    assert set(rows) == {"wknn", "shared_knn"}
+    assert {"n", "mean_m", "median_m", "p90_m", "floor_hit_rate"} <= set(rows["shared_knn"])
+    assert rows["shared_knn"]["n"] == rows["wknn"]["n"] and 0 < rows["shared_knn"]["mean_m"] < 5
+    assert "| shared_knn |" in capsys.readouterr().out
+    assert cli.main(["wifi", "evaluate", "--data-root", str(root), "--dataset", "corridor", "--scans", "1",
+                     "--quiet", "--methods", "nope"]) != 0
+    assert "argument 'methods': unknown ['nope']" in capsys.readouterr().err
