@@ -42,7 +42,7 @@ METHODS = ("ml", "mmse", "tracker", "nnss", "nnss_avg", "wknn", "horus", "shared
 #: Cross-validation grid of shared_knn: c [dB], β [dB], k, T [dB] (fixed in advance; the fusion
 #: defaults 160 / 5 / 20 / 3 are inside it).
 SHARED_GRID = {"penalty_db": (10.0, 20.0, 40.0, 80.0, 160.0), "strength_scale_db": (0.0, 5.0),
-               "k": (1, 2, 3, 4, 5, 6, 8, 12, 20, 30, 50, 80), "temperature_db": (1.0, 3.0, 10.0, 1e3)}
+               "k": (1, 2, 3, 4, 5, 6, 8, 12, 20, 30, 50, 80, 120, 200), "temperature_db": (1.0, 3.0, 10.0, 1e3)}
 
 
 def _shared_defaults() -> Dict[str, float]:
