@@ -253,13 +253,14 @@ class ReferenceIndex:
         from indoorloc._core.wifi import SharedApMatcher, SharedApMatcherOptions
 
         cache = self.__dict__.setdefault("_matchers", {})
-        key = (penalty_db, k, temperature_db)
+        default = SharedApMatcherOptions()
+        key = (default.penalty_db if penalty_db is None else float(penalty_db),
+               default.k if k is None else int(k),
+               default.temperature_db if temperature_db is None else float(temperature_db))
         if key not in cache:
-            fields = {"strength_scale_db": self.strength_scale_db}
-            for name, v in (("penalty_db", penalty_db), ("k", k), ("temperature_db", temperature_db)):
-                if v is not None:
-                    fields[name] = v
-            cache[key] = SharedApMatcher(self.rss_dbm, self.g, SharedApMatcherOptions(**fields))
+            options = default.replace(strength_scale_db=self.strength_scale_db, penalty_db=key[0], k=key[1],
+                                      temperature_db=key[2])
+            cache[key] = SharedApMatcher(self.rss_dbm, self.g, options)
         return cache[key]
 
 
