@@ -45,6 +45,7 @@ void BindNetwork(py::module_& m);
 void BindPdr(py::module_& m);
 void BindWifi(py::module_& m);
 void BindWifiBaselines(py::module_& m);
+void BindWifiMatcher(py::module_& m);
 }  // namespace indoorloc::bindings
 
 PYBIND11_MODULE(_core, m) {
@@ -94,6 +95,7 @@ PYBIND11_MODULE(_core, m) {
   py::module_ wifi = m.def_submodule("wifi", "RSS signal maps, Delaunay interpolation, gradient tracker (paper 004).");
   indoorloc::bindings::BindWifi(wifi);
   indoorloc::bindings::BindWifiBaselines(wifi);
+  indoorloc::bindings::BindWifiMatcher(wifi);
   py::module_ fusion = m.def_submodule("fusion", "Particle-filter fusion of PDR steps, WiFi and a floor plan (issue 14).");
   indoorloc::bindings::BindFusionFloorPlan(fusion);
   indoorloc::bindings::BindFusionTracker(fusion);

@@ -8,6 +8,9 @@
   information; simulated scans (the paper's simulated mode).
 - :class:`GridPosterior`: posterior-mean (MMSE) fixes of the same model on a grid (beyond the paper).
 - :class:`FingerprintLocator`: the baselines NNSS (RADAR), NNSS-AVG, weighted kNN, Horus.
+- :class:`SharedApMatcher`: the shared-AP dissimilarity (RMS RSS difference over the APs both
+  heard + c x the unshared fraction) and its kNN: the fusion tracker's WiFi matcher, and the
+  ``shared_knn`` method of ``indoorloc wifi evaluate``.
 - :class:`GradientTracker` (Algorithm 1 with step control) and :func:`locate_ml` (global
   maximum-likelihood fixes, also from k scans at a static point).
 
@@ -29,6 +32,8 @@ from indoorloc._core.wifi import (
     GridPosterior,
     RssModel,
     RssModelOptions,
+    SharedApMatcher,
+    SharedApMatcherOptions,
     SignalMap,
     SignalMapOptions,
     locate_ml,
@@ -54,6 +59,8 @@ __all__ = [
     "GridPosterior",
     "RssModel",
     "RssModelOptions",
+    "SharedApMatcher",
+    "SharedApMatcherOptions",
     "SignalMap",
     "SignalMapOptions",
     "locate_ml",

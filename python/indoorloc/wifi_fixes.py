@@ -44,9 +44,13 @@ from indoorloc import fusion
 from indoorloc.pdr import handheld as ph
 from indoorloc import wifi_crowdsource as wc
 from indoorloc import wifi_matcher as wm
+from indoorloc._core.wifi import SharedApMatcherOptions
 from indoorloc.validate import integer, real_array, real_scalar
 
 METRICS = ("shared", "strongest", "union")
+#: The compiled matcher's defaults (C++ SharedApMatcherOptions): c, β, k and T of the "shared"
+#: metric are read from there, not restated (one definition per option).
+_SHARED = SharedApMatcherOptions()
 POOLINGS = ("window", "fresh")
 ALIGNS = ("end", "centre")
 
@@ -80,21 +84,21 @@ class FixSettings:
     min_scans: int = 3              #: keep a BSSID heard in at least this many training fingerprints (fixed in advance)
     metric: str = "shared"          #: "shared", "strongest" or "union" (wifi_matcher and module docstrings)
     #: c of "shared": d = weighted RMS over shared APs + c x weighted unshared fraction [dB]. LOFO
-    #: over {80, 160, 320}: 160 on every held-out floor.
-    penalty_db: float = 160.0
+    #: over {80, 160, 320}: 160 on every held-out floor (the C++ default).
+    penalty_db: float = _SHARED.penalty_db
     #: α of the per-AP reliability weights (σ̄²/σ_i²)^α of "shared"; 0 = off. LOFO over {0, 1}: 1 on
     #: four of six held-out floors (within 0.05 m of 0 on all floors).
     ap_weight_power: float = 1.0
     #: β of the strength weights exp((rss + 100)/β) of "shared" [dB]; 0 = off. LOFO over
-    #: {0, 3, 5, 10}: 5 on four of six held-out floors, 10 on F4 and F8; 0 never.
-    strength_scale_db: float = 5.0
+    #: {0, 3, 5, 10}: 5 on four of six held-out floors, 10 on F4 and F8; 0 never (the C++ default: 5).
+    strength_scale_db: float = _SHARED.strength_scale_db
     pair_radius_m: float = 2.0      #: references of two walks this close estimate an AP's noise [m] (fixed in advance)
     strongest_n: int = 10           #: n of "strongest" (fixed in advance: a scan's near APs)
     not_heard_dbm: float = -100.0   #: v₀ of "strongest" (the issue's floor value)
     unshared_cost_db: float = 20.0  #: c of "union": cost of an AP heard in one scan only [dB]
-    k: int = 20                     #: components per fix (best references). LOFO over {8, 12, 20, 30}: 20 or 30
-    #: T of the component weights exp(-(d - d_min)/T) [dB]. LOFO over {3, 10, 30}: 3 on five of six.
-    temperature_db: float = 3.0
+    k: int = _SHARED.k              #: components per fix (best references; 20). LOFO over {8, 12, 20, 30}: 20 or 30
+    #: T of the component weights exp(-(d - d_min)/T) [dB]. LOFO over {3, 10, 30}: 3 on five of six (the C++ default).
+    temperature_db: float = _SHARED.temperature_db
     #: σ of each component of a fix [m]: σ = sd_m + sd_per_db x d_min, d_min the fix's best
     #: dissimilarity [dB] (a poor best match is a wide fix). Calibrated on the six floors so that
     #: the mixture's 95 % region holds the truth at the fix time for ~90 % of the fixes, evenly
@@ -429,14 +433,28 @@ def strongest_ap_dissimilarity(queries_dbm: np.ndarray, database_dbm: np.ndarray
     return out
 
 
-def dissimilarity(queries_dbm: np.ndarray, database: "FingerprintDatabase") -> np.ndarray:
-    """The database's metric (``settings.metric``) of every query (Q, K) to every fingerprint: (Q, N) [dB]."""
+def dissimilarity(queries_dbm: np.ndarray, database: "FingerprintDatabase", num_threads: int = 1) -> np.ndarray:
+    """The database's metric (``settings.metric``) of every query (Q, K) to every fingerprint: (Q, N) [dB].
+    ``num_threads``: threads of the compiled "shared" matcher (<= 0: all cores; results do not
+    depend on it)."""
     s = database.settings
     if s.metric == "shared":
-        return wm.shared_dissimilarity(queries_dbm, database.index, s.penalty_db)
+        return wm.shared_dissimilarity(queries_dbm, database.index, s.penalty_db, num_threads=num_threads)
     if s.metric == "strongest":
         return strongest_ap_dissimilarity(queries_dbm, database.rss_dbm, s.strongest_n, s.not_heard_dbm)
     return scan_dissimilarity(queries_dbm, database.rss_dbm, s.unshared_cost_db)
+
+
+def nearest(queries_dbm: np.ndarray, database: "FingerprintDatabase", num_threads: int = 1
+            ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The ``settings.k`` most similar fingerprints of every query (Q, K), best first, with the
+    weights exp(-(d - d_min) / T): ``(index (Q, k), d (Q, k) [dB], weights (Q, k))``. The
+    "shared" metric runs in one compiled pass (``wifi_matcher.shared_knn``), the others through
+    the (Q, N) matrix (``wifi_matcher.knn``)."""
+    s = database.settings
+    if s.metric == "shared":
+        return wm.shared_knn(queries_dbm, database.index, s.penalty_db, s.k, s.temperature_db, num_threads)
+    return wm.knn(dissimilarity(queries_dbm, database), s.k, s.temperature_db)
 
 
 def fixes_for_walk(walk: Any, database: FingerprintDatabase, with_floors: bool = True) -> fusion.Fixes:
@@ -448,7 +466,7 @@ def fixes_for_walk(walk: Any, database: FingerprintDatabase, with_floors: bool =
     k = min(s.k, database.n_scans)
     if t.size == 0:
         return fusion.Fixes.from_arrays(np.zeros(0), np.zeros((0, k, 2)), np.zeros((0, k)), np.zeros((0, k)))
-    best, d_best, weights = wm.knn(dissimilarity(rss, database), k, s.temperature_db)
+    best, d_best, weights = nearest(rss, database)
     if database.weights is not None:  # grown fingerprints count less
         weights = weights * database.weights[best]
     floors = database.floors[best] if with_floors else None
@@ -470,7 +488,7 @@ def fix_centres(fixes: fusion.Fixes) -> np.ndarray:
     return (w[:, :, None] * np.where(fixes.weights[:, :, None] > 0, fixes.means_m, 0.0)).sum(axis=1)
 
 
-def locate_scans(rss_dbm: np.ndarray, database: FingerprintDatabase) -> np.ndarray:
+def locate_scans(rss_dbm: np.ndarray, database: FingerprintDatabase, num_threads: int = 1) -> np.ndarray:
     """WiFi-only positions (Q, 2) [m] of fingerprints (Q, K in the database's columns, NaN = not
     heard): the weight-averaged position of each one's fix components (the kNN estimate). A
     fingerprint that shares no AP with any reference cannot be placed: its row is NaN (documented
@@ -482,7 +500,7 @@ def locate_scans(rss_dbm: np.ndarray, database: FingerprintDatabase) -> np.ndarr
                          f"database's columns), got {q.shape}")
     if np.isinf(q).any():
         raise ValueError("indoorloc: argument 'rss_dbm': holds an infinite value (NaN marks 'not heard')")
-    best, db, w = wm.knn(dissimilarity(q, database), s.k, s.temperature_db)
+    best, db, w = nearest(q, database, num_threads)
     w_sum = w.sum(axis=1, keepdims=True)
     pos = (w[:, :, None] * database.positions_m[best]).sum(axis=1) / np.where(w_sum > 0, w_sum, 1.0)
     return np.where(w_sum > 0, pos, np.nan)
@@ -500,6 +518,7 @@ __all__ = [
     "fixes_for_walk",
     "fresh_scans",
     "locate_scans",
+    "nearest",
     "scan_dissimilarity",
     "strongest_ap_dissimilarity",
     "walk_queries",

@@ -28,9 +28,11 @@ them. :mod:`indoorloc.wifi_fixes` builds the tracker's position fixes on top of 
        d(a, b)   = rms(a, b) + c · u(a, b)
 
    u is the weighted fraction of the APs heard by only one of the two (0: same AP set, 1: no AP
-   in common, d = inf then). Every sum is a sparse product of the query's weights with the
-   references' rows of the query's own APs (:class:`ReferenceIndex`): one pass per query, no
-   Python loop per pair.
+   in common, d = inf then). Every sum runs over the references that heard one of the query's
+   APs (per-AP posting lists, :class:`ReferenceIndex`), in the compiled matcher
+   ``indoorloc._core.wifi.SharedApMatcher`` (C++ ``wifi/shared_ap_matcher.h``), which also gives
+   the k nearest references (:func:`shared_knn`) without the (Q, N) matrix. The WiFi-only
+   baseline of ``indoorloc wifi evaluate`` ("shared_knn") is the same matcher.
 4. **Per-AP reliability** g_i = (σ̄² / σ_i²)^α: σ_i² is the variance of AP i's RSS between
    references of *different* training walks within ``pair_radius_m`` of each other (half the
    mean squared difference; the revisiting noise a query meets), shrunk towards the pooled σ̄²
@@ -49,7 +51,7 @@ from typing import Any, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from indoorloc.validate import real_array, real_scalar
+from indoorloc.validate import integer, real_array, real_scalar
 
 #: RSS offset used inside the matcher [dB]: values are stored as rss + 100 (0..100 for real RSS),
 #: which keeps float32 sums of squares accurate.
@@ -223,43 +225,48 @@ def ap_reliability(rss_dbm: np.ndarray, positions_m: np.ndarray, walk_index: np.
 
 @dataclass
 class ReferenceIndex:
-    """References prepared for :func:`shared_dissimilarity`: sparse (K, N) matrices in CSR, one row
-    per AP, so that a query gathers the rows of its own APs (a reference hears a few per cent of
-    a floor's APs).
+    """References prepared for :func:`shared_dissimilarity` and :func:`shared_knn`: the compiled
+    matcher (``indoorloc._core.wifi.SharedApMatcher``: per-AP posting lists, so that a query
+    touches only the references that heard one of its APs; a reference hears a few per cent of a
+    floor's APs).
 
-    ``heard`` 1 where heard; ``value`` rss + 100 dB; ``value2`` its square; ``gf`` g_i f(b_i);
-    ``g`` (K,) AP weights; ``strength_scale_db`` β (0: off); ``total_b`` (N,) Σ_B g f(b)."""
+    ``rss_dbm`` (N, K) [dBm, NaN = not heard]; ``g`` (K,) AP weights; ``strength_scale_db`` β
+    (0: off); ``n`` = N. Matchers for other (c, k, T) are built on demand and kept."""
 
-    heard: Any
-    value: Any
-    value2: Any
-    gf: Any
+    rss_dbm: np.ndarray
     g: np.ndarray
     strength_scale_db: float
-    total_b: np.ndarray
     n: int
 
     @classmethod
     def build(cls, rss_dbm: np.ndarray, g: Optional[np.ndarray] = None, strength_scale_db: float = 0.0
               ) -> "ReferenceIndex":
-        from scipy import sparse
-
         x = np.asarray(rss_dbm, float)
-        n, k = x.shape
-        g = np.ones(k) if g is None else np.asarray(g, float)
-        ref, ap = np.nonzero(np.isfinite(x.T).T)          # entries in (reference, AP) order
-        v = x[ref, ap] + RSS_OFFSET_DB
-        gf = g[ap] * _strength(v, strength_scale_db)
+        g = np.ones(x.shape[1]) if g is None else np.asarray(g, float)
+        index = cls(x, g, float(strength_scale_db), int(x.shape[0]))
+        index.matcher()  # validates the references and weights now (ValueError naming them)
+        return index
 
-        def csr(data):
-            return sparse.csr_matrix((np.asarray(data, np.float64), (ap, ref)), shape=(k, n))
+    def matcher(self, penalty_db: Optional[float] = None, k: Optional[int] = None,
+                temperature_db: Optional[float] = None) -> Any:
+        """The compiled matcher with these options (None: the C++ default), built once per
+        (c, k, T) and kept."""
+        from indoorloc._core.wifi import SharedApMatcher, SharedApMatcherOptions
 
-        total_b = np.bincount(ref, weights=gf, minlength=n)
-        return cls(csr(np.ones_like(v)), csr(v), csr(v * v), csr(gf), g, float(strength_scale_db), total_b, n)
+        cache = self.__dict__.setdefault("_matchers", {})
+        default = SharedApMatcherOptions()
+        key = (default.penalty_db if penalty_db is None else float(penalty_db),
+               default.k if k is None else int(k),
+               default.temperature_db if temperature_db is None else float(temperature_db))
+        if key not in cache:
+            options = default.replace(strength_scale_db=self.strength_scale_db, penalty_db=key[0], k=key[1],
+                                      temperature_db=key[2])
+            cache[key] = SharedApMatcher(self.rss_dbm, self.g, options)
+        return cache[key]
 
 
 #: f is evaluated as exp((rss - STRENGTH_PIVOT_DBM) / β): the same ratios as exp((rss + 100) / β), kept
-#: inside float32 for β >= 1 (rss up to -13 dBm in the data).
+#: finite for β >= 1 (rss up to -13 dBm in the data). The C++ matcher uses the same pivot.
 STRENGTH_PIVOT_DBM = -40.0
 
 
@@ -270,20 +277,97 @@ def _strength(value_db: np.ndarray, scale_db: float) -> np.ndarray:
     return np.exp((value_db - (STRENGTH_PIVOT_DBM + RSS_OFFSET_DB)) / scale_db)
 
 
+def _checked_queries(queries_dbm: np.ndarray, index: ReferenceIndex) -> np.ndarray:
+    q = real_array(queries_dbm, "queries_dbm", ndim=2, finite=False, max_abs=1e3)
+    if q.shape[1] != index.rss_dbm.shape[1]:
+        raise ValueError(f"indoorloc: argument 'queries_dbm': expected {index.rss_dbm.shape[1]} columns "
+                         f"(the references' APs), got {q.shape[1]}")
+    return q
+
+
 def shared_dissimilarity(queries_dbm: np.ndarray, index: ReferenceIndex, penalty_db: float,
-                         parts: bool = False):
+                         parts: bool = False, num_threads: int = 1):
     """d(a, b) of the module docstring (3) for every query (Q, K) against every reference: (Q, N) [dB],
     +inf where no AP is shared. With ``parts=True`` returns ``(rms, u)`` instead (d = rms + c u),
     for evaluating several c at once.
 
-    One pass per query over the references' rows of the query's own APs (C of them): a few sparse
-    (C,) by (C, N) products, O(nonzeros of those rows) per query (timing: docs/fusion_real.md)."""
-    q = real_array(queries_dbm, "queries_dbm", ndim=2, finite=False, max_abs=1e3)
-    if q.shape[1] != index.heard.shape[0]:
-        raise ValueError(f"indoorloc: argument 'queries_dbm': expected {index.heard.shape[0]} columns "
-                         f"(the references' APs), got {q.shape[1]}")
+    Computed by the compiled matcher (GIL released; ``num_threads`` <= 0: all cores, results
+    independent of it); :func:`shared_dissimilarity_numpy` is the same in numpy (the reference
+    of the tests). Timing: docs/fusion_real.md, "WiFi as fixes"."""
+    q = _checked_queries(queries_dbm, index)
     penalty_db = real_scalar(penalty_db, "penalty_db", lo=0.0, hi=1e4)
-    n = index.n
+    rms, u = index.matcher().parts(q, num_threads)
+    if parts:
+        return rms, u
+    return rms + penalty_db * u
+
+
+def shared_knn(queries_dbm: np.ndarray, index: ReferenceIndex, penalty_db: float, k: int,
+               temperature_db: float, num_threads: int = 1) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`knn` of :func:`shared_dissimilarity` in one compiled pass, without the (Q, N) matrix:
+    ``(index (Q, k'), d (Q, k') [dB], weights (Q, k'))``, k' = min(k, N), best first (ties: lower
+    reference index). Where fewer than k' references share an AP with a query, the rest are other
+    references at d = inf, weight 0."""
+    q = _checked_queries(queries_dbm, index)
+    penalty_db = real_scalar(penalty_db, "penalty_db", lo=0.0, hi=1e4)
+    k = integer(k, "k", lo=1, hi=10**9)
+    temperature_db = real_scalar(temperature_db, "temperature_db", lo=1e-12, hi=1e12)
+    return index.matcher(penalty_db, k, temperature_db).nearest(q, num_threads)
+
+
+def knn_positions(best: np.ndarray, weights: np.ndarray, positions_m: np.ndarray,
+                  floors: Optional[np.ndarray] = None) -> Tuple[np.ndarray, np.ndarray]:
+    """WiFi-only estimates from neighbours (:func:`shared_knn`): per query the floor with the
+    largest summed weight among its neighbours (a tie: the floor of the best-ranked of the tied),
+    then the weight-averaged position of the neighbours on that floor.
+
+    ``best``, ``weights`` (Q, k); ``positions_m`` (N, 2) [m]; ``floors`` (N,) int or None (all 0).
+    Returns ``(positions_m (Q, 2), floors (Q,) int64)``. A query that shares no AP with any
+    reference (all weights 0) gets the mean reference position and the most common floor."""
+    best = np.asarray(best, np.int64)
+    w = np.asarray(weights, float)
+    pos = np.asarray(positions_m, float)
+    fl = np.zeros(pos.shape[0], np.int64) if floors is None else np.asarray(floors, np.int64)
+    q_n = best.shape[0]
+    if q_n == 0:
+        return np.zeros((0, 2)), np.zeros(0, np.int64)
+    nf = fl[best]                                                    # (Q, k) neighbour floors
+    # Summed weight of each neighbour's floor, per query; the first (best-ranked) maximum wins.
+    same = nf[:, :, None] == nf[:, None, :]
+    votes = (same * w[:, None, :]).sum(axis=2)                       # (Q, k)
+    pick = np.argmax(votes, axis=1)
+    floor = nf[np.arange(q_n), pick]
+    ww = np.where(nf == floor[:, None], w, 0.0)
+    total = ww.sum(axis=1, keepdims=True)
+    out = (ww[:, :, None] * pos[best]).sum(axis=1) / np.where(total > 0, total, 1.0)
+    none = total[:, 0] <= 0
+    if none.any():
+        vals, counts = np.unique(fl, return_counts=True)
+        out[none] = pos.mean(axis=0)
+        floor[none] = vals[np.argmax(counts)]
+    return out, floor.astype(np.int64)
+
+
+def shared_dissimilarity_numpy(queries_dbm: np.ndarray, index: ReferenceIndex, penalty_db: float,
+                               parts: bool = False):
+    """:func:`shared_dissimilarity` in numpy/scipy (the implementation before the compiled
+    matcher; kept as the reference of the tests and of the speed comparison): one pass per query,
+    a few sparse (C,) by (C, N) products over the references' rows of the query's own APs."""
+    from scipy import sparse
+
+    q = _checked_queries(queries_dbm, index)
+    penalty_db = real_scalar(penalty_db, "penalty_db", lo=0.0, hi=1e4)
+    x = index.rss_dbm
+    n, k_aps = x.shape
+    ref, ap = np.nonzero(np.isfinite(x.T).T)          # entries in (reference, AP) order
+    v = x[ref, ap] + RSS_OFFSET_DB
+    gf_entries = index.g[ap] * _strength(v, index.strength_scale_db)
+
+    def csr(data):
+        return sparse.csr_matrix((np.asarray(data, np.float64), (ap, ref)), shape=(k_aps, n))
+
+    heard, value, value2, gf = csr(np.ones_like(v)), csr(v), csr(v * v), csr(gf_entries)
+    total_b = np.bincount(ref, weights=gf_entries, minlength=n)
     rms = np.full((q.shape[0], n), np.inf)
     u = np.ones((q.shape[0], n))
     beta = index.strength_scale_db
@@ -292,15 +376,14 @@ def shared_dissimilarity(queries_dbm: np.ndarray, index: ReferenceIndex, penalty
         if cols.size == 0 or n == 0:
             continue
         a = q[r, cols] + RSS_OFFSET_DB
-        g = index.g[cols]
-        w = g * _strength(a, beta)                                   # w_i = g_i f(a_i)
+        w = index.g[cols] * _strength(a, beta)                       # w_i = g_i f(a_i)
         # (1, C) x (C, N) sparse products: Σ_{A∩B} of w, w a², w a b, w b² and g f(b).
-        sw, s_aa = index.heard[cols].T.dot(np.column_stack([w, w * a * a])).T
-        s_ab = index.value[cols].T.dot(w * a)
-        s_bb = index.value2[cols].T.dot(w)
-        shared_fb = np.asarray(index.gf[cols].sum(axis=0)).ravel()   # Σ_{A∩B} g f(b)
+        sw, s_aa = heard[cols].T.dot(np.column_stack([w, w * a * a])).T
+        s_ab = value[cols].T.dot(w * a)
+        s_bb = value2[cols].T.dot(w)
+        shared_fb = np.asarray(gf[cols].sum(axis=0)).ravel()         # Σ_{A∩B} g f(b)
         ms = s_aa - 2.0 * s_ab + s_bb                                # Σ_{A∩B} w (a - b)²
-        union = float(w.sum()) + index.total_b - shared_fb           # Σ_A + Σ_{B∖A}
+        union = float(w.sum()) + total_b - shared_fb                 # Σ_A + Σ_{B∖A}
         ok = sw > 0
         rms[r, ok] = np.sqrt(np.maximum(ms[ok] / sw[ok], 0.0))
         u[r, ok] = np.clip(1.0 - sw[ok] / union[ok], 0.0, 1.0)
@@ -333,8 +416,11 @@ __all__ = [
     "ReferenceIndex",
     "ap_reliability",
     "knn",
+    "knn_positions",
     "pool_windows",
     "shared_dissimilarity",
+    "shared_dissimilarity_numpy",
+    "shared_knn",
     "walk_measurements",
     "beacon_id",
 ]

@@ -185,3 +185,199 @@ def test_ibeacon_readings_become_fingerprint_columns_at_their_own_time():
     rss, _, n = wm.pool_windows(meas.t_s, meas.bssid_index, meas.rssi_dbm, len(meas.bssids), [20.0], 2.5, 0.0,
                                 meas.reported_s)
     assert rss[0, 1] == -65.0 and rss[0, 2] == -80.0 and n[0] == 4
+
+
+# --- the compiled matcher (indoorloc._core.wifi.SharedApMatcher) against the numpy reference ---
+
+
+def _sparse_fingerprints(rng, rows, aps, heard):
+    x = rng.uniform(-95, -30, (rows, aps))
+    x[rng.random(x.shape) > heard] = nan
+    return x
+
+
+@pytest.mark.parametrize("beta", [0.0, 5.0])
+def test_compiled_dissimilarity_equals_the_numpy_reference(beta):
+    rng = np.random.default_rng(11)
+    x = _sparse_fingerprints(rng, 400, 60, 0.12)
+    q = _sparse_fingerprints(rng, 50, 60, 0.15)
+    q[3] = nan                                   # a query that heard nothing: d = inf everywhere
+    index = wm.ReferenceIndex.build(x, rng.uniform(0.3, 2.0, 60), beta)
+    rms_c, u_c = wm.shared_dissimilarity(q, index, 0.0, parts=True)
+    rms_n, u_n = wm.shared_dissimilarity_numpy(q, index, 0.0, parts=True)
+    assert np.array_equal(np.isinf(rms_c), np.isinf(rms_n)) and np.isinf(rms_c[3]).all()
+    fin = np.isfinite(rms_n)
+    assert fin.mean() > 0.3                      # the comparison is not vacuous
+    np.testing.assert_allclose(rms_c[fin], rms_n[fin], rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(u_c, u_n, rtol=0, atol=1e-12)
+    d = wm.shared_dissimilarity(q, index, 160.0)
+    np.testing.assert_allclose(d[fin], (rms_n + 160.0 * u_n)[fin], rtol=1e-9, atol=1e-9)
+
+
+def test_compiled_knn_equals_numpy_knn_and_does_not_depend_on_threads():
+    rng = np.random.default_rng(12)
+    x = _sparse_fingerprints(rng, 600, 80, 0.1)
+    q = _sparse_fingerprints(rng, 70, 80, 0.12)
+    index = wm.ReferenceIndex.build(x, rng.uniform(0.3, 2.0, 80), 5.0)
+    best_n, d_n, w_n = wm.knn(wm.shared_dissimilarity_numpy(q, index, 160.0), 20, 3.0)
+    best_c, d_c, w_c = wm.shared_knn(q, index, 160.0, 20, 3.0)
+    assert best_c.shape == (70, 20) and best_c.dtype == np.int64
+    fin = np.isfinite(d_n)
+    assert np.array_equal(fin, np.isfinite(d_c)) and fin.mean() > 0.5
+    np.testing.assert_allclose(d_c[fin], d_n[fin], rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(w_c, w_n, rtol=0, atol=1e-9)
+    assert np.array_equal(best_c[fin], best_n[fin])  # random RSS: no exact ties
+    assert np.all(w_c[~fin] == 0) and np.all((best_c >= 0) & (best_c < 600))
+    for threads in (2, 3, 0):
+        b, d, w = wm.shared_knn(q, index, 160.0, 20, 3.0, num_threads=threads)
+        assert np.array_equal(b, best_c) and np.array_equal(d, d_c) and np.array_equal(w, w_c)
+        assert np.array_equal(wm.shared_dissimilarity(q, index, 160.0, num_threads=threads),
+                              wm.shared_dissimilarity(q, index, 160.0))
+
+
+def test_fixes_for_walk_components_equal_the_numpy_knn():
+    """The fixes fusion uses (compiled kNN) hold the components the numpy kNN gives."""
+    rng = np.random.default_rng(13)
+    x = _sparse_fingerprints(rng, 300, 40, 0.2)
+    positions = rng.uniform(0, 60, (300, 2))
+    db = wfx.FingerprintDatabase(x, positions, [f"ap{i}" for i in range(40)], wfx.FixSettings(),
+                                 ap_ratio=rng.uniform(0.5, 2.0, 40))
+    q = _sparse_fingerprints(rng, 25, 40, 0.25)
+    s = db.settings
+    best_n, d_n, w_n = wm.knn(wm.shared_dissimilarity_numpy(q, db.index, s.penalty_db), s.k, s.temperature_db)
+    best_c, d_c, w_c = wfx.nearest(q, db)
+    np.testing.assert_allclose(w_c, w_n, atol=1e-9)
+    np.testing.assert_allclose(wfx.fix_sds(d_c[:, 0], s), wfx.fix_sds(d_n[:, 0], s), atol=1e-9)
+    np.testing.assert_allclose(positions[best_c][w_n > 0], positions[best_n][w_n > 0])
+    expected = (w_n[:, :, None] * positions[best_n]).sum(1) / w_n.sum(1, keepdims=True)
+    np.testing.assert_allclose(wfx.locate_scans(q, db), expected, atol=1e-9)
+
+
+def test_fix_settings_defaults_are_the_compiled_matcher_defaults():
+    from indoorloc.wifi import SharedApMatcherOptions
+
+    o, s = SharedApMatcherOptions(), wfx.FixSettings()
+    assert (s.penalty_db, s.strength_scale_db, s.k, s.temperature_db) == (
+        o.penalty_db, o.strength_scale_db, o.k, o.temperature_db) == (160.0, 5.0, 20, 3.0)
+    assert o.replace(k=5).k == 5 and o.to_dict()["penalty_db"] == 160.0
+    with pytest.raises(ValueError, match="temperature_db"):
+        o.replace(temperature_db=0.0)
+    with pytest.raises(ValueError, match="strength_scale_db"):
+        SharedApMatcherOptions(strength_scale_db=0.5)
+
+
+@pytest.mark.parametrize("bad, match", [
+    (np.full((2, 3), np.inf), "reference_rss_dbm"),
+    (np.full((2, 3), 5e3), "reference_rss_dbm"),
+    ("abc", "reference_rss_dbm"),
+])
+def test_compiled_matcher_rejects_bad_references(bad, match):
+    from indoorloc.wifi import SharedApMatcher
+
+    with pytest.raises(ValueError, match=match):
+        SharedApMatcher(bad)
+
+
+def test_compiled_matcher_rejects_bad_queries_and_weights():
+    from indoorloc.wifi import SharedApMatcher
+
+    x = np.full((4, 3), -60.0)
+    m = SharedApMatcher(x)
+    with pytest.raises(ValueError, match="queries_dbm"):
+        m.nearest(np.full((1, 4), -60.0))
+    with pytest.raises(ValueError, match="queries_dbm"):
+        m.parts(np.array([[-60.0, np.inf, nan]]))
+    with pytest.raises(ValueError, match="ap_weights"):
+        SharedApMatcher(x, np.array([1.0, -1.0, 1.0]))
+    with pytest.raises(ValueError, match="num_threads"):
+        m.nearest(x, num_threads=1.5)
+    q = x.copy()
+    m.nearest(q, num_threads=2)
+    assert np.array_equal(q, x)                   # inputs not modified
+
+
+# --- the WiFi-only baseline of `indoorloc wifi evaluate` ("shared_knn") ---
+
+
+def test_knn_positions_votes_the_floor_then_averages_on_it():
+    positions = np.array([[0.0, 0.0], [10.0, 0.0], [0.0, 10.0], [5.0, 5.0]])
+    floors = np.array([1, 2, 2, 1])
+    best = np.array([[0, 1, 2, 3], [3, 0, 1, 2], [1, 2, 0, 3]])
+    w = np.array([[1.0, 0.4, 0.4, 0.1],        # floor 1: 1.1, floor 2: 0.8 -> floor 1, mean of refs 0 and 3
+                  [0.0, 0.0, 0.0, 0.0],        # nothing shared: mean position, the commonest floor (tie: lowest)
+                  [1.0, 1.0, 0.5, 0.5]])       # floor 2: 2.0
+    pos, fl = wm.knn_positions(best, w, positions, floors)
+    np.testing.assert_allclose(pos[0], (1.0 * positions[0] + 0.1 * positions[3]) / 1.1)
+    np.testing.assert_allclose(pos[1], positions.mean(axis=0))
+    np.testing.assert_allclose(pos[2], (positions[1] + positions[2]) / 2)
+    assert fl.tolist() == [1, 1, 2] and fl.dtype == np.int64
+
+
+def test_block_mean_averages_only_the_readings_heard():
+    from indoorloc.experiments import wifi_evaluate as we
+
+    x = np.array([[-50.0, nan, nan], [-60.0, -70.0, nan], [nan, nan, nan], [-40.0, nan, nan]])
+    out = we.block_mean(x, 2)
+    np.testing.assert_allclose(out[0, :2], [-55.0, -70.0])
+    assert np.isnan(out[0, 2]) and np.isnan(out[1, 1:]).all() and out[1, 0] == -40.0
+
+
+def test_shared_knn_in_wifi_evaluate_on_a_synthetic_two_floor_dataset():
+    """Evaluation of "shared_knn" beside "wknn": same test scans, CV on the training points only."""
+    from indoorloc.experiments import wifi_evaluate as we
+    from indoorloc.io.wifi_datasets import FingerprintDataset, FingerprintSplit
+
+    rng = np.random.default_rng(5)
+    aps = rng.uniform(0, 30, (12, 2))
+    ap_floor = np.repeat([0, 1], 6)
+
+    def scans(points, floors, reps):
+        xy = np.repeat(points, reps, axis=0)
+        fl = np.repeat(floors, reps)
+        d = np.hypot(*(xy[:, None] - aps[None]).transpose(2, 0, 1))
+        rss = -40 - 25 * np.log10(np.maximum(d, 1)) - 15 * (fl[:, None] != ap_floor[None]) + rng.normal(0, 2, d.shape)
+        rss = np.where(rss > -85, rss, 100.0)          # UJI-style sentinel for "not heard"
+        ids = np.repeat(np.arange(len(points)), reps)
+        return FingerprintSplit(rss, xy, fl, ids)
+
+    grid = np.array([[x, y] for x in range(0, 30, 5) for y in range(0, 30, 5)], float)
+    train_pts = np.vstack([grid, grid])
+    train_fl = np.repeat([0, 1], len(grid))
+    test_pts = rng.uniform(0, 25, (20, 2))
+    test_fl = rng.integers(0, 2, 20)
+    ds = FingerprintDataset("synthetic", scans(train_pts, train_fl, 4), scans(test_pts, test_fl, 2), 100.0,
+                            [f"ap{i}" for i in range(12)])
+    hyper = we.cross_validate(ds, k=1, max_points=6, methods=["shared_knn"])
+    assert hyper.shared["k"] in we.SHARED_GRID["k"] and hyper.shared["penalty_db"] in we.SHARED_GRID["penalty_db"]
+    res = we.evaluate(ds, 1, hyper, methods=["wknn", "shared_knn"])
+    assert set(res) == {"wknn", "shared_knn"}
+    r = res["shared_knn"]
+    assert r.errors_m.shape == (40,) and np.isfinite(r.errors_m).all()
+    assert r.errors_m.mean() < 6.0 and r.floor_hit.mean() > 0.9     # points 5 m apart, floors 15 dB apart
+    assert "shared_knn" in we.markdown(res, "t")
+
+
+def test_wifi_evaluate_cli_reports_shared_knn_beside_wknn(shared_data, tmp_path, capsys):
+    """`indoorloc wifi evaluate --methods wknn shared_knn --json`: the old keys stay, shared_knn is added."""
+    import json
+
+    from indoorloc import cli
+
+    root = shared_data / "wifi"
+    if not root.is_dir():
+        pytest.skip(f"no WiFi datasets under {root}")
+    out = tmp_path / "w.json"
+    assert cli.main(["wifi", "evaluate", "--data-root", str(root), "--dataset", "corridor", "--scans", "1",
+                     "--cv-points", "4", "--threads", "1", "--quiet", "--methods", "wknn", "shared_knn",
+                     "--json", str(out)]) == 0
+    entry = json.loads(out.read_text())["corridor/k=1"]
+    assert set(entry["hyper"]) == {"model", "k", "shared_knn"}
+    assert set(entry["hyper"]["shared_knn"]) == {"penalty_db", "strength_scale_db", "k", "temperature_db"}
+    rows = {r["method"]: r for r in entry["results"]}
+    assert set(rows) == {"wknn", "shared_knn"}
+    assert {"n", "mean_m", "median_m", "p90_m", "floor_hit_rate"} <= set(rows["shared_knn"])
+    assert rows["shared_knn"]["n"] == rows["wknn"]["n"] and 0 < rows["shared_knn"]["mean_m"] < 5
+    assert "| shared_knn |" in capsys.readouterr().out
+    assert cli.main(["wifi", "evaluate", "--data-root", str(root), "--dataset", "corridor", "--scans", "1",
+                     "--quiet", "--methods", "nope"]) != 0
+    assert "argument 'methods': unknown ['nope']" in capsys.readouterr().err

@@ -1,5 +1,5 @@
 # Stubs of indoorloc._core.wifi: signal maps, Delaunay interpolation, RSS model, tracker.
-from typing import Dict, List, Optional, Tuple
+from typing import Any, Dict, List, Optional, Tuple
 
 import numpy as np
 import numpy.typing as npt
@@ -161,3 +161,39 @@ class FingerprintLocator:
     def num_access_points(self) -> int: ...
     @property
     def has_variances(self) -> bool: ...
+
+class SharedApMatcherOptions:
+    """Fields and defaults: read them from the compiled struct (``SharedApMatcherOptions().to_dict()``);
+    they are not restated here."""
+    penalty_db: float
+    strength_scale_db: float
+    k: int
+    temperature_db: float
+    def __init__(self, **fields: Any) -> None: ...
+    def replace(self, **fields: Any) -> "SharedApMatcherOptions": ...
+    def to_dict(self) -> Dict[str, Any]: ...
+
+class SharedApMatcher:
+    """Shared-AP dissimilarity and kNN (NaN = not heard)."""
+
+    def __init__(
+        self,
+        reference_rss_dbm: _ArrayLike,
+        ap_weights: Optional[_ArrayLike] = None,
+        options: Optional[SharedApMatcherOptions] = None,
+    ) -> None: ...
+    def parts(self, queries_dbm: _ArrayLike, num_threads: int = 1) -> Tuple[_F64, _F64]:
+        """(rms_db (Q, N), unshared (Q, N))."""
+        ...
+    def dissimilarity(self, queries_dbm: _ArrayLike, num_threads: int = 1) -> _F64: ...
+    def nearest(self, queries_dbm: _ArrayLike, num_threads: int = 1) -> Tuple[_I64, _F64, _F64]:
+        """(index (Q, k), distance_db (Q, k), weight (Q, k)), best first."""
+        ...
+    @property
+    def options(self) -> SharedApMatcherOptions: ...
+    @property
+    def num_references(self) -> int: ...
+    @property
+    def num_access_points(self) -> int: ...
+    @property
+    def num_heard(self) -> int: ...

@@ -24,7 +24,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         res = sweep.run_sweep(sweep_tasks.wifi_case, {"case": [f"{n}/k={k}" for n, k in cases]},
                               scheduler=args.scheduler,
                               shared={"root": str(root), "cv_points": args.cv_points, "cv_seed": args.seed,
-                                      "threads": args.threads})
+                                      "threads": args.threads, "methods": args.methods})
         if res.failed:
             raise RuntimeError(f"indoorloc: case {res.failed[0]['params']['case']} failed: {res.failed[0]['error']}")
         outputs = [(row["markdown"], row["entry"]) for row in res.rows]
@@ -34,7 +34,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         outputs = []
         for i, (name, k) in enumerate(cases, 1):
             with progress.stage(f"wifi evaluate: [{i}/{len(cases)}] {name}, {k} scan(s) per estimate"):
-                outputs.append(we.evaluate_case(root, name, k, args.cv_points, args.seed, args.threads))
+                outputs.append(we.evaluate_case(root, name, k, args.cv_points, args.seed, args.threads,
+                                                methods=args.methods))
     report = {}
     for (name, k), (text, entry) in zip(cases, outputs):
         print(text)
@@ -68,6 +69,8 @@ def add_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
     e = wsub.add_parser("evaluate", help="every method on real datasets", parents=[quiet_parent()])
     e.add_argument("--dataset", nargs="+", default=["uji", "lecture_theatre", "office", "corridor"])
     e.add_argument("--scans", nargs="+", type=int, default=[1, 10], help="scans per estimate")
+    e.add_argument("--methods", nargs="+", default=None,
+                   help="only these methods (default: all: ml mmse tracker nnss nnss_avg wknn horus shared_knn)")
     e.add_argument("--data-root", default=None, help="default: $INDOORLOC_WIFI_DATA or ../shared/data/wifi")
     e.add_argument("--cv-points", type=int, default=24, help="held-out training points for CV")
     e.add_argument("--threads", type=int, default=0, help="0: all cores (results do not depend on it)")

@@ -10,7 +10,7 @@ them themselves.
 from __future__ import annotations
 
 import hashlib
-from typing import Any, Dict, Mapping, Optional
+from typing import Any, Dict, Mapping, Optional, Sequence
 
 import numpy as np
 
@@ -76,13 +76,13 @@ def analog_table1_realisation(params: Mapping[str, Any], seed: int, table1_kwarg
 
 
 def wifi_case(params: Mapping[str, Any], seed: int, root: str, cv_points: int, cv_seed: int,
-              threads: int = 0) -> Dict[str, Any]:
+              threads: int = 0, methods: Optional[Sequence[str]] = None) -> Dict[str, Any]:
     """One ``wifi evaluate`` case ``params["case"]`` = "dataset/k=K" on a worker: its markdown and
     JSON entry (``wifi_evaluate.evaluate_case``; the experiment's own CV seed)."""
     from indoorloc.experiments import wifi_evaluate
 
     name, k = str(params["case"]).split("/k=")
-    text, entry = wifi_evaluate.evaluate_case(root, name, int(k), cv_points, cv_seed, threads)
+    text, entry = wifi_evaluate.evaluate_case(root, name, int(k), cv_points, cv_seed, threads, methods=methods)
     return {"markdown": text, "entry": entry}
 
 

@@ -10,10 +10,16 @@ Every method runs on a dataset's train/test split:
 - ``nnss`` (RADAR), ``nnss_avg`` (mean of the k nearest points), ``horus`` (Gaussian likelihood
   over reference points): on the signal map's per-point statistics;
 - ``wknn``: weighted k nearest neighbours on the raw training scans.
+- ``shared_knn``: the fusion tracker's WiFi matcher (``indoorloc.wifi_matcher``, C++
+  ``SharedApMatcher``) on the raw training scans, "not heard" left out rather than replaced by a
+  floor value: RMS RSS difference over the APs both heard + c x the unshared fraction, the k
+  nearest weighted exp(-(d - d_min) / T), the floor by weighted vote. AP reliability weights are
+  off (they need references of several walks at one place); c, β, k and T by cross-validation.
 
 Two protocols: one scan per estimate, and k consecutive scans at a static test point (the ML
 method multiplies the k likelihoods; the baselines match the averaged scan). Hyper-parameters
-(variance floor and per-AP cap of the model, k of the neighbour methods) are chosen by
+(variance floor and per-AP cap of the model, k of the neighbour methods; c, β, k, T of
+``shared_knn``) are chosen by
 leave-one-reference-point-out cross-validation on the training data only; test files never
 influence them.
 """
@@ -27,11 +33,39 @@ from typing import Dict, Iterable, List, Optional, Sequence
 import numpy as np
 
 from indoorloc import metrics, wifi
+from indoorloc import wifi_matcher as wm
 from indoorloc.io.wifi_datasets import FingerprintDataset, FingerprintSplit
 from indoorloc.progress import progress
 
 NOT_HEARD_DBM = -105.0
-METHODS = ("ml", "mmse", "tracker", "nnss", "nnss_avg", "wknn", "horus")
+METHODS = ("ml", "mmse", "tracker", "nnss", "nnss_avg", "wknn", "horus", "shared_knn")
+#: Cross-validation grid of shared_knn: c [dB], β [dB], k, T [dB] (fixed in advance; the fusion
+#: defaults 160 / 5 / 20 / 3 are inside it).
+SHARED_GRID = {"penalty_db": (10.0, 20.0, 40.0, 80.0, 160.0), "strength_scale_db": (0.0, 5.0),
+               "k": (1, 2, 3, 4, 5, 6, 8, 12, 20, 30, 50, 80, 120, 200), "temperature_db": (1.0, 3.0, 10.0, 1e3)}
+
+
+def _shared_defaults() -> Dict[str, float]:
+    return wifi.SharedApMatcherOptions().to_dict()
+
+
+def not_heard_as_nan(rss_dbm: np.ndarray, sentinel: float) -> np.ndarray:
+    """The dataset's RSS (S, K) [dBm] with its "not heard" sentinel replaced by NaN."""
+    x = np.array(rss_dbm, dtype=float)
+    x[x == sentinel] = np.nan
+    return x
+
+
+def block_mean(x: np.ndarray, k: int) -> np.ndarray:
+    """Per AP, the mean of the readings heard in each block of k consecutive rows (NaN if none)."""
+    if k == 1:
+        return x
+    b = x.reshape(-1, k, x.shape[1])
+    heard = np.isfinite(b)
+    n = heard.sum(axis=1)
+    total = np.where(heard, b, 0.0).sum(axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(n > 0, total / np.maximum(n, 1), np.nan)
 
 
 @dataclass
@@ -43,13 +77,15 @@ class Hyper:
     k: Dict[str, int] = field(default_factory=lambda: {"nnss_avg": 4, "wknn": 5, "horus": 4})
     #: Per model-based method ("ml", "mmse"): (variance floor, cap), when they differ.
     model: Dict[str, tuple] = field(default_factory=dict)
+    #: shared_knn: penalty_db, strength_scale_db, k, temperature_db (default: the C++ defaults).
+    shared: Dict[str, float] = field(default_factory=_shared_defaults)
 
     def for_method(self, method: str) -> "Hyper":
         """These settings with the model's (variance floor, cap) chosen for ``method``."""
         if method not in self.model:
             return self
         vf, cap = self.model[method]
-        return Hyper(variance_floor_db2=vf, max_term=cap, k=self.k)
+        return Hyper(variance_floor_db2=vf, max_term=cap, k=self.k, shared=self.shared)
 
 
 @dataclass
@@ -127,7 +163,20 @@ class MethodSet:
             ),
         }
         self.options = wifi.tracker_options(num_starts=5, start_iterations=25)
+        self.shared_index = wm.ReferenceIndex.build(not_heard_as_nan(train.rss_dbm[rows], sentinel), None,
+                                                    hyper.shared["strength_scale_db"])
+        self.shared_positions = train.positions_m[rows]
+        self.shared_floors = train.floors[rows]
         self._posterior = None  # built on first use (grid over the hull)
+
+    def locate_shared(self, raw_rss_dbm: np.ndarray, k: int) -> tuple:
+        """shared_knn: positions (G, 2) and floors (G,) of blocks of k consecutive raw scans
+        (the dataset's sentinel for "not heard"), each block's readings averaged per AP heard."""
+        h = self.hyper.shared
+        q = block_mean(not_heard_as_nan(raw_rss_dbm, self.sentinel), k)
+        best, _, w = wm.shared_knn(q, self.shared_index, h["penalty_db"], int(h["k"]), h["temperature_db"],
+                                   self.num_threads)
+        return wm.knn_positions(best, w, self.shared_positions, self.shared_floors)
 
     def prepare(self, rss_dbm: np.ndarray) -> np.ndarray:
         return self.map.prepare_scans(rss_dbm, self.sentinel, NOT_HEARD_DBM)
@@ -167,13 +216,19 @@ def cross_validate(
     quiet_label: str = "cv",
     max_estimates_per_point: int = 24,
     num_threads: int = 1,
+    methods: Optional[Sequence[str]] = None,
 ) -> Hyper:
     """Leave-one-reference-point-out over (a seeded subset of) the training points.
 
     For each held-out point, every candidate setting is fitted on the other points' scans and
     scored on the held-out point's scans (blocks of k). Returns the setting with the lowest mean
-    error per method.
+    error per method (averaged over the held-out points). ``methods``: tune only what these need
+    (default: every method).
     """
+    methods = METHODS if methods is None else methods
+    tune_model = any(m in methods for m in ("ml", "mmse", "tracker"))
+    tune_k = any(m in methods for m in ("nnss_avg", "wknn", "horus"))
+    shared_err: Dict[tuple, List[float]] = {}
     train = dataset.train
     points = np.unique(train.point_ids)
     rng = np.random.default_rng(seed)
@@ -189,22 +244,51 @@ def cross_validate(
         if test_rows.size == 0:
             continue
         truth = train.positions_m[test_rows].reshape(-1, k, 2)[:, 0]
-        for vf, cap in model_grid:
+        if "shared_knn" in methods:
+            _shared_cv_point(train, rows, test_rows, k, dataset.not_heard_sentinel, truth, shared_err, num_threads)
+        for vf, cap in (model_grid if tune_model else ()):
             ms = MethodSet(train, dataset.not_heard_sentinel, Hyper(vf, cap), rows=rows, num_threads=num_threads)
             prepared = ms.prepare(train.rss_dbm[test_rows])
             for m in model_err:
                 pos, _ = ms.locate(m, prepared, k)
                 model_err[m][(vf, cap)].append(np.linalg.norm(pos - truth, axis=1).mean())
-        for kk in k_grid:
+        for kk in (k_grid if tune_k else ()):
             ms = MethodSet(train, dataset.not_heard_sentinel, Hyper(4.0, np.inf, {"nnss_avg": kk, "wknn": kk, "horus": kk}), rows=rows)
             prepared = ms.prepare(train.rss_dbm[test_rows])
             for m in k_err:
                 pos, _ = ms.locate(m, prepared, k)
                 k_err[m][kk].append(np.linalg.norm(pos - truth, axis=1).mean())
-    best_k = {m: min(k_grid, key=lambda kk: np.mean(k_err[m][kk])) for m in k_err}
-    model_best = {m: min(model_grid, key=lambda g: np.mean(model_err[m][g])) for m in model_err}
+    default = Hyper()
+    best_k = ({m: min(k_grid, key=lambda kk: np.mean(k_err[m][kk])) for m in k_err} if tune_k else default.k)
+    model_best = ({m: min(model_grid, key=lambda g: np.mean(model_err[m][g])) for m in model_err} if tune_model
+                  else {m: (default.variance_floor_db2, default.max_term) for m in model_err})
+    shared = default.shared
+    if shared_err:
+        c, beta, kk, temp = min(shared_err, key=lambda g: np.mean(shared_err[g]))
+        shared = {"penalty_db": c, "strength_scale_db": beta, "k": int(kk), "temperature_db": temp}
     return Hyper(variance_floor_db2=model_best["ml"][0], max_term=model_best["ml"][1], k=best_k,
-                 model={m: model_best[m] for m in model_best})
+                 model={m: model_best[m] for m in model_best}, shared=shared)
+
+
+def _shared_cv_point(train: FingerprintSplit, rows: np.ndarray, test_rows: np.ndarray, k: int, sentinel: float,
+                     truth: np.ndarray, err: Dict[tuple, List[float]], num_threads: int) -> None:
+    """shared_knn's errors on one held-out point for every point of SHARED_GRID (appended to
+    ``err[(c, β, k, T)]``): one (rms, u) per β, then every c, k and T from it."""
+    queries = block_mean(not_heard_as_nan(train.rss_dbm[test_rows], sentinel), k)
+    ref = not_heard_as_nan(train.rss_dbm[rows], sentinel)
+    pos, floors = train.positions_m[rows], train.floors[rows]
+    k_max = max(SHARED_GRID["k"])
+    for beta in SHARED_GRID["strength_scale_db"]:
+        index = wm.ReferenceIndex.build(ref, None, beta)
+        rms, u = wm.shared_dissimilarity(queries, index, 0.0, parts=True, num_threads=num_threads)
+        for c in SHARED_GRID["penalty_db"]:
+            best, d, _ = wm.knn(rms + c * u, k_max, 1.0)
+            for temp in SHARED_GRID["temperature_db"]:
+                with np.errstate(invalid="ignore"):
+                    w = np.where(np.isfinite(d), np.exp(-(d - d[:, :1]) / temp), 0.0)
+                for kk in SHARED_GRID["k"]:
+                    p, _ = wm.knn_positions(best[:, :kk], w[:, :kk], pos, floors)
+                    err.setdefault((c, beta, kk, temp), []).append(float(np.linalg.norm(p - truth, axis=1).mean()))
 
 
 def evaluate(
@@ -234,9 +318,13 @@ def evaluate(
         if key not in fitted:
             fitted[key] = MethodSet(dataset.train, dataset.not_heard_sentinel, h, num_threads=num_threads)
         ms = fitted[key]
-        prepared = ms.prepare(dataset.test.rss_dbm[rows])
-        start = time.perf_counter()
-        pos, floors = ms.locate(method, prepared, k)
+        if method == "shared_knn":  # raw scans: "not heard" is not replaced by a floor value
+            start = time.perf_counter()
+            pos, floors = ms.locate_shared(dataset.test.rss_dbm[rows], k)
+        else:
+            prepared = ms.prepare(dataset.test.rss_dbm[rows])
+            start = time.perf_counter()
+            pos, floors = ms.locate(method, prepared, k)
         elapsed = time.perf_counter() - start
         results[method] = MethodResult(
             method, np.linalg.norm(pos - truth, axis=1), np.asarray(floors) == truth_floor, elapsed
@@ -244,19 +332,31 @@ def evaluate(
     return results
 
 
-def evaluate_case(root, name: str, k: int, cv_points: int, seed: int, num_threads: int = 0):
+def evaluate_case(root, name: str, k: int, cv_points: int, seed: int, num_threads: int = 0,
+                  methods: Optional[Sequence[str]] = None):
     """One case of ``indoorloc wifi evaluate``: dataset ``name`` under ``root`` with ``k`` scans per
-    estimate, hyper-parameters by cross-validation on its training points. Returns (markdown,
-    JSON entry {"hyper", "results"})."""
+    estimate, hyper-parameters by cross-validation on its training points. ``methods``: a subset
+    of METHODS (default: all; the tracker only with k > 1). Returns (markdown, JSON entry
+    {"hyper": {"model", "k", "shared_knn"}, "results"})."""
     from indoorloc.io.wifi_datasets import load_wifi_dataset
 
+    if methods is not None:
+        unknown = [m for m in methods if m not in METHODS]
+        if unknown:
+            raise ValueError(f"indoorloc: argument 'methods': unknown {unknown} (choose from {', '.join(METHODS)})")
+        methods = [m for m in methods if k > 1 or m != "tracker"]
     ds = load_wifi_dataset(name, root)
     hyper = cross_validate(ds, k=k, max_points=cv_points, seed=seed, quiet_label=f"cv {name} k={k}",
-                           num_threads=num_threads)
-    results = evaluate(ds, scans_per_estimate=k, hyper=hyper, num_threads=num_threads)
-    title = f"{ds.name}, {k} scan(s) per estimate (CV: model (variance floor, cap) {hyper.model}, k {hyper.k})"
-    return markdown(results, title), {"hyper": {"model": hyper.model, "k": hyper.k},
+                           num_threads=num_threads, methods=methods)
+    results = evaluate(ds, scans_per_estimate=k, hyper=hyper, num_threads=num_threads, methods=methods)
+    title = (f"{ds.name}, {k} scan(s) per estimate (CV: model (variance floor, cap) {hyper.model}, k {hyper.k}, "
+             f"shared_knn {_shared_text(hyper.shared)})")
+    return markdown(results, title), {"hyper": {"model": hyper.model, "k": hyper.k, "shared_knn": dict(hyper.shared)},
                                       "results": [r.row() for r in results.values()]}
+
+
+def _shared_text(h: Dict[str, float]) -> str:
+    return f"c {h['penalty_db']:g} dB, beta {h['strength_scale_db']:g} dB, k {int(h['k'])}, T {h['temperature_db']:g} dB"
 
 
 def markdown(results: Dict[str, MethodResult], title: str) -> str:

@@ -96,7 +96,7 @@ def _fixes_of_queries(times_s: np.ndarray, rss_dbm: np.ndarray, database: wfx.Fi
     k = min(s.k, database.n_scans)
     if times_s.size == 0:
         return fusion.Fixes.from_arrays(np.zeros(0), np.zeros((0, k, 2)), np.zeros((0, k)), np.zeros((0, k)))
-    best, d_best, weights = wm.knn(wfx.dissimilarity(rss_dbm, database), k, s.temperature_db)
+    best, d_best, weights = wfx.nearest(rss_dbm, database)  # fixes_for_walk's matcher
     if database.weights is not None:  # grown fingerprints count less (as fixes_for_walk)
         weights = weights * database.weights[best]
     floors = database.floors[best] if with_floors else None

@@ -1,0 +1,228 @@
+#include "indoorloc/wifi/shared_ap_matcher.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace indoorloc::wifi {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+const double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Sparse random fingerprints: each entry heard with probability `heard` at -95..-30 dBm.
+SharedApRowMatrixXd RandomFingerprints(Eigen::Index rows, Eigen::Index aps, double heard, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  SharedApRowMatrixXd x(rows, aps);
+  for (Eigen::Index i = 0; i < rows; ++i) {
+    for (Eigen::Index j = 0; j < aps; ++j) x(i, j) = unit(rng) < heard ? -95.0 + 65.0 * unit(rng) : kNaN;
+  }
+  return x;
+}
+
+// Eq. (1) of the header written out per pair, straight from the definition.
+std::pair<double, double> BruteForce(const SharedApRowMatrixXd& q, Eigen::Index qi, const SharedApRowMatrixXd& r,
+                                     Eigen::Index ri, const Eigen::VectorXd& g, double beta) {
+  auto f = [beta](double x) { return beta > 0 ? std::exp((x + 40.0) / beta) : 1.0; };
+  double shared_w = 0, sq = 0, query_total = 0, ref_only = 0;
+  for (Eigen::Index i = 0; i < q.cols(); ++i) {
+    const bool a_heard = !std::isnan(q(qi, i)), b_heard = !std::isnan(r(ri, i));
+    if (a_heard) query_total += g[i] * f(q(qi, i));
+    if (b_heard && !a_heard) ref_only += g[i] * f(r(ri, i));
+    if (a_heard && b_heard) {
+      const double w = g[i] * f(q(qi, i));
+      shared_w += w;
+      sq += w * (q(qi, i) - r(ri, i)) * (q(qi, i) - r(ri, i));
+    }
+  }
+  if (!(shared_w > 0)) return {kInf, 1.0};
+  return {std::sqrt(sq / shared_w), std::clamp(1.0 - shared_w / (query_total + ref_only), 0.0, 1.0)};
+}
+
+Eigen::VectorXd RandomWeights(Eigen::Index aps, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(0.2, 2.0);
+  Eigen::VectorXd g(aps);
+  for (Eigen::Index i = 0; i < aps; ++i) g[i] = unit(rng);
+  return g;
+}
+
+TEST(SharedApMatcher, DefaultsAreTheFusionFixSettings) {
+  const SharedApMatcherOptions o;
+  EXPECT_EQ(o.penalty_db, 160.0);
+  EXPECT_EQ(o.strength_scale_db, 5.0);
+  EXPECT_EQ(o.k, 20);
+  EXPECT_EQ(o.temperature_db, 3.0);
+  std::string error;
+  EXPECT_TRUE(o.IsValid(&error)) << error;
+}
+
+TEST(SharedApMatcher, PartsMatchBruteForce) {
+  const SharedApRowMatrixXd refs = RandomFingerprints(60, 25, 0.25, 1);
+  const SharedApRowMatrixXd queries = RandomFingerprints(17, 25, 0.3, 2);
+  const Eigen::VectorXd g = RandomWeights(25, 3);
+  for (double beta : {0.0, 5.0}) {
+    SharedApMatcherOptions options;
+    options.strength_scale_db = beta;
+    options.penalty_db = 37.0;
+    const SharedApMatcher matcher(refs, g, options);
+    const SharedApParts parts = matcher.Parts(queries);
+    const SharedApRowMatrixXd d = matcher.Dissimilarity(queries);
+    int shared = 0, unshared = 0;
+    for (Eigen::Index q = 0; q < queries.rows(); ++q) {
+      for (Eigen::Index j = 0; j < refs.rows(); ++j) {
+        const auto [rms, u] = BruteForce(queries, q, refs, j, g, beta);
+        if (std::isinf(rms)) {
+          ++unshared;
+          EXPECT_TRUE(std::isinf(parts.rms_db(q, j)));
+          EXPECT_EQ(parts.unshared(q, j), 1.0);
+          EXPECT_TRUE(std::isinf(d(q, j)));
+        } else {
+          ++shared;
+          EXPECT_NEAR(parts.rms_db(q, j), rms, 1e-9);
+          EXPECT_NEAR(parts.unshared(q, j), u, 1e-12);
+          EXPECT_NEAR(d(q, j), rms + 37.0 * u, 1e-9);
+        }
+      }
+    }
+    EXPECT_GT(shared, 100);  // both cases occur in the random data
+    EXPECT_GT(unshared, 10);
+  }
+}
+
+TEST(SharedApMatcher, NearestMatchesSortedBruteForce) {
+  const SharedApRowMatrixXd refs = RandomFingerprints(80, 30, 0.2, 4);
+  const SharedApRowMatrixXd queries = RandomFingerprints(40, 30, 0.2, 5);
+  const Eigen::VectorXd g = RandomWeights(30, 6);
+  SharedApMatcherOptions options;
+  options.k = 7;
+  options.temperature_db = 4.0;
+  const SharedApMatcher matcher(refs, g, options);
+  const SharedApNeighbours nn = matcher.Nearest(queries);
+  ASSERT_EQ(nn.index.rows(), 40);
+  ASSERT_EQ(nn.index.cols(), 7);
+  for (Eigen::Index q = 0; q < queries.rows(); ++q) {
+    std::vector<std::pair<double, Eigen::Index>> all;
+    for (Eigen::Index j = 0; j < refs.rows(); ++j) {
+      const auto [rms, u] = BruteForce(queries, q, refs, j, g, options.strength_scale_db);
+      if (std::isfinite(rms)) all.emplace_back(rms + options.penalty_db * u, j);
+    }
+    std::sort(all.begin(), all.end());
+    for (Eigen::Index m = 0; m < 7; ++m) {
+      if (m < static_cast<Eigen::Index>(all.size())) {
+        EXPECT_EQ(nn.index(q, m), all[m].second) << "query " << q << " rank " << m;
+        EXPECT_NEAR(nn.distance_db(q, m), all[m].first, 1e-9);
+        EXPECT_NEAR(nn.weight(q, m), std::exp(-(all[m].first - all[0].first) / 4.0), 1e-12);
+      } else {
+        EXPECT_TRUE(std::isinf(nn.distance_db(q, m)));
+        EXPECT_EQ(nn.weight(q, m), 0.0);
+        EXPECT_GE(nn.index(q, m), 0);
+        EXPECT_LT(nn.index(q, m), refs.rows());
+      }
+    }
+  }
+}
+
+TEST(SharedApMatcher, QueryHearingNothingKnownGetsInfiniteDistancesAndDistinctFillers) {
+  SharedApRowMatrixXd refs(3, 2);
+  refs << -50, kNaN, -60, kNaN, -70, kNaN;
+  SharedApRowMatrixXd queries(2, 2);
+  queries << kNaN, -40, kNaN, kNaN;
+  SharedApMatcherOptions options;
+  options.k = 5;  // clamped to 3
+  const SharedApMatcher matcher(refs, Eigen::VectorXd(), options);
+  const SharedApNeighbours nn = matcher.Nearest(queries);
+  ASSERT_EQ(nn.index.cols(), 3);
+  for (Eigen::Index q = 0; q < 2; ++q) {
+    for (Eigen::Index m = 0; m < 3; ++m) {
+      EXPECT_EQ(nn.index(q, m), m);
+      EXPECT_TRUE(std::isinf(nn.distance_db(q, m)));
+      EXPECT_EQ(nn.weight(q, m), 0.0);
+    }
+  }
+}
+
+TEST(SharedApMatcher, IdenticalFingerprintIsAtZero) {
+  const SharedApRowMatrixXd refs = RandomFingerprints(20, 12, 0.5, 7);
+  const SharedApMatcher matcher(refs, Eigen::VectorXd());
+  const SharedApRowMatrixXd d = matcher.Dissimilarity(refs);
+  for (Eigen::Index j = 0; j < refs.rows(); ++j) {
+    if (refs.row(j).array().isNaN().all()) continue;
+    EXPECT_NEAR(d(j, j), 0.0, 1e-9);
+  }
+}
+
+TEST(SharedApMatcher, ResultsDoNotDependOnThreadCount) {
+  const SharedApRowMatrixXd refs = RandomFingerprints(300, 40, 0.15, 8);
+  const SharedApRowMatrixXd queries = RandomFingerprints(150, 40, 0.15, 9);
+  const SharedApMatcher matcher(refs, RandomWeights(40, 10));
+  const SharedApNeighbours one = matcher.Nearest(queries, 1);
+  const SharedApRowMatrixXd d1 = matcher.Dissimilarity(queries, 1);
+  for (int threads : {2, 3, 8}) {
+    const SharedApNeighbours many = matcher.Nearest(queries, threads);
+    EXPECT_TRUE((one.index.array() == many.index.array()).all()) << threads;
+    // Bitwise equal (inf == inf holds), not merely close.
+    EXPECT_TRUE((one.distance_db.array() == many.distance_db.array()).all()) << threads;
+    EXPECT_TRUE((one.weight.array() == many.weight.array()).all()) << threads;
+    EXPECT_TRUE((d1.array() == matcher.Dissimilarity(queries, threads).array()).all()) << threads;
+  }
+}
+
+TEST(SharedApMatcher, RejectsBadInputNamingTheArgument) {
+  const SharedApRowMatrixXd refs = RandomFingerprints(5, 4, 0.5, 11);
+  auto message = [](auto fn) {
+    try {
+      fn();
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no exception");
+  };
+  SharedApMatcherOptions bad;
+  bad.temperature_db = 0.0;
+  EXPECT_NE(message([&] { SharedApMatcher m(refs, Eigen::VectorXd(), bad); }).find("temperature_db"),
+            std::string::npos);
+  bad = SharedApMatcherOptions();
+  bad.strength_scale_db = 0.5;
+  EXPECT_NE(message([&] { SharedApMatcher m(refs, Eigen::VectorXd(), bad); }).find("strength_scale_db"),
+            std::string::npos);
+  bad = SharedApMatcherOptions();
+  bad.k = 0;
+  EXPECT_NE(message([&] { SharedApMatcher m(refs, Eigen::VectorXd(), bad); }).find("k must be"),
+            std::string::npos);
+  SharedApRowMatrixXd inf_refs = refs;
+  inf_refs(2, 1) = kInf;
+  EXPECT_NE(message([&] { SharedApMatcher m(inf_refs, Eigen::VectorXd()); }).find("reference_rss_dbm"),
+            std::string::npos);
+  EXPECT_NE(message([&] { SharedApMatcher m(refs, Eigen::VectorXd::Ones(3)); }).find("ap_weights"),
+            std::string::npos);
+  EXPECT_NE(message([&] { SharedApMatcher m(refs, -Eigen::VectorXd::Ones(4)); }).find("ap_weights"),
+            std::string::npos);
+  const SharedApMatcher matcher(refs, Eigen::VectorXd());
+  EXPECT_NE(message([&] { matcher.Nearest(SharedApRowMatrixXd::Zero(2, 3)); }).find("queries_dbm"),
+            std::string::npos);
+  SharedApRowMatrixXd q = SharedApRowMatrixXd::Constant(1, 4, -50.0);
+  q(0, 3) = 5000.0;
+  EXPECT_NE(message([&] { matcher.Parts(q); }).find("queries_dbm"), std::string::npos);
+}
+
+TEST(SharedApMatcher, EmptyInputs) {
+  const SharedApMatcher no_refs(SharedApRowMatrixXd(0, 3), Eigen::VectorXd());
+  const SharedApNeighbours nn = no_refs.Nearest(SharedApRowMatrixXd::Constant(2, 3, -50.0));
+  EXPECT_EQ(nn.index.rows(), 2);
+  EXPECT_EQ(nn.index.cols(), 0);
+  const SharedApMatcher matcher(RandomFingerprints(4, 3, 0.5, 12), Eigen::VectorXd());
+  EXPECT_EQ(matcher.Dissimilarity(SharedApRowMatrixXd(0, 3)).rows(), 0);
+  EXPECT_EQ(matcher.Nearest(SharedApRowMatrixXd(0, 3)).index.rows(), 0);
+}
+
+}  // namespace
+}  // namespace indoorloc::wifi
