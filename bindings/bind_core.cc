@@ -9,6 +9,7 @@
 #include "indoorloc/core/interrupt.h"
 #include "indoorloc/core/validate.h"
 #include "numpy_args.h"
+#include "options_binding.h"
 
 namespace indoorloc::bindings {
 namespace {
@@ -170,22 +171,15 @@ Offspring counts of `n_runs` independent resamplings, run r using stream (seed, 
 Returns an (n_runs, N) int64 array. The result depends only on the seed, never on n_threads
 (0 = all cores). Used to check unbiasedness (mean count = N w) and compare scheme variances.)doc");
 
-  py::class_<ResamplingOptions>(m, "ResamplingOptions",
-                                "Options of adaptive resampling (resample when ESS < ess_threshold * N).")
-      .def(py::init([](const std::string& scheme, double ess_threshold) {
-             ResamplingOptions o;
-             o.scheme = ParseResamplingScheme(scheme);
-             o.ess_threshold = ess_threshold;
-             ValidateOptions(o);
-             return o;
-           }), py::arg("scheme") = "systematic", py::arg("ess_threshold") = 0.5)
+  py::class_<ResamplingOptions> resampling_options(
+      m, "ResamplingOptions",
+      "Options of adaptive resampling (resample when ESS < ess_threshold * N); fields by keyword.");
+  resampling_options
       .def_property("scheme", [](const ResamplingOptions& o) { return std::string(ToString(o.scheme)); },
-                    [](ResamplingOptions& o, const std::string& s) { o.scheme = ParseResamplingScheme(s); })
-      .def_readwrite("ess_threshold", &ResamplingOptions::ess_threshold)
-      .def("__repr__", [](const ResamplingOptions& o) {
-        return "ResamplingOptions(scheme='" + std::string(ToString(o.scheme)) +
-               "', ess_threshold=" + std::to_string(o.ess_threshold) + ")";
-      });
+                    [](ResamplingOptions& o, const std::string& s) { o.scheme = ParseResamplingScheme(s); },
+                    "'multinomial', 'stratified', 'systematic' or 'residual'.")
+      .def_readwrite("ess_threshold", &ResamplingOptions::ess_threshold, "Resample when ESS < this * N.");
+  BindOptionsProtocol(resampling_options, "ResamplingOptions", {"scheme", "ess_threshold"});
 
   py::class_<ResamplingSummary>(m, "ResamplingSummary", "What one adaptive resampling step did.")
       .def_readonly("resampled", &ResamplingSummary::resampled)

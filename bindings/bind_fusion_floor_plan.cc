@@ -15,6 +15,7 @@
 #include "indoorloc/core/validate.h"
 #include "indoorloc/fusion/floor_plan.h"
 #include "numpy_args.h"
+#include "options_binding.h"
 
 namespace indoorloc::bindings {
 
@@ -146,43 +147,21 @@ is a wall for ``FloorPlan.crosses_wall``.)doc")
           "Wall segments (W, 4) rows (x0, y0, x1, y1) [m] (a copy).")
       .def("__repr__", &GeometryRepr);
 
-  py::class_<FloorPlanOptions>(m, "FloorPlanOptions", R"doc(
-Options of the floor plan's index.
-
-Parameters
-----------
-cell_size_m : float, default 0
-    Side of the grid's square cells [m]; <= 0 chooses it per floor so that a cell holds about
-    ``target_edges_per_cell`` edges on average, bounded to [0.25, 1] m (a pedestrian step then
-    visits one to three cells) and to ``max_cells`` cells.
-target_edges_per_cell : float, default 2
-max_cells : int, default 4000000
-check_self_intersection : bool, default True
-    Reject rings whose edges cross each other (one indexed pass at construction).)doc")
-      .def(py::init([](double cell_size_m, double target_edges_per_cell, int max_cells,
-                       bool check_self_intersection) {
-             FloorPlanOptions o;
-             o.cell_size_m = cell_size_m;
-             o.target_edges_per_cell = target_edges_per_cell;
-             o.max_cells = max_cells;
-             o.check_self_intersection = check_self_intersection;
-             ValidateOptions(o);
-             return o;
-           }),
-           py::arg("cell_size_m") = 0.0, py::arg("target_edges_per_cell") = 2.0,
-           py::arg("max_cells") = 4'000'000, py::arg("check_self_intersection") = true)
-      .def_readwrite("cell_size_m", &FloorPlanOptions::cell_size_m)
-      .def_readwrite("target_edges_per_cell", &FloorPlanOptions::target_edges_per_cell)
-      .def_readwrite("max_cells", &FloorPlanOptions::max_cells)
-      .def_readwrite("check_self_intersection", &FloorPlanOptions::check_self_intersection)
-      .def("__repr__", [](const FloorPlanOptions& o) {
-        std::ostringstream out;
-        out << "FloorPlanOptions(cell_size_m=" << o.cell_size_m
-            << ", target_edges_per_cell=" << o.target_edges_per_cell
-            << ", max_cells=" << o.max_cells << ", check_self_intersection="
-            << (o.check_self_intersection ? "True" : "False") << ")";
-        return out.str();
-      });
+  py::class_<FloorPlanOptions> floor_plan_options(m, "FloorPlanOptions", R"doc(
+Options of the floor plan's index. Set fields by keyword: ``FloorPlanOptions(cell_size_m=0.5)``;
+defaults from ``FloorPlanOptions().to_dict()``; ``replace``, equality and pickling as for every
+Options class.)doc");
+  floor_plan_options
+      .def_readwrite("cell_size_m", &FloorPlanOptions::cell_size_m,
+                     "Side of the grid's square cells [m]; <= 0 chooses it per floor so that a cell holds "
+                     "about target_edges_per_cell edges on average, bounded to [0.25, 1] m and to max_cells.")
+      .def_readwrite("target_edges_per_cell", &FloorPlanOptions::target_edges_per_cell,
+                     "Mean edges per cell aimed at by the automatic cell size.")
+      .def_readwrite("max_cells", &FloorPlanOptions::max_cells, "Limit of a floor's grid cells.")
+      .def_readwrite("check_self_intersection", &FloorPlanOptions::check_self_intersection,
+                     "Reject rings whose edges cross each other (one indexed pass at construction).");
+  BindOptionsProtocol(floor_plan_options, "FloorPlanOptions",
+                      {"cell_size_m", "target_edges_per_cell", "max_cells", "check_self_intersection"});
 
   // pybind11 copies docstrings; these are assembled once here.
   static const std::string is_walkable_doc = std::string(R"doc(

@@ -13,6 +13,7 @@
 #include "indoorloc/network/kalman_smoother.h"
 #include "indoorloc/network/network_adjustment.h"
 #include "numpy_args.h"
+#include "options_binding.h"
 
 namespace indoorloc::bindings {
 
@@ -134,14 +135,15 @@ sgupt_epochs : (S,) int static epochs with constant gravity (SGUPT, paper §3.2)
 }  // namespace
 
 void BindNetwork(py::module_& m) {
-  py::class_<network::NetworkOptions>(m, "NetworkOptions", R"doc(
+  py::class_<network::NetworkOptions> network_options(m, "NetworkOptions", R"doc(
 Options of the network adjustment (see cpp/include/indoorloc/network/network_adjustment.h).
 discretization: "leapfrog" (paper §3.3; decouples even and odd epochs) or "trapezoidal".
 Noise densities: acc_noise_mps2_rthz [m/s^2/sqrt(Hz)], gyro_noise_radps_rthz [rad/s/sqrt(Hz)],
 random walks acc_bias_walk_mps2_rts, gyro_bias_walk_radps_rts, gravity_walk_mps2_rts [unit/sqrt(s)];
 sigmas of VEL, CUPT, ZUPT, GUPT, XOVER, VUPT, SGUPT; slow_parameter_stride (paper §4); solver
-tolerances; check_datum.)doc")
-      .def(py::init<>())
+tolerances; check_datum. Set fields by keyword (``NetworkOptions(sigma_gps_m=0.5)``); ``replace``,
+``to_dict``, equality and pickling as for every Options class.)doc");
+  network_options
       .def_property(
           "discretization",
           [](const network::NetworkOptions& o) {
@@ -208,10 +210,11 @@ tolerances; check_datum.)doc")
         std::string e;
         return o.IsValid(&e) ? std::string() : e;
       }, "'' when valid, else the reason.");
+  BindOptionsProtocol(network_options, "NetworkOptions");
 
-  py::class_<network::KalmanSmootherOptions>(m, "KalmanSmootherOptions",
-                                             "Initial standard deviations of the SSA filter and whether to smooth.")
-      .def(py::init<>())
+  py::class_<network::KalmanSmootherOptions> kalman_smoother_options(
+      m, "KalmanSmootherOptions", "Initial standard deviations of the SSA filter and whether to smooth; fields by keyword.");
+  kalman_smoother_options
       .def_readwrite("init_sigma_position_m", &network::KalmanSmootherOptions::init_sigma_position_m)
       .def_readwrite("init_sigma_velocity_mps", &network::KalmanSmootherOptions::init_sigma_velocity_mps)
       .def_readwrite("init_sigma_level_rad", &network::KalmanSmootherOptions::init_sigma_level_rad)
@@ -220,6 +223,7 @@ tolerances; check_datum.)doc")
       .def_readwrite("init_sigma_gyro_bias_radps", &network::KalmanSmootherOptions::init_sigma_gyro_bias_radps)
       .def_readwrite("init_sigma_gravity_mps2", &network::KalmanSmootherOptions::init_sigma_gravity_mps2)
       .def_readwrite("smooth", &network::KalmanSmootherOptions::smooth);
+  BindOptionsProtocol(kalman_smoother_options, "KalmanSmootherOptions");
 
   m.def("solve_network",
         [](const py::object& imu_time_s, const py::object& acc, const py::object& gyro, const py::object& gps_time_s,

@@ -30,7 +30,6 @@ pdr::ShoeOptions MakeShoe(int window, double threshold, double sigma_acc, double
   ValidateOptions(o);
   return o;
 }
-constexpr double kDeg = 3.14159265358979323846 / 180.0;
 
 // An (M, 2) array of integer sample indices, given as any numeric array.
 Eigen::MatrixXi ToIndexPairs(const py::object& obj, const char* name) {
@@ -125,9 +124,33 @@ py::dict HealthDict(const pdr::ZuptEkfSummary& h) {
   d["report"] = h.BriefReport();
   return d;
 }
+
+/// The name zero_velocity's `rule` argument gives a rule.
+const char* ZeroVelocityRuleName(pdr::ZeroVelocityRule rule) {
+  switch (rule) {
+    case pdr::ZeroVelocityRule::kFixed: return "fixed";
+    case pdr::ZeroVelocityRule::kStanceGuard: return "stance_guard";
+    case pdr::ZeroVelocityRule::kSwingGuard: break;
+  }
+  return "swing_guard";
+}
+
 }  // namespace
 
 void BindPdr(py::module_& m) {
+  // The keyword defaults of these functions are read from default-constructed Options structs
+  // (CONVENTIONS rule 13): the C++ header is the only place a default is written.
+  const pdr::ShoeOptions shoe;
+  const pdr::ZeroVelocityOptions zero_velocity;
+  const pdr::StrideCountOptions stride_count;
+  const pdr::AccelerationStepOptions acceleration_steps;
+  const pdr::GyroStepOptions gyro_steps;
+  const pdr::WeinbergOptions weinberg;
+  const pdr::MagneticStepOptions magnetic_steps;
+  const pdr::MahonyOptions mahony;
+  const pdr::StepCovarianceOptions step_covariance;
+  const pdr::InsZuptOptions ins_zupt;
+  const pdr::ZuptEkfOptions zupt_ekf;
   m.def("shoe_statistic", [](const py::object& acc, const py::object& gyro, int window, double sigma_acc, double sigma_gyro,
                              double gravity) {
           MatrixArg a = ToMatrix(acc, "acc_mps2", -1, 3);
@@ -136,8 +159,8 @@ void BindPdr(py::module_& m) {
           py::gil_scoped_release release;
           return pdr::ShoeStatistic(a.map, g.map, o);
         },
-        py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("window") = 5, py::arg("sigma_acc_mps2") = 0.01,
-        py::arg("sigma_gyro_radps") = 0.1 * kDeg, py::arg("gravity_mps2") = 9.81,
+        py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("window") = shoe.window, py::arg("sigma_acc_mps2") = shoe.sigma_acc_mps2,
+        py::arg("sigma_gyro_radps") = shoe.sigma_gyro_radps, py::arg("gravity_mps2") = shoe.gravity_mps2,
         "SHOE test statistic (N,) of specific force (N, 3) [m/s^2] and angular rate (N, 3) [rad/s].");
   m.def("shoe_detector", [](const py::object& acc, const py::object& gyro, int window, double threshold, double sigma_acc,
                             double sigma_gyro, double gravity) {
@@ -147,8 +170,8 @@ void BindPdr(py::module_& m) {
           py::gil_scoped_release release;
           return pdr::ShoeDetector(a.map, g.map, o);
         },
-        py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("window") = 5, py::arg("threshold") = 3e4,
-        py::arg("sigma_acc_mps2") = 0.01, py::arg("sigma_gyro_radps") = 0.1 * kDeg, py::arg("gravity_mps2") = 9.81, R"doc(
+        py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("window") = shoe.window, py::arg("threshold") = shoe.threshold,
+        py::arg("sigma_acc_mps2") = shoe.sigma_acc_mps2, py::arg("sigma_gyro_radps") = shoe.sigma_gyro_radps, py::arg("gravity_mps2") = shoe.gravity_mps2, R"doc(
 Stance flags (N,) bool of the SHOE zero-velocity detector (Skog et al. 2010): statistic < threshold.
 acc_mps2, gyro_radps: (N, 3) in the sensor frame [m/s^2], [rad/s]; window in samples.)doc");
   m.def("zero_velocity", [](const py::object& acc, const py::object& gyro, double rate_hz, const std::string& rule,
@@ -198,12 +221,12 @@ acc_mps2, gyro_radps: (N, 3) in the sensor frame [m/s^2], [rad/s]; window in sam
           d["report"] = sm.BriefReport();
           return d;
         },
-        py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("rate_hz"), py::arg("rule") = "swing_guard",
-        py::arg("threshold") = 1e4, py::arg("max_swing_s") = 2.0, py::arg("max_swing_ratio") = 1.5,
-        py::arg("ladder_step_decades") = 0.25, py::arg("min_stance_s") = 0.02, py::arg("min_stance_share") = 0.15,
-        py::arg("min_stance_fraction") = 0.3,
-        py::arg("max_threshold") = 1e7, py::arg("window") = 5, py::arg("sigma_acc_mps2") = 0.01,
-        py::arg("sigma_gyro_radps") = 0.1 * kDeg, py::arg("gravity_mps2") = 9.81, R"doc(
+        py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("rate_hz"), py::arg("rule") = std::string(ZeroVelocityRuleName(zero_velocity.rule)),
+        py::arg("threshold") = zero_velocity.shoe.threshold, py::arg("max_swing_s") = zero_velocity.max_swing_s, py::arg("max_swing_ratio") = zero_velocity.max_swing_ratio,
+        py::arg("ladder_step_decades") = zero_velocity.ladder_step_decades, py::arg("min_stance_s") = zero_velocity.min_stance_s, py::arg("min_stance_share") = zero_velocity.min_stance_share,
+        py::arg("min_stance_fraction") = zero_velocity.min_stance_fraction,
+        py::arg("max_threshold") = zero_velocity.max_threshold, py::arg("window") = zero_velocity.shoe.window, py::arg("sigma_acc_mps2") = zero_velocity.shoe.sigma_acc_mps2,
+        py::arg("sigma_gyro_radps") = zero_velocity.shoe.sigma_gyro_radps, py::arg("gravity_mps2") = zero_velocity.shoe.gravity_mps2, R"doc(
 Zero-velocity detection with the SHOE threshold adapted to the recording (C++ DetectZeroVelocity).
 acc_mps2, gyro_radps: (N, 3) sensor frame [m/s^2], [rad/s]; rate_hz [Hz]; window in samples.
 rule "swing_guard" (default, chosen by cross-validation): the threshold climbs the ladder
@@ -238,8 +261,8 @@ median_swing_s [s], stance_fraction, walking_stance_fraction [0..1], walking_spa
           d["report"] = out.summary.BriefReport();
           return d;
         },
-        py::arg("stance"), py::arg("rate_hz"), py::arg("min_stance_s") = 0.02, py::arg("min_swing_s") = 0.1,
-        py::arg("min_swing_fraction") = 0.5, py::arg("long_swing_factor") = 1.7, R"doc(
+        py::arg("stance"), py::arg("rate_hz"), py::arg("min_stance_s") = stride_count.min_stance_s, py::arg("min_swing_s") = stride_count.min_swing_s,
+        py::arg("min_swing_fraction") = stride_count.min_swing_fraction, py::arg("long_swing_factor") = stride_count.long_swing_factor, R"doc(
 Strides of the instrumented foot from stance flags (N,) sampled at rate_hz [Hz] (C++ CountStrides):
 stance runs shorter than min_stance_s [s] inside a swing are flicker; swing runs shorter than
 max(min_swing_s [s], min_swing_fraction x the recording's median swing) inside a stance are
@@ -262,9 +285,9 @@ median_swing_s, median_stance_s [s], report.)doc");
           const std::vector<int> steps = pdr::DetectStepsAcceleration(rate_hz, a.map, o, &sigma);
           return py::make_tuple(steps, sigma);
         },
-        py::arg("acc_mps2"), py::arg("rate_hz"), py::arg("window_s") = 0.1, py::arg("adaptive") = true,
-        py::arg("swing_threshold_mps2") = 2.0, py::arg("stance_threshold_mps2") = 1.0, py::arg("swing_fraction") = 0.35,
-        py::arg("stance_fraction") = 0.15, py::arg("min_step_interval_s") = 0.4, R"doc(
+        py::arg("acc_mps2"), py::arg("rate_hz"), py::arg("window_s") = acceleration_steps.window_s, py::arg("adaptive") = acceleration_steps.adaptive,
+        py::arg("swing_threshold_mps2") = acceleration_steps.swing_threshold_mps2, py::arg("stance_threshold_mps2") = acceleration_steps.stance_threshold_mps2, py::arg("swing_fraction") = acceleration_steps.swing_fraction,
+        py::arg("stance_fraction") = acceleration_steps.stance_fraction, py::arg("min_step_interval_s") = acceleration_steps.min_step_interval_s, R"doc(
 Paper 002's acceleration-variance step detector (eq. 1-3). Returns (step sample indices, σ (N,)
 [m/s^2]). adaptive=True: thresholds = fractions of the 95th percentile of σ; False: the fixed
 T1, T2 [m/s^2] (paper: 2 and 1 at 100 Hz).)doc");
@@ -276,8 +299,8 @@ T1, T2 [m/s^2] (paper: 2 and 1 at 100 Hz).)doc");
           o.min_swing_s = min_swing_s;
           return pdr::DetectStepsGyro(rate_hz, g.map, o);
         },
-        py::arg("gyro_radps"), py::arg("rate_hz"), py::arg("threshold_radps") = 1.0, py::arg("median_window_s") = 0.1,
-        py::arg("min_swing_s") = 0.2, "Gyroscope step detector (paper 002 §III.D): step sample indices.");
+        py::arg("gyro_radps"), py::arg("rate_hz"), py::arg("threshold_radps") = gyro_steps.threshold_radps, py::arg("median_window_s") = gyro_steps.median_window_s,
+        py::arg("min_swing_s") = gyro_steps.min_swing_s, "Gyroscope step detector (paper 002 §III.D): step sample indices.");
   m.def("butterworth_sos", &pdr::ButterworthSos, py::arg("order"), py::arg("cutoff_hz"), py::arg("rate_hz"),
         py::arg("highpass") = false, R"doc(
 Butterworth filter as second-order sections, shape (ceil(order/2), 6), rows [b0 b1 b2 a0 a1 a2]
@@ -300,8 +323,8 @@ zi=sosfilt_zi(sos) * x[0]).)doc");
           py::gil_scoped_release release;
           return pdr::WeinbergFeatures(rate_hz, a.map, iv, o);
         },
-        py::arg("acc_mps2"), py::arg("rate_hz"), py::arg("intervals"), py::arg("filter_order") = 4, py::arg("cutoff_hz") = 3.0,
-        py::arg("steady_state_start") = true, R"doc(
+        py::arg("acc_mps2"), py::arg("rate_hz"), py::arg("intervals"), py::arg("filter_order") = weinberg.filter_order, py::arg("cutoff_hz") = weinberg.cutoff_hz,
+        py::arg("steady_state_start") = weinberg.steady_state_start, R"doc(
 Weinberg bounce feature (max a~ - min a~)^(1/4) [(m/s^2)^(1/4)] over each interval (M, 2) of
 inclusive sample indices [start, end], with a~ the Butterworth low-pass (order, cutoff_hz [Hz])
 of |acc_mps2| (N, 3) [m/s^2] sampled at rate_hz [Hz]. Stride length = K x feature (eq. 4).)doc");
@@ -313,8 +336,8 @@ of |acc_mps2| (N, 3) [m/s^2] sampled at rate_hz [Hz]. Stride length = K x featur
           py::gil_scoped_release release;
           return pdr::WeinbergStrideLengths(rate_hz, a.map, steps, o);
         },
-        py::arg("acc_mps2"), py::arg("rate_hz"), py::arg("step_indices"), py::arg("k") = 0.364, py::arg("window_s") = 0.15,
-        py::arg("filter_order") = 4, py::arg("cutoff_hz") = 3.0, py::arg("steady_state_start") = true, R"doc(
+        py::arg("acc_mps2"), py::arg("rate_hz"), py::arg("step_indices"), py::arg("k") = weinberg.k, py::arg("window_s") = weinberg.window_s,
+        py::arg("filter_order") = weinberg.filter_order, py::arg("cutoff_hz") = weinberg.cutoff_hz, py::arg("steady_state_start") = weinberg.steady_state_start, R"doc(
 Weinberg stride lengths [m] (paper 002 eq. 4), one per step: K (max - min)^(1/4) of the 3 Hz
 low-passed |acc| [m/s^2] over +-window_s [s] around each step sample (strictly increasing
 indices into acc_mps2 (N, 3)). K [m/(m/s^2)^(1/4)]: 0.364 in the paper (foot); calibrate it with
@@ -348,9 +371,9 @@ Returns a dict: k, rms_residual_m (0), n_strides, report.)doc");
           const std::vector<int> steps = pdr::DetectStepsMagnetometer(rate_hz, g.map, o, &magnitude);
           return py::make_tuple(steps, magnitude);
         },
-        py::arg("mag"), py::arg("rate_hz"), py::arg("highpass_order") = 2, py::arg("highpass_hz") = 0.5,
-        py::arg("threshold_fraction") = 0.3, py::arg("median_window_s") = 0.1, py::arg("min_swing_s") = 0.2,
-        py::arg("min_rest_s") = 0.15, R"doc(
+        py::arg("mag"), py::arg("rate_hz"), py::arg("highpass_order") = magnetic_steps.highpass_order, py::arg("highpass_hz") = magnetic_steps.highpass_hz,
+        py::arg("threshold_fraction") = magnetic_steps.threshold_fraction, py::arg("median_window_s") = magnetic_steps.median_window_s, py::arg("min_swing_s") = magnetic_steps.min_swing_s,
+        py::arg("min_rest_s") = magnetic_steps.min_rest_s, R"doc(
 Magnetometer step detector (paper 002 §III.D): Butterworth high-pass (order, highpass_hz [Hz])
 per axis of mag (N, 3) (any unit, e.g. uT), |m_hp| thresholded at threshold_fraction x its 95th
 percentile, median filter (median_window_s [s]), rests shorter than min_rest_s [s] merged, a step at
@@ -391,9 +414,9 @@ each transition to rest after at least min_swing_s [s] of motion. Returns (step 
           d["seconds"] = out.seconds;
           return d;
         },
-        py::arg("time_s"), py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("mag") = py::none(), py::arg("kp") = 1.0,
-        py::arg("ki") = 0.05, py::arg("kp_mag") = 0.5, py::arg("gravity_mps2") = 9.81, py::arg("acc_gate_mps2") = 2.0,
-        py::arg("mag_norm_tolerance") = 0.1, py::arg("mag_dip_tolerance_rad") = 10.0 * kDeg, py::arg("init_samples") = 20, R"doc(
+        py::arg("time_s"), py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("mag") = py::none(), py::arg("kp") = mahony.kp,
+        py::arg("ki") = mahony.ki, py::arg("kp_mag") = mahony.kp_mag, py::arg("gravity_mps2") = mahony.gravity_mps2, py::arg("acc_gate_mps2") = mahony.acc_gate_mps2,
+        py::arg("mag_norm_tolerance") = mahony.mag_norm_tolerance, py::arg("mag_dip_tolerance_rad") = mahony.mag_dip_tolerance_rad, py::arg("init_samples") = mahony.init_samples, R"doc(
 Mahony complementary attitude filter (gyro + gravity, magnetometer optional, heading-only and
 gated by a disturbance test on the field norm and dip). time_s (N,) [s], acc_mps2 (N, 3) [m/s^2],
 gyro_radps (N, 3) [rad/s], mag (N, 3) any unit or None. Gains kp, kp_mag [rad/s], ki [rad/s^2].
@@ -414,8 +437,8 @@ step sample; quaternions_wxyz (N, 4) body -> navigation (z up).)doc");
           return TrackDict(pdr::PositionsFromStrides(l.map, h.map, ToStart(start), MakeStepCov(sd_sl, sd_frac, sd_psi, sd_psi0)));
         },
         py::arg("stride_lengths_m"), py::arg("headings_rad"), py::arg("start_xy") = std::vector<double>{0.0, 0.0},
-        py::arg("sigma_stride_length_m") = 0.1, py::arg("stride_length_sd_fraction") = 0.1,
-        py::arg("sigma_heading_step_rad") = 4.0 * kDeg, py::arg("sigma_heading_initial_rad") = 0.0, R"doc(
+        py::arg("sigma_stride_length_m") = step_covariance.sigma_stride_length_m, py::arg("stride_length_sd_fraction") = step_covariance.stride_length_sd_fraction,
+        py::arg("sigma_heading_step_rad") = step_covariance.sigma_heading_step_rad, py::arg("sigma_heading_initial_rad") = step_covariance.sigma_heading_initial_rad, R"doc(
 Paper 002 eq. 8: P_k = P_{k-1} + SL_k (cos th_k, sin th_k) from stride lengths (M,) [m] and
 headings (M,) [rad], starting at start_xy [m]. Each step carries the 3 x 3 covariance of
 (x [m], y [m], heading error [rad]) under a heading random walk (sigma_heading_step_rad per step)
@@ -426,9 +449,9 @@ dict: positions_m (M, 2), covariances (M, 3, 3), stride_lengths_m, headings_rad.
           MatrixArg d = ToMatrix(inc, "increments_m");
           return TrackDict(pdr::PositionsFromIncrements(d.map, ToStart(start), MakeStepCov(sd_sl, sd_frac, sd_psi, sd_psi0)));
         },
-        py::arg("increments_m"), py::arg("start_xy") = std::vector<double>{0.0, 0.0}, py::arg("sigma_stride_length_m") = 0.1,
-        py::arg("stride_length_sd_fraction") = 0.1, py::arg("sigma_heading_step_rad") = 4.0 * kDeg,
-        py::arg("sigma_heading_initial_rad") = 0.0, R"doc(
+        py::arg("increments_m"), py::arg("start_xy") = std::vector<double>{0.0, 0.0}, py::arg("sigma_stride_length_m") = step_covariance.sigma_stride_length_m,
+        py::arg("stride_length_sd_fraction") = step_covariance.stride_length_sd_fraction, py::arg("sigma_heading_step_rad") = step_covariance.sigma_heading_step_rad,
+        py::arg("sigma_heading_initial_rad") = step_covariance.sigma_heading_initial_rad, R"doc(
 Paper 002 eq. 9: P_k = P_{k-1} + dP_k(x, y) from INS-ZUPT increments (M, 2) or (M, 3) [m], with
 the per-step covariance of positions_from_strides (SL = |dP_xy|, heading = atan2(dP_y, dP_x)).)doc");
   m.def("ins_zupt_increments", [](const py::object& time_s, const py::object& acc, const py::object& quaternions,
@@ -451,8 +474,8 @@ the per-step covariance of positions_from_strides (SL = |dP_xy|, heading = atan2
           d["velocities_mps"] = out.velocities_mps;
           return d;
         },
-        py::arg("time_s"), py::arg("acc_mps2"), py::arg("quaternions_wxyz"), py::arg("step_indices"), py::arg("window_s") = 0.05,
-        py::arg("gravity_mps2") = 9.81, R"doc(
+        py::arg("time_s"), py::arg("acc_mps2"), py::arg("quaternions_wxyz"), py::arg("step_indices"), py::arg("window_s") = ins_zupt.window_s,
+        py::arg("gravity_mps2") = ins_zupt.gravity_mps2, R"doc(
 Paper 002 §IV.B (steps 1-5, eq. 5-6): rotate acc_mps2 (N, 3) [m/s^2] by quaternions_wxyz (N, 4)
 (body -> navigation, z up), remove gravity, integrate from the first step, remove the drift by
 the mean velocity over +-window_s [s] around each step sample, linearly interpolated between
@@ -499,11 +522,11 @@ dict: increments_m (M-1, 3), stride_lengths_m (M-1,) (eq. 6), velocities_mps (N,
           d["health"] = HealthDict(out.summary);
           return d;
         },
-        py::arg("time_s"), py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("stance"), py::arg("sigma_acc_mps2") = 0.5,
-        py::arg("sigma_gyro_radps") = 0.5 * kDeg, py::arg("sigma_zupt_mps") = 0.01, py::arg("gravity_mps2") = 9.81,
-        py::arg("init_samples") = 20, py::arg("smooth") = false, py::arg("sigma_stance_heading_rad") = 0.0,
-        py::arg("min_stance_fraction") = 0.02, py::arg("max_plausible_swing_s") = 5.0, py::arg("max_plausible_stride_m") = 4.0,
-        py::arg("max_median_stride_m") = 2.5, py::arg("max_stance_speed_mps") = 4.0, py::arg("speed_rise_factor") = 3.0, py::arg("min_rising_speed_mps") = 1.0, R"doc(
+        py::arg("time_s"), py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("stance"), py::arg("sigma_acc_mps2") = zupt_ekf.sigma_acc_mps2,
+        py::arg("sigma_gyro_radps") = zupt_ekf.sigma_gyro_radps, py::arg("sigma_zupt_mps") = zupt_ekf.sigma_zupt_mps, py::arg("gravity_mps2") = zupt_ekf.gravity_mps2,
+        py::arg("init_samples") = zupt_ekf.init_samples, py::arg("smooth") = zupt_ekf.smooth, py::arg("sigma_stance_heading_rad") = zupt_ekf.sigma_stance_heading_rad,
+        py::arg("min_stance_fraction") = zupt_ekf.min_stance_fraction, py::arg("max_plausible_swing_s") = zupt_ekf.max_plausible_swing_s, py::arg("max_plausible_stride_m") = zupt_ekf.max_plausible_stride_m,
+        py::arg("max_median_stride_m") = zupt_ekf.max_median_stride_m, py::arg("max_stance_speed_mps") = zupt_ekf.max_stance_speed_mps, py::arg("speed_rise_factor") = zupt_ekf.speed_rise_factor, py::arg("min_rising_speed_mps") = zupt_ekf.min_rising_speed_mps, R"doc(
 Zero-velocity-aided strapdown INS (9-state error-state EKF, OpenShoe/PyShoe style) over a
 recording: time_s (N,) [s], acc_mps2 and gyro_radps (N, 3) sensor frame, stance (N,) bool.
 smooth=True adds the RTS smoother (positions_m smoothed, filtered_positions_m the EKF's).

@@ -93,7 +93,7 @@ PYBIND11_MODULE(_core, m) {
   py::module_ wifi = m.def_submodule("wifi", "RSS signal maps, Delaunay interpolation, gradient tracker (paper 004).");
   indoorloc::bindings::BindWifi(wifi);
   indoorloc::bindings::BindWifiBaselines(wifi);
-  py::module_ fusion = m.def_submodule("fusion", "Particle-filter fusion of PDR steps, WiFi and a floor plan (issue 14).");
+  py::module_ fusion = m.def_submodule("fusion", "Particle-filter fusion of PDR steps, WiFi and a floor plan (docs/fusion.md).");
   indoorloc::bindings::BindFusionFloorPlan(fusion);
   indoorloc::bindings::BindFusionTracker(fusion);
   indoorloc::bindings::BindFusionGrid(fusion);

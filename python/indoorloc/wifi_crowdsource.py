@@ -1,4 +1,4 @@
-"""A crowdsourced WiFi signal map from walks with waypoints (issue 15, "A crowdsourced signal map").
+"""A crowdsourced WiFi signal map from walks with waypoints (docs/fusion_real.md).
 
 Surveyors' walks (the Indoor Location Competition 2.0 format, :mod:`indoorloc.io`) carry WiFi
 readings and a few surveyed waypoints; nobody stood still at reference points. This module turns

@@ -1,6 +1,5 @@
 """WiFi-only baselines on held-out walks of the Indoor Location Competition 2.0 data, with the
-crowdsourced signal map of :mod:`indoorloc.wifi_crowdsource` (issue 15, item 1 of
-``fusion evaluate``).
+crowdsourced signal map of :mod:`indoorloc.wifi_crowdsource` (``fusion evaluate``).
 
 Protocol (docs/fusion_real.md, "Crowdsourced signal map"): per floor, ``folds``-fold
 cross-validation by walk (fixed seed). In each outer fold the map is built from the training
@@ -56,7 +55,7 @@ MODEL_GRID: Dict[str, Sequence[Any]] = {
     "cell_size_m": (2.0, 3.0, 4.0),
     "min_walks": (2, 4, 8),
 }
-#: The lead's quick look (issue 15): 5-NN on raw scans placed linearly, mean / median / p90 [m].
+#: The lead's quick look: 5-NN on raw scans placed linearly, mean / median / p90 [m].
 LEAD_QUICK_LOOK = {"F3": (25.0, 9.0, 90.0), "F4": (35.0, 18.0, 94.0), "F8": (23.0, 13.0, 69.0)}
 
 

@@ -1,4 +1,4 @@
-"""The WiFi-only matcher study (issue 25, "A WiFi observation at the state of the art").
+"""The WiFi-only matcher study (docs/fusion_real.md, "WiFi as fixes").
 
 ``python -m indoorloc.experiments.wifi_matcher_study [--data-root DIR] [--floors B1 F1 ...]
 [--json FILE] [--markdown FILE] [--cache-dir DIR]``
