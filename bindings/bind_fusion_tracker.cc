@@ -62,10 +62,8 @@ const T* OptionalPointer(const py::object& obj, const char* argument, const char
   }
 }
 
-}  // namespace
-
-void BindFusionTracker(py::module_& m) {
-  m.attr("ANY_FLOOR") = PositionFix::kAnyFloor;
+/// The tracker's and the smoother's options (the generic Options protocol).
+void BindTrackerOptions(py::module_& m) {
   py::class_<TrackerOptions> tracker_options(m, "TrackerOptions", R"doc(
 Options of the fusion particle tracker (see docs/fusion.md for each constant and how its
 default was chosen). Set fields by keyword: ``TrackerOptions(num_particles=2000, tempering=0.3)``;
@@ -133,6 +131,10 @@ ess_threshold) and fix (fix_outlier_probability, fix_tempering) options are flat
       .def_readwrite("num_threads", &SmootherOptions::num_threads);
   BindOptionsProtocol(smoother_options, "SmootherOptions", {"num_trajectories", "max_particles", "seed", "num_threads"});
 
+}
+
+/// What a tracker run did.
+void BindTrackerSummary(py::module_& m) {
   py::class_<TrackerSummary>(m, "TrackerSummary", "What a tracker run did.")
       .def_readonly("steps", &TrackerSummary::steps)
       .def_readonly("wifi_updates", &TrackerSummary::wifi_updates)
@@ -148,6 +150,10 @@ ess_threshold) and fix (fix_outlier_probability, fix_tempering) options are flat
       .def("brief_report", &TrackerSummary::BriefReport)
       .def("__repr__", [](const TrackerSummary& s) { return "<TrackerSummary " + s.BriefReport() + ">"; });
 
+}
+
+/// WiFi observations and the steps given to the tracker.
+void BindWifiObservations(py::module_& m) {
   py::class_<WifiObservation>(m, "WifiObservation", R"doc(
 Usable readings of one scan (or of readings sharing their own time): AP columns of the signal
 map and RSS [dBm]. Build them with make_wifi_observations.)doc")
@@ -248,6 +254,10 @@ options.max_age_s are dropped. Returns (list of WifiObservation sorted by time, 
 Polar steps (length [m], heading [rad], their sd; each (M,)) to displacements (M, 2) [m] and
 covariances (M, 3) = (xx, xy, yy) [m²] by first-order propagation.)doc");
 
+}
+
+/// The streaming ParticleTracker.
+void BindParticleTracker(py::module_& m) {
   py::class_<ParticleTracker>(m, "ParticleTracker", R"doc(
 Streaming fusion particle filter (PDR steps + WiFi + floor plan, optional corridor network).
 Keeps references to plan, wifi_model and corridors (kept alive by this object).
@@ -353,6 +363,10 @@ options : TrackerOptions)doc")
            },
            py::arg("states"), py::arg("floor_indices"));
 
+}
+
+/// track(): a whole walk, with the backward smoother.
+void BindBatchTrack(py::module_& m) {
   m.def("track",
         [](const py::object& plan, const py::object& wifi_model, const py::object& corridors, const py::object& step_times_s,
            const py::object& displacements_m, const py::object& covariances_m2, const std::vector<WifiObservation>& observations,
@@ -446,6 +460,17 @@ floor_probabilities (M, F), floor_index, heading_offset_rad, scale, ess, log_lik
 blocked_fraction, resampled, recovered, lagged_m), the TrackerSummary, and with a smoother
 smoothed_m (M, 2), smoothed_covariance_m2 (M, 3), smoothed_floor_index (M,),
 smoothed_trajectories_m (M, 2T), smoother_seconds.)doc");
+}
+
+}  // namespace
+
+void BindFusionTracker(py::module_& m) {
+  m.attr("ANY_FLOOR") = PositionFix::kAnyFloor;
+  BindTrackerOptions(m);
+  BindTrackerSummary(m);
+  BindWifiObservations(m);
+  BindParticleTracker(m);
+  BindBatchTrack(m);
 }
 
 }  // namespace indoorloc::bindings

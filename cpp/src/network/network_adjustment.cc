@@ -313,22 +313,17 @@ void CheckNetworkInput(const NetworkObservations& obs, const NetworkState& state
                   "row " + std::to_string(i) + " is not a unit quaternion");
 }
 
-NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& initial, const NetworkOptions& options,
-                          NetworkSummary* summary) {
-  WallTimer total;
-  ValidateOptions(options);
-  CheckNetworkInput(obs, initial);
-  const int n = static_cast<int>(obs.imu_time_s.size());
-  const double dt = (obs.imu_time_s[n - 1] - obs.imu_time_s[0]) / (n - 1);
-  const bool leap = options.discretization == Discretization::kLeapFrog;
+namespace {
 
-  // Structural datum checks (cheap, before any work).
-  CheckArgument(obs.gps_time_s.size() > 0, "gps_position_m",
-                "datum defect: no CUPT (GPS) observations, the position of the network is not determined");
-  struct GpsTie {
-    int a;
-    double alpha;
-  };
+/// A CUPT (GPS) epoch tied to the IMU epochs: p(t) = (1 - alpha) r[a] + alpha r[a + 1].
+struct GpsTie {
+  int a;
+  double alpha;
+};
+
+/// Ties every GPS time to the IMU epochs (n epochs dt [s] apart); with leap-frog, throws when
+/// the CUPTs leave one parity chain without a position datum.
+std::vector<GpsTie> TieGpsToEpochs(const NetworkObservations& obs, int n, double dt, bool leap) {
   std::vector<GpsTie> ties;
   bool parity_has_cupt[2] = {false, false};
   for (Eigen::Index i = 0; i < obs.gps_time_s.size(); ++i) {
@@ -355,9 +350,11 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
                       (parity_has_cupt[0] ? "odd" : "even") +
                       "-epoch chain has no position datum (leap-frog couples only epochs of equal parity); "
                       "use the trapezoidal discretisation or GPS times on both parities");
+  return ties;
+}
 
-  Blocks b = FromState(initial, options.slow_parameter_stride);
-  const int stride = b.stride, m_slow = b.m;
+/// Earth rate and normal gravity at the options' latitude and origin height.
+internal::ModelConstants MakeModelConstants(const NetworkOptions& options) {
   internal::ModelConstants model;
   model.earth_rate_enu = EarthRateEnu(options.latitude_rad) * (options.earth_rate_radps / kEarthRateRadps);
   const Eigen::Vector3d gc = NormalGravityCoefficients(options.latitude_rad);
@@ -365,22 +362,30 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
   model.c1 = gc[1];
   model.c2 = gc[2];
   model.origin_height_m = options.origin_height_m;
+  return model;
+}
 
-  ceres::Problem::Options popts;
-  popts.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::EigenQuaternionManifold quaternion_manifold;
-  ceres::Problem problem(popts);
-  // Column order of the Jacobian (datum check, dense inverse): per epoch r, v, q and, at the first
-  // epoch of each slow interval, that interval's a, o, δg. labels[col] names each tangent column.
+/// The unknowns of the network, in the Jacobian's column order (datum check, dense inverse): per
+/// epoch r, v, q and, at the first epoch of each slow interval, that interval's a, o, δg.
+struct ParameterLayout {
   std::vector<double*> ordered_blocks;
+  std::vector<ColumnLabel> labels;  ///< names each tangent column
+  std::vector<int> gravity_column;  ///< per slow node: the column of its δg
+};
+
+ParameterLayout AddParameterBlocks(Blocks& b, int n, ceres::Manifold* quaternion_manifold, ceres::Problem& problem) {
+  const int stride = b.stride, m_slow = b.m;
+  ParameterLayout layout;
+  std::vector<double*>& ordered_blocks = layout.ordered_blocks;
+  std::vector<ColumnLabel>& labels = layout.labels;
+  std::vector<int>& gravity_column = layout.gravity_column;
   ordered_blocks.reserve(3 * n + 3 * m_slow);
-  std::vector<ColumnLabel> labels;
   labels.reserve(9 * n + 7 * m_slow);
-  std::vector<int> gravity_column(static_cast<size_t>(m_slow));
+  gravity_column.resize(static_cast<size_t>(m_slow));
   for (int i = 0; i < n; ++i) {
     problem.AddParameterBlock(b.R(i), 3);
     problem.AddParameterBlock(b.V(i), 3);
-    problem.AddParameterBlock(b.Q(i), 4, &quaternion_manifold);
+    problem.AddParameterBlock(b.Q(i), 4, quaternion_manifold);
     for (double* p : {b.R(i), b.V(i), b.Q(i)}) ordered_blocks.push_back(p);
     for (const char* name : {"position", "velocity", "attitude"})
       for (int c = 0; c < 3; ++c) labels.push_back({name, i});
@@ -396,8 +401,23 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
       labels.push_back({"gravity_disturbance", i});
     }
   }
+  return layout;
+}
 
-  std::vector<ceres::ResidualBlockId> acc_ids, gyro_ids, gps_ids;
+/// The residual blocks of the three groups whose variance factors the summary can report.
+struct ResidualGroups {
+  std::vector<ceres::ResidualBlockId> acc, gyro, gps;
+};
+
+/// The dynamics: velocity, specific-force and angular-rate conditions between epochs (leap-frog
+/// or trapezoidal) and the random walks of the biases and δg.
+void AddDynamics(const NetworkObservations& obs, const NetworkOptions& options, const internal::ModelConstants& model,
+                 double dt, Blocks& b, ceres::Problem& problem, ResidualGroups* groups) {
+  const int n = static_cast<int>(obs.imu_time_s.size());
+  const int stride = b.stride, m_slow = b.m;
+  const bool leap = options.discretization == Discretization::kLeapFrog;
+  std::vector<ceres::ResidualBlockId>& acc_ids = groups->acc;
+  std::vector<ceres::ResidualBlockId>& gyro_ids = groups->gyro;
   const double sigma_f = options.acc_noise_mps2_rthz / std::sqrt(dt);
   const double sigma_w = options.gyro_noise_radps_rthz / std::sqrt(dt);
   auto f_at = [&](int i) { return Eigen::Vector3d(obs.acc_body_mps2.row(i).transpose()); };
@@ -457,7 +477,19 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
       const double centre_a = 0.5 * (b.First(k) + b.End(k) - 1), centre_b = 0.5 * (b.First(k + 1) + b.End(k + 1) - 1);
       add_random_walks(k, k + 1, (centre_b - centre_a) * dt);
     }
-  // Static observations.
+}
+
+/// Counts of the observations that become residuals only for some inputs.
+struct StaticCounts {
+  int num_xover = 0;
+  int num_sgupt = 0;
+};
+
+/// The static observations: CUPT (GPS), ZUPT, VUPT, GUPT, XOVER and SGUPT.
+StaticCounts AddStaticObservations(const NetworkObservations& obs, const NetworkOptions& options,
+                                   const internal::ModelConstants& model, const std::vector<GpsTie>& ties, Blocks& b,
+                                   ceres::Problem& problem, ResidualGroups* groups) {
+  std::vector<ceres::ResidualBlockId>& gps_ids = groups->gps;
   const bool huber = options.gps_huber_threshold > 0.0;  // the Problem owns each loss
   for (Eigen::Index i = 0; i < obs.gps_time_s.size(); ++i) {
     const Eigen::Vector3d p = obs.gps_position_m.row(i).transpose();
@@ -511,100 +543,94 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
     }
     i = j;
   }
+  return {num_xover, num_sgupt};
+}
 
-  NetworkSummary s;
-  s.num_epochs = n;
-  s.num_parameters = static_cast<long>(problem.NumParameters()) - n;  // quaternion: 4 stored, 3 free
-  s.num_residuals = problem.NumResiduals();
-  s.num_slow_nodes = m_slow;
-  s.num_xover = num_xover;
-  s.num_vupt = static_cast<int>(obs.vupt_epochs.size());
-  s.num_sgupt = num_sgupt;
-
-  CheckArgument(!options.variance_components || s.num_parameters <= kMaxDenseUnknowns, "options",
-                "variance_components is limited to " + std::to_string(kMaxDenseUnknowns) + " unknowns (got " +
-                    std::to_string(s.num_parameters) + ")");
-  if (options.gravity_covariance == NetworkOptions::Covariance::kDense && s.num_parameters > kMaxDenseUnknowns)
-    ThrowInvalidArgument("options", "gravity_covariance = dense is limited to " + std::to_string(kMaxDenseUnknowns) +
-                                        " unknowns (got " +
-                                        std::to_string(s.num_parameters) + "); use ceres");
-  // Numerical datum check: LDLᵀ of JᵀJ at the initial values.
-  if (options.check_datum) {
-    WallTimer datum_timer;
-    ceres::Problem::EvaluateOptions eo;
-    eo.parameter_blocks = ordered_blocks;
-    eo.apply_loss_function = false;
-    eo.num_threads = options.num_threads;
-    ceres::CRSMatrix crs;
-    double cost = 0.0;
-    if (!problem.Evaluate(eo, &cost, nullptr, nullptr, &crs))
-      throw std::runtime_error("indoorloc: network: evaluating the Jacobian at the initial values failed");
-    Eigen::Map<const Eigen::SparseMatrix<double, Eigen::RowMajor, int>> jac(
-        crs.num_rows, crs.num_cols, static_cast<Eigen::Index>(crs.values.size()), crs.rows.data(), crs.cols.data(),
-        crs.values.data());
-    Eigen::SparseMatrix<double> normal = Eigen::SparseMatrix<double>(jac.transpose()) * jac;
-    // Jacobi scaling to a unit diagonal: the pivots are then the ratios pivot / diagonal entry,
-    // and the factorisation does not suffer from the units of the parameters.
-    Eigen::VectorXd scale = normal.diagonal();
-    for (Eigen::Index i = 0; i < scale.size(); ++i) scale[i] = scale[i] > 0.0 ? 1.0 / std::sqrt(scale[i]) : 1.0;
-    normal = scale.asDiagonal() * normal * scale.asDiagonal();
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt;
-    ldlt.analyzePattern(normal);
-    ldlt.factorize(normal);
-    const Eigen::VectorXd diag = normal.diagonal();
-    const Eigen::VectorXd d = ldlt.vectorD();
-    const auto& perm = ldlt.permutationP().indices();
-    double worst = std::numeric_limits<double>::infinity();
-    int worst_col = -1;
-    const bool failed = ldlt.info() != Eigen::Success;
-    std::vector<int> inverse(static_cast<size_t>(normal.cols()));
-    for (int col = 0; col < normal.cols(); ++col) inverse[static_cast<size_t>(perm[col])] = col;
-    if (failed) {
-      // Eigen stops at the first exactly zero pivot; later entries of D are not computed.
-      worst = 0.0;
-      for (int k = 0; k < d.size(); ++k)
-        if (d[k] == 0.0) {
-          worst_col = inverse[static_cast<size_t>(k)];
-          break;
-        }
-    } else {
-      for (int col = 0; col < normal.cols(); ++col) {
-        const double ratio = diag[col] > 0.0 ? d[perm[col]] : 0.0;
-        if (ratio < worst) {
-          worst = ratio;
-          worst_col = col;
-        }
+/// Numerical datum check: LDLᵀ of the Jacobi-scaled JᵀJ at the initial values; throws naming the
+/// first undetermined parameter when a pivot ratio falls below options.datum_pivot_tolerance.
+void CheckDatum(const NetworkOptions& options, const ParameterLayout& layout, ceres::Problem& problem,
+                NetworkSummary* summary) {
+  NetworkSummary& s = *summary;
+  const std::vector<double*>& ordered_blocks = layout.ordered_blocks;
+  const std::vector<ColumnLabel>& labels = layout.labels;
+  WallTimer datum_timer;
+  ceres::Problem::EvaluateOptions eo;
+  eo.parameter_blocks = ordered_blocks;
+  eo.apply_loss_function = false;
+  eo.num_threads = options.num_threads;
+  ceres::CRSMatrix crs;
+  double cost = 0.0;
+  if (!problem.Evaluate(eo, &cost, nullptr, nullptr, &crs))
+    throw std::runtime_error("indoorloc: network: evaluating the Jacobian at the initial values failed");
+  Eigen::Map<const Eigen::SparseMatrix<double, Eigen::RowMajor, int>> jac(
+      crs.num_rows, crs.num_cols, static_cast<Eigen::Index>(crs.values.size()), crs.rows.data(), crs.cols.data(),
+      crs.values.data());
+  Eigen::SparseMatrix<double> normal = Eigen::SparseMatrix<double>(jac.transpose()) * jac;
+  // Jacobi scaling to a unit diagonal: the pivots are then the ratios pivot / diagonal entry,
+  // and the factorisation does not suffer from the units of the parameters.
+  Eigen::VectorXd scale = normal.diagonal();
+  for (Eigen::Index i = 0; i < scale.size(); ++i) scale[i] = scale[i] > 0.0 ? 1.0 / std::sqrt(scale[i]) : 1.0;
+  normal = scale.asDiagonal() * normal * scale.asDiagonal();
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt;
+  ldlt.analyzePattern(normal);
+  ldlt.factorize(normal);
+  const Eigen::VectorXd diag = normal.diagonal();
+  const Eigen::VectorXd d = ldlt.vectorD();
+  const auto& perm = ldlt.permutationP().indices();
+  double worst = std::numeric_limits<double>::infinity();
+  int worst_col = -1;
+  const bool failed = ldlt.info() != Eigen::Success;
+  std::vector<int> inverse(static_cast<size_t>(normal.cols()));
+  for (int col = 0; col < normal.cols(); ++col) inverse[static_cast<size_t>(perm[col])] = col;
+  if (failed) {
+    // Eigen stops at the first exactly zero pivot; later entries of D are not computed.
+    worst = 0.0;
+    for (int k = 0; k < d.size(); ++k)
+      if (d[k] == 0.0) {
+        worst_col = inverse[static_cast<size_t>(k)];
+        break;
       }
-    }
-    s.min_pivot_ratio = worst;
-    s.seconds_datum_check = datum_timer.ElapsedSeconds();
-    if (failed || worst < options.datum_pivot_tolerance) {
-      std::ostringstream m;
-      m << "datum defect: the normal matrix is rank deficient (smallest pivot ratio " << worst << " < "
-        << options.datum_pivot_tolerance << ")";
-      if (worst_col >= 0)
-        m << "; first undetermined parameter: " << labels[static_cast<size_t>(worst_col)].name << " at epoch "
-          << labels[static_cast<size_t>(worst_col)].epoch;
-      m << ". Add observations (CUPT for position, GUPT or XOVER for gravity vs accelerometer bias)";
-      // A defect can also be numerical: weights spanning many orders of magnitude. Name the
-      // extreme sds of the options so that a mistyped one is found.
-      const std::pair<const char*, double> sds[] = {
-          {"acc_noise_mps2_rthz", options.acc_noise_mps2_rthz}, {"gyro_noise_radps_rthz", options.gyro_noise_radps_rthz},
-          {"sigma_gps_m", options.sigma_gps_m},                 {"sigma_zupt_mps", options.sigma_zupt_mps},
-          {"sigma_gupt_mps2", options.sigma_gupt_mps2},         {"sigma_xover_mps2", options.sigma_xover_mps2},
-          {"sigma_vel_mps", options.sigma_vel_mps}};
-      const auto* lo = &sds[0];
-      const auto* hi = &sds[0];
-      for (const auto& e : sds) {
-        if (e.second < lo->second) lo = &e;
-        if (e.second > hi->second) hi = &e;
+  } else {
+    for (int col = 0; col < normal.cols(); ++col) {
+      const double ratio = diag[col] > 0.0 ? d[perm[col]] : 0.0;
+      if (ratio < worst) {
+        worst = ratio;
+        worst_col = col;
       }
-      m << ", or check the sds in 'options' (from " << lo->first << " = " << lo->second << " to " << hi->first
-        << " = " << hi->second << ")";
-      ThrowInvalidArgument("observations", m.str());
     }
   }
+  s.min_pivot_ratio = worst;
+  s.seconds_datum_check = datum_timer.ElapsedSeconds();
+  if (failed || worst < options.datum_pivot_tolerance) {
+    std::ostringstream m;
+    m << "datum defect: the normal matrix is rank deficient (smallest pivot ratio " << worst << " < "
+      << options.datum_pivot_tolerance << ")";
+    if (worst_col >= 0)
+      m << "; first undetermined parameter: " << labels[static_cast<size_t>(worst_col)].name << " at epoch "
+        << labels[static_cast<size_t>(worst_col)].epoch;
+    m << ". Add observations (CUPT for position, GUPT or XOVER for gravity vs accelerometer bias)";
+    // A defect can also be numerical: weights spanning many orders of magnitude. Name the
+    // extreme sds of the options so that a mistyped one is found.
+    const std::pair<const char*, double> sds[] = {
+        {"acc_noise_mps2_rthz", options.acc_noise_mps2_rthz}, {"gyro_noise_radps_rthz", options.gyro_noise_radps_rthz},
+        {"sigma_gps_m", options.sigma_gps_m},                 {"sigma_zupt_mps", options.sigma_zupt_mps},
+        {"sigma_gupt_mps2", options.sigma_gupt_mps2},         {"sigma_xover_mps2", options.sigma_xover_mps2},
+        {"sigma_vel_mps", options.sigma_vel_mps}};
+    const auto* lo = &sds[0];
+    const auto* hi = &sds[0];
+    for (const auto& e : sds) {
+      if (e.second < lo->second) lo = &e;
+      if (e.second > hi->second) hi = &e;
+    }
+    m << ", or check the sds in 'options' (from " << lo->first << " = " << lo->second << " to " << hi->first
+      << " = " << hi->second << ")";
+    ThrowInvalidArgument("observations", m.str());
+  }
+}
 
+/// Runs Ceres (sparse normal Cholesky) and records its iterations, costs and termination.
+void RunSolver(const NetworkOptions& options, ceres::Problem& problem, NetworkSummary* summary) {
+  NetworkSummary& s = *summary;
   ceres::Solver::Options so;
   so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
   so.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
@@ -636,7 +662,20 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
   }
   const double redundancy = static_cast<double>(s.num_residuals) - static_cast<double>(s.num_parameters);
   s.variance_factor = redundancy > 0.0 ? 2.0 * s.final_cost / redundancy : 0.0;
-  NetworkState out = ToState(b);
+}
+
+/// After the solve: the variance components of the acc, gyro and GPS groups and the sd of every
+/// δg, as the options ask.
+void ComputePrecision(const NetworkOptions& options, const ParameterLayout& layout, const ResidualGroups& groups,
+                      Blocks& b, int n, ceres::Problem& problem, NetworkState* state, NetworkSummary* summary) {
+  NetworkSummary& s = *summary;
+  NetworkState& out = *state;
+  const int m_slow = b.m;
+  const std::vector<double*>& ordered_blocks = layout.ordered_blocks;
+  const std::vector<int>& gravity_column = layout.gravity_column;
+  const std::vector<ceres::ResidualBlockId>& acc_ids = groups.acc;
+  const std::vector<ceres::ResidualBlockId>& gyro_ids = groups.gyro;
+  const std::vector<ceres::ResidualBlockId>& gps_ids = groups.gps;
   // (JᵀJ)⁻¹ at the solution, dense (small networks only): shared by the variance components and
   // the dense δg covariance, computed at most once.
   ceres::Problem::EvaluateOptions eo;
@@ -712,6 +751,55 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
     }
     s.seconds_covariance += cov_timer.ElapsedSeconds();
   }
+}
+
+}  // namespace
+
+NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& initial, const NetworkOptions& options,
+                          NetworkSummary* summary) {
+  WallTimer total;
+  ValidateOptions(options);
+  CheckNetworkInput(obs, initial);
+  const int n = static_cast<int>(obs.imu_time_s.size());
+  const double dt = (obs.imu_time_s[n - 1] - obs.imu_time_s[0]) / (n - 1);
+  const bool leap = options.discretization == Discretization::kLeapFrog;
+
+  // Structural datum checks (cheap, before any work).
+  CheckArgument(obs.gps_time_s.size() > 0, "gps_position_m",
+                "datum defect: no CUPT (GPS) observations, the position of the network is not determined");
+  const std::vector<GpsTie> ties = TieGpsToEpochs(obs, n, dt, leap);
+
+  Blocks b = FromState(initial, options.slow_parameter_stride);
+  const internal::ModelConstants model = MakeModelConstants(options);
+  ceres::Problem::Options popts;
+  popts.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::EigenQuaternionManifold quaternion_manifold;
+  ceres::Problem problem(popts);
+  const ParameterLayout layout = AddParameterBlocks(b, n, &quaternion_manifold, problem);
+  ResidualGroups groups;
+  AddDynamics(obs, options, model, dt, b, problem, &groups);
+  const StaticCounts counts = AddStaticObservations(obs, options, model, ties, b, problem, &groups);
+
+  NetworkSummary s;
+  s.num_epochs = n;
+  s.num_parameters = static_cast<long>(problem.NumParameters()) - n;  // quaternion: 4 stored, 3 free
+  s.num_residuals = problem.NumResiduals();
+  s.num_slow_nodes = b.m;
+  s.num_xover = counts.num_xover;
+  s.num_vupt = static_cast<int>(obs.vupt_epochs.size());
+  s.num_sgupt = counts.num_sgupt;
+
+  CheckArgument(!options.variance_components || s.num_parameters <= kMaxDenseUnknowns, "options",
+                "variance_components is limited to " + std::to_string(kMaxDenseUnknowns) + " unknowns (got " +
+                    std::to_string(s.num_parameters) + ")");
+  if (options.gravity_covariance == NetworkOptions::Covariance::kDense && s.num_parameters > kMaxDenseUnknowns)
+    ThrowInvalidArgument("options", "gravity_covariance = dense is limited to " + std::to_string(kMaxDenseUnknowns) +
+                                        " unknowns (got " +
+                                        std::to_string(s.num_parameters) + "); use ceres");
+  if (options.check_datum) CheckDatum(options, layout, problem, &s);
+  RunSolver(options, problem, &s);
+  NetworkState out = ToState(b);
+  ComputePrecision(options, layout, groups, b, n, problem, &out, &s);
   s.seconds_total = total.ElapsedSeconds();
   if (summary) *summary = s;
   return out;
