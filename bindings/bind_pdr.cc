@@ -16,6 +16,7 @@
 #include "indoorloc/pdr/zero_velocity.h"
 #include "indoorloc/pdr/zupt_ekf.h"
 #include "numpy_args.h"
+#include "result_binding.h"
 
 namespace indoorloc::bindings {
 
@@ -80,9 +81,8 @@ Eigen::Vector2d ToStart(const py::object& start) {
   return Eigen::Vector2d(v.map[0], v.map[1]);
 }
 
-py::dict TrackDict(const pdr::StepTrack& t) {
-  py::dict d;
-  d["positions_m"] = t.positions_m;
+/// (M, 3, 3) covariances from the (M, 9) rows of a StepTrack.
+py::array_t<double> CovarianceArray(const pdr::StepTrack& t) {
   py::array_t<double> cov({static_cast<py::ssize_t>(t.covariances.rows()), py::ssize_t{3}, py::ssize_t{3}});
   auto c = cov.mutable_unchecked<3>();
   for (Eigen::Index k = 0; k < t.covariances.rows(); ++k) {
@@ -90,39 +90,107 @@ py::dict TrackDict(const pdr::StepTrack& t) {
       for (int j = 0; j < 3; ++j) c(k, i, j) = t.covariances(k, 3 * i + j);
     }
   }
-  d["covariances"] = cov;
-  d["stride_lengths_m"] = t.stride_lengths_m;
-  d["headings_rad"] = t.headings_rad;
-  return d;
+  return cov;
 }
 
-py::dict CalibrationDict(const pdr::WeinbergCalibration& c) {
-  py::dict d;
-  d["k"] = c.k;
-  d["rms_residual_m"] = c.rms_residual_m;
-  d["n_strides"] = c.n_strides;
-  d["report"] = c.BriefReport();
-  return d;
-}
-py::dict HealthDict(const pdr::ZuptEkfSummary& h) {
-  py::dict d;
-  d["n_samples"] = h.n_samples;
-  d["n_stance_samples"] = h.n_stance_samples;
-  d["n_stance_phases"] = h.n_stance_phases;
-  d["stance_fraction"] = h.stance_fraction;
-  d["walking_stance_fraction"] = h.walking_stance_fraction;
-  d["swing_median_s"] = h.swing_median_s;
-  d["swing_max_s"] = h.swing_max_s;
-  d["speed_at_stance_median_mps"] = h.speed_at_stance_median_mps;
-  d["speed_at_stance_max_mps"] = h.speed_at_stance_max_mps;
-  d["speed_at_stance_rise"] = h.speed_at_stance_rise;
-  d["longest_stride_m"] = h.longest_stride_m;
-  d["median_stride_m"] = h.median_stride_m;
-  d["implausible"] = h.implausible;
-  d["reasons"] = h.reasons;
-  d["seconds"] = h.seconds;
-  d["report"] = h.BriefReport();
-  return d;
+/// The result types of the pdr functions: typed read-only objects that also read as the dicts
+/// they replace (result_binding.h).
+void BindPdrResults(py::module_& m) {
+  using pdr::StepTrack;
+  ResultBinder<StepTrack>(m, "StepTrack", "Positions from strides or increments, with per-step covariances.")
+      .Field("positions_m", [](const StepTrack& t) { return RowMatrixXd(t.positions_m); }, "(M, 2) [m].")
+      .Field("covariances", &CovarianceArray, "(M, 3, 3) of (x [m], y [m], heading error [rad]).")
+      .Field("stride_lengths_m", [](const StepTrack& t) { return Eigen::VectorXd(t.stride_lengths_m); }, "(M,) [m].")
+      .Field("headings_rad", [](const StepTrack& t) { return Eigen::VectorXd(t.headings_rad); }, "(M,) [rad].")
+      .Finish();
+  using pdr::WeinbergCalibration;
+  ResultBinder<WeinbergCalibration>(m, "WeinbergCalibration", "A calibrated Weinberg K.")
+      .Field("k", [](const WeinbergCalibration& c) { return c.k; }, "K [m / (m/s^2)^(1/4)].")
+      .Field("rms_residual_m", [](const WeinbergCalibration& c) { return c.rms_residual_m; })
+      .Field("n_strides", [](const WeinbergCalibration& c) { return c.n_strides; })
+      .Field("report", [](const WeinbergCalibration& c) { return c.BriefReport(); })
+      .Finish();
+  using pdr::ZuptEkfSummary;
+  ResultBinder<ZuptEkfSummary>(m, "ZuptEkfSummary", "Health of a ZUPT EKF run (divergence is reported, never silent).")
+      .Field("n_samples", [](const ZuptEkfSummary& h) { return h.n_samples; })
+      .Field("n_stance_samples", [](const ZuptEkfSummary& h) { return h.n_stance_samples; })
+      .Field("n_stance_phases", [](const ZuptEkfSummary& h) { return h.n_stance_phases; })
+      .Field("stance_fraction", [](const ZuptEkfSummary& h) { return h.stance_fraction; })
+      .Field("walking_stance_fraction", [](const ZuptEkfSummary& h) { return h.walking_stance_fraction; })
+      .Field("swing_median_s", [](const ZuptEkfSummary& h) { return h.swing_median_s; })
+      .Field("swing_max_s", [](const ZuptEkfSummary& h) { return h.swing_max_s; })
+      .Field("speed_at_stance_median_mps", [](const ZuptEkfSummary& h) { return h.speed_at_stance_median_mps; })
+      .Field("speed_at_stance_max_mps", [](const ZuptEkfSummary& h) { return h.speed_at_stance_max_mps; })
+      .Field("speed_at_stance_rise", [](const ZuptEkfSummary& h) { return h.speed_at_stance_rise; })
+      .Field("longest_stride_m", [](const ZuptEkfSummary& h) { return h.longest_stride_m; })
+      .Field("median_stride_m", [](const ZuptEkfSummary& h) { return h.median_stride_m; })
+      .Field("implausible", [](const ZuptEkfSummary& h) { return h.implausible; })
+      .Field("reasons", [](const ZuptEkfSummary& h) { return h.reasons; })
+      .Field("seconds", [](const ZuptEkfSummary& h) { return h.seconds; })
+      .Field("report", [](const ZuptEkfSummary& h) { return h.BriefReport(); })
+      .Finish();
+  using pdr::ZeroVelocityOutput;
+  ResultBinder<ZeroVelocityOutput>(m, "ZeroVelocityOutput", "Stance detection of a recording and how its threshold was set.")
+      .Field("stance", [](const ZeroVelocityOutput& o) { return pdr::BoolVector(o.stance); }, "(N,) bool.")
+      .Field("statistic", [](const ZeroVelocityOutput& o) { return Eigen::VectorXd(o.statistic); }, "(N,) SHOE statistic.")
+      .Field("threshold", [](const ZeroVelocityOutput& o) { return o.summary.threshold; })
+      .Field("base_threshold", [](const ZeroVelocityOutput& o) { return o.summary.base_threshold; })
+      .Field("guard_raised", [](const ZeroVelocityOutput& o) { return o.summary.guard_raised; })
+      .Field("guard_satisfied", [](const ZeroVelocityOutput& o) { return o.summary.guard_satisfied; })
+      .Field("ladder_rungs", [](const ZeroVelocityOutput& o) { return o.summary.ladder_rungs; })
+      .Field("max_swing_s", [](const ZeroVelocityOutput& o) { return o.summary.max_swing_s; })
+      .Field("median_swing_s", [](const ZeroVelocityOutput& o) { return o.summary.median_swing_s; })
+      .Field("stance_fraction", [](const ZeroVelocityOutput& o) { return o.summary.stance_fraction; })
+      .Field("walking_stance_fraction", [](const ZeroVelocityOutput& o) { return o.summary.walking_stance_fraction; })
+      .Field("walking_span", [](const ZeroVelocityOutput& o) {
+               return py::make_tuple(o.summary.walking_begin, o.summary.walking_end);
+             }, "(begin, end) sample indices of the walking span.")
+      .Field("report", [](const ZeroVelocityOutput& o) { return o.summary.BriefReport(); })
+      .Finish();
+  using pdr::StrideCountOutput;
+  ResultBinder<StrideCountOutput>(m, "StrideCountOutput", "Strides counted from a stance sequence.")
+      .Field("stride_indices", [](const StrideCountOutput& o) {
+               return Eigen::Map<const Eigen::VectorXi>(o.stride_indices.data(),
+                                                       static_cast<Eigen::Index>(o.stride_indices.size()))
+                   .cast<std::int64_t>()
+                   .eval();
+             }, "(S,) int64 stance-onset samples.")
+      .Field("cleaned_stance", [](const StrideCountOutput& o) { return pdr::BoolVector(o.cleaned_stance); })
+      .Field("n_strides", [](const StrideCountOutput& o) { return o.summary.n_strides; })
+      .Field("n_flicker_stances", [](const StrideCountOutput& o) { return o.summary.n_flicker_stances; })
+      .Field("n_flicker_swings", [](const StrideCountOutput& o) { return o.summary.n_flicker_swings; })
+      .Field("n_split_strides", [](const StrideCountOutput& o) { return o.summary.n_split_strides; })
+      .Field("median_swing_s", [](const StrideCountOutput& o) { return o.summary.median_swing_s; })
+      .Field("median_stance_s", [](const StrideCountOutput& o) { return o.summary.median_stance_s; })
+      .Field("report", [](const StrideCountOutput& o) { return o.summary.BriefReport(); })
+      .Finish();
+  using pdr::AttitudeOutput;
+  ResultBinder<AttitudeOutput>(m, "AttitudeOutput", "Attitude of a recording by the Mahony filter.")
+      .Field("quaternions_wxyz", [](const AttitudeOutput& o) { return RowMatrixXd(o.quaternions_wxyz); }, "(N, 4).")
+      .Field("gyro_bias_radps", [](const AttitudeOutput& o) { return RowMatrixXd(o.gyro_bias_radps); }, "(N, 3).")
+      .Field("mag_used", [](const AttitudeOutput& o) { return pdr::BoolVector(o.mag_used); }, "(N,) bool.")
+      .Field("mag_rejected", [](const AttitudeOutput& o) { return o.mag_rejected; })
+      .Field("reference_field_norm", [](const AttitudeOutput& o) { return o.reference_field_norm; })
+      .Field("reference_dip_rad", [](const AttitudeOutput& o) { return o.reference_dip_rad; })
+      .Field("seconds", [](const AttitudeOutput& o) { return o.seconds; })
+      .Finish();
+  using pdr::InsZuptIncrements;
+  ResultBinder<InsZuptIncrements>(m, "InsZuptIncrements", "Per-step INS-ZUPT increments (paper 002 eq. 5-6).")
+      .Field("increments_m", [](const InsZuptIncrements& o) { return RowMatrixXd(o.increments_m); }, "(M-1, 3) [m].")
+      .Field("stride_lengths_m", [](const InsZuptIncrements& o) { return Eigen::VectorXd(o.stride_lengths_m); })
+      .Field("velocities_mps", [](const InsZuptIncrements& o) { return RowMatrixXd(o.velocities_mps); }, "(N, 3).")
+      .Finish();
+  using pdr::ZuptEkfOutput;
+  ResultBinder<ZuptEkfOutput>(m, "ZuptEkfOutput", "A ZUPT-aided INS run over a recording.")
+      .Field("positions_m", [](const ZuptEkfOutput& o) { return RowMatrixXd(o.positions_m); }, "(N, 3) [m].")
+      .Field("filtered_positions_m", [](const ZuptEkfOutput& o) { return RowMatrixXd(o.filtered_positions_m); })
+      .Field("velocities_mps", [](const ZuptEkfOutput& o) { return RowMatrixXd(o.velocities_mps); })
+      .Field("headings_rad", [](const ZuptEkfOutput& o) { return Eigen::VectorXd(o.headings_rad); })
+      .Field("quaternions_wxyz", [](const ZuptEkfOutput& o) { return RowMatrixXd(o.quaternions_wxyz); })
+      .Field("position_sd_m", [](const ZuptEkfOutput& o) { return RowMatrixXd(o.position_sd_m); })
+      .Field("seconds", [](const ZuptEkfOutput& o) { return o.seconds; })
+      .Field("health", [](const ZuptEkfOutput& o) { return o.summary; }, "A ZuptEkfSummary.")
+      .Finish();
 }
 
 /// The name zero_velocity's `rule` argument gives a rule.
@@ -138,6 +206,7 @@ const char* ZeroVelocityRuleName(pdr::ZeroVelocityRule rule) {
 }  // namespace
 
 void BindPdr(py::module_& m) {
+  BindPdrResults(m);
   // The keyword defaults of these functions are read from default-constructed Options structs
   // (CONVENTIONS rule 13): the C++ header is the only place a default is written.
   const pdr::ShoeOptions shoe;
@@ -204,22 +273,7 @@ acc_mps2, gyro_radps: (N, 3) in the sensor frame [m/s^2], [rad/s]; window in sam
             py::gil_scoped_release release;
             out = pdr::DetectZeroVelocity(a.map, g.map, rate_hz, o);
           }
-          const pdr::ZeroVelocitySummary& sm = out.summary;
-          py::dict d;
-          d["stance"] = out.stance;
-          d["statistic"] = out.statistic;
-          d["threshold"] = sm.threshold;
-          d["base_threshold"] = sm.base_threshold;
-          d["guard_raised"] = sm.guard_raised;
-          d["guard_satisfied"] = sm.guard_satisfied;
-          d["ladder_rungs"] = sm.ladder_rungs;
-          d["max_swing_s"] = sm.max_swing_s;
-          d["median_swing_s"] = sm.median_swing_s;
-          d["stance_fraction"] = sm.stance_fraction;
-          d["walking_stance_fraction"] = sm.walking_stance_fraction;
-          d["walking_span"] = py::make_tuple(sm.walking_begin, sm.walking_end);
-          d["report"] = sm.BriefReport();
-          return d;
+          return out;
         },
         py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("rate_hz"), py::arg("rule") = std::string(ZeroVelocityRuleName(zero_velocity.rule)),
         py::arg("threshold") = zero_velocity.shoe.threshold, py::arg("max_swing_s") = zero_velocity.max_swing_s, py::arg("max_swing_ratio") = zero_velocity.max_swing_ratio,
@@ -249,17 +303,7 @@ median_swing_s [s], stance_fraction, walking_stance_fraction [0..1], walking_spa
           o.long_swing_factor = long_swing_factor;
           ValidateOptions(o);
           pdr::StrideCountOutput out = pdr::CountStrides(st, rate_hz, o);
-          py::dict d;
-          d["stride_indices"] = Eigen::Map<const Eigen::VectorXi>(out.stride_indices.data(), static_cast<Eigen::Index>(out.stride_indices.size())).cast<std::int64_t>().eval();
-          d["cleaned_stance"] = out.cleaned_stance;
-          d["n_strides"] = out.summary.n_strides;
-          d["n_flicker_stances"] = out.summary.n_flicker_stances;
-          d["n_flicker_swings"] = out.summary.n_flicker_swings;
-          d["n_split_strides"] = out.summary.n_split_strides;
-          d["median_swing_s"] = out.summary.median_swing_s;
-          d["median_stance_s"] = out.summary.median_stance_s;
-          d["report"] = out.summary.BriefReport();
-          return d;
+          return out;
         },
         py::arg("stance"), py::arg("rate_hz"), py::arg("min_stance_s") = stride_count.min_stance_s, py::arg("min_swing_s") = stride_count.min_swing_s,
         py::arg("min_swing_fraction") = stride_count.min_swing_fraction, py::arg("long_swing_factor") = stride_count.long_swing_factor, R"doc(
@@ -345,14 +389,14 @@ calibrate_weinberg_k.)doc");
   m.def("calibrate_weinberg_k", [](const py::object& features, const py::object& lengths) {
           VectorArg f = ToVector(features, "features");
           VectorArg l = ToVector(lengths, "lengths_m", f.map.size());
-          return CalibrationDict(pdr::CalibrateWeinbergK(f.map, l.map));
+          return pdr::CalibrateWeinbergK(f.map, l.map);
         },
         py::arg("features"), py::arg("lengths_m"), R"doc(
 Least-squares Weinberg K = sum(f L) / sum(f^2) from bounce features f (M,) and known stride
 lengths L (M,) [m]. Returns a dict: k, rms_residual_m, n_strides, report.)doc");
   m.def("calibrate_weinberg_k_from_distance", [](const py::object& features, double distance_m) {
           VectorArg f = ToVector(features, "features");
-          return CalibrationDict(pdr::CalibrateWeinbergKFromDistance(f.map, distance_m));
+          return pdr::CalibrateWeinbergKFromDistance(f.map, distance_m);
         },
         py::arg("features"), py::arg("distance_m"), R"doc(
 Weinberg K = D / sum(f) from the bounce features (M,) of a walk of known length D [m].
@@ -404,15 +448,7 @@ each transition to rest after at least min_swing_s [s] of motion. Returns (step 
             py::gil_scoped_release release;
             out = pdr::RunMahony(t.map, a.map, g.map, m, o);
           }
-          py::dict d;
-          d["quaternions_wxyz"] = out.quaternions_wxyz;
-          d["gyro_bias_radps"] = out.gyro_bias_radps;
-          d["mag_used"] = out.mag_used;
-          d["mag_rejected"] = out.mag_rejected;
-          d["reference_field_norm"] = out.reference_field_norm;
-          d["reference_dip_rad"] = out.reference_dip_rad;
-          d["seconds"] = out.seconds;
-          return d;
+          return out;
         },
         py::arg("time_s"), py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("mag") = py::none(), py::arg("kp") = mahony.kp,
         py::arg("ki") = mahony.ki, py::arg("kp_mag") = mahony.kp_mag, py::arg("gravity_mps2") = mahony.gravity_mps2, py::arg("acc_gate_mps2") = mahony.acc_gate_mps2,
@@ -434,7 +470,7 @@ step sample; quaternions_wxyz (N, 4) body -> navigation (z up).)doc");
                                      double sd_sl, double sd_frac, double sd_psi, double sd_psi0) {
           VectorArg l = ToVector(sl, "stride_lengths_m");
           VectorArg h = ToVector(headings, "headings_rad", l.map.size());
-          return TrackDict(pdr::PositionsFromStrides(l.map, h.map, ToStart(start), MakeStepCov(sd_sl, sd_frac, sd_psi, sd_psi0)));
+          return (pdr::PositionsFromStrides(l.map, h.map, ToStart(start), MakeStepCov(sd_sl, sd_frac, sd_psi, sd_psi0)));
         },
         py::arg("stride_lengths_m"), py::arg("headings_rad"), py::arg("start_xy") = std::vector<double>{0.0, 0.0},
         py::arg("sigma_stride_length_m") = step_covariance.sigma_stride_length_m, py::arg("stride_length_sd_fraction") = step_covariance.stride_length_sd_fraction,
@@ -447,7 +483,7 @@ dict: positions_m (M, 2), covariances (M, 3, 3), stride_lengths_m, headings_rad.
   m.def("positions_from_increments", [](const py::object& inc, const py::object& start, double sd_sl, double sd_frac,
                                         double sd_psi, double sd_psi0) {
           MatrixArg d = ToMatrix(inc, "increments_m");
-          return TrackDict(pdr::PositionsFromIncrements(d.map, ToStart(start), MakeStepCov(sd_sl, sd_frac, sd_psi, sd_psi0)));
+          return (pdr::PositionsFromIncrements(d.map, ToStart(start), MakeStepCov(sd_sl, sd_frac, sd_psi, sd_psi0)));
         },
         py::arg("increments_m"), py::arg("start_xy") = std::vector<double>{0.0, 0.0}, py::arg("sigma_stride_length_m") = step_covariance.sigma_stride_length_m,
         py::arg("stride_length_sd_fraction") = step_covariance.stride_length_sd_fraction, py::arg("sigma_heading_step_rad") = step_covariance.sigma_heading_step_rad,
@@ -468,11 +504,7 @@ the per-step covariance of positions_from_strides (SL = |dP_xy|, heading = atan2
             py::gil_scoped_release release;
             out = pdr::ComputeInsZuptIncrements(t.map, a.map, q.map, steps, o);
           }
-          py::dict d;
-          d["increments_m"] = out.increments_m;
-          d["stride_lengths_m"] = out.stride_lengths_m;
-          d["velocities_mps"] = out.velocities_mps;
-          return d;
+          return out;
         },
         py::arg("time_s"), py::arg("acc_mps2"), py::arg("quaternions_wxyz"), py::arg("step_indices"), py::arg("window_s") = ins_zupt.window_s,
         py::arg("gravity_mps2") = ins_zupt.gravity_mps2, R"doc(
@@ -511,16 +543,7 @@ dict: increments_m (M-1, 3), stride_lengths_m (M-1,) (eq. 6), velocities_mps (N,
             py::gil_scoped_release release;
             out = pdr::RunZuptEkf(t.map, a.map, g.map, st, o);
           }
-          py::dict d;
-          d["positions_m"] = out.positions_m;
-          d["filtered_positions_m"] = out.filtered_positions_m;
-          d["velocities_mps"] = out.velocities_mps;
-          d["headings_rad"] = out.headings_rad;
-          d["quaternions_wxyz"] = out.quaternions_wxyz;
-          d["position_sd_m"] = out.position_sd_m;
-          d["seconds"] = out.seconds;
-          d["health"] = HealthDict(out.summary);
-          return d;
+          return out;
         },
         py::arg("time_s"), py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("stance"), py::arg("sigma_acc_mps2") = zupt_ekf.sigma_acc_mps2,
         py::arg("sigma_gyro_radps") = zupt_ekf.sigma_gyro_radps, py::arg("sigma_zupt_mps") = zupt_ekf.sigma_zupt_mps, py::arg("gravity_mps2") = zupt_ekf.gravity_mps2,

@@ -41,9 +41,9 @@ from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 import numpy as np
 
 from indoorloc import fusion
-from indoorloc import pdr_handheld as ph
-from indoorloc import wifi_crowdsource as wc
-from indoorloc import wifi_matcher as wm
+from indoorloc import pdr_handheld
+from indoorloc import wifi_crowdsource
+from indoorloc import wifi_matcher
 from indoorloc.validate import integer, real_array, real_scalar
 
 METRICS = ("shared", "strongest", "union")
@@ -144,7 +144,7 @@ def fresh_scans(walk: Any, fresh_age_s: float, bssids: Optional[Sequence[str]] =
     wf = walk.wifi
     names = list(wf.bssids) if bssids is None else list(bssids)
     index = {b: i for i, b in enumerate(names)}
-    epochs = wc.scan_epochs(wf, fresh_age_s)
+    epochs = wifi_crowdsource.scan_epochs(wf, fresh_age_s)
     keep = np.flatnonzero(np.isfinite(epochs))
     rss = np.full((keep.size, len(names)), np.nan)
     if wf.n_readings and keep.size:
@@ -182,7 +182,7 @@ class FingerprintDatabase:
             self.walk_index = np.zeros(self.positions_m.shape[0], dtype=np.int64)
         if self.ap_ratio is None:
             self.ap_ratio = np.ones(self.rss_dbm.shape[1])
-        self._index: Optional[wm.ReferenceIndex] = None
+        self._index: Optional[wifi_matcher.ReferenceIndex] = None
 
     def with_settings(self, settings: FixSettings) -> "FingerprintDatabase":
         """The same fingerprints with other fix settings. What was fixed at the build stays: the
@@ -199,12 +199,12 @@ class FingerprintDatabase:
         return int(self.positions_m.shape[0])
 
     @property
-    def index(self) -> wm.ReferenceIndex:
+    def index(self) -> wifi_matcher.ReferenceIndex:
         """The fingerprints prepared for the "shared" metric (built once)."""
         if self._index is None:
             s = self.settings
             g = self.ap_ratio ** s.ap_weight_power if s.ap_weight_power else None
-            self._index = wm.ReferenceIndex.build(self.rss_dbm, g, s.strength_scale_db)
+            self._index = wifi_matcher.ReferenceIndex.build(self.rss_dbm, g, s.strength_scale_db)
         return self._index
 
 
@@ -216,14 +216,14 @@ def _walk_fingerprints(walk: Any, s: FixSettings, positions_at: Callable[[np.nda
         if t.size == 0:
             return None
     else:
-        meas = wm.walk_measurements(walk)
+        meas = wifi_matcher.walk_measurements(walk)
         names = list(meas.bssids)
         wt = np.asarray(walk.waypoint_t_s, float)
         if meas.n == 0 or wt.size == 0:
             return None
         # Reference times along the surveyed part of the walk (positions_at drops what it cannot place).
         t = np.arange(wt[0], wt[-1] + 1e-9, s.ref_spacing_s)
-        rss, _, n_used = wm.pool_windows(meas.t_s, meas.bssid_index, meas.rssi_dbm, len(names), t,
+        rss, _, n_used = wifi_matcher.pool_windows(meas.t_s, meas.bssid_index, meas.rssi_dbm, len(names), t,
                                          s.ref_window_s / 2, s.ref_window_s / 2)
         t, rss = t[n_used > 0], rss[n_used > 0]
         if t.size == 0:
@@ -235,8 +235,8 @@ def _walk_fingerprints(walk: Any, s: FixSettings, positions_at: Callable[[np.nda
 
 
 def build_database(train_walks: Sequence[Any], settings: Optional[FixSettings] = None,
-                   steps: Optional[Sequence[ph.HandheldSteps]] = None,
-                   map_settings: Optional[wc.CrowdMapSettings] = None,
+                   steps: Optional[Sequence[pdr_handheld.HandheldSteps]] = None,
+                   map_settings: Optional[wifi_crowdsource.CrowdMapSettings] = None,
                    floors: Optional[Sequence[int]] = None,
                    positions_at: Optional[Sequence[Callable[[np.ndarray], Tuple[np.ndarray, np.ndarray]]]] = None
                    ) -> FingerprintDatabase:
@@ -265,7 +265,7 @@ def build_database(train_walks: Sequence[Any], settings: Optional[FixSettings] =
             where = positions_at[i]
         else:
             def where(t, walk=walk, i=i):
-                pos = wc.walk_positions(walk, t, map_settings, None if steps is None else steps[i])
+                pos = wifi_crowdsource.walk_positions(walk, t, map_settings, None if steps is None else steps[i])
                 return pos.xy_m, pos.valid
         got = _walk_fingerprints(walk, s, where)
         if got is not None:
@@ -296,7 +296,7 @@ def build_database(train_walks: Sequence[Any], settings: Optional[FixSettings] =
     walk_idx = np.concatenate([p[4] for p in per_walk])
     ratio = None
     if s.metric == "shared":  # also when α = 0, so that with_settings can turn the weights on
-        ratio = wm.ap_reliability(rss_all, xy_all, walk_idx, 1.0, s.pair_radius_m)
+        ratio = wifi_matcher.ap_reliability(rss_all, xy_all, walk_idx, 1.0, s.pair_radius_m)
     return FingerprintDatabase(rss_all, xy_all, vocab, s, np.concatenate([p[3] for p in per_walk]), walk_idx, ratio)
 
 
@@ -312,14 +312,14 @@ def walk_queries(walk: Any, database: FingerprintDatabase) -> Tuple[np.ndarray, 
     if s.pooling == "fresh":
         t, rss, _ = fresh_scans(walk, s.fresh_age_s, database.bssids)
     else:
-        meas = wm.walk_measurements(walk)
+        meas = wifi_matcher.walk_measurements(walk)
         cols = meas.columns({b: i for i, b in enumerate(database.bssids)})
         scan_t = np.unique(np.asarray(walk.wifi.scan_times_s, float))
         if s.query_align == "end":
-            rss, t, _ = wm.pool_windows(meas.t_s, cols, meas.rssi_dbm, len(database.bssids), scan_t,
+            rss, t, _ = wifi_matcher.pool_windows(meas.t_s, cols, meas.rssi_dbm, len(database.bssids), scan_t,
                                         s.query_window_s, 0.0, meas.reported_s)
         else:
-            rss, t, _ = wm.pool_windows(meas.t_s, cols, meas.rssi_dbm, len(database.bssids), scan_t,
+            rss, t, _ = wifi_matcher.pool_windows(meas.t_s, cols, meas.rssi_dbm, len(database.bssids), scan_t,
                                         s.query_window_s / 2, s.query_window_s / 2)
     ok = np.isfinite(rss).sum(axis=1) >= s.min_aps
     t, rss = t[ok], rss[ok]
@@ -387,7 +387,7 @@ def dissimilarity(queries_dbm: np.ndarray, database: "FingerprintDatabase") -> n
     """The database's metric (``settings.metric``) of every query (Q, K) to every fingerprint: (Q, N) [dB]."""
     s = database.settings
     if s.metric == "shared":
-        return wm.shared_dissimilarity(queries_dbm, database.index, s.penalty_db)
+        return wifi_matcher.shared_dissimilarity(queries_dbm, database.index, s.penalty_db)
     if s.metric == "strongest":
         return strongest_ap_dissimilarity(queries_dbm, database.rss_dbm, s.strongest_n, s.not_heard_dbm)
     return scan_dissimilarity(queries_dbm, database.rss_dbm, s.unshared_cost_db)
@@ -402,7 +402,7 @@ def fixes_for_walk(walk: Any, database: FingerprintDatabase, with_floors: bool =
     k = min(s.k, database.n_scans)
     if t.size == 0:
         return fusion.Fixes.from_arrays(np.zeros(0), np.zeros((0, k, 2)), np.zeros((0, k)), np.zeros((0, k)))
-    best, d_best, weights = wm.knn(dissimilarity(rss, database), k, s.temperature_db)
+    best, d_best, weights = wifi_matcher.knn(dissimilarity(rss, database), k, s.temperature_db)
     floors = database.floors[best] if with_floors else None
     return fusion.Fixes.from_arrays(t, database.positions_m[best], fix_sds(d_best[:, 0], s), weights, floors)
 
@@ -426,7 +426,7 @@ def locate_scans(rss_dbm: np.ndarray, database: FingerprintDatabase) -> np.ndarr
     """WiFi-only positions (Q, 2) [m] of fingerprints (Q, K in the database's columns, NaN = not
     heard): the weight-averaged position of each one's fix components (the kNN estimate)."""
     s = database.settings
-    best, db, w = wm.knn(dissimilarity(rss_dbm, database), s.k, s.temperature_db)
+    best, db, w = wifi_matcher.knn(dissimilarity(rss_dbm, database), s.k, s.temperature_db)
     w_sum = w.sum(axis=1, keepdims=True)
     pos = (w[:, :, None] * database.positions_m[best]).sum(axis=1) / np.where(w_sum > 0, w_sum, 1.0)
     return np.where(w_sum > 0, pos, np.nan)
