@@ -175,8 +175,11 @@ successor_rule : {"catalog", "incremental"}
              py::gil_scoped_release release;
              return std::make_shared<AnalogHMM>(catalog, o);
            }),
-           py::arg("catalog"), py::arg("k") = 10, py::arg("observed") = std::vector<int>{0}, py::arg("R"),
-           py::arg("sigma_scale") = 1.0, py::arg("successor_rule") = "catalog")
+           py::arg("catalog"), py::arg("k") = AnalogHmmOptions().k, py::arg("observed") = std::vector<int>{0}, py::arg("R"),
+           py::arg("sigma_scale") = AnalogHmmOptions().sigma_scale,
+           py::arg("successor_rule") = AnalogHmmOptions().successor_rule == analog::SuccessorRule::kCatalog
+                                           ? "catalog"
+                                           : "incremental")
       .def_property_readonly("transitions_next", [](const AnalogHMM& h) {
         const auto& t = h.transitions();
         return Eigen::Map<const Eigen::Matrix<int, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(t.next.data(), t.num_states, t.k);
@@ -217,8 +220,10 @@ successor_rule : {"catalog", "incremental"}
              d["seconds"] = out.seconds;
              return d;
            },
-           py::arg("observations"), py::arg("beam") = py::none(), py::arg("beam_unobserved") = 0,
-           py::arg("max_dropped_mass") = 1.0, py::arg("beam_max") = 0, py::arg("initial") = py::none(), R"doc(
+           py::arg("observations"), py::arg("beam") = py::none(),
+           py::arg("beam_unobserved") = analog::SmoothOptions().beam_unobserved,
+           py::arg("max_dropped_mass") = analog::SmoothOptions().max_dropped_mass,
+           py::arg("beam_max") = analog::SmoothOptions().beam_max, py::arg("initial") = py::none(), R"doc(
 Forward-backward on observations (T, m) (NaN = missing). beam=None: exact; beam=N: truncated
 (paper §2.3); beam_unobserved: a wider beam at steps with no observation (0: same as beam);
 max_dropped_mass: mass-adaptive beam, keep more than N states (most likely first) until at most

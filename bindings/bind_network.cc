@@ -341,8 +341,9 @@ Returns (smoothed state dict, filtered state dict, summary dict).)doc").c_str())
           }
           return Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor>(x);
         },
-        py::arg("time_s"), py::arg("position_m"), py::arg("radius_m") = 5.0, py::arg("max_height_difference_m") = 50.0,
-        py::arg("min_separation_s") = 30.0, R"doc(
+        py::arg("time_s"), py::arg("position_m"), py::arg("radius_m") = network::CrossoverOptions().radius_m,
+        py::arg("max_height_difference_m") = network::CrossoverOptions().max_height_difference_m,
+        py::arg("min_separation_s") = network::CrossoverOptions().min_separation_s, R"doc(
 Cross-overs of a trajectory: (K, 2) int epoch pairs (n < k) at most radius_m apart horizontally,
 |dh| <= max_height_difference_m, at least min_separation_s apart in time; one (the closest) per
 crossing of two passes. time_s (N,) [s], position_m (N, 3) ENU [m].)doc");

@@ -113,7 +113,8 @@ Build a map from raw scans: rss_dbm (S, K_all) with a not-heard sentinel or NaN,
              MatrixArg rss = ToMatrix(rss_dbm, "rss_dbm", -1, -1, Finiteness::kAny);
              return map.PrepareScans(rss.map, sentinel, not_heard_dbm);
            },
-           py::arg("rss_dbm"), py::arg("not_heard_sentinel") = 100.0, py::arg("not_heard_dbm") = -105.0,
+           py::arg("rss_dbm"), py::arg("not_heard_sentinel") = SignalMapOptions().not_heard_sentinel,
+           py::arg("not_heard_dbm") = SignalMapOptions().not_heard_dbm,
            "Select the map's AP columns from raw scans (S, K_all) and apply the not-heard model.")
       .def_property_readonly("num_points", &SignalMap::num_points)
       .def_property_readonly("num_access_points", &SignalMap::num_access_points)
