@@ -90,7 +90,8 @@ py::array_t<double> DensePosterior(const analog::SparsePosteriors& p, int m) {
 
 }  // namespace
 
-void BindAnalog(py::module_& m) {
+/// The catalog of analogs (states and their successors).
+static void BindCatalog(py::module_& m) {
   py::class_<Catalog, std::shared_ptr<Catalog>>(m, "Catalog", R"doc(
 Catalog of (analog, successor) pairs from historical trajectories (paper 001, eq. 2 and 6).
 
@@ -134,7 +135,10 @@ stride : int
            },
            py::arg("queries"), py::arg("k"),
            "Exact K nearest analogs of queries (Q, D): (indices into `analogs` (Q, K), squared distances (Q, K)).");
+}
 
+/// The analog HMM and its smoother.
+static void BindAnalogHmm(py::module_& m) {
   py::class_<AnalogHMM, std::shared_ptr<AnalogHMM>>(m, "AnalogHMM", R"doc(
 Analog HMM (paper 001 §2.2): kNN transitions (eq. 4, adaptive σ) and Gaussian observations of
 selected state components with covariance R (eq. 5).
@@ -247,7 +251,10 @@ log_likelihood, dropped_mass (T,), support_size (T,), seconds.)doc")
              return d;
            },
            py::arg("observations"), py::arg("beam") = py::none(), "MAP state sequence (Viterbi): dict indices (T,), states (T, D).");
+}
 
+/// forward_backward and viterbi on explicit sparse transitions.
+static void BindSparseHmmAlgorithms(py::module_& m) {
   m.def("forward_backward", [](const py::object& next_idx, const py::object& prob, const py::object& log_emission,
                                const py::object& initial, const py::object& beam) {
           const GenericHmm h(next_idx, prob, log_emission, initial, beam);
@@ -278,6 +285,12 @@ dense posterior (T, M), filtering (T, M), log_likelihood, dropped_mass (T,), sec
         },
         py::arg("next_idx"), py::arg("prob"), py::arg("log_emission"), py::arg("initial"), py::arg("beam") = py::none(),
         "MAP path (T,) and its log-probability for an HMM given as in forward_backward.");
+}
+
+void BindAnalog(py::module_& m) {
+  BindCatalog(m);
+  BindAnalogHmm(m);
+  BindSparseHmmAlgorithms(m);
 }
 
 }  // namespace indoorloc::bindings

@@ -53,7 +53,8 @@ py::array_t<double> DrawMany(RandomStream& rng, py::ssize_t size, const char* na
 
 }  // namespace
 
-void BindCore(py::module_& m) {
+/// Seeds and the counter-based random streams.
+static void BindRandomStreams(py::module_& m) {
   m.def("derive_seed", &DeriveSeed, py::arg("seed"), py::arg("stream"),
         "Seed of stream `stream` derived from `seed` (SplitMix64 hash); both are uint64.");
 
@@ -87,7 +88,10 @@ pairs are independent; the same pair always gives the same numbers on every plat
            }, py::arg("n"), py::arg("size"), "Array of `size` uniform integers in [0, n).")
       .def("split", &RandomStream::Split, py::arg("child"),
            "An independent child stream derived from this one (this stream advances one draw).");
+}
 
+/// Log-weight arithmetic: log-sum-exp, normalisation, ESS.
+static void BindLogWeights(py::module_& m) {
   m.def("log_sum_exp", [](const py::object& log_weights) {
           // C++ validates log-weights itself (NaN, +inf, all -inf), naming the entry.
           VectorArg lw = ToVector(log_weights, "log_weights", -1, Finiteness::kAny);
@@ -111,7 +115,10 @@ Normalise log-weights. Returns ``(normalized_log_weights, log_normalizer)`` wher
           return EffectiveSampleSize(lw.map);
         }, py::arg("log_weights"),
         "Effective sample size (sum w)^2 / sum w^2 of unnormalised log-weights, in [1, N].");
+}
 
+/// Resampling schemes, adaptive resampling and its options.
+static void BindResampling(py::module_& m) {
   m.def("resample", [](const py::object& log_weights, const std::string& scheme,
                        const py::object& rng, int num_out) {
           // C++ validates log-weights itself (NaN, +inf, all -inf), naming the entry.
@@ -207,6 +214,12 @@ Adaptive resampling step of a particle filter (paper 000, eq. 14).
 
 Returns ``(ancestors, log_weights, summary)``: ancestors (N,) int64 (identity if no resampling),
 the normalised (or reset to uniform) log-weights (N,), and a ResamplingSummary.)doc");
+}
+
+void BindCore(py::module_& m) {
+  BindRandomStreams(m);
+  BindLogWeights(m);
+  BindResampling(m);
 }
 
 }  // namespace indoorloc::bindings

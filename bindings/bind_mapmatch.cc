@@ -87,7 +87,8 @@ py::dict EstimatesToDict(const std::vector<StepEstimate>& e) {
 
 }  // namespace
 
-void BindMapmatch(py::module_& m) {
+/// The road network.
+static void BindRoadNetwork(py::module_& m) {
   py::class_<RoadNetwork, std::shared_ptr<RoadNetwork>>(m, "RoadNetwork", R"doc(
 Straight segments with connectivity at their ends (paper 000 §II.B) and a spatial index.
 
@@ -165,7 +166,10 @@ split_at_intersections : bool
            }, py::arg("segment"), py::arg("along_m"))
       .def("report", &RoadNetwork::Report, "Validation report: sizes, components, dangling ends.")
       .def("__repr__", [](const RoadNetwork& n) { return "<RoadNetwork " + n.Report() + ">"; });
+}
 
+/// Simulated vehicle runs.
+static void BindTrajectorySimulation(py::module_& m) {
   py::class_<TrajectoryOptions> trajectory_options(m, "TrajectoryOptions",
                                                     "Simulated vehicle runs (paper 000 §III); fields by keyword.");
   trajectory_options.def_readwrite("duration_s", &TrajectoryOptions::duration_s, "Run length [s].")
@@ -188,7 +192,10 @@ split_at_intersections : bool
         py::arg("network"), py::arg("options") = TrajectoryOptions(), py::arg("seed") = 0, py::arg("stream") = 0, R"doc(
 One simulated run: dict with positions_m (T, 2), segments (T,), heading_true_rad, speed_mps
 (odometer), heading_rad (compass), speed_bias_mps, start_m. Sample k is at time (k + 1) dt.)doc");
+}
 
+/// The circular particle filter, its options and the Monte Carlo study.
+static void BindParticleMapMatcher(py::module_& m) {
   py::class_<FilterOptions> filter_options(
       m, "FilterOptions", "Options of the circular particle filter (see docs/mapmatch.md); fields by keyword.");
   filter_options.def_readwrite("num_particles", &FilterOptions::num_particles)
@@ -319,6 +326,12 @@ Paper 000 §III Monte Carlo: n_runs simulated runs, each filtered; run r uses st
 and (seed, 2r + 1), so results do not depend on n_threads (0 = all cores). Returns a dict of
 (R, T) arrays error_m, smoothed_error_m, correct_segment, tracking and (R,) speed_bias_mps,
 filter_seconds, recoveries.)doc");
+}
+
+void BindMapmatch(py::module_& m) {
+  BindRoadNetwork(m);
+  BindTrajectorySimulation(m);
+  BindParticleMapMatcher(m);
 }
 
 }  // namespace indoorloc::bindings

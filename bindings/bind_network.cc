@@ -134,7 +134,8 @@ sgupt_epochs : (S,) int static epochs with constant gravity (SGUPT, paper §3.2)
 
 }  // namespace
 
-void BindNetwork(py::module_& m) {
+/// Options of the network adjustment and of the Kalman smoother baseline.
+static void BindNetworkOptions(py::module_& m) {
   py::class_<network::NetworkOptions> network_options(m, "NetworkOptions", R"doc(
 Options of the network adjustment (see cpp/include/indoorloc/network/network_adjustment.h).
 discretization: "leapfrog" (paper §3.3; decouples even and odd epochs) or "trapezoidal".
@@ -224,7 +225,10 @@ tolerances; check_datum. Set fields by keyword (``NetworkOptions(sigma_gps_m=0.5
       .def_readwrite("init_sigma_gravity_mps2", &network::KalmanSmootherOptions::init_sigma_gravity_mps2)
       .def_readwrite("smooth", &network::KalmanSmootherOptions::smooth);
   BindOptionsProtocol(kalman_smoother_options, "KalmanSmootherOptions");
+}
 
+/// solve_network and the kalman_smoother baseline.
+static void BindNetworkSolvers(py::module_& m) {
   m.def("solve_network",
         [](const py::object& imu_time_s, const py::object& acc, const py::object& gyro, const py::object& gps_time_s,
            const py::object& gps_position_m, const py::dict& initial, const py::object& zupt_epochs,
@@ -325,7 +329,10 @@ State-space baseline (SSA): error-state EKF + RTS smoother with the model and no
 )doc") + kObservationsDoc + R"doc(
 initial : dict with the keys of solve_network, shape (1, .) or (N, .): only row 0 is used.
 Returns (smoothed state dict, filtered state dict, summary dict).)doc").c_str());
+}
 
+/// Cross-overs of a trajectory, normal gravity and the earth rate.
+static void BindNetworkGeodesy(py::module_& m) {
   m.def("find_crossovers",
         [](const py::object& time_s, const py::object& position_m, double radius_m, double max_dh, double min_sep) {
           VectorArg t = ToVector(time_s, "time_s");
@@ -365,6 +372,12 @@ crossing of two passes. time_s (N,) [s], position_m (N, 3) ENU [m].)doc");
           return Eigen::Vector3d(network::EarthRateEnu(latitude_rad));
         },
         py::arg("latitude_rad"), "Earth rotation vector (3,) in the local ENU frame [rad/s].");
+}
+
+void BindNetwork(py::module_& m) {
+  BindNetworkOptions(m);
+  BindNetworkSolvers(m);
+  BindNetworkGeodesy(m);
 }
 
 }  // namespace indoorloc::bindings

@@ -43,10 +43,8 @@ std::string RuleName(network::Discretisation rule) {
 
 }  // namespace
 
-void BindNetworkScale(py::module_& m) {
-  // Keyword defaults equal to a struct's default are read from it (the struct is the one place a
-  // default is written); the scenario sizes of the folded and crossover benchmarks (50 Hz, 2 Hz
-  // GPS, their durations) are those scenarios' own and stay literal.
+/// The folded repeated-pass network (block-tridiagonal elimination with checkpoints).
+static void BindFoldedNetwork(py::module_& m) {
   const network::LinearInsNetworkOptions linear;
   const network::FoldedNetworkOptions folded;
   m.def(
@@ -130,7 +128,11 @@ dict: imu_epochs, gps_epochs, unknowns, ties, gupts, equations, folded_blocks,
 folded_block_size, factor_seconds, backward_seconds, total_seconds [s], stored_factor_bytes,
 min_relative_pivot, max_abs_error (every unknown, against the noise-free truth), gravity_rmse
 [m/s²], gravity_sigma (E, 3) [m/s²], gravity_estimate (E, 3) [m/s²] or empty, report.)doc");
+}
 
+/// The survey network with cross-over ties, solved by PCG.
+static void BindCrossoverNetwork(py::module_& m) {
+  const network::LinearInsNetworkOptions linear;
   m.def(
       "solve_linear_ins_network_with_crossovers",
       [](double imu_rate_hz, double duration_s, double gps_rate_hz, const std::string& rule, int lines, int cross_lines,
@@ -184,7 +186,11 @@ conjugate gradients preconditioned with the stored banded factor. Paper Table 2 
 Returns a dict: sizes, crossings, ties, factor_seconds, factor_bytes, pcg_iterations,
 pcg_seconds, pcg_relative_residual, pcg_converged, max_abs_error and gravity_rmse [m/s²]
 against the noise-free truth, total_seconds, report.)doc");
+}
 
+/// The linear INS network through Ceres, its equations and its normal blocks.
+static void BindLinearInsNetworkParts(py::module_& m) {
+  const network::LinearInsNetworkOptions linear;
   m.def(
       "solve_linear_ins_network_ceres",
       [](double imu_rate_hz, double duration_s, double gps_rate_hz, const std::string& rule, int prior_epochs,
@@ -306,7 +312,12 @@ sigma_gupt, imu_epochs. Unknowns per epoch: δr, δv, ψ, accelerometer bias, gy
       py::arg("rule") = RuleName(linear.rule), py::arg("prior_epochs") = linear.prior_epochs, R"doc(
 The normal equations of the linearised INS/GPS network as dense blocks, for solving it with other
 libraries: diagonal (n, b, b) = A_ii, lower (n, b, b) = A_{i,i-1} (lower[0] is zero), rhs (n, b).)doc");
+}
 
+/// The linear INS network solved directly (Cholesky or QR).
+static void BindLinearInsNetworkSolve(py::module_& m) {
+  const network::LinearInsNetworkOptions linear;
+  const network::FoldedNetworkOptions folded;
   m.def(
       "solve_linear_ins_network",
       [](double imu_rate_hz, double duration_s, double gps_rate_hz, const std::string& rule, bool gravity_covariance,
@@ -404,6 +415,16 @@ dict: sizes (imu_epochs, gps_epochs, unknowns, equations, block_size, num_blocks
 min_relative_pivot_unknown (where it was seen), max_abs_error against the noise-free truth with
 max_abs_error_by_unknown (18,) and max_abs_error_epoch, gravity_rmse [m/s²], gravity_sigma (E, 3)
 [m/s²], gravity_estimate, report.)doc");
+}
+
+void BindNetworkScale(py::module_& m) {
+  // Keyword defaults equal to a struct's default are read from it (the struct is the one place a
+  // default is written); the scenario sizes of the folded and crossover benchmarks (50 Hz, 2 Hz
+  // GPS, their durations) are those scenarios' own and stay literal.
+  BindFoldedNetwork(m);
+  BindCrossoverNetwork(m);
+  BindLinearInsNetworkParts(m);
+  BindLinearInsNetworkSolve(m);
 }
 
 }  // namespace indoorloc::bindings

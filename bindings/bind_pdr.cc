@@ -205,21 +205,11 @@ const char* ZeroVelocityRuleName(pdr::ZeroVelocityRule rule) {
 
 }  // namespace
 
-void BindPdr(py::module_& m) {
-  BindPdrResults(m);
-  // The keyword defaults of these functions are read from default-constructed Options structs
-  // (CONVENTIONS rule 13): the C++ header is the only place a default is written.
+/// Stance detection (SHOE and the adaptive detector) and stride counting.
+static void BindZeroVelocity(py::module_& m) {
   const pdr::ShoeOptions shoe;
   const pdr::ZeroVelocityOptions zero_velocity;
   const pdr::StrideCountOptions stride_count;
-  const pdr::AccelerationStepOptions acceleration_steps;
-  const pdr::GyroStepOptions gyro_steps;
-  const pdr::WeinbergOptions weinberg;
-  const pdr::MagneticStepOptions magnetic_steps;
-  const pdr::MahonyOptions mahony;
-  const pdr::StepCovarianceOptions step_covariance;
-  const pdr::InsZuptOptions ins_zupt;
-  const pdr::ZuptEkfOptions zupt_ekf;
   m.def("shoe_statistic", [](const py::object& acc, const py::object& gyro, int window, double sigma_acc, double sigma_gyro,
                              double gravity) {
           MatrixArg a = ToMatrix(acc, "acc_mps2", -1, 3);
@@ -314,6 +304,14 @@ flicker; a swing longer than long_swing_factor x the median swing (0 disables) c
 round(length / median) strides. Returns a dict: stride_indices (S,) int64 stance onsets,
 cleaned_stance (N,) bool, n_strides, n_flicker_stances, n_flicker_swings, n_split_strides,
 median_swing_s, median_stance_s [s], report.)doc");
+}
+
+/// Step detectors, filters and the Weinberg stride length.
+static void BindStepDetection(py::module_& m) {
+  const pdr::AccelerationStepOptions acceleration_steps;
+  const pdr::GyroStepOptions gyro_steps;
+  const pdr::WeinbergOptions weinberg;
+  const pdr::MagneticStepOptions magnetic_steps;
   m.def("steps_acceleration", [](const py::object& acc, double rate_hz, double window_s, bool adaptive, double swing_threshold,
                                  double stance_threshold, double swing_fraction, double stance_fraction, double min_step_interval_s) {
           MatrixArg a = ToMatrix(acc, "acc_mps2", -1, 3);
@@ -423,6 +421,13 @@ per axis of mag (N, 3) (any unit, e.g. uT), |m_hp| thresholded at threshold_frac
 percentile, median filter (median_window_s [s]), rests shorter than min_rest_s [s] merged, a step at
 each transition to rest after at least min_swing_s [s] of motion. Returns (step sample indices,
 |m_hp| (N,) in the unit of mag).)doc");
+}
+
+/// Attitude, stance headings and positions from strides or increments.
+static void BindAttitudeAndPositions(py::module_& m) {
+  const pdr::MahonyOptions mahony;
+  const pdr::StepCovarianceOptions step_covariance;
+  const pdr::InsZuptOptions ins_zupt;
   m.def("attitude_mahony", [](const py::object& time_s, const py::object& acc, const py::object& gyro, const py::object& mag,
                               double kp, double ki, double kp_mag, double gravity, double acc_gate, double norm_tol,
                               double dip_tol, int init_samples) {
@@ -513,6 +518,11 @@ Paper 002 §IV.B (steps 1-5, eq. 5-6): rotate acc_mps2 (N, 3) [m/s^2] by quatern
 the mean velocity over +-window_s [s] around each step sample, linearly interpolated between
 steps, and sum each step. step_indices: M >= 2 strictly increasing stance samples. Returns a
 dict: increments_m (M-1, 3), stride_lengths_m (M-1,) (eq. 6), velocities_mps (N, 3).)doc");
+}
+
+/// The ZUPT-aided INS.
+static void BindZuptEkf(py::module_& m) {
+  const pdr::ZuptEkfOptions zupt_ekf;
   m.def("zupt_ekf", [](const py::object& time_s, const py::object& acc, const py::object& gyro, const py::object& stance,
                        double sigma_acc, double sigma_gyro, double sigma_zupt, double gravity, int init_samples, bool smooth,
                        double sigma_stance_heading, double min_stance_fraction, double max_plausible_swing_s,
@@ -564,6 +574,16 @@ median_stride_m [m],
 implausible (bool), reasons (list of str), report (one line). The limits min_stance_fraction,
 max_plausible_swing_s [s], max_plausible_stride_m and max_median_stride_m [m], max_stance_speed_mps [m/s],
 speed_rise_factor and min_rising_speed_mps [m/s] only flag (defaults calibrated in docs/pdr.md).)doc");
+}
+
+void BindPdr(py::module_& m) {
+  BindPdrResults(m);
+  // The keyword defaults of these functions are read from default-constructed Options structs
+  // (CONVENTIONS rule 13): the C++ header is the only place a default is written.
+  BindZeroVelocity(m);
+  BindStepDetection(m);
+  BindAttitudeAndPositions(m);
+  BindZuptEkf(m);
 }
 
 }  // namespace indoorloc::bindings

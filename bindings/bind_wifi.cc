@@ -68,7 +68,8 @@ py::dict FixesToDict(const std::vector<WifiFix>& fixes) {
 
 }  // namespace
 
-void BindWifi(py::module_& m) {
+/// Signal maps and their options.
+static void BindSignalMap(py::module_& m) {
   py::class_<SignalMapOptions> signal_map_options(m, "SignalMapOptions",
                                                    "How raw scans become a signal map; fields by keyword.");
   signal_map_options
@@ -130,7 +131,10 @@ Build a map from raw scans: rss_dbm (S, K_all) with a not-heard sentinel or NaN,
                std::to_string(map.num_access_points()) + " APs, " +
                std::to_string(map.distinct_floors().size()) + " floor(s)>";
       });
+}
 
+/// The Delaunay interpolator of a signal map.
+static void BindDelaunayInterpolator(py::module_& m) {
   py::class_<DelaunayInterpolator, std::shared_ptr<DelaunayInterpolator>>(m, "DelaunayInterpolator", R"doc(
 Piecewise-linear interpolation of fields over a CGAL Delaunay triangulation, with gradients.)doc")
       .def(py::init([](const py::object& positions_m, const py::object& fields) {
@@ -175,7 +179,10 @@ query's triangle as the search hint (paths).)doc")
       .def_property_readonly("num_points", &DelaunayInterpolator::num_points)
       .def_property_readonly("num_fields", &DelaunayInterpolator::num_fields)
       .def_property_readonly("num_triangles", &DelaunayInterpolator::num_triangles);
+}
 
+/// The Gaussian RSS model and its options.
+static void BindRssModel(py::module_& m) {
   py::class_<RssModelOptions> rss_model_options(m, "RssModelOptions", "Options of the RSS model; fields by keyword.");
   rss_model_options
       .def_readwrite("variance_floor_db2", &RssModelOptions::variance_floor_db2, "Lower bound of a variance [dB^2].")
@@ -276,7 +283,10 @@ l(z, v) [nats], its gradient (2,) [1/m] and the Fisher information (2, 2) [1/m^2
            py::arg("points_m"), py::arg("floor") = 0, py::arg("seed") = 0, R"doc(
 Simulated mode (paper §5.6.1): one Gaussian RSS vector per point (Q, 2) drawn from the
 interpolated model, (Q, K) [dBm]. Stream `seed` of indoorloc's generator.)doc");
+}
 
+/// The gradient tracker and its options.
+static void BindGradientTracker(py::module_& m) {
   py::class_<GradientTrackerOptions> gradient_tracker_options(
       m, "GradientTrackerOptions", "Step control of the gradient tracker; fields by keyword.");
   gradient_tracker_options
@@ -321,7 +331,10 @@ Streaming tracker of paper 004 (Algorithm 1, Fisher-scoring steps, no motion mod
       .def("reset", &GradientTracker::Reset)
       .def("reset_to", &GradientTracker::ResetTo, py::arg("position_m"), py::arg("floor") = 0)
       .def_property_readonly("initialized", &GradientTracker::initialized);
+}
 
+/// Grid posteriors and maximum-likelihood location.
+static void BindGridPosterior(py::module_& m) {
   py::class_<wifi::GridPosterior>(m, "GridPosterior", R"doc(
 Posterior mean and covariance of the position under the interpolated likelihood, on a grid
 over each floor's hull (uniform prior). ``spacing_m <= 0``: a third of the median reference spacing.)doc")
@@ -379,6 +392,14 @@ Global maximum-likelihood fixes. Rows of rss_dbm (Q, K) [dBm, prepared] are grou
 of ``group_size`` consecutive scans taken at one position (e.g. 10 scans at a static test point).
 Returns a dict: positions_m (G, 2), covariances_m2 (G, 2, 2), floors (G,), neg_log_likelihood,
 inside, iterations, fallback_steps.)doc");
+}
+
+void BindWifi(py::module_& m) {
+  BindSignalMap(m);
+  BindDelaunayInterpolator(m);
+  BindRssModel(m);
+  BindGradientTracker(m);
+  BindGridPosterior(m);
 }
 
 }  // namespace indoorloc::bindings
