@@ -106,7 +106,7 @@ def _stub_literal_defaults():
             funcs = []
             if isinstance(node, ast.FunctionDef):
                 funcs.append((node.name, node))
-            elif isinstance(node, ast.ClassDef):
+            elif isinstance(node, ast.ClassDef) and not node.name.startswith("_"):  # _x: stub-only bases
                 funcs += [(f"{node.name}.{f.name}", f) for f in node.body if isinstance(f, ast.FunctionDef)]
             for qual, f in funcs:
                 args = f.args.args[len(f.args.args) - len(f.args.defaults):]
