@@ -8,8 +8,8 @@ _ArrayLike = npt.ArrayLike
 _F64 = npt.NDArray[np.float64]
 
 
-# Result types: typed read-only objects that also read as the former dicts (result["key"], keys(),
-# items(), get(), to_dict(); they pickle as that dict).
+# Result types: typed read-only objects (fields listed as annotations; they cannot be set) that also
+# read as the former dicts (result["key"], keys(), items(), get(), to_dict(); they pickle as that dict).
 
 class _Result:
     """The read-only mapping protocol every result type has (bindings/result_binding.h)."""
@@ -25,148 +25,84 @@ class _Result:
 
 
 class StepTrack(_Result):
-    @property
-    def positions_m(self) -> _F64: ...
-    @property
-    def covariances(self) -> _F64: ...
-    @property
-    def stride_lengths_m(self) -> _F64: ...
-    @property
-    def headings_rad(self) -> _F64: ...
+    positions_m: _F64
+    covariances: _F64
+    stride_lengths_m: _F64
+    headings_rad: _F64
 
 class WeinbergCalibration(_Result):
-    @property
-    def k(self) -> float: ...
-    @property
-    def rms_residual_m(self) -> float: ...
-    @property
-    def n_strides(self) -> int: ...
-    @property
-    def report(self) -> str: ...
+    k: float
+    rms_residual_m: float
+    n_strides: int
+    report: str
 
 class ZuptEkfSummary(_Result):
-    @property
-    def n_samples(self) -> int: ...
-    @property
-    def n_stance_samples(self) -> int: ...
-    @property
-    def n_stance_phases(self) -> int: ...
-    @property
-    def stance_fraction(self) -> float: ...
-    @property
-    def walking_stance_fraction(self) -> float: ...
-    @property
-    def swing_median_s(self) -> float: ...
-    @property
-    def swing_max_s(self) -> float: ...
-    @property
-    def speed_at_stance_median_mps(self) -> float: ...
-    @property
-    def speed_at_stance_max_mps(self) -> float: ...
-    @property
-    def speed_at_stance_rise(self) -> float: ...
-    @property
-    def longest_stride_m(self) -> float: ...
-    @property
-    def median_stride_m(self) -> float: ...
-    @property
-    def implausible(self) -> bool: ...
-    @property
-    def reasons(self) -> List[str]: ...
-    @property
-    def seconds(self) -> float: ...
-    @property
-    def report(self) -> str: ...
+    n_samples: int
+    n_stance_samples: int
+    n_stance_phases: int
+    stance_fraction: float
+    walking_stance_fraction: float
+    swing_median_s: float
+    swing_max_s: float
+    speed_at_stance_median_mps: float
+    speed_at_stance_max_mps: float
+    speed_at_stance_rise: float
+    longest_stride_m: float
+    median_stride_m: float
+    implausible: bool
+    reasons: List[str]
+    seconds: float
+    report: str
 
 class ZeroVelocityOutput(_Result):
-    @property
-    def stance(self) -> npt.NDArray[np.bool_]: ...
-    @property
-    def statistic(self) -> _F64: ...
-    @property
-    def threshold(self) -> float: ...
-    @property
-    def base_threshold(self) -> float: ...
-    @property
-    def guard_raised(self) -> bool: ...
-    @property
-    def guard_satisfied(self) -> bool: ...
-    @property
-    def ladder_rungs(self) -> int: ...
-    @property
-    def max_swing_s(self) -> float: ...
-    @property
-    def median_swing_s(self) -> float: ...
-    @property
-    def stance_fraction(self) -> float: ...
-    @property
-    def walking_stance_fraction(self) -> float: ...
-    @property
-    def walking_span(self) -> Tuple[int, int]: ...
-    @property
-    def report(self) -> str: ...
+    stance: npt.NDArray[np.bool_]
+    statistic: _F64
+    threshold: float
+    base_threshold: float
+    guard_raised: bool
+    guard_satisfied: bool
+    ladder_rungs: int
+    max_swing_s: float
+    median_swing_s: float
+    stance_fraction: float
+    walking_stance_fraction: float
+    walking_span: Tuple[int, int]
+    report: str
 
 class StrideCountOutput(_Result):
-    @property
-    def stride_indices(self) -> npt.NDArray[np.int64]: ...
-    @property
-    def cleaned_stance(self) -> npt.NDArray[np.bool_]: ...
-    @property
-    def n_strides(self) -> int: ...
-    @property
-    def n_flicker_stances(self) -> int: ...
-    @property
-    def n_flicker_swings(self) -> int: ...
-    @property
-    def n_split_strides(self) -> int: ...
-    @property
-    def median_swing_s(self) -> float: ...
-    @property
-    def median_stance_s(self) -> float: ...
-    @property
-    def report(self) -> str: ...
+    stride_indices: npt.NDArray[np.int64]
+    cleaned_stance: npt.NDArray[np.bool_]
+    n_strides: int
+    n_flicker_stances: int
+    n_flicker_swings: int
+    n_split_strides: int
+    median_swing_s: float
+    median_stance_s: float
+    report: str
 
 class AttitudeOutput(_Result):
-    @property
-    def quaternions_wxyz(self) -> _F64: ...
-    @property
-    def gyro_bias_radps(self) -> _F64: ...
-    @property
-    def mag_used(self) -> npt.NDArray[np.bool_]: ...
-    @property
-    def mag_rejected(self) -> int: ...
-    @property
-    def reference_field_norm(self) -> float: ...
-    @property
-    def reference_dip_rad(self) -> float: ...
-    @property
-    def seconds(self) -> float: ...
+    quaternions_wxyz: _F64
+    gyro_bias_radps: _F64
+    mag_used: npt.NDArray[np.bool_]
+    mag_rejected: int
+    reference_field_norm: float
+    reference_dip_rad: float
+    seconds: float
 
 class InsZuptIncrements(_Result):
-    @property
-    def increments_m(self) -> _F64: ...
-    @property
-    def stride_lengths_m(self) -> _F64: ...
-    @property
-    def velocities_mps(self) -> _F64: ...
+    increments_m: _F64
+    stride_lengths_m: _F64
+    velocities_mps: _F64
 
 class ZuptEkfOutput(_Result):
-    @property
-    def positions_m(self) -> _F64: ...
-    @property
-    def filtered_positions_m(self) -> _F64: ...
-    @property
-    def velocities_mps(self) -> _F64: ...
-    @property
-    def headings_rad(self) -> _F64: ...
-    @property
-    def quaternions_wxyz(self) -> _F64: ...
-    @property
-    def position_sd_m(self) -> _F64: ...
-    @property
-    def seconds(self) -> float: ...
-    @property
-    def health(self) -> ZuptEkfSummary: ...
+    positions_m: _F64
+    filtered_positions_m: _F64
+    velocities_mps: _F64
+    headings_rad: _F64
+    quaternions_wxyz: _F64
+    position_sd_m: _F64
+    seconds: float
+    health: ZuptEkfSummary
 
 def shoe_statistic(
     acc_mps2: _ArrayLike,
