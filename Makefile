@@ -24,10 +24,12 @@ ASAN_DIR := build/asan
 export CMAKE_BUILD_PARALLEL_LEVEL := $(JOBS)
 
 # Debian packages: compilers, C++ libraries (Eigen, CGAL + GMP/MPFR/Boost, Ceres + glog/gflags +
-# SuiteSparse, GoogleTest) and Python headers/venv for the system interpreter.
+# SuiteSparse, GoogleTest), Python headers/venv for the system interpreter, and the headless
+# browser of the track viewer's test (chromium + its chromedriver, driven by selenium).
 DEBIAN_PACKAGES := g++ make cmake python3-dev python3-venv \
   libeigen3-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev \
-  libceres-dev libgoogle-glog-dev libgflags-dev libsuitesparse-dev libgtest-dev libnanoflann-dev
+  libceres-dev libgoogle-glog-dev libgflags-dev libsuitesparse-dev libgtest-dev libnanoflann-dev \
+  chromium chromium-driver libsqlite3-dev
 # Build requirements (installed into the venv because the build runs without isolation, so
 # that one persistent build folder serves the wheel, ctest and the C++ install).
 BUILD_REQUIREMENTS := "scikit-build-core>=0.10" "pybind11>=2.10" "cmake>=3.20" ninja
@@ -75,6 +77,11 @@ test-cpp-app: install
 	  -DCMAKE_PREFIX_PATH=$(abspath $(STAGE_DIR)) >/dev/null
 	$(VENV)/bin/cmake --build build/cpp_app
 	./build/cpp_app/cpp_app
+	# A site file written by the just-installed Python package, read and tracked on by C++ alone.
+	$(PY) examples/cpp_app/export_walk.py survey build/cpp_app_site
+	$(VENV)/bin/indoorloc --quiet site build build/cpp_app_site/survey -o build/cpp_app_site/site.db --no-coverage
+	$(PY) examples/cpp_app/export_walk.py walk build/cpp_app_site
+	./build/cpp_app/site_app build/cpp_app_site/site.db build/cpp_app_site/walk_events.txt
 
 test: install
 	$(MAKE) --no-print-directory test-cpp test-python test-cpp-app

@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-BENCHMARKS = ["bench_resampling", "bench_wifi", "bench_mapmatch", "bench_analog", "bench_pdr", "bench_network",
+BENCHMARKS = ["bench_resampling", "bench_wifi", "bench_wifi_fix", "bench_mapmatch", "bench_analog", "bench_pdr", "bench_network",
               "bench_network_scale", "bench_fusion", "bench_fusion_grid"]
 
 

@@ -137,6 +137,8 @@ void BindPdrResults(py::module_& m) {
       .Field("base_threshold", [](const ZeroVelocityOutput& o) { return o.summary.base_threshold; })
       .Field("guard_raised", [](const ZeroVelocityOutput& o) { return o.summary.guard_raised; })
       .Field("guard_satisfied", [](const ZeroVelocityOutput& o) { return o.summary.guard_satisfied; })
+      .Field("low_motion_rule", [](const ZeroVelocityOutput& o) { return o.summary.low_motion_rule; })
+      .Field("flicker_s", [](const ZeroVelocityOutput& o) { return o.summary.flicker_s; })
       .Field("ladder_rungs", [](const ZeroVelocityOutput& o) { return o.summary.ladder_rungs; })
       .Field("max_swing_s", [](const ZeroVelocityOutput& o) { return o.summary.max_swing_s; })
       .Field("median_swing_s", [](const ZeroVelocityOutput& o) { return o.summary.median_swing_s; })
@@ -235,7 +237,8 @@ Stance flags (N,) bool of the SHOE zero-velocity detector (Skog et al. 2010): st
 acc_mps2, gyro_radps: (N, 3) in the sensor frame [m/s^2], [rad/s]; window in samples.)doc");
   m.def("zero_velocity", [](const py::object& acc, const py::object& gyro, double rate_hz, const std::string& rule,
                             double threshold, double max_swing_s, double max_swing_ratio, double ladder_step_decades,
-                            double min_stance_s, double min_stance_share, double min_stance_fraction, double max_threshold, int window, double sigma_acc,
+                            double min_stance_s, double min_stance_share, double min_stance_fraction, double max_threshold,
+                            double min_plausible_swing_s, double low_motion_min_stance_s, int window, double sigma_acc,
                             double sigma_gyro, double gravity) {
           MatrixArg a = ToMatrix(acc, "acc_mps2", -1, 3);
           MatrixArg g = ToMatrix(gyro, "gyro_radps", a.map.rows(), 3);
@@ -257,6 +260,8 @@ acc_mps2, gyro_radps: (N, 3) in the sensor frame [m/s^2], [rad/s]; window in sam
           o.min_stance_share = min_stance_share;
           o.min_stance_fraction = min_stance_fraction;
           o.max_threshold = max_threshold;
+          o.min_plausible_swing_s = min_plausible_swing_s;
+          o.low_motion_min_stance_s = low_motion_min_stance_s;
           ValidateOptions(o);
           pdr::ZeroVelocityOutput out;
           {
@@ -269,7 +274,9 @@ acc_mps2, gyro_radps: (N, 3) in the sensor frame [m/s^2], [rad/s]; window in sam
         py::arg("threshold") = zero_velocity.shoe.threshold, py::arg("max_swing_s") = zero_velocity.max_swing_s, py::arg("max_swing_ratio") = zero_velocity.max_swing_ratio,
         py::arg("ladder_step_decades") = zero_velocity.ladder_step_decades, py::arg("min_stance_s") = zero_velocity.min_stance_s, py::arg("min_stance_share") = zero_velocity.min_stance_share,
         py::arg("min_stance_fraction") = zero_velocity.min_stance_fraction,
-        py::arg("max_threshold") = zero_velocity.max_threshold, py::arg("window") = zero_velocity.shoe.window, py::arg("sigma_acc_mps2") = zero_velocity.shoe.sigma_acc_mps2,
+        py::arg("max_threshold") = zero_velocity.max_threshold,
+        py::arg("min_plausible_swing_s") = zero_velocity.min_plausible_swing_s,
+        py::arg("low_motion_min_stance_s") = zero_velocity.low_motion_min_stance_s, py::arg("window") = zero_velocity.shoe.window, py::arg("sigma_acc_mps2") = zero_velocity.shoe.sigma_acc_mps2,
         py::arg("sigma_gyro_radps") = zero_velocity.shoe.sigma_gyro_radps, py::arg("gravity_mps2") = zero_velocity.shoe.gravity_mps2, R"doc(
 Zero-velocity detection with the SHOE threshold adapted to the recording (C++ DetectZeroVelocity).
 acc_mps2, gyro_radps: (N, 3) sensor frame [m/s^2], [rad/s]; rate_hz [Hz]; window in samples.
@@ -277,10 +284,16 @@ rule "swing_guard" (default, chosen by cross-validation): the threshold climbs t
 threshold * 10^(j * ladder_step_decades) up to max_threshold and stops at the first rung where
 no swing (non-stance between two stance phases; stance flicker shorter than min_stance_s [s]
 ignored) is longer than max_swing_s [s] or than max_swing_ratio times the median swing, and at
-least min_stance_share of all samples are stance.
+least min_stance_share of all samples are stance, and the median swing lasts at least
+min_plausible_swing_s [s] (shorter swings are no human gait: such rungs are refused). Stance
+runs shorter than min_stance_s inside a swing are dropped from the returned stance. When no rung
+is accepted, the low-motion rule climbs again ignoring stance shorter than
+low_motion_min_stance_s [s]; failing that the most regular plausible rung is used and
+guard_satisfied is False.
 "stance_guard": raised to the min_stance_fraction-quantile of the statistic over the walking
 span. "fixed": statistic < threshold. Returns a dict: stance (N,) bool, statistic (N,),
-threshold (used), base_threshold, guard_raised, guard_satisfied, ladder_rungs, max_swing_s,
+threshold (used), base_threshold, guard_raised, guard_satisfied, low_motion_rule, flicker_s [s],
+ladder_rungs, max_swing_s,
 median_swing_s [s], stance_fraction, walking_stance_fraction [0..1], walking_span, report.)doc");
   m.def("count_strides", [](const py::object& stance, double rate_hz, double min_stance_s, double min_swing_s,
                             double min_swing_fraction, double long_swing_factor) {

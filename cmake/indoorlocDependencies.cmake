@@ -5,6 +5,7 @@
 #   Ceres    libceres-dev       private: sparse least squares (network, wifi refinement);
 #                               SuiteSparse (CHOLMOD, SPQR) comes through Ceres' link interface
 #   nanoflann libnanoflann-dev  private, header-only: exact kNN on kd-trees (analog)
+#   SQLite3  libsqlite3-dev     private: the site file reader (fusion/site_file.cc)
 #   GTest    libgtest-dev       tests only
 #   pybind11 PyPI (>= 2.10)     bindings only
 find_package(Eigen3 3.3 REQUIRED NO_MODULE)
@@ -18,6 +19,7 @@ set(CMAKE_POLICY_DEFAULT_CMP0167 NEW)
 find_package(CGAL 5.0 REQUIRED)
 find_package(Ceres 2.0 REQUIRED)
 find_package(nanoflann REQUIRED)
+find_package(SQLite3 REQUIRED)  # CMake's FindSQLite3 (>= 3.14): target SQLite::SQLite3
 
 if(INDOORLOC_BUILD_TESTS)
   find_package(GTest REQUIRED)

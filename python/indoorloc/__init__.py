@@ -19,10 +19,19 @@ from indoorloc import mapmatch
 from indoorloc import metrics
 from indoorloc import network
 from indoorloc import pdr
-from indoorloc import pdr_handheld
 from indoorloc import wifi
 
 # One source of truth: project(VERSION) in CMakeLists.txt, compiled into _core.
 __version__: str = _core.__version__
 
-__all__ = ["__version__", "analog", "core", "fusion", "mapmatch", "metrics", "network", "pdr", "pdr_handheld", "wifi"]
+__all__ = ["__version__", "analog", "core", "fusion", "mapmatch", "metrics", "network", "pdr", "wifi"]
+
+
+def __getattr__(name: str):  # noqa: ANN202 - module attribute hook
+    # indoorloc.pdr_handheld moved to indoorloc.pdr.handheld (docs/api_changes.md): the old
+    # attribute still works for one release, importing the deprecated alias (which warns).
+    if name == "pdr_handheld":
+        import importlib
+
+        return importlib.import_module("indoorloc.pdr_handheld")
+    raise AttributeError(f"module 'indoorloc' has no attribute {name!r}")

@@ -80,6 +80,31 @@ def error_cdfs(errors_by_method: Mapping[str, object], path: Path, xmax_m: float
     return Path(path)
 
 
+def heading_offsets(rows, path: Path, method: str = "fusion_smoother") -> Path:
+    """Per walk, the tracker's final heading offset against the walk's residual measured from its
+    waypoints [deg] (rows: ``indoorloc fusion evaluate``'s ``heading_offsets``); the prior's
+    centre is 0 (the training offset)."""
+    r = [row for row in rows if method in row["final_deg"]]
+    x = [row["residual_deg"] for row in r]
+    y = [row["final_deg"][method] for row in r]
+    fig, ax = plt.subplots(figsize=(4.6, 4.2), dpi=120)
+    lim = max([20.0] + [abs(v) for v in x + y]) * 1.05
+    ax.plot([-lim, lim], [-lim, lim], color="#888", lw=0.8, label="final = residual")
+    ax.axhline(0.0, color="#c55", lw=0.8, ls="--", label="prior centre")
+    ax.scatter(x, y, s=9, alpha=0.7, label=f"{method} ({len(r)} walks)")
+    ax.set_xlim(-lim, lim)
+    ax.set_ylim(-lim, lim)
+    ax.set_aspect("equal")
+    ax.set_xlabel("walk's residual from its waypoints [deg]")
+    ax.set_ylabel("tracker's final heading offset [deg]")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return Path(path)
+
+
 def mapmatch_clouds(network, trajectory, clouds: Mapping[float, tuple], path: Path) -> Path:
     """Particle clouds at several times over the road network (paper 000, Figs. 5-8)."""
     times = sorted(clouds)
@@ -283,3 +308,42 @@ def fusion_real_walk(snapshot: Mapping[str, object], path: Path) -> Path:
     series = {name: (t, e, ".") for name, e in snapshot["errors"].items()}
     return _finish_walk_figure(fig, ax_err, series, "time since the first waypoint [s]", "error at the waypoint [m]",
                                False, path)
+
+
+def site_coverage(coverage: Mapping[str, object], path: Path, title: str = "",
+                  lowo_points: object = None) -> Path:
+    """Survey coverage of one floor (``fusion.Site.coverage``): distance from each walkable cell
+    to the nearest fingerprint [m] (dense where small, absent where large), the plan's edges,
+    the fingerprints; with ``lowo_points`` ((N, 3): x, y, error [m] of a leave-one-walk-out
+    check) the expected error at those points."""
+    import numpy as np
+
+    x0, x1, y0, y1 = coverage["extent_m"]
+    fig, ax = plt.subplots(figsize=(8, 6.5), dpi=110)
+    im = ax.imshow(np.clip(coverage["distance_m"], 0, 20), origin="lower", extent=(x0, x1, y0, y1),
+                   cmap="viridis_r", vmin=0, vmax=20, interpolation="nearest")
+    fig.colorbar(im, ax=ax, shrink=0.8, label="distance to nearest fingerprint [m] (20+: absent)")
+    edges = np.asarray(coverage["edges_m"])
+    if edges.size:
+        from matplotlib.collections import LineCollection
+
+        ax.add_collection(LineCollection(edges.reshape(-1, 2, 2), colors="#444", linewidths=0.5))
+    fp = np.asarray(coverage["fingerprints_m"])
+    if fp.size:
+        ax.plot(fp[:, 0], fp[:, 1], ".", ms=1.5, color="white", alpha=0.6, label="fingerprints")
+    if lowo_points is not None and np.size(lowo_points):
+        p = np.asarray(lowo_points)
+        sc = ax.scatter(p[:, 0], p[:, 1], c=np.clip(p[:, 2], 0, 20), cmap="Reds", vmin=0, vmax=20, s=14,
+                        edgecolors="k", linewidths=0.3, label="leave-one-walk-out error")
+        fig.colorbar(sc, ax=ax, shrink=0.8, label="expected error [m] (leave one walk out)")
+    ax.set_xlim(x0, x1)
+    ax.set_ylim(y0, y1)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title(title or f"survey coverage: {100 * coverage['fraction_within_5m']:.0f} % of the walkable area within 5 m")
+    ax.legend(loc="upper right", fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return Path(path)

@@ -79,18 +79,49 @@ class Measurements:
         return col_of_bssid[self.bssid_index] if self.n else np.zeros(0, np.int64)
 
 
-def walk_measurements(walk: Any) -> Measurements:
+def walk_measurements(walk: Any, beacons: bool = False) -> Measurements:
     """Every distinct (BSSID, last-seen time) measurement of a walk, at its first report.
 
-    ``walk.wifi`` is an ``IlcWifi`` (or anything with its arrays and ``new_measurement_mask``)."""
+    ``walk.wifi`` is an ``IlcWifi`` (or anything with its arrays and ``new_measurement_mask``).
+    ``beacons``: also the walk's iBeacon readings (``walk.beacons``, an ``IlcBeacons``), each a
+    measurement of a pseudo-BSSID :func:`beacon_id` at its own time, so that a fingerprint holds
+    beacon RSS beside WiFi RSS (readings without a finite RSSI are left out)."""
     wf = walk.wifi
     if wf.n_readings == 0:
         z = np.zeros(0)
-        return Measurements(list(wf.bssids), np.zeros(0, np.int64), z, z, z)
-    first = wf.new_measurement_mask()  # first report of each measurement (readings are in scan order)
-    return Measurements(list(wf.bssids), np.asarray(wf.bssid_index)[first].astype(np.int64),
-                        np.asarray(wf.rssi_dbm, float)[first], np.asarray(wf.last_seen_s, float)[first],
-                        np.asarray(wf.scan_time_s, float)[first])
+        meas = Measurements(list(wf.bssids), np.zeros(0, np.int64), z, z, z)
+    else:
+        first = wf.new_measurement_mask()  # first report of each measurement (readings are in scan order)
+        meas = Measurements(list(wf.bssids), np.asarray(wf.bssid_index)[first].astype(np.int64),
+                            np.asarray(wf.rssi_dbm, float)[first], np.asarray(wf.last_seen_s, float)[first],
+                            np.asarray(wf.scan_time_s, float)[first])
+    bc = getattr(walk, "beacons", None) if beacons else None
+    if bc is None or len(bc.t_s) == 0:
+        return meas
+    rssi = np.asarray(bc.rssi_dbm, float)
+    t = np.asarray(bc.t_s, float)
+    keep = np.flatnonzero(np.isfinite(rssi) & np.isfinite(t))
+    if keep.size == 0:
+        return meas
+    ids = [beacon_id(bc.uuid[i], int(bc.major[i]), int(bc.minor[i]), bc.mac[i]) for i in keep]
+    names = list(meas.bssids)
+    column = {b: i for i, b in enumerate(names)}
+    index = np.empty(keep.size, np.int64)
+    for j, b in enumerate(ids):
+        if b not in column:
+            column[b] = len(names)
+            names.append(b)
+        index[j] = column[b]
+    return Measurements(names, np.r_[meas.bssid_index, index], np.r_[meas.rssi_dbm, rssi[keep]],
+                        np.r_[meas.t_s, t[keep]], np.r_[meas.reported_s, t[keep]])
+
+
+def beacon_id(uuid: str, major: int, minor: int, mac: str = "") -> str:
+    """The pseudo-BSSID of an iBeacon in a fingerprint: ``ibeacon:UUID:MAJOR:MINOR`` (its
+    advertised identity), or ``ibeacon:MAC`` where major or minor was damaged (-1)."""
+    if major < 0 or minor < 0 or not uuid:
+        return f"ibeacon:{mac}"
+    return f"ibeacon:{uuid.lower()}:{major}:{minor}"
 
 
 def pool_windows(t_s: np.ndarray, columns: np.ndarray, rssi_dbm: np.ndarray, n_columns: int,
@@ -304,4 +335,5 @@ __all__ = [
     "pool_windows",
     "shared_dissimilarity",
     "walk_measurements",
+    "beacon_id",
 ]

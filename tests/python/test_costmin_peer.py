@@ -1,4 +1,4 @@
-"""Cost-minimisation peer (benchmarks/ilc_costmin_peer.py, issue 15 item 3): WiFi fixes plus PDR
+"""Cost-minimisation baseline (indoorloc.fusion.costmin_baseline): WiFi fixes plus PDR
 displacements by robust least squares, with an optional per-walk rotation of the PDR.
 
 Checked on a synthetic L-shaped walk simulated here (exact displacements, fixes with Gaussian
@@ -6,15 +6,10 @@ noise and a few gross outliers): the track beats the fixes alone and PDR alone, 
 beats the quadratic one, a rotated PDR is recovered, the solution is a stationary point of the
 documented cost (numerical gradient), and bad input raises ValueError naming the argument."""
 
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
-
-import ilc_costmin_peer as cm  # noqa: E402
+from indoorloc.fusion import costmin_baseline as cm
 
 STEP_S = 0.5
 STEP_M = 0.7

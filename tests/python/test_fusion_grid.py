@@ -71,8 +71,11 @@ def test_smoother_is_honest_and_learns_the_offset():
     r = fusion.track_grid(tracker, steps, fixes=fixes)
     err = np.hypot(*(r["smoothed_m"] - truth).T)
     assert err.mean() < 2.0
-    inside = fusion.region95_contains(r["smoothed_m"], r["smoothed_covariance_m2"], truth)
+    # On data from the model itself the posterior's own spread is honest; the returned
+    # covariance (calibrated for real walks' misfits, GridTrackerOptions) only widens it.
+    inside = fusion.region95_contains(r["smoothed_m"], r["smoothed_posterior_covariance_m2"], truth)
     assert inside.mean() > 0.8
+    assert fusion.region95_contains(r["smoothed_m"], r["smoothed_covariance_m2"], truth).mean() >= inside.mean()
     # PDR headings were 0.1 rad low: the offset posterior moves from its prior (0) towards +0.1
     # and holds it within two of its own sd (ten fixes of sd 4 m with a decoy leave it broad).
     assert r["walk_heading_offset_rad"] > 0.02

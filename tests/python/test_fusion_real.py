@@ -66,6 +66,10 @@ def test_walk_snapshot_and_plots(two_floor_site, tmp_path):
     assert snap["waypoints_m"].shape[1] == 2 and snap["smoothed_m"].shape[1] == 2
     assert snap["extent_m"] is not None
     assert np.all(np.isfinite(snap["errors"]["fusion_smoother"]))
+    # The track viewer's inputs: the track's times, its smoothed covariances, the fixes' times.
+    assert snap["track_t_s"].shape == (len(snap["smoothed_m"]),) and np.all(np.diff(snap["track_t_s"]) >= 0)
+    assert snap["smoothed_covariance_m2"].shape == (len(snap["smoothed_m"]), 3)
+    assert snap["fix_t_s"].shape == (len(snap["fix_centres_m"]),)
     from indoorloc import plots
 
     png = plots.fusion_real_walk(snap, tmp_path / "walk.png")
@@ -93,6 +97,12 @@ def test_cli_writes_the_json_contract_and_plots(two_floor_site, tmp_path, monkey
     smoother = data["methods"]["fusion_smoother"]
     assert 0.0 <= smoother["region95_coverage"] <= 1.0
     assert smoother["offset_error_deg"]["n_walks"] >= 1
+    # Per walk, the final offset beside the residual; the mean |difference| is offset_error_deg's.
+    rows = [r for r in data["heading_offsets"] if "fusion_smoother" in r["final_deg"]]
+    assert len(rows) == smoother["offset_error_deg"]["n_walks"]
+    diff = [abs((r["final_deg"]["fusion_smoother"] - r["residual_deg"] + 180.0) % 360.0 - 180.0) for r in rows]
+    assert math.isclose(sum(diff) / len(diff), smoother["offset_error_deg"]["mean_abs"], abs_tol=0.01)
+    assert (tmp_path / "plots" / "fusion_real_heading_offsets.png").is_file()
     assert (tmp_path / "plots" / "fusion_real_error_cdfs.png").is_file()
     assert (tmp_path / "plots" / "fusion_real_walk_F1.png").is_file()
     assert "| method |" in capsys.readouterr().out

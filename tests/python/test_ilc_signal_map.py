@@ -7,7 +7,7 @@ the test on the shared site (../shared/data/fusion/ilc2020_site2) skips when it 
 import numpy as np
 import pytest
 
-from indoorloc import pdr_handheld as ph
+from indoorloc.pdr import handheld as ph
 from indoorloc import wifi
 from indoorloc import wifi_crowdsource as wc
 from indoorloc.io import read_ilc_walk

@@ -1,4 +1,4 @@
-"""Hand-held phone PDR (indoorloc.pdr_handheld): synthetic steps, K calibration, headings, one
+"""Hand-held phone PDR (indoorloc.pdr.handheld): synthetic steps, K calibration, headings, one
 real walk of the ILC 2020 data when present."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from indoorloc import pdr_handheld as ph
+from indoorloc.pdr import handheld as ph
 
 RATE = 50.0
 G = ph.GRAVITY_MPS2
@@ -153,3 +153,73 @@ def test_one_real_walk(shared_data: Path):
     # The rotation-vector frame is the floor frame up to a small offset on this site.
     off = ph.best_yaw_offset(iv.direction_rad, iv.disp_rv_m)
     assert abs(math.degrees(off)) < 30
+
+
+# --------------------------------------------------------------------------------------------
+# Non-finite input and wrong names: a ValueError naming the argument (issue 28's probe)
+
+
+def _steps():
+    arrays, _ = _synthetic(n_steps=10)
+    st = ph.handheld_steps(arrays, ph.HandheldOptions())
+    assert st.n_steps == 10
+    return st
+
+
+def test_pdr_track_refuses_non_finite_input():
+    st = _steps()
+    t = np.linspace(st.start_t_s, st.t_s[-1], 5)
+    assert np.all(np.isfinite(ph.pdr_track(st, [0.0, 0.0], t)))
+    from dataclasses import replace
+
+    bad = replace(st, length_m=np.where(np.arange(st.n_steps) == 3, np.nan, st.length_m))
+    with pytest.raises(ValueError, match="steps.length_m"):
+        ph.pdr_track(bad, [0.0, 0.0], t)
+    with pytest.raises(ValueError, match="t_query"):
+        ph.pdr_track(st, [0.0, 0.0], np.array([t[0], np.nan]))
+    with pytest.raises(ValueError, match="yaw_offset_rad"):
+        ph.pdr_track(st, [0.0, 0.0], t, yaw_offset_rad=math.inf)
+    with pytest.raises(ValueError, match="start_xy_m"):
+        ph.pdr_track(st, [np.nan, 0.0], t)
+    with pytest.raises(ValueError, match="'heading'.*'north'"):
+        ph.pdr_track(st, [0.0, 0.0], t, heading="north")
+
+
+def test_rescale_refuses_a_nan_k():
+    st = _steps()
+    with pytest.raises(ValueError, match="HandheldOptions.k"):
+        ph.rescale(st, ph.HandheldOptions(k=math.nan))
+    assert np.all(np.isfinite(ph.rescale(st, ph.HandheldOptions(k=0.5)).length_m))
+
+
+def test_rotation_vector_heading_refuses_nan():
+    with pytest.raises(ValueError, match="quat_xyzw"):
+        ph.rotation_vector_heading(np.array([0.0, 0.0, np.nan, 1.0]))
+    with pytest.raises(ValueError, match="quat_xyzw"):
+        ph.rotation_vector_heading(np.zeros(3))
+    assert ph.rotation_vector_heading(np.array([0.0, 0.0, 0.0, 1.0]))[0] == pytest.approx(math.pi / 2)
+
+
+def test_waypoint_intervals_refuses_nan_times():
+    st = _steps()
+    xy = np.array([[0.0, 0.0], [5.0, 0.0], [5.0, 5.0]])
+    t = np.array([st.start_t_s, st.t_s[4], st.t_s[-1]])
+    assert ph.waypoint_intervals(st, t, xy).distance_m.shape == (2,)
+    with pytest.raises(ValueError, match="waypoint_t_s"):
+        ph.waypoint_intervals(st, np.array([t[0], np.nan, t[2]]), xy)
+    with pytest.raises(ValueError, match="waypoint_xy_m"):
+        ph.waypoint_intervals(st, t, xy[:2])
+
+
+def test_huge_windows_are_refused_by_name():
+    for name in ("rms_window_s", "min_step_interval_s", "max_step_half_window_s", "complementary_tau_s"):
+        with pytest.raises(ValueError, match=f"HandheldOptions.{name}"):
+            ph.HandheldOptions(**{name: 1e300}).validate()
+    arrays, _ = _synthetic(n_steps=4)
+    with pytest.raises(ValueError, match="rms_window_s"):
+        ph.handheld_steps(arrays, ph.HandheldOptions(rms_window_s=1e300))
+
+
+def test_calibrate_handheld_refuses_no_walks():
+    with pytest.raises(ValueError, match="'walks'"):
+        ph.calibrate_handheld([])

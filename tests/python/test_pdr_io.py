@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from indoorloc.experiments import pdr_evaluate as pe
+from indoorloc.pdr import metrics
 from indoorloc.io import (
     ImuRecording,
     check_imu_units,
@@ -151,22 +152,22 @@ def test_align_2d_recovers_rotated_translated_path():
     c, s = math.cos(theta), math.sin(theta)
     est = (truth - truth[0]) @ np.array([[c, -s], [s, c]]).T + np.array([5.0, -3.0])
     est3 = np.column_stack([est, rng.standard_normal(100)])  # z is ignored
-    aligned, angle = pe.align_2d(est3, truth, n_align=10, return_angle=True)
+    aligned, angle = metrics.align_2d(est3, truth, n_align=10, return_angle=True)
     np.testing.assert_allclose(aligned, truth, atol=1e-10)
     assert angle == pytest.approx(-theta)
-    assert pe.armse(aligned, truth) == pytest.approx(0.0, abs=1e-10)
+    assert metrics.armse(aligned, truth) == pytest.approx(0.0, abs=1e-10)
     still = np.zeros((5, 2))
-    np.testing.assert_allclose(pe.align_2d(still, still + 1.0, 5), still + 1.0)
+    np.testing.assert_allclose(metrics.align_2d(still, still + 1.0, 5), still + 1.0)
     with pytest.raises(ValueError, match="n_align"):
-        pe.align_2d(est, truth, 1)
+        metrics.align_2d(est, truth, 1)
 
 
 def test_armse_known_case():
     truth = np.zeros((4, 2))
     est = np.array([[3.0, 4.0], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]])  # errors 5, 0, 0, 0
-    assert pe.armse(est, truth) == pytest.approx(math.sqrt(25.0 / 4.0))
+    assert metrics.armse(est, truth) == pytest.approx(math.sqrt(25.0 / 4.0))
     with pytest.raises(ValueError, match="truth_xy"):
-        pe.armse(est, truth[:3])
+        metrics.armse(est, truth[:3])
 
 
 def test_strides_from_stance_merges_flicker():

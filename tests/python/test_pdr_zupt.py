@@ -23,6 +23,7 @@ import pytest
 from indoorloc import pdr
 from indoorloc.experiments import pdr_evaluate as pe
 from indoorloc.experiments import pdr_zupt_cv as cv
+from indoorloc.pdr import metrics, recommended
 from indoorloc.io import IrregularTimestampsWarning, fit_sample_rate, load_pyshoe_trial
 from indoorloc.simulate.foot_gait import foot_gait
 
@@ -33,9 +34,9 @@ def _final_error(rec, positions):
 
 
 def _fixed_stance(rec, threshold):
-    return np.asarray(pdr.shoe_detector(rec.acc_mps2, rec.gyro_radps, window=pe.SHOE_WINDOW, threshold=threshold,
-                                        sigma_acc_mps2=pe.SHOE_SIGMA_ACC_MPS2,
-                                        sigma_gyro_radps=pe.SHOE_SIGMA_GYRO_RADPS), dtype=bool)
+    return np.asarray(pdr.shoe_detector(rec.acc_mps2, rec.gyro_radps, window=recommended.SHOE_WINDOW, threshold=threshold,
+                                        sigma_acc_mps2=recommended.SHOE_SIGMA_ACC_MPS2,
+                                        sigma_gyro_radps=recommended.SHOE_SIGMA_GYRO_RADPS), dtype=bool)
 
 
 # ------------------------------------------------------------------ the three failure modes
@@ -46,7 +47,7 @@ def test_low_motion_walk_keeps_its_stance_and_a_lost_stance_is_flagged():
     assert bad["health"]["walking_stance_fraction"] < 0.15
     assert bad["health"]["implausible"] and bad["health"]["reasons"]
     assert _final_error(rec, bad["positions_m"]) > 0.3  # drifting
-    good = pe.run_recommended(rec)
+    good = recommended.run_recommended(rec)
     assert good["detector"]["guard_raised"] and good["detector"]["guard_satisfied"]
     assert good["health"]["walking_stance_fraction"] > 0.3
     assert not good["health"]["implausible"], good["health"]["report"]
@@ -60,7 +61,7 @@ def test_run_with_never_still_stances_finds_every_stride():
     stance = _fixed_stance(rec, 3e5)
     lost = pdr.count_strides(stance, rec.rate_hz)["n_strides"]
     assert lost < 13  # the failure: most stances missed
-    good = pe.run_recommended(rec)
+    good = recommended.run_recommended(rec)
     assert good["stride_indices"].size == 26
     assert not good["health"]["implausible"], good["health"]["report"]
     assert _final_error(rec, good["positions_m"]) < 0.05 * rec.distance_m
@@ -71,7 +72,7 @@ def test_slow_walk_counts_every_stride():
     stance = _fixed_stance(rec, 3e5)
     assert pe.strides_from_stance(stance, rec.rate_hz).size < 29  # the old counter merges stances
     assert pdr.count_strides(stance, rec.rate_hz)["n_strides"] == 29
-    good = pe.run_recommended(rec)
+    good = recommended.run_recommended(rec)
     assert good["stride_indices"].size == 29
     assert not good["health"]["implausible"], good["health"]["report"]
     assert _final_error(rec, good["positions_m"]) < 0.05 * rec.distance_m
@@ -80,11 +81,11 @@ def test_slow_walk_counts_every_stride():
 def test_a_stretched_path_is_flagged_by_its_median_stride():
     # The issue's divergent recordings: the path through the strides was 2-3x the walk. Here
     # the strides really are 2.8 m (twice a walk's): the health check reports it, a walk passes.
-    long = pe.run_recommended(foot_gait(12, stride_m=2.8, seed=11))
+    long = recommended.run_recommended(foot_gait(12, stride_m=2.8, seed=11))
     assert long["health"]["implausible"]
     assert long["health"]["median_stride_m"] == pytest.approx(2.8, abs=0.1)
     assert any("median stride" in r for r in long["health"]["reasons"])
-    walk = pe.run_recommended(foot_gait(12, stride_m=1.4, seed=11))
+    walk = recommended.run_recommended(foot_gait(12, stride_m=1.4, seed=11))
     assert not walk["health"]["implausible"] and walk["health"]["median_stride_m"] == pytest.approx(1.4, abs=0.05)
 
 
@@ -95,8 +96,8 @@ def test_guard_mirror_in_the_cv_harness_equals_the_cpp_rule():
     for base, frac in ((3e4, 0.3), (1e4, 0.4), (1e6, 0.2)):
         det = pdr.zero_velocity(rec.acc_mps2, rec.gyro_radps, rec.rate_hz, rule="stance_guard",
                                 threshold=base, min_stance_fraction=frac,
-                                window=pe.SHOE_WINDOW, sigma_acc_mps2=pe.SHOE_SIGMA_ACC_MPS2,
-                                sigma_gyro_radps=pe.SHOE_SIGMA_GYRO_RADPS)
+                                window=recommended.SHOE_WINDOW, sigma_acc_mps2=recommended.SHOE_SIGMA_ACC_MPS2,
+                                sigma_gyro_radps=recommended.SHOE_SIGMA_GYRO_RADPS)
         mine = cv._stance_guard(rec, st, {"log_gamma": math.log10(base), "min_fraction": frac})
         assert np.mean(mine != np.asarray(det["stance"])) < 1e-3
 
@@ -178,7 +179,7 @@ def test_evaluate_json_schema_on_a_partial_data_root(tmp_path):
     _write_trial(folder / "a_LLIO.mat", foot_gait(8, seed=8))
     _write_trial(folder / "b_LLIO.mat", foot_gait(8, seed=9), truth=False)
     doc = pe.evaluate_json(tmp_path)  # only the pyshoe folder exists: the rest is skipped
-    assert doc["default_method"] == pe.DEFAULT_METHOD
+    assert doc["default_method"] == recommended.DEFAULT_METHOD
     assert [r["name"] for r in doc["recordings"]] == ["a", "b"]
     for r in doc["recordings"]:
         assert tuple(r) == pe.JSON_ROW_KEYS
@@ -202,7 +203,7 @@ def test_cli_writes_the_json(tmp_path, capsys):
     assert main(["pdr", "evaluate", "--data-root", str(tmp_path), "--json", str(out), "--only", "pyshoe",
                  "--quiet"]) == 0
     doc = json.loads(out.read_text())
-    assert doc["default_method"] == pe.DEFAULT_METHOD and len(doc["recordings"]) == 1
+    assert doc["default_method"] == recommended.DEFAULT_METHOD and len(doc["recordings"]) == 1
     assert "Recommended method" in capsys.readouterr().out
 
 
@@ -213,7 +214,7 @@ def test_recommended_method_on_two_real_trials(shared_data):
         pytest.skip(f"PyShoe trials not found at {root}")
     for p in sorted(root.glob("*.mat"))[:2]:
         rec = load_pyshoe_trial(p)
-        r = pe.run_recommended(rec)
+        r = recommended.run_recommended(rec)
         sc = pe.score_pyshoe_trial(rec, (r["positions_m"], r["stride_indices"]))
         assert sc["armse_m"] < 0.4 and abs(sc["stride_count_error"]) <= 1
         assert not r["health"]["implausible"], r["health"]["report"]
@@ -257,3 +258,59 @@ def test_leave_one_out_never_scores_a_trial_with_a_setting_chosen_on_it():
     assert r["worst_armse_m"] == 5.0 and r["n_over_0_4_m"] == 1
     by_day = cv.leave_one_out(res, by_session=True)  # three days: the same folds here
     assert by_day["chosen"] == r["chosen"]
+
+
+# --------------------------------------------------------------------------------------------
+# Slow, low-motion walks (issue 28): the guard must not trade a walk for a standstill, and the
+# health check must flag it when a result is physically implausible.
+
+
+def _old_rule(rec):
+    """The swing guard before issue 28: no swing floor, raw stance (flicker kept)."""
+    det = recommended.detect_stance(rec, min_plausible_swing_s=0.0, low_motion_min_stance_s=0.02)
+    stance = np.asarray(det["statistic"]) < det["threshold"]
+    out = pdr.zupt_ekf(rec.time_s, rec.acc_mps2, rec.gyro_radps, stance, smooth=True)
+    strides = np.asarray(pdr.count_strides(stance, rec.rate_hz)["stride_indices"])
+    return det, stance, np.asarray(out["positions_m"]), strides, dict(out["health"], guard_satisfied=True)
+
+
+def test_a_slow_low_motion_walk_is_not_traded_for_a_standstill():
+    from indoorloc.simulate.foot_gait import slow_low_motion_gait
+
+    # 29 strides of 0.29 m, flat swings, stances that rock unevenly: the issue's signature
+    rec = slow_low_motion_gait(seed=108, pitch_deg=20.0, stance_rate_radps=0.5, swing_s=0.6)
+    det, stance, pos, strides, health = _old_rule(rec)
+    assert det["threshold"] >= 1e6 and stance.mean() > 0.9 and det["median_swing_s"] < 0.1
+    assert strides.size == 0
+    assert _final_error(rec, pos) > 0.5 * rec.distance_m  # the walk is lost
+    # ... and the health check would have said so
+    evidence = recommended.gait_evidence(rec)
+    reasons = recommended.gait_plausibility(health, evidence, metrics.path_length(pos[:, :2]), int(strides.size))
+    assert any("median swing" in r for r in reasons) and any("strides counted" in r for r in reasons)
+    good = recommended.run_recommended(rec)
+    assert good["detector"]["median_swing_s"] >= 0.2
+    assert good["stride_indices"].size == 29
+    assert not good["health"]["implausible"], good["health"]["report"]
+    assert _final_error(rec, good["positions_m"]) < 0.1 * rec.distance_m
+
+
+def test_the_health_check_flags_each_implausible_result():
+    walking = {"energy_mps2": 5.0, "strength": 0.6, "period_s": 1.2, "rhythm_strides": 30.0}
+    ok = {"swing_median_s": 0.7, "median_stride_m": 1.2, "n_stance_phases": 31, "guard_satisfied": True}
+    assert recommended.gait_plausibility(ok, walking, 36.0, 30) == []
+    assert "median swing" in recommended.gait_plausibility(dict(ok, swing_median_s=0.05), walking, 36.0, 30)[0]
+    assert "median stride" in recommended.gait_plausibility(dict(ok, median_stride_m=0.05), walking, 36.0, 30)[0]
+    assert "step rhythm implies" in recommended.gait_plausibility(ok, walking, 1.0, 30)[0]
+    assert "strides counted" in recommended.gait_plausibility(ok, walking, 36.0, 3)[0]
+    assert "no threshold" in recommended.gait_plausibility(dict(ok, guard_satisfied=False), walking, 36.0, 30)[0]
+    # no walking in the IMU: short strides and a short path are no contradiction
+    still = {"energy_mps2": 0.05, "strength": 0.05, "period_s": float("nan"), "rhythm_strides": 0.0}
+    assert recommended.gait_plausibility(dict(ok, median_stride_m=0.0), still, 0.0, 0) == []
+
+
+def test_gait_evidence_reads_the_rhythm_of_a_walk():
+    rec = foot_gait(20, stance_s=0.5, swing_s=0.6, seed=12)
+    ev = recommended.gait_evidence(rec)
+    assert ev["period_s"] == pytest.approx(1.1, abs=0.03)
+    assert ev["rhythm_strides"] == pytest.approx(20, abs=1.5)
+    assert ev["energy_mps2"] > 1.0 and ev["strength"] > 0.5

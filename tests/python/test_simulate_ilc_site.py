@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from indoorloc import pdr_handheld as ph
+from indoorloc.pdr import handheld as ph
 from indoorloc import wifi_crowdsource as wc
 from indoorloc import wifi_fixes as wfx
 from indoorloc.experiments import fusion_real as fr
@@ -200,7 +200,7 @@ def test_fusion_evaluate_end_to_end(site):
     settings = fr.RealSettings(num_particles=500, folds=2, smoother_trajectories=10)
     result = fr.evaluate(data_root=root, floors=["F1"], settings=settings)
     assert set(result) >= {"methods", "waypoints", "settings"}
-    expected = set(fr.METHODS) if fr._peer() is not None else set(fr.METHODS) - {"peer_costmin"}
+    expected = set(fr.METHODS)
     assert set(result["methods"]) == expected
     n_wp = sum(floor.walk(i).n_waypoints for i in range(floor.n_walks))
     for name, stats in result["methods"].items():

@@ -167,3 +167,21 @@ def test_fix_sd_grows_with_the_best_dissimilarity():
     np.testing.assert_allclose(wfx.fix_sds(np.array([50.0]), wfx.FixSettings(sd_m=3.0, sd_per_db=0.0)), [3.0])
     with pytest.raises(ValueError, match="FixSettings.sd_per_db"):
         wfx.FixSettings(sd_per_db=-0.1).validate()
+
+
+def test_ibeacon_readings_become_fingerprint_columns_at_their_own_time():
+    # Two readings of one beacon (its advertised identity) and one whose major was damaged (-1:
+    # named by its MAC); a NaN RSSI is left out. Without ``beacons`` the WiFi measurements are
+    # all there is.
+    wf = _wifi([(20.0, [("a", -50.0, 19.5)])])
+    bc = SimpleNamespace(t_s=np.array([18.0, 19.0, 19.5, 21.0]), uuid=["U1", "U1", "U2", "U1"],
+                         major=np.array([1, 1, -1, 1]), minor=np.array([7, 7, 3, 7]),
+                         rssi_dbm=np.array([-70.0, -65.0, -80.0, nan]), mac=["m1", "m1", "m2", "m1"])
+    walk = SimpleNamespace(wifi=wf, beacons=bc)
+    assert wm.walk_measurements(walk).n == 1
+    meas = wm.walk_measurements(walk, beacons=True)
+    assert meas.n == 4
+    assert meas.bssids[1:] == [wm.beacon_id("U1", 1, 7), "ibeacon:m2"] == ["ibeacon:u1:1:7", "ibeacon:m2"]
+    rss, _, n = wm.pool_windows(meas.t_s, meas.bssid_index, meas.rssi_dbm, len(meas.bssids), [20.0], 2.5, 0.0,
+                                meas.reported_s)
+    assert rss[0, 1] == -65.0 and rss[0, 2] == -80.0 and n[0] == 4

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <sstream>
 #include <stdexcept>
 
@@ -319,6 +320,12 @@ bool GridTrackerOptions::IsValid(std::string* error) const {
       .Check(fix_ok, "fix", fix_error)
       .InRange(median_block_m, 0.1, 100.0, "median_block_m")
       .InRange(start_position_sd_m, 0.01, 1e4, "start_position_sd_m")
+      .InRange(filtered_covariance_scale, 1e-6, 1e6, "filtered_covariance_scale")
+      .InRange(filtered_covariance_floor_m, 0.0, 1e4, "filtered_covariance_floor_m")
+      .InRange(filtered_covariance_fix_gain, 0.0, 1e3, "filtered_covariance_fix_gain")
+      .InRange(smoothed_covariance_scale, 1e-6, 1e6, "smoothed_covariance_scale")
+      .InRange(smoothed_covariance_floor_m, 0.0, 1e4, "smoothed_covariance_floor_m")
+      .InRange(smoothed_covariance_fix_gain, 0.0, 1e3, "smoothed_covariance_fix_gain")
       .InRange(max_memory_bytes, 1e6, 1e13, "max_memory_bytes")
       .IntInRange(num_threads, -1, 4096, "num_threads");
 }
@@ -330,6 +337,72 @@ std::string GridTrackSummary::BriefReport() const {
       << " s";
   return out.str();
 }
+
+namespace {
+
+// Weighted mean of a fix's components [m].
+Eigen::Vector2d FixCentre(const PositionFix& f) {
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+  double total = 0;
+  for (Eigen::Index i = 0; i < f.means_m.rows(); ++i) {
+    centre += f.weights[i] * f.means_m.row(i).transpose();
+    total += f.weights[i];
+  }
+  return total > 0 ? Eigen::Vector2d(centre / total) : centre;
+}
+
+// Σ' = a Σ + (b² + (g d)²) I per step k >= k0 (GridTrackerOptions, "Calibration of the returned
+// covariances"); the posterior's own Σ is kept beside it.
+void CalibrateRows(const RowMatrixXd& mean, double a, double b, double g,
+                   const std::function<int(int, const Eigen::Vector2d&)>& fix_of, const std::vector<Eigen::Vector2d>& centres,
+                   int k0, RowMatrixXd* cov, RowMatrixXd* posterior, Eigen::VectorXd* distance) {
+  *posterior = *cov;
+  distance->setZero(cov->rows());
+  for (Eigen::Index k = k0; k < cov->rows(); ++k) {
+    const Eigen::Vector2d m = mean.row(k).transpose();
+    const int j = fix_of(static_cast<int>(k), m);
+    const double d = j >= 0 ? (m - centres[j]).norm() : 0.0;
+    (*distance)[k] = d;
+    const double iso = b * b + (g * d) * (g * d);
+    (*cov)(k, 0) = a * (*cov)(k, 0) + iso;
+    (*cov)(k, 1) = a * (*cov)(k, 1);
+    (*cov)(k, 2) = a * (*cov)(k, 2) + iso;
+  }
+}
+
+void CalibrateCovariances(const std::vector<StepInput>& steps, const std::vector<PositionFix>& fixes, int k0,
+                          const GridTrackerOptions& o, GridTrackResult* r) {
+  std::vector<Eigen::Vector2d> centres;
+  std::vector<double> times;
+  centres.reserve(fixes.size());
+  for (const PositionFix& f : fixes) {
+    centres.push_back(FixCentre(f));
+    times.push_back(f.time_s);
+  }
+  // Filtered: the last fix applied by step k (a fix applies at the first step at or after it).
+  const auto last_applied = [&](int k, const Eigen::Vector2d&) {
+    return static_cast<int>(std::upper_bound(times.begin(), times.end(), steps[k].time_s) - times.begin()) - 1;
+  };
+  // Smoothed: the fix nearest in time.
+  const auto nearest = [&](int k, const Eigen::Vector2d&) {
+    if (times.empty()) return -1;
+    const double t = steps[k].time_s;
+    const auto it = std::lower_bound(times.begin(), times.end(), t);
+    int j = static_cast<int>(it - times.begin());
+    if (j == static_cast<int>(times.size()) || (j > 0 && t - times[j - 1] <= times[j] - t)) --j;
+    return j;
+  };
+  CalibrateRows(r->filtered_mean_m, o.filtered_covariance_scale, o.filtered_covariance_floor_m,
+                o.filtered_covariance_fix_gain, last_applied, centres, k0, &r->filtered_covariance_m2,
+                &r->filtered_posterior_covariance_m2, &r->filtered_fix_distance_m);
+  if (r->smoothed_mean_m.rows() > 0) {
+    CalibrateRows(r->smoothed_mean_m, o.smoothed_covariance_scale, o.smoothed_covariance_floor_m,
+                  o.smoothed_covariance_fix_gain, nearest, centres, k0, &r->smoothed_covariance_m2,
+                  &r->smoothed_posterior_covariance_m2, &r->smoothed_fix_distance_m);
+  }
+}
+
+}  // namespace
 
 struct GridTracker::Impl {
   const FloorPlan* plan = nullptr;
@@ -888,6 +961,7 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
       r.smoothed_covariance_m2.row(k) << cov[0], cov[1], cov[2];
     }
   }
+  CalibrateCovariances(steps, fixes, k0, o, &r);
   if (o.spatial_median) {
     // Per step: the blocks of the most probable floor's layers, weighted, then Weiszfeld.
     auto median_at = [&](const std::vector<double>& w, const std::vector<std::vector<float>>& blocks, int k) {

@@ -86,6 +86,8 @@ bool ZeroVelocityOptions::IsValid(std::string* error) const {
   if (!(ladder_step_decades > 0.0 && ladder_step_decades <= 2.0)) return fail("ladder_step_decades must be in (0, 2]");
   if (!(min_stance_s >= 0.0) || !std::isfinite(min_stance_s)) return fail("min_stance_s must be >= 0");
   if (!(min_stance_share >= 0.0 && min_stance_share < 1.0)) return fail("min_stance_share must be in [0, 1)");
+  if (!(min_plausible_swing_s >= 0.0 && min_plausible_swing_s < max_swing_s)) return fail("min_plausible_swing_s must be in [0, max_swing_s)");
+  if (!(low_motion_min_stance_s >= 0.0) || !std::isfinite(low_motion_min_stance_s)) return fail("low_motion_min_stance_s must be >= 0");
   return true;
 }
 
@@ -97,7 +99,8 @@ std::string ZeroVelocitySummary::BriefReport() const {
   s << "), stance " << 100.0 * stance_fraction << " % of the recording, " << 100.0 * walking_stance_fraction
     << " % of the walking span [" << walking_begin << ", " << walking_end << ")";
   if (max_swing_s > 0.0) s << ", swings median " << median_swing_s << " s / max " << max_swing_s << " s";
-  if (!guard_satisfied) s << "; the guard found no threshold without an overlong swing";
+  if (low_motion_rule) s << "; low-motion rule (stance shorter than " << flicker_s << " s inside a swing ignored)";
+  if (!guard_satisfied) s << "; the guard found no threshold with a plausible gait (swings neither overlong nor shorter than a human swing)";
   return s.str();
 }
 
@@ -128,6 +131,61 @@ std::pair<double, double> SwingStats(const Eigen::VectorXd& t, double threshold,
   if (n > last_stance_end) swings.push_back(static_cast<double>(n - last_stance_end));
   if (swings.empty()) return {0.0, 0.0};
   return {*std::max_element(swings.begin(), swings.end()), internal::Median(swings)};
+}
+
+// Stance runs shorter than min_stance samples that lie inside the recording (flicker the swing
+// guard ignored: SHOE's blind spot in mid-swing, where a steady acceleration leaves ||f|| near g)
+// turned into swing, so that the filter receives the stance the guard judged.
+BoolVector WithoutStanceFlicker(BoolVector stance, Eigen::Index min_stance) {
+  const Eigen::Index n = stance.size();
+  for (Eigen::Index k = 0; k < n;) {
+    if (!stance[k]) {
+      ++k;
+      continue;
+    }
+    Eigen::Index e = k;
+    while (e < n && stance[e]) ++e;
+    if (e - k < min_stance && k > 0 && e < n) stance.segment(k, e - k).setConstant(false);
+    k = e;
+  }
+  return stance;
+}
+
+struct Rung {
+  double threshold = 0.0;
+  int index = 0;
+  double longest = 0.0;  // [samples]
+  double median = 0.0;   // [samples]
+};
+
+// One climb of the swing guard's ladder with flicker length min_stance [samples]. Returns true
+// with the first accepted rung in *accepted; rungs whose median swing is shorter than the
+// plausible floor are never accepted (a threshold that high has eaten the swings). *best_plausible
+// receives the plausible rung with the most regular swings (least longest / median; chosen over
+// "no overlong swing first" by the low-motion study: docs/pdr.md).
+bool ClimbLadder(const Eigen::VectorXd& t, const ZeroVelocityOptions& options, double rate_hz, Eigen::Index min_stance,
+                 Rung* accepted, Rung* best_plausible) {
+  const double max_swing = options.max_swing_s * rate_hz;
+  const double floor = options.min_plausible_swing_s * rate_hz;
+  const double n = static_cast<double>(std::max<Eigen::Index>(t.size(), 1));
+  double best = std::numeric_limits<double>::infinity();  // least longest / median so far
+  for (int j = 0;; ++j) {
+    const double gamma = std::min(options.shoe.threshold * std::pow(10.0, j * options.ladder_step_decades), options.max_threshold);
+    const auto [longest, median] = SwingStats(t, gamma, min_stance);
+    const Rung rung{gamma, j, longest, median};
+    if (median >= floor && median > 0.0) {
+      if (longest / median < best) {
+        best = longest / median;
+        *best_plausible = rung;
+      }
+      const double share = static_cast<double>((t.array() < gamma).count()) / n;
+      if (longest <= max_swing && longest <= options.max_swing_ratio * median && share >= options.min_stance_share) {
+        *accepted = rung;
+        return true;
+      }
+    }
+    if (gamma >= options.max_threshold) return false;
+  }
 }
 
 }  // namespace
@@ -164,27 +222,43 @@ ZeroVelocityOutput DetectZeroVelocity(const Eigen::Ref<const RowMatrixXd>& acc, 
       s.threshold = std::min(q, options.max_threshold);
       s.guard_raised = true;
     }
-  } else if (options.rule == ZeroVelocityRule::kSwingGuard) {
-    const Eigen::Index min_stance = std::max<Eigen::Index>(1, std::lround(options.min_stance_s * rate_hz));
-    const double max_swing = options.max_swing_s * rate_hz;
-    s.guard_satisfied = false;
-    for (int j = 0;; ++j) {
-      const double gamma = std::min(options.shoe.threshold * std::pow(10.0, j * options.ladder_step_decades), options.max_threshold);
-      const auto [longest, median] = SwingStats(t, gamma, min_stance);
-      s.threshold = gamma;
-      s.ladder_rungs = j;
-      s.max_swing_s = longest / rate_hz;
-      s.median_swing_s = median / rate_hz;
-      const double share = static_cast<double>((t.array() < gamma).count()) / static_cast<double>(std::max<Eigen::Index>(n, 1));
-      if (longest <= max_swing && longest <= options.max_swing_ratio * median && share >= options.min_stance_share) {
-        s.guard_satisfied = true;
-        break;
-      }
-      if (gamma >= options.max_threshold) break;
+  }
+  Eigen::Index flicker = 0;  // stance runs shorter than this inside a swing are dropped (swing guard)
+  if (options.rule == ZeroVelocityRule::kSwingGuard) {
+    // The guard's ladder, then the low-motion rule: a walk whose swings are slow and flat has
+    // mid-swing dips of T below any threshold that finds its stances, so the plain ladder either
+    // climbs until the "swings" are tens of ms (stance 98 %, no stride) or never settles. Its
+    // second climb ignores stance shorter than low_motion_min_stance_s; when neither climb finds
+    // a rung, the most regular plausible rung is used and guard_satisfied stays false (the
+    // health check then reports the result implausible).
+    const Eigen::Index normal = std::max<Eigen::Index>(1, std::lround(options.min_stance_s * rate_hz));
+    const Eigen::Index low = std::max<Eigen::Index>(1, std::lround(options.low_motion_min_stance_s * rate_hz));
+    Rung chosen{options.shoe.threshold, 0, 0.0, 0.0}, best_normal = chosen, best_low = chosen;
+    bool have_best = false;
+    flicker = normal;
+    s.guard_satisfied = ClimbLadder(t, options, rate_hz, normal, &chosen, &best_normal);
+    if (!s.guard_satisfied) {
+      s.low_motion_rule = true;
+      flicker = low;
+      best_low.median = -1.0;
+      s.guard_satisfied = ClimbLadder(t, options, rate_hz, low, &chosen, &best_low);
+      have_best = best_low.median > 0.0;
+      if (!s.guard_satisfied) chosen = have_best ? best_low : Rung{options.shoe.threshold, 0, 0.0, 0.0};
     }
+    if (chosen.median <= 0.0) {  // no plausible rung at all: the base threshold, described
+      const auto [longest, median] = SwingStats(t, chosen.threshold, flicker);
+      chosen.longest = longest;
+      chosen.median = median;
+    }
+    s.threshold = chosen.threshold;
+    s.ladder_rungs = chosen.index;
+    s.max_swing_s = chosen.longest / rate_hz;
+    s.median_swing_s = chosen.median / rate_hz;
+    s.flicker_s = static_cast<double>(flicker) / rate_hz;
     s.guard_raised = s.threshold > options.shoe.threshold;
   }
   out.stance = (t.array() < s.threshold).matrix();
+  if (flicker > 1) out.stance = WithoutStanceFlicker(std::move(out.stance), flicker);
   const Eigen::Index count = out.stance.count();
   s.stance_fraction = n > 0 ? static_cast<double>(count) / static_cast<double>(n) : 0.0;
   s.walking_stance_fraction = static_cast<double>(out.stance.segment(begin, end - begin).count()) / static_cast<double>(end - begin);

@@ -343,6 +343,25 @@ bool DelaunayInterpolator::Interpolate(const Eigen::Vector2d& z_m, Eigen::Ref<Ei
   return inside;
 }
 
+FaceLocation DelaunayInterpolator::LocateFace(const Eigen::Vector2d& z_m, int* hint) const {
+  CheckArgument(std::isfinite(z_m[0]) && std::isfinite(z_m[1]), "z_m", "is not finite");
+  const Impl& s = *impl_;
+  const int start = (hint != nullptr && *hint >= 0 && *hint < num_triangles())
+                        ? *hint
+                        : s.GridStart(z_m[0], z_m[1]);
+  FaceLocation out;
+  double ex, ey;
+  out.inside = s.Locate(start, z_m[0], z_m[1], &out.triangle, &ex, &ey, out.weights);
+  if (hint != nullptr) *hint = out.triangle;
+  const Triangle& tri = s.triangles[static_cast<size_t>(out.triangle)];
+  for (int j = 0; j < 3; ++j) out.vertices[j] = tri.vertex[j];
+  out.grad_b1[0] = tri.inverse[0][0];
+  out.grad_b1[1] = tri.inverse[0][1];
+  out.grad_b2[0] = tri.inverse[1][0];
+  out.grad_b2[1] = tri.inverse[1][1];
+  return out;
+}
+
 BarycentricLocation DelaunayInterpolator::Locate(const Eigen::Vector2d& z_m) const {
   const Impl& s = *impl_;
   int t;

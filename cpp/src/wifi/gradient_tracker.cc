@@ -148,10 +148,14 @@ WifiFix LocateMaximumLikelihood(const RssModel& model, const Eigen::Ref<const Ro
   std::vector<Start> starts;
   for (int f = 0; f < num_floors; ++f) {
     if (floor_index >= 0 && f != floor_index) continue;
-    int hint = -1;
-    for (int row : model.points_on_floor(f)) {
-      const Eigen::Vector2d z = model.map().positions_m().row(row).transpose();
-      starts.push_back({model.Evaluate(rss_dbm, z, f, &hint).neg_log_likelihood, f, z});
+    // l at the reference points, as Evaluate gives it there (to rounding), from the table of
+    // the heard APs' entries (not one interpolation of K APs per point).
+    Eigen::VectorXd l;
+    model.ReferencePointNegLogLikelihood(rss_dbm, f, &l);
+    const std::vector<int>& rows = model.points_on_floor(f);
+    for (size_t i = 0; i < rows.size(); ++i) {
+      const Eigen::Vector2d z = model.map().positions_m().row(rows[i]).transpose();
+      starts.push_back({l[static_cast<Eigen::Index>(i)], f, z});
     }
   }
   const size_t keep = std::min(starts.size(), static_cast<size_t>(options.num_starts));

@@ -10,12 +10,17 @@
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/options.h"
 #include "indoorloc/core/validate.h"
+#include "point_likelihood_table.h"
 #include "rss_limits.h"
 
 namespace indoorloc::wifi {
-namespace {
 
-constexpr double kLog2Pi = 1.8378770664093453;
+struct GridPosterior::FloorGrid {
+  RowMatrixXd points;                    // G x 2
+  internal::PointLikelihoodTable table;  // l at the G points
+};
+
+namespace {
 
 // Median distance from each reference point to its nearest other point (O(N^2) on a subset),
 // ignoring near-duplicates closer than 1 cm (surveys often repeat a point with tiny offsets).
@@ -52,6 +57,8 @@ GridPosterior::GridPosterior(std::shared_ptr<const RssModel> model, GridPosterio
   spacing_m_ = options.spacing_m > 0 ? options.spacing_m : MedianSpacing(model_->map().positions_m()) / 3.0;
   const Eigen::Index k = model_->num_access_points();
   const double variance_floor = model_->options().variance_floor_db2;
+  const internal::ApBackground background =
+      internal::FindBackground(model_->map().mean_dbm(), model_->map().variance_db2(), variance_floor);
   for (size_t f = 0; f < model_->floors().size(); ++f) {
     const std::vector<int>& rows = model_->points_on_floor(static_cast<int>(f));
     Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
@@ -63,8 +70,8 @@ GridPosterior::GridPosterior(std::shared_ptr<const RssModel> model, GridPosterio
     double h = spacing_m_;
     const Eigen::Vector2d extent = (hi - lo).cwiseMax(1e-9);
     while ((extent[0] / h + 1) * (extent[1] / h + 1) > options.max_points_per_floor) h *= 1.25;
-    // Candidates, interpolated values and the floor's arrays: (2 + 2 K + 3) doubles per point.
-    RequireSizeLimit(static_cast<double>(options.max_points_per_floor) * (5.0 + 2.0 * model_->num_access_points()),
+    // The table's worst case (no AP at its background anywhere): 3.5 K doubles per point.
+    RequireSizeLimit(static_cast<double>(options.max_points_per_floor) * (5.0 + 3.5 * model_->num_access_points()),
                      sizeof(double), "max_points_per_floor", "grid values");
     const int nx = static_cast<int>(std::floor(extent[0] / h)) + 1;
     const int ny = static_cast<int>(std::floor(extent[1] / h)) + 1;
@@ -72,27 +79,29 @@ GridPosterior::GridPosterior(std::shared_ptr<const RssModel> model, GridPosterio
     for (int iy = 0, c = 0; iy < ny; ++iy) {
       for (int ix = 0; ix < nx; ++ix, ++c) candidates.row(c) << lo[0] + ix * h, lo[1] + iy * h;
     }
-    const InterpolationBatch b = model_->interpolator(static_cast<int>(f)).InterpolateBatch(candidates, true);
-    FloorGrid grid;
-    const Eigen::Index inside = b.inside.count();
-    grid.points.resize(inside, 2);
-    grid.mean.resize(inside, k);
-    grid.inv_variance.resize(inside, k);
-    grid.log_norm.resize(inside);
-    for (Eigen::Index i = 0, g = 0; i < candidates.rows(); ++i) {
-      if (!b.inside[i]) continue;  // the grid covers the convex hull only
-      grid.points.row(g) = candidates.row(i);
-      grid.mean.row(g) = b.values.row(i).head(k);
-      double log_norm = 0.0;
-      for (Eigen::Index a = 0; a < k; ++a) {
-        const double v = std::max(b.values(i, k + a), variance_floor);
-        grid.inv_variance(g, a) = 1.0 / v;
-        log_norm += 0.5 * (kLog2Pi + std::log(v));
+    auto grid_ptr = std::make_shared<FloorGrid>();
+    FloorGrid& grid = *grid_ptr;
+    grid.table = internal::PointLikelihoodTable(background, model_->options().max_term);
+    std::vector<double> inside_xy;
+    Eigen::VectorXd variance(k);
+    // Interpolated in blocks: the fields and gradients of K APs for every candidate at once
+    // would take G x 6K doubles.
+    constexpr Eigen::Index kBlock = 1024;
+    for (Eigen::Index b0 = 0; b0 < candidates.rows(); b0 += kBlock) {
+      const Eigen::Index block_rows = std::min(kBlock, candidates.rows() - b0);
+      const InterpolationBatch b =
+          model_->interpolator(static_cast<int>(f)).InterpolateBatch(candidates.middleRows(b0, block_rows), true);
+      for (Eigen::Index i = 0; i < block_rows; ++i) {
+        if (!b.inside[i]) continue;  // the grid covers the convex hull only
+        inside_xy.push_back(candidates(b0 + i, 0));
+        inside_xy.push_back(candidates(b0 + i, 1));
+        for (Eigen::Index a = 0; a < k; ++a) variance[a] = std::max(b.values(i, k + a), variance_floor);
+        grid.table.AddPoint(b.values.row(i).data(), variance.data());
       }
-      grid.log_norm[g] = log_norm;
-      ++g;
     }
-    floors_.push_back(std::move(grid));
+    grid.table.Finish();
+    grid.points = Eigen::Map<const RowMatrixXd>(inside_xy.data(), static_cast<Eigen::Index>(inside_xy.size() / 2), 2);
+    floors_.push_back(std::move(grid_ptr));
   }
 }
 
@@ -105,40 +114,43 @@ WifiFix GridPosterior::Locate(const Eigen::Ref<const RowMatrixXd>& rss_dbm) cons
   CheckArgument(rss_dbm.rows() > 0, "rss_dbm", "no scan");
   CheckFinite(rss_dbm, "rss_dbm");
   internal::CheckRss(rss_dbm, "rss_dbm");
-  const double cap = model_->options().max_term;
-  const double n = static_cast<double>(rss_dbm.rows());
-  // l at every grid point of every floor, then log-sum-exp weights.
+  // l at every grid point of every floor (PointLikelihoodTable), then log-sum-exp weights.
   std::vector<Eigen::VectorXd> l(floors_.size());
   double best = std::numeric_limits<double>::infinity();
   for (size_t f = 0; f < floors_.size(); ++f) {
-    const FloorGrid& grid = floors_[f];
-    l[f] = n * grid.log_norm;
-    for (Eigen::Index g = 0; g < grid.points.rows(); ++g) {
-      double sum = 0.0;
-      for (Eigen::Index s = 0; s < rss_dbm.rows(); ++s) {
-        for (Eigen::Index a = 0; a < k; ++a) {
-          const double r = rss_dbm(s, a) - grid.mean(g, a);
-          sum += std::min(0.5 * r * r * grid.inv_variance(g, a), cap);
-        }
-      }
-      l[f][g] += sum;
-      best = std::min(best, l[f][g]);
-    }
+    floors_[f]->table.NegLogLikelihood(rss_dbm, &l[f]);
+    if (l[f].size() > 0) best = std::min(best, l[f].minCoeff());
   }
   WifiFix fix;
   double best_mass = -1.0, total_mass = 0.0;
+  std::vector<int> support;
+  // Only points with exp(best - l) > e^-cutoff are weighted: the best point weighs 1, so the
+  // points left out, at most G of them, change every sum by less than G e^-cutoff = 1e-17 of
+  // its value (below double rounding); on a large map they are most of the grid.
+  Eigen::Index total_points = 0;
+  for (const auto& grid : floors_) total_points += grid->points.rows();
+  const double cutoff = 39.2 + std::log(static_cast<double>(std::max<Eigen::Index>(total_points, 1)));
   for (size_t f = 0; f < floors_.size(); ++f) {
-    const FloorGrid& grid = floors_[f];
-    const Eigen::ArrayXd w = (best - l[f].array()).exp();
+    const FloorGrid& grid = *floors_[f];
+    support.clear();
+    const double* lf = l[f].data();
+    for (Eigen::Index g = 0; g < l[f].size(); ++g) {
+      if (lf[g] - best < cutoff) support.push_back(static_cast<int>(g));
+    }
+    Eigen::ArrayXd w(static_cast<Eigen::Index>(support.size()));
+    for (size_t j = 0; j < support.size(); ++j) w[static_cast<Eigen::Index>(j)] = best - lf[support[j]];
+    w = w.exp();  // vectorised, as the dense pass's exp over the whole grid was
     const double mass = w.sum();
     total_mass += mass;
     if (mass <= best_mass || mass <= 0.0) continue;
     best_mass = mass;
-    const Eigen::Vector2d mean = (grid.points.transpose() * w.matrix()) / mass;
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    for (size_t j = 0; j < support.size(); ++j) mean += w[static_cast<Eigen::Index>(j)] * grid.points.row(support[j]).transpose();
+    mean /= mass;
     Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
-    for (Eigen::Index g = 0; g < grid.points.rows(); ++g) {
-      const Eigen::Vector2d d = grid.points.row(g).transpose() - mean;
-      cov += w[g] * d * d.transpose();
+    for (size_t j = 0; j < support.size(); ++j) {
+      const Eigen::Vector2d d = grid.points.row(support[j]).transpose() - mean;
+      cov += w[static_cast<Eigen::Index>(j)] * d * d.transpose();
     }
     fix.position_m = mean;
     // Grid quantisation adds h^2/12 per axis; it keeps the covariance positive definite.
@@ -154,7 +166,7 @@ const RowMatrixXd& GridPosterior::grid(int floor_index) const {
     throw std::out_of_range("indoorloc: argument 'floor_index': must be in [0, " + std::to_string(num_floors()) +
                             "), got " + std::to_string(floor_index));
   }
-  return floors_[static_cast<size_t>(floor_index)].points;
+  return floors_[static_cast<size_t>(floor_index)]->points;
 }
 
 }  // namespace indoorloc::wifi

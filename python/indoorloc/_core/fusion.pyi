@@ -200,6 +200,9 @@ class GridTrackerOptions:
     """Fields and defaults: read them from the compiled struct (``GridTrackerOptions().to_dict()``);
     they are not restated here."""
     cell_size_m: float
+    filtered_covariance_fix_gain: float
+    filtered_covariance_floor_m: float
+    filtered_covariance_scale: float
     fix_outlier_probability: float
     fix_tempering: float
     fix_tempering_by_variance: bool
@@ -212,6 +215,9 @@ class GridTrackerOptions:
     position_noise_m: float
     scale_bins: int
     scale_sd: float
+    smoothed_covariance_fix_gain: float
+    smoothed_covariance_floor_m: float
+    smoothed_covariance_scale: float
     spatial_median: bool
     start_position_sd_m: float
     walkable_subsamples: int

@@ -61,6 +61,8 @@ class ZeroVelocityOutput(_Result):
     base_threshold: float
     guard_raised: bool
     guard_satisfied: bool
+    low_motion_rule: bool
+    flicker_s: float
     ladder_rungs: int
     max_swing_s: float
     median_swing_s: float
@@ -154,6 +156,8 @@ def zero_velocity(
     min_stance_share: float = 0.15,
     min_stance_fraction: float = 0.3,
     max_threshold: float = 1e7,
+    min_plausible_swing_s: float = 0.2,
+    low_motion_min_stance_s: float = 0.08,
     window: int = 5,
     sigma_acc_mps2: float = 0.01,
     sigma_gyro_radps: float = ...,

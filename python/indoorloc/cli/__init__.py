@@ -9,6 +9,8 @@
     indoorloc wifi evaluate [--dataset uji office ...] [--scans 1 10]
     indoorloc wifi simulate [--runs R] [--noise-db S]
     indoorloc reproduce [--papers 000 ...] [--out DIR] [--runs N] [--quick]
+    indoorloc site build SURVEY_DIR -o SITE.db [--floors ...] | site add SITE.db WALK... | site info SITE.db
+    indoorloc track WALK... --site SITE.db [--floor NAME|auto] [--no-smooth] -o OUT.{geojson,csv,json}
     indoorloc sweep FILE.toml [--scheduler tcp://host:8786] [--out results.jsonl]
 
 Each subsystem's subcommands live in ``indoorloc/cli/<subsystem>.py`` with an
@@ -117,6 +119,13 @@ def _add_reproduce(sub: argparse._SubParsersAction) -> None:
     reproduce.add_parser(sub, quiet_parent)
 
 
+def _add_site(sub: argparse._SubParsersAction) -> None:
+    from indoorloc.cli import site
+
+    site.add_parser(sub, quiet_parent)
+    site.add_track_parser(sub, quiet_parent)
+
+
 def _add_sweep(sub: argparse._SubParsersAction) -> None:
     from indoorloc.cli import sweep
 
@@ -130,7 +139,7 @@ def _add_wifi(sub: argparse._SubParsersAction) -> None:
 
 
 # Subsystems register `add(subparsers)` functions here.
-_SUBCOMMANDS: List[Callable[[argparse._SubParsersAction], None]] = [_add_core, _add_analog, _add_fusion, _add_mapmatch, _add_network, _add_pdr, _add_reproduce, _add_sweep, _add_wifi]
+_SUBCOMMANDS: List[Callable[[argparse._SubParsersAction], None]] = [_add_core, _add_analog, _add_fusion, _add_mapmatch, _add_network, _add_pdr, _add_reproduce, _add_site, _add_sweep, _add_wifi]
 
 
 def build_parser() -> argparse.ArgumentParser:

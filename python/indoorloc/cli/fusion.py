@@ -74,6 +74,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
             errors.setdefault(row["method"], []).append(row["error_m"])
         written = [plots.error_cdfs(errors, out / "fusion_real_error_cdfs.png", xmax_m=60.0,
                                     title=f"Waypoint errors, floors {' '.join(floors)}")]
+        if result.get("heading_offsets"):
+            written.append(plots.heading_offsets(result["heading_offsets"], out / "fusion_real_heading_offsets.png"))
         for floor in floors:
             written.append(plots.fusion_real_walk(fr.walk_snapshot(root, floor, args.plot_walk, settings),
                                                   out / f"fusion_real_walk_{floor}.png"))

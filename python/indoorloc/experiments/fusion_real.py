@@ -3,7 +3,7 @@
 Data: the Indoor Location Competition 2.0 site-2 walks (``shared/data/fusion/ilc2020_site2``,
 docs/fusion_data.md) or any folder in that layout. Per floor, k-fold by walk (fixed seed): the
 training walks give the handheld-PDR calibration (Weinberg K, the yaw offset between the phone's
-rotation-vector heading and the floor frame, its spread over walks: ``pdr_handheld``) and the
+rotation-vector heading and the floor frame, its spread over walks: ``indoorloc.pdr.handheld``) and the
 crowdsourced signal map (``wifi_crowdsource``); each test walk is then tracked from its own IMU
 and WiFi and the floor plan, and scored at its surveyed waypoints. Methods, side by side on the
 same folds:
@@ -17,7 +17,7 @@ same folds:
     handheld PDR from the first waypoint, headings rotated by the training yaw offset.
 ``peer_costmin``
     the cost-minimisation post-processing of the 2021 competition's public solutions
-    (``benchmarks/ilc_costmin_peer.py``): the kNN WiFi fixes (``wifi_knn``) at every scan plus
+    (:mod:`indoorloc.fusion.costmin_baseline`): the kNN WiFi fixes (``wifi_knn``) at every scan plus
     the PDR displacements by robust least squares with a per-walk rotation. Only when run from a source
     tree (the peer is not part of the package); otherwise absent from the table.
 ``fusion_unknown_start``, ``fusion_known_start``, ``fusion_smoother``
@@ -42,7 +42,6 @@ from __future__ import annotations
 
 import itertools
 import math
-import sys
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -52,7 +51,9 @@ from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from indoorloc import fusion, pdr_handheld as ph, wifi, wifi_crowdsource as wc, wifi_fixes as wfx
+from indoorloc import fusion, wifi, wifi_crowdsource as wc, wifi_fixes as wfx
+from indoorloc.fusion import site_model
+from indoorloc.pdr import handheld as ph
 from indoorloc.io import ilc_floor_names, load_floor_plan, read_ilc_floor
 
 FLOORS: Tuple[str, ...] = ()  #: none named: every floor folder under the data root, in building order
@@ -120,6 +121,12 @@ class RealSettings:
     #: fusion_known_start, like its τ and ε).
     known_start_wall_log_penalty: float = -3.0
     known_start_fix_tempering_by_variance: bool = False
+    #: The known start's calibration of its returned covariance (a, b [m], g of
+    #: GridTrackerOptions.filtered_covariance_*): the all-floor choice of
+    #: ``experiments/fusion_uncertainty`` (LOFO coverage 0.956, 0.93-0.98 per floor).
+    known_start_covariance_scale: float = 3.0
+    known_start_covariance_floor_m: float = 1.5
+    known_start_covariance_fix_gain: float = 0.0
     floor_identification: bool = True   #: also run the default with the floor not given
     threads: int = 2                    #: walks tracked in parallel (results do not depend on it)
     #: Engine of the fusion_* methods: "grid" (exact filter and smoother on floor cells,
@@ -144,6 +151,14 @@ class RealSettings:
         settings.update(overrides)
         return fusion.tracker_options(**settings)
 
+    def track_settings(self) -> site_model.TrackSettings:
+        """The settings a site model's default tracker takes (``fusion.site_model``)."""
+        return site_model.TrackSettings(
+            step_length_sd_fraction=self.step_length_sd_fraction, step_heading_sd_rad=self.step_heading_sd_rad,
+            fixes=self.fixes, grid_options=self.grid_options, point_estimate=self.point_estimate,
+            identification_cell_m=self.floor_identification_cell_m,
+            identification_offset_bins=self.floor_identification_offset_bins)
+
     def to_dict(self) -> Dict[str, Any]:
         d = asdict(self)
         d["wall_log_penalty"] = None if math.isinf(self.wall_log_penalty) else self.wall_log_penalty
@@ -167,9 +182,14 @@ class WalkScore:
     in_region95: Dict[str, np.ndarray] = field(default_factory=dict)
     #: Per method with a heading-offset state: final offset minus the walk's residual [rad].
     offset_error_rad: Dict[str, float] = field(default_factory=dict)
+    #: The walk's heading residual measured from its waypoints [rad] (``heading_residual_rad``).
+    heading_residual_rad: Optional[float] = None
     waypoint_t0: float = 0.0                          #: the first waypoint's time [s]
     waypoint_xy_m: Optional[np.ndarray] = None        #: surveyed waypoints (W, 2) [m]
     smoothed_track_m: Optional[np.ndarray] = None     #: the default's smoothed track (per step)
+    #: Per grid method: what the covariance calibration is fitted on (``fusion_uncertainty``):
+    #: ``error_m`` (W, 2) estimate minus truth, ``posterior_covariance_m2`` (W, 3), ``fix_distance_m`` (W,).
+    calibration_inputs: Dict[str, Dict[str, np.ndarray]] = field(default_factory=dict)
 
 
 @dataclass
@@ -213,17 +233,10 @@ def floor_number(name: str) -> int:
 
 
 def _peer():
-    """The cost-minimisation peer from benchmarks/ (source tree only), or None."""
-    here = Path(__file__).resolve()
-    for parent in here.parents:
-        candidate = parent / "benchmarks" / "ilc_costmin_peer.py"
-        if candidate.is_file():
-            if str(candidate.parent) not in sys.path:
-                sys.path.insert(0, str(candidate.parent))
-            import ilc_costmin_peer  # noqa: E402
+    """The cost-minimisation baseline (:mod:`indoorloc.fusion.costmin_baseline`)."""
+    from indoorloc.fusion import costmin_baseline
 
-            return ilc_costmin_peer
-    return None
+    return costmin_baseline
 
 
 def _folds(n: int, k: int, seed: int) -> List[np.ndarray]:
@@ -295,9 +308,7 @@ def _score_walk(walk, steps_raw: ph.HandheldSteps, models: FoldModels, settings:
     # PDR: calibrated steps, headings rotated into the floor frame by the training yaw offset.
     cal = models.cal
     steps = ph.rescale(steps_raw, cal.options)
-    heading = steps.heading_rad + cal.yaw_offset_rad
-    length_sd = settings.step_length_sd_fraction * steps.length_m
-    pdr_steps = fusion.Steps.from_polar(steps.t_s, steps.length_m, heading, length_sd, settings.step_heading_sd_rad)
+    pdr_steps = site_model.tracker_steps(steps_raw, cal, settings.track_settings())
     if "pdr_only" in want:
         put("pdr_only", ph.pdr_track(steps, wxy[0], wt, yaw_offset_rad=cal.yaw_offset_rad))
     if peer is not None and "peer_costmin" in want and len(fixes) and len(pdr_steps):
@@ -311,6 +322,7 @@ def _score_walk(walk, steps_raw: ph.HandheldSteps, models: FoldModels, settings:
         return score
     spread = max(cal.yaw_offset_spread_rad, 1e-3)
     residual = heading_residual_rad(steps, cal.yaw_offset_rad, wt, wxy)
+    score.heading_residual_rad = residual
     options = settings.tracker_options(unknown_start_heading_sd_rad=spread, start_heading_offset_sd_rad=spread)
     start_xy = wxy[0] if not math.isinf(settings.wall_log_penalty) else _walkable_start(fl.plan, wxy[0])
     known = {"position_m": start_xy, "floor": fl.number, "heading_offset_rad": 0.0, "time_s": float(wt[0])}
@@ -432,8 +444,8 @@ def _grid_options(settings: RealSettings, spread_rad: float, **changes):
 
 
 def _identification_options(settings: RealSettings, spread_rad: float):
-    return _grid_options(settings, spread_rad, cell_size_m=settings.floor_identification_cell_m,
-                         heading_offset_bins=settings.floor_identification_offset_bins)
+    median = settings.point_estimate == "median" or settings.score_both_point_estimates
+    return site_model.identification_grid_options(settings.track_settings(), spread_rad, median)
 
 
 def _score_walk_grid(score: WalkScore, put, pdr_steps, fixes, known_fixes, known: dict, models: FoldModels,
@@ -470,6 +482,11 @@ def _score_walk_grid(score: WalkScore, put, pdr_steps, fixes, known_fixes, known
             score.seconds[name] = seconds
             if name in COVARIANCE_METHODS:
                 score.in_region95[name] = fusion.region95_contains(est, np.asarray(r[cov_key])[idx], wxy)
+                prefix = "" if key == "mean_m" else "smoothed_"
+                score.calibration_inputs[name] = {
+                    "error_m": est - wxy,
+                    "posterior_covariance_m2": np.asarray(r[prefix + "posterior_covariance_m2"])[idx],
+                    "fix_distance_m": np.asarray(r[prefix + "fix_distance_m"])[idx]}
         return r
 
     if want & {"fusion_unknown_start", "fusion_smoother"} or settings.floor_identification:
@@ -483,7 +500,10 @@ def _score_walk_grid(score: WalkScore, put, pdr_steps, fixes, known_fixes, known
         fix_tempering=settings.known_start_fix_tempering,
         fix_outlier_probability=settings.known_start_fix_outlier_probability,
         wall_log_penalty=settings.known_start_wall_log_penalty,
-        fix_tempering_by_variance=settings.known_start_fix_tempering_by_variance), fl.name)
+        fix_tempering_by_variance=settings.known_start_fix_tempering_by_variance,
+        filtered_covariance_scale=settings.known_start_covariance_scale,
+        filtered_covariance_floor_m=settings.known_start_covariance_floor_m,
+        filtered_covariance_fix_gain=settings.known_start_covariance_fix_gain), fl.name)
     if "fusion_known_start" in want:
         run("fusion_known_start", None, known_tracker, known, known_fixes, smooth=False)
     if "fusion_no_walls" in want:
@@ -522,9 +542,9 @@ def _fold_models(floors: Sequence[FloorData], fold_of: Dict[str, List[np.ndarray
             continue
         train = [w for i, w in enumerate(fl.walks) if i not in test]
         train_steps = [s for i, s in enumerate(fl.steps) if i not in test]
-        cal = ph.calibrate_handheld(train, steps_cache=train_steps)
+        cal = site_model.calibrate_floor(train, train_steps)
         crowd = wc.build_crowd_map(train, wc.CrowdMapSettings(), fl.number) if with_crowd_map else None
-        database = wfx.build_database(train, settings.fixes, train_steps, floors=[fl.number] * len(train))
+        database = site_model.build_fingerprints(train, train_steps, fl.number, settings.fixes)
         out[fl.name] = FoldModels(fl, cal, crowd, database)
         all_walks += train
         all_steps += train_steps
@@ -650,6 +670,13 @@ def summarize(scores: Sequence[WalkScore], settings: RealSettings, seconds: floa
             walk_seconds[name] = float(np.mean(v))
     out = {"methods": methods, "waypoints": rows, "settings": settings.to_dict(), "per_floor": per_floor,
            "error_vs_time": by_time, "seconds": round(seconds, 2), "mean_seconds_per_walk": walk_seconds}
+    # Per walk: the final heading offset of each method with an offset state against the walk's
+    # residual measured from its waypoints (both relative to the training yaw offset) [deg].
+    out["heading_offsets"] = [
+        {"floor": s.floor, "walk": s.walk, "residual_deg": round(math.degrees(s.heading_residual_rad), 3),
+         "final_deg": {name: round(math.degrees(_wrap(s.heading_residual_rad + err)), 3)
+                       for name, err in s.offset_error_rad.items() if name != "fusion_no_heading_offset"}}
+        for s in scores if s.heading_residual_rad is not None and math.isfinite(s.heading_residual_rad)]
     ident = [s for s in scores if s.floor_correct is not None]
     if ident:
         correct = np.concatenate([s.floor_correct for s in ident])
@@ -770,6 +797,12 @@ def walk_snapshot(data_root: Optional[Path], floor: str, walk_index: int = 0,
             "fix_centres_m": wfx.fix_centres(fixes) if len(fixes) else np.zeros((0, 2)), "pdr_m": pdr,
             "smoothed_m": np.asarray(result["smoothed_m"]), "filter_m": np.asarray(result["mean_m"]),
             "trajectories_m": np.asarray(result["smoothed_trajectories_m"]),
+            # For the track viewer: the track's times (since the first waypoint, as waypoint_t_s) [s],
+            # its smoothed covariances (xx, xy, yy) [m²] (None where the engine gives none) and the fixes' times.
+            "track_t_s": np.asarray(pdr_steps.times_s, float) - wt[0],
+            "smoothed_covariance_m2": (np.asarray(result["smoothed_covariance_m2"])
+                                       if "smoothed_covariance_m2" in result else None),
+            "fix_t_s": (np.asarray(fixes.times_s, float) - wt[0]) if len(fixes) else np.zeros(0),
             "errors": {"pdr_only": np.hypot(*(ph.pdr_track(steps, wxy[0], wt, yaw_offset_rad=models.cal.yaw_offset_rad) - wxy).T),
                        "fusion_smoother": np.hypot(*(_interp_track(wt, pdr_steps.times_s, result["smoothed_m"]) - wxy).T),
                        "wifi_knn": np.hypot(*(_nearest_rows(wt, fixes.times_s, wfx.fix_centres(fixes)) - wxy).T)

@@ -1,5 +1,6 @@
 """WiFi-only baselines on held-out walks of the Indoor Location Competition 2.0 data, with the
-crowdsourced signal map of :mod:`indoorloc.wifi_crowdsource` (``fusion evaluate``).
+crowdsourced signal map of :mod:`indoorloc.wifi_crowdsource` (issue 15, item 1 of
+``fusion evaluate``).
 
 Protocol (docs/fusion_real.md, "Crowdsourced signal map"): per floor, ``folds``-fold
 cross-validation by walk (fixed seed). In each outer fold the map is built from the training
@@ -35,7 +36,7 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
-from indoorloc import pdr_handheld
+from indoorloc.pdr import handheld
 from indoorloc import wifi
 from indoorloc import wifi_crowdsource
 from indoorloc.progress import progress
@@ -55,7 +56,7 @@ MODEL_GRID: Dict[str, Sequence[Any]] = {
     "cell_size_m": (2.0, 3.0, 4.0),
     "min_walks": (2, 4, 8),
 }
-#: The lead's quick look: 5-NN on raw scans placed linearly, mean / median / p90 [m].
+#: The lead's quick look (issue 15): 5-NN on raw scans placed linearly, mean / median / p90 [m].
 LEAD_QUICK_LOOK = {"F3": (25.0, 9.0, 90.0), "F4": (35.0, 18.0, 94.0), "F8": (23.0, 13.0, 69.0)}
 
 
@@ -105,7 +106,7 @@ def load_floor(floor: Any, positionings: Sequence[str] = wifi_crowdsource.POSITI
     out = []
     base = settings or wifi_crowdsource.CrowdMapSettings()
     for w in floor.walks():
-        steps = pdr_handheld.handheld_steps(w, pdr_handheld.HandheldOptions(heading_source=base.heading_source))
+        steps = handheld.handheld_steps(w, handheld.HandheldOptions(heading_source=base.heading_source))
         placed = {p: wifi_crowdsource.reading_positions(w, replace(base, positioning=p), steps) for p in positionings}
         names, values = _nearest_scans(w, max_age_s)
         out.append(_Walk(w.walk_id, np.asarray(w.waypoint_t_s, float), np.asarray(w.waypoint_xy_m, float),

@@ -9,6 +9,7 @@ from indoorloc.registry import DemoContext, DemoSection, default_pdr_root, regis
 def demo(ctx: DemoContext) -> DemoSection:
     from indoorloc import plots
     from indoorloc.experiments import pdr_evaluate as pe
+    from indoorloc.pdr import metrics
     from indoorloc.io import pdr_datasets as io
 
     root = default_pdr_root()
@@ -20,12 +21,12 @@ def demo(ctx: DemoContext) -> DemoSection:
     pos8, _ = pe.zupt_ekf_method(figure8)
     pos_trial, _ = pe.zupt_ekf_method(trial)
     est = pos_trial[:, :2] * pe.PYSHOE_TRUTH_FROM_Z_UP
-    aligned = pe.align_2d(est, trial.truth_xy_m, pe.pyshoe_alignment_samples(trial))
+    aligned = metrics.align_2d(est, trial.truth_xy_m, pe.pyshoe_alignment_samples(trial))
     fig = plots.pdr_paths(pos8[:, :2], trial.name, aligned, trial.truth_xy_m, ctx.figure_path("pdr_paths"))
     loop = pe.score_closed_loop(figure8, (pos8, None))
     text = (
         f"OpenShoe figure-8 (820 Hz, 62 s): final error {loop['final_error_2d_m']:.3f} m over "
         f"{loop['path_length_2d_m']:.1f} m (OpenShoe's EKF 0.45 m). PyShoe trial {trial.name}: ARMSE "
-        f"{pe.armse(aligned, trial.truth_xy_m):.3f} m against Vicon. Full evaluation: `indoorloc pdr evaluate`."
+        f"{metrics.armse(aligned, trial.truth_xy_m):.3f} m against Vicon. Full evaluation: `indoorloc pdr evaluate`."
     )
     return DemoSection(markdown=text, figures=[fig])

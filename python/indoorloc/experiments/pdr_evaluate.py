@@ -3,9 +3,10 @@
 Two evaluations, one parameter set for all recordings of a sensor:
 
 - :func:`evaluate_pyshoe`: the University of Toronto / PyShoe Vicon trials (per-sample ground
-  truth). Each estimate is aligned with :func:`align_2d` (start position and initial heading, as
-  PyShoe does) and scored by :func:`armse`; median, mean and worst over trials, and the stride
-  count error when the method also returns its detected strides.
+  truth). Each estimate is aligned with :func:`indoorloc.pdr.metrics.align_2d` (start position
+  and initial heading, as PyShoe does) and scored by :func:`indoorloc.pdr.metrics.armse`; median,
+  mean and worst over trials, and the stride count error when the method also returns its
+  detected strides.
 - :func:`evaluate_closed_loops`: the x-io short / long walks and the OpenShoe figure-8, which end
   where they start: the final position error ||p_last - p_first|| (2-D and 3-D) and its
   percentage of the distance walked (path length of the estimate).
@@ -13,10 +14,11 @@ Two evaluations, one parameter set for all recordings of a sensor:
 :func:`markdown` renders both as tables with the peers' published figures beside ours.
 
 A method is a callable ``method(recording) -> positions_m (N, 3)`` or
-``-> (positions_m (N, 3), stride_indices (S,))``. The recommended one (issue 16) is
-:func:`zupt_guard_method` / :func:`run_recommended`: the SHOE statistic with the swing-guard
-threshold (:data:`ZUPT_DETECTOR`, chosen by cross-validation in :mod:`pdr_zupt_cv`), the ZUPT EKF
-+ RTS smoother with its health check, and :func:`indoorloc.pdr.count_strides`;
+``-> (positions_m (N, 3), stride_indices (S,))``. The recommended one is
+:func:`zupt_guard_method`, an adapter of :func:`indoorloc.pdr.recommended.run_recommended` (the
+SHOE statistic with the swing-guard threshold, the ZUPT EKF + RTS smoother with its health check,
+:func:`indoorloc.pdr.count_strides`; the pipeline and the metrics live in the ``indoorloc.pdr``
+package, this module keeps the study);
 :func:`evaluate_json` writes every recording's figures in the stable schema of docs/pdr.md.
 :func:`zupt_ekf_method` (fixed per-sensor threshold) and :func:`zupt_adaptive_method` (issue 8's
 per-class rule, which overfitted) remain for comparison. ``indoorloc.pdr`` is imported lazily,
@@ -45,17 +47,19 @@ from indoorloc.io.pdr_datasets import (
     load_pyshoe_trial,
     load_xio,
 )
+from indoorloc.pdr import metrics as _metrics
+from indoorloc.pdr import recommended as _recommended
 from indoorloc.progress import progress, stage
 
 PathLike = Union[str, Path]
 MethodOutput = Union[np.ndarray, Tuple[np.ndarray, Optional[np.ndarray]]]
 Method = Callable[[ImuRecording], MethodOutput]
 
-#: SHOE window [samples] and noise settings used by :func:`zupt_ekf_method` (the statistic's
-#: scale depends on them: T ~ 1/sigma^2).
-SHOE_WINDOW = 5
-SHOE_SIGMA_ACC_MPS2 = 0.01
-SHOE_SIGMA_GYRO_RADPS = 0.1 * math.pi / 180.0
+#: SHOE window [samples] and noise settings of every method here (those of the recommended
+#: pipeline, :mod:`indoorloc.pdr.recommended`).
+_SHOE_WINDOW = _recommended.SHOE_WINDOW
+_SHOE_SIGMA_ACC_MPS2 = _recommended.SHOE_SIGMA_ACC_MPS2
+_SHOE_SIGMA_GYRO_RADPS = _recommended.SHOE_SIGMA_GYRO_RADPS
 
 #: Default SHOE threshold per sensor (dimensionless statistic of Skog et al. 2010 eq. 13, with
 #: the window and sigmas above; log10 T is about 2-2.5 at rest and 6-7 in swing on these files).
@@ -80,84 +84,8 @@ PEER_PYSHOE = {"method": "PyShoe ESKF + SHOE (42 trials)", "median_armse_m": 0.0
 
 
 # --------------------------------------------------------------------------------------------
-# Metrics
+# Stride counting of the comparison methods
 # --------------------------------------------------------------------------------------------
-def _xy(a: Any, name: str) -> np.ndarray:
-    arr = np.asarray(a, dtype=float)
-    if arr.ndim != 2 or arr.shape[1] < 2 or arr.shape[0] == 0:
-        raise ValueError(f"indoorloc: argument '{name}': expected an (N, 2) or (N, 3) array, "
-                         f"got shape {arr.shape}")
-    return arr[:, :2]
-
-
-def align_2d(estimate_xy: Any, truth_xy: Any, n_align: int, *,
-             return_angle: bool = False) -> Union[np.ndarray, Tuple[np.ndarray, float]]:
-    """Align an estimated 2-D track with the truth by start position and initial heading.
-
-    The usual PyShoe-style alignment: a dead-reckoning track has an arbitrary origin and an
-    unobservable initial heading, so the estimate is translated so that its first sample equals
-    the truth's first sample, then rotated about that point by the angle that best aligns the
-    first ``n_align`` samples in least squares. With ``a_i = e_i - e_0`` and ``b_i = t_i - t_0``
-    the angle minimising ``sum_i ||R(theta) a_i - b_i||^2`` is, in closed form,
-
-        theta = atan2( sum_i (a_i x b_i), sum_i (a_i . b_i) )
-
-    (2-D cross product ``a_x b_y - a_y b_x``). Nothing else (no scale, no later sample) is fitted.
-
-    Parameters
-    ----------
-    estimate_xy, truth_xy : (N, 2) or (N, 3) float
-        Estimated and true positions [m]; only x, y are used.
-    n_align : int
-        Number of leading samples used for the heading (2 <= n_align <= N). When those samples
-        do not move (all at the start point) the angle is 0.
-    return_angle : bool
-        Also return theta [rad].
-
-    Returns
-    -------
-    aligned : (N, 2) float
-        The aligned estimate (and theta when ``return_angle``).
-    """
-    e = _xy(estimate_xy, "estimate_xy")
-    t = _xy(truth_xy, "truth_xy")
-    if e.shape != t.shape:
-        raise ValueError(f"indoorloc: argument 'truth_xy': {t.shape[0]} rows but estimate_xy has "
-                         f"{e.shape[0]}")
-    n = int(n_align)
-    if not 2 <= n <= e.shape[0]:
-        raise ValueError(f"indoorloc: argument 'n_align': must be in [2, {e.shape[0]}], got {n_align}")
-    a = e[:n] - e[0]
-    b = t[:n] - t[0]
-    cross = float(np.sum(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]))
-    dot = float(np.sum(a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1]))
-    theta = math.atan2(cross, dot) if (cross != 0.0 or dot != 0.0) else 0.0
-    c, s = math.cos(theta), math.sin(theta)
-    rot = np.array([[c, -s], [s, c]])
-    aligned = (e - e[0]) @ rot.T + t[0]
-    return (aligned, theta) if return_angle else aligned
-
-
-def armse(estimate_xy: Any, truth_xy: Any) -> float:
-    """Absolute root-mean-square error [m]: ``sqrt( (1/N) sum_k ||e_k - t_k||^2 )``.
-
-    Over all N samples, 2-D (x, y) Euclidean error, estimate and truth already in the same frame
-    (align first with :func:`align_2d`). This is PyShoe's ARMSE.
-    """
-    e = _xy(estimate_xy, "estimate_xy")
-    t = _xy(truth_xy, "truth_xy")
-    if e.shape != t.shape:
-        raise ValueError(f"indoorloc: argument 'truth_xy': {t.shape[0]} rows but estimate_xy has "
-                         f"{e.shape[0]}")
-    return float(np.sqrt(np.mean(np.sum((e - t) ** 2, axis=1))))
-
-
-def path_length(positions: Any) -> float:
-    """Sum of the distances between consecutive positions [m] ((N, 2) or (N, 3))."""
-    p = np.asarray(positions, dtype=float)
-    return float(np.sum(np.linalg.norm(np.diff(p, axis=0), axis=1)))
-
-
 def strides_from_stance(stance: Any, rate_hz: float, *, min_swing_s: float = 0.3,
                         min_stance_s: float = 0.02, long_swing_factor: Optional[float] = 1.7
                         ) -> np.ndarray:
@@ -225,7 +153,7 @@ def zupt_ekf_method(recording: ImuRecording, threshold: Optional[float] = None, 
     """SHOE stance detection then the ZUPT-aided EKF (``indoorloc.pdr``).
 
     ``threshold`` is the SHOE threshold for the window and sigmas of this module
-    (``SHOE_WINDOW``, ``SHOE_SIGMA_*``); None takes the per-sensor default
+    (``SHOE_WINDOW``, ``SHOE_SIGMA_*`` of :mod:`indoorloc.pdr.recommended`); None takes the per-sensor default
     :data:`DEFAULT_SHOE_THRESHOLD`. Returns ``(positions_m (N, 3), stride_indices (S,))``, the
     strides being the stance onsets of :func:`strides_from_stance`.
     """
@@ -233,9 +161,9 @@ def zupt_ekf_method(recording: ImuRecording, threshold: Optional[float] = None, 
 
     gamma = default_threshold(recording) if threshold is None else float(threshold)
     stance = np.asarray(pdr.shoe_detector(recording.acc_mps2, recording.gyro_radps,
-                                          window=SHOE_WINDOW, threshold=gamma,
-                                          sigma_acc_mps2=SHOE_SIGMA_ACC_MPS2,
-                                          sigma_gyro_radps=SHOE_SIGMA_GYRO_RADPS), dtype=bool)
+                                          window=_SHOE_WINDOW, threshold=gamma,
+                                          sigma_acc_mps2=_SHOE_SIGMA_ACC_MPS2,
+                                          sigma_gyro_radps=_SHOE_SIGMA_GYRO_RADPS), dtype=bool)
     out = pdr.zupt_ekf(recording.time_s, recording.acc_mps2, recording.gyro_radps, stance, smooth=smooth)
     positions = np.asarray(out["positions_m"], dtype=float)
     return positions, strides_from_stance(stance, recording.rate_hz)
@@ -271,9 +199,9 @@ def adaptive_threshold(recording: ImuRecording) -> float:
         return default_threshold(recording)
     from indoorloc import pdr
 
-    t = np.asarray(pdr.shoe_statistic(recording.acc_mps2, recording.gyro_radps, window=SHOE_WINDOW,
-                                      sigma_acc_mps2=SHOE_SIGMA_ACC_MPS2,
-                                      sigma_gyro_radps=SHOE_SIGMA_GYRO_RADPS))
+    t = np.asarray(pdr.shoe_statistic(recording.acc_mps2, recording.gyro_radps, window=_SHOE_WINDOW,
+                                      sigma_acc_mps2=_SHOE_SIGMA_ACC_MPS2,
+                                      sigma_gyro_radps=_SHOE_SIGMA_GYRO_RADPS))
     p99 = float(np.percentile(np.log10(np.maximum(t, 1e-300)), 99))
     return float(rule["low"] if p99 < rule["p99_cut"] else rule["high"])
 
@@ -289,9 +217,9 @@ def zupt_adaptive_method(recording: ImuRecording, threshold: Optional[float] = N
     gamma = adaptive_threshold(recording) if threshold is None else float(threshold)
     positions, _ = zupt_ekf_method(recording, threshold=gamma, smooth=smooth)
     counting = np.asarray(pdr.shoe_detector(recording.acc_mps2, recording.gyro_radps,
-                                            window=SHOE_WINDOW, threshold=default_threshold(recording),
-                                            sigma_acc_mps2=SHOE_SIGMA_ACC_MPS2,
-                                            sigma_gyro_radps=SHOE_SIGMA_GYRO_RADPS), dtype=bool)
+                                            window=_SHOE_WINDOW, threshold=default_threshold(recording),
+                                            sigma_acc_mps2=_SHOE_SIGMA_ACC_MPS2,
+                                            sigma_gyro_radps=_SHOE_SIGMA_GYRO_RADPS), dtype=bool)
     return positions, strides_from_stance(counting, recording.rate_hz)
 
 
@@ -346,9 +274,9 @@ def step_positioning_method(recording: ImuRecording, threshold: Optional[float] 
 
     gamma = default_threshold(recording) if threshold is None else float(threshold)
     stance = np.asarray(pdr.shoe_detector(recording.acc_mps2, recording.gyro_radps,
-                                          window=SHOE_WINDOW, threshold=gamma,
-                                          sigma_acc_mps2=SHOE_SIGMA_ACC_MPS2,
-                                          sigma_gyro_radps=SHOE_SIGMA_GYRO_RADPS), dtype=bool)
+                                          window=_SHOE_WINDOW, threshold=gamma,
+                                          sigma_acc_mps2=_SHOE_SIGMA_ACC_MPS2,
+                                          sigma_gyro_radps=_SHOE_SIGMA_GYRO_RADPS), dtype=bool)
     steps = stance_step_samples(stance, recording.rate_hz)
     if steps.size < 2:
         raise ValueError(f"indoorloc: argument 'recording': {recording.name}: fewer than 2 stance phases")
@@ -397,9 +325,9 @@ def step_covariance_coverage(recording: ImuRecording, threshold: Optional[float]
     if recording.truth_xy_m is None:
         raise ValueError(f"indoorloc: argument 'recording': {recording.name} has no truth_xy_m")
     gamma = default_threshold(recording) if threshold is None else float(threshold)
-    stance = np.asarray(pdr.shoe_detector(recording.acc_mps2, recording.gyro_radps, window=SHOE_WINDOW,
-                                          threshold=gamma, sigma_acc_mps2=SHOE_SIGMA_ACC_MPS2,
-                                          sigma_gyro_radps=SHOE_SIGMA_GYRO_RADPS), dtype=bool)
+    stance = np.asarray(pdr.shoe_detector(recording.acc_mps2, recording.gyro_radps, window=_SHOE_WINDOW,
+                                          threshold=gamma, sigma_acc_mps2=_SHOE_SIGMA_ACC_MPS2,
+                                          sigma_gyro_radps=_SHOE_SIGMA_GYRO_RADPS), dtype=bool)
     steps = stance_step_samples(stance, recording.rate_hz)
     quats = pdr.attitude_mahony(recording.time_s, recording.acc_mps2, recording.gyro_radps)["quaternions_wxyz"]
     inc = pdr.ins_zupt_increments(recording.time_s, recording.acc_mps2, quats, steps)
@@ -407,7 +335,7 @@ def step_covariance_coverage(recording: ImuRecording, threshold: Optional[float]
     xy = np.vstack([[0.0, 0.0], track["positions_m"]])
     pos = _per_sample(steps, xy, recording.n_samples)[:, :2] * PYSHOE_TRUTH_FROM_Z_UP
     n_align = pyshoe_alignment_samples(recording, n_align_strides)
-    aligned, theta = align_2d(pos, recording.truth_xy_m, n_align, return_angle=True)
+    aligned, theta = _metrics.align_2d(pos, recording.truth_xy_m, n_align, return_angle=True)
     c, s_ = math.cos(theta), math.sin(theta)
     rot = np.array([[c, -s_], [s_, c]]) @ np.diag(PYSHOE_TRUTH_FROM_Z_UP)
     d2 = []
@@ -437,60 +365,10 @@ def with_threshold(method: Callable[..., MethodOutput], threshold: float) -> Met
 # --------------------------------------------------------------------------------------------
 # The recommended method (issue 16): SHOE with the stance guard, EKF + RTS, C++ stride counting
 # --------------------------------------------------------------------------------------------
-#: Settings of :func:`indoorloc.pdr.zero_velocity` used by :func:`zupt_guard_method` for every
-#: sensor (one parameter set; the swing guard adapts the threshold per recording). Chosen by
-#: leave-one-trial-out cross-validation over the 21 PyShoe trials (``python -m
-#: indoorloc.experiments.pdr_zupt_cv``; docs/pdr.md "Zero-velocity detection"): the family won
-#: against a fixed threshold, a stance-fraction guard, a pure quantile, per-class thresholds and
-#: SHOE/ARE/AMV voting; within it, threshold 1e4 (grid 1e4-10^4.5), max_swing_s 2.0 (grid
-#: 1.25-3; 1.5-3 tie) and max_swing_ratio 1.5 (grid 1.3-2; 1.5-2 tie) were the folds' choices.
-#: The ladder step (0.25 decade), the cap (1e7) and the stance floor (15 % of the samples, a
-#: safety net that binds on none of the recordings here) were fixed beforehand, not tuned.
-ZUPT_DETECTOR = {"rule": "swing_guard", "threshold": 1e4, "max_swing_s": 2.0, "max_swing_ratio": 1.5,
-                 "ladder_step_decades": 0.25, "min_stance_share": 0.15, "max_threshold": 1e7}
-
-#: Name of the recommended method in ``indoorloc pdr evaluate --json`` (``default_method``).
-DEFAULT_METHOD = "zupt_rts_swing_guard"
-
-
-def detect_stance(recording: ImuRecording, **overrides: Any) -> Dict[str, Any]:
-    """:func:`indoorloc.pdr.zero_velocity` on a recording with :data:`ZUPT_DETECTOR` (keywords
-    override it) and this module's SHOE window and noise sds. Returns its dict (stance,
-    threshold, guard_raised, stance fractions, report)."""
-    from indoorloc import pdr
-
-    opts = dict(ZUPT_DETECTOR)
-    opts.update(overrides)
-    return pdr.zero_velocity(recording.acc_mps2, recording.gyro_radps, recording.rate_hz, window=SHOE_WINDOW,
-                             sigma_acc_mps2=SHOE_SIGMA_ACC_MPS2, sigma_gyro_radps=SHOE_SIGMA_GYRO_RADPS, **opts)
-
-
-def run_recommended(recording: ImuRecording, smooth: bool = True, **overrides: Any) -> Dict[str, Any]:
-    """The recommended pipeline on one recording: :func:`detect_stance`, the ZUPT EKF (+ RTS
-    smoother when ``smooth``) and :func:`indoorloc.pdr.count_strides`. Returns ``{"positions_m"
-    (N, 3), "stride_indices" (S,), "stance" (N,), "detector" (the detector's dict without the
-    arrays), "health" (the EKF's health check plus the detector threshold and stride counts)}``."""
-    from indoorloc import pdr
-
-    det = detect_stance(recording, **overrides)
-    stance = np.asarray(det["stance"], dtype=bool)
-    out = pdr.zupt_ekf(recording.time_s, recording.acc_mps2, recording.gyro_radps, stance, smooth=smooth)
-    count = pdr.count_strides(stance, recording.rate_hz)
-    health = dict(out["health"])
-    health.update({"shoe_threshold": float(det["threshold"]), "guard_raised": bool(det["guard_raised"]),
-                   "guard_satisfied": bool(det.get("guard_satisfied", True)),
-                   "stride_median_swing_s": float(count["median_swing_s"]),
-                   "stride_median_stance_s": float(count["median_stance_s"]),
-                   "split_strides": int(count["n_split_strides"])})
-    return {"positions_m": np.asarray(out["positions_m"], dtype=float),
-            "stride_indices": np.asarray(count["stride_indices"], dtype=np.int64), "stance": stance,
-            "detector": {k: v for k, v in det.items() if k not in ("stance", "statistic")}, "health": health}
-
-
 def zupt_guard_method(recording: ImuRecording, smooth: bool = True) -> Tuple[np.ndarray, np.ndarray]:
     """The recommended method as a ``method(recording)`` for the evaluations:
     ``(positions_m (N, 3), stride_indices)`` of :func:`run_recommended` (EKF + RTS)."""
-    r = run_recommended(recording, smooth=smooth)
+    r = _recommended.run_recommended(recording, smooth=smooth)
     return r["positions_m"], r["stride_indices"]
 
 
@@ -545,9 +423,9 @@ def score_pyshoe_trial(recording: ImuRecording, output: MethodOutput,
         pos = pos.copy()
         pos[:, :2] = pos[:, :2] * PYSHOE_TRUTH_FROM_Z_UP
     n_align = pyshoe_alignment_samples(recording, n_align_strides)
-    aligned = align_2d(pos[:, :2], recording.truth_xy_m, n_align)
+    aligned = _metrics.align_2d(pos[:, :2], recording.truth_xy_m, n_align)
     row: Dict[str, Any] = {"trial": recording.name, "n_samples": recording.n_samples,
-                           "armse_m": armse(aligned, recording.truth_xy_m),
+                           "armse_m": _metrics.armse(aligned, recording.truth_xy_m),
                            "final_error_m": float(np.linalg.norm(aligned[-1] - recording.truth_xy_m[-1])),
                            "distance_m": recording.distance_m}
     truth_strides = (None if recording.stride_indices is None
@@ -632,7 +510,7 @@ def score_closed_loop(recording: ImuRecording, output: MethodOutput) -> Dict[str
     if pos.shape[1] == 2:
         pos = np.column_stack([pos, np.zeros(pos.shape[0])])
     d = pos[-1] - pos[0]
-    len2, len3 = path_length(pos[:, :2]), path_length(pos)
+    len2, len3 = _metrics.path_length(pos[:, :2]), _metrics.path_length(pos)
     e2, e3 = float(np.linalg.norm(d[:2])), float(np.linalg.norm(d))
     peer = PEER_CLOSED_LOOP_FINAL_ERROR_M.get(recording.name)
     return {"recording": recording.name, "n_samples": recording.n_samples,
@@ -726,7 +604,7 @@ def _health_json(health: Dict[str, Any]) -> Dict[str, Any]:
 
 
 def _zupt_row(dataset: str, rec: ImuRecording) -> Dict[str, Any]:
-    r = run_recommended(rec)
+    r = _recommended.run_recommended(rec)
     pos, strides = r["positions_m"], r["stride_indices"]
     armse_m = final_m = None
     if rec.truth_xy_m is not None:
@@ -735,9 +613,9 @@ def _zupt_row(dataset: str, rec: ImuRecording) -> Dict[str, Any]:
     elif rec.closed_loop:
         final_m = float(np.linalg.norm(pos[-1, :2] - pos[0, :2]))
     health = dict(r["health"])
-    health["path_length_m"] = path_length(pos[:, :2])
+    health["path_length_m"] = _metrics.path_length(pos[:, :2])
     si = rec.stride_indices
-    return {"dataset": dataset, "name": rec.name, "method": DEFAULT_METHOD, "armse_m": _finite_or_none(armse_m),
+    return {"dataset": dataset, "name": rec.name, "method": _recommended.DEFAULT_METHOD, "armse_m": _finite_or_none(armse_m),
             "final_error_m": _finite_or_none(final_m), "distance_m": _finite_or_none(rec.distance_m),
             "strides_truth": None if si is None else max(0, int(si.size) - 1),
             "strides_detected": int(strides.size), "health": _health_json(health)}
@@ -792,7 +670,7 @@ def evaluate_json(root: PathLike, only: Optional[Sequence[str]] = None) -> Dict[
             continue
         for rec in progress(recs, total=len(recs), desc=nm):
             rows.append(_zupt_row(nm, rec))
-    return {"default_method": DEFAULT_METHOD, "recordings": rows}
+    return {"default_method": _recommended.DEFAULT_METHOD, "recordings": rows}
 
 
 def dataset_task(params: Dict[str, Any], seed: int, root: str) -> Dict[str, Any]:
@@ -810,7 +688,7 @@ def evaluate_json_on_dask(root: PathLike, only: Optional[Sequence[str]], schedul
     res = sweep.run_sweep(dataset_task, {"dataset": names}, scheduler=scheduler, shared={"root": str(r)})
     if res.failed:
         raise RuntimeError(f"indoorloc: dataset {res.failed[0]['params']['dataset']} failed: {res.failed[0]['error']}")
-    return {"default_method": DEFAULT_METHOD, "recordings": [rec for row in res.rows for rec in row["recordings"]]}
+    return {"default_method": _recommended.DEFAULT_METHOD, "recordings": [rec for row in res.rows for rec in row["recordings"]]}
 
 
 def _mobgap_rows(folder: Path) -> List[Dict[str, Any]]:
@@ -887,3 +765,25 @@ def markdown(pyshoe: Optional[Dict[str, Any]] = None, closed_loops: Optional[Dic
                          f"{_fmt(r['strides_truth'], 'd')} | {_fmt(r['strides_detected'], 'd')} |")
         parts.append("")
     return "\n".join(parts)
+
+
+# --------------------------------------------------------------------------------------------
+# Names moved into the pdr package (docs/api_changes.md): still importable from here for one
+# release, with a DeprecationWarning.
+# --------------------------------------------------------------------------------------------
+_MOVED = {"align_2d": "indoorloc.pdr.metrics", "armse": "indoorloc.pdr.metrics",
+          "path_length": "indoorloc.pdr.metrics", "run_recommended": "indoorloc.pdr.recommended",
+          "detect_stance": "indoorloc.pdr.recommended", "ZUPT_DETECTOR": "indoorloc.pdr.recommended",
+          "DEFAULT_METHOD": "indoorloc.pdr.recommended", "SHOE_WINDOW": "indoorloc.pdr.recommended",
+          "SHOE_SIGMA_ACC_MPS2": "indoorloc.pdr.recommended", "SHOE_SIGMA_GYRO_RADPS": "indoorloc.pdr.recommended"}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _MOVED:
+        import importlib
+        import warnings
+
+        warnings.warn(f"indoorloc.experiments.pdr_evaluate.{name} is deprecated and will be removed in the next "
+                      f"release: use {_MOVED[name]}.{name} (docs/api_changes.md)", DeprecationWarning, stacklevel=2)
+        return getattr(importlib.import_module(_MOVED[name]), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

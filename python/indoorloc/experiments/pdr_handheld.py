@@ -25,7 +25,7 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
-from indoorloc import pdr_handheld as ph
+from indoorloc.pdr import handheld as ph
 from indoorloc.progress import progress
 
 PathLike = Union[str, Path]

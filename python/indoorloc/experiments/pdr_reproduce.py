@@ -50,14 +50,14 @@ def synthetic_walk(seed: int, quick: bool = False):
 def _count_errors_pct(recording) -> Dict[str, float]:
     """|detected - true| step count in % of the true count, per detector, on one foot recording."""
     from indoorloc import pdr
-    from indoorloc.experiments import pdr_evaluate as pe
+    from indoorloc.pdr import recommended
 
     truth = max(1, int(recording.stride_indices.size) - 1)
     acc_paper = len(pdr.steps_acceleration(recording.acc_mps2, recording.rate_hz, window_s=0.15, adaptive=False,
                                            swing_threshold_mps2=2.0, stance_threshold_mps2=1.0)[0])
     acc_adaptive = len(pdr.steps_acceleration(recording.acc_mps2, recording.rate_hz)[0])
     gyro = len(pdr.steps_gyro(recording.gyro_radps, recording.rate_hz))
-    stance = np.asarray(pe.detect_stance(recording)["stance"], dtype=bool)
+    stance = np.asarray(recommended.detect_stance(recording)["stance"], dtype=bool)
     shoe = int(np.asarray(pdr.count_strides(stance, recording.rate_hz)["stride_indices"]).size)
     return {name: 100.0 * abs(n - truth) / truth for name, n in (
         ("acceleration, paper's fixed thresholds", acc_paper), ("acceleration, adaptive thresholds", acc_adaptive),
@@ -70,12 +70,12 @@ def _distance_error_pct(recording) -> float:
     Both distances are summed over the stride intervals (positions at the annotated stance
     samples, ``recording.stride_indices``), as the paper integrates stride lengths (Table IV): a
     path length over every sample would add the sensor's sway and the truth's jitter."""
-    from indoorloc.experiments import pdr_evaluate as pe
+    from indoorloc.pdr import metrics, recommended
 
     idx = np.asarray(recording.stride_indices, dtype=np.int64)
-    est = pe.run_recommended(recording)["positions_m"][idx, :2]
-    truth = pe.path_length(np.asarray(recording.truth_xy_m)[idx])
-    return 100.0 * abs(pe.path_length(est) - truth) / truth
+    est = recommended.run_recommended(recording)["positions_m"][idx, :2]
+    truth = metrics.path_length(np.asarray(recording.truth_xy_m)[idx])
+    return 100.0 * abs(metrics.path_length(est) - truth) / truth
 
 
 _PAPER_VALUE = {"acceleration, paper's fixed thresholds": PAPER_TABLE_III["acceleration"],

@@ -45,6 +45,7 @@ import numpy as np
 
 from indoorloc.experiments import pdr_evaluate as pe
 from indoorloc.io.pdr_datasets import ImuRecording, list_pyshoe_trials, load_pyshoe_trial
+from indoorloc.pdr import metrics, recommended
 from indoorloc.progress import progress
 
 Stats = Dict[str, np.ndarray]
@@ -60,13 +61,13 @@ def _sliding_mean(x: np.ndarray, w: int) -> np.ndarray:
     return (c[start + w] - c[start]) / w
 
 
-def detector_statistics(recording: ImuRecording, window: int = pe.SHOE_WINDOW) -> Stats:
+def detector_statistics(recording: ImuRecording, window: int = recommended.SHOE_WINDOW) -> Stats:
     """log10 of the SHOE, ARE and AMV statistics (Skog et al. 2010 eq. 13, 11, 10) of a recording,
     with the noise sds of :mod:`pdr_evaluate` (``SHOE_SIGMA_*``): ARE = mean |w|^2 / s_w^2, AMV =
     mean |f - mean f|^2 / s_a^2 over the window. SHOE comes from the C++ detector."""
     from indoorloc import pdr
 
-    sa, sg = pe.SHOE_SIGMA_ACC_MPS2, pe.SHOE_SIGMA_GYRO_RADPS
+    sa, sg = recommended.SHOE_SIGMA_ACC_MPS2, recommended.SHOE_SIGMA_GYRO_RADPS
     shoe = np.asarray(pdr.shoe_statistic(recording.acc_mps2, recording.gyro_radps, window=window,
                                          sigma_acc_mps2=sa, sigma_gyro_radps=sg))
     are = _sliding_mean(np.sum(recording.gyro_radps ** 2, axis=1), window) / sg ** 2
@@ -138,8 +139,8 @@ def _swing_guard(rec: ImuRecording, st: Stats, p: Dict[str, float]) -> np.ndarra
 
     det = pdr.zero_velocity(rec.acc_mps2, rec.gyro_radps, rec.rate_hz, rule="swing_guard",
                             threshold=10.0 ** p["log_gamma"], max_swing_s=p["max_swing_s"],
-                            max_swing_ratio=p["max_swing_ratio"], window=pe.SHOE_WINDOW,
-                            sigma_acc_mps2=pe.SHOE_SIGMA_ACC_MPS2, sigma_gyro_radps=pe.SHOE_SIGMA_GYRO_RADPS)
+                            max_swing_ratio=p["max_swing_ratio"], window=recommended.SHOE_WINDOW,
+                            sigma_acc_mps2=recommended.SHOE_SIGMA_ACC_MPS2, sigma_gyro_radps=recommended.SHOE_SIGMA_GYRO_RADPS)
     return np.asarray(det["stance"], dtype=bool)
 
 
@@ -268,22 +269,20 @@ def held_out_paper_tables(recs: Sequence[ImuRecording], res: Dict[str, List[Dict
     which use the library's default setting, chosen on all 21 trials. Errors as in
     ``pdr_reproduce`` (count: |detected - (annotated - 1)| / (annotated - 1); distance: path over
     the annotated stance samples, ZUPT EKF + RTS) [%]."""
-    from indoorloc.experiments import pdr_evaluate as pe
-
     loo = leave_one_out(res, by_session=by_session)
     count_pct, distance_pct = [], []
     for rec, key in zip(recs, loo["chosen"]):
         p = json.loads(key)
         # The library's pipeline (run_recommended: its other detector settings, EKF + RTS) with the
         # fold's choice: with the default choice on every trial it gives the reproduce rows exactly.
-        out = pe.run_recommended(rec, threshold=10.0 ** p["log_gamma"], max_swing_s=p["max_swing_s"],
-                                 max_swing_ratio=p["max_swing_ratio"])
+        out = recommended.run_recommended(rec, threshold=10.0 ** p["log_gamma"], max_swing_s=p["max_swing_s"],
+                                          max_swing_ratio=p["max_swing_ratio"])
         truth = max(1, int(rec.stride_indices.size) - 1)
         count_pct.append(100.0 * abs(int(out["stride_indices"].size) - truth) / truth)
         idx = np.asarray(rec.stride_indices, dtype=np.int64)
         est = out["positions_m"][idx, :2]
-        true_len = pe.path_length(np.asarray(rec.truth_xy_m)[idx])
-        distance_pct.append(100.0 * abs(pe.path_length(est) - true_len) / true_len)
+        true_len = metrics.path_length(np.asarray(rec.truth_xy_m)[idx])
+        distance_pct.append(100.0 * abs(metrics.path_length(est) - true_len) / true_len)
     return {"trials": loo["trials"], "chosen": loo["chosen"], "count_error_pct": count_pct,
             "distance_error_pct": distance_pct}
 

@@ -460,3 +460,4 @@ __all__ = [
     "track",
     "tracker_options",
 ]
+

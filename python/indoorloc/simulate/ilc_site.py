@@ -28,7 +28,7 @@ same layout, as in :mod:`indoorloc.simulate.building`):
   low-pass that ``pdr.weinberg_features`` applies), plus a forward surge (0.35 A at f) and a
   lateral sway (0.25 A at f / 2) and white noise.
 - **Orientation.** The phone is held flat in front, portrait (+y forward), pitched up by
-  6-14 deg with a small bob. Its heading (pdr_handheld's convention: the +y axis, east = 0,
+  6-14 deg with a small bob. Its heading (indoorloc.pdr.handheld's convention: the +y axis, east = 0,
   north = pi/2) is the walking direction (smoothed over 0.4 s) minus the walk's yaw offset:
   ``yaw_offset_deg`` (the floor frame minus the phone frame, what ``calibrate_handheld`` fits) plus
   N(0, yaw_offset_walk_sd_deg) per walk. TYPE_GYROSCOPE is the body rate of that orientation
@@ -107,7 +107,7 @@ class IlcSiteConfig:
     step_frequency_hz: float = 1.8
     step_frequency_walker_sd_hz: float = 0.08
     #: K of L = K (max - min LP|a|)^(1/4) [m / (m/s^2)^(1/4)]; with 0.62-0.78 m strides the bounce
-    #: amplitude is 1.6-4 m/s^2, clear of pdr_handheld's 1 m/s^2 peak floor
+    #: amplitude is 1.6-4 m/s^2, clear of indoorloc.pdr.handheld's 1 m/s^2 peak floor
     weinberg_k: float = 0.46
     yaw_offset_deg: float = 4.0                #: floor-frame heading minus phone heading, site mean
     yaw_offset_walk_sd_deg: float = 1.5        #: per-walk spread of that offset

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -67,7 +68,7 @@ TEST(GridTrackerTest, KnownStartFollowsTheSteps) {
     EXPECT_NEAR(r.smoothed_mean_m(k, 0), r.filtered_mean_m(k, 0), 0.05) << k;
   }
   // The spread grows with the steps' noise (no fixes).
-  EXPECT_GT(r.filtered_covariance_m2(19, 0), r.filtered_covariance_m2(0, 0));
+  EXPECT_GT(r.filtered_posterior_covariance_m2(19, 0), r.filtered_posterior_covariance_m2(0, 0));
   EXPECT_NEAR(r.smoothed_floor_probabilities[0], 1.0, 1e-12);
 }
 
@@ -84,8 +85,8 @@ TEST(GridTrackerTest, UnknownStartPlacedByOneFix) {
   // that of the fix plus the within-cell spread (1/12 m²) and the first step's noise.
   EXPECT_NEAR(r.filtered_mean_m(0, 0), 30, 0.05);
   EXPECT_NEAR(r.filtered_mean_m(0, 1), 15, 0.05);
-  EXPECT_NEAR(r.filtered_covariance_m2(0, 0), 9.0 + 1.0 / 12.0, 0.3);
-  EXPECT_NEAR(r.filtered_covariance_m2(0, 1), 0.0, 0.05);
+  EXPECT_NEAR(r.filtered_posterior_covariance_m2(0, 0), 9.0 + 1.0 / 12.0, 0.3);
+  EXPECT_NEAR(r.filtered_posterior_covariance_m2(0, 1), 0.0, 0.05);
   // Later steps move the mean by the steps.
   EXPECT_NEAR(r.filtered_mean_m(3, 0) - r.filtered_mean_m(0, 0), 2.1, 0.1);
 }
@@ -99,11 +100,65 @@ TEST(GridTrackerTest, SmootherCarriesALateFixBack) {
   const auto steps = Straight(30, 0.7, M_PI / 2);  // north, 21 m
   const GridTrackResult r = tracker.Run(steps, {Fix(15.0, 40, 30, 1.0)}, TrackStart(), true);
   // Before the fix the filter knows nothing: its mean is near the hall's centre.
-  EXPECT_GT(r.filtered_covariance_m2(5, 0), 50.0);
+  EXPECT_GT(r.filtered_posterior_covariance_m2(5, 0), 50.0);
   // The smoother puts the first step 20.3 m south of the fix (29 steps of 0.7 m back).
   EXPECT_NEAR(r.smoothed_mean_m(0, 0), 40, 0.5);
   EXPECT_NEAR(r.smoothed_mean_m(0, 1), 30 - 0.7 * 29, 0.7);
   EXPECT_NEAR(r.smoothed_mean_m(29, 1), 30, 0.5);
+}
+
+TEST(GridTrackerTest, ReturnedCovarianceIsCalibratedByTheFixDistance) {
+  const FloorPlan plan = Hall();
+  GridTrackerOptions o;
+  o.heading_offset_sd_rad = 0.0;
+  o.fix.tempering = 1.0;
+  o.filtered_covariance_scale = o.smoothed_covariance_scale = 1.0;  // the posterior's own
+  o.filtered_covariance_floor_m = o.smoothed_covariance_floor_m = 0.0;
+  o.filtered_covariance_fix_gain = o.smoothed_covariance_fix_gain = 0.0;
+  const GridTracker raw_tracker(&plan, o);
+  o.filtered_covariance_scale = 2.0;
+  o.filtered_covariance_floor_m = 1.5;
+  o.filtered_covariance_fix_gain = 0.5;
+  o.smoothed_covariance_scale = 3.0;
+  o.smoothed_covariance_floor_m = 0.5;
+  o.smoothed_covariance_fix_gain = 0.25;
+  const GridTracker tracker(&plan, o);
+  const auto steps = Straight(30, 0.7, M_PI / 2);
+  // Two fixes 10 m apart (weights 1 and 3: centre 7.5 m along) at 3 s, one at 12 s.
+  PositionFix two = Fix(3.0, 20, 10, 2.0);
+  two.means_m.resize(2, 2);
+  two.means_m << 20, 10, 30, 10;
+  two.sds_m = Eigen::VectorXd::Constant(2, 2.0);
+  two.weights = Eigen::Vector2d(1.0, 3.0);
+  two.floors = Eigen::VectorXi::Constant(2, PositionFix::kAnyFloor);
+  const std::vector<PositionFix> fixes = {two, Fix(12.0, 25, 25, 2.0)};
+  const GridTrackResult a = raw_tracker.Run(steps, fixes, TrackStart(), true);
+  const GridTrackResult b = tracker.Run(steps, fixes, TrackStart(), true);
+  // Estimates and the posterior's own spread do not change; d is 0 before the first fix.
+  EXPECT_EQ(a.filtered_mean_m, b.filtered_mean_m);
+  EXPECT_EQ(a.filtered_covariance_m2, b.filtered_posterior_covariance_m2);
+  EXPECT_EQ(a.smoothed_covariance_m2, b.smoothed_posterior_covariance_m2);
+  EXPECT_EQ(a.filtered_covariance_m2, a.filtered_posterior_covariance_m2);
+  const Eigen::Vector2d c1(27.5, 10), c2(25, 25);
+  for (int k = 0; k < 30; ++k) {
+    const double t = steps[k].time_s;
+    const Eigen::Vector2d fm = b.filtered_mean_m.row(k).transpose();
+    const double df = t < 3.0 ? 0.0 : ((t < 12.0 ? c1 : c2) - fm).norm();
+    EXPECT_NEAR(b.filtered_fix_distance_m[k], df, 1e-9) << k;
+    const double iso_f = 1.5 * 1.5 + 0.25 * df * df;
+    EXPECT_NEAR(b.filtered_covariance_m2(k, 0), 2.0 * a.filtered_covariance_m2(k, 0) + iso_f, 1e-9) << k;
+    EXPECT_NEAR(b.filtered_covariance_m2(k, 1), 2.0 * a.filtered_covariance_m2(k, 1), 1e-9) << k;
+    const Eigen::Vector2d sm = b.smoothed_mean_m.row(k).transpose();
+    const double ds = ((std::abs(t - 3.0) <= std::abs(t - 12.0) ? c1 : c2) - sm).norm();
+    EXPECT_NEAR(b.smoothed_fix_distance_m[k], ds, 1e-9) << k;
+    EXPECT_NEAR(b.smoothed_covariance_m2(k, 2),
+                3.0 * a.smoothed_covariance_m2(k, 2) + 0.25 + 0.0625 * ds * ds, 1e-9) << k;
+  }
+  GridTrackerOptions bad;
+  bad.smoothed_covariance_scale = 0.0;
+  std::string error;
+  EXPECT_FALSE(bad.IsValid(&error));
+  EXPECT_NE(error.find("smoothed_covariance_scale"), std::string::npos) << error;
 }
 
 TEST(GridTrackerTest, HeadingOffsetLearntFromFixes) {
@@ -155,7 +210,7 @@ TEST(GridTrackerTest, WallsKeepTheTrackOutOfTheShop) {
   // A fix in the middle of the shop: the posterior mass lies outside it.
   const GridTrackResult r = tracker.Run(Straight(2, 0.7, 0.0), {Fix(0.5, 25, 25, 3.0)}, TrackStart(), false);
   const double x = r.filtered_mean_m(0, 0), y = r.filtered_mean_m(0, 1);
-  const double spread = std::sqrt(r.filtered_covariance_m2(0, 0) + r.filtered_covariance_m2(0, 2));
+  const double spread = std::sqrt(r.filtered_posterior_covariance_m2(0, 0) + r.filtered_posterior_covariance_m2(0, 2));
   EXPECT_GT(spread, 4.0);  // the mass is around the shop, not at its centre
   (void)x;
   (void)y;

@@ -76,11 +76,13 @@ TEST(ZeroVelocity, SwingGuardClimbsUntilNoStanceIsMissed) {
   const ZeroVelocityOutput base = DetectZeroVelocity(still.acc, still.gyro, 200.0, o);
   EXPECT_FALSE(base.summary.guard_raised);
   EXPECT_EQ(base.summary.ladder_rungs, 0);
-  // With a cap below the stance level the guard gives up at the cap and says so.
+  // With a cap below the stance level no rung is accepted: the guard says so, the low-motion
+  // rule was tried, and the threshold stays within the cap.
   o.max_threshold = 2e4;
   const ZeroVelocityOutput capped = DetectZeroVelocity(g.acc, g.gyro, 200.0, o);
   EXPECT_FALSE(capped.summary.guard_satisfied);
-  EXPECT_DOUBLE_EQ(capped.summary.threshold, 2e4);
+  EXPECT_TRUE(capped.summary.low_motion_rule);
+  EXPECT_LE(capped.summary.threshold, 2e4);
   EXPECT_THROW(DetectZeroVelocity(g.acc, g.gyro, 0.0, o), std::invalid_argument);
 }
 
@@ -101,6 +103,75 @@ TEST(ZeroVelocity, OptionsAreChecked) {
   o = ZeroVelocityOptions();
   o.max_swing_s = 0.0;
   EXPECT_THROW(DetectZeroVelocity(g.acc, g.gyro, 200.0, o), std::invalid_argument);
+}
+
+// A recording whose SHOE statistic is the given piecewise-constant T (W = 5, σ_ω = 0.1°/s):
+// gravity on z, the body turning about x at ω = sqrt(T) σ_ω. Blocks are (T, samples).
+Gait StatisticBlocks(const std::vector<std::pair<double, int>>& blocks) {
+  int n = 0;
+  for (const auto& b : blocks) n += b.second;
+  Gait g;
+  g.acc = RowMatrixXd::Zero(n, 3);
+  g.acc.col(2).setConstant(9.81);
+  g.gyro = RowMatrixXd::Zero(n, 3);
+  const double sigma = ShoeOptions().sigma_gyro_radps;
+  int k = 0;
+  for (const auto& [t, length] : blocks) {
+    for (int i = 0; i < length; ++i) g.gyro(k++, 0) = std::sqrt(t) * sigma;
+  }
+  return g;
+}
+
+TEST(ZeroVelocity, RefusesRungsWhoseSwingsAreShorterThanAnyHumanSwing) {
+  // 200 Hz, 12 strides: stances of 1 s alternately still (T = 3e4) and rocking hard (3e6),
+  // swings of 0.7 s at T = 1e6 with a 30 ms peak (2e7) in the middle: the statistic of a slow
+  // shuffle. The old ladder stops where only the peaks remain "swing" (30 ms swings, stance
+  // ~98 %): a walk traded for a standstill.
+  std::vector<std::pair<double, int>> blocks{{1e2, 400}};
+  for (int i = 0; i < 12; ++i) {
+    blocks.push_back({1e6, 67});
+    blocks.push_back({2e7, 6});
+    blocks.push_back({1e6, 67});
+    blocks.push_back({i % 2 == 0 ? 3e4 : 3e6, 200});
+  }
+  blocks.push_back({1e2, 400});
+  const Gait g = StatisticBlocks(blocks);
+  ZeroVelocityOptions old_rule;
+  old_rule.min_plausible_swing_s = 0.0;
+  const ZeroVelocityOutput old_out = DetectZeroVelocity(g.acc, g.gyro, 200.0, old_rule);
+  EXPECT_TRUE(old_out.summary.guard_satisfied);
+  EXPECT_LE(old_out.summary.median_swing_s, 0.05);  // 10 samples: the peak widened by the window
+  EXPECT_GT(old_out.summary.stance_fraction, 0.95);
+  const ZeroVelocityOutput out = DetectZeroVelocity(g.acc, g.gyro, 200.0, ZeroVelocityOptions());
+  EXPECT_GE(out.summary.median_swing_s, 0.2);
+  EXPECT_LT(out.summary.stance_fraction, 0.9);
+  EXPECT_LT(out.summary.threshold, old_out.summary.threshold);
+}
+
+TEST(ZeroVelocity, StanceFlickerInsideASwingIsDroppedFromTheOutput) {
+  // Stances alternately still (3e4) and trembling (3e5): the guard climbs to >= 3e5. Each swing
+  // (T = 1e6) has two 5-sample dips to 5e3 (SHOE's mid-swing blind spot), 3 samples below the
+  // threshold after the window: flicker for the guard, and now no zero-velocity update for the
+  // filter either.
+  std::vector<std::pair<double, int>> blocks{{1e2, 400}};
+  for (int i = 0; i < 8; ++i) {
+    blocks.push_back({1e6, 44});
+    blocks.push_back({5e3, 5});
+    blocks.push_back({1e6, 44});
+    blocks.push_back({5e3, 5});
+    blocks.push_back({1e6, 42});
+    blocks.push_back({i % 2 == 0 ? 3e4 : 3e5, 200});
+  }
+  blocks.push_back({1e2, 400});
+  const Gait g = StatisticBlocks(blocks);
+  const ZeroVelocityOutput out = DetectZeroVelocity(g.acc, g.gyro, 200.0, ZeroVelocityOptions());
+  EXPECT_TRUE(out.summary.guard_satisfied);
+  EXPECT_FALSE(out.summary.low_motion_rule);
+  EXPECT_GT(out.summary.threshold, 3e5);
+  EXPECT_NEAR(out.summary.median_swing_s, 0.7, 0.05);
+  EXPECT_EQ(CountStrides(out.stance, 200.0).summary.n_flicker_stances, 0);
+  const Eigen::Index raw = (out.statistic.array() < out.summary.threshold).count();
+  EXPECT_EQ(raw - out.stance.count(), 8 * 2 * 3);  // exactly the dips were dropped
 }
 
 BoolVector Pattern(const std::vector<std::pair<bool, int>>& runs) {

@@ -46,6 +46,40 @@ TEST(GridPosterior, MatchesBruteForcePosteriorFromTheModel) {
   EXPECT_THROW(GridPosterior(model, bad), std::invalid_argument);
 }
 
+// On a map whose APs are heard over parts of the floor the posterior sums only the heard APs'
+// entries; it must equal the dense sum of every AP's term (EvaluateEveryAccessPoint).
+TEST(GridPosterior, PartlyHeardMapMatchesEveryAccessPointSum) {
+  RssModelOptions model_options;
+  model_options.max_term = 5.0;
+  auto model = std::make_shared<const RssModel>(testing::PartlyHeardMap(), model_options);
+  GridPosteriorOptions options;
+  options.spacing_m = 0.7;
+  const GridPosterior posterior(model, options);
+  RandomStream rng(9);
+  for (int trial = 0; trial < 5; ++trial) {
+    Eigen::VectorXd mean, var;
+    int hint = -1;
+    model->MeanAndVariance(Eigen::Vector2d(rng.Uniform(2, 28), rng.Uniform(2, 18)), 0, &mean, &var, &hint);
+    RowMatrixXd scans(2, mean.size());
+    for (int s = 0; s < 2; ++s) {
+      for (Eigen::Index a = 0; a < mean.size(); ++a) {
+        const double v = rng.Normal(mean[a], std::sqrt(var[a]));
+        scans(s, a) = mean[a] > -104.0 && v > -80.0 ? v : -105.0;
+      }
+    }
+    const RowMatrixXd& grid = posterior.grid(0);
+    Eigen::VectorXd l(grid.rows());
+    for (Eigen::Index g = 0; g < grid.rows(); ++g) {
+      l[g] = model->EvaluateEveryAccessPoint(scans, grid.row(g).transpose(), 0, &hint).neg_log_likelihood;
+    }
+    const Eigen::ArrayXd w = (l.minCoeff() - l.array()).exp();
+    const Eigen::Vector2d expected = grid.transpose() * w.matrix() / w.sum();
+    const WifiFix fix = posterior.Locate(scans);
+    EXPECT_LT((fix.position_m - expected).norm(), 1e-9);
+    EXPECT_NEAR(fix.neg_log_likelihood, l.minCoeff() - std::log(w.sum()), 1e-9 * std::abs(l.minCoeff()));
+  }
+}
+
 // Issue 17: grid(floor_index) had no bounds check (grid(100000) segfaulted, grid(-1) read garbage).
 TEST(GridPosterior, GridIndexOutsideTheFloorsThrowsOutOfRange) {
   auto model = std::make_shared<const RssModel>(testing::LatticeMap(), RssModelOptions());

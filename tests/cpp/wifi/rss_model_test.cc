@@ -1,6 +1,7 @@
 #include "indoorloc/wifi/rss_model.h"
 
 #include <cmath>
+#include <limits>
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
@@ -90,6 +91,57 @@ TEST(RssModel, CapLimitsEachAccessPointsTerm) {
   EXPECT_THROW(plain.Evaluate(RowMatrixXd::Zero(1, 3), z, 0, &h1), std::invalid_argument);
   options.max_term = -1;
   EXPECT_THROW(RssModel(testing::LatticeMap(), options), std::invalid_argument);
+}
+
+// Evaluate interpolates only the APs off their background in z's triangle; it must give what
+// the every-AP reference gives (to rounding) everywhere, inside and outside the hull, with
+// heard and not-heard readings, one or several scans, with and without the cap.
+TEST(RssModel, SparseEvaluateMatchesEveryAccessPoint) {
+  for (const double cap : {std::numeric_limits<double>::infinity(), 3.0}) {
+    RssModelOptions options;
+    options.max_term = cap;
+    const RssModel model(testing::PartlyHeardMap(), options);
+    RandomStream rng(11);
+    for (int trial = 0; trial < 200; ++trial) {
+      const Eigen::Vector2d truth(rng.Uniform(0, 30), rng.Uniform(0, 20));
+      const int n = trial % 3 + 1;
+      RowMatrixXd scans(n, model.num_access_points());
+      for (int s = 0; s < n; ++s) scans.row(s) = Scan(model, truth, rng);
+      for (Eigen::Index a = 0; a < scans.cols(); ++a) {  // not heard below -80 dBm, as in the map
+        for (int s = 0; s < n; ++s) scans(s, a) = scans(s, a) > -80.0 ? scans(s, a) : -105.0;
+      }
+      const Eigen::Vector2d z(rng.Uniform(-3, 33), rng.Uniform(-3, 23));
+      int h1 = -1, h2 = -1;
+      const RssLikelihood fast = model.Evaluate(scans, z, 0, &h1);
+      const RssLikelihood every = model.EvaluateEveryAccessPoint(scans, z, 0, &h2);
+      const double l = std::abs(every.neg_log_likelihood);
+      EXPECT_NEAR(fast.neg_log_likelihood, every.neg_log_likelihood, 1e-12 * std::max(1.0, l));
+      EXPECT_LT((fast.gradient - every.gradient).norm(), 1e-10 * std::max(1.0, every.gradient.norm()));
+      EXPECT_LT((fast.fisher - every.fisher).norm(), 1e-10 * std::max(1.0, every.fisher.norm()));
+      EXPECT_EQ(fast.inside, every.inside);
+      EXPECT_EQ(fast.evaluated_at_m, every.evaluated_at_m);
+    }
+  }
+}
+
+TEST(RssModel, ReferencePointScoresMatchEvaluateAtThePoints) {
+  RssModelOptions options;
+  options.max_term = 4.0;
+  const RssModel model(testing::PartlyHeardMap(30, 3), options);
+  RandomStream rng(5);
+  RowMatrixXd scans(2, model.num_access_points());
+  scans.row(0) = Scan(model, Eigen::Vector2d(12, 7), rng);
+  scans.row(1) = Scan(model, Eigen::Vector2d(12.5, 7), rng);
+  scans = (scans.array() > -80.0).select(scans, -105.0);
+  Eigen::VectorXd l;
+  model.ReferencePointNegLogLikelihood(scans, 0, &l);
+  ASSERT_EQ(l.size(), model.map().num_points());
+  for (int i = 0; i < model.map().num_points(); ++i) {
+    int hint = -1;
+    const double every =
+        model.EvaluateEveryAccessPoint(scans, model.map().positions_m().row(i).transpose(), 0, &hint).neg_log_likelihood;
+    EXPECT_NEAR(l[i], every, 1e-12 * std::max(1.0, std::abs(every)));
+  }
 }
 
 }  // namespace

@@ -19,7 +19,15 @@
 //    expects) misses many: the guard raises γ until they are found, and a slow walk, whose
 //    stances are found at γ₀, keeps the low threshold it needs. The rule checks the consequence
 //    of a threshold on the recording itself instead of classifying the gait. A rung must also
-//    make at least min_stance_share of the samples stance.
+//    make at least min_stance_share of the samples stance, and its median swing must last at
+//    least min_plausible_swing_s: a rung whose swings are shorter than any human swing has
+//    traded the walk for a standstill (issue 28: a slow walk read as 98.6 % stance with 30 ms
+//    "swings") and is refused. Stance runs shorter than min_stance_s inside a swing are flicker
+//    for the guard and are dropped from the returned stance too (SHOE's mid-swing blind spot:
+//    a steady acceleration keeps ||f|| near g and the rate may cross zero).
+//    Low-motion rule: when no rung is accepted, the ladder is climbed again with flicker up to
+//    low_motion_min_stance_s; failing that, the plausible rung with the most regular swings
+//    (least longest / median) is used and guard_satisfied is false.
 //  - kStanceGuard: γ = min(γ_max, max(γ₀, Q_f(T))), Q_f the f-quantile of T over the walking
 //    span (first to last sample with T ≥ γ₀): at least the fraction f of the walk is stance.
 //    Kept as a candidate; it lost in cross-validation (docs/pdr.md).
@@ -79,12 +87,22 @@ struct ZeroVelocityOptions {
   double max_swing_ratio = 1.5;
   /// Swing guard: the ladder step [decades]: γ_j = γ₀ 10^(j step).
   double ladder_step_decades = 0.25;
-  /// Swing guard: stance runs shorter than this [s] inside a swing are flicker.
+  /// Swing guard: stance runs shorter than this [s] inside a swing are flicker: ignored by the
+  /// guard and dropped from the returned stance (issue 16's value; tuning it with the issue-28
+  /// constants was unstable: one running trial, whose stances last 0.07-0.1 s, lost 0.6 m).
   double min_stance_s = 0.02;
   /// Swing guard: a rung is accepted only when at least this fraction of all samples is stance
   /// (the issue's diverging walk had 9 %). Not tuned: a safety net that binds on none of the 24
   /// recordings here (their least stance fraction at the chosen threshold is 22 %).
   double min_stance_share = 0.15;
+  /// Swing guard: a rung whose median swing is shorter than this [s] is refused (no human swing
+  /// lasts less; PyShoe walks and runs: 0.66-1.21 s). Leave-one-recording-out CV over the 21
+  /// PyShoe trials and 12 synthetic slow low-motion gaits chose 0.2 from {0.15, 0.2, 0.25, 0.3,
+  /// 0.35} (0.2-0.35 tie; 0.15 lets the failure through on 3 of the 12 gaits).
+  double min_plausible_swing_s = 0.2;
+  /// Low-motion rule: stance runs shorter than this [s] inside a swing are flicker on the second
+  /// climb. CV chose 0.08 from {0.05, 0.08, 0.1, 0.12} (docs/pdr.md, "Low-motion walks").
+  double low_motion_min_stance_s = 0.08;
   /// Stance guard: the least stance fraction f of the walking span [0..1).
   double min_stance_fraction = 0.3;
   /// Both guards: the threshold is never raised above this (γ_max > γ₀).
@@ -98,7 +116,9 @@ struct ZeroVelocitySummary {
   double threshold = 0.0;               ///< the threshold used
   bool guard_raised = false;            ///< the guard raised γ above γ₀
   int ladder_rungs = 0;                 ///< swing guard: rungs climbed (γ = γ₀ 10^(rungs step))
-  bool guard_satisfied = true;          ///< swing guard: false when even γ_max left a swing too long
+  bool guard_satisfied = true;          ///< swing guard: false when no rung (either climb) gave a plausible gait
+  bool low_motion_rule = false;         ///< swing guard: the low-motion rule (second climb) chose the threshold
+  double flicker_s = 0.0;               ///< swing guard: stance runs shorter than this inside a swing were dropped [s]
   double max_swing_s = 0.0;             ///< longest swing at the threshold used [s] (swing guard)
   double median_swing_s = 0.0;          ///< median swing at the threshold used [s] (swing guard)
   double stance_fraction = 0.0;         ///< over the recording [0..1]

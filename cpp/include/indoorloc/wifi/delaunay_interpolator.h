@@ -40,6 +40,17 @@ struct BarycentricLocation {
   bool inside = true;              ///< z inside the convex hull
 };
 
+/// A located face with what a caller needs to interpolate chosen fields and their gradients:
+/// f(z) = Σ_j weights[j] f(vertices[j]); ∇f = (f(v1) - f(v0)) grad_b1 + (f(v2) - f(v0)) grad_b2.
+struct FaceLocation {
+  int triangle = 0;                ///< face index in [0, num_triangles())
+  int vertices[3] = {0, 0, 0};     ///< point indices (rows of positions / fields)
+  double weights[3] = {0, 0, 0};   ///< barycentric coordinates (of the hull projection when outside)
+  double grad_b1[2] = {0, 0};      ///< gradient of weights[1] [1/m]
+  double grad_b2[2] = {0, 0};      ///< gradient of weights[2] [1/m]
+  bool inside = true;              ///< z inside the convex hull
+};
+
 class DelaunayInterpolator {
  public:
   /// Triangulates positions_m (N x 2) [m] carrying fields (N x F). Throws
@@ -59,6 +70,10 @@ class DelaunayInterpolator {
   /// returns true if z_m is inside the convex hull. Not thread-safe with a shared hint only.
   bool Interpolate(const Eigen::Vector2d& z_m, Eigen::Ref<Eigen::VectorXd> values,
                    Eigen::Ref<RowMatrixXd> gradients, int* hint) const;
+
+  /// Locates z_m as Interpolate does (same hint rule, same face and weights) without
+  /// evaluating any field: for callers that need a few fields of many (sparse likelihoods).
+  FaceLocation LocateFace(const Eigen::Vector2d& z_m, int* hint) const;
 
   /// Batch version: queries_m (Q x 2). With `sequential` the previous query's face is the hint
   /// (paths); otherwise the coarse grid hint is used (random order). Multi-threaded over

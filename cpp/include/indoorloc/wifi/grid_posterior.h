@@ -7,7 +7,9 @@
 // minimise the expected squared error and average over the ambiguous, multi-modal likelihoods
 // that single scans give on real maps. The integral is a sum over a uniform grid of spacing h
 // covering each floor's convex hull; the interpolated means and variances of the grid points
-// are computed once, so a query costs one pass over G x K numbers (G grid points, K APs).
+// are computed once. A query costs one pass over the grid entries of the APs the scan hears
+// (each AP is heard over a part of a building; see src/wifi/point_likelihood_table.h), not
+// over G x K numbers (G grid points, K APs); the fixes are the dense sum's to rounding.
 // The floor is the one with the largest posterior mass.
 #pragma once
 
@@ -47,15 +49,10 @@ class GridPosterior {
   double spacing_m() const { return spacing_m_; }
 
  private:
-  struct FloorGrid {
-    RowMatrixXd points;          // G x 2
-    RowMatrixXd mean;            // G x K
-    RowMatrixXd inv_variance;    // G x K, 1 / max(δ, floor)
-    Eigen::VectorXd log_norm;    // G: Σ_i ½ log(2π δ_i)
-  };
+  struct FloorGrid;  // grid points and their likelihood table (defined in the source)
   std::shared_ptr<const RssModel> model_;
   double spacing_m_ = 0.0;
-  std::vector<FloorGrid> floors_;
+  std::vector<std::shared_ptr<const FloorGrid>> floors_;
 };
 
 }  // namespace indoorloc::wifi

@@ -18,6 +18,7 @@
 #pragma once
 
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -64,9 +65,21 @@ class RssModel {
   const std::vector<int>& points_on_floor(int floor_index) const;
 
   /// l, ∇l and I for the scans `rss_dbm` (n x K, all taken at z) on a floor. `hint` carries the
-  /// last triangle between calls (start at -1; one hint per floor).
+  /// last triangle between calls (start at -1; one hint per floor). Interpolates only the APs
+  /// that differ from their background (not-heard) pair at some vertex of z's triangle; the
+  /// others add a constant per triangle and no gradient: EvaluateEveryAccessPoint to rounding.
   RssLikelihood Evaluate(const Eigen::Ref<const RowMatrixXd>& rss_dbm, const Eigen::Vector2d& z_m,
                          int floor_index, int* hint) const;
+
+  /// Evaluate's reference: interpolates every AP at z and sums all K terms (O(K) per call).
+  RssLikelihood EvaluateEveryAccessPoint(const Eigen::Ref<const RowMatrixXd>& rss_dbm, const Eigen::Vector2d& z_m,
+                                         int floor_index, int* hint) const;
+
+  /// l (neg_log_likelihood of Evaluate) at each reference point of a floor, in
+  /// points_on_floor(floor_index) order, for the scans rss_dbm (n x K, prepared); O(entries of
+  /// the heard APs) instead of O(points x K). Resizes *neg_log_likelihood.
+  void ReferencePointNegLogLikelihood(const Eigen::Ref<const RowMatrixXd>& rss_dbm, int floor_index,
+                                      Eigen::VectorXd* neg_log_likelihood) const;
 
   /// Interpolated mean [dBm] and floored variance [dB^2] of every AP at z (for simulation).
   bool MeanAndVariance(const Eigen::Vector2d& z_m, int floor_index, Eigen::VectorXd* mean_dbm,
@@ -76,6 +89,7 @@ class RssModel {
   Eigen::Matrix2d FisherInformation(const Eigen::Vector2d& z_m, int floor_index, int* hint) const;
 
  private:
+  void BuildSparseTerms();
   void EvaluateFields(const Eigen::Vector2d& z_m, int floor_index, int* hint, bool* inside,
                       Eigen::Vector2d* at) const;
 
@@ -84,6 +98,8 @@ class RssModel {
   std::vector<int> floors_;
   std::vector<std::vector<int>> points_on_floor_;
   std::vector<DelaunayInterpolator> interpolators_;
+  struct SparseTerms;  // backgrounds, per-triangle active APs, reference-point tables (source)
+  std::shared_ptr<const SparseTerms> sparse_;
   // Scratch buffers (per thread) for fields and gradients.
   static thread_local Eigen::VectorXd values_;
   static thread_local RowMatrixXd gradients_;

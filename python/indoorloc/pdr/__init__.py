@@ -19,7 +19,17 @@
   (:func:`positions_from_strides`) and increments (:func:`positions_from_increments`), each step
   with a 3 x 3 covariance of (x, y, heading error) for fusion with maps and WiFi.
 
-Loaders for the recordings in ../shared/data/pdr are in :mod:`indoorloc.io`.
+Beside the compiled functions, the package holds the Python side of the subsystem:
+
+- :mod:`indoorloc.pdr.recommended`: the recommended foot-mounted pipeline
+  (:func:`run_recommended`, :func:`detect_stance`, :data:`ZUPT_DETECTOR`) and its health check
+  (:func:`gait_plausibility`);
+- :mod:`indoorloc.pdr.metrics`: :func:`align_2d`, :func:`armse`, :func:`path_length`;
+- :mod:`indoorloc.pdr.handheld`: step-and-heading PDR for a hand-held phone
+  (:mod:`indoorloc.pdr.orientation`: its rotation-vector and gyroscope headings).
+
+Loaders for the recordings in ../shared/data/pdr are in :mod:`indoorloc.io`. Moves from earlier
+paths are listed in docs/api_changes.md.
 """
 
 from __future__ import annotations
@@ -45,16 +55,29 @@ from indoorloc._core.pdr import (
     zero_velocity,
     zupt_ekf,
 )
+from indoorloc.pdr import handheld, metrics, recommended
+from indoorloc.pdr.metrics import align_2d, armse, path_length
+from indoorloc.pdr.recommended import ZUPT_DETECTOR, detect_stance, gait_plausibility, run_recommended
 
 __all__ = [
+    "ZUPT_DETECTOR",
+    "align_2d",
+    "armse",
     "attitude_mahony",
     "butterworth_sos",
     "calibrate_weinberg_k",
     "calibrate_weinberg_k_from_distance",
     "count_strides",
+    "detect_stance",
+    "gait_plausibility",
+    "handheld",
     "ins_zupt_increments",
+    "metrics",
+    "path_length",
     "positions_from_increments",
     "positions_from_strides",
+    "recommended",
+    "run_recommended",
     "shoe_detector",
     "shoe_statistic",
     "sos_filter",

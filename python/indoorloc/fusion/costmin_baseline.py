@@ -1,4 +1,5 @@
-"""Cost-minimisation peer of the fusion tracker (issue 15, item 3 of ``indoorloc fusion evaluate``).
+"""Cost-minimisation baseline of the fusion tracker: robust least squares of WiFi fixes and PDR
+(the peer that ``indoorloc fusion evaluate`` scores as ``peer_costmin``; users compare against it).
 
 The cost minimisation post-processing of the public Kaggle Indoor Location & Navigation 2021
 notebooks: per walk, WiFi gives absolute fixes f_j at scan times t_j (noisy, sometimes gross),
@@ -45,6 +46,7 @@ Benchmark peer only (numpy + scipy): never imported by the ``indoorloc`` package
 
 from __future__ import annotations
 
+
 import time
 from dataclasses import asdict, dataclass, field
 from typing import Optional, Tuple, Union
@@ -52,6 +54,8 @@ from typing import Optional, Tuple, Union
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import spsolve
+
+__all__ = ['CostMinSettings', 'CostMinSummary', 'costmin_track', 'evaluate_at']
 
 LOSSES = ("linear", "huber", "soft_l1", "cauchy")
 ROTATION_METHODS = ("joint", "alternate")

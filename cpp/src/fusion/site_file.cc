@@ -1,0 +1,225 @@
+// Site file reader (site_file.h): SQLite C API, read-only, one prepared statement per query.
+#include "indoorloc/fusion/site_file.h"
+
+#include <sqlite3.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <stdexcept>
+#include <utility>
+
+namespace indoorloc::fusion {
+namespace {
+
+// A prepared statement, finalized on scope exit.
+class Statement {
+ public:
+  Statement(sqlite3* db, const std::string& sql, const std::string& path) : db_(db) {
+    if (sqlite3_prepare_v2(db, sql.c_str(), -1, &stmt_, nullptr) != SQLITE_OK) {
+      throw std::runtime_error("indoorloc: site file " + path + ": damaged or not a site (" + sqlite3_errmsg(db) +
+                               ")");
+    }
+  }
+  ~Statement() { sqlite3_finalize(stmt_); }
+  Statement(const Statement&) = delete;
+  Statement& operator=(const Statement&) = delete;
+  void Bind(int i, const std::string& v) { sqlite3_bind_text(stmt_, i, v.c_str(), -1, SQLITE_TRANSIENT); }
+  bool Step() {
+    const int rc = sqlite3_step(stmt_);
+    if (rc == SQLITE_ROW) return true;
+    if (rc == SQLITE_DONE) return false;
+    throw std::runtime_error(std::string("indoorloc: site file: read failed (") + sqlite3_errmsg(db_) + ")");
+  }
+  double Double(int c) const {
+    return sqlite3_column_type(stmt_, c) == SQLITE_NULL ? std::numeric_limits<double>::quiet_NaN()
+                                                        : sqlite3_column_double(stmt_, c);
+  }
+  int Int(int c) const { return sqlite3_column_int(stmt_, c); }
+  std::string Text(int c) const {
+    const unsigned char* t = sqlite3_column_text(stmt_, c);
+    return t ? std::string(reinterpret_cast<const char*>(t)) : std::string();
+  }
+  // A blob of little-endian float64 as rows x cols (the hosts we build for are little-endian).
+  RowMatrixXd Matrix(int c, int cols) const {
+    const int bytes = sqlite3_column_bytes(stmt_, c);
+    const void* data = sqlite3_column_blob(stmt_, c);
+    const int n = bytes / static_cast<int>(sizeof(double));
+    if (bytes % (sizeof(double) * cols) != 0) throw std::runtime_error("indoorloc: site file: malformed array blob");
+    RowMatrixXd m(n / cols, cols);
+    if (n) std::memcpy(m.data(), data, static_cast<size_t>(n) * sizeof(double));
+    return m;
+  }
+
+ private:
+  sqlite3* db_;
+  sqlite3_stmt* stmt_ = nullptr;
+};
+
+}  // namespace
+
+struct SiteFile::Impl {
+  std::string path;
+  sqlite3* db = nullptr;
+  ~Impl() {
+    if (db) sqlite3_close(db);
+  }
+  int Pragma(const std::string& name) {
+    Statement s(db, "PRAGMA " + name, path);
+    return s.Step() ? s.Int(0) : 0;
+  }
+  void RequireFloor(const std::string& floor) const {
+    Statement s(db, "SELECT 1 FROM floors WHERE name = ?", path);
+    s.Bind(1, floor);
+    if (!s.Step()) {
+      throw std::invalid_argument("indoorloc: argument 'floor': '" + floor + "' is not in site " + path);
+    }
+  }
+};
+
+SiteFile::SiteFile(const std::string& path) : impl_(std::make_unique<Impl>()) {
+  impl_->path = path;
+  {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw std::runtime_error("indoorloc: site file " + path + ": not found");
+    char head[16] = {0};
+    in.read(head, 16);
+    if (in.gcount() < 16 || std::memcmp(head, "SQLite format 3", 16) != 0) {
+      throw std::runtime_error("indoorloc: site file " + path + ": not an SQLite file");
+    }
+  }
+  if (sqlite3_open_v2(path.c_str(), &impl_->db, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
+    throw std::runtime_error("indoorloc: site file " + path + ": cannot open (" + sqlite3_errmsg(impl_->db) + ")");
+  }
+  const int app = impl_->Pragma("application_id");
+  if (app != kApplicationId) {
+    throw std::runtime_error("indoorloc: site file " + path + ": an SQLite file of another application, not an "
+                             "indoorloc site");
+  }
+  const int version = impl_->Pragma("user_version");
+  if (version != kFormatVersion) {
+    throw std::runtime_error("indoorloc: site file " + path + ": format version " + std::to_string(version) +
+                             ", this reader reads version " + std::to_string(kFormatVersion));
+  }
+  Statement check(impl_->db, "PRAGMA quick_check", path);
+  if (!check.Step() || check.Text(0) != "ok") {
+    throw std::runtime_error("indoorloc: site file " + path + ": damaged (" + check.Text(0) + ")");
+  }
+}
+
+SiteFile::~SiteFile() = default;
+SiteFile::SiteFile(SiteFile&&) noexcept = default;
+SiteFile& SiteFile::operator=(SiteFile&&) noexcept = default;
+
+const std::string& SiteFile::path() const { return impl_->path; }
+
+std::vector<std::string> SiteFile::FloorNames() const {
+  Statement s(impl_->db, "SELECT name FROM floors ORDER BY number", impl_->path);
+  std::vector<std::string> out;
+  while (s.Step()) out.push_back(s.Text(0));
+  return out;
+}
+
+std::string SiteFile::Meta(const std::string& key) const {
+  Statement s(impl_->db, "SELECT value FROM meta WHERE key = ?", impl_->path);
+  s.Bind(1, key);
+  return s.Step() ? s.Text(0) : std::string();
+}
+
+SiteFloor SiteFile::Floor(const std::string& name) const {
+  impl_->RequireFloor(name);
+  SiteFloor f;
+  {
+    Statement s(impl_->db, "SELECT name, number, origin_lon, origin_lat, walkable_area_m2 FROM floors WHERE name = ?",
+                impl_->path);
+    s.Bind(1, name);
+    s.Step();
+    f.name = s.Text(0);
+    f.number = s.Int(1);
+    f.origin_lon_deg = s.Double(2);
+    f.origin_lat_deg = s.Double(3);
+    f.walkable_area_m2 = s.Double(4);
+  }
+  f.geometry.floor = f.number;
+  Statement s(impl_->db, "SELECT role, xy_m FROM plan_rings WHERE floor = ? ORDER BY role, ring", impl_->path);
+  s.Bind(1, name);
+  while (s.Step()) {
+    (s.Text(0) == "outline" ? f.geometry.outlines : f.geometry.obstacles).push_back(s.Matrix(1, 2));
+  }
+  if (f.geometry.outlines.empty()) {
+    throw std::runtime_error("indoorloc: site file " + impl_->path + ": floor " + name + " has no outline");
+  }
+  return f;
+}
+
+SitePdrCalibration SiteFile::Calibration(const std::string& floor) const {
+  impl_->RequireFloor(floor);
+  Statement s(impl_->db,
+              "SELECT k, yaw_offset_rad, yaw_offset_spread_rad, length_sd_fraction, heading_sd_rad FROM "
+              "pdr_calibration WHERE floor = ?",
+              impl_->path);
+  s.Bind(1, floor);
+  if (!s.Step()) throw std::runtime_error("indoorloc: site file " + impl_->path + ": floor " + floor + " has no PDR calibration");
+  return {s.Double(0), s.Double(1), s.Double(2), s.Double(3), s.Double(4)};
+}
+
+GridTrackerOptions SiteFile::TrackerOptions(const std::string& floor) const {
+  const SitePdrCalibration cal = Calibration(floor);
+  GridTrackerOptions o;
+  std::map<std::string, double> v;
+  Statement s(impl_->db, "SELECT name, value FROM grid_options", impl_->path);
+  while (s.Step()) v[s.Text(0)] = s.Double(1);
+  auto get = [&](const char* key, double fallback) {
+    auto it = v.find(key);
+    return it == v.end() ? fallback : it->second;
+  };
+  o.cell_size_m = get("cell_size_m", o.cell_size_m);
+  o.walkable_subsamples = static_cast<int>(get("walkable_subsamples", o.walkable_subsamples));
+  o.heading_offset_bins = static_cast<int>(get("heading_offset_bins", o.heading_offset_bins));
+  o.heading_offset_span_sd = get("heading_offset_span_sd", o.heading_offset_span_sd);
+  o.scale_bins = static_cast<int>(get("scale_bins", o.scale_bins));
+  o.scale_sd = get("scale_sd", o.scale_sd);
+  o.position_noise_m = get("position_noise_m", o.position_noise_m);
+  o.wall_log_penalty = get("wall_log_penalty", o.wall_log_penalty);
+  o.fix.outlier_probability = get("fix_outlier_probability", o.fix.outlier_probability);
+  o.fix.tempering = get("fix_tempering", o.fix.tempering);
+  o.fix_tempering_by_variance = get("fix_tempering_by_variance", o.fix_tempering_by_variance) != 0.0;
+  o.spatial_median = get("spatial_median", o.spatial_median) != 0.0;
+  o.median_block_m = get("median_block_m", o.median_block_m);
+  o.start_position_sd_m = get("start_position_sd_m", o.start_position_sd_m);
+  o.max_memory_bytes = get("max_memory_bytes", o.max_memory_bytes);
+  o.num_threads = static_cast<int>(get("num_threads", o.num_threads));
+  const double spread = std::isfinite(cal.yaw_offset_spread_rad) ? cal.yaw_offset_spread_rad : 0.0;
+  o.heading_offset_sd_rad = std::max(spread, 1e-3);
+  return o;
+}
+
+RowMatrixXd SiteFile::FingerprintPositions(const std::string& floor) const {
+  impl_->RequireFloor(floor);
+  Statement s(impl_->db, "SELECT x_m, y_m FROM fingerprints WHERE floor = ? ORDER BY id", impl_->path);
+  s.Bind(1, floor);
+  std::vector<double> xy;
+  while (s.Step()) {
+    xy.push_back(s.Double(0));
+    xy.push_back(s.Double(1));
+  }
+  RowMatrixXd m(static_cast<Eigen::Index>(xy.size() / 2), 2);
+  if (!xy.empty()) std::memcpy(m.data(), xy.data(), xy.size() * sizeof(double));
+  return m;
+}
+
+int SiteFile::WalkCount(const std::string& floor) const {
+  if (floor.empty()) {
+    Statement s(impl_->db, "SELECT COUNT(*) FROM walks", impl_->path);
+    return s.Step() ? s.Int(0) : 0;
+  }
+  impl_->RequireFloor(floor);
+  Statement s(impl_->db, "SELECT COUNT(*) FROM walks WHERE floor = ?", impl_->path);
+  s.Bind(1, floor);
+  return s.Step() ? s.Int(0) : 0;
+}
+
+}  // namespace indoorloc::fusion

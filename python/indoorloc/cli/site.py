@@ -1,0 +1,187 @@
+"""``indoorloc site ...`` and ``indoorloc track``: a site model from survey walks, and walks
+tracked with it (docs/your_building.md). Parse and print only; the work is
+:class:`indoorloc.fusion.Site` and :mod:`indoorloc.io.track_files`.
+
+    indoorloc site build SURVEY_DIR -o SITE.db [--floors F1 F2] [--coverage DIR] [--lowo]
+    indoorloc site add SITE.db WALK.txt ... [--floor NAME]
+    indoorloc site grow SITE.db WALK.txt ... [--floor NAME|auto] [--max-sd-m M] [--weight W]
+    indoorloc site info SITE.db [--json]
+    indoorloc track WALK.txt ... --site SITE.db [--floor NAME|auto] [--smooth|--no-smooth] -o OUT.{geojson,csv,json}
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+
+def _floor_table(info: dict) -> str:
+    lines = ["| floor | walks | fingerprints | APs | beacons | walkable [m²] | survey coverage (within 5 m) |",
+             "|---|---|---|---|---|---|---|"]
+    for name, f in info["floors"].items():
+        lines.append(f"| {name} | {f['walks']} | {f['fingerprints']} | {f['access_points']} | {f['beacons']} | "
+                     f"{f['walkable_area_m2']:.0f} | {100 * f['survey_coverage']:.0f} % |")
+    return "\n".join(lines)
+
+
+def cmd_build(args: argparse.Namespace) -> int:
+    from indoorloc import progress
+    from indoorloc.fusion.site import Site
+    from indoorloc.io.survey_layout import survey_floors
+
+    floors = survey_floors(Path(args.survey_dir), args.floors)
+    ticker = progress.Ticker(total=sum(len(f.walk_paths) for f in floors), desc="site build: walks")
+    tic = time.perf_counter()
+    site = Site.build(args.survey_dir, args.output, floors=args.floors, progress=lambda _: ticker.tick())
+    ticker.close()
+    seconds = time.perf_counter() - tic
+    info = site.info()
+    print(_floor_table(info))
+    print(f"\nsite {args.output}: {len(info['floors'])} floor(s), {len(info['walks'])} walks, "
+          f"{info['size_bytes'] / 1e6:.1f} MB, built in {seconds:.1f} s")
+    out = Path(args.coverage) if args.coverage else Path(args.output).with_suffix("").parent / (
+        Path(args.output).stem + "_coverage")
+    if not args.no_coverage:
+        from indoorloc import plots
+
+        out.mkdir(parents=True, exist_ok=True)
+        for name in site.floors:
+            lowo = None
+            if args.lowo:
+                t = progress.Ticker(desc=f"leave one walk out {name}")
+                lowo = site.leave_one_walk_out(name, progress=lambda _: t.tick())
+                t.close()
+                st = lowo["stats"]
+                if st:
+                    print(f"{name}: leave-one-walk-out error mean {st['mean_m']:.1f} m, median {st['median_m']:.1f} m, "
+                          f"p90 {st['p90_m']:.1f} m ({st['n_waypoints']} waypoints of {lowo['walks']} walks)")
+            png = plots.site_coverage(site.coverage(name), out / f"coverage_{name}.png",
+                                      lowo_points=None if lowo is None else lowo["points"])
+            print(f"coverage map: {png}")
+    return 0
+
+
+def cmd_add(args: argparse.Namespace) -> int:
+    from indoorloc import progress
+    from indoorloc.fusion.site import Site
+
+    site = Site.open(args.site)
+    ticker = progress.Ticker(total=len(args.walks), desc="site add: walks")
+    added = site.add([Path(w) for w in args.walks], floor=args.floor, progress=lambda _: ticker.tick())
+    ticker.close()
+    print(f"added {len(added)} walk(s) to {args.site}: {', '.join(added)}")
+    print(_floor_table(site.info()))
+    return 0
+
+
+def cmd_grow(args: argparse.Namespace) -> int:
+    from indoorloc import progress
+    from indoorloc.fusion.site import Site
+
+    site = Site.open(args.site)
+    ticker = progress.Ticker(total=len(args.walks), desc="site grow: walks")
+    added = site.grow([Path(w) for w in args.walks], floor=args.floor, max_sd_m=args.max_sd_m, weight=args.weight,
+                      progress=lambda _: ticker.tick())
+    ticker.close()
+    for walk_id, n in added.items():
+        print(f"{walk_id}: {n} fingerprints placed by the track")
+    print(_floor_table(site.info()))
+    return 0
+
+
+def cmd_info(args: argparse.Namespace) -> int:
+    from indoorloc.fusion.site import Site
+
+    info = Site.open(args.site).info()
+    if args.json:
+        print(json.dumps(info, indent=1))
+        return 0
+    m = info["meta"]
+    print(f"site {info['path']} ({info['size_bytes'] / 1e6:.1f} MB): format {m.get('format')} version "
+          f"{m.get('format_version')}, built {m.get('built')} by indoorloc {m.get('library_version')}, "
+          f"modified {m.get('modified')}, survey {m.get('survey_dir')}")
+    print(_floor_table(info))
+    for name, f in info["floors"].items():
+        c = f["pdr_calibration"]
+        if c:
+            print(f"{name}: PDR K {c['k']:.3f}, yaw offset {c['yaw_offset_deg']:.1f} deg (spread "
+                  f"{c['yaw_offset_spread_deg']:.1f} deg)")
+    return 0
+
+
+def cmd_track(args: argparse.Namespace) -> int:
+    from indoorloc import progress
+    from indoorloc.fusion.site import Site
+    from indoorloc.io.track_files import EXTENSIONS, error_stats, write_tracks
+
+    if Path(args.output).suffix.lower() not in EXTENSIONS:
+        raise ValueError(f"indoorloc: argument '-o/--output': {args.output}: the extension must be one of {EXTENSIONS}")
+    site = Site.open(args.site)
+    tracks = []
+    floor = None if args.floor is None else args.floor
+    for w in progress.progress(args.walks, desc="track: walks"):
+        tr = site.track(Path(w), floor=floor, smooth=args.smooth)
+        tracks.append(tr)
+        st = error_stats(tr.errors_m)
+        line = f"{tr.walk_id}: floor {tr.floor} (p {tr.floor_probability:.2f}), {tr.times_s.size} steps"
+        if tr.header_floor and tr.header_floor != tr.floor:
+            line += f" (its header says floor {tr.header_floor}: waypoint errors not comparable)"
+        if st:
+            line += (f", error at {st['n_waypoints']} waypoints: mean {st['mean_m']:.2f} m, median "
+                     f"{st['median_m']:.2f} m, p90 {st['p90_m']:.2f} m")
+        print(line)
+    write_tracks(args.output, tracks, str(args.site))
+    print(f"written: {args.output}")
+    return 0
+
+
+def add_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
+    p = sub.add_parser("site", help="a site model (one SQLite file) built from survey walks")
+    ssub = p.add_subparsers(dest="site_command", required=True)
+    b = ssub.add_parser("build", parents=[quiet_parent()],
+                        help="build SITE.db from a survey folder (ILC 2020 SITE/FLOOR/path_data_files or Kaggle "
+                             "2021 train/SITE/FLOOR + metadata/SITE/FLOOR); every walk needs waypoints")
+    b.add_argument("survey_dir")
+    b.add_argument("-o", "--output", required=True, help="the site file to write (replaced only on success)")
+    b.add_argument("--floors", nargs="+", default=None, help="floor folders (default: all, in building order)")
+    b.add_argument("--coverage", default=None, metavar="DIR",
+                   help="folder of the coverage map PNGs (default: SITE_coverage beside the site file)")
+    b.add_argument("--no-coverage", action="store_true", help="no coverage maps")
+    b.add_argument("--lowo", action="store_true",
+                   help="also the expected error: each survey walk tracked on a site without it (slower)")
+    b.set_defaults(func=cmd_build)
+    a = ssub.add_parser("add", parents=[quiet_parent()], help="add survey walks (with waypoints) to a site")
+    a.add_argument("site")
+    a.add_argument("walks", nargs="+", metavar="WALK")
+    a.add_argument("--floor", default=None, help="floor of the walks (default: each walk's FloorName header)")
+    a.set_defaults(func=cmd_add)
+    g = ssub.add_parser("grow", parents=[quiet_parent()],
+                        help="add walks WITHOUT waypoints: fingerprints placed by the smoothed track where confident, "
+                             "at a lower weight")
+    g.add_argument("site")
+    g.add_argument("walks", nargs="+", metavar="WALK")
+    g.add_argument("--floor", default=None, help="floor name or 'auto' (default: each walk's FloorName header, else auto)")
+    g.add_argument("--max-sd-m", type=float, default=None,
+                   help="largest posterior sd [m] of a position used (default: fusion.site.GROW_MAX_SD_M)")
+    g.add_argument("--weight", type=float, default=None,
+                   help="weight of the grown fingerprints in (0, 1] (default: fusion.site.GROW_WEIGHT)")
+    g.set_defaults(func=cmd_grow)
+    i = ssub.add_parser("info", parents=[quiet_parent()], help="provenance and per-floor summary of a site")
+    i.add_argument("site")
+    i.add_argument("--json", action="store_true", help="print the JSON (docs/your_building.md)")
+    i.set_defaults(func=cmd_info)
+
+
+def add_track_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
+    t = sub.add_parser("track", parents=[quiet_parent()],
+                       help="track walks with a site model; GeoJSON, CSV or JSON by the output's extension")
+    t.add_argument("walks", nargs="+", metavar="WALK")
+    t.add_argument("--site", required=True, help="the site file (indoorloc site build)")
+    t.add_argument("--floor", default=None,
+                   help="floor name, or 'auto' to identify it (default: the walk's FloorName header, else auto)")
+    t.add_argument("--smooth", action=argparse.BooleanOptionalAction, default=True,
+                   help="forward-backward smoother (default); --no-smooth: the causal filter")
+    t.add_argument("-o", "--output", required=True, help="OUT.geojson, OUT.csv or OUT.json")
+    t.set_defaults(func=cmd_track)

@@ -1,0 +1,461 @@
+"""A site model in one file: built once from survey walks with waypoints, grown walk by walk,
+used to track new walks (docs/your_building.md).
+
+Per floor it keeps the walkable plan, the WiFi fingerprints (iBeacon sightings where present),
+the handheld-PDR calibration and the tracker settings, with provenance (walk ids and files,
+library version, build time). The file format is :mod:`indoorloc.fusion.site_store` (SQLite).
+
+What is stored is per walk (fingerprints before any vocabulary filter, the PDR between
+waypoints), and what depends on all walks of a floor (AP vocabulary and reliabilities, the
+calibration) is derived from it, so :meth:`Site.add` of a walk gives the same site as a build
+that included it. Example::
+
+    from indoorloc.fusion.site import Site
+    site = Site.build("ilc2020_site2", "site2.db", floors=["F8"])
+    track = Site.open("site2.db").track("walk.txt", floor="auto")
+    track.xy_m, track.errors_m
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Dict, List, Optional, Sequence, Union
+
+import numpy as np
+
+from indoorloc import _core
+from indoorloc.pdr import handheld as ph
+from indoorloc import wifi_fixes as wfx
+from indoorloc.fusion import FloorPlan, FloorPlanOptions, site_model
+from indoorloc.fusion import site_store as store
+from indoorloc.fusion import site_tables as tables
+from indoorloc.fusion.grid import GridTracker
+from indoorloc.io.errors import FormatError, RecordingWarning
+from indoorloc.io.ilc2020 import read_ilc_walk
+from indoorloc.io.survey_layout import survey_floors
+
+WalkLike = Union[str, os.PathLike, Any]
+
+
+@dataclass
+class FloorModels:
+    """One floor of a site, ready to track: plan, calibration, fingerprints, grid tracker."""
+
+    name: str
+    number: int
+    origin_lon_lat: tuple
+    plan: FloorPlan
+    calibration: ph.HandheldCalibration
+    database: wfx.FingerprintDatabase
+    tracker: GridTracker
+
+
+@dataclass
+class WalkTrack:
+    """A walk tracked on a site: per step (M) times [s since the walk's first record], position
+    (M, 2) [m, floor frame] and covariance (M, 3) = (xx, xy, yy) [m²]; the floor and its
+    probability; the waypoints and the errors at them [m] when the walk has waypoints."""
+
+    walk_id: str
+    source: str
+    floor: str
+    floor_number: int
+    floor_probability: float
+    floor_probabilities: Dict[str, float]
+    smoothed: bool
+    t0_unix_ms: int
+    times_s: np.ndarray
+    xy_m: np.ndarray
+    covariance_m2: np.ndarray
+    origin_lon_lat: tuple
+    waypoint_t_s: np.ndarray
+    waypoint_xy_m: np.ndarray
+    errors_m: Optional[np.ndarray]
+    header_floor: str = ""   #: the walk header's FloorName ("" when absent)
+
+
+#: Site.grow: largest posterior sd [m] of a smoothed position used to place a fingerprint. Chosen
+#: by leave-one-floor-out over {2, 4, 8, 16, 32} m on the shared site (experiments/site_growth.py,
+#: docs/your_building.md "Growing the map"): 8 m for five of six held-out floors (4 m for B1) and
+#: on all six floors pooled.
+GROW_MAX_SD_M = 8.0
+#: Weight of a grown fingerprint's fix component relative to a surveyed one: fixed in advance
+#: (not cross-validated).
+GROW_WEIGHT = 0.5
+
+
+def _confident_positions(track: "WalkTrack", max_sd_m: float):
+    """t (Q,) [s] -> (xy (Q, 2), valid (Q,)): the smoothed track interpolated at t, valid inside
+    the track's span where the largest sd of the interpolated covariance is at most max_sd_m."""
+    t_tr, xy, c = track.times_s, track.xy_m, np.asarray(track.covariance_m2, float)
+    half = 0.5 * (c[:, 0] + c[:, 2])
+    largest_sd = np.sqrt(np.maximum(half + np.sqrt((0.5 * (c[:, 0] - c[:, 2])) ** 2 + c[:, 1] ** 2), 0.0))
+
+    def at(t):
+        t = np.asarray(t, float)
+        pos = np.c_[np.interp(t, t_tr, xy[:, 0]), np.interp(t, t_tr, xy[:, 1])]
+        ok = (t >= t_tr[0]) & (t <= t_tr[-1]) & (np.interp(t, t_tr, largest_sd) <= max_sd_m)
+        return pos, ok
+    return at
+
+
+def _read_walk(walk: WalkLike):
+    return read_ilc_walk(walk) if isinstance(walk, (str, os.PathLike)) else walk
+
+
+class Site:
+    """A site file opened for tracking and growing (:meth:`open`, :meth:`build`)."""
+
+    def __init__(self, path: Path):
+        self.path = Path(path)
+        con = store.connect(self.path)
+        try:
+            self.meta = store.meta(con)
+            row = con.execute("SELECT settings FROM tracker_settings WHERE name = 'default'").fetchone()
+            if row is None:
+                raise store.SiteFileError(f"indoorloc: site file {self.path}: no tracker settings")
+            self.settings = site_model.TrackSettings.from_dict(json.loads(row[0]))
+            self._floors = {name: (int(num), (lon, lat)) for name, num, lon, lat in con.execute(
+                "SELECT name, number, origin_lon, origin_lat FROM floors ORDER BY number")}
+        finally:
+            con.close()
+        self._models: Dict[str, FloorModels] = {}
+        self._all: Optional[tuple] = None
+
+    # ---- opening and building -------------------------------------------------------------
+    @classmethod
+    def open(cls, path: Union[str, os.PathLike]) -> "Site":
+        """Open a site file; SiteFileError (a ValueError) naming the file when it is not one of
+        this format version or is damaged."""
+        return cls(Path(path))
+
+    @classmethod
+    def build(cls, survey_dir: Union[str, os.PathLike], path: Union[str, os.PathLike],
+              floors: Optional[Sequence[str]] = None, settings: Optional[site_model.TrackSettings] = None,
+              progress: Optional[Callable[[str], None]] = None) -> "Site":
+        """Build a site file from a survey folder (ILC 2020 or Kaggle 2021 layout,
+        :func:`indoorloc.io.survey_layout.survey_floors`): every walk of the floors (all by
+        default) must have waypoints; a walk file that cannot be read is skipped with a
+        RecordingWarning and listed in the meta table (``skipped_walks``). Written to a temporary file and renamed: an existing
+        ``path`` is replaced only when the build succeeded. ``progress(walk_id)`` after each walk."""
+        settings = settings or site_model.TrackSettings()
+        settings.validate()
+        survey = survey_floors(Path(survey_dir), floors)
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
+        os.close(fd)
+        os.unlink(tmp)
+        try:
+            con = store.create(Path(tmp))
+            built = tables.now()
+            for key, value in (("format", "indoorloc.site"), ("format_version", str(store.FORMAT_VERSION)),
+                               ("library_version", _core.__version__), ("built", built),
+                               ("modified", built), ("survey_dir", str(Path(survey_dir).resolve()))):
+                con.execute("INSERT INTO meta VALUES (?, ?)", (key, value))
+            con.execute("INSERT INTO tracker_settings VALUES ('default', ?)", (json.dumps(settings.to_dict()),))
+            grid = settings.grid_options.replace(spatial_median=settings.point_estimate == "median").to_dict()
+            con.executemany("INSERT INTO grid_options VALUES (?, ?)", [(k, float(v)) for k, v in sorted(grid.items())])
+            for fl in survey:
+                tables.insert_floor(con, fl)
+            seq, skipped = 0, {}
+            for fl in survey:
+                for wp in fl.walk_paths:
+                    try:
+                        walk = read_ilc_walk(wp)
+                    except FormatError as exc:  # the loader rule: an unreadable walk is skipped, said, listed
+                        warnings.warn(f"indoorloc: walk {wp} skipped: {exc}", RecordingWarning, stacklevel=2)
+                        skipped[str(wp)] = str(exc)
+                        continue
+                    tables.insert_survey_walk(con, walk, fl.name, seq, settings, str(wp))
+                    seq += 1
+                    if progress:
+                        progress(wp.stem)
+                tables.recalibrate(con, fl.name)
+            con.execute("INSERT INTO meta VALUES ('skipped_walks', ?)", (json.dumps(skipped),))
+            con.execute("COMMIT")
+            con.close()
+            os.replace(tmp, path)
+        except BaseException:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+            raise
+        return cls(path)
+
+    def add(self, walks: Sequence[WalkLike], floor: Optional[str] = None,
+            progress: Optional[Callable[[str], None]] = None) -> List[str]:
+        """Add survey walks (with waypoints) to the site, in one transaction: if any walk fails,
+        the file keeps its old content. The floor of each walk is ``floor`` or the walk's
+        ``FloorName`` header. Returns the walk ids added."""
+        con = store.connect(self.path, write=True)
+        added = []
+        try:
+            con.execute("BEGIN IMMEDIATE")
+            seq = con.execute("SELECT COALESCE(MAX(seq) + 1, 0) FROM walks").fetchone()[0]
+            touched = set()
+            for w in walks:
+                walk = _read_walk(w)
+                name = self._walk_floor(walk, floor)
+                tables.insert_survey_walk(con, walk, name, seq, self.settings, str(getattr(walk, "path", w)))
+                seq += 1
+                touched.add(name)
+                added.append(walk.walk_id)
+                if progress:
+                    progress(walk.walk_id)
+            for name in sorted(touched):
+                tables.recalibrate(con, name)
+            con.execute("INSERT OR REPLACE INTO meta VALUES ('modified', ?)", (tables.now(),))
+            con.execute("COMMIT")
+        except BaseException:
+            if con.in_transaction:
+                con.execute("ROLLBACK")
+            raise
+        finally:
+            con.close()
+        self._models.clear()
+        self._all = None
+        return added
+
+    def grow(self, walks: Sequence[WalkLike], floor: Optional[str] = None, max_sd_m: Optional[float] = None,
+             weight: Optional[float] = None, progress: Optional[Callable[[str], None]] = None) -> Dict[str, int]:
+        """Add walks *without* waypoints: each tracked (default tracker, smoothed; floor as in
+        :meth:`track`) on the current site, and its WiFi fingerprints placed at the smoothed
+        positions where the posterior is confident (largest sd of the smoothed covariance at most
+        ``max_sd_m`` [m], default :data:`GROW_MAX_SD_M`), stored with weight ``weight`` (default
+        :data:`GROW_WEIGHT`; a fix component from them counts that much relative to a surveyed
+        one). All walks are tracked on the site as it was, then written in one transaction.
+        Returns ``{walk id: fingerprints added}``."""
+        max_sd_m = GROW_MAX_SD_M if max_sd_m is None else float(max_sd_m)
+        weight = GROW_WEIGHT if weight is None else float(weight)
+        if not (max_sd_m > 0 and math.isfinite(max_sd_m)):
+            raise ValueError(f"indoorloc: argument 'max_sd_m': must be finite and > 0, got {max_sd_m!r}")
+        if not 0 < weight <= 1:
+            raise ValueError(f"indoorloc: argument 'weight': must be in (0, 1], got {weight!r}")
+        placed = []
+        for w in walks:
+            walk = _read_walk(w)
+            tr = self.track(walk, floor=floor)
+            placed.append((walk, tr, wfx.walk_fingerprints(walk, self.settings.fixes,
+                                                           positions_at=_confident_positions(tr, max_sd_m),
+                                                           span_s=(tr.times_s[0], tr.times_s[-1]))))
+            if progress:
+                progress(walk.walk_id)
+        con = store.connect(self.path, write=True)
+        out = {}
+        try:
+            con.execute("BEGIN IMMEDIATE")
+            seq = con.execute("SELECT COALESCE(MAX(seq) + 1, 0) FROM walks").fetchone()[0]
+            for walk, tr, got in placed:
+                if con.execute("SELECT 1 FROM walks WHERE id = ?", (walk.walk_id,)).fetchone():
+                    raise ValueError(f"indoorloc: walk {tr.source}: walk id {walk.walk_id} is already in the site")
+                con.execute("INSERT INTO walks VALUES (?, ?, ?, ?, 'grown', ?, ?, ?, ?)",
+                            (walk.walk_id, seq, tr.floor, tr.source, weight, tables.now(), int(np.size(walk.waypoint_t_s)),
+                             float(walk.duration_s)))
+                seq += 1
+                out[walk.walk_id] = tables.insert_fingerprints(con, tr.floor, walk.walk_id, got, weight)
+            con.execute("INSERT OR REPLACE INTO meta VALUES ('modified', ?)", (tables.now(),))
+            con.execute("COMMIT")
+        except BaseException:
+            if con.in_transaction:
+                con.execute("ROLLBACK")
+            raise
+        finally:
+            con.close()
+        self._models.clear()
+        self._all = None
+        return out
+
+    # ---- reading ------------------------------------------------------------------------
+    @property
+    def floors(self) -> List[str]:
+        """Floor names in building order."""
+        return list(self._floors)
+
+    def _walk_floor(self, walk: Any, floor: Optional[str]) -> str:
+        name = floor or walk.metadata.get("FloorName") or ""
+        if not name:
+            raise ValueError(f"indoorloc: walk {getattr(walk, 'path', walk.walk_id)}: no FloorName in its header; "
+                             f"name the floor (one of {self.floors})")
+        if name not in self._floors:
+            raise ValueError(f"indoorloc: walk {getattr(walk, 'path', walk.walk_id)}: floor {name!r} is not in site "
+                             f"{self.path} (floors: {self.floors})")
+        return name
+
+    def floor_models(self, name: str) -> FloorModels:
+        """The models of one floor, read from the file once."""
+        if name not in self._floors:
+            raise ValueError(f"indoorloc: argument 'floor': {name!r} is not in site {self.path} (floors: {self.floors})")
+        if name not in self._models:
+            con = store.connect(self.path)
+            try:
+                number, origin = self._floors[name]
+                plan = tables.plan(con, name, number, origin)
+                cal = tables.calibration(con, name)
+                database = tables.database(con, [name], self.settings.fixes)
+            finally:
+                con.close()
+            tracker = GridTracker(plan, site_model.floor_grid_options(self.settings, cal))
+            self._models[name] = FloorModels(name, number, origin, plan, cal, database, tracker)
+        return self._models[name]
+
+    def _all_floors(self) -> tuple:
+        """(all-floor identification tracker, floor numbers, database, offset sd) for --floor auto."""
+        if self._all is None:
+            models = [self.floor_models(n) for n in self.floors]
+            plan = FloorPlan([m.plan.geometry(0) for m in models], FloorPlanOptions())
+            # The walk's floor is unknown: the widest calibrated offset spread of the floors.
+            spread = max(site_model.offset_spread_rad(m.calibration) for m in models)
+            tracker = GridTracker(plan, site_model.identification_grid_options(self.settings, spread))
+            con = store.connect(self.path)
+            try:
+                database = tables.database(con, self.floors, self.settings.fixes)
+            finally:
+                con.close()
+            self._all = (tracker, [m.number for m in models], database)
+        return self._all
+
+    def track(self, walk: WalkLike, floor: Optional[str] = None, smooth: bool = True) -> WalkTrack:
+        """Track one walk (a walk file or an ``IlcWalk``) with the default tracker.
+
+        ``floor``: a floor name, ``"auto"`` (identified from the walk's WiFi and motion over all
+        floors: the floor with the most evidence, then the floor-given tracker on it), or None
+        (the walk header's ``FloorName``; ``auto`` when it has none). ValueError naming the walk
+        and floor when that floor is not in the site."""
+        walk = _read_walk(walk)
+        src = str(getattr(walk, "path", walk.walk_id))
+        if floor is None:
+            floor = walk.metadata.get("FloorName") or "auto"
+            if floor != "auto" and floor not in self._floors:
+                raise ValueError(f"indoorloc: walk {src}: its floor {floor!r} is not in site {self.path} "
+                                 f"(floors: {self.floors}); pass floor='auto' or one of them")
+        steps_raw = ph.handheld_steps(walk)
+        probabilities = {}
+        if floor == "auto":
+            tracker_all, numbers, database = self._all_floors()
+            # Steps rotated with the first floor's calibration for identification; then the floor's own.
+            first = self.floor_models(self.floors[0])
+            ident = site_model.identify_floor(tracker_all, numbers, site_model.tracker_steps(
+                steps_raw, first.calibration, self.settings), wfx.fixes_for_walk(walk, database))
+            by_number = {n: name for name, (n, _) in self._floors.items()}
+            floor = by_number[ident["floor"]]
+            probabilities = {by_number[n]: p for n, p in ident["probabilities"].items()}
+        m = self.floor_models(floor) if floor in self._floors else self._walk_floor(walk, floor)
+        steps = site_model.tracker_steps(steps_raw, m.calibration, self.settings)
+        if len(steps) == 0:
+            raise ValueError(f"indoorloc: walk {src}: no step detected, nothing to track")
+        fixes = wfx.fixes_for_walk(walk, m.database)
+        r = site_model.run_default(m.tracker, steps, fixes, smooth=smooth)
+        median = self.settings.point_estimate == "median"
+        key = ("smoothed_median_m" if median else "smoothed_m") if smooth else ("median_m" if median else "mean_m")
+        cov = np.asarray(r["smoothed_covariance_m2" if smooth else "covariance_m2"], float)
+        wt = np.asarray(walk.waypoint_t_s, float)
+        wxy = np.asarray(walk.waypoint_xy_m, float).reshape(-1, 2)
+        # Waypoints are in their own floor's frame: errors only when the walk is on the tracked floor.
+        header_floor = str(walk.metadata.get("FloorName") or "")
+        comparable = wt.size and header_floor in ("", floor)
+        errors = site_model.walk_errors_m(steps.times_s, r[key], wt, wxy) if comparable else None
+        return WalkTrack(walk.walk_id, src, floor, m.number, probabilities.get(floor, 1.0), probabilities or {floor: 1.0},
+                         bool(smooth), int(walk.t0_unix_ms), np.asarray(steps.times_s, float),
+                         np.asarray(r[key], float), cov, m.origin_lon_lat, wt, wxy, errors, header_floor)
+
+    def leave_one_walk_out(self, name: str, progress: Optional[Callable[[str], None]] = None) -> Dict[str, Any]:
+        """The expected error on a floor: each survey walk tracked (default tracker, floor given)
+        on the floor's models without it (calibration and fingerprints rebuilt from the others),
+        re-read from its source file. Returns ``{"points": (W, 3) x, y [m] of every waypoint and
+        its error [m], "stats": mean/median/p90, "walks": n, "missing": [walk files not found]}``."""
+        m = self.floor_models(name)
+        con = store.connect(self.path)
+        try:
+            walks = con.execute("SELECT id, source FROM walks WHERE floor = ? AND kind = 'survey' ORDER BY seq",
+                                (name,)).fetchall()
+            points, missing = [], []
+            for walk_id, source in walks:
+                if not Path(source).is_file():
+                    missing.append(source)
+                    continue
+                walk = read_ilc_walk(source)
+                cal = tables.calibrate(con, name, exclude_walk=walk_id)
+                database = tables.database(con, [name], self.settings.fixes, exclude_walk=walk_id)
+                tracker = GridTracker(m.plan, site_model.floor_grid_options(self.settings, cal))
+                steps = site_model.tracker_steps(ph.handheld_steps(walk), cal, self.settings)
+                if len(steps):
+                    r = site_model.run_default(tracker, steps, wfx.fixes_for_walk(walk, database))
+                    key = "smoothed_median_m" if self.settings.point_estimate == "median" else "smoothed_m"
+                    e = site_model.walk_errors_m(steps.times_s, r[key], walk.waypoint_t_s, walk.waypoint_xy_m)
+                    points.append(np.c_[np.asarray(walk.waypoint_xy_m, float).reshape(-1, 2), e])
+                if progress:
+                    progress(walk_id)
+        finally:
+            con.close()
+        p = np.vstack(points) if points else np.zeros((0, 3))
+        stats = None if not p.size else {"mean_m": float(p[:, 2].mean()), "median_m": float(np.median(p[:, 2])),
+                                         "p90_m": float(np.percentile(p[:, 2], 90)), "n_waypoints": int(p.shape[0])}
+        return {"points": p, "stats": stats, "walks": len(points), "missing": missing}
+
+    def info(self) -> Dict[str, Any]:
+        """Provenance and a per-floor summary: walks, fingerprints, access points, beacons,
+        walkable area [m²], survey coverage (fraction of the walkable area within 5 m of a
+        fingerprint) and the PDR calibration."""
+        con = store.connect(self.path)
+        try:
+            out = {"path": str(self.path), "size_bytes": self.path.stat().st_size, "meta": store.meta(con),
+                   "settings": self.settings.to_dict(), "floors": {}}
+            for name, (number, origin) in self._floors.items():
+                area = con.execute("SELECT walkable_area_m2 FROM floors WHERE name = ?", (name,)).fetchone()[0]
+                n_walks = con.execute("SELECT COUNT(*) FROM walks WHERE floor = ?", (name,)).fetchone()[0]
+                n_fp = con.execute("SELECT COUNT(*) FROM fingerprints WHERE floor = ?", (name,)).fetchone()[0]
+                n_b = con.execute("SELECT COUNT(DISTINCT beacon) FROM beacons WHERE floor = ?", (name,)).fetchone()[0]
+                ids = set()
+                for (blob,) in con.execute("SELECT ap_ids FROM fingerprints WHERE floor = ?", (name,)):
+                    ids.update(np.frombuffer(blob, "<i4").tolist())
+                cal = con.execute("SELECT k, yaw_offset_rad, yaw_offset_spread_rad FROM pdr_calibration WHERE floor = ?",
+                                  (name,)).fetchone()
+                out["floors"][name] = {
+                    "number": number, "origin_lon_lat": list(origin), "walks": n_walks, "fingerprints": n_fp,
+                    "access_points": len(ids), "beacons": n_b, "walkable_area_m2": round(area, 1),
+                    "survey_coverage": round(self.coverage(name)["fraction_within_5m"], 4),
+                    "pdr_calibration": None if cal is None else {
+                        "k": cal[0], "yaw_offset_deg": math.degrees(cal[1]), "yaw_offset_spread_deg": math.degrees(cal[2])}}
+            out["walks"] = [dict(zip(("id", "floor", "source", "kind", "weight", "added"), r)) for r in con.execute(
+                "SELECT id, floor, source, kind, weight, added FROM walks ORDER BY seq")]
+        finally:
+            con.close()
+        return out
+
+    def coverage(self, name: str, cell_m: float = 2.0) -> Dict[str, Any]:
+        """Survey coverage of a floor: on a grid of ``cell_m`` cells over the plan, the distance
+        [m] from each walkable cell centre to the nearest fingerprint (NaN: not walkable), and
+        the fraction of walkable cells within 5 m."""
+        from scipy.spatial import cKDTree
+
+        if name not in self._floors:
+            raise ValueError(f"indoorloc: argument 'floor': {name!r} is not in site {self.path}")
+        con = store.connect(self.path)
+        try:
+            number, origin = self._floors[name]
+            plan = tables.plan(con, name, number, origin)
+            xy = np.array(con.execute("SELECT x_m, y_m FROM fingerprints WHERE floor = ?", (name,)).fetchall(),
+                          float).reshape(-1, 2)
+        finally:
+            con.close()
+        b = np.asarray(plan.bounds(0), float).ravel()
+        xs = np.arange(b[0] + cell_m / 2, b[2], cell_m)
+        ys = np.arange(b[1] + cell_m / 2, b[3], cell_m)
+        gx, gy = np.meshgrid(xs, ys)
+        pts = np.c_[gx.ravel(), gy.ravel()]
+        walkable = np.asarray(plan.is_walkable(pts, 0), bool)
+        dist = np.full(pts.shape[0], np.nan)
+        if xy.shape[0] and walkable.any():
+            dist[walkable] = cKDTree(xy).query(pts[walkable])[0]
+        frac = float(np.mean(dist[walkable] <= 5.0)) if walkable.any() else 0.0
+        return {"extent_m": (b[0], b[2], b[1], b[3]), "distance_m": dist.reshape(gx.shape), "fingerprints_m": xy,
+                "fraction_within_5m": frac, "edges_m": np.asarray(plan.edges(0))}
+
+
+__all__ = ["FloorModels", "Site", "WalkTrack"]

@@ -1,0 +1,159 @@
+"""What a site model holds per floor, and the default tracker run on one walk with it.
+
+A floor's model is built from survey walks with waypoints (docs/your_building.md):
+
+- the handheld-PDR calibration (Weinberg K, the yaw offset between the phone's rotation-vector
+  heading and the floor frame, its spread over walks: :func:`indoorloc.pdr.handheld.calibrate_handheld`);
+- the WiFi fingerprint database (:func:`indoorloc.wifi_fixes.build_database`);
+- the walkable plan (:func:`indoorloc.io.load_floor_plan`, origin at the outline's south-west corner).
+
+A walk is then tracked by the default tracker of docs/fusion_real.md: the grid tracker from an
+unknown start with the forward-backward smoother (``fusion.GridTracker``), its steps rotated by
+the calibrated yaw offset and its WiFi turned into fingerprint fixes. ``indoorloc fusion
+evaluate`` (experiments/fusion_real.py) and :class:`indoorloc.fusion.Site` both call this module,
+so the figures of the study are the figures of a site file.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+from typing import Any, Dict, List, Optional, Sequence
+
+import numpy as np
+
+from indoorloc.pdr import handheld as ph
+from indoorloc import wifi_fixes as wfx
+from indoorloc.fusion import Steps
+from indoorloc.fusion.grid import GridTracker, GridTrackerOptions, track_grid
+
+
+@dataclass
+class TrackSettings:
+    """The default tracker's settings on real walks (how each was chosen: docs/fusion_real.md).
+
+    The heading-offset prior sd of the grid is not here: it is each floor's calibrated spread."""
+
+    #: Per-step white noise of the handheld PDR: length sd as a fraction of the stride, heading sd
+    #: [rad]; the systematic parts are the tracker's scale and offset states (fixed in advance).
+    step_length_sd_fraction: float = 0.15
+    step_heading_sd_rad: float = math.radians(10.0)
+    #: The fingerprint fixes (``wifi_fixes.FixSettings``; leave-one-floor-out defaults).
+    fixes: wfx.FixSettings = field(default_factory=wfx.FixSettings)
+    #: The grid tracker's options (``fusion.GridTrackerOptions``, defaults read from C++).
+    grid_options: Any = field(default_factory=GridTrackerOptions)
+    #: "mean" or "median" (spatial median) of the posterior as the point estimate.
+    point_estimate: str = "mean"
+    #: Floor identification (``--floor auto``): cells [m] and offset bins of the all-floor filter.
+    identification_cell_m: float = 2.0
+    identification_offset_bins: int = 3
+
+    def validate(self) -> None:
+        """Raises ValueError naming the first invalid field."""
+        for name in ("step_length_sd_fraction", "step_heading_sd_rad", "identification_cell_m"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise ValueError(f"indoorloc: TrackSettings.{name} must be finite and > 0, got {v!r}")
+        if self.point_estimate not in ("mean", "median"):
+            raise ValueError(f"indoorloc: TrackSettings.point_estimate must be 'mean' or 'median', "
+                             f"got {self.point_estimate!r}")
+        self.fixes.validate()
+
+    def to_dict(self) -> Dict[str, Any]:
+        """JSON-ready (an infinite wall penalty becomes None)."""
+        d: Dict[str, Any] = {k: getattr(self, k) for k in ("step_length_sd_fraction", "step_heading_sd_rad",
+                                                          "point_estimate", "identification_cell_m",
+                                                          "identification_offset_bins")}
+        d["fixes"] = asdict(self.fixes)
+        d["grid_options"] = {k: (None if isinstance(v, float) and math.isinf(v) else v)
+                             for k, v in self.grid_options.to_dict().items()}
+        return d
+
+    @classmethod
+    def from_dict(cls, d: Dict[str, Any]) -> "TrackSettings":
+        """Inverse of :meth:`to_dict`; unknown keys raise ValueError naming them."""
+        d = dict(d)
+        fixes = wfx.FixSettings(**d.pop("fixes", {}))
+        g = {k: (-math.inf if k == "wall_log_penalty" and v is None else v) for k, v in d.pop("grid_options", {}).items()}
+        known = {f for f in cls.__dataclass_fields__}
+        unknown = sorted(set(d) - known)
+        if unknown:
+            raise ValueError(f"indoorloc: tracker settings: unknown keys {unknown}")
+        return cls(fixes=fixes, grid_options=GridTrackerOptions().replace(**g), **d)
+
+
+def calibrate_floor(walks: Sequence[Any], steps: Sequence[ph.HandheldSteps]) -> ph.HandheldCalibration:
+    """The floor's handheld-PDR calibration from its survey walks (with waypoints) and their
+    detected steps (same order)."""
+    return ph.calibrate_handheld(walks, steps_cache=steps)
+
+
+def build_fingerprints(walks: Sequence[Any], steps: Sequence[ph.HandheldSteps], floor_number: int,
+                       settings: wfx.FixSettings) -> wfx.FingerprintDatabase:
+    """The floor's fingerprint database from its survey walks, each fingerprint placed by PDR
+    between the waypoints (``wifi_fixes.build_database``)."""
+    return wfx.build_database(walks, settings, steps, floors=[floor_number] * len(walks))
+
+
+def tracker_steps(steps_raw: ph.HandheldSteps, cal: ph.HandheldCalibration, settings: TrackSettings) -> Steps:
+    """A walk's detected steps as the tracker takes them: lengths with the calibrated K, headings
+    rotated into the floor frame by the calibrated yaw offset [rad], per-step sds from
+    ``settings``."""
+    steps = ph.rescale(steps_raw, cal.options)
+    heading = steps.heading_rad + cal.yaw_offset_rad
+    return Steps.from_polar(steps.t_s, steps.length_m, heading, settings.step_length_sd_fraction * steps.length_m,
+                            settings.step_heading_sd_rad)
+
+
+def offset_spread_rad(cal: ph.HandheldCalibration) -> float:
+    """The heading-offset prior sd of the floor [rad]: the calibrated spread over the survey
+    walks, at least 1e-3 (a single walk has no spread)."""
+    spread = cal.yaw_offset_spread_rad
+    return max(spread if math.isfinite(spread) else 0.0, 1e-3)
+
+
+def floor_grid_options(settings: TrackSettings, cal: ph.HandheldCalibration, spatial_median: Optional[bool] = None,
+                       **changes) -> Any:
+    """The grid options of a floor: the settings' options with the floor's offset spread
+    (``spatial_median`` default: whether the point estimate is the median)."""
+    median = settings.point_estimate == "median" if spatial_median is None else bool(spatial_median)
+    return settings.grid_options.replace(heading_offset_sd_rad=offset_spread_rad(cal), spatial_median=median,
+                                         **changes)
+
+
+def identification_grid_options(settings: TrackSettings, spread_rad: float, spatial_median: bool = False) -> Any:
+    """Grid options of the all-floor floor-identification filter (coarser cells, fewer offset bins)."""
+    return settings.grid_options.replace(heading_offset_sd_rad=spread_rad, spatial_median=spatial_median,
+                                         cell_size_m=settings.identification_cell_m,
+                                         heading_offset_bins=settings.identification_offset_bins)
+
+
+def run_default(tracker: GridTracker, steps: Steps, fixes, smooth: bool = True) -> dict:
+    """The default tracker on one walk: unknown start, filter and (``smooth``) smoother
+    (:func:`indoorloc.fusion.track_grid`'s dict)."""
+    return dict(track_grid(tracker, steps, fixes=fixes, start=None, smooth=smooth))
+
+
+def identify_floor(tracker_all: GridTracker, floors: Sequence[int], steps: Steps, fixes) -> Dict[str, Any]:
+    """The floor of a walk (a walk stays on one floor): the all-floor filter's floor with the most
+    evidence over the walk. Returns ``{"floor": int, "probabilities": {floor: p}, "result": dict}``."""
+    r = dict(track_grid(tracker_all, steps, fixes=fixes, smooth=False))
+    p = np.asarray(r["smoothed_floor_probabilities"], float)
+    best = int(np.argmax(p))
+    return {"floor": int(floors[best]), "probabilities": {int(f): float(v) for f, v in zip(floors, p)}, "result": r}
+
+
+def walk_errors_m(track_t_s: np.ndarray, track_m: np.ndarray, waypoint_t_s: np.ndarray,
+                  waypoint_xy_m: np.ndarray) -> np.ndarray:
+    """Error [m] at each waypoint of the track interpolated linearly to the waypoint times."""
+    t = np.asarray(track_t_s, float)
+    xy = np.asarray(track_m, float)
+    wt = np.asarray(waypoint_t_s, float)
+    if t.size == 0:
+        return np.full(wt.size, np.nan)
+    est = np.stack([np.interp(wt, t, xy[:, 0]), np.interp(wt, t, xy[:, 1])], axis=1)
+    return np.hypot(*(est - np.asarray(waypoint_xy_m, float)).T)
+
+
+__all__ = ["TrackSettings", "build_fingerprints", "calibrate_floor", "floor_grid_options", "identification_grid_options",
+           "identify_floor", "offset_spread_rad", "run_default", "tracker_steps", "walk_errors_m"]

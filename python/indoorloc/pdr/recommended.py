@@ -1,0 +1,187 @@
+"""The recommended foot-mounted PDR pipeline: stance detection, ZUPT EKF + RTS smoother, strides,
+and a health check that flags every physically implausible result.
+
+:func:`run_recommended` on an :class:`~indoorloc.io.ImuRecording`:
+
+1. :func:`detect_stance`: the SHOE statistic (window and noise sds :data:`SHOE_WINDOW`,
+   :data:`SHOE_SIGMA_ACC_MPS2`, :data:`SHOE_SIGMA_GYRO_RADPS`) with the swing guard of
+   :func:`indoorloc.pdr.zero_velocity` (:data:`ZUPT_DETECTOR`): the threshold climbs a ladder until
+   the gait looks whole, never onto a rung whose swings are shorter than a human swing, and a
+   low-motion rule for slow, flat walks (docs/pdr.md, "Low-motion walks");
+2. :func:`indoorloc.pdr.zupt_ekf` with the RTS smoother, and :func:`indoorloc.pdr.count_strides`;
+3. the health check: the EKF's own (divergence, missing stances, stretched paths) plus
+   :func:`gait_plausibility`, which compares the result with the gait the IMU shows (swing
+   durations, stride lengths, path length against the step rhythm of the gyroscope). Its limits
+   are :data:`HEALTH_LIMITS` (calibrated in :mod:`indoorloc.experiments.pdr_low_motion`;
+   docs/errors.md, "implausible").
+
+Every constant was chosen by cross-validation over the PyShoe Vicon trials and synthetic gaits
+(docs/pdr.md). Moved here from ``indoorloc.experiments.pdr_evaluate`` (docs/api_changes.md).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any, Dict, List
+
+import numpy as np
+
+from indoorloc._core import pdr as _pdr
+from indoorloc.pdr.metrics import path_length
+
+if TYPE_CHECKING:  # `import indoorloc` loads no file-format module (CONVENTIONS rule 11)
+    from indoorloc.io.pdr_datasets import ImuRecording
+
+__all__ = ["DEFAULT_METHOD", "HEALTH_LIMITS", "SHOE_SIGMA_ACC_MPS2", "SHOE_SIGMA_GYRO_RADPS", "SHOE_WINDOW",
+           "ZUPT_DETECTOR", "detect_stance", "gait_evidence", "gait_plausibility", "run_recommended"]
+
+#: SHOE window [samples] and noise settings (the statistic's scale depends on them: T ~ 1/sigma^2).
+SHOE_WINDOW = 5
+SHOE_SIGMA_ACC_MPS2 = 0.01
+SHOE_SIGMA_GYRO_RADPS = 0.1 * math.pi / 180.0
+
+#: Settings of :func:`indoorloc.pdr.zero_velocity` used by :func:`detect_stance` for every sensor
+#: (one parameter set; the swing guard adapts the threshold per recording). Chosen by
+#: leave-one-trial-out cross-validation over the 21 PyShoe trials (``python -m
+#: indoorloc.experiments.pdr_zupt_cv``; docs/pdr.md "Zero-velocity detection"): threshold 1e4
+#: (grid 1e4-10^4.5), max_swing_s 2.0 (grid 1.25-3; 1.5-3 tie) and max_swing_ratio 1.5 (grid
+#: 1.3-2; 1.5-2 tie). The ladder step (0.25 decade), the cap (1e7) and the stance floor (15 %)
+#: were fixed beforehand. min_plausible_swing_s (0.2 s) and low_motion_min_stance_s (0.08 s):
+#: leave-one-recording-out CV over the 21 trials and 12 synthetic slow low-motion gaits
+#: (``python -m indoorloc.experiments.pdr_low_motion``; docs/pdr.md "Low-motion walks").
+ZUPT_DETECTOR = {"rule": "swing_guard", "threshold": 1e4, "max_swing_s": 2.0, "max_swing_ratio": 1.5,
+                 "ladder_step_decades": 0.25, "min_stance_share": 0.15, "max_threshold": 1e7,
+                 "min_plausible_swing_s": 0.2, "low_motion_min_stance_s": 0.08}
+
+#: Name of the recommended method in ``indoorloc pdr evaluate --json`` (``default_method``).
+DEFAULT_METHOD = "zupt_rts_swing_guard"
+
+#: Limits of :func:`gait_plausibility` (they flag, they never change the estimate). Calibrated in
+#: :mod:`indoorloc.experiments.pdr_low_motion` (the table is in docs/errors.md): no good run of
+#: the shared recordings is flagged, every synthetic failure is.
+#: - min_swing_s: a median swing shorter than this is no human gait [s] (good runs >= 0.66 s);
+#: - min_stride_m: a median stride shorter than this while the IMU shows walking [m];
+#: - min_path_per_rhythm_stride_m: path length / strides of the gyroscope's rhythm [m];
+#: - min_stride_count_ratio: detected strides / rhythm strides;
+#: - walking_energy_mps2: the IMU "shows walking" when the 95th percentile of ||f| - g| exceeds
+#:   this [m/s^2] and the rhythm's autocorrelation exceeds walking_rhythm_strength.
+HEALTH_LIMITS = {"min_swing_s": 0.15, "min_stride_m": 0.1, "min_path_per_rhythm_stride_m": 0.1,
+                 "min_stride_count_ratio": 0.5, "walking_energy_mps2": 0.3, "walking_rhythm_strength": 0.15}
+
+_GRAVITY_MPS2 = 9.81
+
+
+def detect_stance(recording: ImuRecording, **overrides: Any) -> Dict[str, Any]:
+    """:func:`indoorloc.pdr.zero_velocity` on a recording with :data:`ZUPT_DETECTOR` (keywords
+    override it) and the SHOE window and noise sds of this module. Returns its dict (stance,
+    threshold, guard_raised, guard_satisfied, low_motion_rule, stance fractions, report)."""
+    opts = dict(ZUPT_DETECTOR)
+    opts.update(overrides)
+    return _pdr.zero_velocity(recording.acc_mps2, recording.gyro_radps, recording.rate_hz, window=SHOE_WINDOW,
+                              sigma_acc_mps2=SHOE_SIGMA_ACC_MPS2, sigma_gyro_radps=SHOE_SIGMA_GYRO_RADPS, **opts)
+
+
+def gait_evidence(recording: ImuRecording, active_radps: float = 1.0, lo_s: float = 0.4,
+                  hi_s: float = 2.5) -> Dict[str, float]:
+    """What the IMU alone says about the gait, whatever the detector made of it.
+
+    - ``energy_mps2``: 95th percentile of ||f| - g| [m/s^2] (a foot at rest: noise, < 0.1;
+      walking: several m/s^2);
+    - ``active_s``: time from the first to the last sample whose angular rate exceeds
+      ``active_radps`` [s] (a swinging foot turns at 2-10 rad/s);
+    - ``period_s`` / ``strength``: the stride period, the lag (``lo_s`` to ``hi_s``) of the highest
+      local maximum of the autocorrelation of |omega| over that span, and its normalised height
+      (0..1; NaN / 0 when there is no peak);
+    - ``rhythm_strides``: ``active_s / period_s`` (0 without a rhythm).
+    """
+    acc = np.asarray(recording.acc_mps2, dtype=float)
+    w = np.linalg.norm(np.asarray(recording.gyro_radps, dtype=float), axis=1)
+    rate = float(recording.rate_hz)
+    energy = float(np.percentile(np.abs(np.linalg.norm(acc, axis=1) - _GRAVITY_MPS2), 95)) if acc.size else 0.0
+    active = np.flatnonzero(w > active_radps)
+    out = {"energy_mps2": energy, "active_s": 0.0, "period_s": float("nan"), "strength": 0.0, "rhythm_strides": 0.0}
+    if active.size < 2:
+        return out
+    a, b = int(active[0]), int(active[-1]) + 1
+    out["active_s"] = (b - a) / rate
+    x = w[a:b] - w[a:b].mean()
+    n = x.size
+    lo, hi = max(1, int(lo_s * rate)), min(n - 2, int(hi_s * rate))
+    if hi <= lo + 1 or not np.any(x):
+        return out
+    f = np.fft.rfft(x, 2 * n)
+    ac = np.fft.irfft(f * np.conj(f))[:n]
+    k = np.arange(lo, hi)
+    peaks = k[(ac[k] > ac[k - 1]) & (ac[k] >= ac[k + 1])]
+    if peaks.size == 0 or ac[0] <= 0:
+        return out
+    best = int(peaks[int(np.argmax(ac[peaks]))])
+    # unbiased: the lag-k sum has n - k terms
+    out["strength"] = float(ac[best] / ac[0] * n / (n - best))
+    out["period_s"] = best / rate
+    out["rhythm_strides"] = out["active_s"] / out["period_s"]
+    return out
+
+
+def gait_plausibility(health: Dict[str, Any], evidence: Dict[str, float], path_m: float, n_strides: int,
+                      limits: Dict[str, float] = HEALTH_LIMITS) -> List[str]:
+    """Reasons (one sentence each) why a foot-mounted PDR result cannot be the walk the IMU shows;
+    empty when plausible. ``health``: the EKF health dict (``swing_median_s``,
+    ``median_stride_m``, ``n_stance_phases``) with the detector's ``guard_satisfied``;
+    ``evidence``: :func:`gait_evidence`; ``path_m``: the estimate's 2-D path length [m];
+    ``n_strides``: strides counted. Limits: :data:`HEALTH_LIMITS`."""
+    reasons: List[str] = []
+    walking = (evidence["energy_mps2"] >= limits["walking_energy_mps2"]
+               and evidence["strength"] >= limits["walking_rhythm_strength"])
+    swing = float(health.get("swing_median_s", 0.0))
+    if int(health.get("n_stance_phases", 0)) >= 2 and swing < limits["min_swing_s"]:
+        reasons.append(f"the median swing lasts {swing:.3f} s (limit {limits['min_swing_s']} s): no human swing is "
+                       "that short, the stance detector has eaten the swings")
+    if not health.get("guard_satisfied", True):
+        reasons.append("the stance detector found no threshold with a plausible gait")
+    if walking:
+        stride = float(health.get("median_stride_m", 0.0))
+        if stride < limits["min_stride_m"]:
+            reasons.append(f"the median stride is {stride:.3f} m (limit {limits['min_stride_m']} m) while the "
+                           f"accelerometer shows walking ({evidence['energy_mps2']:.1f} m/s^2)")
+        rhythm = evidence["rhythm_strides"]
+        if rhythm > 0 and path_m / rhythm < limits["min_path_per_rhythm_stride_m"]:
+            reasons.append(f"the path ({path_m:.2f} m) is far below what the step rhythm implies ({rhythm:.0f} strides "
+                           f"of {evidence['period_s']:.2f} s: at least "
+                           f"{limits['min_path_per_rhythm_stride_m'] * rhythm:.1f} m)")
+        if rhythm > 0 and n_strides < limits["min_stride_count_ratio"] * rhythm:
+            reasons.append(f"{n_strides} strides counted where the step rhythm shows about {rhythm:.0f}")
+    return reasons
+
+
+def run_recommended(recording: ImuRecording, smooth: bool = True, **overrides: Any) -> Dict[str, Any]:
+    """The recommended pipeline on one recording: :func:`detect_stance`, the ZUPT EKF (+ RTS
+    smoother when ``smooth``) and :func:`indoorloc.pdr.count_strides`. Returns ``{"positions_m"
+    (N, 3) [m], "stride_indices" (S,), "stance" (N,), "detector" (the detector's dict without the
+    arrays), "health" (the EKF's health check, the detector threshold and stride counts, the gait
+    evidence, and ``implausible`` / ``reasons`` including :func:`gait_plausibility`)}``.
+    ``overrides`` go to :func:`detect_stance`."""
+    det = detect_stance(recording, **overrides)
+    stance = np.asarray(det["stance"], dtype=bool)
+    out = _pdr.zupt_ekf(recording.time_s, recording.acc_mps2, recording.gyro_radps, stance, smooth=smooth)
+    count = _pdr.count_strides(stance, recording.rate_hz)
+    positions = np.asarray(out["positions_m"], dtype=float)
+    strides = np.asarray(count["stride_indices"], dtype=np.int64)
+    health = dict(out["health"])
+    health.update({"shoe_threshold": float(det["threshold"]), "guard_raised": bool(det["guard_raised"]),
+                   "guard_satisfied": bool(det.get("guard_satisfied", True)),
+                   "low_motion_rule": bool(det.get("low_motion_rule", False)),
+                   "stride_median_swing_s": float(count["median_swing_s"]),
+                   "stride_median_stance_s": float(count["median_stance_s"]),
+                   "split_strides": int(count["n_split_strides"])})
+    evidence = gait_evidence(recording)
+    health.update({"gait_energy_mps2": evidence["energy_mps2"], "rhythm_period_s": evidence["period_s"],
+                   "rhythm_strength": evidence["strength"], "rhythm_strides": evidence["rhythm_strides"]})
+    extra = gait_plausibility(health, evidence, path_length(positions[:, :2]), int(strides.size))
+    if extra:
+        health["reasons"] = list(health.get("reasons", [])) + extra
+        health["implausible"] = True
+        health["report"] = str(health.get("report", "")).replace(": plausible", ": IMPLAUSIBLE") + "".join(
+            "; " + r for r in extra)
+    return {"positions_m": positions, "stride_indices": strides, "stance": stance,
+            "detector": {k: v for k, v in det.items() if k not in ("stance", "statistic")}, "health": health}

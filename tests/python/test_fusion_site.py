@@ -1,0 +1,318 @@
+"""indoorloc.fusion.Site: the site file (SQLite) built from survey walks, grown walk by walk,
+used to track walks; ``indoorloc site ...`` and ``indoorloc track``.
+
+Real walks of the shared site (one floor, a few walks, to stay fast); the tests skip with a
+reason when the shared data is absent."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import sqlite3
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+FLOOR = "F8"
+N_SURVEY = 4
+REPO = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture
+def floor_dir(shared_data) -> Path:
+    d = shared_data / "fusion" / "ilc2020_site2" / FLOOR
+    if not d.is_dir():
+        pytest.skip(f"shared site floor not found at {d}")
+    return d
+
+
+def _walk_paths(floor_dir: Path):
+    return sorted((floor_dir / "path_data_files").glob("*.txt"))
+
+
+def _survey(tmp: Path, floor_dir: Path, walks, kaggle: bool = False) -> Path:
+    """A survey folder with the given walk files: ILC 2020 layout (SITE/F8/path_data_files) or
+    Kaggle 2021 (ROOT/train/SITE/F8/*.txt, ROOT/metadata/SITE/F8/)."""
+    if kaggle:
+        root = tmp / "kaggle"
+        wdir, pdir = root / "train" / "site2" / FLOOR, root / "metadata" / "site2" / FLOOR
+    else:
+        root = tmp / "ilc"
+        wdir, pdir = root / FLOOR / "path_data_files", root / FLOOR
+    wdir.mkdir(parents=True)
+    pdir.mkdir(parents=True, exist_ok=True)
+    for name in ("geojson_map.json", "floor_info.json"):
+        (pdir / name).write_bytes((floor_dir / name).read_bytes())
+    for w in walks:
+        (wdir / w.name).symlink_to(w)
+    return root
+
+
+@pytest.fixture
+def built(tmp_path, floor_dir):
+    from indoorloc.fusion.site import Site
+
+    paths = _walk_paths(floor_dir)
+    survey = _survey(tmp_path, floor_dir, paths[:N_SURVEY])
+    site = Site.build(survey, tmp_path / "site.db")
+    return site, paths
+
+
+def test_round_trip_equals_in_memory_models(built, floor_dir):
+    """A site saved and re-opened tracks a held-out walk exactly as the models built in memory
+    from the same walks (fusion.site_model, what fusion evaluate uses)."""
+    from indoorloc.pdr import handheld as ph
+    from indoorloc import wifi_fixes as wfx
+    from indoorloc.fusion import GridTracker, site_model
+    from indoorloc.fusion.site import Site
+    from indoorloc.io import load_floor_plan
+    from indoorloc.io.ilc2020 import read_ilc_walk
+
+    site, paths = built
+    walks = [read_ilc_walk(p) for p in paths[:N_SURVEY]]
+    steps = [ph.handheld_steps(w) for w in walks]
+    settings = site_model.TrackSettings()
+    cal = site_model.calibrate_floor(walks, steps)
+    db = site_model.build_fingerprints(walks, steps, 8, settings.fixes)
+    plan = load_floor_plan(floor_dir / "geojson_map.json", floors=[8], origin_lon_lat="outline_sw")
+    tracker = GridTracker(plan, site_model.floor_grid_options(settings, cal))
+    test = read_ilc_walk(paths[N_SURVEY + 2])
+    r = site_model.run_default(tracker, site_model.tracker_steps(ph.handheld_steps(test), cal, settings),
+                               wfx.fixes_for_walk(test, db))
+    reopened = Site.open(site.path)
+    track = reopened.track(test, floor=FLOOR)
+    np.testing.assert_array_equal(track.xy_m, r["smoothed_m"])
+    np.testing.assert_array_equal(track.covariance_m2, r["smoothed_covariance_m2"])
+    assert track.errors_m is not None and track.errors_m.size == test.waypoint_t_s.size
+    assert np.all(np.isfinite(track.errors_m))
+    # The floor's header names it: the default floor is the header's.
+    np.testing.assert_array_equal(reopened.track(test).xy_m, track.xy_m)
+
+
+def test_add_equals_build_with_the_walk(tmp_path, floor_dir):
+    from indoorloc.fusion.site import Site
+    from indoorloc.io.ilc2020 import read_ilc_walk
+
+    paths = _walk_paths(floor_dir)
+    small = Site.build(_survey(tmp_path / "a", floor_dir, paths[:N_SURVEY - 1]), tmp_path / "small.db")
+    assert small.add([paths[N_SURVEY - 1]]) == [paths[N_SURVEY - 1].stem]
+    full = Site.build(_survey(tmp_path / "b", floor_dir, paths[:N_SURVEY]), tmp_path / "full.db")
+    a, b = Site.open(small.path).floor_models(FLOOR), full.floor_models(FLOOR)
+    np.testing.assert_array_equal(a.database.rss_dbm, b.database.rss_dbm)
+    np.testing.assert_array_equal(a.database.positions_m, b.database.positions_m)
+    assert a.database.bssids == b.database.bssids
+    np.testing.assert_array_equal(a.database.ap_ratio, b.database.ap_ratio)
+    assert (a.calibration.k, a.calibration.yaw_offset_rad) == (b.calibration.k, b.calibration.yaw_offset_rad)
+    test = read_ilc_walk(paths[N_SURVEY + 1])
+    np.testing.assert_array_equal(Site.open(small.path).track(test).xy_m, full.track(test).xy_m)
+    # A walk already in the site is refused, and the file keeps its content.
+    with pytest.raises(ValueError, match="already in the site"):
+        small.add([paths[0]])
+    assert len(Site.open(small.path).info()["walks"]) == N_SURVEY
+
+
+def test_leave_one_walk_out_and_auto_floor(built):
+    site, paths = built
+    lowo = site.leave_one_walk_out(FLOOR)
+    assert lowo["walks"] == N_SURVEY and not lowo["missing"]
+    assert lowo["points"].shape == (lowo["stats"]["n_waypoints"], 3) and np.all(np.isfinite(lowo["points"]))
+    cov = site.coverage(FLOOR)
+    assert 0 < cov["fraction_within_5m"] < 1 and cov["fingerprints_m"].shape[1] == 2
+    auto = site.track(paths[-1], floor="auto")
+    assert auto.floor == FLOOR and auto.floor_probabilities == {FLOOR: pytest.approx(1.0)}
+    np.testing.assert_array_equal(auto.xy_m, site.track(paths[-1], floor=FLOOR).xy_m)
+    filt = site.track(paths[-1], smooth=False)
+    assert not filt.smoothed and filt.xy_m.shape == auto.xy_m.shape
+
+
+def test_kaggle_layout(tmp_path, floor_dir):
+    from indoorloc.fusion.site import Site
+
+    paths = _walk_paths(floor_dir)[:2]
+    site = Site.build(_survey(tmp_path, floor_dir, paths, kaggle=True), tmp_path / "k.db")
+    info = site.info()
+    assert list(info["floors"]) == [FLOOR]
+    assert info["floors"][FLOOR]["walks"] == 2 and info["floors"][FLOOR]["fingerprints"] > 0
+    assert info["meta"]["format_version"] == "1"
+    assert [w["id"] for w in info["walks"]] == [p.stem for p in paths]
+
+
+def test_bad_files_give_clear_errors(built, tmp_path):
+    from indoorloc.fusion.site import Site
+    from indoorloc.fusion.site_store import SiteFileError
+
+    site, _ = built
+    text = tmp_path / "notes.db"
+    text.write_text("not a database\n")
+    with pytest.raises(SiteFileError, match="notes.db: not an SQLite file"):
+        Site.open(text)
+    foreign = tmp_path / "foreign.db"
+    con = sqlite3.connect(foreign)
+    con.execute("CREATE TABLE t (x)")
+    con.commit()
+    con.close()
+    with pytest.raises(SiteFileError, match="foreign.db: an SQLite file of another application"):
+        Site.open(foreign)
+    old = tmp_path / "old.db"
+    old.write_bytes(site.path.read_bytes())
+    con = sqlite3.connect(old)
+    con.execute("PRAGMA user_version = 99")
+    con.close()
+    with pytest.raises(SiteFileError, match="old.db: format version 99"):
+        Site.open(old)
+    cut = tmp_path / "cut.db"
+    data = site.path.read_bytes()
+    cut.write_bytes(data[: len(data) // 2])
+    with pytest.raises(SiteFileError, match="cut.db: damaged"):
+        Site.open(cut).floor_models(FLOOR)
+    with pytest.raises(SiteFileError, match="missing.db: not found"):
+        Site.open(tmp_path / "missing.db")
+
+
+def test_unknown_floor_and_walk_without_waypoints(built, tmp_path, floor_dir):
+    from indoorloc.fusion.site import Site
+    from indoorloc.io.ilc2020 import read_ilc_walk
+
+    site, paths = built
+    with pytest.raises(ValueError, match="'F3' is not in site"):
+        site.track(paths[-1], floor="F3")
+    other = read_ilc_walk(next((floor_dir.parent / "F1" / "path_data_files").glob("*.txt")))
+    with pytest.raises(ValueError, match=r"its floor 'F1' is not in site .*floor='auto'"):
+        site.track(other)
+    # A survey walk without waypoints: build refuses, naming the file; the old site stays.
+    bare = tmp_path / "bare" / FLOOR / "path_data_files"
+    bare.mkdir(parents=True)
+    for name in ("geojson_map.json", "floor_info.json"):
+        (bare.parent / name).write_bytes((floor_dir / name).read_bytes())
+    lines = paths[0].read_text().splitlines(keepends=True)
+    (bare / "nowaypoints.txt").write_text("".join(l for l in lines if "TYPE_WAYPOINT" not in l))
+    before = site.path.read_bytes()
+    with pytest.raises(ValueError, match=r"nowaypoints.txt: 0 waypoint\(s\); a survey walk needs at least 2"):
+        Site.build(tmp_path / "bare", site.path)
+    assert site.path.read_bytes() == before
+    with pytest.raises(ValueError, match="nowaypoints.txt: 0 waypoint"):
+        site.add([bare / "nowaypoints.txt"])
+    # An unreadable walk file is skipped with a warning and listed (the loader rule), not fatal.
+    from indoorloc.io.errors import RecordingWarning
+
+    good = tmp_path / "good" / FLOOR / "path_data_files"
+    good.mkdir(parents=True)
+    for name in ("geojson_map.json", "floor_info.json"):
+        (good.parent / name).write_bytes((floor_dir / name).read_bytes())
+    (good / paths[0].name).symlink_to(paths[0])
+    (good / paths[1].name).symlink_to(paths[1])
+    (good / "broken.txt").write_text("1574231797021\tTYPE_ACCELEROMETER\tnot-a-number\t1\t2\t3\n")
+    with pytest.warns(RecordingWarning, match="broken.txt skipped"):
+        g = Site.build(tmp_path / "good", tmp_path / "good.db")
+    assert "broken.txt" in g.info()["meta"]["skipped_walks"] and len(g.info()["walks"]) == 2
+    # ... but it can be tracked (no errors printed for it).
+    track = site.track(bare / "nowaypoints.txt")
+    assert track.errors_m is None and track.xy_m.shape[1] == 2
+
+
+def test_grow_places_walks_without_waypoints(built, tmp_path):
+    """site grow: a walk's fingerprints placed by the track where confident, stored as 'grown' at
+    the given weight; the grown site tracks; bad arguments and a failing walk leave the file as it was."""
+    from indoorloc.fusion.site import Site
+
+    site, paths = built
+    walk = paths[N_SURVEY + 3]
+    bare = tmp_path / "bare.txt"
+    bare.write_text("".join(l for l in walk.read_text().splitlines(keepends=True) if "TYPE_WAYPOINT" not in l))
+    before = site.info()
+    with pytest.raises(ValueError, match="argument 'weight'"):
+        site.grow([bare], weight=0.0)
+    with pytest.raises(ValueError, match="already in the site"):
+        site.grow([bare, paths[0]])
+    assert site.info()["walks"] == before["walks"]
+    added = site.grow([bare], max_sd_m=1e6, weight=0.25)
+    assert list(added) == ["bare"] and added["bare"] > 0
+    info = Site.open(site.path).info()
+    assert info["walks"][-1]["kind"] == "grown" and info["walks"][-1]["weight"] == 0.25
+    assert info["floors"][FLOOR]["fingerprints"] == before["floors"][FLOOR]["fingerprints"] + added["bare"]
+    db = Site.open(site.path).floor_models(FLOOR).database
+    assert db.weights is not None and set(np.unique(db.weights)) == {0.25, 1.0}
+    # A strict threshold places fewer fingerprints than a loose one.
+    strict = tmp_path / "strict.db"
+    strict.write_bytes(site.path.read_bytes())
+    bare2 = tmp_path / "bare2.txt"
+    bare2.write_text(bare.read_text())
+    assert Site.open(strict).grow([bare2], max_sd_m=0.5)["bare2"] < added["bare"]
+    assert np.all(np.isfinite(Site.open(site.path).track(paths[-1]).xy_m))
+
+
+_KILLED_ADD = """
+import sys, time
+from pathlib import Path
+from indoorloc.fusion.site import Site
+site = Site.open(sys.argv[1])
+def hold(walk_id):  # inside the transaction, after the first walk's rows are written
+    Path(sys.argv[2]).write_text(walk_id)
+    time.sleep(60)
+site.add([Path(p) for p in sys.argv[3:]], progress=hold)
+"""
+
+
+def test_killed_add_leaves_the_old_content(built, tmp_path):
+    from indoorloc.fusion.site import Site
+
+    site, paths = built
+    before = site.info()
+    flag = tmp_path / "inside"
+    env = dict(os.environ, PYTHONPATH=str(REPO / "python") + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    proc = subprocess.Popen([sys.executable, "-c", _KILLED_ADD, str(site.path), str(flag),
+                             str(paths[N_SURVEY]), str(paths[N_SURVEY + 1])], env=env)
+    try:
+        deadline = time.monotonic() + 120
+        while not flag.exists():
+            assert proc.poll() is None, "the add process ended before writing"
+            assert time.monotonic() < deadline, "the add process did not reach the write"
+            time.sleep(0.1)
+        assert Path(str(site.path) + "-journal").exists()  # mid-transaction
+    finally:
+        proc.send_signal(signal.SIGKILL)
+        proc.wait()
+    after = Site.open(site.path)
+    assert after.info()["walks"] == before["walks"]
+    assert after.info()["floors"] == before["floors"]
+    np.testing.assert_array_equal(after.track(paths[-1]).xy_m, site.track(paths[-1]).xy_m)
+
+
+def test_cli_build_info_track(tmp_path, floor_dir, capsys):
+    from indoorloc.cli import main
+
+    paths = _walk_paths(floor_dir)
+    survey = _survey(tmp_path, floor_dir, paths[:3])
+    db = tmp_path / "s.db"
+    assert main(["--quiet", "site", "build", str(survey), "-o", str(db), "--coverage", str(tmp_path / "cov")]) == 0
+    assert (tmp_path / "cov" / f"coverage_{FLOOR}.png").stat().st_size > 0
+    assert "| F8 | 3 |" in capsys.readouterr().out
+    assert main(["site", "info", str(db), "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    assert info["floors"][FLOOR]["walks"] == 3
+    out = tmp_path / "t.json"
+    assert main(["--quiet", "track", str(paths[5]), "--site", str(db), "-o", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "error at" in printed and "mean" in printed and "p90" in printed
+    doc = json.loads(out.read_text())
+    assert doc["format"] == "indoorloc.track" and doc["version"] == 1
+    w = doc["walks"][0]
+    assert w["floor"] == FLOOR and len(w["t_s"]) == len(w["x_m"]) == len(w["sd_x_m"]) > 0
+    assert w["errors"]["n_waypoints"] == len(w["waypoints"]["t_s"])
+    gj = tmp_path / "t.geojson"
+    assert main(["--quiet", "track", str(paths[5]), "--site", str(db), "--no-smooth", "-o", str(gj)]) == 0
+    feat = json.loads(gj.read_text())["features"][0]
+    lon, lat = np.asarray(feat["geometry"]["coordinates"]).T
+    assert 120.0 < lon.min() < lon.max() < 120.2 and 30.2 < lat.min() < lat.max() < 30.4
+    assert feat["properties"]["smoothed"] is False and feat["properties"]["floor"] == FLOOR
+    csv = tmp_path / "t.csv"
+    assert main(["--quiet", "track", str(paths[5]), "--site", str(db), "-o", str(csv)]) == 0
+    head = csv.read_text().splitlines()
+    assert head[0].startswith("walk,t_s,unix_ms,x_m,y_m,floor,sd_x_m,sd_y_m,floor_probability")
+    assert main(["--quiet", "track", str(paths[5]), "--site", str(db), "-o", str(tmp_path / "t.txt")]) == 2
+    assert "extension" in capsys.readouterr().err
