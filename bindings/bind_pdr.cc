@@ -291,7 +291,7 @@ is accepted, the low-motion rule climbs again ignoring stance shorter than
 low_motion_min_stance_s [s]; failing that the most regular plausible rung is used and
 guard_satisfied is False.
 "stance_guard": raised to the min_stance_fraction-quantile of the statistic over the walking
-span. "fixed": statistic < threshold. Returns a dict: stance (N,) bool, statistic (N,),
+span. "fixed": statistic < threshold. Returns a ZeroVelocityOutput (reads as a dict): stance (N,) bool, statistic (N,),
 threshold (used), base_threshold, guard_raised, guard_satisfied, low_motion_rule, flicker_s [s],
 ladder_rungs, max_swing_s,
 median_swing_s [s], stance_fraction, walking_stance_fraction [0..1], walking_span, report.)doc");
@@ -314,7 +314,7 @@ Strides of the instrumented foot from stance flags (N,) sampled at rate_hz [Hz] 
 stance runs shorter than min_stance_s [s] inside a swing are flicker; swing runs shorter than
 max(min_swing_s [s], min_swing_fraction x the recording's median swing) inside a stance are
 flicker; a swing longer than long_swing_factor x the median swing (0 disables) counts as
-round(length / median) strides. Returns a dict: stride_indices (S,) int64 stance onsets,
+round(length / median) strides. Returns a StrideCountOutput (reads as a dict): stride_indices (S,) int64 stance onsets,
 cleaned_stance (N,) bool, n_strides, n_flicker_stances, n_flicker_swings, n_split_strides,
 median_swing_s, median_stance_s [s], report.)doc");
 }
@@ -404,14 +404,14 @@ calibrate_weinberg_k.)doc");
         },
         py::arg("features"), py::arg("lengths_m"), R"doc(
 Least-squares Weinberg K = sum(f L) / sum(f^2) from bounce features f (M,) and known stride
-lengths L (M,) [m]. Returns a dict: k, rms_residual_m, n_strides, report.)doc");
+lengths L (M,) [m]. Returns a WeinbergCalibration (reads as a dict): k, rms_residual_m, n_strides, report.)doc");
   m.def("calibrate_weinberg_k_from_distance", [](const py::object& features, double distance_m) {
           VectorArg f = ToVector(features, "features");
           return pdr::CalibrateWeinbergKFromDistance(f.map, distance_m);
         },
         py::arg("features"), py::arg("distance_m"), R"doc(
 Weinberg K = D / sum(f) from the bounce features (M,) of a walk of known length D [m].
-Returns a dict: k, rms_residual_m (0), n_strides, report.)doc");
+Returns a WeinbergCalibration (reads as a dict): k, rms_residual_m (0), n_strides, report.)doc");
   m.def("steps_magnetometer", [](const py::object& mag, double rate_hz, int order, double highpass_hz, double fraction,
                                  double median_window_s, double min_swing_s, double min_rest_s) {
           MatrixArg g = ToMatrix(mag, "mag", -1, 3);
@@ -474,7 +474,7 @@ static void BindAttitudeAndPositions(py::module_& m) {
 Mahony complementary attitude filter (gyro + gravity, magnetometer optional, heading-only and
 gated by a disturbance test on the field norm and dip). time_s (N,) [s], acc_mps2 (N, 3) [m/s^2],
 gyro_radps (N, 3) [rad/s], mag (N, 3) any unit or None. Gains kp, kp_mag [rad/s], ki [rad/s^2].
-Returns a dict: quaternions_wxyz (N, 4) body -> navigation (z up; x = initial heading, or
+Returns an AttitudeOutput (reads as a dict): quaternions_wxyz (N, 4) body -> navigation (z up; x = initial heading, or
 magnetic north with mag), gyro_bias_radps (N, 3), mag_used (N,) bool, mag_rejected,
 reference_field_norm, reference_dip_rad, seconds.)doc");
   m.def("stance_headings", [](const py::object& quaternions, const py::object& step_indices) {
@@ -497,7 +497,7 @@ Paper 002 eq. 8: P_k = P_{k-1} + SL_k (cos th_k, sin th_k) from stride lengths (
 headings (M,) [rad], starting at start_xy [m]. Each step carries the 3 x 3 covariance of
 (x [m], y [m], heading error [rad]) under a heading random walk (sigma_heading_step_rad per step)
 and stride-length noise (sigma_stride_length_m + stride_length_sd_fraction x SL). Returns a
-dict: positions_m (M, 2), covariances (M, 3, 3), stride_lengths_m, headings_rad.)doc");
+StepTrack (reads as a dict): positions_m (M, 2), covariances (M, 3, 3), stride_lengths_m, headings_rad.)doc");
   m.def("positions_from_increments", [](const py::object& inc, const py::object& start, double sd_sl, double sd_frac,
                                         double sd_psi, double sd_psi0) {
           MatrixArg d = ToMatrix(inc, "increments_m");
@@ -529,8 +529,8 @@ the per-step covariance of positions_from_strides (SL = |dP_xy|, heading = atan2
 Paper 002 §IV.B (steps 1-5, eq. 5-6): rotate acc_mps2 (N, 3) [m/s^2] by quaternions_wxyz (N, 4)
 (body -> navigation, z up), remove gravity, integrate from the first step, remove the drift by
 the mean velocity over +-window_s [s] around each step sample, linearly interpolated between
-steps, and sum each step. step_indices: M >= 2 strictly increasing stance samples. Returns a
-dict: increments_m (M-1, 3), stride_lengths_m (M-1,) (eq. 6), velocities_mps (N, 3).)doc");
+steps, and sum each step. step_indices: M >= 2 strictly increasing stance samples. Returns an
+InsZuptIncrements (reads as a dict): increments_m (M-1, 3), stride_lengths_m (M-1,) (eq. 6), velocities_mps (N, 3).)doc");
 }
 
 /// The ZUPT-aided INS.
@@ -577,9 +577,9 @@ Zero-velocity-aided strapdown INS (9-state error-state EKF, OpenShoe/PyShoe styl
 recording: time_s (N,) [s], acc_mps2 and gyro_radps (N, 3) sensor frame, stance (N,) bool.
 smooth=True adds the RTS smoother (positions_m smoothed, filtered_positions_m the EKF's).
 sigma_stance_heading_rad > 0 adds a stance heading update (yaw held at its stance-onset value).
-Returns a dict: positions_m (N, 3) (z up, start at 0, initial yaw 0), velocities_mps (N, 3),
+Returns a ZuptEkfOutput (reads as a dict): positions_m (N, 3) (z up, start at 0, initial yaw 0), velocities_mps (N, 3),
 headings_rad (N,), quaternions_wxyz (N, 4) body -> nav, position_sd_m (N, 3), seconds, and
-health: the health check (ZuptEkfSummary) as a dict: stance_fraction and walking_stance_fraction
+health: the health check (a ZuptEkfSummary, read like a dict): stance_fraction and walking_stance_fraction
 [0..1], n_stance_phases, swing_median_s / swing_max_s [s], speed_at_stance_median_mps /
 speed_at_stance_max_mps (|v| the filter had integrated when each stance began, before its update)
 [m/s], speed_at_stance_rise (last third / first third of the onsets), longest_stride_m and
