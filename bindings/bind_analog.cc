@@ -90,7 +90,8 @@ py::array_t<double> DensePosterior(const analog::SparsePosteriors& p, int m) {
 
 }  // namespace
 
-void BindAnalog(py::module_& m) {
+/// The catalog of analogs (states and their successors).
+static void BindCatalog(py::module_& m) {
   py::class_<Catalog, std::shared_ptr<Catalog>>(m, "Catalog", R"doc(
 Catalog of (analog, successor) pairs from historical trajectories (paper 001, eq. 2 and 6).
 
@@ -134,7 +135,10 @@ stride : int
            },
            py::arg("queries"), py::arg("k"),
            "Exact K nearest analogs of queries (Q, D): (indices into `analogs` (Q, K), squared distances (Q, K)).");
+}
 
+/// The analog HMM and its smoother.
+static void BindAnalogHmm(py::module_& m) {
   py::class_<AnalogHMM, std::shared_ptr<AnalogHMM>>(m, "AnalogHMM", R"doc(
 Analog HMM (paper 001 §2.2): kNN transitions (eq. 4, adaptive σ) and Gaussian observations of
 selected state components with covariance R (eq. 5).
@@ -175,8 +179,11 @@ successor_rule : {"catalog", "incremental"}
              py::gil_scoped_release release;
              return std::make_shared<AnalogHMM>(catalog, o);
            }),
-           py::arg("catalog"), py::arg("k") = 10, py::arg("observed") = std::vector<int>{0}, py::arg("R"),
-           py::arg("sigma_scale") = 1.0, py::arg("successor_rule") = "catalog")
+           py::arg("catalog"), py::arg("k") = AnalogHmmOptions().k, py::arg("observed") = std::vector<int>{0}, py::arg("R"),
+           py::arg("sigma_scale") = AnalogHmmOptions().sigma_scale,
+           py::arg("successor_rule") = AnalogHmmOptions().successor_rule == analog::SuccessorRule::kCatalog
+                                           ? "catalog"
+                                           : "incremental")
       .def_property_readonly("transitions_next", [](const AnalogHMM& h) {
         const auto& t = h.transitions();
         return Eigen::Map<const Eigen::Matrix<int, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(t.next.data(), t.num_states, t.k);
@@ -217,8 +224,10 @@ successor_rule : {"catalog", "incremental"}
              d["seconds"] = out.seconds;
              return d;
            },
-           py::arg("observations"), py::arg("beam") = py::none(), py::arg("beam_unobserved") = 0,
-           py::arg("max_dropped_mass") = 1.0, py::arg("beam_max") = 0, py::arg("initial") = py::none(), R"doc(
+           py::arg("observations"), py::arg("beam") = py::none(),
+           py::arg("beam_unobserved") = analog::SmoothOptions().beam_unobserved,
+           py::arg("max_dropped_mass") = analog::SmoothOptions().max_dropped_mass,
+           py::arg("beam_max") = analog::SmoothOptions().beam_max, py::arg("initial") = py::none(), R"doc(
 Forward-backward on observations (T, m) (NaN = missing). beam=None: exact; beam=N: truncated
 (paper §2.3); beam_unobserved: a wider beam at steps with no observation (0: same as beam);
 max_dropped_mass: mass-adaptive beam, keep more than N states (most likely first) until at most
@@ -242,7 +251,10 @@ log_likelihood, dropped_mass (T,), support_size (T,), seconds.)doc")
              return d;
            },
            py::arg("observations"), py::arg("beam") = py::none(), "MAP state sequence (Viterbi): dict indices (T,), states (T, D).");
+}
 
+/// forward_backward and viterbi on explicit sparse transitions.
+static void BindSparseHmmAlgorithms(py::module_& m) {
   m.def("forward_backward", [](const py::object& next_idx, const py::object& prob, const py::object& log_emission,
                                const py::object& initial, const py::object& beam) {
           const GenericHmm h(next_idx, prob, log_emission, initial, beam);
@@ -273,6 +285,12 @@ dense posterior (T, M), filtering (T, M), log_likelihood, dropped_mass (T,), sec
         },
         py::arg("next_idx"), py::arg("prob"), py::arg("log_emission"), py::arg("initial"), py::arg("beam") = py::none(),
         "MAP path (T,) and its log-probability for an HMM given as in forward_backward.");
+}
+
+void BindAnalog(py::module_& m) {
+  BindCatalog(m);
+  BindAnalogHmm(m);
+  BindSparseHmmAlgorithms(m);
 }
 
 }  // namespace indoorloc::bindings

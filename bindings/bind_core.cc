@@ -9,6 +9,7 @@
 #include "indoorloc/core/interrupt.h"
 #include "indoorloc/core/validate.h"
 #include "numpy_args.h"
+#include "options_binding.h"
 
 namespace indoorloc::bindings {
 namespace {
@@ -52,7 +53,8 @@ py::array_t<double> DrawMany(RandomStream& rng, py::ssize_t size, const char* na
 
 }  // namespace
 
-void BindCore(py::module_& m) {
+/// Seeds and the counter-based random streams.
+static void BindRandomStreams(py::module_& m) {
   m.def("derive_seed", &DeriveSeed, py::arg("seed"), py::arg("stream"),
         "Seed of stream `stream` derived from `seed` (SplitMix64 hash); both are uint64.");
 
@@ -86,7 +88,10 @@ pairs are independent; the same pair always gives the same numbers on every plat
            }, py::arg("n"), py::arg("size"), "Array of `size` uniform integers in [0, n).")
       .def("split", &RandomStream::Split, py::arg("child"),
            "An independent child stream derived from this one (this stream advances one draw).");
+}
 
+/// Log-weight arithmetic: log-sum-exp, normalisation, ESS.
+static void BindLogWeights(py::module_& m) {
   m.def("log_sum_exp", [](const py::object& log_weights) {
           // C++ validates log-weights itself (NaN, +inf, all -inf), naming the entry.
           VectorArg lw = ToVector(log_weights, "log_weights", -1, Finiteness::kAny);
@@ -110,7 +115,10 @@ Normalise log-weights. Returns ``(normalized_log_weights, log_normalizer)`` wher
           return EffectiveSampleSize(lw.map);
         }, py::arg("log_weights"),
         "Effective sample size (sum w)^2 / sum w^2 of unnormalised log-weights, in [1, N].");
+}
 
+/// Resampling schemes, adaptive resampling and its options.
+static void BindResampling(py::module_& m) {
   m.def("resample", [](const py::object& log_weights, const std::string& scheme,
                        const py::object& rng, int num_out) {
           // C++ validates log-weights itself (NaN, +inf, all -inf), naming the entry.
@@ -170,22 +178,15 @@ Offspring counts of `n_runs` independent resamplings, run r using stream (seed, 
 Returns an (n_runs, N) int64 array. The result depends only on the seed, never on n_threads
 (0 = all cores). Used to check unbiasedness (mean count = N w) and compare scheme variances.)doc");
 
-  py::class_<ResamplingOptions>(m, "ResamplingOptions",
-                                "Options of adaptive resampling (resample when ESS < ess_threshold * N).")
-      .def(py::init([](const std::string& scheme, double ess_threshold) {
-             ResamplingOptions o;
-             o.scheme = ParseResamplingScheme(scheme);
-             o.ess_threshold = ess_threshold;
-             ValidateOptions(o);
-             return o;
-           }), py::arg("scheme") = "systematic", py::arg("ess_threshold") = 0.5)
+  py::class_<ResamplingOptions> resampling_options(
+      m, "ResamplingOptions",
+      "Options of adaptive resampling (resample when ESS < ess_threshold * N); fields by keyword.");
+  resampling_options
       .def_property("scheme", [](const ResamplingOptions& o) { return std::string(ToString(o.scheme)); },
-                    [](ResamplingOptions& o, const std::string& s) { o.scheme = ParseResamplingScheme(s); })
-      .def_readwrite("ess_threshold", &ResamplingOptions::ess_threshold)
-      .def("__repr__", [](const ResamplingOptions& o) {
-        return "ResamplingOptions(scheme='" + std::string(ToString(o.scheme)) +
-               "', ess_threshold=" + std::to_string(o.ess_threshold) + ")";
-      });
+                    [](ResamplingOptions& o, const std::string& s) { o.scheme = ParseResamplingScheme(s); },
+                    "'multinomial', 'stratified', 'systematic' or 'residual'.")
+      .def_readwrite("ess_threshold", &ResamplingOptions::ess_threshold, "Resample when ESS < this * N.");
+  BindOptionsProtocol(resampling_options, "ResamplingOptions", {"scheme", "ess_threshold"});
 
   py::class_<ResamplingSummary>(m, "ResamplingSummary", "What one adaptive resampling step did.")
       .def_readonly("resampled", &ResamplingSummary::resampled)
@@ -213,6 +214,12 @@ Adaptive resampling step of a particle filter (paper 000, eq. 14).
 
 Returns ``(ancestors, log_weights, summary)``: ancestors (N,) int64 (identity if no resampling),
 the normalised (or reset to uniform) log-weights (N,), and a ResamplingSummary.)doc");
+}
+
+void BindCore(py::module_& m) {
+  BindRandomStreams(m);
+  BindLogWeights(m);
+  BindResampling(m);
 }
 
 }  // namespace indoorloc::bindings

@@ -15,6 +15,7 @@
 #include "indoorloc/core/validate.h"
 #include "indoorloc/fusion/floor_plan.h"
 #include "numpy_args.h"
+#include "options_binding.h"
 
 namespace indoorloc::bindings {
 
@@ -91,7 +92,10 @@ num_threads : int, default 1
 
 }  // namespace
 
-void BindFusionFloorPlan(py::module_& m) {
+static void BindFloorPlanQueries(py::class_<FloorPlan>& floor_plan);
+
+/// One floor's outlines, obstacles and walls as given.
+static void BindFloorGeometry(py::module_& m) {
   py::class_<FloorGeometry>(m, "FloorGeometry", R"doc(
 The geometry of one floor, in metres in the floor frame.
 
@@ -145,80 +149,30 @@ is a wall for ``FloorPlan.crosses_wall``.)doc")
           },
           "Wall segments (W, 4) rows (x0, y0, x1, y1) [m] (a copy).")
       .def("__repr__", &GeometryRepr);
+}
 
-  py::class_<FloorPlanOptions>(m, "FloorPlanOptions", R"doc(
-Options of the floor plan's index.
+/// Options of the floor plan's index.
+static void BindFloorPlanOptions(py::module_& m) {
+  py::class_<FloorPlanOptions> floor_plan_options(m, "FloorPlanOptions", R"doc(
+Options of the floor plan's index. Set fields by keyword: ``FloorPlanOptions(cell_size_m=0.5)``;
+defaults from ``FloorPlanOptions().to_dict()``; ``replace``, equality and pickling as for every
+Options class.)doc");
+  floor_plan_options
+      .def_readwrite("cell_size_m", &FloorPlanOptions::cell_size_m,
+                     "Side of the grid's square cells [m]; <= 0 chooses it per floor so that a cell holds "
+                     "about target_edges_per_cell edges on average, bounded to [0.25, 1] m and to max_cells.")
+      .def_readwrite("target_edges_per_cell", &FloorPlanOptions::target_edges_per_cell,
+                     "Mean edges per cell aimed at by the automatic cell size.")
+      .def_readwrite("max_cells", &FloorPlanOptions::max_cells, "Limit of a floor's grid cells.")
+      .def_readwrite("check_self_intersection", &FloorPlanOptions::check_self_intersection,
+                     "Reject rings whose edges cross each other (one indexed pass at construction).");
+  BindOptionsProtocol(floor_plan_options, "FloorPlanOptions",
+                      {"cell_size_m", "target_edges_per_cell", "max_cells", "check_self_intersection"});
+}
 
-Parameters
-----------
-cell_size_m : float, default 0
-    Side of the grid's square cells [m]; <= 0 chooses it per floor so that a cell holds about
-    ``target_edges_per_cell`` edges on average, bounded to [0.25, 1] m (a pedestrian step then
-    visits one to three cells) and to ``max_cells`` cells.
-target_edges_per_cell : float, default 2
-max_cells : int, default 4000000
-check_self_intersection : bool, default True
-    Reject rings whose edges cross each other (one indexed pass at construction).)doc")
-      .def(py::init([](double cell_size_m, double target_edges_per_cell, int max_cells,
-                       bool check_self_intersection) {
-             FloorPlanOptions o;
-             o.cell_size_m = cell_size_m;
-             o.target_edges_per_cell = target_edges_per_cell;
-             o.max_cells = max_cells;
-             o.check_self_intersection = check_self_intersection;
-             ValidateOptions(o);
-             return o;
-           }),
-           py::arg("cell_size_m") = 0.0, py::arg("target_edges_per_cell") = 2.0,
-           py::arg("max_cells") = 4'000'000, py::arg("check_self_intersection") = true)
-      .def_readwrite("cell_size_m", &FloorPlanOptions::cell_size_m)
-      .def_readwrite("target_edges_per_cell", &FloorPlanOptions::target_edges_per_cell)
-      .def_readwrite("max_cells", &FloorPlanOptions::max_cells)
-      .def_readwrite("check_self_intersection", &FloorPlanOptions::check_self_intersection)
-      .def("__repr__", [](const FloorPlanOptions& o) {
-        std::ostringstream out;
-        out << "FloorPlanOptions(cell_size_m=" << o.cell_size_m
-            << ", target_edges_per_cell=" << o.target_edges_per_cell
-            << ", max_cells=" << o.max_cells << ", check_self_intersection="
-            << (o.check_self_intersection ? "True" : "False") << ")";
-        return out.str();
-      });
-
-  // pybind11 copies docstrings; these are assembled once here.
-  static const std::string is_walkable_doc = std::string(R"doc(
-Whether points are walkable (inside an outline and inside no obstacle).
-
-Parameters
-----------
-points_m : (Q, 2) float array [m])doc") + kBatchNote + R"doc(
-
-Returns
--------
-(Q,) bool array)doc";
-  static const std::string crosses_wall_doc = std::string(R"doc(
-Whether steps p -> q intersect or touch any wall edge (exact predicates). The ends themselves
-are not tested for walkability.
-
-Parameters
-----------
-segments_m : (Q, 4) float array [m]
-    Rows (x0, y0, x1, y1).)doc") + kBatchNote + R"doc(
-
-Returns
--------
-(Q,) bool array)doc";
-  static const std::string distance_doc = std::string(R"doc(
-Euclidean distance [m] from points to the nearest wall edge (ring edge or wall segment).
-
-Parameters
-----------
-points_m : (Q, 2) float array [m])doc") + kBatchNote + R"doc(
-
-Returns
--------
-(Q,) float array [m])doc";
-
-  py::class_<FloorPlan>(m, "FloorPlan", R"doc(
+/// FloorPlan: construction, floors and their geometry, then its queries.
+static void BindFloorPlan(py::module_& m) {
+  py::class_<FloorPlan> floor_plan(m, "FloorPlan", R"doc(
 A building's walkable space, floor by floor, with indexed geometric queries: is a point walkable,
 does a step cross a wall, how far is the nearest wall. Immutable; queries release the GIL and
 may run on several threads.
@@ -236,7 +190,8 @@ ValueError
     Naming the bad argument (e.g. ``floors[1].obstacles[3]``): no floors, a repeated floor
     number, a floor without outline, a ring with fewer than 3 distinct vertices or zero area,
     NaN or infinite coordinates, a self-intersecting ring, a zero-length wall, a floor with no
-    walkable area.)doc")
+    walkable area.)doc");
+  floor_plan
       .def(py::init([](const py::object& floors, const FloorPlanOptions& options) {
              std::vector<FloorGeometry> list;
              if (py::isinstance<FloorGeometry>(floors)) {
@@ -291,7 +246,53 @@ What building a floor's index cost, as a dict: edges, cells, edge_cell_entries (
 registrations), index_bytes, self_intersection_work (exact predicate evaluations of the
 self-intersection sweep: O(E log E)), area_scanlines, area_edge_visits, area_subsampled.)doc")
       .def("cell_size", &FloorPlan::CellSize, py::arg("floor_index") = 0,
-           "Side of a floor's index cells [m].")
+           "Side of a floor's index cells [m].");
+  BindFloorPlanQueries(floor_plan);
+}
+
+void BindFusionFloorPlan(py::module_& m) {
+  BindFloorGeometry(m);
+  BindFloorPlanOptions(m);
+  BindFloorPlan(m);
+}
+
+/// The indexed queries of FloorPlan (walkable, wall crossing, distance, sampling).
+static void BindFloorPlanQueries(py::class_<FloorPlan>& floor_plan) {
+  // pybind11 copies docstrings; these are assembled once here.
+  static const std::string is_walkable_doc = std::string(R"doc(
+Whether points are walkable (inside an outline and inside no obstacle).
+
+Parameters
+----------
+points_m : (Q, 2) float array [m])doc") + kBatchNote + R"doc(
+
+Returns
+-------
+(Q,) bool array)doc";
+  static const std::string crosses_wall_doc = std::string(R"doc(
+Whether steps p -> q intersect or touch any wall edge (exact predicates). The ends themselves
+are not tested for walkability.
+
+Parameters
+----------
+segments_m : (Q, 4) float array [m]
+    Rows (x0, y0, x1, y1).)doc") + kBatchNote + R"doc(
+
+Returns
+-------
+(Q,) bool array)doc";
+  static const std::string distance_doc = std::string(R"doc(
+Euclidean distance [m] from points to the nearest wall edge (ring edge or wall segment).
+
+Parameters
+----------
+points_m : (Q, 2) float array [m])doc") + kBatchNote + R"doc(
+
+Returns
+-------
+(Q,) float array [m])doc";
+
+  floor_plan
       .def("is_walkable", [](const FloorPlan& plan, const py::object& points_m,
                              const py::object& floor_indices, int num_threads) {
              MatrixArg p = ToQueries(points_m, "points_m", 2);

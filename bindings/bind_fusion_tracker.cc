@@ -18,6 +18,7 @@
 #include "indoorloc/fusion/wifi_likelihood.h"
 #include "fusion_args.h"
 #include "numpy_args.h"
+#include "options_binding.h"
 
 namespace indoorloc::bindings {
 
@@ -61,34 +62,16 @@ const T* OptionalPointer(const py::object& obj, const char* argument, const char
   }
 }
 
-}  // namespace
-
-void BindFusionTracker(py::module_& m) {
-  m.attr("ANY_FLOOR") = PositionFix::kAnyFloor;
-  py::class_<TrackerOptions>(m, "TrackerOptions", R"doc(
+/// The tracker's and the smoother's options (the generic Options protocol).
+void BindTrackerOptions(py::module_& m) {
+  py::class_<TrackerOptions> tracker_options(m, "TrackerOptions", R"doc(
 Options of the fusion particle tracker (see docs/fusion.md for each constant and how its
 default was chosen). Set fields by keyword: ``TrackerOptions(num_particles=2000, tempering=0.3)``;
-the nested motion (heading_offset_walk_rad, scale_walk, min_scale, max_scale, position_noise_m) and
-WiFi (tempering, max_term, max_age_s, use_not_heard, not_heard_dbm) options are flattened.)doc")
-      .def(py::init([](const py::kwargs& kwargs) {
-        TrackerOptions o;
-        py::object self = py::cast(o);
-        for (const auto& item : kwargs) {
-          const std::string key = py::str(item.first);
-          if (!py::hasattr(self, key.c_str())) ThrowInvalidArgument(key, "is not a TrackerOptions field");
-          try {
-            self.attr(key.c_str()) = item.second;
-          } catch (py::error_already_set& e) {
-            // pybind11's setter error names neither the field nor the type it wanted.
-            if (!e.matches(PyExc_TypeError)) throw;
-            throw py::type_error("indoorloc: argument '" + key + "': wrong type " +
-                                 std::string(Py_TYPE(item.second.ptr())->tp_name) + " for TrackerOptions." + key);
-          }
-        }
-        TrackerOptions out = self.cast<TrackerOptions>();
-        ValidateOptions(out);
-        return out;
-      }))
+the nested motion (heading_offset_walk_rad, scale_walk, min_scale, max_scale, position_noise_m),
+WiFi (tempering, max_term, max_age_s, use_not_heard, not_heard_dbm), resampling (resampling,
+ess_threshold) and fix (fix_outlier_probability, fix_tempering) options are flattened.
+``replace``, ``to_dict``, equality and pickling as for every Options class.)doc");
+  tracker_options
       .def_readwrite("num_particles", &TrackerOptions::num_particles)
       .def_property("heading_offset_walk_rad", [](const TrackerOptions& o) { return o.motion.heading_offset_walk_rad; },
                     [](TrackerOptions& o, double v) { o.motion.heading_offset_walk_rad = v; },
@@ -135,30 +118,23 @@ WiFi (tempering, max_term, max_age_s, use_not_heard, not_heard_dbm) options are 
       .def_readwrite("corridor_kappa", &TrackerOptions::corridor_kappa)
       .def_readwrite("smoothing_lag_steps", &TrackerOptions::smoothing_lag_steps)
       .def_readwrite("num_threads", &TrackerOptions::num_threads)
-      .def_readwrite("seed", &TrackerOptions::seed)
-      .def("validate", [](const TrackerOptions& o) { ValidateOptions(o); })
-      .def("__repr__", [](const TrackerOptions& o) {
-        return "<TrackerOptions num_particles=" + std::to_string(o.num_particles) +
-               " tempering=" + std::to_string(o.wifi.tempering) + " seed=" + std::to_string(o.seed) + ">";
-      });
+      .def_readwrite("seed", &TrackerOptions::seed);
+  BindOptionsProtocol(tracker_options, "TrackerOptions");
 
-  py::class_<SmootherOptions>(m, "SmootherOptions", "Forward-filter backward-simulation smoother options.")
-      .def(py::init([](int num_trajectories, int max_particles, std::uint64_t seed, int num_threads) {
-             SmootherOptions o;
-             o.num_trajectories = num_trajectories;
-             o.max_particles = max_particles;
-             o.seed = seed;
-             o.num_threads = num_threads;
-             ValidateOptions(o);
-             return o;
-           }),
-           py::arg("num_trajectories") = 100, py::arg("max_particles") = 2000, py::arg("seed") = 1,
-           py::arg("num_threads") = 1)
-      .def_readwrite("num_trajectories", &SmootherOptions::num_trajectories)
-      .def_readwrite("max_particles", &SmootherOptions::max_particles)
+  py::class_<SmootherOptions> smoother_options(m, "SmootherOptions",
+                                               "Forward-filter backward-simulation smoother options; fields by keyword.");
+  smoother_options
+      .def_readwrite("num_trajectories", &SmootherOptions::num_trajectories, "Backward trajectories drawn.")
+      .def_readwrite("max_particles", &SmootherOptions::max_particles,
+                     "Particles kept per stored step (a subsample of the filter's).")
       .def_readwrite("seed", &SmootherOptions::seed)
       .def_readwrite("num_threads", &SmootherOptions::num_threads);
+  BindOptionsProtocol(smoother_options, "SmootherOptions", {"num_trajectories", "max_particles", "seed", "num_threads"});
 
+}
+
+/// What a tracker run did.
+void BindTrackerSummary(py::module_& m) {
   py::class_<TrackerSummary>(m, "TrackerSummary", "What a tracker run did.")
       .def_readonly("steps", &TrackerSummary::steps)
       .def_readonly("wifi_updates", &TrackerSummary::wifi_updates)
@@ -174,6 +150,10 @@ WiFi (tempering, max_term, max_age_s, use_not_heard, not_heard_dbm) options are 
       .def("brief_report", &TrackerSummary::BriefReport)
       .def("__repr__", [](const TrackerSummary& s) { return "<TrackerSummary " + s.BriefReport() + ">"; });
 
+}
+
+/// WiFi observations and the steps given to the tracker.
+void BindWifiObservations(py::module_& m) {
   py::class_<WifiObservation>(m, "WifiObservation", R"doc(
 Usable readings of one scan (or of readings sharing their own time): AP columns of the signal
 map and RSS [dBm]. Build them with make_wifi_observations.)doc")
@@ -274,6 +254,10 @@ options.max_age_s are dropped. Returns (list of WifiObservation sorted by time, 
 Polar steps (length [m], heading [rad], their sd; each (M,)) to displacements (M, 2) [m] and
 covariances (M, 3) = (xx, xy, yy) [m²] by first-order propagation.)doc");
 
+}
+
+/// The streaming ParticleTracker.
+void BindParticleTracker(py::module_& m) {
   py::class_<ParticleTracker>(m, "ParticleTracker", R"doc(
 Streaming fusion particle filter (PDR steps + WiFi + floor plan, optional corridor network).
 Keeps references to plan, wifi_model and corridors (kept alive by this object).
@@ -379,6 +363,10 @@ options : TrackerOptions)doc")
            },
            py::arg("states"), py::arg("floor_indices"));
 
+}
+
+/// track(): a whole walk, with the backward smoother.
+void BindBatchTrack(py::module_& m) {
   m.def("track",
         [](const py::object& plan, const py::object& wifi_model, const py::object& corridors, const py::object& step_times_s,
            const py::object& displacements_m, const py::object& covariances_m2, const std::vector<WifiObservation>& observations,
@@ -472,6 +460,17 @@ floor_probabilities (M, F), floor_index, heading_offset_rad, scale, ess, log_lik
 blocked_fraction, resampled, recovered, lagged_m), the TrackerSummary, and with a smoother
 smoothed_m (M, 2), smoothed_covariance_m2 (M, 3), smoothed_floor_index (M,),
 smoothed_trajectories_m (M, 2T), smoother_seconds.)doc");
+}
+
+}  // namespace
+
+void BindFusionTracker(py::module_& m) {
+  m.attr("ANY_FLOOR") = PositionFix::kAnyFloor;
+  BindTrackerOptions(m);
+  BindTrackerSummary(m);
+  BindWifiObservations(m);
+  BindParticleTracker(m);
+  BindBatchTrack(m);
 }
 
 }  // namespace indoorloc::bindings

@@ -15,6 +15,7 @@
 #include "indoorloc/mapmatch/road_network.h"
 #include "indoorloc/mapmatch/trajectory_simulator.h"
 #include "numpy_args.h"
+#include "options_binding.h"
 
 namespace indoorloc::bindings {
 
@@ -86,7 +87,8 @@ py::dict EstimatesToDict(const std::vector<StepEstimate>& e) {
 
 }  // namespace
 
-void BindMapmatch(py::module_& m) {
+/// The road network.
+static void BindRoadNetwork(py::module_& m) {
   py::class_<RoadNetwork, std::shared_ptr<RoadNetwork>>(m, "RoadNetwork", R"doc(
 Straight segments with connectivity at their ends (paper 000 §II.B) and a spatial index.
 
@@ -164,31 +166,24 @@ split_at_intersections : bool
            }, py::arg("segment"), py::arg("along_m"))
       .def("report", &RoadNetwork::Report, "Validation report: sizes, components, dangling ends.")
       .def("__repr__", [](const RoadNetwork& n) { return "<RoadNetwork " + n.Report() + ">"; });
+}
 
-  py::class_<TrajectoryOptions>(m, "TrajectoryOptions", "Simulated vehicle runs (paper 000 §III).")
-      .def(py::init([](double duration_s, double dt_s, double speed_mps, double speed_noise_sd_mps,
-                       double speed_bias_halfwidth_mps, double heading_kappa, bool allow_straight) {
-             TrajectoryOptions o;
-             o.duration_s = duration_s;
-             o.dt_s = dt_s;
-             o.speed_mps = speed_mps;
-             o.speed_noise_sd_mps = speed_noise_sd_mps;
-             o.speed_bias_halfwidth_mps = speed_bias_halfwidth_mps;
-             o.heading_kappa = heading_kappa;
-             o.allow_straight = allow_straight;
-             ValidateOptions(o);
-             return o;
-           }),
-           py::arg("duration_s") = 200.0, py::arg("dt_s") = 0.5, py::arg("speed_mps") = 2.0,
-           py::arg("speed_noise_sd_mps") = 0.6, py::arg("speed_bias_halfwidth_mps") = 0.5,
-           py::arg("heading_kappa") = 2.0, py::arg("allow_straight") = false)
-      .def_readwrite("duration_s", &TrajectoryOptions::duration_s)
-      .def_readwrite("dt_s", &TrajectoryOptions::dt_s)
-      .def_readwrite("speed_mps", &TrajectoryOptions::speed_mps)
-      .def_readwrite("speed_noise_sd_mps", &TrajectoryOptions::speed_noise_sd_mps)
-      .def_readwrite("speed_bias_halfwidth_mps", &TrajectoryOptions::speed_bias_halfwidth_mps)
-      .def_readwrite("heading_kappa", &TrajectoryOptions::heading_kappa)
-      .def_readwrite("allow_straight", &TrajectoryOptions::allow_straight);
+/// Simulated vehicle runs.
+static void BindTrajectorySimulation(py::module_& m) {
+  py::class_<TrajectoryOptions> trajectory_options(m, "TrajectoryOptions",
+                                                    "Simulated vehicle runs (paper 000 §III); fields by keyword.");
+  trajectory_options.def_readwrite("duration_s", &TrajectoryOptions::duration_s, "Run length [s].")
+      .def_readwrite("dt_s", &TrajectoryOptions::dt_s, "Sample period of both sensors [s].")
+      .def_readwrite("speed_mps", &TrajectoryOptions::speed_mps, "True constant speed [m/s].")
+      .def_readwrite("speed_noise_sd_mps", &TrajectoryOptions::speed_noise_sd_mps, "Odometer noise sd [m/s].")
+      .def_readwrite("speed_bias_halfwidth_mps", &TrajectoryOptions::speed_bias_halfwidth_mps,
+                     "Per-run odometer bias ~ U(-h, h) [m/s].")
+      .def_readwrite("heading_kappa", &TrajectoryOptions::heading_kappa, "Compass von Mises concentration.")
+      .def_readwrite("allow_straight", &TrajectoryOptions::allow_straight,
+                     "Whether the vehicle may go straight on at a junction.");
+  BindOptionsProtocol(trajectory_options, "TrajectoryOptions",
+                      {"duration_s", "dt_s", "speed_mps", "speed_noise_sd_mps", "speed_bias_halfwidth_mps",
+                       "heading_kappa", "allow_straight"});
 
   m.def("simulate_trajectory", [](const RoadNetwork& n, const TrajectoryOptions& o, std::uint64_t seed, std::uint64_t stream) {
           RandomStream rng(seed, stream);
@@ -197,50 +192,38 @@ split_at_intersections : bool
         py::arg("network"), py::arg("options") = TrajectoryOptions(), py::arg("seed") = 0, py::arg("stream") = 0, R"doc(
 One simulated run: dict with positions_m (T, 2), segments (T,), heading_true_rad, speed_mps
 (odometer), heading_rad (compass), speed_bias_mps, start_m. Sample k is at time (k + 1) dt.)doc");
+}
 
-  py::class_<FilterOptions>(m, "FilterOptions", "Options of the circular particle filter (see docs/mapmatch.md).")
-      .def(py::init([](int num_particles, double kappa, double noise_halfwidth_m, const std::string& resampling,
-                       double ess_threshold, const std::string& junction_policy, double junction_kappa,
-                       bool estimate_speed_bias, double bias_halfwidth_mps, double bias_jitter_mps,
-                       double tracking_spread_m, double recovery_disagreement, double recovery_window_s,
-                       double recovery_fraction, int smoothing_lag_steps, std::uint64_t seed) {
-             FilterOptions o;
-             o.num_particles = num_particles;
-             o.kappa = kappa;
-             o.noise_halfwidth_m = noise_halfwidth_m;
-             o.resampling.scheme = ParseResamplingScheme(resampling, "resampling");
-             o.resampling.ess_threshold = ess_threshold;
-             o.junction_policy = ParsePolicy(junction_policy);
-             o.junction_kappa = junction_kappa;
-             o.estimate_speed_bias = estimate_speed_bias;
-             o.bias_halfwidth_mps = bias_halfwidth_mps;
-             o.bias_jitter_mps = bias_jitter_mps;
-             o.tracking_spread_m = tracking_spread_m;
-             o.recovery_disagreement = recovery_disagreement;
-             o.recovery_window_s = recovery_window_s;
-             o.recovery_fraction = recovery_fraction;
-             o.smoothing_lag_steps = smoothing_lag_steps;
-             o.seed = seed;
-             ValidateOptions(o);
-             return o;
-           }),
-           py::arg("num_particles") = 10000, py::arg("kappa") = 1.0, py::arg("noise_halfwidth_m") = 0.6,
-           py::arg("resampling") = "systematic", py::arg("ess_threshold") = 0.5, py::arg("junction_policy") = "uniform",
-           py::arg("junction_kappa") = 2.0, py::arg("estimate_speed_bias") = false, py::arg("bias_halfwidth_mps") = 0.5,
-           py::arg("bias_jitter_mps") = 0.02, py::arg("tracking_spread_m") = 2.0, py::arg("recovery_disagreement") = 0.9,
-           py::arg("recovery_window_s") = 20.0, py::arg("recovery_fraction") = 0.5, py::arg("smoothing_lag_steps") = 0,
-           py::arg("seed") = 0)
-      .def_readwrite("num_particles", &FilterOptions::num_particles)
-      .def_readwrite("kappa", &FilterOptions::kappa)
-      .def_readwrite("noise_halfwidth_m", &FilterOptions::noise_halfwidth_m)
-      .def_readwrite("estimate_speed_bias", &FilterOptions::estimate_speed_bias)
-      .def_readwrite("smoothing_lag_steps", &FilterOptions::smoothing_lag_steps)
-      .def_readwrite("recovery_disagreement", &FilterOptions::recovery_disagreement)
-      .def_readwrite("seed", &FilterOptions::seed)
+/// The circular particle filter, its options and the Monte Carlo study.
+static void BindParticleMapMatcher(py::module_& m) {
+  py::class_<FilterOptions> filter_options(
+      m, "FilterOptions", "Options of the circular particle filter (see docs/mapmatch.md); fields by keyword.");
+  filter_options.def_readwrite("num_particles", &FilterOptions::num_particles)
+      .def_readwrite("kappa", &FilterOptions::kappa, "κ of the von Mises heading weight.")
+      .def_readwrite("noise_halfwidth_m", &FilterOptions::noise_halfwidth_m, "Uniform along-track noise half-width [m].")
+      .def_property("resampling", [](const FilterOptions& o) { return std::string(ToString(o.resampling.scheme)); },
+                    [](FilterOptions& o, const std::string& v) { o.resampling.scheme = ParseResamplingScheme(v, "resampling"); })
+      .def_property("ess_threshold", [](const FilterOptions& o) { return o.resampling.ess_threshold; },
+                    [](FilterOptions& o, double v) { o.resampling.ess_threshold = v; })
       .def_property("junction_policy",
                     [](const FilterOptions& o) { return o.junction_policy == JunctionPolicy::kUniform ? "uniform" : "heading_aware"; },
-                    [](FilterOptions& o, const std::string& s) { o.junction_policy = ParsePolicy(s); })
-      .def("validate", [](const FilterOptions& o) { ValidateOptions(o); });
+                    [](FilterOptions& o, const std::string& s) { o.junction_policy = ParsePolicy(s); },
+                    "'uniform' or 'heading_aware'.")
+      .def_readwrite("junction_kappa", &FilterOptions::junction_kappa)
+      .def_readwrite("estimate_speed_bias", &FilterOptions::estimate_speed_bias)
+      .def_readwrite("bias_halfwidth_mps", &FilterOptions::bias_halfwidth_mps)
+      .def_readwrite("bias_jitter_mps", &FilterOptions::bias_jitter_mps)
+      .def_readwrite("tracking_spread_m", &FilterOptions::tracking_spread_m)
+      .def_readwrite("recovery_disagreement", &FilterOptions::recovery_disagreement)
+      .def_readwrite("recovery_window_s", &FilterOptions::recovery_window_s)
+      .def_readwrite("recovery_fraction", &FilterOptions::recovery_fraction)
+      .def_readwrite("smoothing_lag_steps", &FilterOptions::smoothing_lag_steps)
+      .def_readwrite("seed", &FilterOptions::seed);
+  BindOptionsProtocol(filter_options, "FilterOptions",
+                      {"num_particles", "kappa", "noise_halfwidth_m", "resampling", "ess_threshold", "junction_policy",
+                       "junction_kappa", "estimate_speed_bias", "bias_halfwidth_mps", "bias_jitter_mps",
+                       "tracking_spread_m", "recovery_disagreement", "recovery_window_s", "recovery_fraction",
+                       "smoothing_lag_steps", "seed"});
 
   py::class_<ParticleMapMatcher>(m, "ParticleMapMatcher", R"doc(
 Circular particle filter on a road network (paper 000 Algorithm 1). Keeps a reference to the
@@ -343,6 +326,12 @@ Paper 000 §III Monte Carlo: n_runs simulated runs, each filtered; run r uses st
 and (seed, 2r + 1), so results do not depend on n_threads (0 = all cores). Returns a dict of
 (R, T) arrays error_m, smoothed_error_m, correct_segment, tracking and (R,) speed_bias_mps,
 filter_seconds, recoveries.)doc");
+}
+
+void BindMapmatch(py::module_& m) {
+  BindRoadNetwork(m);
+  BindTrajectorySimulation(m);
+  BindParticleMapMatcher(m);
 }
 
 }  // namespace indoorloc::bindings

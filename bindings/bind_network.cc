@@ -13,6 +13,7 @@
 #include "indoorloc/network/kalman_smoother.h"
 #include "indoorloc/network/network_adjustment.h"
 #include "numpy_args.h"
+#include "options_binding.h"
 
 namespace indoorloc::bindings {
 
@@ -133,15 +134,17 @@ sgupt_epochs : (S,) int static epochs with constant gravity (SGUPT, paper §3.2)
 
 }  // namespace
 
-void BindNetwork(py::module_& m) {
-  py::class_<network::NetworkOptions>(m, "NetworkOptions", R"doc(
+/// Options of the network adjustment and of the Kalman smoother baseline.
+static void BindNetworkOptions(py::module_& m) {
+  py::class_<network::NetworkOptions> network_options(m, "NetworkOptions", R"doc(
 Options of the network adjustment (see cpp/include/indoorloc/network/network_adjustment.h).
 discretization: "leapfrog" (paper §3.3; decouples even and odd epochs) or "trapezoidal".
 Noise densities: acc_noise_mps2_rthz [m/s^2/sqrt(Hz)], gyro_noise_radps_rthz [rad/s/sqrt(Hz)],
 random walks acc_bias_walk_mps2_rts, gyro_bias_walk_radps_rts, gravity_walk_mps2_rts [unit/sqrt(s)];
 sigmas of VEL, CUPT, ZUPT, GUPT, XOVER, VUPT, SGUPT; slow_parameter_stride (paper §4); solver
-tolerances; check_datum.)doc")
-      .def(py::init<>())
+tolerances; check_datum. Set fields by keyword (``NetworkOptions(sigma_gps_m=0.5)``); ``replace``,
+``to_dict``, equality and pickling as for every Options class.)doc");
+  network_options
       .def_property(
           "discretization",
           [](const network::NetworkOptions& o) {
@@ -208,10 +211,11 @@ tolerances; check_datum.)doc")
         std::string e;
         return o.IsValid(&e) ? std::string() : e;
       }, "'' when valid, else the reason.");
+  BindOptionsProtocol(network_options, "NetworkOptions");
 
-  py::class_<network::KalmanSmootherOptions>(m, "KalmanSmootherOptions",
-                                             "Initial standard deviations of the SSA filter and whether to smooth.")
-      .def(py::init<>())
+  py::class_<network::KalmanSmootherOptions> kalman_smoother_options(
+      m, "KalmanSmootherOptions", "Initial standard deviations of the SSA filter and whether to smooth; fields by keyword.");
+  kalman_smoother_options
       .def_readwrite("init_sigma_position_m", &network::KalmanSmootherOptions::init_sigma_position_m)
       .def_readwrite("init_sigma_velocity_mps", &network::KalmanSmootherOptions::init_sigma_velocity_mps)
       .def_readwrite("init_sigma_level_rad", &network::KalmanSmootherOptions::init_sigma_level_rad)
@@ -220,7 +224,11 @@ tolerances; check_datum.)doc")
       .def_readwrite("init_sigma_gyro_bias_radps", &network::KalmanSmootherOptions::init_sigma_gyro_bias_radps)
       .def_readwrite("init_sigma_gravity_mps2", &network::KalmanSmootherOptions::init_sigma_gravity_mps2)
       .def_readwrite("smooth", &network::KalmanSmootherOptions::smooth);
+  BindOptionsProtocol(kalman_smoother_options, "KalmanSmootherOptions");
+}
 
+/// solve_network and the kalman_smoother baseline.
+static void BindNetworkSolvers(py::module_& m) {
   m.def("solve_network",
         [](const py::object& imu_time_s, const py::object& acc, const py::object& gyro, const py::object& gps_time_s,
            const py::object& gps_position_m, const py::dict& initial, const py::object& zupt_epochs,
@@ -321,7 +329,10 @@ State-space baseline (SSA): error-state EKF + RTS smoother with the model and no
 )doc") + kObservationsDoc + R"doc(
 initial : dict with the keys of solve_network, shape (1, .) or (N, .): only row 0 is used.
 Returns (smoothed state dict, filtered state dict, summary dict).)doc").c_str());
+}
 
+/// Cross-overs of a trajectory, normal gravity and the earth rate.
+static void BindNetworkGeodesy(py::module_& m) {
   m.def("find_crossovers",
         [](const py::object& time_s, const py::object& position_m, double radius_m, double max_dh, double min_sep) {
           VectorArg t = ToVector(time_s, "time_s");
@@ -337,8 +348,9 @@ Returns (smoothed state dict, filtered state dict, summary dict).)doc").c_str())
           }
           return Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor>(x);
         },
-        py::arg("time_s"), py::arg("position_m"), py::arg("radius_m") = 5.0, py::arg("max_height_difference_m") = 50.0,
-        py::arg("min_separation_s") = 30.0, R"doc(
+        py::arg("time_s"), py::arg("position_m"), py::arg("radius_m") = network::CrossoverOptions().radius_m,
+        py::arg("max_height_difference_m") = network::CrossoverOptions().max_height_difference_m,
+        py::arg("min_separation_s") = network::CrossoverOptions().min_separation_s, R"doc(
 Cross-overs of a trajectory: (K, 2) int epoch pairs (n < k) at most radius_m apart horizontally,
 |dh| <= max_height_difference_m, at least min_separation_s apart in time; one (the closest) per
 crossing of two passes. time_s (N,) [s], position_m (N, 3) ENU [m].)doc");
@@ -360,6 +372,12 @@ crossing of two passes. time_s (N,) [s], position_m (N, 3) ENU [m].)doc");
           return Eigen::Vector3d(network::EarthRateEnu(latitude_rad));
         },
         py::arg("latitude_rad"), "Earth rotation vector (3,) in the local ENU frame [rad/s].");
+}
+
+void BindNetwork(py::module_& m) {
+  BindNetworkOptions(m);
+  BindNetworkSolvers(m);
+  BindNetworkGeodesy(m);
 }
 
 }  // namespace indoorloc::bindings

@@ -36,9 +36,17 @@ network::LinearInsNetworkOptions MakeOptions(double imu_rate_hz, double duration
   return o;
 }
 
+/// The name the `rule` argument gives a discretisation.
+std::string RuleName(network::Discretisation rule) {
+  return rule == network::Discretisation::kLeapFrog ? "leapfrog" : "trapezoidal";
+}
+
 }  // namespace
 
-void BindNetworkScale(py::module_& m) {
+/// The folded repeated-pass network (block-tridiagonal elimination with checkpoints).
+static void BindFoldedNetwork(py::module_& m) {
+  const network::LinearInsNetworkOptions linear;
+  const network::FoldedNetworkOptions folded;
   m.def(
       "solve_folded_linear_ins_network",
       [](double imu_rate_hz, double duration_s, double gps_rate_hz, const std::string& rule, long long num_ties,
@@ -85,9 +93,9 @@ void BindNetworkScale(py::module_& m) {
         return d;
       },
       py::arg("imu_rate_hz") = 50.0, py::arg("duration_s") = 60.0, py::arg("gps_rate_hz") = 2.0,
-      py::arg("rule") = "leapfrog", py::arg("num_ties") = 1000, py::arg("num_gupts") = 10,
-      py::arg("sigma_xover_mps2") = 1e-5, py::arg("sigma_gupt_mps2") = 1e-5, py::arg("checkpoint_interval") = 2048,
-      py::arg("gravity_covariance") = true, py::arg("keep_gravity_estimate") = false, py::arg("num_threads") = 1, R"doc(
+      py::arg("rule") = RuleName(linear.rule), py::arg("num_ties") = 1000, py::arg("num_gupts") = 10,
+      py::arg("sigma_xover_mps2") = 1e-5, py::arg("sigma_gupt_mps2") = 1e-5, py::arg("checkpoint_interval") = folded.checkpoint_interval,
+      py::arg("gravity_covariance") = folded.gravity_covariance, py::arg("keep_gravity_estimate") = folded.keep_gravity_estimate, py::arg("num_threads") = folded.num_threads, R"doc(
 The linearised INS/GPS network of a survey re-flown in reverse over its own track, with
 cross-over ties between the two passes and GUPTs, solved exactly (no iteration) by the
 block-tridiagonal Cholesky in the folded order (super-block k = base blocks m-1-k and m+k,
@@ -120,7 +128,11 @@ dict: imu_epochs, gps_epochs, unknowns, ties, gupts, equations, folded_blocks,
 folded_block_size, factor_seconds, backward_seconds, total_seconds [s], stored_factor_bytes,
 min_relative_pivot, max_abs_error (every unknown, against the noise-free truth), gravity_rmse
 [m/s²], gravity_sigma (E, 3) [m/s²], gravity_estimate (E, 3) [m/s²] or empty, report.)doc");
+}
 
+/// The survey network with cross-over ties, solved by PCG.
+static void BindCrossoverNetwork(py::module_& m) {
+  const network::LinearInsNetworkOptions linear;
   m.def(
       "solve_linear_ins_network_with_crossovers",
       [](double imu_rate_hz, double duration_s, double gps_rate_hz, const std::string& rule, int lines, int cross_lines,
@@ -164,7 +176,7 @@ min_relative_pivot, max_abs_error (every unknown, against the noise-free truth),
         return d;
       },
       py::arg("imu_rate_hz") = 50.0, py::arg("duration_s") = 600.0, py::arg("gps_rate_hz") = 2.0,
-      py::arg("rule") = "leapfrog", py::arg("lines") = 10, py::arg("cross_lines") = 10,
+      py::arg("rule") = RuleName(linear.rule), py::arg("lines") = 10, py::arg("cross_lines") = 10,
       py::arg("sigma_xover_mps2") = 1e-5, py::arg("max_iterations") = 1000, py::arg("relative_tolerance") = 1e-8, R"doc(
 The linearised INS/GPS network with cross-over ties of a grid survey (`lines` East-West lines,
 then `cross_lines` North-South lines; each crossing ties the three δg unknowns), solved by
@@ -174,7 +186,11 @@ conjugate gradients preconditioned with the stored banded factor. Paper Table 2 
 Returns a dict: sizes, crossings, ties, factor_seconds, factor_bytes, pcg_iterations,
 pcg_seconds, pcg_relative_residual, pcg_converged, max_abs_error and gravity_rmse [m/s²]
 against the noise-free truth, total_seconds, report.)doc");
+}
 
+/// The linear INS network through Ceres, its equations and its normal blocks.
+static void BindLinearInsNetworkParts(py::module_& m) {
+  const network::LinearInsNetworkOptions linear;
   m.def(
       "solve_linear_ins_network_ceres",
       [](double imu_rate_hz, double duration_s, double gps_rate_hz, const std::string& rule, int prior_epochs,
@@ -204,8 +220,8 @@ against the noise-free truth, total_seconds, report.)doc");
         d["report"] = r.report;
         return d;
       },
-      py::arg("imu_rate_hz") = 200.0, py::arg("duration_s") = 60.0, py::arg("gps_rate_hz") = 1.0,
-      py::arg("rule") = "leapfrog", py::arg("prior_epochs") = 2, py::arg("one_gauss_newton_step") = false, R"doc(
+      py::arg("imu_rate_hz") = linear.imu_rate_hz, py::arg("duration_s") = linear.duration_s, py::arg("gps_rate_hz") = linear.gps_rate_hz,
+      py::arg("rule") = RuleName(linear.rule), py::arg("prior_epochs") = linear.prior_epochs, py::arg("one_gauss_newton_step") = false, R"doc(
 The linearised INS/GPS network (same equations as solve_linear_ins_network) solved by Ceres
 (SPARSE_NORMAL_CHOLESKY with SuiteSparse, single thread): the peer of the benchmark, in process.
 With one_gauss_newton_step=False Ceres runs with its default Solver::Options (Levenberg-
@@ -248,8 +264,8 @@ truth), linear_solver, report.)doc");
         d["imu_epochs"] = e.imu_epochs;
         return d;
       },
-      py::arg("imu_rate_hz") = 200.0, py::arg("duration_s") = 60.0, py::arg("gps_rate_hz") = 1.0,
-      py::arg("rule") = "leapfrog", py::arg("prior_epochs") = 2, R"doc(
+      py::arg("imu_rate_hz") = linear.imu_rate_hz, py::arg("duration_s") = linear.duration_s, py::arg("gps_rate_hz") = linear.gps_rate_hz,
+      py::arg("rule") = RuleName(linear.rule), py::arg("prior_epochs") = linear.prior_epochs, R"doc(
 The observation equations of the linearised INS/GPS network (for building it in other solvers):
 dict with offsets, J (list of 18x18: equation centred at n reads sum_a J[a] x[n + offsets[a]] =
 dynamic_l[i]), row_sigma (18,), centres, dynamic_l, gps_epochs, gps_l (CUPT on δr), prior_l
@@ -292,11 +308,16 @@ sigma_gupt, imu_epochs. Unknowns per epoch: δr, δv, ψ, accelerometer bias, gy
         }
         return py::make_tuple(diagonal, lower, rhs);
       },
-      py::arg("imu_rate_hz") = 200.0, py::arg("duration_s") = 60.0, py::arg("gps_rate_hz") = 1.0,
-      py::arg("rule") = "leapfrog", py::arg("prior_epochs") = 2, R"doc(
+      py::arg("imu_rate_hz") = linear.imu_rate_hz, py::arg("duration_s") = linear.duration_s, py::arg("gps_rate_hz") = linear.gps_rate_hz,
+      py::arg("rule") = RuleName(linear.rule), py::arg("prior_epochs") = linear.prior_epochs, R"doc(
 The normal equations of the linearised INS/GPS network as dense blocks, for solving it with other
 libraries: diagonal (n, b, b) = A_ii, lower (n, b, b) = A_{i,i-1} (lower[0] is zero), rhs (n, b).)doc");
+}
 
+/// The linear INS network solved directly (Cholesky or QR).
+static void BindLinearInsNetworkSolve(py::module_& m) {
+  const network::LinearInsNetworkOptions linear;
+  const network::FoldedNetworkOptions folded;
   m.def(
       "solve_linear_ins_network",
       [](double imu_rate_hz, double duration_s, double gps_rate_hz, const std::string& rule, bool gravity_covariance,
@@ -351,9 +372,9 @@ libraries: diagonal (n, b, b) = A_ii, lower (n, b, b) = A_{i,i-1} (lower[0] is z
         d["report"] = r.solver.BriefReport();
         return d;
       },
-      py::arg("imu_rate_hz") = 200.0, py::arg("duration_s") = 60.0, py::arg("gps_rate_hz") = 1.0,
-      py::arg("rule") = "leapfrog", py::arg("gravity_covariance") = true, py::arg("checkpoint_interval") = 0,
-      py::arg("prior_epochs") = 2, py::arg("keep_gravity_estimate") = false, py::arg("num_threads") = 1,
+      py::arg("imu_rate_hz") = linear.imu_rate_hz, py::arg("duration_s") = linear.duration_s, py::arg("gps_rate_hz") = linear.gps_rate_hz,
+      py::arg("rule") = RuleName(linear.rule), py::arg("gravity_covariance") = folded.gravity_covariance, py::arg("checkpoint_interval") = 0,
+      py::arg("prior_epochs") = linear.prior_epochs, py::arg("keep_gravity_estimate") = folded.keep_gravity_estimate, py::arg("num_threads") = folded.num_threads,
       py::arg("pivot_tolerance") = py::none(), py::arg("method") = "cholesky", R"doc(
 Builds the linearised strapdown INS/GPS network (18 unknowns per IMU epoch, leap-frog or
 trapezoidal dynamic equations, CUPT at the GPS epochs, alignment prior, GUPT at the end) block by
@@ -394,6 +415,16 @@ dict: sizes (imu_epochs, gps_epochs, unknowns, equations, block_size, num_blocks
 min_relative_pivot_unknown (where it was seen), max_abs_error against the noise-free truth with
 max_abs_error_by_unknown (18,) and max_abs_error_epoch, gravity_rmse [m/s²], gravity_sigma (E, 3)
 [m/s²], gravity_estimate, report.)doc");
+}
+
+void BindNetworkScale(py::module_& m) {
+  // Keyword defaults equal to a struct's default are read from it (the struct is the one place a
+  // default is written); the scenario sizes of the folded and crossover benchmarks (50 Hz, 2 Hz
+  // GPS, their durations) are those scenarios' own and stay literal.
+  BindFoldedNetwork(m);
+  BindCrossoverNetwork(m);
+  BindLinearInsNetworkParts(m);
+  BindLinearInsNetworkSolve(m);
 }
 
 }  // namespace indoorloc::bindings

@@ -16,6 +16,7 @@
 #include "indoorloc/pdr/zero_velocity.h"
 #include "indoorloc/pdr/zupt_ekf.h"
 #include "numpy_args.h"
+#include "result_binding.h"
 
 namespace indoorloc::bindings {
 
@@ -30,7 +31,6 @@ pdr::ShoeOptions MakeShoe(int window, double threshold, double sigma_acc, double
   ValidateOptions(o);
   return o;
 }
-constexpr double kDeg = 3.14159265358979323846 / 180.0;
 
 // An (M, 2) array of integer sample indices, given as any numeric array.
 Eigen::MatrixXi ToIndexPairs(const py::object& obj, const char* name) {
@@ -81,9 +81,8 @@ Eigen::Vector2d ToStart(const py::object& start) {
   return Eigen::Vector2d(v.map[0], v.map[1]);
 }
 
-py::dict TrackDict(const pdr::StepTrack& t) {
-  py::dict d;
-  d["positions_m"] = t.positions_m;
+/// (M, 3, 3) covariances from the (M, 9) rows of a StepTrack.
+py::array_t<double> CovarianceArray(const pdr::StepTrack& t) {
   py::array_t<double> cov({static_cast<py::ssize_t>(t.covariances.rows()), py::ssize_t{3}, py::ssize_t{3}});
   auto c = cov.mutable_unchecked<3>();
   for (Eigen::Index k = 0; k < t.covariances.rows(); ++k) {
@@ -91,43 +90,128 @@ py::dict TrackDict(const pdr::StepTrack& t) {
       for (int j = 0; j < 3; ++j) c(k, i, j) = t.covariances(k, 3 * i + j);
     }
   }
-  d["covariances"] = cov;
-  d["stride_lengths_m"] = t.stride_lengths_m;
-  d["headings_rad"] = t.headings_rad;
-  return d;
+  return cov;
 }
 
-py::dict CalibrationDict(const pdr::WeinbergCalibration& c) {
-  py::dict d;
-  d["k"] = c.k;
-  d["rms_residual_m"] = c.rms_residual_m;
-  d["n_strides"] = c.n_strides;
-  d["report"] = c.BriefReport();
-  return d;
+/// The result types of the pdr functions: typed read-only objects that also read as the dicts
+/// they replace (result_binding.h).
+void BindPdrResults(py::module_& m) {
+  using pdr::StepTrack;
+  ResultBinder<StepTrack>(m, "StepTrack", "Positions from strides or increments, with per-step covariances.")
+      .Field("positions_m", [](const StepTrack& t) { return RowMatrixXd(t.positions_m); }, "(M, 2) [m].")
+      .Field("covariances", &CovarianceArray, "(M, 3, 3) of (x [m], y [m], heading error [rad]).")
+      .Field("stride_lengths_m", [](const StepTrack& t) { return Eigen::VectorXd(t.stride_lengths_m); }, "(M,) [m].")
+      .Field("headings_rad", [](const StepTrack& t) { return Eigen::VectorXd(t.headings_rad); }, "(M,) [rad].")
+      .Finish();
+  using pdr::WeinbergCalibration;
+  ResultBinder<WeinbergCalibration>(m, "WeinbergCalibration", "A calibrated Weinberg K.")
+      .Field("k", [](const WeinbergCalibration& c) { return c.k; }, "K [m / (m/s^2)^(1/4)].")
+      .Field("rms_residual_m", [](const WeinbergCalibration& c) { return c.rms_residual_m; })
+      .Field("n_strides", [](const WeinbergCalibration& c) { return c.n_strides; })
+      .Field("report", [](const WeinbergCalibration& c) { return c.BriefReport(); })
+      .Finish();
+  using pdr::ZuptEkfSummary;
+  ResultBinder<ZuptEkfSummary>(m, "ZuptEkfSummary", "Health of a ZUPT EKF run (divergence is reported, never silent).")
+      .Field("n_samples", [](const ZuptEkfSummary& h) { return h.n_samples; })
+      .Field("n_stance_samples", [](const ZuptEkfSummary& h) { return h.n_stance_samples; })
+      .Field("n_stance_phases", [](const ZuptEkfSummary& h) { return h.n_stance_phases; })
+      .Field("stance_fraction", [](const ZuptEkfSummary& h) { return h.stance_fraction; })
+      .Field("walking_stance_fraction", [](const ZuptEkfSummary& h) { return h.walking_stance_fraction; })
+      .Field("swing_median_s", [](const ZuptEkfSummary& h) { return h.swing_median_s; })
+      .Field("swing_max_s", [](const ZuptEkfSummary& h) { return h.swing_max_s; })
+      .Field("speed_at_stance_median_mps", [](const ZuptEkfSummary& h) { return h.speed_at_stance_median_mps; })
+      .Field("speed_at_stance_max_mps", [](const ZuptEkfSummary& h) { return h.speed_at_stance_max_mps; })
+      .Field("speed_at_stance_rise", [](const ZuptEkfSummary& h) { return h.speed_at_stance_rise; })
+      .Field("longest_stride_m", [](const ZuptEkfSummary& h) { return h.longest_stride_m; })
+      .Field("median_stride_m", [](const ZuptEkfSummary& h) { return h.median_stride_m; })
+      .Field("implausible", [](const ZuptEkfSummary& h) { return h.implausible; })
+      .Field("reasons", [](const ZuptEkfSummary& h) { return h.reasons; })
+      .Field("seconds", [](const ZuptEkfSummary& h) { return h.seconds; })
+      .Field("report", [](const ZuptEkfSummary& h) { return h.BriefReport(); })
+      .Finish();
+  using pdr::ZeroVelocityOutput;
+  ResultBinder<ZeroVelocityOutput>(m, "ZeroVelocityOutput", "Stance detection of a recording and how its threshold was set.")
+      .Field("stance", [](const ZeroVelocityOutput& o) { return pdr::BoolVector(o.stance); }, "(N,) bool.")
+      .Field("statistic", [](const ZeroVelocityOutput& o) { return Eigen::VectorXd(o.statistic); }, "(N,) SHOE statistic.")
+      .Field("threshold", [](const ZeroVelocityOutput& o) { return o.summary.threshold; })
+      .Field("base_threshold", [](const ZeroVelocityOutput& o) { return o.summary.base_threshold; })
+      .Field("guard_raised", [](const ZeroVelocityOutput& o) { return o.summary.guard_raised; })
+      .Field("guard_satisfied", [](const ZeroVelocityOutput& o) { return o.summary.guard_satisfied; })
+      .Field("low_motion_rule", [](const ZeroVelocityOutput& o) { return o.summary.low_motion_rule; })
+      .Field("flicker_s", [](const ZeroVelocityOutput& o) { return o.summary.flicker_s; })
+      .Field("ladder_rungs", [](const ZeroVelocityOutput& o) { return o.summary.ladder_rungs; })
+      .Field("max_swing_s", [](const ZeroVelocityOutput& o) { return o.summary.max_swing_s; })
+      .Field("median_swing_s", [](const ZeroVelocityOutput& o) { return o.summary.median_swing_s; })
+      .Field("stance_fraction", [](const ZeroVelocityOutput& o) { return o.summary.stance_fraction; })
+      .Field("walking_stance_fraction", [](const ZeroVelocityOutput& o) { return o.summary.walking_stance_fraction; })
+      .Field("walking_span", [](const ZeroVelocityOutput& o) {
+               return py::make_tuple(o.summary.walking_begin, o.summary.walking_end);
+             }, "(begin, end) sample indices of the walking span.")
+      .Field("report", [](const ZeroVelocityOutput& o) { return o.summary.BriefReport(); })
+      .Finish();
+  using pdr::StrideCountOutput;
+  ResultBinder<StrideCountOutput>(m, "StrideCountOutput", "Strides counted from a stance sequence.")
+      .Field("stride_indices", [](const StrideCountOutput& o) {
+               return Eigen::Map<const Eigen::VectorXi>(o.stride_indices.data(),
+                                                       static_cast<Eigen::Index>(o.stride_indices.size()))
+                   .cast<std::int64_t>()
+                   .eval();
+             }, "(S,) int64 stance-onset samples.")
+      .Field("cleaned_stance", [](const StrideCountOutput& o) { return pdr::BoolVector(o.cleaned_stance); })
+      .Field("n_strides", [](const StrideCountOutput& o) { return o.summary.n_strides; })
+      .Field("n_flicker_stances", [](const StrideCountOutput& o) { return o.summary.n_flicker_stances; })
+      .Field("n_flicker_swings", [](const StrideCountOutput& o) { return o.summary.n_flicker_swings; })
+      .Field("n_split_strides", [](const StrideCountOutput& o) { return o.summary.n_split_strides; })
+      .Field("median_swing_s", [](const StrideCountOutput& o) { return o.summary.median_swing_s; })
+      .Field("median_stance_s", [](const StrideCountOutput& o) { return o.summary.median_stance_s; })
+      .Field("report", [](const StrideCountOutput& o) { return o.summary.BriefReport(); })
+      .Finish();
+  using pdr::AttitudeOutput;
+  ResultBinder<AttitudeOutput>(m, "AttitudeOutput", "Attitude of a recording by the Mahony filter.")
+      .Field("quaternions_wxyz", [](const AttitudeOutput& o) { return RowMatrixXd(o.quaternions_wxyz); }, "(N, 4).")
+      .Field("gyro_bias_radps", [](const AttitudeOutput& o) { return RowMatrixXd(o.gyro_bias_radps); }, "(N, 3).")
+      .Field("mag_used", [](const AttitudeOutput& o) { return pdr::BoolVector(o.mag_used); }, "(N,) bool.")
+      .Field("mag_rejected", [](const AttitudeOutput& o) { return o.mag_rejected; })
+      .Field("reference_field_norm", [](const AttitudeOutput& o) { return o.reference_field_norm; })
+      .Field("reference_dip_rad", [](const AttitudeOutput& o) { return o.reference_dip_rad; })
+      .Field("seconds", [](const AttitudeOutput& o) { return o.seconds; })
+      .Finish();
+  using pdr::InsZuptIncrements;
+  ResultBinder<InsZuptIncrements>(m, "InsZuptIncrements", "Per-step INS-ZUPT increments (paper 002 eq. 5-6).")
+      .Field("increments_m", [](const InsZuptIncrements& o) { return RowMatrixXd(o.increments_m); }, "(M-1, 3) [m].")
+      .Field("stride_lengths_m", [](const InsZuptIncrements& o) { return Eigen::VectorXd(o.stride_lengths_m); })
+      .Field("velocities_mps", [](const InsZuptIncrements& o) { return RowMatrixXd(o.velocities_mps); }, "(N, 3).")
+      .Finish();
+  using pdr::ZuptEkfOutput;
+  ResultBinder<ZuptEkfOutput>(m, "ZuptEkfOutput", "A ZUPT-aided INS run over a recording.")
+      .Field("positions_m", [](const ZuptEkfOutput& o) { return RowMatrixXd(o.positions_m); }, "(N, 3) [m].")
+      .Field("filtered_positions_m", [](const ZuptEkfOutput& o) { return RowMatrixXd(o.filtered_positions_m); })
+      .Field("velocities_mps", [](const ZuptEkfOutput& o) { return RowMatrixXd(o.velocities_mps); })
+      .Field("headings_rad", [](const ZuptEkfOutput& o) { return Eigen::VectorXd(o.headings_rad); })
+      .Field("quaternions_wxyz", [](const ZuptEkfOutput& o) { return RowMatrixXd(o.quaternions_wxyz); })
+      .Field("position_sd_m", [](const ZuptEkfOutput& o) { return RowMatrixXd(o.position_sd_m); })
+      .Field("seconds", [](const ZuptEkfOutput& o) { return o.seconds; })
+      .Field("health", [](const ZuptEkfOutput& o) { return o.summary; }, "A ZuptEkfSummary.")
+      .Finish();
 }
-py::dict HealthDict(const pdr::ZuptEkfSummary& h) {
-  py::dict d;
-  d["n_samples"] = h.n_samples;
-  d["n_stance_samples"] = h.n_stance_samples;
-  d["n_stance_phases"] = h.n_stance_phases;
-  d["stance_fraction"] = h.stance_fraction;
-  d["walking_stance_fraction"] = h.walking_stance_fraction;
-  d["swing_median_s"] = h.swing_median_s;
-  d["swing_max_s"] = h.swing_max_s;
-  d["speed_at_stance_median_mps"] = h.speed_at_stance_median_mps;
-  d["speed_at_stance_max_mps"] = h.speed_at_stance_max_mps;
-  d["speed_at_stance_rise"] = h.speed_at_stance_rise;
-  d["longest_stride_m"] = h.longest_stride_m;
-  d["median_stride_m"] = h.median_stride_m;
-  d["implausible"] = h.implausible;
-  d["reasons"] = h.reasons;
-  d["seconds"] = h.seconds;
-  d["report"] = h.BriefReport();
-  return d;
+
+/// The name zero_velocity's `rule` argument gives a rule.
+const char* ZeroVelocityRuleName(pdr::ZeroVelocityRule rule) {
+  switch (rule) {
+    case pdr::ZeroVelocityRule::kFixed: return "fixed";
+    case pdr::ZeroVelocityRule::kStanceGuard: return "stance_guard";
+    case pdr::ZeroVelocityRule::kSwingGuard: break;
+  }
+  return "swing_guard";
 }
+
 }  // namespace
 
-void BindPdr(py::module_& m) {
+/// Stance detection (SHOE and the adaptive detector) and stride counting.
+static void BindZeroVelocity(py::module_& m) {
+  const pdr::ShoeOptions shoe;
+  const pdr::ZeroVelocityOptions zero_velocity;
+  const pdr::StrideCountOptions stride_count;
   m.def("shoe_statistic", [](const py::object& acc, const py::object& gyro, int window, double sigma_acc, double sigma_gyro,
                              double gravity) {
           MatrixArg a = ToMatrix(acc, "acc_mps2", -1, 3);
@@ -136,8 +220,8 @@ void BindPdr(py::module_& m) {
           py::gil_scoped_release release;
           return pdr::ShoeStatistic(a.map, g.map, o);
         },
-        py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("window") = 5, py::arg("sigma_acc_mps2") = 0.01,
-        py::arg("sigma_gyro_radps") = 0.1 * kDeg, py::arg("gravity_mps2") = 9.81,
+        py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("window") = shoe.window, py::arg("sigma_acc_mps2") = shoe.sigma_acc_mps2,
+        py::arg("sigma_gyro_radps") = shoe.sigma_gyro_radps, py::arg("gravity_mps2") = shoe.gravity_mps2,
         "SHOE test statistic (N,) of specific force (N, 3) [m/s^2] and angular rate (N, 3) [rad/s].");
   m.def("shoe_detector", [](const py::object& acc, const py::object& gyro, int window, double threshold, double sigma_acc,
                             double sigma_gyro, double gravity) {
@@ -147,8 +231,8 @@ void BindPdr(py::module_& m) {
           py::gil_scoped_release release;
           return pdr::ShoeDetector(a.map, g.map, o);
         },
-        py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("window") = 5, py::arg("threshold") = 3e4,
-        py::arg("sigma_acc_mps2") = 0.01, py::arg("sigma_gyro_radps") = 0.1 * kDeg, py::arg("gravity_mps2") = 9.81, R"doc(
+        py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("window") = shoe.window, py::arg("threshold") = shoe.threshold,
+        py::arg("sigma_acc_mps2") = shoe.sigma_acc_mps2, py::arg("sigma_gyro_radps") = shoe.sigma_gyro_radps, py::arg("gravity_mps2") = shoe.gravity_mps2, R"doc(
 Stance flags (N,) bool of the SHOE zero-velocity detector (Skog et al. 2010): statistic < threshold.
 acc_mps2, gyro_radps: (N, 3) in the sensor frame [m/s^2], [rad/s]; window in samples.)doc");
   m.def("zero_velocity", [](const py::object& acc, const py::object& gyro, double rate_hz, const std::string& rule,
@@ -184,33 +268,16 @@ acc_mps2, gyro_radps: (N, 3) in the sensor frame [m/s^2], [rad/s]; window in sam
             py::gil_scoped_release release;
             out = pdr::DetectZeroVelocity(a.map, g.map, rate_hz, o);
           }
-          const pdr::ZeroVelocitySummary& sm = out.summary;
-          py::dict d;
-          d["stance"] = out.stance;
-          d["statistic"] = out.statistic;
-          d["threshold"] = sm.threshold;
-          d["base_threshold"] = sm.base_threshold;
-          d["guard_raised"] = sm.guard_raised;
-          d["guard_satisfied"] = sm.guard_satisfied;
-          d["low_motion_rule"] = sm.low_motion_rule;
-          d["flicker_s"] = sm.flicker_s;
-          d["ladder_rungs"] = sm.ladder_rungs;
-          d["max_swing_s"] = sm.max_swing_s;
-          d["median_swing_s"] = sm.median_swing_s;
-          d["stance_fraction"] = sm.stance_fraction;
-          d["walking_stance_fraction"] = sm.walking_stance_fraction;
-          d["walking_span"] = py::make_tuple(sm.walking_begin, sm.walking_end);
-          d["report"] = sm.BriefReport();
-          return d;
+          return out;
         },
-        py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("rate_hz"), py::arg("rule") = "swing_guard",
-        py::arg("threshold") = 1e4, py::arg("max_swing_s") = 2.0, py::arg("max_swing_ratio") = 1.5,
-        py::arg("ladder_step_decades") = 0.25, py::arg("min_stance_s") = 0.02, py::arg("min_stance_share") = 0.15,
-        py::arg("min_stance_fraction") = 0.3,
-        py::arg("max_threshold") = 1e7, py::arg("min_plausible_swing_s") = pdr::ZeroVelocityOptions().min_plausible_swing_s,
-        py::arg("low_motion_min_stance_s") = pdr::ZeroVelocityOptions().low_motion_min_stance_s,
-        py::arg("window") = 5, py::arg("sigma_acc_mps2") = 0.01,
-        py::arg("sigma_gyro_radps") = 0.1 * kDeg, py::arg("gravity_mps2") = 9.81, R"doc(
+        py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("rate_hz"), py::arg("rule") = std::string(ZeroVelocityRuleName(zero_velocity.rule)),
+        py::arg("threshold") = zero_velocity.shoe.threshold, py::arg("max_swing_s") = zero_velocity.max_swing_s, py::arg("max_swing_ratio") = zero_velocity.max_swing_ratio,
+        py::arg("ladder_step_decades") = zero_velocity.ladder_step_decades, py::arg("min_stance_s") = zero_velocity.min_stance_s, py::arg("min_stance_share") = zero_velocity.min_stance_share,
+        py::arg("min_stance_fraction") = zero_velocity.min_stance_fraction,
+        py::arg("max_threshold") = zero_velocity.max_threshold,
+        py::arg("min_plausible_swing_s") = zero_velocity.min_plausible_swing_s,
+        py::arg("low_motion_min_stance_s") = zero_velocity.low_motion_min_stance_s, py::arg("window") = zero_velocity.shoe.window, py::arg("sigma_acc_mps2") = zero_velocity.shoe.sigma_acc_mps2,
+        py::arg("sigma_gyro_radps") = zero_velocity.shoe.sigma_gyro_radps, py::arg("gravity_mps2") = zero_velocity.shoe.gravity_mps2, R"doc(
 Zero-velocity detection with the SHOE threshold adapted to the recording (C++ DetectZeroVelocity).
 acc_mps2, gyro_radps: (N, 3) sensor frame [m/s^2], [rad/s]; rate_hz [Hz]; window in samples.
 rule "swing_guard" (default, chosen by cross-validation): the threshold climbs the ladder
@@ -224,7 +291,7 @@ is accepted, the low-motion rule climbs again ignoring stance shorter than
 low_motion_min_stance_s [s]; failing that the most regular plausible rung is used and
 guard_satisfied is False.
 "stance_guard": raised to the min_stance_fraction-quantile of the statistic over the walking
-span. "fixed": statistic < threshold. Returns a dict: stance (N,) bool, statistic (N,),
+span. "fixed": statistic < threshold. Returns a ZeroVelocityOutput (reads as a dict): stance (N,) bool, statistic (N,),
 threshold (used), base_threshold, guard_raised, guard_satisfied, low_motion_rule, flicker_s [s],
 ladder_rungs, max_swing_s,
 median_swing_s [s], stance_fraction, walking_stance_fraction [0..1], walking_span, report.)doc");
@@ -239,27 +306,25 @@ median_swing_s [s], stance_fraction, walking_stance_fraction [0..1], walking_spa
           o.long_swing_factor = long_swing_factor;
           ValidateOptions(o);
           pdr::StrideCountOutput out = pdr::CountStrides(st, rate_hz, o);
-          py::dict d;
-          d["stride_indices"] = Eigen::Map<const Eigen::VectorXi>(out.stride_indices.data(), static_cast<Eigen::Index>(out.stride_indices.size())).cast<std::int64_t>().eval();
-          d["cleaned_stance"] = out.cleaned_stance;
-          d["n_strides"] = out.summary.n_strides;
-          d["n_flicker_stances"] = out.summary.n_flicker_stances;
-          d["n_flicker_swings"] = out.summary.n_flicker_swings;
-          d["n_split_strides"] = out.summary.n_split_strides;
-          d["median_swing_s"] = out.summary.median_swing_s;
-          d["median_stance_s"] = out.summary.median_stance_s;
-          d["report"] = out.summary.BriefReport();
-          return d;
+          return out;
         },
-        py::arg("stance"), py::arg("rate_hz"), py::arg("min_stance_s") = 0.02, py::arg("min_swing_s") = 0.1,
-        py::arg("min_swing_fraction") = 0.5, py::arg("long_swing_factor") = 1.7, R"doc(
+        py::arg("stance"), py::arg("rate_hz"), py::arg("min_stance_s") = stride_count.min_stance_s, py::arg("min_swing_s") = stride_count.min_swing_s,
+        py::arg("min_swing_fraction") = stride_count.min_swing_fraction, py::arg("long_swing_factor") = stride_count.long_swing_factor, R"doc(
 Strides of the instrumented foot from stance flags (N,) sampled at rate_hz [Hz] (C++ CountStrides):
 stance runs shorter than min_stance_s [s] inside a swing are flicker; swing runs shorter than
 max(min_swing_s [s], min_swing_fraction x the recording's median swing) inside a stance are
 flicker; a swing longer than long_swing_factor x the median swing (0 disables) counts as
-round(length / median) strides. Returns a dict: stride_indices (S,) int64 stance onsets,
+round(length / median) strides. Returns a StrideCountOutput (reads as a dict): stride_indices (S,) int64 stance onsets,
 cleaned_stance (N,) bool, n_strides, n_flicker_stances, n_flicker_swings, n_split_strides,
 median_swing_s, median_stance_s [s], report.)doc");
+}
+
+/// Step detectors, filters and the Weinberg stride length.
+static void BindStepDetection(py::module_& m) {
+  const pdr::AccelerationStepOptions acceleration_steps;
+  const pdr::GyroStepOptions gyro_steps;
+  const pdr::WeinbergOptions weinberg;
+  const pdr::MagneticStepOptions magnetic_steps;
   m.def("steps_acceleration", [](const py::object& acc, double rate_hz, double window_s, bool adaptive, double swing_threshold,
                                  double stance_threshold, double swing_fraction, double stance_fraction, double min_step_interval_s) {
           MatrixArg a = ToMatrix(acc, "acc_mps2", -1, 3);
@@ -275,9 +340,9 @@ median_swing_s, median_stance_s [s], report.)doc");
           const std::vector<int> steps = pdr::DetectStepsAcceleration(rate_hz, a.map, o, &sigma);
           return py::make_tuple(steps, sigma);
         },
-        py::arg("acc_mps2"), py::arg("rate_hz"), py::arg("window_s") = 0.1, py::arg("adaptive") = true,
-        py::arg("swing_threshold_mps2") = 2.0, py::arg("stance_threshold_mps2") = 1.0, py::arg("swing_fraction") = 0.35,
-        py::arg("stance_fraction") = 0.15, py::arg("min_step_interval_s") = 0.4, R"doc(
+        py::arg("acc_mps2"), py::arg("rate_hz"), py::arg("window_s") = acceleration_steps.window_s, py::arg("adaptive") = acceleration_steps.adaptive,
+        py::arg("swing_threshold_mps2") = acceleration_steps.swing_threshold_mps2, py::arg("stance_threshold_mps2") = acceleration_steps.stance_threshold_mps2, py::arg("swing_fraction") = acceleration_steps.swing_fraction,
+        py::arg("stance_fraction") = acceleration_steps.stance_fraction, py::arg("min_step_interval_s") = acceleration_steps.min_step_interval_s, R"doc(
 Paper 002's acceleration-variance step detector (eq. 1-3). Returns (step sample indices, σ (N,)
 [m/s^2]). adaptive=True: thresholds = fractions of the 95th percentile of σ; False: the fixed
 T1, T2 [m/s^2] (paper: 2 and 1 at 100 Hz).)doc");
@@ -289,8 +354,8 @@ T1, T2 [m/s^2] (paper: 2 and 1 at 100 Hz).)doc");
           o.min_swing_s = min_swing_s;
           return pdr::DetectStepsGyro(rate_hz, g.map, o);
         },
-        py::arg("gyro_radps"), py::arg("rate_hz"), py::arg("threshold_radps") = 1.0, py::arg("median_window_s") = 0.1,
-        py::arg("min_swing_s") = 0.2, "Gyroscope step detector (paper 002 §III.D): step sample indices.");
+        py::arg("gyro_radps"), py::arg("rate_hz"), py::arg("threshold_radps") = gyro_steps.threshold_radps, py::arg("median_window_s") = gyro_steps.median_window_s,
+        py::arg("min_swing_s") = gyro_steps.min_swing_s, "Gyroscope step detector (paper 002 §III.D): step sample indices.");
   m.def("butterworth_sos", &pdr::ButterworthSos, py::arg("order"), py::arg("cutoff_hz"), py::arg("rate_hz"),
         py::arg("highpass") = false, R"doc(
 Butterworth filter as second-order sections, shape (ceil(order/2), 6), rows [b0 b1 b2 a0 a1 a2]
@@ -313,8 +378,8 @@ zi=sosfilt_zi(sos) * x[0]).)doc");
           py::gil_scoped_release release;
           return pdr::WeinbergFeatures(rate_hz, a.map, iv, o);
         },
-        py::arg("acc_mps2"), py::arg("rate_hz"), py::arg("intervals"), py::arg("filter_order") = 4, py::arg("cutoff_hz") = 3.0,
-        py::arg("steady_state_start") = true, R"doc(
+        py::arg("acc_mps2"), py::arg("rate_hz"), py::arg("intervals"), py::arg("filter_order") = weinberg.filter_order, py::arg("cutoff_hz") = weinberg.cutoff_hz,
+        py::arg("steady_state_start") = weinberg.steady_state_start, R"doc(
 Weinberg bounce feature (max a~ - min a~)^(1/4) [(m/s^2)^(1/4)] over each interval (M, 2) of
 inclusive sample indices [start, end], with a~ the Butterworth low-pass (order, cutoff_hz [Hz])
 of |acc_mps2| (N, 3) [m/s^2] sampled at rate_hz [Hz]. Stride length = K x feature (eq. 4).)doc");
@@ -326,8 +391,8 @@ of |acc_mps2| (N, 3) [m/s^2] sampled at rate_hz [Hz]. Stride length = K x featur
           py::gil_scoped_release release;
           return pdr::WeinbergStrideLengths(rate_hz, a.map, steps, o);
         },
-        py::arg("acc_mps2"), py::arg("rate_hz"), py::arg("step_indices"), py::arg("k") = 0.364, py::arg("window_s") = 0.15,
-        py::arg("filter_order") = 4, py::arg("cutoff_hz") = 3.0, py::arg("steady_state_start") = true, R"doc(
+        py::arg("acc_mps2"), py::arg("rate_hz"), py::arg("step_indices"), py::arg("k") = weinberg.k, py::arg("window_s") = weinberg.window_s,
+        py::arg("filter_order") = weinberg.filter_order, py::arg("cutoff_hz") = weinberg.cutoff_hz, py::arg("steady_state_start") = weinberg.steady_state_start, R"doc(
 Weinberg stride lengths [m] (paper 002 eq. 4), one per step: K (max - min)^(1/4) of the 3 Hz
 low-passed |acc| [m/s^2] over +-window_s [s] around each step sample (strictly increasing
 indices into acc_mps2 (N, 3)). K [m/(m/s^2)^(1/4)]: 0.364 in the paper (foot); calibrate it with
@@ -335,18 +400,18 @@ calibrate_weinberg_k.)doc");
   m.def("calibrate_weinberg_k", [](const py::object& features, const py::object& lengths) {
           VectorArg f = ToVector(features, "features");
           VectorArg l = ToVector(lengths, "lengths_m", f.map.size());
-          return CalibrationDict(pdr::CalibrateWeinbergK(f.map, l.map));
+          return pdr::CalibrateWeinbergK(f.map, l.map);
         },
         py::arg("features"), py::arg("lengths_m"), R"doc(
 Least-squares Weinberg K = sum(f L) / sum(f^2) from bounce features f (M,) and known stride
-lengths L (M,) [m]. Returns a dict: k, rms_residual_m, n_strides, report.)doc");
+lengths L (M,) [m]. Returns a WeinbergCalibration (reads as a dict): k, rms_residual_m, n_strides, report.)doc");
   m.def("calibrate_weinberg_k_from_distance", [](const py::object& features, double distance_m) {
           VectorArg f = ToVector(features, "features");
-          return CalibrationDict(pdr::CalibrateWeinbergKFromDistance(f.map, distance_m));
+          return pdr::CalibrateWeinbergKFromDistance(f.map, distance_m);
         },
         py::arg("features"), py::arg("distance_m"), R"doc(
 Weinberg K = D / sum(f) from the bounce features (M,) of a walk of known length D [m].
-Returns a dict: k, rms_residual_m (0), n_strides, report.)doc");
+Returns a WeinbergCalibration (reads as a dict): k, rms_residual_m (0), n_strides, report.)doc");
   m.def("steps_magnetometer", [](const py::object& mag, double rate_hz, int order, double highpass_hz, double fraction,
                                  double median_window_s, double min_swing_s, double min_rest_s) {
           MatrixArg g = ToMatrix(mag, "mag", -1, 3);
@@ -361,14 +426,21 @@ Returns a dict: k, rms_residual_m (0), n_strides, report.)doc");
           const std::vector<int> steps = pdr::DetectStepsMagnetometer(rate_hz, g.map, o, &magnitude);
           return py::make_tuple(steps, magnitude);
         },
-        py::arg("mag"), py::arg("rate_hz"), py::arg("highpass_order") = 2, py::arg("highpass_hz") = 0.5,
-        py::arg("threshold_fraction") = 0.3, py::arg("median_window_s") = 0.1, py::arg("min_swing_s") = 0.2,
-        py::arg("min_rest_s") = 0.15, R"doc(
+        py::arg("mag"), py::arg("rate_hz"), py::arg("highpass_order") = magnetic_steps.highpass_order, py::arg("highpass_hz") = magnetic_steps.highpass_hz,
+        py::arg("threshold_fraction") = magnetic_steps.threshold_fraction, py::arg("median_window_s") = magnetic_steps.median_window_s, py::arg("min_swing_s") = magnetic_steps.min_swing_s,
+        py::arg("min_rest_s") = magnetic_steps.min_rest_s, R"doc(
 Magnetometer step detector (paper 002 §III.D): Butterworth high-pass (order, highpass_hz [Hz])
 per axis of mag (N, 3) (any unit, e.g. uT), |m_hp| thresholded at threshold_fraction x its 95th
 percentile, median filter (median_window_s [s]), rests shorter than min_rest_s [s] merged, a step at
 each transition to rest after at least min_swing_s [s] of motion. Returns (step sample indices,
 |m_hp| (N,) in the unit of mag).)doc");
+}
+
+/// Attitude, stance headings and positions from strides or increments.
+static void BindAttitudeAndPositions(py::module_& m) {
+  const pdr::MahonyOptions mahony;
+  const pdr::StepCovarianceOptions step_covariance;
+  const pdr::InsZuptOptions ins_zupt;
   m.def("attitude_mahony", [](const py::object& time_s, const py::object& acc, const py::object& gyro, const py::object& mag,
                               double kp, double ki, double kp_mag, double gravity, double acc_gate, double norm_tol,
                               double dip_tol, int init_samples) {
@@ -394,23 +466,15 @@ each transition to rest after at least min_swing_s [s] of motion. Returns (step 
             py::gil_scoped_release release;
             out = pdr::RunMahony(t.map, a.map, g.map, m, o);
           }
-          py::dict d;
-          d["quaternions_wxyz"] = out.quaternions_wxyz;
-          d["gyro_bias_radps"] = out.gyro_bias_radps;
-          d["mag_used"] = out.mag_used;
-          d["mag_rejected"] = out.mag_rejected;
-          d["reference_field_norm"] = out.reference_field_norm;
-          d["reference_dip_rad"] = out.reference_dip_rad;
-          d["seconds"] = out.seconds;
-          return d;
+          return out;
         },
-        py::arg("time_s"), py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("mag") = py::none(), py::arg("kp") = 1.0,
-        py::arg("ki") = 0.05, py::arg("kp_mag") = 0.5, py::arg("gravity_mps2") = 9.81, py::arg("acc_gate_mps2") = 2.0,
-        py::arg("mag_norm_tolerance") = 0.1, py::arg("mag_dip_tolerance_rad") = 10.0 * kDeg, py::arg("init_samples") = 20, R"doc(
+        py::arg("time_s"), py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("mag") = py::none(), py::arg("kp") = mahony.kp,
+        py::arg("ki") = mahony.ki, py::arg("kp_mag") = mahony.kp_mag, py::arg("gravity_mps2") = mahony.gravity_mps2, py::arg("acc_gate_mps2") = mahony.acc_gate_mps2,
+        py::arg("mag_norm_tolerance") = mahony.mag_norm_tolerance, py::arg("mag_dip_tolerance_rad") = mahony.mag_dip_tolerance_rad, py::arg("init_samples") = mahony.init_samples, R"doc(
 Mahony complementary attitude filter (gyro + gravity, magnetometer optional, heading-only and
 gated by a disturbance test on the field norm and dip). time_s (N,) [s], acc_mps2 (N, 3) [m/s^2],
 gyro_radps (N, 3) [rad/s], mag (N, 3) any unit or None. Gains kp, kp_mag [rad/s], ki [rad/s^2].
-Returns a dict: quaternions_wxyz (N, 4) body -> navigation (z up; x = initial heading, or
+Returns an AttitudeOutput (reads as a dict): quaternions_wxyz (N, 4) body -> navigation (z up; x = initial heading, or
 magnetic north with mag), gyro_bias_radps (N, 3), mag_used (N,) bool, mag_rejected,
 reference_field_norm, reference_dip_rad, seconds.)doc");
   m.def("stance_headings", [](const py::object& quaternions, const py::object& step_indices) {
@@ -424,24 +488,24 @@ step sample; quaternions_wxyz (N, 4) body -> navigation (z up).)doc");
                                      double sd_sl, double sd_frac, double sd_psi, double sd_psi0) {
           VectorArg l = ToVector(sl, "stride_lengths_m");
           VectorArg h = ToVector(headings, "headings_rad", l.map.size());
-          return TrackDict(pdr::PositionsFromStrides(l.map, h.map, ToStart(start), MakeStepCov(sd_sl, sd_frac, sd_psi, sd_psi0)));
+          return (pdr::PositionsFromStrides(l.map, h.map, ToStart(start), MakeStepCov(sd_sl, sd_frac, sd_psi, sd_psi0)));
         },
         py::arg("stride_lengths_m"), py::arg("headings_rad"), py::arg("start_xy") = std::vector<double>{0.0, 0.0},
-        py::arg("sigma_stride_length_m") = 0.1, py::arg("stride_length_sd_fraction") = 0.1,
-        py::arg("sigma_heading_step_rad") = 4.0 * kDeg, py::arg("sigma_heading_initial_rad") = 0.0, R"doc(
+        py::arg("sigma_stride_length_m") = step_covariance.sigma_stride_length_m, py::arg("stride_length_sd_fraction") = step_covariance.stride_length_sd_fraction,
+        py::arg("sigma_heading_step_rad") = step_covariance.sigma_heading_step_rad, py::arg("sigma_heading_initial_rad") = step_covariance.sigma_heading_initial_rad, R"doc(
 Paper 002 eq. 8: P_k = P_{k-1} + SL_k (cos th_k, sin th_k) from stride lengths (M,) [m] and
 headings (M,) [rad], starting at start_xy [m]. Each step carries the 3 x 3 covariance of
 (x [m], y [m], heading error [rad]) under a heading random walk (sigma_heading_step_rad per step)
 and stride-length noise (sigma_stride_length_m + stride_length_sd_fraction x SL). Returns a
-dict: positions_m (M, 2), covariances (M, 3, 3), stride_lengths_m, headings_rad.)doc");
+StepTrack (reads as a dict): positions_m (M, 2), covariances (M, 3, 3), stride_lengths_m, headings_rad.)doc");
   m.def("positions_from_increments", [](const py::object& inc, const py::object& start, double sd_sl, double sd_frac,
                                         double sd_psi, double sd_psi0) {
           MatrixArg d = ToMatrix(inc, "increments_m");
-          return TrackDict(pdr::PositionsFromIncrements(d.map, ToStart(start), MakeStepCov(sd_sl, sd_frac, sd_psi, sd_psi0)));
+          return (pdr::PositionsFromIncrements(d.map, ToStart(start), MakeStepCov(sd_sl, sd_frac, sd_psi, sd_psi0)));
         },
-        py::arg("increments_m"), py::arg("start_xy") = std::vector<double>{0.0, 0.0}, py::arg("sigma_stride_length_m") = 0.1,
-        py::arg("stride_length_sd_fraction") = 0.1, py::arg("sigma_heading_step_rad") = 4.0 * kDeg,
-        py::arg("sigma_heading_initial_rad") = 0.0, R"doc(
+        py::arg("increments_m"), py::arg("start_xy") = std::vector<double>{0.0, 0.0}, py::arg("sigma_stride_length_m") = step_covariance.sigma_stride_length_m,
+        py::arg("stride_length_sd_fraction") = step_covariance.stride_length_sd_fraction, py::arg("sigma_heading_step_rad") = step_covariance.sigma_heading_step_rad,
+        py::arg("sigma_heading_initial_rad") = step_covariance.sigma_heading_initial_rad, R"doc(
 Paper 002 eq. 9: P_k = P_{k-1} + dP_k(x, y) from INS-ZUPT increments (M, 2) or (M, 3) [m], with
 the per-step covariance of positions_from_strides (SL = |dP_xy|, heading = atan2(dP_y, dP_x)).)doc");
   m.def("ins_zupt_increments", [](const py::object& time_s, const py::object& acc, const py::object& quaternions,
@@ -458,19 +522,20 @@ the per-step covariance of positions_from_strides (SL = |dP_xy|, heading = atan2
             py::gil_scoped_release release;
             out = pdr::ComputeInsZuptIncrements(t.map, a.map, q.map, steps, o);
           }
-          py::dict d;
-          d["increments_m"] = out.increments_m;
-          d["stride_lengths_m"] = out.stride_lengths_m;
-          d["velocities_mps"] = out.velocities_mps;
-          return d;
+          return out;
         },
-        py::arg("time_s"), py::arg("acc_mps2"), py::arg("quaternions_wxyz"), py::arg("step_indices"), py::arg("window_s") = 0.05,
-        py::arg("gravity_mps2") = 9.81, R"doc(
+        py::arg("time_s"), py::arg("acc_mps2"), py::arg("quaternions_wxyz"), py::arg("step_indices"), py::arg("window_s") = ins_zupt.window_s,
+        py::arg("gravity_mps2") = ins_zupt.gravity_mps2, R"doc(
 Paper 002 §IV.B (steps 1-5, eq. 5-6): rotate acc_mps2 (N, 3) [m/s^2] by quaternions_wxyz (N, 4)
 (body -> navigation, z up), remove gravity, integrate from the first step, remove the drift by
 the mean velocity over +-window_s [s] around each step sample, linearly interpolated between
-steps, and sum each step. step_indices: M >= 2 strictly increasing stance samples. Returns a
-dict: increments_m (M-1, 3), stride_lengths_m (M-1,) (eq. 6), velocities_mps (N, 3).)doc");
+steps, and sum each step. step_indices: M >= 2 strictly increasing stance samples. Returns an
+InsZuptIncrements (reads as a dict): increments_m (M-1, 3), stride_lengths_m (M-1,) (eq. 6), velocities_mps (N, 3).)doc");
+}
+
+/// The ZUPT-aided INS.
+static void BindZuptEkf(py::module_& m) {
+  const pdr::ZuptEkfOptions zupt_ekf;
   m.def("zupt_ekf", [](const py::object& time_s, const py::object& acc, const py::object& gyro, const py::object& stance,
                        double sigma_acc, double sigma_gyro, double sigma_zupt, double gravity, int init_samples, bool smooth,
                        double sigma_stance_heading, double min_stance_fraction, double max_plausible_swing_s,
@@ -501,29 +566,20 @@ dict: increments_m (M-1, 3), stride_lengths_m (M-1,) (eq. 6), velocities_mps (N,
             py::gil_scoped_release release;
             out = pdr::RunZuptEkf(t.map, a.map, g.map, st, o);
           }
-          py::dict d;
-          d["positions_m"] = out.positions_m;
-          d["filtered_positions_m"] = out.filtered_positions_m;
-          d["velocities_mps"] = out.velocities_mps;
-          d["headings_rad"] = out.headings_rad;
-          d["quaternions_wxyz"] = out.quaternions_wxyz;
-          d["position_sd_m"] = out.position_sd_m;
-          d["seconds"] = out.seconds;
-          d["health"] = HealthDict(out.summary);
-          return d;
+          return out;
         },
-        py::arg("time_s"), py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("stance"), py::arg("sigma_acc_mps2") = 0.5,
-        py::arg("sigma_gyro_radps") = 0.5 * kDeg, py::arg("sigma_zupt_mps") = 0.01, py::arg("gravity_mps2") = 9.81,
-        py::arg("init_samples") = 20, py::arg("smooth") = false, py::arg("sigma_stance_heading_rad") = 0.0,
-        py::arg("min_stance_fraction") = 0.02, py::arg("max_plausible_swing_s") = 5.0, py::arg("max_plausible_stride_m") = 4.0,
-        py::arg("max_median_stride_m") = 2.5, py::arg("max_stance_speed_mps") = 4.0, py::arg("speed_rise_factor") = 3.0, py::arg("min_rising_speed_mps") = 1.0, R"doc(
+        py::arg("time_s"), py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("stance"), py::arg("sigma_acc_mps2") = zupt_ekf.sigma_acc_mps2,
+        py::arg("sigma_gyro_radps") = zupt_ekf.sigma_gyro_radps, py::arg("sigma_zupt_mps") = zupt_ekf.sigma_zupt_mps, py::arg("gravity_mps2") = zupt_ekf.gravity_mps2,
+        py::arg("init_samples") = zupt_ekf.init_samples, py::arg("smooth") = zupt_ekf.smooth, py::arg("sigma_stance_heading_rad") = zupt_ekf.sigma_stance_heading_rad,
+        py::arg("min_stance_fraction") = zupt_ekf.min_stance_fraction, py::arg("max_plausible_swing_s") = zupt_ekf.max_plausible_swing_s, py::arg("max_plausible_stride_m") = zupt_ekf.max_plausible_stride_m,
+        py::arg("max_median_stride_m") = zupt_ekf.max_median_stride_m, py::arg("max_stance_speed_mps") = zupt_ekf.max_stance_speed_mps, py::arg("speed_rise_factor") = zupt_ekf.speed_rise_factor, py::arg("min_rising_speed_mps") = zupt_ekf.min_rising_speed_mps, R"doc(
 Zero-velocity-aided strapdown INS (9-state error-state EKF, OpenShoe/PyShoe style) over a
 recording: time_s (N,) [s], acc_mps2 and gyro_radps (N, 3) sensor frame, stance (N,) bool.
 smooth=True adds the RTS smoother (positions_m smoothed, filtered_positions_m the EKF's).
 sigma_stance_heading_rad > 0 adds a stance heading update (yaw held at its stance-onset value).
-Returns a dict: positions_m (N, 3) (z up, start at 0, initial yaw 0), velocities_mps (N, 3),
+Returns a ZuptEkfOutput (reads as a dict): positions_m (N, 3) (z up, start at 0, initial yaw 0), velocities_mps (N, 3),
 headings_rad (N,), quaternions_wxyz (N, 4) body -> nav, position_sd_m (N, 3), seconds, and
-health: the health check (ZuptEkfSummary) as a dict: stance_fraction and walking_stance_fraction
+health: the health check (a ZuptEkfSummary, read like a dict): stance_fraction and walking_stance_fraction
 [0..1], n_stance_phases, swing_median_s / swing_max_s [s], speed_at_stance_median_mps /
 speed_at_stance_max_mps (|v| the filter had integrated when each stance began, before its update)
 [m/s], speed_at_stance_rise (last third / first third of the onsets), longest_stride_m and
@@ -531,6 +587,16 @@ median_stride_m [m],
 implausible (bool), reasons (list of str), report (one line). The limits min_stance_fraction,
 max_plausible_swing_s [s], max_plausible_stride_m and max_median_stride_m [m], max_stance_speed_mps [m/s],
 speed_rise_factor and min_rising_speed_mps [m/s] only flag (defaults calibrated in docs/pdr.md).)doc");
+}
+
+void BindPdr(py::module_& m) {
+  BindPdrResults(m);
+  // The keyword defaults of these functions are read from default-constructed Options structs
+  // (CONVENTIONS rule 13): the C++ header is the only place a default is written.
+  BindZeroVelocity(m);
+  BindStepDetection(m);
+  BindAttitudeAndPositions(m);
+  BindZuptEkf(m);
 }
 
 }  // namespace indoorloc::bindings

@@ -18,6 +18,7 @@
 #include "indoorloc/wifi/rss_model.h"
 #include "indoorloc/wifi/signal_map.h"
 #include "numpy_args.h"
+#include "options_binding.h"
 
 namespace indoorloc::bindings {
 
@@ -67,24 +68,19 @@ py::dict FixesToDict(const std::vector<WifiFix>& fixes) {
 
 }  // namespace
 
-void BindWifi(py::module_& m) {
-  py::class_<SignalMapOptions>(m, "SignalMapOptions", "How raw scans become a signal map.")
-      .def(py::init([](double not_heard_sentinel, double not_heard_dbm, double variance_floor_db2,
-                       double min_point_fraction) {
-             SignalMapOptions o;
-             o.not_heard_sentinel = not_heard_sentinel;
-             o.not_heard_dbm = not_heard_dbm;
-             o.variance_floor_db2 = variance_floor_db2;
-             o.min_point_fraction = min_point_fraction;
-             ValidateOptions(o);
-             return o;
-           }),
-           py::arg("not_heard_sentinel") = 100.0, py::arg("not_heard_dbm") = -105.0,
-           py::arg("variance_floor_db2") = 4.0, py::arg("min_point_fraction") = 0.0)
-      .def_readwrite("not_heard_sentinel", &SignalMapOptions::not_heard_sentinel)
-      .def_readwrite("not_heard_dbm", &SignalMapOptions::not_heard_dbm)
-      .def_readwrite("variance_floor_db2", &SignalMapOptions::variance_floor_db2)
-      .def_readwrite("min_point_fraction", &SignalMapOptions::min_point_fraction);
+/// Signal maps and their options.
+static void BindSignalMap(py::module_& m) {
+  py::class_<SignalMapOptions> signal_map_options(m, "SignalMapOptions",
+                                                   "How raw scans become a signal map; fields by keyword.");
+  signal_map_options
+      .def_readwrite("not_heard_sentinel", &SignalMapOptions::not_heard_sentinel,
+                     "RSS value that marks 'not heard' in the raw scans [dBm].")
+      .def_readwrite("not_heard_dbm", &SignalMapOptions::not_heard_dbm, "RSS a not-heard AP is given [dBm].")
+      .def_readwrite("variance_floor_db2", &SignalMapOptions::variance_floor_db2, "Lower bound of a variance [dB^2].")
+      .def_readwrite("min_point_fraction", &SignalMapOptions::min_point_fraction,
+                     "Drop APs heard at fewer than this fraction of the reference points.");
+  BindOptionsProtocol(signal_map_options, "SignalMapOptions",
+                      {"not_heard_sentinel", "not_heard_dbm", "variance_floor_db2", "min_point_fraction"});
 
   py::class_<SignalMap, std::shared_ptr<SignalMap>>(m, "SignalMap", R"doc(
 Reference positions with per-AP RSS mean [dBm] and variance [dB^2] (paper 004, §5.4).)doc")
@@ -118,7 +114,8 @@ Build a map from raw scans: rss_dbm (S, K_all) with a not-heard sentinel or NaN,
              MatrixArg rss = ToMatrix(rss_dbm, "rss_dbm", -1, -1, Finiteness::kAny);
              return map.PrepareScans(rss.map, sentinel, not_heard_dbm);
            },
-           py::arg("rss_dbm"), py::arg("not_heard_sentinel") = 100.0, py::arg("not_heard_dbm") = -105.0,
+           py::arg("rss_dbm"), py::arg("not_heard_sentinel") = SignalMapOptions().not_heard_sentinel,
+           py::arg("not_heard_dbm") = SignalMapOptions().not_heard_dbm,
            "Select the map's AP columns from raw scans (S, K_all) and apply the not-heard model.")
       .def_property_readonly("num_points", &SignalMap::num_points)
       .def_property_readonly("num_access_points", &SignalMap::num_access_points)
@@ -134,7 +131,10 @@ Build a map from raw scans: rss_dbm (S, K_all) with a not-heard sentinel or NaN,
                std::to_string(map.num_access_points()) + " APs, " +
                std::to_string(map.distinct_floors().size()) + " floor(s)>";
       });
+}
 
+/// The Delaunay interpolator of a signal map.
+static void BindDelaunayInterpolator(py::module_& m) {
   py::class_<DelaunayInterpolator, std::shared_ptr<DelaunayInterpolator>>(m, "DelaunayInterpolator", R"doc(
 Piecewise-linear interpolation of fields over a CGAL Delaunay triangulation, with gradients.)doc")
       .def(py::init([](const py::object& positions_m, const py::object& fields) {
@@ -179,18 +179,15 @@ query's triangle as the search hint (paths).)doc")
       .def_property_readonly("num_points", &DelaunayInterpolator::num_points)
       .def_property_readonly("num_fields", &DelaunayInterpolator::num_fields)
       .def_property_readonly("num_triangles", &DelaunayInterpolator::num_triangles);
+}
 
-  py::class_<RssModelOptions>(m, "RssModelOptions")
-      .def(py::init([](double variance_floor_db2, double max_term) {
-             RssModelOptions o;
-             o.variance_floor_db2 = variance_floor_db2;
-             o.max_term = max_term;
-             ValidateOptions(o);
-             return o;
-           }),
-           py::arg("variance_floor_db2") = 4.0, py::arg("max_term") = std::numeric_limits<double>::infinity())
-      .def_readwrite("variance_floor_db2", &RssModelOptions::variance_floor_db2)
-      .def_readwrite("max_term", &RssModelOptions::max_term);
+/// The Gaussian RSS model and its options.
+static void BindRssModel(py::module_& m) {
+  py::class_<RssModelOptions> rss_model_options(m, "RssModelOptions", "Options of the RSS model; fields by keyword.");
+  rss_model_options
+      .def_readwrite("variance_floor_db2", &RssModelOptions::variance_floor_db2, "Lower bound of a variance [dB^2].")
+      .def_readwrite("max_term", &RssModelOptions::max_term, "Cap of each AP's residual term [nats].");
+  BindOptionsProtocol(rss_model_options, "RssModelOptions", {"variance_floor_db2", "max_term"});
 
   py::class_<RssModel, std::shared_ptr<RssModel>>(m, "RssModel", R"doc(
 The interpolated Gaussian RSS model of a signal map: l(z, v), its gradient and Fisher information.)doc")
@@ -286,9 +283,13 @@ l(z, v) [nats], its gradient (2,) [1/m] and the Fisher information (2, 2) [1/m^2
            py::arg("points_m"), py::arg("floor") = 0, py::arg("seed") = 0, R"doc(
 Simulated mode (paper §5.6.1): one Gaussian RSS vector per point (Q, 2) drawn from the
 interpolated model, (Q, K) [dBm]. Stream `seed` of indoorloc's generator.)doc");
+}
 
-  py::class_<GradientTrackerOptions>(m, "GradientTrackerOptions", "Step control of the gradient tracker.")
-      .def(py::init<>())
+/// The gradient tracker and its options.
+static void BindGradientTracker(py::module_& m) {
+  py::class_<GradientTrackerOptions> gradient_tracker_options(
+      m, "GradientTrackerOptions", "Step control of the gradient tracker; fields by keyword.");
+  gradient_tracker_options
       .def_readwrite("max_step_m", &GradientTrackerOptions::max_step_m)
       .def_readwrite("min_reciprocal_condition", &GradientTrackerOptions::min_reciprocal_condition)
       .def_readwrite("fallback_step_m", &GradientTrackerOptions::fallback_step_m)
@@ -298,8 +299,8 @@ interpolated model, (Q, K) [dBm]. Stream `seed` of indoorloc's generator.)doc");
       .def_readwrite("num_starts", &GradientTrackerOptions::num_starts)
       .def_readwrite("start_iterations", &GradientTrackerOptions::start_iterations)
       .def_readwrite("tolerance_m", &GradientTrackerOptions::tolerance_m)
-      .def_readwrite("relocalize_threshold_nats", &GradientTrackerOptions::relocalize_threshold_nats)
-      .def("validate", [](const GradientTrackerOptions& o) { ValidateOptions(o); });
+      .def_readwrite("relocalize_threshold_nats", &GradientTrackerOptions::relocalize_threshold_nats);
+  BindOptionsProtocol(gradient_tracker_options, "GradientTrackerOptions");
 
   py::class_<GradientTracker>(m, "GradientTracker", R"doc(
 Streaming tracker of paper 004 (Algorithm 1, Fisher-scoring steps, no motion model).)doc")
@@ -330,7 +331,10 @@ Streaming tracker of paper 004 (Algorithm 1, Fisher-scoring steps, no motion mod
       .def("reset", &GradientTracker::Reset)
       .def("reset_to", &GradientTracker::ResetTo, py::arg("position_m"), py::arg("floor") = 0)
       .def_property_readonly("initialized", &GradientTracker::initialized);
+}
 
+/// Grid posteriors and maximum-likelihood location.
+static void BindGridPosterior(py::module_& m) {
   py::class_<wifi::GridPosterior>(m, "GridPosterior", R"doc(
 Posterior mean and covariance of the position under the interpolated likelihood, on a grid
 over each floor's hull (uniform prior). ``spacing_m <= 0``: a third of the median reference spacing.)doc")
@@ -388,6 +392,14 @@ Global maximum-likelihood fixes. Rows of rss_dbm (Q, K) [dBm, prepared] are grou
 of ``group_size`` consecutive scans taken at one position (e.g. 10 scans at a static test point).
 Returns a dict: positions_m (G, 2), covariances_m2 (G, 2, 2), floors (G,), neg_log_likelihood,
 inside, iterations, fallback_steps.)doc");
+}
+
+void BindWifi(py::module_& m) {
+  BindSignalMap(m);
+  BindDelaunayInterpolator(m);
+  BindRssModel(m);
+  BindGradientTracker(m);
+  BindGridPosterior(m);
 }
 
 }  // namespace indoorloc::bindings

@@ -74,6 +74,7 @@ py::tuple Locate(const FingerprintLocator& locator, const py::object& scans_dbm,
 }  // namespace
 
 void BindWifiBaselines(py::module_& m) {
+  const wifi::FingerprintOptions defaults;  // the keyword defaults below are read from C++
   py::class_<FingerprintLocator>(m, "FingerprintLocator", R"doc(
 Fingerprinting baselines: locate WiFi scans by matching them against reference fingerprints.
 
@@ -119,9 +120,10 @@ ValueError
     a negative variance, or horus without variances.)doc")
       .def(py::init(&MakeLocator), py::arg("reference_rss_dbm"),
            py::arg("reference_positions_m"), py::arg("reference_floors"),
-           py::arg("reference_variance_db2") = py::none(), py::arg("method") = "wknn",
-           py::arg("k") = 4, py::arg("distance_epsilon_db") = 1e-3,
-           py::arg("variance_floor_db2") = 4.0)
+           py::arg("reference_variance_db2") = py::none(),
+           py::arg("method") = std::string(wifi::ToString(defaults.method)), py::arg("k") = defaults.k,
+           py::arg("distance_epsilon_db") = defaults.distance_epsilon_db,
+           py::arg("variance_floor_db2") = defaults.variance_floor_db2)
       .def("locate", &Locate, py::arg("scans_dbm"), py::arg("num_threads") = 1, R"doc(
 Locate a batch of scans.
 

@@ -96,7 +96,7 @@ PYBIND11_MODULE(_core, m) {
   indoorloc::bindings::BindWifi(wifi);
   indoorloc::bindings::BindWifiBaselines(wifi);
   indoorloc::bindings::BindWifiMatcher(wifi);
-  py::module_ fusion = m.def_submodule("fusion", "Particle-filter fusion of PDR steps, WiFi and a floor plan (issue 14).");
+  py::module_ fusion = m.def_submodule("fusion", "Particle-filter fusion of PDR steps, WiFi and a floor plan (docs/fusion.md).");
   indoorloc::bindings::BindFusionFloorPlan(fusion);
   indoorloc::bindings::BindFusionTracker(fusion);
   indoorloc::bindings::BindFusionGrid(fusion);

@@ -3,10 +3,15 @@
 // restated on the Python side (CONVENTIONS rule 13):
 //   - Options(**fields): the C++ defaults, the given fields set, then IsValid (ValueError naming
 //     an unknown field, a value of the wrong type, or the rule broken);
-//   - replace(**fields), to_dict(), __repr__, ==, pickling (Dask ships options to workers).
+//   - replace(**fields), to_dict(), validate(), __repr__, ==, pickling (Dask ships options to
+//     workers);
+//   - the positional call form some classes once had (Options(500, 2.0)) still works, with a
+//     DeprecationWarning, when the class lists its old positional order (docs/api_changes.md).
 #pragma once
 
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <pybind11/pybind11.h>
 
@@ -49,20 +54,51 @@ T OptionsWithFields(const T& base, const py::dict& fields, const char* type_name
       py::setattr(obj, item.first, item.second);
     } catch (const py::error_already_set& e) {
       if (!e.matches(PyExc_TypeError)) throw;
-      ThrowInvalidArgument(key, std::string("has the wrong type for ") + type_name + ": got " +
-                                    std::string(Py_TYPE(item.second.ptr())->tp_name));
+      // pybind11's setter error names neither the field nor the type it wanted.
+      throw py::type_error("indoorloc: argument '" + key + "': has the wrong type for " + type_name + "." +
+                           key + ": got " + std::string(Py_TYPE(item.second.ptr())->tp_name));
     }
   }
   T out = obj.cast<T>();
-  ValidateOptions(out, type_name);
+  ValidateOptions(out);  // "argument 'options': <rule>", as when an algorithm validates them
   return out;
 }
 
-/// Adds the kwargs constructor, replace, to_dict, __repr__, __eq__ and pickling to a bound
-/// Options class whose fields are already bound.
+/// The keyword fields of a call that may still use the deprecated positional form: positional
+/// values are matched to `legacy_order` with a DeprecationWarning.
+inline py::dict FieldsFromCall(const py::args& args, const py::kwargs& kwargs, const char* type_name,
+                               const std::vector<std::string>& legacy_order) {
+  py::dict fields;
+  for (const auto& item : kwargs) fields[item.first] = item.second;
+  if (args.empty()) return fields;
+  if (args.size() > legacy_order.size()) {
+    throw py::type_error(std::string("indoorloc: ") + type_name + " takes its fields by keyword only (" +
+                         std::to_string(args.size()) + " positional arguments given)");
+  }
+  const std::string message = std::string(type_name) +
+                              "(...) with positional arguments is deprecated; pass the fields by keyword "
+                              "(docs/api_changes.md)";
+  if (PyErr_WarnEx(PyExc_DeprecationWarning, message.c_str(), 1) != 0) throw py::error_already_set();
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const py::str key(legacy_order[i]);
+    if (fields.contains(key)) {
+      throw py::type_error(std::string("indoorloc: argument '") + legacy_order[i] + "': given twice to " + type_name);
+    }
+    fields[key] = args[i];
+  }
+  return fields;
+}
+
+/// Adds the kwargs constructor, replace, to_dict, validate, __repr__, __eq__ and pickling to a
+/// bound Options class whose fields are already bound. `legacy_order`: the field order of a former
+/// positional constructor, kept working with a DeprecationWarning (empty: keywords only).
 template <typename T>
-void BindOptionsProtocol(py::class_<T>& cls, const char* type_name) {
-  cls.def(py::init([type_name](const py::kwargs& fields) { return OptionsWithFields(T(), fields, type_name); }))
+void BindOptionsProtocol(py::class_<T>& cls, const char* type_name, std::vector<std::string> legacy_order = {}) {
+  cls.def(py::init([type_name, legacy_order](const py::args& args, const py::kwargs& kwargs) {
+        return OptionsWithFields(T(), FieldsFromCall(args, kwargs, type_name, legacy_order), type_name);
+      }))
+      .def("validate", [](const T& self) { ValidateOptions(self); },
+           "Raises ValueError naming the field and the rule broken, if any.")
       .def("replace", [type_name](const T& self, const py::kwargs& fields) {
              return OptionsWithFields(self, fields, type_name);
            },

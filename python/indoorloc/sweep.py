@@ -1,4 +1,4 @@
-"""Parameter sweeps and Monte Carlo studies on Dask (issue 19): the same tasks in-process on the
+"""Parameter sweeps and Monte Carlo studies on Dask: the same tasks in-process on the
 local cores or on a cluster, with results that do not depend on where or in which order they ran.
 
 A sweep maps a pure, picklable task function ``fn(params: dict, seed: int, **shared) -> dict``

@@ -53,7 +53,7 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from indoorloc.pdr import handheld as ph
+from indoorloc.pdr import handheld
 from indoorloc import wifi
 
 POSITIONING = ("pdr", "linear")
@@ -84,8 +84,8 @@ class CrowdMapSettings:
             raise ValueError(f"indoorloc: CrowdMapSettings.{name}: {why}")
         if self.positioning not in POSITIONING:
             bad("positioning", f"{self.positioning!r} is not one of {POSITIONING}")
-        if self.heading_source not in ph.HEADING_SOURCES:
-            bad("heading_source", f"{self.heading_source!r} is not one of {ph.HEADING_SOURCES}")
+        if self.heading_source not in handheld.HEADING_SOURCES:
+            bad("heading_source", f"{self.heading_source!r} is not one of {handheld.HEADING_SOURCES}")
         for name in ("cell_size_m", "fresh_age_s", "max_age_s", "max_scale_ratio"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
@@ -139,7 +139,7 @@ def _similarities(p_at_wp: np.ndarray, wxy: np.ndarray, n_steps: np.ndarray,
 
 
 def walk_positions(walk: Any, t_query_s: np.ndarray, settings: Optional[CrowdMapSettings] = None,
-                   steps: Optional[ph.HandheldSteps] = None) -> WalkPositions:
+                   steps: Optional[handheld.HandheldSteps] = None) -> WalkPositions:
     """The walker's position at the query times (walk clock [s]) from the waypoints and PDR.
 
     Parameters
@@ -191,12 +191,12 @@ def walk_positions(walk: Any, t_query_s: np.ndarray, settings: Optional[CrowdMap
     use_pdr = np.zeros(n_int, dtype=bool)
     if s.positioning == "pdr":
         if steps is None:
-            steps = ph.handheld_steps(walk, ph.HandheldOptions(heading_source=s.heading_source))
-        disp = ph.step_displacements(steps, s.heading_source)
+            steps = handheld.handheld_steps(walk, handheld.HandheldOptions(heading_source=s.heading_source))
+        disp = handheld.step_displacements(steps, s.heading_source)
         ones_disp = np.column_stack([np.ones(steps.n_steps), disp])
-        at_wp = ph.cumulative_at(steps, ones_disp, wt)
+        at_wp = handheld.cumulative_at(steps, ones_disp, wt)
         fac, use_pdr = _similarities(at_wp[:, 1:], wxy, np.diff(at_wp[:, 0]), s)
-        p = ph.cumulative_at(steps, disp, t)
+        p = handheld.cumulative_at(steps, disp, t)
         # Extrapolation uses the nearest usable interval's similarity.
         jj = j.copy()
         if use_pdr.any():
@@ -205,7 +205,7 @@ def walk_positions(walk: Any, t_query_s: np.ndarray, settings: Optional[CrowdMap
             jj[after] = usable[-1]
         anchor = np.where(t[:, None] < wt[0], wxy[0], np.where(t[:, None] > wt[-1], wxy[-1], wxy[j]))
         anchor_t = np.where(t < wt[0], wt[0], np.where(t > wt[-1], wt[-1], wt[j]))
-        p_anchor = ph.cumulative_at(steps, disp, anchor_t)
+        p_anchor = handheld.cumulative_at(steps, disp, anchor_t)
         d = p - p_anchor
         z = fac[jj] * (d[:, 0] + 1j * d[:, 1])
         pdr_xy = anchor + np.column_stack([z.real, z.imag])
@@ -265,7 +265,7 @@ def scan_epochs(wf: Any, fresh_age_s: float) -> np.ndarray:
 
 
 def reading_positions(walk: Any, settings: Optional[CrowdMapSettings] = None,
-                      steps: Optional[ph.HandheldSteps] = None) -> PlacedReadings:
+                      steps: Optional[handheld.HandheldSteps] = None) -> PlacedReadings:
     """Places every distinct WiFi measurement of a walk (``new_measurement_mask``) at the
     walker's position at its last-seen time (:func:`walk_positions`); also the scans' epochs."""
     s = settings or CrowdMapSettings()
@@ -275,7 +275,7 @@ def reading_positions(walk: Any, settings: Optional[CrowdMapSettings] = None,
     epochs = scan_epochs(wf, s.fresh_age_s)
     epochs = epochs[np.isfinite(epochs)]
     if s.positioning == "pdr" and steps is None and (t_read.size or epochs.size):
-        steps = ph.handheld_steps(walk, ph.HandheldOptions(heading_source=s.heading_source))
+        steps = handheld.handheld_steps(walk, handheld.HandheldOptions(heading_source=s.heading_source))
     pos = walk_positions(walk, np.concatenate([t_read, epochs]), s, steps)
     r = t_read.shape[0]
     ok_r, ok_e = pos.valid[:r], pos.valid[r:]

@@ -41,9 +41,9 @@ from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 import numpy as np
 
 from indoorloc import fusion
-from indoorloc.pdr import handheld as ph
-from indoorloc import wifi_crowdsource as wc
-from indoorloc import wifi_matcher as wm
+from indoorloc.pdr import handheld
+from indoorloc import wifi_crowdsource
+from indoorloc import wifi_matcher
 from indoorloc._core.wifi import SharedApMatcherOptions
 from indoorloc.validate import integer, real_array, real_scalar
 
@@ -154,7 +154,7 @@ def fresh_scans(walk: Any, fresh_age_s: float, bssids: Optional[Sequence[str]] =
     wf = walk.wifi
     names = list(wf.bssids) if bssids is None else list(bssids)
     index = {b: i for i, b in enumerate(names)}
-    epochs = wc.scan_epochs(wf, fresh_age_s)
+    epochs = wifi_crowdsource.scan_epochs(wf, fresh_age_s)
     keep = np.flatnonzero(np.isfinite(epochs))
     rss = np.full((keep.size, len(names)), np.nan)
     if wf.n_readings and keep.size:
@@ -195,7 +195,7 @@ class FingerprintDatabase:
             self.walk_index = np.zeros(self.positions_m.shape[0], dtype=np.int64)
         if self.ap_ratio is None:
             self.ap_ratio = np.ones(self.rss_dbm.shape[1])
-        self._index: Optional[wm.ReferenceIndex] = None
+        self._index: Optional[wifi_matcher.ReferenceIndex] = None
 
     def with_settings(self, settings: FixSettings) -> "FingerprintDatabase":
         """The same fingerprints with other fix settings. What was fixed at the build stays: the
@@ -212,12 +212,12 @@ class FingerprintDatabase:
         return int(self.positions_m.shape[0])
 
     @property
-    def index(self) -> wm.ReferenceIndex:
+    def index(self) -> wifi_matcher.ReferenceIndex:
         """The fingerprints prepared for the "shared" metric (built once)."""
         if self._index is None:
             s = self.settings
             g = self.ap_ratio ** s.ap_weight_power if s.ap_weight_power else None
-            self._index = wm.ReferenceIndex.build(self.rss_dbm, g, s.strength_scale_db)
+            self._index = wifi_matcher.ReferenceIndex.build(self.rss_dbm, g, s.strength_scale_db)
         return self._index
 
 
@@ -230,14 +230,14 @@ def _walk_fingerprints(walk: Any, s: FixSettings, positions_at: Callable[[np.nda
         if t.size == 0:
             return None
     else:
-        meas = wm.walk_measurements(walk, beacons=s.beacons)
+        meas = wifi_matcher.walk_measurements(walk, beacons=s.beacons)
         names = list(meas.bssids)
         wt = np.asarray(walk.waypoint_t_s, float) if span_s is None else np.asarray(span_s, float)
         if meas.n == 0 or wt.size == 0:
             return None
         # Reference times along the surveyed part of the walk (positions_at drops what it cannot place).
         t = np.arange(wt[0], wt[-1] + 1e-9, s.ref_spacing_s)
-        rss, _, n_used = wm.pool_windows(meas.t_s, meas.bssid_index, meas.rssi_dbm, len(names), t,
+        rss, _, n_used = wifi_matcher.pool_windows(meas.t_s, meas.bssid_index, meas.rssi_dbm, len(names), t,
                                          s.ref_window_s / 2, s.ref_window_s / 2)
         t, rss = t[n_used > 0], rss[n_used > 0]
         if t.size == 0:
@@ -249,8 +249,8 @@ def _walk_fingerprints(walk: Any, s: FixSettings, positions_at: Callable[[np.nda
 
 
 def build_database(train_walks: Sequence[Any], settings: Optional[FixSettings] = None,
-                   steps: Optional[Sequence[ph.HandheldSteps]] = None,
-                   map_settings: Optional[wc.CrowdMapSettings] = None,
+                   steps: Optional[Sequence[handheld.HandheldSteps]] = None,
+                   map_settings: Optional[wifi_crowdsource.CrowdMapSettings] = None,
                    floors: Optional[Sequence[int]] = None,
                    positions_at: Optional[Sequence[Callable[[np.ndarray], Tuple[np.ndarray, np.ndarray]]]] = None
                    ) -> FingerprintDatabase:
@@ -279,7 +279,7 @@ def build_database(train_walks: Sequence[Any], settings: Optional[FixSettings] =
             where = positions_at[i]
         else:
             def where(t, walk=walk, i=i):
-                pos = wc.walk_positions(walk, t, map_settings, None if steps is None else steps[i])
+                pos = wifi_crowdsource.walk_positions(walk, t, map_settings, None if steps is None else steps[i])
                 return pos.xy_m, pos.valid
         got = _walk_fingerprints(walk, s, where)
         if got is not None:
@@ -289,7 +289,7 @@ def build_database(train_walks: Sequence[Any], settings: Optional[FixSettings] =
     return assemble_database(per_walk, s)
 
 
-def walk_fingerprints(walk: Any, settings: FixSettings, steps: Optional[ph.HandheldSteps] = None,
+def walk_fingerprints(walk: Any, settings: FixSettings, steps: Optional[handheld.HandheldSteps] = None,
                       positions_at: Optional[Callable[[np.ndarray], Tuple[np.ndarray, np.ndarray]]] = None,
                       span_s: Optional[Tuple[float, float]] = None
                       ) -> Optional[Tuple[np.ndarray, np.ndarray, List[str], np.ndarray]]:
@@ -305,7 +305,7 @@ def walk_fingerprints(walk: Any, settings: FixSettings, steps: Optional[ph.Handh
     settings.validate()
 
     def where(t):
-        pos = wc.walk_positions(walk, t, None, steps)
+        pos = wifi_crowdsource.walk_positions(walk, t, None, steps)
         return pos.xy_m, pos.valid
     return _walk_fingerprints(walk, settings, positions_at or where, span_s)
 
@@ -343,7 +343,7 @@ def assemble_database(per_walk: Sequence[Tuple[np.ndarray, np.ndarray, List[str]
         # Pairs of references only within a floor: floors' frames share coordinates, and an AP
         # heard strongly on its own floor and weakly above it is a floor's signature, not noise.
         where = np.c_[xy_all, 1e6 * floors_all.astype(float)]
-        ratio = wm.ap_reliability(rss_all, where, walk_idx, 1.0, s.pair_radius_m)
+        ratio = wifi_matcher.ap_reliability(rss_all, where, walk_idx, 1.0, s.pair_radius_m)
     w_all = None
     if weights is not None and any(np.any(np.asarray(w) != 1.0) for w in weights):
         w_all = np.concatenate([np.asarray(w, float) for w in weights])
@@ -362,14 +362,14 @@ def walk_queries(walk: Any, database: FingerprintDatabase) -> Tuple[np.ndarray, 
     if s.pooling == "fresh":
         t, rss, _ = fresh_scans(walk, s.fresh_age_s, database.bssids)
     else:
-        meas = wm.walk_measurements(walk, beacons=s.beacons)
+        meas = wifi_matcher.walk_measurements(walk, beacons=s.beacons)
         cols = meas.columns({b: i for i, b in enumerate(database.bssids)})
         scan_t = np.unique(np.asarray(walk.wifi.scan_times_s, float))
         if s.query_align == "end":
-            rss, t, _ = wm.pool_windows(meas.t_s, cols, meas.rssi_dbm, len(database.bssids), scan_t,
+            rss, t, _ = wifi_matcher.pool_windows(meas.t_s, cols, meas.rssi_dbm, len(database.bssids), scan_t,
                                         s.query_window_s, 0.0, meas.reported_s)
         else:
-            rss, t, _ = wm.pool_windows(meas.t_s, cols, meas.rssi_dbm, len(database.bssids), scan_t,
+            rss, t, _ = wifi_matcher.pool_windows(meas.t_s, cols, meas.rssi_dbm, len(database.bssids), scan_t,
                                         s.query_window_s / 2, s.query_window_s / 2)
     ok = np.isfinite(rss).sum(axis=1) >= s.min_aps
     t, rss = t[ok], rss[ok]
@@ -439,7 +439,7 @@ def dissimilarity(queries_dbm: np.ndarray, database: "FingerprintDatabase", num_
     depend on it)."""
     s = database.settings
     if s.metric == "shared":
-        return wm.shared_dissimilarity(queries_dbm, database.index, s.penalty_db, num_threads=num_threads)
+        return wifi_matcher.shared_dissimilarity(queries_dbm, database.index, s.penalty_db, num_threads=num_threads)
     if s.metric == "strongest":
         return strongest_ap_dissimilarity(queries_dbm, database.rss_dbm, s.strongest_n, s.not_heard_dbm)
     return scan_dissimilarity(queries_dbm, database.rss_dbm, s.unshared_cost_db)
@@ -453,8 +453,8 @@ def nearest(queries_dbm: np.ndarray, database: "FingerprintDatabase", num_thread
     the (Q, N) matrix (``wifi_matcher.knn``)."""
     s = database.settings
     if s.metric == "shared":
-        return wm.shared_knn(queries_dbm, database.index, s.penalty_db, s.k, s.temperature_db, num_threads)
-    return wm.knn(dissimilarity(queries_dbm, database), s.k, s.temperature_db)
+        return wifi_matcher.shared_knn(queries_dbm, database.index, s.penalty_db, s.k, s.temperature_db, num_threads)
+    return wifi_matcher.knn(dissimilarity(queries_dbm, database), s.k, s.temperature_db)
 
 
 def fixes_for_walk(walk: Any, database: FingerprintDatabase, with_floors: bool = True) -> fusion.Fixes:

@@ -1,5 +1,5 @@
 """WiFi fingerprints pooled in time along the walks, and the shared-AP dissimilarity that matches them
-(issue 25, "A WiFi observation at the state of the art"; docs/fusion_real.md, "WiFi as fixes").
+(docs/fusion_real.md, "WiFi as fixes").
 
 When to use: to turn a crowdsourced set of walks (waypoints + WiFi, the Indoor Location Competition
 2.0 format) into reference fingerprints and to match the fingerprints of another walk against

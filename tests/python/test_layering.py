@@ -13,6 +13,10 @@ pattern that matches it (``*``: one name, ``**``: one or more dotted names). A n
 ``foo`` slots in by name: ``indoorloc/foo.py`` is a facade, ``experiments/foo_*.py`` an
 experiment, ``cli/foo.py`` an entry point. A module that matches no pattern fails
 ``test_every_module_has_one_layer``: add a pattern rather than an exception.
+
+Across the layers, the subsystems (``SUBSYSTEMS``: the package ``indoorloc/foo/`` or facade
+``indoorloc/foo.py`` of each C++ subsystem) import only their declared neighbours
+(``SUBSYSTEM_NEIGHBOURS``: fusion may use wifi, pdr and mapmatch; every subsystem may use core).
 """
 
 from __future__ import annotations
@@ -53,6 +57,20 @@ LAYERS: Tuple[Tuple[str, str, Tuple[str, ...]], ...] = (
     ("entry points", "the demo runner and the command line",
      ("indoorloc.demo", "indoorloc.__main__", "indoorloc.cli", "indoorloc.cli.**")),
 )
+
+
+#: The subsystems of the package, one per C++ subsystem (cpp/include/indoorloc/<s>/).
+SUBSYSTEMS: Tuple[str, ...] = ("core", "analog", "mapmatch", "network", "pdr", "wifi", "fusion")
+#: Which other subsystems a subsystem may import (core: every subsystem may).
+SUBSYSTEM_NEIGHBOURS: Dict[str, Set[str]] = {"fusion": {"wifi", "pdr", "mapmatch"}}
+#: Top-level modules that belong to a subsystem while they move into its package
+#: (docs/api_changes.md lists the moves).
+SUBSYSTEM_MODULES: Dict[str, str] = {
+    "indoorloc.pdr_handheld": "pdr",
+    "indoorloc.wifi_matcher": "wifi",
+    "indoorloc.wifi_crowdsource": "fusion",
+    "indoorloc.wifi_fixes": "fusion",
+}
 
 
 class Import(NamedTuple):
@@ -238,6 +256,32 @@ def layer_violations(graph: Mapping[str, List[Import]], layers=LAYERS) -> List[s
     return problems
 
 
+def subsystem_of(module: str, modules: Mapping[str, str] = SUBSYSTEM_MODULES) -> Optional[str]:
+    """The subsystem a module belongs to (``indoorloc.<s>`` or inside it), else None."""
+    if module in modules:
+        return modules[module]
+    parts = module.split(".")
+    if len(parts) >= 2 and parts[0] == PACKAGE and parts[1] in SUBSYSTEMS:
+        return parts[1]
+    return None
+
+
+def subsystem_violations(graph: Mapping[str, List[Import]], modules: Mapping[str, str] = SUBSYSTEM_MODULES,
+                         neighbours: Mapping[str, Set[str]] = SUBSYSTEM_NEIGHBOURS) -> List[str]:
+    """One line per import of another subsystem that is neither core nor a declared neighbour."""
+    problems = []
+    for module, imps in sorted(graph.items()):
+        own = subsystem_of(module, modules)
+        if own is None:
+            continue
+        for imp in imps:
+            other = subsystem_of(imp.target, modules)
+            if other is None or other in (own, "core") or other in neighbours.get(own, set()):
+                continue
+            problems.append(f"{module}:{imp.line} ({own}) imports {imp.target} ({other})")
+    return problems
+
+
 def _format_cycle(cycle: List[str], graph: Mapping[str, List[Import]]) -> str:
     steps = []
     for a, b in zip(cycle, cycle[1:]):
@@ -276,6 +320,31 @@ def test_no_import_cycle(graph):
 def test_no_module_imports_a_higher_layer(graph):
     problems = layer_violations(graph)
     assert not problems, "imports of a higher layer:\n" + "\n".join(problems)
+
+
+def test_subsystems_import_only_declared_neighbours(graph):
+    problems = subsystem_violations(graph)
+    assert not problems, "imports between subsystems not declared in SUBSYSTEM_NEIGHBOURS:\n" + "\n".join(problems)
+
+
+def test_every_subsystem_module_listed_exists(graph):
+    assert set(SUBSYSTEM_MODULES) <= set(graph), f"stale: {set(SUBSYSTEM_MODULES) - set(graph)}"
+
+
+def test_checker_finds_imports_between_subsystems():
+    graph = _fake({
+        "indoorloc.wifi": "from indoorloc import pdr\nfrom indoorloc import core",
+        "indoorloc.pdr": "",
+        "indoorloc.core": "",
+        "indoorloc.fusion": "from indoorloc import wifi, pdr, mapmatch",
+        "indoorloc.fusion.site": "from indoorloc.network import solve",
+        "indoorloc.network": "def solve():\n    pass",
+        "indoorloc.mapmatch": "",
+    })
+    assert subsystem_violations(graph) == [
+        "indoorloc.fusion.site:1 (fusion) imports indoorloc.network (network)",
+        "indoorloc.wifi:1 (wifi) imports indoorloc.pdr (pdr)",
+    ]
 
 
 def test_leaves_import_nothing_from_indoorloc(graph):

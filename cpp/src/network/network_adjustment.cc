@@ -17,135 +17,13 @@
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/validate.h"
 #include "indoorloc/network/gravity.h"
+#include "network_problem.h"
 #include "residuals.h"
 
 namespace indoorloc::network {
 
-namespace {
+using namespace adjustment;  // NOLINT: the problem's parts (network_problem.h)
 
-/// Parameter storage of the whole network: r, v, q per IMU epoch; a, o, δg per slow node
-/// (one per `stride` epochs; stride 1: per epoch).
-struct Blocks {
-  int n = 0;       // IMU epochs
-  int stride = 1;  // slow_parameter_stride
-  int m = 0;       // slow nodes ⌈n / stride⌉
-  std::vector<double> r, v, q, a, o, dg;  // q in x, y, z, w
-  int Slow(int epoch) const { return epoch / stride; }
-  double* R(int i) { return &r[3 * i]; }
-  double* V(int i) { return &v[3 * i]; }
-  double* Q(int i) { return &q[4 * i]; }
-  double* A(int k) { return &a[3 * k]; }  // slow node k
-  double* O(int k) { return &o[3 * k]; }
-  double* G(int k) { return &dg[k]; }
-  /// First and one-past-last epoch of slow node k.
-  int First(int k) const { return k * stride; }
-  // In 64 bits: a stride near 2**31 would overflow (and abort inside Ceres).
-  int End(int k) const { return static_cast<int>(std::min<long long>((k + 1LL) * stride, n)); }
-};
-
-Blocks FromState(const NetworkState& s, int stride) {
-  Blocks b;
-  b.n = static_cast<int>(s.position_m.rows());
-  b.stride = stride;
-  b.m = b.n == 0 ? 0 : 1 + (b.n - 1) / stride;  // ⌈n / stride⌉ without overflowing n + stride
-  b.r.resize(3 * b.n);
-  b.v.resize(3 * b.n);
-  b.q.resize(4 * b.n);
-  b.a.assign(3 * b.m, 0.0);
-  b.o.assign(3 * b.m, 0.0);
-  b.dg.assign(b.m, 0.0);
-  for (int i = 0; i < b.n; ++i) {
-    for (int k = 0; k < 3; ++k) {
-      b.r[3 * i + k] = s.position_m(i, k);
-      b.v[3 * i + k] = s.velocity_mps(i, k);
-    }
-    Eigen::Quaterniond q(s.attitude_wxyz(i, 0), s.attitude_wxyz(i, 1), s.attitude_wxyz(i, 2), s.attitude_wxyz(i, 3));
-    q.normalize();
-    b.q[4 * i + 0] = q.x();
-    b.q[4 * i + 1] = q.y();
-    b.q[4 * i + 2] = q.z();
-    b.q[4 * i + 3] = q.w();
-  }
-  // Slow blocks: the mean of the initial values over the interval.
-  for (int k = 0; k < b.m; ++k) {
-    const int first = b.First(k), count = b.End(k) - first;
-    for (int c = 0; c < 3; ++c) {
-      b.a[3 * k + c] = s.acc_bias_mps2.col(c).segment(first, count).mean();
-      b.o[3 * k + c] = s.gyro_bias_radps.col(c).segment(first, count).mean();
-    }
-    b.dg[k] = s.gravity_disturbance_mps2.segment(first, count).mean();
-  }
-  return b;
-}
-
-NetworkState ToState(const Blocks& b) {
-  NetworkState s;
-  s.position_m.resize(b.n, 3);
-  s.velocity_mps.resize(b.n, 3);
-  s.attitude_wxyz.resize(b.n, 4);
-  s.acc_bias_mps2.resize(b.n, 3);
-  s.gyro_bias_radps.resize(b.n, 3);
-  s.gravity_disturbance_mps2.resize(b.n);
-  for (int i = 0; i < b.n; ++i) {
-    const int k = b.Slow(i);
-    for (int c = 0; c < 3; ++c) {
-      s.position_m(i, c) = b.r[3 * i + c];
-      s.velocity_mps(i, c) = b.v[3 * i + c];
-      s.acc_bias_mps2(i, c) = b.a[3 * k + c];
-      s.gyro_bias_radps(i, c) = b.o[3 * k + c];
-    }
-    s.attitude_wxyz(i, 0) = b.q[4 * i + 3];
-    s.attitude_wxyz(i, 1) = b.q[4 * i + 0];
-    s.attitude_wxyz(i, 2) = b.q[4 * i + 1];
-    s.attitude_wxyz(i, 3) = b.q[4 * i + 2];
-    s.gravity_disturbance_mps2[i] = b.dg[k];
-  }
-  return s;
-}
-
-/// What a column of the (tangent-space) Jacobian is: block name and epoch (slow blocks: the
-/// first epoch of their interval), for the datum-defect message.
-struct ColumnLabel {
-  const char* name;
-  int epoch;
-};
-
-template <typename Functor, int kRes, int... kSizes>
-ceres::CostFunction* Auto(Functor f) {
-  return new ceres::AutoDiffCostFunction<Functor, kRes, kSizes...>(new Functor(f));
-}
-
-/// AB / OB residual over a step dt: random walk (tau = 0) or Gauss-Markov.
-ceres::CostFunction* BiasModel(double q, double tau, double step) {
-  if (tau <= 0.0)
-    return new ceres::AutoDiffCostFunction<internal::RandomWalk<3>, 3, 3, 3>(
-        new internal::RandomWalk<3>{1.0 / (q * std::sqrt(step))});
-  const double phi = std::exp(-step / tau);
-  const double sigma = q * std::sqrt(0.5 * tau * (1.0 - phi * phi));
-  return new ceres::AutoDiffCostFunction<internal::GaussMarkov<3>, 3, 3, 3>(
-      new internal::GaussMarkov<3>{phi, 1.0 / sigma});
-}
-
-void CheckEpochs(const Eigen::VectorXi& epochs, int n, const char* name) {
-  for (Eigen::Index i = 0; i < epochs.size(); ++i)
-    CheckArgument(epochs[i] >= 0 && epochs[i] < n, name,
-                  "entry " + std::to_string(i) + " = " + std::to_string(epochs[i]) + " is not an epoch in [0, " +
-                      std::to_string(n) + ")");
-}
-
-/// (JᵀJ)⁻¹ as a dense matrix: sparse LDLᵀ (AMD) of JᵀJ, then n solves (O(n nnz(L)), n² memory).
-template <typename Jacobian>
-Eigen::MatrixXd DenseInverseOfNormal(const Jacobian& jac) {
-  const Eigen::SparseMatrix<double> normal = Eigen::SparseMatrix<double>(jac.transpose()) * jac;
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt(normal);
-  if (ldlt.info() != Eigen::Success)
-    throw std::runtime_error("indoorloc: network: the normal matrix at the solution is singular");
-  return ldlt.solve(Eigen::MatrixXd::Identity(normal.rows(), normal.cols()));
-}
-
-constexpr long kMaxDenseUnknowns = 8000;  // n² doubles: 0.5 GB
-
-}  // namespace
 
 bool NetworkOptions::IsValid(std::string* error) const {
   Validator v(error);
@@ -317,298 +195,105 @@ void CheckNetworkInput(const NetworkObservations& obs, const NetworkState& state
                   "row " + std::to_string(i) + " is not a unit quaternion");
 }
 
-NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& initial, const NetworkOptions& options,
-                          NetworkSummary* summary) {
-  WallTimer total;
-  ValidateOptions(options);
-  CheckNetworkInput(obs, initial);
-  const int n = static_cast<int>(obs.imu_time_s.size());
-  const double dt = (obs.imu_time_s[n - 1] - obs.imu_time_s[0]) / (n - 1);
-  const bool leap = options.discretization == Discretization::kLeapFrog;
+namespace {
 
-  // Structural datum checks (cheap, before any work).
-  CheckArgument(obs.gps_time_s.size() > 0, "gps_position_m",
-                "datum defect: no CUPT (GPS) observations, the position of the network is not determined");
-  struct GpsTie {
-    int a;
-    double alpha;
-  };
-  std::vector<GpsTie> ties;
-  bool parity_has_cupt[2] = {false, false};
-  for (Eigen::Index i = 0; i < obs.gps_time_s.size(); ++i) {
-    const double u = (obs.gps_time_s[i] - obs.imu_time_s[0]) / dt;
-    int a = std::clamp(static_cast<int>(std::floor(u)), 0, n - 2);
-    double alpha = u - a;
-    if (alpha < 1e-9) alpha = 0.0;
-    if (alpha > 1.0 - 1e-9) {
-      a += 1;
-      alpha = 0.0;
-      if (a == n - 1) {  // the last epoch: tie as (n-2, α = 1)
-        a = n - 2;
-        alpha = 1.0;
+/// (JᵀJ)⁻¹ as a dense matrix: sparse LDLᵀ (AMD) of JᵀJ, then n solves (O(n nnz(L)), n² memory).
+template <typename Jacobian>
+Eigen::MatrixXd DenseInverseOfNormal(const Jacobian& jac) {
+  const Eigen::SparseMatrix<double> normal = Eigen::SparseMatrix<double>(jac.transpose()) * jac;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt(normal);
+  if (ldlt.info() != Eigen::Success)
+    throw std::runtime_error("indoorloc: network: the normal matrix at the solution is singular");
+  return ldlt.solve(Eigen::MatrixXd::Identity(normal.rows(), normal.cols()));
+}
+
+constexpr long kMaxDenseUnknowns = 8000;  // n² doubles: 0.5 GB
+
+/// Numerical datum check: LDLᵀ of the Jacobi-scaled JᵀJ at the initial values; throws naming the
+/// first undetermined parameter when a pivot ratio falls below options.datum_pivot_tolerance.
+void CheckDatum(const NetworkOptions& options, const ParameterLayout& layout, ceres::Problem& problem,
+                NetworkSummary* summary) {
+  NetworkSummary& s = *summary;
+  const std::vector<double*>& ordered_blocks = layout.ordered_blocks;
+  const std::vector<ColumnLabel>& labels = layout.labels;
+  WallTimer datum_timer;
+  ceres::Problem::EvaluateOptions eo;
+  eo.parameter_blocks = ordered_blocks;
+  eo.apply_loss_function = false;
+  eo.num_threads = options.num_threads;
+  ceres::CRSMatrix crs;
+  double cost = 0.0;
+  if (!problem.Evaluate(eo, &cost, nullptr, nullptr, &crs))
+    throw std::runtime_error("indoorloc: network: evaluating the Jacobian at the initial values failed");
+  Eigen::Map<const Eigen::SparseMatrix<double, Eigen::RowMajor, int>> jac(
+      crs.num_rows, crs.num_cols, static_cast<Eigen::Index>(crs.values.size()), crs.rows.data(), crs.cols.data(),
+      crs.values.data());
+  Eigen::SparseMatrix<double> normal = Eigen::SparseMatrix<double>(jac.transpose()) * jac;
+  // Jacobi scaling to a unit diagonal: the pivots are then the ratios pivot / diagonal entry,
+  // and the factorisation does not suffer from the units of the parameters.
+  Eigen::VectorXd scale = normal.diagonal();
+  for (Eigen::Index i = 0; i < scale.size(); ++i) scale[i] = scale[i] > 0.0 ? 1.0 / std::sqrt(scale[i]) : 1.0;
+  normal = scale.asDiagonal() * normal * scale.asDiagonal();
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt;
+  ldlt.analyzePattern(normal);
+  ldlt.factorize(normal);
+  const Eigen::VectorXd diag = normal.diagonal();
+  const Eigen::VectorXd d = ldlt.vectorD();
+  const auto& perm = ldlt.permutationP().indices();
+  double worst = std::numeric_limits<double>::infinity();
+  int worst_col = -1;
+  const bool failed = ldlt.info() != Eigen::Success;
+  std::vector<int> inverse(static_cast<size_t>(normal.cols()));
+  for (int col = 0; col < normal.cols(); ++col) inverse[static_cast<size_t>(perm[col])] = col;
+  if (failed) {
+    // Eigen stops at the first exactly zero pivot; later entries of D are not computed.
+    worst = 0.0;
+    for (int k = 0; k < d.size(); ++k)
+      if (d[k] == 0.0) {
+        worst_col = inverse[static_cast<size_t>(k)];
+        break;
       }
-    }
-    ties.push_back({a, alpha});
-    if (alpha < 1.0) parity_has_cupt[a % 2] = true;
-    if (alpha > 0.0) parity_has_cupt[(a + 1) % 2] = true;
-  }
-  if (leap)
-    CheckArgument(parity_has_cupt[0] && parity_has_cupt[1], "gps_time_s",
-                  std::string("datum defect of the leap-frog network: every CUPT falls on ") +
-                      (parity_has_cupt[0] ? "even" : "odd") + " epochs, so the " +
-                      (parity_has_cupt[0] ? "odd" : "even") +
-                      "-epoch chain has no position datum (leap-frog couples only epochs of equal parity); "
-                      "use the trapezoidal discretisation or GPS times on both parities");
-
-  Blocks b = FromState(initial, options.slow_parameter_stride);
-  const int stride = b.stride, m_slow = b.m;
-  internal::ModelConstants model;
-  model.earth_rate_enu = EarthRateEnu(options.latitude_rad) * (options.earth_rate_radps / kEarthRateRadps);
-  const Eigen::Vector3d gc = NormalGravityCoefficients(options.latitude_rad);
-  model.gamma0 = gc[0];
-  model.c1 = gc[1];
-  model.c2 = gc[2];
-  model.origin_height_m = options.origin_height_m;
-
-  ceres::Problem::Options popts;
-  popts.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::EigenQuaternionManifold quaternion_manifold;
-  ceres::Problem problem(popts);
-  // Column order of the Jacobian (datum check, dense inverse): per epoch r, v, q and, at the first
-  // epoch of each slow interval, that interval's a, o, δg. labels[col] names each tangent column.
-  std::vector<double*> ordered_blocks;
-  ordered_blocks.reserve(3 * n + 3 * m_slow);
-  std::vector<ColumnLabel> labels;
-  labels.reserve(9 * n + 7 * m_slow);
-  std::vector<int> gravity_column(static_cast<size_t>(m_slow));
-  for (int i = 0; i < n; ++i) {
-    problem.AddParameterBlock(b.R(i), 3);
-    problem.AddParameterBlock(b.V(i), 3);
-    problem.AddParameterBlock(b.Q(i), 4, &quaternion_manifold);
-    for (double* p : {b.R(i), b.V(i), b.Q(i)}) ordered_blocks.push_back(p);
-    for (const char* name : {"position", "velocity", "attitude"})
-      for (int c = 0; c < 3; ++c) labels.push_back({name, i});
-    if (i % stride == 0) {
-      const int k = b.Slow(i);
-      problem.AddParameterBlock(b.A(k), 3);
-      problem.AddParameterBlock(b.O(k), 3);
-      problem.AddParameterBlock(b.G(k), 1);
-      for (double* p : {b.A(k), b.O(k), b.G(k)}) ordered_blocks.push_back(p);
-      for (const char* name : {"acc_bias", "gyro_bias"})
-        for (int c = 0; c < 3; ++c) labels.push_back({name, i});
-      gravity_column[static_cast<size_t>(k)] = static_cast<int>(labels.size());
-      labels.push_back({"gravity_disturbance", i});
-    }
-  }
-
-  std::vector<ceres::ResidualBlockId> acc_ids, gyro_ids, gps_ids;
-  const double sigma_f = options.acc_noise_mps2_rthz / std::sqrt(dt);
-  const double sigma_w = options.gyro_noise_radps_rthz / std::sqrt(dt);
-  auto f_at = [&](int i) { return Eigen::Vector3d(obs.acc_body_mps2.row(i).transpose()); };
-  auto w_at = [&](int i) { return Eigen::Vector3d(obs.gyro_body_radps.row(i).transpose()); };
-  // AB, OB, GDT between two slow nodes (or epochs) over `step` seconds.
-  auto add_random_walks = [&](int ka, int kb, double step) {
-    problem.AddResidualBlock(BiasModel(options.acc_bias_walk_mps2_rts, options.acc_bias_correlation_time_s, step),
-                             nullptr, b.A(ka), b.A(kb));
-    problem.AddResidualBlock(BiasModel(options.gyro_bias_walk_radps_rts, options.gyro_bias_correlation_time_s, step),
-                             nullptr, b.O(ka), b.O(kb));
-    problem.AddResidualBlock(
-        Auto<internal::RandomWalk<1>, 1, 1, 1>({1.0 / (options.gravity_walk_mps2_rts * std::sqrt(step))}), nullptr,
-        b.G(ka), b.G(kb));
-  };
-  if (leap) {
-    const double step = 2.0 * dt;
-    for (int i = 1; i + 1 < n; ++i) {
-      const int k = b.Slow(i);
-      problem.AddResidualBlock(Auto<internal::VelLeapFrog, 3, 3, 3, 3>({step, 1.0 / options.sigma_vel_mps}), nullptr,
-                               b.R(i - 1), b.R(i + 1), b.V(i));
-      acc_ids.push_back(problem.AddResidualBlock(
-          Auto<internal::FbLeapFrog, 3, 3, 3, 3, 4, 3, 3, 1>({model, f_at(i), step, 1.0 / sigma_f}), nullptr,
-          b.V(i - 1), b.V(i + 1), b.V(i), b.Q(i), b.R(i), b.A(k), b.G(k)));
-      gyro_ids.push_back(problem.AddResidualBlock(
-          Auto<internal::WibLeapFrog, 3, 4, 4, 4, 3>({model.earth_rate_enu, w_at(i), step, 1.0 / sigma_w}), nullptr,
-          b.Q(i - 1), b.Q(i + 1), b.Q(i), b.O(k)));
-      // Stride 1: the paper's Λ(a, n) = (a[n+1] - a[n-1]) / 2δt (two interleaved bias chains).
-      if (stride == 1) add_random_walks(i - 1, i + 1, step);
-    }
   } else {
-    for (int i = 0; i + 1 < n; ++i) {
-      const int ka = b.Slow(i), kb = b.Slow(i + 1);
-      problem.AddResidualBlock(Auto<internal::VelTrapezoidal, 3, 3, 3, 3, 3>({dt, 1.0 / options.sigma_vel_mps}),
-                               nullptr, b.R(i), b.R(i + 1), b.V(i), b.V(i + 1));
-      const internal::FbTrapezoidal fb{model, f_at(i), f_at(i + 1), dt, 1.0 / sigma_f};
-      const internal::WibTrapezoidal wib{model.earth_rate_enu, 0.5 * (w_at(i) + w_at(i + 1)), dt, 1.0 / sigma_w};
-      if (ka == kb) {  // both epochs in one slow interval: one a, o, δg block
-        acc_ids.push_back(problem.AddResidualBlock(
-            Auto<internal::FbTrapezoidalShared, 3, 3, 3, 4, 4, 3, 3, 3, 1>({fb}), nullptr, b.V(i), b.V(i + 1),
-            b.Q(i), b.Q(i + 1), b.R(i), b.R(i + 1), b.A(ka), b.G(ka)));
-        gyro_ids.push_back(problem.AddResidualBlock(Auto<internal::WibTrapezoidalShared, 3, 4, 4, 3>({wib}), nullptr,
-                                                    b.Q(i), b.Q(i + 1), b.O(ka)));
-      } else {
-        acc_ids.push_back(problem.AddResidualBlock(Auto<internal::FbTrapezoidal, 3, 3, 3, 4, 4, 3, 3, 3, 3, 1, 1>(fb),
-                                                   nullptr, b.V(i), b.V(i + 1), b.Q(i), b.Q(i + 1), b.R(i),
-                                                   b.R(i + 1), b.A(ka), b.A(kb), b.G(ka), b.G(kb)));
-        gyro_ids.push_back(problem.AddResidualBlock(Auto<internal::WibTrapezoidal, 3, 4, 4, 3, 3>(wib), nullptr,
-                                                    b.Q(i), b.Q(i + 1), b.O(ka), b.O(kb)));
-      }
-      if (stride == 1) add_random_walks(i, i + 1, dt);
-    }
-  }
-  // Slow parameters: random walks between consecutive slow nodes over the time between the
-  // centres of their intervals (s δt for full intervals; the last one may be shorter).
-  if (stride > 1)
-    for (int k = 0; k + 1 < m_slow; ++k) {
-      const double centre_a = 0.5 * (b.First(k) + b.End(k) - 1), centre_b = 0.5 * (b.First(k + 1) + b.End(k + 1) - 1);
-      add_random_walks(k, k + 1, (centre_b - centre_a) * dt);
-    }
-  // Static observations.
-  const bool huber = options.gps_huber_threshold > 0.0;  // the Problem owns each loss
-  for (Eigen::Index i = 0; i < obs.gps_time_s.size(); ++i) {
-    const Eigen::Vector3d p = obs.gps_position_m.row(i).transpose();
-    const GpsTie& t = ties[static_cast<size_t>(i)];
-    ceres::LossFunction* loss = huber ? new ceres::HuberLoss(options.gps_huber_threshold) : nullptr;
-    if (t.alpha == 0.0)
-      gps_ids.push_back(
-          problem.AddResidualBlock(Auto<internal::Cupt, 3, 3>({p, 1.0 / options.sigma_gps_m}), loss, b.R(t.a)));
-    else
-      gps_ids.push_back(problem.AddResidualBlock(
-          Auto<internal::CuptInterpolated, 3, 3, 3>({p, t.alpha, 1.0 / options.sigma_gps_m}), loss, b.R(t.a),
-          b.R(t.a + 1)));
-  }
-  for (Eigen::Index i = 0; i < obs.zupt_epochs.size(); ++i)
-    problem.AddResidualBlock(Auto<internal::Zupt, 3, 3>({1.0 / options.sigma_zupt_mps}), nullptr,
-                             b.V(obs.zupt_epochs[i]));
-  for (Eigen::Index i = 0; i < obs.vupt_epochs.size(); ++i) {
-    const Eigen::Vector3d v0 = obs.vupt_velocity_mps.row(i).transpose();
-    const double sd = obs.vupt_sd_mps.size() > 0 ? obs.vupt_sd_mps[i] : options.sigma_vupt_mps;
-    problem.AddResidualBlock(Auto<internal::Vupt, 3, 3>({v0, 1.0 / sd}), nullptr, b.V(obs.vupt_epochs[i]));
-  }
-  for (Eigen::Index i = 0; i < obs.gupt_epochs.size(); ++i) {
-    const int e = obs.gupt_epochs[i];
-    problem.AddResidualBlock(
-        Auto<internal::Gupt, 1, 3, 1>({model, obs.gupt_gravity_mps2[i], 1.0 / options.sigma_gupt_mps2}), nullptr,
-        b.R(e), b.G(b.Slow(e)));
-  }
-  int num_xover = 0;
-  for (Eigen::Index i = 0; i < obs.xover_epochs.rows(); ++i) {
-    const int ka = b.Slow(obs.xover_epochs(i, 0)), kb = b.Slow(obs.xover_epochs(i, 1));
-    if (ka == kb) continue;  // both epochs share one δg block: the tie holds identically
-    problem.AddResidualBlock(Auto<internal::Xover, 1, 1, 1>({1.0 / options.sigma_xover_mps2}), nullptr, b.G(ka),
-                             b.G(kb));
-    ++num_xover;
-  }
-  // SGUPT: in each run of consecutive static epochs, δg[n] = δg[n0] (n0 the run's first epoch),
-  // once per slow block of the run other than n0's.
-  int num_sgupt = 0;
-  for (Eigen::Index i = 0; i < obs.sgupt_epochs.size();) {
-    Eigen::Index j = i + 1;
-    while (j < obs.sgupt_epochs.size() && obs.sgupt_epochs[j] == obs.sgupt_epochs[j - 1] + 1) ++j;
-    const int k0 = b.Slow(obs.sgupt_epochs[i]);
-    int last = k0;
-    for (Eigen::Index e = i + 1; e < j; ++e) {
-      const int k = b.Slow(obs.sgupt_epochs[e]);
-      if (k == last) continue;  // epochs of one slow block: one tie
-      last = k;
-      problem.AddResidualBlock(Auto<internal::Sgupt, 1, 1, 1>({1.0 / options.sigma_sgupt_mps2}), nullptr, b.G(k0),
-                               b.G(k));
-      ++num_sgupt;
-    }
-    i = j;
-  }
-
-  NetworkSummary s;
-  s.num_epochs = n;
-  s.num_parameters = static_cast<long>(problem.NumParameters()) - n;  // quaternion: 4 stored, 3 free
-  s.num_residuals = problem.NumResiduals();
-  s.num_slow_nodes = m_slow;
-  s.num_xover = num_xover;
-  s.num_vupt = static_cast<int>(obs.vupt_epochs.size());
-  s.num_sgupt = num_sgupt;
-
-  CheckArgument(!options.variance_components || s.num_parameters <= kMaxDenseUnknowns, "options",
-                "variance_components is limited to " + std::to_string(kMaxDenseUnknowns) + " unknowns (got " +
-                    std::to_string(s.num_parameters) + ")");
-  if (options.gravity_covariance == NetworkOptions::Covariance::kDense && s.num_parameters > kMaxDenseUnknowns)
-    ThrowInvalidArgument("options", "gravity_covariance = dense is limited to " + std::to_string(kMaxDenseUnknowns) +
-                                        " unknowns (got " +
-                                        std::to_string(s.num_parameters) + "); use ceres");
-  // Numerical datum check: LDLᵀ of JᵀJ at the initial values.
-  if (options.check_datum) {
-    WallTimer datum_timer;
-    ceres::Problem::EvaluateOptions eo;
-    eo.parameter_blocks = ordered_blocks;
-    eo.apply_loss_function = false;
-    eo.num_threads = options.num_threads;
-    ceres::CRSMatrix crs;
-    double cost = 0.0;
-    if (!problem.Evaluate(eo, &cost, nullptr, nullptr, &crs))
-      throw std::runtime_error("indoorloc: network: evaluating the Jacobian at the initial values failed");
-    Eigen::Map<const Eigen::SparseMatrix<double, Eigen::RowMajor, int>> jac(
-        crs.num_rows, crs.num_cols, static_cast<Eigen::Index>(crs.values.size()), crs.rows.data(), crs.cols.data(),
-        crs.values.data());
-    Eigen::SparseMatrix<double> normal = Eigen::SparseMatrix<double>(jac.transpose()) * jac;
-    // Jacobi scaling to a unit diagonal: the pivots are then the ratios pivot / diagonal entry,
-    // and the factorisation does not suffer from the units of the parameters.
-    Eigen::VectorXd scale = normal.diagonal();
-    for (Eigen::Index i = 0; i < scale.size(); ++i) scale[i] = scale[i] > 0.0 ? 1.0 / std::sqrt(scale[i]) : 1.0;
-    normal = scale.asDiagonal() * normal * scale.asDiagonal();
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt;
-    ldlt.analyzePattern(normal);
-    ldlt.factorize(normal);
-    const Eigen::VectorXd diag = normal.diagonal();
-    const Eigen::VectorXd d = ldlt.vectorD();
-    const auto& perm = ldlt.permutationP().indices();
-    double worst = std::numeric_limits<double>::infinity();
-    int worst_col = -1;
-    const bool failed = ldlt.info() != Eigen::Success;
-    std::vector<int> inverse(static_cast<size_t>(normal.cols()));
-    for (int col = 0; col < normal.cols(); ++col) inverse[static_cast<size_t>(perm[col])] = col;
-    if (failed) {
-      // Eigen stops at the first exactly zero pivot; later entries of D are not computed.
-      worst = 0.0;
-      for (int k = 0; k < d.size(); ++k)
-        if (d[k] == 0.0) {
-          worst_col = inverse[static_cast<size_t>(k)];
-          break;
-        }
-    } else {
-      for (int col = 0; col < normal.cols(); ++col) {
-        const double ratio = diag[col] > 0.0 ? d[perm[col]] : 0.0;
-        if (ratio < worst) {
-          worst = ratio;
-          worst_col = col;
-        }
+    for (int col = 0; col < normal.cols(); ++col) {
+      const double ratio = diag[col] > 0.0 ? d[perm[col]] : 0.0;
+      if (ratio < worst) {
+        worst = ratio;
+        worst_col = col;
       }
     }
-    s.min_pivot_ratio = worst;
-    s.seconds_datum_check = datum_timer.ElapsedSeconds();
-    if (failed || worst < options.datum_pivot_tolerance) {
-      std::ostringstream m;
-      m << "datum defect: the normal matrix is rank deficient (smallest pivot ratio " << worst << " < "
-        << options.datum_pivot_tolerance << ")";
-      if (worst_col >= 0)
-        m << "; first undetermined parameter: " << labels[static_cast<size_t>(worst_col)].name << " at epoch "
-          << labels[static_cast<size_t>(worst_col)].epoch;
-      m << ". Add observations (CUPT for position, GUPT or XOVER for gravity vs accelerometer bias)";
-      // A defect can also be numerical: weights spanning many orders of magnitude. Name the
-      // extreme sds of the options so that a mistyped one is found.
-      const std::pair<const char*, double> sds[] = {
-          {"acc_noise_mps2_rthz", options.acc_noise_mps2_rthz}, {"gyro_noise_radps_rthz", options.gyro_noise_radps_rthz},
-          {"sigma_gps_m", options.sigma_gps_m},                 {"sigma_zupt_mps", options.sigma_zupt_mps},
-          {"sigma_gupt_mps2", options.sigma_gupt_mps2},         {"sigma_xover_mps2", options.sigma_xover_mps2},
-          {"sigma_vel_mps", options.sigma_vel_mps}};
-      const auto* lo = &sds[0];
-      const auto* hi = &sds[0];
-      for (const auto& e : sds) {
-        if (e.second < lo->second) lo = &e;
-        if (e.second > hi->second) hi = &e;
-      }
-      m << ", or check the sds in 'options' (from " << lo->first << " = " << lo->second << " to " << hi->first
-        << " = " << hi->second << ")";
-      ThrowInvalidArgument("observations", m.str());
-    }
   }
+  s.min_pivot_ratio = worst;
+  s.seconds_datum_check = datum_timer.ElapsedSeconds();
+  if (failed || worst < options.datum_pivot_tolerance) {
+    std::ostringstream m;
+    m << "datum defect: the normal matrix is rank deficient (smallest pivot ratio " << worst << " < "
+      << options.datum_pivot_tolerance << ")";
+    if (worst_col >= 0)
+      m << "; first undetermined parameter: " << labels[static_cast<size_t>(worst_col)].name << " at epoch "
+        << labels[static_cast<size_t>(worst_col)].epoch;
+    m << ". Add observations (CUPT for position, GUPT or XOVER for gravity vs accelerometer bias)";
+    // A defect can also be numerical: weights spanning many orders of magnitude. Name the
+    // extreme sds of the options so that a mistyped one is found.
+    const std::pair<const char*, double> sds[] = {
+        {"acc_noise_mps2_rthz", options.acc_noise_mps2_rthz}, {"gyro_noise_radps_rthz", options.gyro_noise_radps_rthz},
+        {"sigma_gps_m", options.sigma_gps_m},                 {"sigma_zupt_mps", options.sigma_zupt_mps},
+        {"sigma_gupt_mps2", options.sigma_gupt_mps2},         {"sigma_xover_mps2", options.sigma_xover_mps2},
+        {"sigma_vel_mps", options.sigma_vel_mps}};
+    const auto* lo = &sds[0];
+    const auto* hi = &sds[0];
+    for (const auto& e : sds) {
+      if (e.second < lo->second) lo = &e;
+      if (e.second > hi->second) hi = &e;
+    }
+    m << ", or check the sds in 'options' (from " << lo->first << " = " << lo->second << " to " << hi->first
+      << " = " << hi->second << ")";
+    ThrowInvalidArgument("observations", m.str());
+  }
+}
 
+/// Runs Ceres (sparse normal Cholesky) and records its iterations, costs and termination.
+void RunSolver(const NetworkOptions& options, ceres::Problem& problem, NetworkSummary* summary) {
+  NetworkSummary& s = *summary;
   ceres::Solver::Options so;
   so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
   so.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
@@ -640,7 +325,20 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
   }
   const double redundancy = static_cast<double>(s.num_residuals) - static_cast<double>(s.num_parameters);
   s.variance_factor = redundancy > 0.0 ? 2.0 * s.final_cost / redundancy : 0.0;
-  NetworkState out = ToState(b);
+}
+
+/// After the solve: the variance components of the acc, gyro and GPS groups and the sd of every
+/// δg, as the options ask.
+void ComputePrecision(const NetworkOptions& options, const ParameterLayout& layout, const ResidualGroups& groups,
+                      Blocks& b, int n, ceres::Problem& problem, NetworkState* state, NetworkSummary* summary) {
+  NetworkSummary& s = *summary;
+  NetworkState& out = *state;
+  const int m_slow = b.m;
+  const std::vector<double*>& ordered_blocks = layout.ordered_blocks;
+  const std::vector<int>& gravity_column = layout.gravity_column;
+  const std::vector<ceres::ResidualBlockId>& acc_ids = groups.acc;
+  const std::vector<ceres::ResidualBlockId>& gyro_ids = groups.gyro;
+  const std::vector<ceres::ResidualBlockId>& gps_ids = groups.gps;
   // (JᵀJ)⁻¹ at the solution, dense (small networks only): shared by the variance components and
   // the dense δg covariance, computed at most once.
   ceres::Problem::EvaluateOptions eo;
@@ -716,6 +414,55 @@ NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& in
     }
     s.seconds_covariance += cov_timer.ElapsedSeconds();
   }
+}
+
+}  // namespace
+
+NetworkState SolveNetwork(const NetworkObservations& obs, const NetworkState& initial, const NetworkOptions& options,
+                          NetworkSummary* summary) {
+  WallTimer total;
+  ValidateOptions(options);
+  CheckNetworkInput(obs, initial);
+  const int n = static_cast<int>(obs.imu_time_s.size());
+  const double dt = (obs.imu_time_s[n - 1] - obs.imu_time_s[0]) / (n - 1);
+  const bool leap = options.discretization == Discretization::kLeapFrog;
+
+  // Structural datum checks (cheap, before any work).
+  CheckArgument(obs.gps_time_s.size() > 0, "gps_position_m",
+                "datum defect: no CUPT (GPS) observations, the position of the network is not determined");
+  const std::vector<GpsTie> ties = TieGpsToEpochs(obs, n, dt, leap);
+
+  Blocks b = FromState(initial, options.slow_parameter_stride);
+  const internal::ModelConstants model = MakeModelConstants(options);
+  ceres::Problem::Options popts;
+  popts.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::EigenQuaternionManifold quaternion_manifold;
+  ceres::Problem problem(popts);
+  const ParameterLayout layout = AddParameterBlocks(b, n, &quaternion_manifold, problem);
+  ResidualGroups groups;
+  AddDynamics(obs, options, model, dt, b, problem, &groups);
+  const StaticCounts counts = AddStaticObservations(obs, options, model, ties, b, problem, &groups);
+
+  NetworkSummary s;
+  s.num_epochs = n;
+  s.num_parameters = static_cast<long>(problem.NumParameters()) - n;  // quaternion: 4 stored, 3 free
+  s.num_residuals = problem.NumResiduals();
+  s.num_slow_nodes = b.m;
+  s.num_xover = counts.num_xover;
+  s.num_vupt = static_cast<int>(obs.vupt_epochs.size());
+  s.num_sgupt = counts.num_sgupt;
+
+  CheckArgument(!options.variance_components || s.num_parameters <= kMaxDenseUnknowns, "options",
+                "variance_components is limited to " + std::to_string(kMaxDenseUnknowns) + " unknowns (got " +
+                    std::to_string(s.num_parameters) + ")");
+  if (options.gravity_covariance == NetworkOptions::Covariance::kDense && s.num_parameters > kMaxDenseUnknowns)
+    ThrowInvalidArgument("options", "gravity_covariance = dense is limited to " + std::to_string(kMaxDenseUnknowns) +
+                                        " unknowns (got " +
+                                        std::to_string(s.num_parameters) + "); use ceres");
+  if (options.check_datum) CheckDatum(options, layout, problem, &s);
+  RunSolver(options, problem, &s);
+  NetworkState out = ToState(b);
+  ComputePrecision(options, layout, groups, b, n, problem, &out, &s);
   s.seconds_total = total.ElapsedSeconds();
   if (summary) *summary = s;
   return out;

@@ -54,7 +54,7 @@ bool ZuptEkfOptions::IsValid(std::string* error) const {
       .InRange(gravity_mps2, 0.1, 100.0, "gravity_mps2")
       .IntInRange(init_samples, 1, 1000000000, "init_samples")
       .ZeroOrScale(sigma_stance_heading_rad, "sigma_stance_heading_rad")
-      // Health-check limits (issue 16).
+      // Health-check limits (divergence is reported, never silent: see zupt_ekf.h).
       .Check(min_stance_fraction >= 0.0 && min_stance_fraction < 1.0, "min_stance_fraction", "must be in [0, 1)")
       .Scale(max_plausible_stride_m, "max_plausible_stride_m")
       .Scale(max_stance_speed_mps, "max_stance_speed_mps")

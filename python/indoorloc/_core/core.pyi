@@ -1,5 +1,5 @@
 # Stubs of indoorloc._core.core: random streams, log-space weights, resampling.
-from typing import Tuple, Union
+from typing import Any, Dict, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -17,9 +17,14 @@ class RandomStream:
     def split(self, child: int) -> RandomStream: ...
 
 class ResamplingOptions:
-    scheme: str
+    """Fields and defaults: read them from the compiled struct (``ResamplingOptions().to_dict()``);
+    they are not restated here."""
     ess_threshold: float
-    def __init__(self, scheme: str = "systematic", ess_threshold: float = 0.5) -> None: ...
+    scheme: str
+    def __init__(self, *args: Any, **fields: Any) -> None: ...
+    def replace(self, **fields: Any) -> "ResamplingOptions": ...
+    def to_dict(self) -> Dict[str, Any]: ...
+    def validate(self) -> None: ...
 
 class ResamplingSummary:
     @property

@@ -33,17 +33,16 @@ class FloorGeometry:
     def walls(self, walls: _ArrayLike) -> None: ...
 
 class FloorPlanOptions:
+    """Fields and defaults: read them from the compiled struct (``FloorPlanOptions().to_dict()``);
+    they are not restated here."""
     cell_size_m: float
-    target_edges_per_cell: float
-    max_cells: int
     check_self_intersection: bool
-    def __init__(
-        self,
-        cell_size_m: float = 0.0,
-        target_edges_per_cell: float = 2.0,
-        max_cells: int = 4000000,
-        check_self_intersection: bool = True,
-    ) -> None: ...
+    max_cells: int
+    target_edges_per_cell: float
+    def __init__(self, *args: Any, **fields: Any) -> None: ...
+    def replace(self, **fields: Any) -> "FloorPlanOptions": ...
+    def to_dict(self) -> Dict[str, Any]: ...
+    def validate(self) -> None: ...
 
 class FloorPlan:
     def __init__(
@@ -76,46 +75,55 @@ class FloorPlan:
     def report(self) -> str: ...
 
 class TrackerOptions:
-    num_particles: int
-    heading_offset_walk_rad: float
-    scale_walk: float
-    min_scale: float
-    max_scale: float
-    position_noise_m: float
-    tempering: float
-    max_term: float
-    max_age_s: float
-    use_not_heard: bool
-    not_heard_dbm: float
-    resampling: str
-    ess_threshold: float
-    wall_log_penalty: float
-    respread_after_blocked_steps: int
-    respread_sd_m: float
-    start_position_sd_m: float
-    start_heading_offset_sd_rad: float
-    start_scale_sd: float
-    unknown_start_heading_sd_rad: float
+    """Fields and defaults: read them from the compiled struct (``TrackerOptions().to_dict()``);
+    they are not restated here."""
     candidate_spacing_m: float
-    recovery_log_ratio: float
-    recovery_scans: int
-    recovery_fraction: float
-    floor_change_probability: float
     corridor_kappa: float
-    smoothing_lag_steps: int
-    num_threads: int
-    seed: int
+    ess_threshold: float
     fix_outlier_probability: float
     fix_tempering: float
-    def __init__(self, **kwargs: Any) -> None: ...
+    floor_change_probability: float
+    heading_offset_walk_rad: float
+    max_age_s: float
+    max_scale: float
+    max_term: float
+    min_scale: float
+    not_heard_dbm: float
+    num_particles: int
+    num_threads: int
+    position_noise_m: float
+    recovery_fraction: float
+    recovery_log_ratio: float
+    recovery_scans: int
+    resampling: str
+    respread_after_blocked_steps: int
+    respread_sd_m: float
+    scale_walk: float
+    seed: int
+    smoothing_lag_steps: int
+    start_heading_offset_sd_rad: float
+    start_position_sd_m: float
+    start_scale_sd: float
+    tempering: float
+    unknown_start_heading_sd_rad: float
+    use_not_heard: bool
+    wall_log_penalty: float
+    def __init__(self, *args: Any, **fields: Any) -> None: ...
+    def replace(self, **fields: Any) -> "TrackerOptions": ...
+    def to_dict(self) -> Dict[str, Any]: ...
     def validate(self) -> None: ...
 
 class SmootherOptions:
-    num_trajectories: int
+    """Fields and defaults: read them from the compiled struct (``SmootherOptions().to_dict()``);
+    they are not restated here."""
     max_particles: int
-    seed: int
     num_threads: int
-    def __init__(self, num_trajectories: int = 100, max_particles: int = 2000, seed: int = 1, num_threads: int = 1) -> None: ...
+    num_trajectories: int
+    seed: int
+    def __init__(self, *args: Any, **fields: Any) -> None: ...
+    def replace(self, **fields: Any) -> "SmootherOptions": ...
+    def to_dict(self) -> Dict[str, Any]: ...
+    def validate(self) -> None: ...
 
 class TrackerSummary:
     @property
@@ -192,31 +200,32 @@ class GridTrackerOptions:
     """Fields and defaults: read them from the compiled struct (``GridTrackerOptions().to_dict()``);
     they are not restated here."""
     cell_size_m: float
-    walkable_subsamples: int
-    heading_offset_bins: int
-    heading_offset_sd_rad: float
-    heading_offset_span_sd: float
-    scale_bins: int
-    scale_sd: float
-    position_noise_m: float
-    wall_log_penalty: float
+    filtered_covariance_fix_gain: float
+    filtered_covariance_floor_m: float
+    filtered_covariance_scale: float
     fix_outlier_probability: float
     fix_tempering: float
     fix_tempering_by_variance: bool
-    spatial_median: bool
-    median_block_m: float
-    start_position_sd_m: float
-    filtered_covariance_scale: float
-    filtered_covariance_floor_m: float
-    filtered_covariance_fix_gain: float
-    smoothed_covariance_scale: float
-    smoothed_covariance_floor_m: float
-    smoothed_covariance_fix_gain: float
+    heading_offset_bins: int
+    heading_offset_sd_rad: float
+    heading_offset_span_sd: float
     max_memory_bytes: float
+    median_block_m: float
     num_threads: int
-    def __init__(self, **fields: Any) -> None: ...
+    position_noise_m: float
+    scale_bins: int
+    scale_sd: float
+    smoothed_covariance_fix_gain: float
+    smoothed_covariance_floor_m: float
+    smoothed_covariance_scale: float
+    spatial_median: bool
+    start_position_sd_m: float
+    walkable_subsamples: int
+    wall_log_penalty: float
+    def __init__(self, *args: Any, **fields: Any) -> None: ...
     def replace(self, **fields: Any) -> "GridTrackerOptions": ...
     def to_dict(self) -> Dict[str, Any]: ...
+    def validate(self) -> None: ...
 
 class GridTrackSummary:
     @property

@@ -1,5 +1,5 @@
 # Stubs of indoorloc._core.mapmatch: road networks, trajectories, circular particle filter.
-from typing import Dict, List, Optional, Tuple
+from typing import Any, Dict, List, Optional, Tuple
 
 import numpy as np
 import numpy.typing as npt
@@ -40,56 +40,46 @@ class RoadNetwork:
     def report(self) -> str: ...
 
 class TrajectoryOptions:
-    duration_s: float
+    """Fields and defaults: read them from the compiled struct (``TrajectoryOptions().to_dict()``);
+    they are not restated here."""
+    allow_straight: bool
     dt_s: float
+    duration_s: float
+    heading_kappa: float
+    speed_bias_halfwidth_mps: float
     speed_mps: float
     speed_noise_sd_mps: float
-    speed_bias_halfwidth_mps: float
-    heading_kappa: float
-    allow_straight: bool
-    def __init__(
-        self,
-        duration_s: float = 200.0,
-        dt_s: float = 0.5,
-        speed_mps: float = 2.0,
-        speed_noise_sd_mps: float = 0.6,
-        speed_bias_halfwidth_mps: float = 0.5,
-        heading_kappa: float = 2.0,
-        allow_straight: bool = False,
-    ) -> None: ...
+    def __init__(self, *args: Any, **fields: Any) -> None: ...
+    def replace(self, **fields: Any) -> "TrajectoryOptions": ...
+    def to_dict(self) -> Dict[str, Any]: ...
+    def validate(self) -> None: ...
 
 def simulate_trajectory(
     network: RoadNetwork, options: TrajectoryOptions = ..., seed: int = 0, stream: int = 0
 ) -> Dict[str, object]: ...
 
 class FilterOptions:
-    num_particles: int
+    """Fields and defaults: read them from the compiled struct (``FilterOptions().to_dict()``);
+    they are not restated here."""
+    bias_halfwidth_mps: float
+    bias_jitter_mps: float
+    ess_threshold: float
+    estimate_speed_bias: bool
+    junction_kappa: float
+    junction_policy: str
     kappa: float
     noise_halfwidth_m: float
-    estimate_speed_bias: bool
-    smoothing_lag_steps: int
+    num_particles: int
     recovery_disagreement: float
+    recovery_fraction: float
+    recovery_window_s: float
+    resampling: str
     seed: int
-    junction_policy: str
-    def __init__(
-        self,
-        num_particles: int = 10000,
-        kappa: float = 1.0,
-        noise_halfwidth_m: float = 0.6,
-        resampling: str = "systematic",
-        ess_threshold: float = 0.5,
-        junction_policy: str = "uniform",
-        junction_kappa: float = 2.0,
-        estimate_speed_bias: bool = False,
-        bias_halfwidth_mps: float = 0.5,
-        bias_jitter_mps: float = 0.02,
-        tracking_spread_m: float = 2.0,
-        recovery_disagreement: float = 0.9,
-        recovery_window_s: float = 20.0,
-        recovery_fraction: float = 0.5,
-        smoothing_lag_steps: int = 0,
-        seed: int = 0,
-    ) -> None: ...
+    smoothing_lag_steps: int
+    tracking_spread_m: float
+    def __init__(self, *args: Any, **fields: Any) -> None: ...
+    def replace(self, **fields: Any) -> "FilterOptions": ...
+    def to_dict(self) -> Dict[str, Any]: ...
     def validate(self) -> None: ...
 
 class ParticleMapMatcher:

@@ -69,49 +69,59 @@ _F64 = npt.NDArray[np.float64]
 _State = Dict[str, _F64]
 
 class NetworkOptions:
-    discretization: str
-    latitude_rad: float
-    origin_height_m: float
-    earth_rate_radps: float
-    acc_noise_mps2_rthz: float
-    gyro_noise_radps_rthz: float
-    acc_bias_walk_mps2_rts: float
-    gyro_bias_walk_radps_rts: float
-    gravity_walk_mps2_rts: float
+    """Fields and defaults: read them from the compiled struct (``NetworkOptions().to_dict()``);
+    they are not restated here."""
     acc_bias_correlation_time_s: float
-    gyro_bias_correlation_time_s: float
-    sigma_vel_mps: float
-    sigma_gps_m: float
-    sigma_zupt_mps: float
-    sigma_gupt_mps2: float
-    sigma_xover_mps2: float
-    sigma_vupt_mps: float
-    sigma_sgupt_mps2: float
-    slow_parameter_stride: int
-    gps_huber_threshold: float
-    max_iterations: int
-    initial_trust_region_radius: float
-    function_tolerance: float
-    gradient_tolerance: float
-    parameter_tolerance: float
-    num_threads: int
+    acc_bias_walk_mps2_rts: float
+    acc_noise_mps2_rthz: float
     check_datum: bool
     datum_pivot_tolerance: float
+    discretization: str
+    earth_rate_radps: float
+    function_tolerance: float
+    gps_huber_threshold: float
+    gradient_tolerance: float
     gravity_covariance: str
+    gravity_walk_mps2_rts: float
+    gyro_bias_correlation_time_s: float
+    gyro_bias_walk_radps_rts: float
+    gyro_noise_radps_rthz: float
+    initial_trust_region_radius: float
+    latitude_rad: float
+    max_iterations: int
+    num_threads: int
+    origin_height_m: float
+    parameter_tolerance: float
+    sigma_gps_m: float
+    sigma_gupt_mps2: float
+    sigma_sgupt_mps2: float
+    sigma_vel_mps: float
+    sigma_vupt_mps: float
+    sigma_xover_mps2: float
+    sigma_zupt_mps: float
+    slow_parameter_stride: int
     variance_components: bool
-    def __init__(self) -> None: ...
+    def __init__(self, *args: Any, **fields: Any) -> None: ...
+    def replace(self, **fields: Any) -> "NetworkOptions": ...
+    def to_dict(self) -> Dict[str, Any]: ...
+    def validate(self) -> None: ...
     def is_valid(self) -> str: ...
 
 class KalmanSmootherOptions:
+    """Fields and defaults: read them from the compiled struct (``KalmanSmootherOptions().to_dict()``);
+    they are not restated here."""
+    init_sigma_acc_bias_mps2: float
+    init_sigma_gravity_mps2: float
+    init_sigma_gyro_bias_radps: float
+    init_sigma_heading_rad: float
+    init_sigma_level_rad: float
     init_sigma_position_m: float
     init_sigma_velocity_mps: float
-    init_sigma_level_rad: float
-    init_sigma_heading_rad: float
-    init_sigma_acc_bias_mps2: float
-    init_sigma_gyro_bias_radps: float
-    init_sigma_gravity_mps2: float
     smooth: bool
-    def __init__(self) -> None: ...
+    def __init__(self, *args: Any, **fields: Any) -> None: ...
+    def replace(self, **fields: Any) -> "KalmanSmootherOptions": ...
+    def to_dict(self) -> Dict[str, Any]: ...
+    def validate(self) -> None: ...
 
 def solve_network(
     imu_time_s: _ArrayLike,

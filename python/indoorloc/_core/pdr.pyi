@@ -1,11 +1,110 @@
 # Stubs of indoorloc._core.pdr: zero-velocity detection and the ZUPT-aided EKF.
-from typing import Any, Dict, List, Optional, Tuple
+from typing import Any, Dict, Iterator, List, Optional, Tuple
 
 import numpy as np
 import numpy.typing as npt
 
 _ArrayLike = npt.ArrayLike
 _F64 = npt.NDArray[np.float64]
+
+
+# Result types: typed read-only objects (fields listed as annotations; they cannot be set) that also
+# read as the former dicts (result["key"], keys(), items(), get(), to_dict(); they pickle as that dict).
+
+class _Result:
+    """The read-only mapping protocol every result type has (bindings/result_binding.h)."""
+    def __getitem__(self, key: str) -> Any: ...
+    def keys(self) -> List[str]: ...
+    def values(self) -> List[Any]: ...
+    def items(self) -> List[Tuple[str, Any]]: ...
+    def get(self, key: str, default: Any = None) -> Any: ...
+    def __contains__(self, key: object) -> bool: ...
+    def __iter__(self) -> Iterator[str]: ...
+    def __len__(self) -> int: ...
+    def to_dict(self) -> Dict[str, Any]: ...
+
+
+class StepTrack(_Result):
+    positions_m: _F64
+    covariances: _F64
+    stride_lengths_m: _F64
+    headings_rad: _F64
+
+class WeinbergCalibration(_Result):
+    k: float
+    rms_residual_m: float
+    n_strides: int
+    report: str
+
+class ZuptEkfSummary(_Result):
+    n_samples: int
+    n_stance_samples: int
+    n_stance_phases: int
+    stance_fraction: float
+    walking_stance_fraction: float
+    swing_median_s: float
+    swing_max_s: float
+    speed_at_stance_median_mps: float
+    speed_at_stance_max_mps: float
+    speed_at_stance_rise: float
+    longest_stride_m: float
+    median_stride_m: float
+    implausible: bool
+    reasons: List[str]
+    seconds: float
+    report: str
+
+class ZeroVelocityOutput(_Result):
+    stance: npt.NDArray[np.bool_]
+    statistic: _F64
+    threshold: float
+    base_threshold: float
+    guard_raised: bool
+    guard_satisfied: bool
+    low_motion_rule: bool
+    flicker_s: float
+    ladder_rungs: int
+    max_swing_s: float
+    median_swing_s: float
+    stance_fraction: float
+    walking_stance_fraction: float
+    walking_span: Tuple[int, int]
+    report: str
+
+class StrideCountOutput(_Result):
+    stride_indices: npt.NDArray[np.int64]
+    cleaned_stance: npt.NDArray[np.bool_]
+    n_strides: int
+    n_flicker_stances: int
+    n_flicker_swings: int
+    n_split_strides: int
+    median_swing_s: float
+    median_stance_s: float
+    report: str
+
+class AttitudeOutput(_Result):
+    quaternions_wxyz: _F64
+    gyro_bias_radps: _F64
+    mag_used: npt.NDArray[np.bool_]
+    mag_rejected: int
+    reference_field_norm: float
+    reference_dip_rad: float
+    seconds: float
+
+class InsZuptIncrements(_Result):
+    increments_m: _F64
+    stride_lengths_m: _F64
+    velocities_mps: _F64
+
+class ZuptEkfOutput(_Result):
+    positions_m: _F64
+    filtered_positions_m: _F64
+    velocities_mps: _F64
+    headings_rad: _F64
+    quaternions_wxyz: _F64
+    position_sd_m: _F64
+    seconds: float
+    health: ZuptEkfSummary
 
 def shoe_statistic(
     acc_mps2: _ArrayLike,
@@ -43,7 +142,7 @@ def zupt_ekf(
     max_stance_speed_mps: float = 4.0,
     speed_rise_factor: float = 3.0,
     min_rising_speed_mps: float = 1.0,
-) -> Dict[str, Any]: ...
+) -> ZuptEkfOutput: ...
 def zero_velocity(
     acc_mps2: _ArrayLike,
     gyro_radps: _ArrayLike,
@@ -63,7 +162,7 @@ def zero_velocity(
     sigma_acc_mps2: float = 0.01,
     sigma_gyro_radps: float = ...,
     gravity_mps2: float = 9.81,
-) -> Dict[str, Any]: ...
+) -> ZeroVelocityOutput: ...
 def count_strides(
     stance: _ArrayLike,
     rate_hz: float,
@@ -71,7 +170,7 @@ def count_strides(
     min_swing_s: float = 0.1,
     min_swing_fraction: float = 0.5,
     long_swing_factor: float = 1.7,
-) -> Dict[str, Any]: ...
+) -> StrideCountOutput: ...
 def steps_acceleration(
     acc_mps2: _ArrayLike,
     rate_hz: float,
@@ -110,8 +209,8 @@ def weinberg_stride_lengths(
     cutoff_hz: float = 3.0,
     steady_state_start: bool = True,
 ) -> _F64: ...
-def calibrate_weinberg_k(features: _ArrayLike, lengths_m: _ArrayLike) -> Dict[str, Any]: ...
-def calibrate_weinberg_k_from_distance(features: _ArrayLike, distance_m: float) -> Dict[str, Any]: ...
+def calibrate_weinberg_k(features: _ArrayLike, lengths_m: _ArrayLike) -> WeinbergCalibration: ...
+def calibrate_weinberg_k_from_distance(features: _ArrayLike, distance_m: float) -> WeinbergCalibration: ...
 def steps_magnetometer(
     mag: _ArrayLike,
     rate_hz: float,
@@ -135,7 +234,7 @@ def attitude_mahony(
     mag_norm_tolerance: float = 0.1,
     mag_dip_tolerance_rad: float = ...,
     init_samples: int = 20,
-) -> Dict[str, Any]: ...
+) -> AttitudeOutput: ...
 def stance_headings(quaternions_wxyz: _ArrayLike, step_indices: _ArrayLike) -> _F64: ...
 def positions_from_strides(
     stride_lengths_m: _ArrayLike,
@@ -145,7 +244,7 @@ def positions_from_strides(
     stride_length_sd_fraction: float = 0.1,
     sigma_heading_step_rad: float = ...,
     sigma_heading_initial_rad: float = 0.0,
-) -> Dict[str, np.ndarray]: ...
+) -> StepTrack: ...
 def positions_from_increments(
     increments_m: _ArrayLike,
     start_xy: _ArrayLike = ...,
@@ -153,7 +252,7 @@ def positions_from_increments(
     stride_length_sd_fraction: float = 0.1,
     sigma_heading_step_rad: float = ...,
     sigma_heading_initial_rad: float = 0.0,
-) -> Dict[str, np.ndarray]: ...
+) -> StepTrack: ...
 def ins_zupt_increments(
     time_s: _ArrayLike,
     acc_mps2: _ArrayLike,
@@ -161,4 +260,4 @@ def ins_zupt_increments(
     step_indices: _ArrayLike,
     window_s: float = 0.05,
     gravity_mps2: float = 9.81,
-) -> Dict[str, np.ndarray]: ...
+) -> InsZuptIncrements: ...

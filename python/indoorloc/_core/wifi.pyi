@@ -9,17 +9,16 @@ _F64 = npt.NDArray[np.float64]
 _I64 = npt.NDArray[np.int64]
 
 class SignalMapOptions:
-    not_heard_sentinel: float
-    not_heard_dbm: float
-    variance_floor_db2: float
+    """Fields and defaults: read them from the compiled struct (``SignalMapOptions().to_dict()``);
+    they are not restated here."""
     min_point_fraction: float
-    def __init__(
-        self,
-        not_heard_sentinel: float = 100.0,
-        not_heard_dbm: float = -105.0,
-        variance_floor_db2: float = 4.0,
-        min_point_fraction: float = 0.0,
-    ) -> None: ...
+    not_heard_dbm: float
+    not_heard_sentinel: float
+    variance_floor_db2: float
+    def __init__(self, *args: Any, **fields: Any) -> None: ...
+    def replace(self, **fields: Any) -> "SignalMapOptions": ...
+    def to_dict(self) -> Dict[str, Any]: ...
+    def validate(self) -> None: ...
 
 class SignalMap:
     def __init__(
@@ -73,9 +72,14 @@ class DelaunayInterpolator:
     def num_triangles(self) -> int: ...
 
 class RssModelOptions:
-    variance_floor_db2: float
+    """Fields and defaults: read them from the compiled struct (``RssModelOptions().to_dict()``);
+    they are not restated here."""
     max_term: float
-    def __init__(self, variance_floor_db2: float = 4.0, max_term: float = ...) -> None: ...
+    variance_floor_db2: float
+    def __init__(self, *args: Any, **fields: Any) -> None: ...
+    def replace(self, **fields: Any) -> "RssModelOptions": ...
+    def to_dict(self) -> Dict[str, Any]: ...
+    def validate(self) -> None: ...
 
 class RssModel:
     def __init__(self, map: SignalMap, options: RssModelOptions = ...) -> None: ...
@@ -95,17 +99,21 @@ class RssModel:
     def simulate_scans(self, points_m: _ArrayLike, floor: int = 0, seed: int = 0) -> _F64: ...
 
 class GradientTrackerOptions:
+    """Fields and defaults: read them from the compiled struct (``GradientTrackerOptions().to_dict()``);
+    they are not restated here."""
+    backtracking: bool
+    fallback_step_m: float
+    iterations_per_scan: int
     max_step_m: float
     min_reciprocal_condition: float
-    fallback_step_m: float
-    backtracking: bool
-    iterations_per_scan: int
-    paper_mode: bool
     num_starts: int
+    paper_mode: bool
+    relocalize_threshold_nats: float
     start_iterations: int
     tolerance_m: float
-    relocalize_threshold_nats: float
-    def __init__(self) -> None: ...
+    def __init__(self, *args: Any, **fields: Any) -> None: ...
+    def replace(self, **fields: Any) -> "GradientTrackerOptions": ...
+    def to_dict(self) -> Dict[str, Any]: ...
     def validate(self) -> None: ...
 
 class GradientTracker:

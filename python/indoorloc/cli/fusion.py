@@ -1,6 +1,6 @@
 """`indoorloc fusion ...` subcommands: the fusion tracker's experiments.
 
-``indoorloc fusion synthetic [--walks N] [--seed S] [--json FILE]`` prints the table of issue 14
+``indoorloc fusion synthetic [--walks N] [--seed S] [--json FILE]`` prints the synthetic-building table
 and writes its JSON contract: ``{"methods": {NAME: {"mean_m", "p90_m", "n_walks", ...}},
 "seeds": [...], "unknown_start_time_to_3m_s": ...}`` with NAME one of ``wifi_only``,
 ``pdr_only``, ``pdr_walls``, ``pdr_wifi``, ``fusion_known_start``, ``fusion_unknown_start``,

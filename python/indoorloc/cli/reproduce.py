@@ -1,4 +1,4 @@
-"""`indoorloc reproduce`: every table of the five papers in one report (issue 18).
+"""`indoorloc reproduce`: every table of the five papers in one report (docs/reproduce.md).
 
     indoorloc reproduce [--papers 000 001 002 003 004] [--out DIR] [--runs N] [--threads T]
                         [--seed S] [--rerun PAPER ... | --rerun all] [--quick] [--scheduler ADDR]

@@ -37,7 +37,7 @@ from indoorloc.experiments.reproduce_cells import Cell, ReproduceContext, Table
 from indoorloc.simulate import lorenz63, lorenz63_anda
 
 PAPER = "001"
-#: Realisations per Table 1 cell at full size (issue 18: at least 50).
+#: Realisations per Table 1 cell at full size (at least 50, so that a cell's spread is itself stable).
 FULL_RUNS = 50
 #: IMU erasure seeds at full size (each seed draws new masks and noise on the same walk).
 FULL_IMU_RUNS = 10

@@ -1,4 +1,4 @@
-"""The fusion tracker on the synthetic building: what each source contributes (issue 14).
+"""The fusion tracker on the synthetic building: what each source contributes.
 
 Per seed one building and one walk (``simulate.building`` / ``simulate.walker``), then seven
 methods on the same inputs, scored by the position error against the truth:

@@ -1,4 +1,4 @@
-"""How the map-matching filter's propagation noise half-width a was chosen (paper 000, issue 18).
+"""How the map-matching filter's propagation noise half-width a was chosen (paper 000).
 
 Paper 000 gives the propagation noise η (eq. 8-9) only as "a centered uniform distribution of
 variance η_Q" with no value. ``NOISE_HALFWIDTH_M`` in ``mapmatch_reproduce`` is ours, one value per

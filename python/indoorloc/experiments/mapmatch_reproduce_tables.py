@@ -1,4 +1,4 @@
-"""Paper 000 (mapmatch) in ``indoorloc reproduce`` (issue 18): Tables I and II and Figs. 3-4 of
+"""Paper 000 (mapmatch) in ``indoorloc reproduce``: Tables I and II and Figs. 3-4 of
 El Mokhtari et al. as :class:`~indoorloc.experiments.reproduce_cells.Cell` s, one value per Monte
 Carlo run beside the paper's figure.
 

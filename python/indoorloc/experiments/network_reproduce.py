@@ -189,7 +189,7 @@ def demo(ctx: DemoContext) -> DemoSection:
 
 
 # ---------------------------------------------------------------------------------------------
-# `indoorloc reproduce`, paper 003 (issue 18)
+# `indoorloc reproduce`, paper 003
 
 #: Paper 003 Table 2: (name, IMU rate [Hz], duration [s], GPS rate [Hz], N*_eq, N_par, rule, method).
 #: Case 3 (200 Hz x 14,400 s, 5 Hz GPS) is solved with method "qr": the streaming Householder QR

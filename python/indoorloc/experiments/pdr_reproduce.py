@@ -11,7 +11,7 @@ speeds; 30 loops), which are not public. We run the same algorithms on
   magnetometer) for the magnetometer detector and Weinberg, x-io and OpenShoe loops for §IV.C.
   One value per recording (``seeds`` = the recording's index in file order).
 
-Settings: every detector and filter runs with the library defaults (chosen in issues 6, 8 and 16
+Settings: every detector and filter runs with the library defaults (chosen
 by cross-validation on the PyShoe trials, docs/pdr.md), except the paper's acceleration detector
 with the paper's fixed thresholds (T1 = 2, T2 = 1 m/s², w = 0.15 s), reported beside our adaptive one.
 """

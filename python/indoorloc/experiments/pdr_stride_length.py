@@ -2,7 +2,7 @@
 the Mobilise-D lower-back recordings (mobgap): :func:`evaluate_weinberg_mobgap`,
 :func:`evaluate_step_detectors_mobgap`.
 
-Protocol (issue 6): K is calibrated on Test5 (a short straight walk) and tested on Test11
+Protocol: K is calibrated on Test5 (a short straight walk) and tested on Test11
 (simulated daily life) against the INDIP reference stride lengths. The reference strides
 (initial contact to the next initial contact of the same foot) segment the signal, so the figures
 measure the stride-length model alone, not a step detector. For each stride the bounce feature

@@ -1,4 +1,4 @@
-"""Leave-one-trial-out cross-validation of zero-velocity (ZUPT) detection rules (issue 16).
+"""Leave-one-trial-out cross-validation of zero-velocity (ZUPT) detection rules.
 
 Every candidate rule has a small grid of settings. For each setting the SHOE stance of every
 PyShoe trial is computed, the ZUPT EKF + RTS smoother run on it, and the trial scored (2-D ARMSE
@@ -13,7 +13,7 @@ Candidates (``CANDIDATES``):
 
 - ``fixed``: one SHOE threshold for every recording (log10 gamma on a grid);
 - ``p99_classes``: motion classes by the recording's 99th percentile of log10 T (slow walk vs
-  fast walk / run, the rule of issue 8 that overfitted), a threshold per class;
+  fast walk / run, the earlier per-class rule that overfitted), a threshold per class;
 - ``cadence_classes``: motion classes by the stride period (the autocorrelation peak of log10 T
   between 0.4 and 2.5 s: running strides are shorter), a threshold per class;
 - ``swing_guard``: a base threshold raised on a ladder (0.25 decade) until no swing is longer

@@ -2,7 +2,7 @@
 
 A paper reports one number per table cell; a Monte Carlo gives one number per run. A ``Cell``
 keeps every per-run value with the seed that produced it, and summarises them the same way
-everywhere in ``indoorloc reproduce`` (issue 18): mean ± sd, median, interquartile range, and the
+everywhere in ``indoorloc reproduce``: mean ± sd, median, interquartile range, and the
 percentile of our runs at which the paper's figure falls, with a one-line verdict.
 
 Percentile convention: the share of our runs strictly below the paper's value plus half the share
@@ -146,7 +146,7 @@ class ReproduceContext:
         Base seed; a section derives every run's seed from it (documented in its Table.setup).
     scheduler : None, str or distributed.Client
         None = in process; an address or a Client = run the section's tasks through
-        ``indoorloc.sweep.run_sweep`` on that Dask cluster (issue 19).
+        ``indoorloc.sweep.run_sweep`` on that Dask cluster.
     log : callable(str)
         Prints one progress line (with the time) whether or not stdout is a terminal.
     quick : bool

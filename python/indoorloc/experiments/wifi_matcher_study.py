@@ -1,4 +1,4 @@
-"""The WiFi-only matcher study (issue 25, "A WiFi observation at the state of the art").
+"""The WiFi-only matcher study (docs/fusion_real.md, "WiFi as fixes").
 
 ``python -m indoorloc.experiments.wifi_matcher_study [--data-root DIR] [--floors B1 F1 ...]
 [--json FILE] [--markdown FILE] [--cache-dir DIR]``
@@ -66,7 +66,7 @@ class CachedWalk:
 def cache_floor(root: Path, name: str, cache_dir: Path, log=print) -> Tuple[List[CachedWalk], List[str]]:
     """The floor's walks from the cache, parsing and placing the missing ones; also the ids of
     walks the loader refused (skipped)."""
-    from indoorloc import wifi_crowdsource as wc
+    from indoorloc import wifi_crowdsource
     from indoorloc.io import read_ilc_floor
 
     floor = read_ilc_floor(Path(root) / name)
@@ -86,7 +86,7 @@ def cache_floor(root: Path, name: str, cache_dir: Path, log=print) -> Tuple[List
             wt = np.asarray(walk.waypoint_t_s, float)
             if wt.size:
                 grid = np.arange(wt[0] - 3.0, wt[-1] + 3.0 + GRID_STEP_S / 2, GRID_STEP_S)
-                pos = wc.walk_positions(walk, grid)
+                pos = wifi_crowdsource.walk_positions(walk, grid)
                 gxy = np.where(pos.valid[:, None], pos.xy_m, np.nan)
             else:
                 grid, gxy = np.zeros(0), np.zeros((0, 2))
@@ -168,11 +168,11 @@ class FoldQueries:
 
 
 def fold_queries(test: Sequence[CachedWalk], database) -> FoldQueries:
-    from indoorloc import wifi_fixes as wfx
+    from indoorloc import wifi_fixes
 
     ts, rs, ws, wpw, wpt, wpx = [], [], [], [], [], []
     for i, w in enumerate(test):
-        t, rss = wfx.walk_queries(w, database)
+        t, rss = wifi_fixes.walk_queries(w, database)
         ts.append(t)
         rs.append(rss)
         ws.append(np.full(t.size, i))
@@ -211,7 +211,7 @@ def evaluate_grid(walks: Sequence[CachedWalk], grid: Dict[str, Sequence[Any]], f
     """Waypoint errors of every grid point on one floor (4-fold by walk), concatenated in fold order;
     plus per-waypoint facts (fold, coverage distance, bound distance at the default reference
     window) and the old matcher's errors."""
-    from indoorloc import wifi_fixes as wfx, wifi_matcher as wm
+    from indoorloc import wifi_fixes, wifi_matcher
 
     out: Dict[str, List[np.ndarray]] = {}
     extra: Dict[str, List[np.ndarray]] = {"fold": [], "coverage_m": [], "old": []}
@@ -221,9 +221,9 @@ def evaluate_grid(walks: Sequence[CachedWalk], grid: Dict[str, Sequence[Any]], f
         test = [walks[i] for i in test_idx]
         pos = [w.positions_at for w in train]
         # The previous matcher, and the training scan positions (coverage).
-        old_db = wfx.build_database(train, wfx.FixSettings(**OLD), positions_at=pos)
+        old_db = wifi_fixes.build_database(train, wifi_fixes.FixSettings(**OLD), positions_at=pos)
         qo = fold_queries(test, old_db)
-        best, _, w = wm.knn(wfx.dissimilarity(qo.rss_dbm, old_db), 8, 2.0)
+        best, _, w = wifi_matcher.knn(wifi_fixes.dissimilarity(qo.rss_dbm, old_db), 8, 2.0)
         extra["old"].append(waypoint_errors(qo, weighted_centres(old_db.positions_m, best, w)))
         from scipy.spatial import cKDTree
 
@@ -231,17 +231,17 @@ def evaluate_grid(walks: Sequence[CachedWalk], grid: Dict[str, Sequence[Any]], f
         extra["fold"].append(np.full(qo.wp_t_s.size, j))
         for bvals in itertools.product(*(grid[k] for k in BUILD_KEYS)):
             b = dict(zip(BUILD_KEYS, bvals))
-            db0 = wfx.build_database(train, wfx.FixSettings(**b), positions_at=pos)
+            db0 = wifi_fixes.build_database(train, wifi_fixes.FixSettings(**b), positions_at=pos)
             for qvals in itertools.product(*(grid[k] for k in QUERY_KEYS)):
                 qd = dict(zip(QUERY_KEYS, qvals))
-                q = fold_queries(test, db0.with_settings(wfx.FixSettings(**b, **qd)))
+                q = fold_queries(test, db0.with_settings(wifi_fixes.FixSettings(**b, **qd)))
                 for ivals in itertools.product(*(grid[k] for k in INDEX_KEYS)):
                     idx = dict(zip(INDEX_KEYS, ivals))
-                    db = db0.with_settings(wfx.FixSettings(**b, **qd, **idx))
-                    rms, u = wm.shared_dissimilarity(q.rss_dbm, db.index, 0.0, parts=True)
+                    db = db0.with_settings(wifi_fixes.FixSettings(**b, **qd, **idx))
+                    rms, u = wifi_matcher.shared_dissimilarity(q.rss_dbm, db.index, 0.0, parts=True)
                     kmax = max(grid["k"])
                     for c in grid["penalty_db"]:
-                        best, dbest, _ = wm.knn(rms + c * u, kmax, 1.0)
+                        best, dbest, _ = wifi_matcher.knn(rms + c * u, kmax, 1.0)
                         for k in grid["k"]:
                             for temp in grid["temperature_db"]:
                                 ww = np.exp(-(dbest[:, :k] - dbest[:, :1]) / temp)
@@ -330,26 +330,26 @@ def tracker_view(walks: Sequence[CachedWalk], settings, folds: int = 4, seed: in
     bound/coverage distances of the test waypoints."""
     from scipy.spatial import cKDTree
 
-    from indoorloc import wifi_fixes as wfx
+    from indoorloc import wifi_fixes
 
-    from indoorloc import wifi_matcher as wm
+    from indoorloc import wifi_matcher
 
     truth, means, weights, fold_of, d_min = [], [], [], [], []
     bound = []
     for j, test_idx in enumerate(_folds(len(walks), folds, seed)):
         ts = set(test_idx.tolist())
         train = [w for i, w in enumerate(walks) if i not in ts]
-        db = wfx.build_database(train, settings, positions_at=[w.positions_at for w in train])
+        db = wifi_fixes.build_database(train, settings, positions_at=[w.positions_at for w in train])
         tree = cKDTree(db.positions_m)
         for i in test_idx:
             w = walks[i]
             bound.append(tree.query(w.waypoint_xy_m)[0])
-            t, rss = wfx.walk_queries(w, db)   # the queries of fixes_for_walk
+            t, rss = wifi_fixes.walk_queries(w, db)   # the queries of fixes_for_walk
             wt = w.waypoint_t_s
             ok = (t >= wt[0]) & (t <= wt[-1])
             if not ok.any():
                 continue
-            best, d, wgt = wm.knn(wfx.dissimilarity(rss[ok], db), settings.k, settings.temperature_db)
+            best, d, wgt = wifi_matcher.knn(wifi_fixes.dissimilarity(rss[ok], db), settings.k, settings.temperature_db)
             truth.append(np.column_stack([np.interp(t[ok], wt, w.waypoint_xy_m[:, c]) for c in range(2)]))
             means.append(db.positions_m[best])
             weights.append(wgt)
@@ -373,22 +373,22 @@ def time_queries(walks: Sequence[CachedWalk], settings, repeats: int = 3) -> Dic
     """Milliseconds per query of ``locate_scans``: the first walk's queries against a database of
     all the other walks given (here: every walk of the two largest floors, as in floor
     identification), a walk's queries at once and one query at a time."""
-    from indoorloc import wifi_fixes as wfx
+    from indoorloc import wifi_fixes
 
     test, train = walks[0], list(walks[1:])
-    db = wfx.build_database(train, settings, positions_at=[w.positions_at for w in train])
-    _, rss = wfx.walk_queries(test, db)
+    db = wifi_fixes.build_database(train, settings, positions_at=[w.positions_at for w in train])
+    _, rss = wifi_fixes.walk_queries(test, db)
     db.index  # built once per database, outside the timing
     best = math.inf
     for _ in range(repeats):
         tic = time.perf_counter()
-        wfx.locate_scans(rss, db)
+        wifi_fixes.locate_scans(rss, db)
         best = min(best, time.perf_counter() - tic)
     single = math.inf
     for _ in range(repeats):
         tic = time.perf_counter()
         for r in range(rss.shape[0]):
-            wfx.locate_scans(rss[r:r + 1], db)
+            wifi_fixes.locate_scans(rss[r:r + 1], db)
         single = min(single, time.perf_counter() - tic)
     return {"references": db.n_scans, "aps": len(db.bssids), "queries": int(rss.shape[0]),
             "ms_per_query_batch": 1e3 * best / max(1, rss.shape[0]),
@@ -401,7 +401,7 @@ def time_queries(walks: Sequence[CachedWalk], settings, repeats: int = 3) -> Dic
 
 def run(data_root: Path, floors: Sequence[str], cache_dir: Path, grid: Optional[Dict[str, Sequence[Any]]] = None,
         log=print) -> Dict[str, Any]:
-    from indoorloc import wifi_fixes as wfx
+    from indoorloc import wifi_fixes
 
     grid = dict(GRID if grid is None else grid)
     tic = time.time()
@@ -415,7 +415,7 @@ def run(data_root: Path, floors: Sequence[str], cache_dir: Path, grid: Optional[
         log(f"{f}: grid of {len(errors[f])} points in {time.time() - t0:.0f} s")
     sel = lofo(errors, floors)
     chosen = parse_key(sel["best_all"])
-    settings = wfx.FixSettings(**chosen)
+    settings = wifi_fixes.FixSettings(**chosen)
     out: Dict[str, Any] = {"floors": list(floors), "grid": {k: list(v) for k, v in grid.items()},
                            "skipped_walks": {f: len(v) for f, v in skipped.items()},
                            "lofo": sel, "chosen_all_floors": chosen, "per_floor": {}}

@@ -1,5 +1,5 @@
 """Fusion: one particle filter that tracks a walking person from PDR steps, a WiFi signal map and
-a floor plan (issue 14; the "future work" of papers 000 §IV and 002 §VI).
+a floor plan (the "future work" of papers 000 §IV and 002 §VI).
 
 - :class:`FloorPlan` / :class:`FloorGeometry` / :class:`FloorPlanOptions`: walkable space per
   floor (outlines minus obstacles, thin walls) with indexed batch queries: walkable points, wall

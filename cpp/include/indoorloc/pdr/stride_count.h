@@ -2,8 +2,7 @@
 //
 // A stride of the instrumented foot is one swing followed by a stance: the strides are the
 // stance onsets after a swing (the rest at the very start is not a stride). Stance detectors
-// flicker, and the flicker depends on the gait, so the cleaning uses the recording's own rhythm
-// (issue 16):
+// flicker, and the flicker depends on the gait, so the cleaning uses the recording's own rhythm:
 //  1. stance runs shorter than min_stance_s inside a swing are swing (a pause of the detector
 //     in mid-swing);
 //  2. swing runs shorter than max(min_swing_s, min_swing_fraction x the median swing) inside a

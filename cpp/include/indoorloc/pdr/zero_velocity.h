@@ -8,7 +8,7 @@
 // acceleration-moving-variance and angular-rate-energy detectors of the same paper, and the
 // two-threshold acceleration-variance detector of paper 002 (eq. 1-3) with windows in samples.
 //
-// DetectZeroVelocity (issue 16) adapts the SHOE threshold to the recording. Rules:
+// DetectZeroVelocity (the adaptive detector) adapts the SHOE threshold to the recording. Rules:
 //  - kFixed: T_k < γ₀.
 //  - kSwingGuard (the default): γ climbs a ladder γ₀ · 10^(j · step), j = 0, 1, ..., up to
 //    γ_max, and stops at the first rung where the recording's gait looks whole: every swing (a

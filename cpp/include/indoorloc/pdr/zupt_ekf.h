@@ -19,7 +19,7 @@
 // δ_k = C_k (δ_{k+1} + u_{k+1}), where u_{k+1} is the correction the ZUPT update applied at k+1
 // (x⁺_{k+1} - x⁻_{k+1}), and δ_N = 0. Only C_k and u_k are stored (9 x 9 + 9 numbers per sample).
 //
-// Health check (issue 16: divergence must be reported, never silent). The Summary describes the
+// Health check (divergence must be reported, never silent). The Summary describes the
 // stance the filter was given and what the filter made of it: the stance fraction over the
 // walking span (first swing to last swing), the swing durations, the speed |v̂⁻| the filter had
 // integrated when each stance began (before its zero-velocity update: the velocity error of one
