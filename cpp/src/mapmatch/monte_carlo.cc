@@ -5,6 +5,7 @@
 #include "indoorloc/core/interrupt.h"
 #include "indoorloc/core/options.h"
 #include "indoorloc/core/parallel.h"
+#include "indoorloc/core/validate.h"
 
 namespace indoorloc::mapmatch {
 
@@ -41,6 +42,12 @@ std::vector<RunResult> RunMonteCarlo(const RoadNetwork& network, const Trajector
                                      const FilterOptions& filter, int n_runs, std::uint64_t seed, int n_threads) {
   ValidateOptions(trajectory, "trajectory");
   ValidateOptions(filter, "filter");
+  // The filter's recovery window is sized from the trajectory's step: refuse it here, before
+  // any run simulates its trajectory (the same bound the filter checks at its first step).
+  if (filter.recovery_disagreement > 0.0) {
+    RequireSizeLimit(filter.recovery_window_s / trajectory.dt_s, sizeof(double), "dt_s",
+                     "recovery-window slots (recovery_window_s / dt_s)", 1e9);
+  }
   std::vector<RunResult> results(static_cast<size_t>(std::max(0, n_runs)));
   ParallelForRuns(n_runs, n_threads, seed, [&](int run, RandomStream&) {
     results[static_cast<size_t>(run)] = RunOnce(network, trajectory, filter, seed, run);

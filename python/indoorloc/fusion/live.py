@@ -46,6 +46,7 @@ from typing import Any, Dict, Iterator, List, Optional, Sequence, Tuple
 import numpy as np
 
 from indoorloc._core.fusion import GridFilterSession, GridTracker
+from indoorloc.io.ilc2020.walk_types import quaternion_from_rotation_vector
 from indoorloc.pdr import handheld as ph
 from indoorloc.pdr import streaming as ps
 from indoorloc import wifi_fixes as wfx
@@ -60,21 +61,6 @@ STEP_HEADING_SD_RAD = math.radians(10.0)
 #: Event kinds of :meth:`LiveTracker.add_event` and :func:`walk_events`, in their order at equal
 #: times (the held IMU streams before the accelerometer sample that uses them).
 EVENT_KINDS = ("gyroscope", "rotation_vector", "accelerometer", "wifi", "beacon")
-
-
-def quaternion_from_rotation_vector(values: np.ndarray) -> np.ndarray:
-    """(N, 4) unit quaternions (x, y, z, w) from Android rotation-vector values (N, 3 or 4): w
-    completed as sqrt(max(0, 1 - |v|²)) where absent or NaN, then normalised (the same code as
-    ``IlcWalk.rotation_quaternion_xyzw``)."""
-    v = np.asarray(values, dtype=np.float64)
-    q = np.empty((v.shape[0], 4), dtype=np.float64)
-    q[:, :3] = v[:, :3]
-    w = np.sqrt(np.maximum(0.0, 1.0 - np.sum(v[:, :3] ** 2, axis=1)))
-    if v.shape[1] == 4:
-        w = np.where(np.isnan(v[:, 3]), w, v[:, 3])
-    q[:, 3] = w
-    norm = np.linalg.norm(q, axis=1, keepdims=True)
-    return q / np.where(norm > 0, norm, 1.0)
 
 
 def _step_arrays(steps: ph.HandheldSteps, yaw_offset_rad: float, length_sd_fraction: float,

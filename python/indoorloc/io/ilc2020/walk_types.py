@@ -374,16 +374,24 @@ class IlcWalk:
         completed as ``sqrt(max(0, 1 - x^2 - y^2 - z^2))`` (Android's
         ``SensorManager.getQuaternionFromVector``), then every row is normalised.
         """
-        v = self.rotation_vector.values
-        q = np.empty((v.shape[0], 4), dtype=np.float64)
-        q[:, :3] = v[:, :3]
-        w = np.sqrt(np.maximum(0.0, 1.0 - np.sum(v[:, :3] ** 2, axis=1)))
-        if v.shape[1] == 4:
-            w = np.where(np.isnan(v[:, 3]), w, v[:, 3])
-        q[:, 3] = w
-        norm = np.linalg.norm(q, axis=1, keepdims=True)
-        return q / np.where(norm > 0, norm, 1.0)
+        return quaternion_from_rotation_vector(self.rotation_vector.values)
 
 
 # --------------------------------------------------------------------------------------------
 # Parsing
+
+
+def quaternion_from_rotation_vector(values: np.ndarray) -> np.ndarray:
+    """(N, 4) unit quaternions (x, y, z, w) from Android rotation-vector values (N, 3 or 4): w
+    taken from the values where stored and not NaN, otherwise completed as
+    ``sqrt(max(0, 1 - x^2 - y^2 - z^2))`` (Android's ``SensorManager.getQuaternionFromVector``),
+    then every row normalised (:meth:`IlcWalk.rotation_quaternion_xyzw`, the live tracker)."""
+    v = np.asarray(values, dtype=np.float64)
+    q = np.empty((v.shape[0], 4), dtype=np.float64)
+    q[:, :3] = v[:, :3]
+    w = np.sqrt(np.maximum(0.0, 1.0 - np.sum(v[:, :3] ** 2, axis=1)))
+    if v.shape[1] == 4:
+        w = np.where(np.isnan(v[:, 3]), w, v[:, 3])
+    q[:, 3] = w
+    norm = np.linalg.norm(q, axis=1, keepdims=True)
+    return q / np.where(norm > 0, norm, 1.0)
