@@ -69,25 +69,12 @@ from indoorloc.io.road_network import (
     write_geojson_segments,
 )
 
+from indoorloc.io.ilc2020 import __all__ as _ilc2020_all  # noqa: E402: the loader's names, listed once
 
 __all__ = [
     "FormatError",
     "RecordingWarning",
-    "ILC_SENSOR_TYPES",
-    "BssidVocabulary",
-    "IlcBeacons",
-    "IlcFloor",
-    "IlcSensor",
-    "IlcWalk",
-    "IlcWifi",
-    "UnknownWalkError",
-    "describe_ilc_floor",
-    "ilc_floor_level",
-    "ilc_floor_names",
-    "ilc_floor_origin_lonlat",
-    "read_ilc_floor",
-    "read_ilc_site",
-    "read_ilc_walk",
+    *_ilc2020_all,
     "GeoJsonFloor",
     "floor_geometry_to_geojson",
     "load_floor_plan",
