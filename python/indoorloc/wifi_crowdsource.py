@@ -514,6 +514,8 @@ def scan_matrix(walk: Any, bssids: Sequence[str], settings: Optional[CrowdMapSet
     if max_age_s is not None:
         sel &= age <= max_age_s
     idx = np.flatnonzero(sel)
+    if idx.size == 0:  # the walk heard none of the map's APs (or none fresh enough): all NaN
+        return times, rss, ages
     sid = wf.scan_index[idx]
     # Order so that for each (scan, column) the preferred reading comes last: older first,
     # then weaker first; assignment keeps the last.

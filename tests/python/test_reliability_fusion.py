@@ -338,3 +338,19 @@ def test_wifi_helpers_refuse_non_finite_arguments_and_name_the_query():
     # A scan that heard none of the database's APs cannot be placed: NaN (documented), the rest finite.
     out = wifi_fixes.locate_scans(np.array([[-50.0, -60.0], [np.nan, np.nan]]), db)
     assert np.isfinite(out[0]).all() and np.isnan(out[1]).all()
+
+
+def test_scan_matrix_of_a_walk_that_heard_none_of_the_maps_aps_is_all_nan():
+    from types import SimpleNamespace
+
+    from indoorloc import wifi_crowdsource
+    from indoorloc.io.ilc2020 import IlcWifi
+
+    wf = IlcWifi(np.array([1.0, 1.0, 3.0]), np.array([0, 1, 0]), np.array([-50.0, -60.0, -55.0]),
+                 np.full(3, 2412.0), np.array([0.9, 0.5, 2.9]), ["a", "b"], ["", ""], np.array([0, 2]))
+    walk = SimpleNamespace(wifi=wf)
+    for bssids, kw in ((["zz"], {}), (["a"], {"max_age_s": 1e-9})):
+        t, rss, ages = wifi_crowdsource.scan_matrix(walk, bssids, **kw)
+        assert t.tolist() == [1.0, 3.0] and rss.shape == (2, 1) and np.isnan(rss).all() and np.isnan(ages).all()
+    t, rss, _ = wifi_crowdsource.scan_matrix(walk, ["a", "b"])
+    assert rss.tolist() == [[-50.0, -60.0], [-55.0, np.nan]] or np.allclose(np.nan_to_num(rss), [[-50, -60], [-55, 0]])
