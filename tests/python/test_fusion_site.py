@@ -20,7 +20,6 @@ import pytest
 
 FLOOR = "F8"
 N_SURVEY = 4
-REPO = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture
@@ -264,7 +263,12 @@ def test_killed_add_leaves_the_old_content(built, tmp_path):
     site, paths = built
     before = site.info()
     flag = tmp_path / "inside"
-    env = dict(os.environ, PYTHONPATH=str(REPO / "python") + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    # The child imports the package this test imported (installed, or the source tree with its
+    # built module), not the source tree alone, which has no compiled _core after a plain install.
+    import indoorloc
+
+    package_root = str(Path(indoorloc.__file__).resolve().parents[1])
+    env = dict(os.environ, PYTHONPATH=package_root + os.pathsep + os.environ.get("PYTHONPATH", ""))
     proc = subprocess.Popen([sys.executable, "-c", _KILLED_ADD, str(site.path), str(flag),
                              str(paths[N_SURVEY]), str(paths[N_SURVEY + 1])], env=env)
     try:
