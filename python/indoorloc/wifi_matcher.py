@@ -247,6 +247,13 @@ class ReferenceIndex:
         index.matcher()  # validates the references and weights now (ValueError naming them)
         return index
 
+    def __getstate__(self) -> dict:
+        """Pickling and copying (Dask, copy.deepcopy) keep the references; the compiled matchers
+        are not picklable and are rebuilt on demand."""
+        state = dict(self.__dict__)
+        state.pop("_matchers", None)
+        return state
+
     def matcher(self, penalty_db: Optional[float] = None, k: Optional[int] = None,
                 temperature_db: Optional[float] = None) -> Any:
         """The compiled matcher with these options (None: the C++ default), built once per

@@ -381,3 +381,16 @@ def test_wifi_evaluate_cli_reports_shared_knn_beside_wknn(shared_data, tmp_path,
     assert cli.main(["wifi", "evaluate", "--data-root", str(root), "--dataset", "corridor", "--scans", "1",
                      "--quiet", "--methods", "nope"]) != 0
     assert "argument 'methods': unknown ['nope']" in capsys.readouterr().err
+
+
+def test_a_database_with_its_compiled_matcher_pickles_and_copies():
+    import copy
+    import pickle
+
+    rss = np.array([[-50.0, -60.0], [-70.0, nan], [-55.0, -65.0], [-52.0, -61.0]])
+    xy = np.array([[0.0, 0.0], [5.0, 0.0], [10.0, 0.0], [0.5, 0.0]])
+    db = wfx.assemble_database([(rss, xy, ["a", "b"], np.zeros(4, int), np.arange(4))], wfx.FixSettings(k=2))
+    q = np.array([[-51.0, -60.5]])
+    before = wfx.locate_scans(q, db)  # builds the compiled matcher
+    for other in (pickle.loads(pickle.dumps(db)), copy.deepcopy(db)):
+        np.testing.assert_array_equal(wfx.locate_scans(q, other), before)
