@@ -100,12 +100,14 @@ class RealSettings:
     #: LOFO: log-weight of a step through a shop wall (-inf: the particle is dropped; log 0.02 in
     #: the grid: shops are polygons without doors and 12 of 866 waypoints lie inside one). A known
     #: start inside a shop is moved to the nearest walkable point.
-    wall_log_penalty: float = -math.inf
+    wall_log_penalty: float = field(default_factory=lambda: fusion.TrackerOptions().wall_log_penalty)
     candidate_spacing_m: float = 2.0    #: unknown start and recovery on the mall floors
     #: The WiFi as fingerprint fixes (``wifi_fixes``); k, T, σ, c: LOFO.
     fixes: wfx.FixSettings = field(default_factory=wfx.FixSettings)
-    fix_outlier_probability: float = 0.1  #: LOFO: ε of the fixes
-    fix_tempering: float = 0.6            #: LOFO: τ_fix (consecutive scans share stale readings)
+    #: LOFO: ε of the fixes (the particle tracker's own default, read from TrackerOptions).
+    fix_outlier_probability: float = field(default_factory=lambda: fusion.TrackerOptions().fix_outlier_probability)
+    #: LOFO: τ_fix (consecutive scans share stale readings; TrackerOptions' default).
+    fix_tempering: float = field(default_factory=lambda: fusion.TrackerOptions().fix_tempering)
     #: The known-start filter's own choice (LOFO on ``fusion_known_start`` over the same grid,
     #: the same point in every fold): with the start known, WiFi fixes only need to stop drift
     #: and are weighted less.
@@ -272,11 +274,8 @@ def _walkable_start(plan, xy: np.ndarray, floor_index: int = 0) -> np.ndarray:
 
 
 def replace_options(options: fusion.TrackerOptions, **changes) -> fusion.TrackerOptions:
-    """A copy of TrackerOptions with some fields changed."""
-    names = [n for n in dir(options) if not n.startswith("_") and not callable(getattr(options, n))]
-    values = {n: getattr(options, n) for n in names}
-    values.update(changes)
-    return fusion.tracker_options(**values)
+    """A copy of TrackerOptions with some fields changed (its bound ``replace``, which validates)."""
+    return options.replace(**changes)
 
 
 def _score_walk(walk, steps_raw: ph.HandheldSteps, models: FoldModels, settings: RealSettings, peer,
