@@ -73,12 +73,14 @@ def registered_demos() -> Dict[str, DemoEntry]:
 
 def default_data_root() -> Path:
     """Where the real WiFi datasets are: $INDOORLOC_WIFI_DATA, else the first `shared/data/wifi`
-    found beside the working folder or one of its parents (a clone sits next to `shared/`)."""
+    found beside the working folder or one of its parents (a clone sits next to `shared/`), else
+    beside the package's own folder or one of its parents (a source tree run from elsewhere)."""
     env = os.environ.get("INDOORLOC_WIFI_DATA")
     if env:
         return Path(env)
     here = Path.cwd().resolve()
-    for folder in (here, *here.parents):
+    package = Path(__file__).resolve().parent
+    for folder in (here, *here.parents, *package.parents):
         candidate = folder / "shared" / "data" / "wifi"
         if candidate.is_dir():
             return candidate
