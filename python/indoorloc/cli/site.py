@@ -126,7 +126,11 @@ def cmd_track(args: argparse.Namespace) -> int:
         tracks.append(tr)
         st = error_stats(tr.errors_m)
         line = f"{tr.walk_id}: floor {tr.floor} (p {tr.floor_probability:.2f}), {tr.times_s.size} steps"
-        if tr.header_floor and tr.header_floor != tr.floor:
+        if tr.header_floor and tr.header_floor not in site.floors:
+            line += (f" (its header says floor {tr.header_floor}, which this site does not have: the track assumes "
+                     f"the walk is on one of the site's floors {site.floors}, and the floor probability is among "
+                     "those only)")
+        elif tr.header_floor and tr.header_floor != tr.floor:
             line += f" (its header says floor {tr.header_floor}: waypoint errors not comparable)"
         if st:
             line += (f", error at {st['n_waypoints']} waypoints: mean {st['mean_m']:.2f} m, median "
