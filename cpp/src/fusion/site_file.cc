@@ -184,6 +184,7 @@ GridTrackerOptions SiteFile::TrackerOptions(const std::string& floor) const {
   o.scale_sd = get("scale_sd", o.scale_sd);
   o.position_noise_m = get("position_noise_m", o.position_noise_m);
   o.wall_log_penalty = get("wall_log_penalty", o.wall_log_penalty);
+  o.wall_margin_m = get("wall_margin_m", o.wall_margin_m);
   o.fix.outlier_probability = get("fix_outlier_probability", o.fix.outlier_probability);
   o.fix.tempering = get("fix_tempering", o.fix.tempering);
   o.fix_tempering_by_variance = get("fix_tempering_by_variance", o.fix_tempering_by_variance) != 0.0;
