@@ -689,7 +689,8 @@ TRACKER_FIELDS = {
 
 
 def group_fusion() -> None:
-    from indoorloc import fusion, wifi_fixes
+    from indoorloc import fusion
+    from indoorloc.fusion import wifi_fixes
     from indoorloc import io as iio
     from indoorloc._core import fusion as cf
 
