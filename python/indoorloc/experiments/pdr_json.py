@@ -13,13 +13,8 @@ from typing import Any, Dict, List, Optional, Sequence, Union
 import numpy as np
 
 from indoorloc.experiments.pdr_scoring import score_pyshoe_trial
-from indoorloc.io.pdr_datasets import (
-    ImuRecording,
-    list_pyshoe_trials,
-    load_openshoe,
-    load_pyshoe_trial,
-    load_xio,
-)
+from indoorloc.io import pdr_datasets
+from indoorloc.io.pdr_datasets import ImuRecording
 from indoorloc.pdr import metrics as _metrics
 from indoorloc.pdr import recommended as _recommended
 from indoorloc.progress import progress, stage
@@ -114,11 +109,13 @@ def evaluate_json(root: PathLike, only: Optional[Sequence[str]] = None) -> Dict[
         if not folder.is_dir():
             continue
         if nm == "pyshoe":
-            recs = [load_pyshoe_trial(p) for p in list_pyshoe_trials(folder)]
+            recs = [pdr_datasets.load_pyshoe_trial(p) for p in pdr_datasets.list_pyshoe_trials(folder)]
         elif nm == "xio":
-            recs = [load_xio(folder / f) for f in ("short_walk.csv", "long_walk.csv") if (folder / f).is_file()]
+            recs = [pdr_datasets.load_xio(folder / f) for f in ("short_walk.csv", "long_walk.csv")
+                    if (folder / f).is_file()]
         elif nm == "openshoe":
-            recs = [load_openshoe(folder / "OpenShoeDataSet.txt")] if (folder / "OpenShoeDataSet.txt").is_file() else []
+            loop = folder / "OpenShoeDataSet.txt"
+            recs = [pdr_datasets.load_openshoe(loop)] if loop.is_file() else []
         else:
             with stage("mobgap"):
                 rows.extend(_mobgap_rows(folder))

@@ -38,7 +38,6 @@ __all__ = [
     "SURIMI_NAMES",
     "FingerprintDataset",
     "FingerprintSplit",
-    "PathLike",
     "available_datasets",
     "load_rss_rtt_room",
     "load_surimi",
