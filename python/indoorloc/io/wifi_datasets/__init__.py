@@ -26,7 +26,7 @@ Examples
 ((4860, 5), -200.0)
 """
 
-from indoorloc.io.wifi_datasets.dataset import FingerprintDataset, FingerprintSplit, PathLike
+from indoorloc.io.wifi_datasets.dataset import FingerprintDataset, FingerprintSplit, PathLike  # noqa: F401
 from indoorloc.io.wifi_datasets.discovery import available_datasets, load_wifi_dataset
 from indoorloc.io.wifi_datasets.rss_rtt_rooms import RSS_RTT_GRID_M, RSS_RTT_ROOMS, load_rss_rtt_room
 from indoorloc.io.wifi_datasets.surimi import SURIMI_NAMES, load_surimi

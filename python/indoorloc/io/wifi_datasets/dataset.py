@@ -177,8 +177,11 @@ def _integer_floors(values: np.ndarray, path: Path) -> np.ndarray:
     return nearest.astype(np.int64)
 
 
-def _point_ids(train_key: np.ndarray, test_key: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
-    """Ids of the (x, y, floor) rows of both splits, numbered by first appearance."""
+def _point_ids(train_xy: np.ndarray, train_floors: np.ndarray, test_xy: np.ndarray,
+               test_floors: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+    """Ids of the (x, y, floor) reference points of both splits, numbered by first appearance."""
+    train_key = np.column_stack([train_xy, train_floors])
+    test_key = np.column_stack([test_xy, test_floors])
     key = np.round(np.vstack([train_key, test_key]), _POINT_KEY_DECIMALS)
     _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
     inverse = inverse.reshape(-1)

@@ -162,8 +162,7 @@ def load_rss_rtt_room(root: PathLike, room: str) -> FingerprintDataset:
 
     tr_floor = np.zeros(tr_xy.shape[0], dtype=np.int64)
     te_floor = np.zeros(te_xy.shape[0], dtype=np.int64)
-    tr_ids, te_ids = _point_ids(np.column_stack([tr_xy, tr_floor]),
-                                np.column_stack([te_xy, te_floor]))
+    tr_ids, te_ids = _point_ids(tr_xy, tr_floor, te_xy, te_floor)
     description = (
         f"WiFi RSS/RTT dataset (Feng, Nguyen, Luo, IEEE J-ISPIN 2024), room {key}: RSS in dBm, "
         f"-200 = not heard; positions = grid indices x {RSS_RTT_GRID_M} m; single floor (0); "

@@ -114,8 +114,8 @@ def load_surimi(root: PathLike, name: str) -> FingerprintDataset:
     multi_building = buildings.size > 1
     floors = {s: (10 * fb[:, 1] + fb[:, 0]) if multi_building else fb[:, 0]
               for s, fb in floor_b.items()}
-    tr_ids, te_ids = _point_ids(np.column_stack([labels["training"][:, :2], floors["training"]]),
-                                np.column_stack([labels["test"][:, :2], floors["test"]]))
+    tr_ids, te_ids = _point_ids(labels["training"][:, :2], floors["training"], labels["test"][:, :2],
+                                floors["test"])
 
     description = (
         f"SURIMI collection ({key}.mat, common format of Torres-Sospedra et al.): RSS in dBm, "

@@ -187,8 +187,7 @@ def load_uji_library(
         folder, "trn", trn, month, fix_known_errors, None)
     te_rss, te_xy, te_floor, te_t, fixed_te = _uji_read_split(
         folder, "tst", tst, month, fix_known_errors, tr_rss.shape[1])
-    tr_ids, te_ids = _point_ids(np.column_stack([tr_xy, tr_floor]),
-                                np.column_stack([te_xy, te_floor]))
+    tr_ids, te_ids = _point_ids(tr_xy, tr_floor, te_xy, te_floor)
 
     description = (
         f"UJI long-term WiFi library dataset (Mendoza-Silva et al., Data 3(1):3, 2018), month "
