@@ -36,7 +36,7 @@ import numpy as np
 from indoorloc import fusion
 from indoorloc.pdr import handheld as ph
 from indoorloc.pdr import streaming as ps
-from indoorloc import wifi_fixes as wfx
+from indoorloc.fusion import wifi_fixes
 from indoorloc import wifi_matcher as wm
 from indoorloc.fusion import live
 from indoorloc.io import load_floor_plan, read_ilc_floor, read_ilc_site
@@ -64,7 +64,7 @@ def _floors(quick: bool):
         yield "F1", 1, floor, "synthetic (simulate.ilc_site; the shared data is absent)"
 
 
-def _scan_200(db: wfx.FingerprintDatabase, rng: np.random.Generator, t_s: float):
+def _scan_200(db: wifi_fixes.FingerprintDatabase, rng: np.random.Generator, t_s: float):
     """200 readings of the database's APs (the most heard first), RSSI -95..-40 dBm, last seen in
     the 3 s before t_s."""
     heard = np.isfinite(db.rss_dbm).sum(axis=0)
@@ -89,7 +89,7 @@ def run_floor(name, number, floor, rng):
     train = [w for i, w in enumerate(walks) if i != test_i]
     tic = time.perf_counter()
     cal = ph.calibrate_handheld(train, steps_cache=[ps.causal_handheld_steps(w) for w in train])
-    db = wfx.build_database(train, wfx.FixSettings(), [ph.handheld_steps(w) for w in train], floors=[number] * len(train))
+    db = wifi_fixes.build_database(train, wifi_fixes.FixSettings(), [ph.handheld_steps(w) for w in train], floors=[number] * len(train))
     plan = load_floor_plan(floor.geojson_path, floors=[number], origin_lon_lat="outline_sw")
     tracker = fusion.GridTracker(plan, fusion.GridTrackerOptions(heading_offset_sd_rad=max(cal.yaw_offset_spread_rad, 1e-3)))
     models_s = time.perf_counter() - tic
@@ -131,11 +131,11 @@ def run_floor(name, number, floor, rng):
         t0 = time.perf_counter_ns()
         q, _ = pooler.query(t, names, rssi, seen)
         t1 = time.perf_counter_ns()
-        d = wfx.dissimilarity(q[None, :], db)
+        d = wifi_fixes.dissimilarity(q[None, :], db)
         t2 = time.perf_counter_ns()
         best, d_best, w = wm.knn(d, db.settings.k, db.settings.temperature_db)
         t3 = time.perf_counter_ns()
-        fusion.Fixes.from_arrays(np.array([t]), db.positions_m[best], wfx.fix_sds(d_best[:, 0], db.settings), w,
+        fusion.Fixes.from_arrays(np.array([t]), db.positions_m[best], wifi_fixes.fix_sds(d_best[:, 0], db.settings), w,
                                  db.floors[best]).as_arrays()
         t4 = time.perf_counter_ns()
         for key, v in zip(parts, (t1 - t0, t2 - t1, t3 - t2, t4 - t3)):

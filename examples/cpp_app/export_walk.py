@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from indoorloc.pdr import handheld as ph
-from indoorloc import wifi_fixes as wfx
+from indoorloc.fusion import wifi_fixes
 from indoorloc.fusion import site_model
 from indoorloc.fusion.site import Site
 from indoorloc.io.ilc2020 import read_ilc_walk
@@ -40,7 +40,7 @@ def walk(out: Path) -> None:
     track = site.track(w, floor="F1")
     m = site.floor_models("F1")
     steps = site_model.tracker_steps(ph.handheld_steps(w), m.calibration, site.settings)
-    fixes = wfx.fixes_for_walk(w, m.database)
+    fixes = wifi_fixes.fixes_for_walk(w, m.database)
     g = lambda v: f"{float(v):.17g}"  # noqa: E731
     lines = ["floor F1", f"steps {len(steps)}"]
     cov = np.asarray(steps.covariances_m2).reshape(len(steps), -1)

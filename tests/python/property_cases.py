@@ -369,24 +369,14 @@ def fuzz_file(name: str, load, folder: Path, damaged: str, arg_name: str = "path
     naming the damaged file (`arg_name` is the loader's parameter, for the record)."""
     from hypothesis import given
 
-    from indoorloc.io import FormatError
     from property_harness import TALLY, Case, call
 
     target = folder / damaged
     valid = target.read_bytes()
     load()  # the undamaged file loads
 
-    def reload(**kwargs):
-        try:
-            return load()
-        except FormatError:
-            raise
-        except ValueError as exc:
-            # The library promises one type for damaged files.
-            raise RuntimeError(f"ValueError that is not a FormatError: {exc}") from exc
-
     # The "argument" spoiled is the file: an error message must name it.
-    case = Case(name, lambda **kwargs: reload(), {damaged: None})
+    case = Case(name, lambda **kwargs: _load_as_format_error(load), {damaged: None})
     TALLY.cases += 1
 
     @given(how=_damage())
@@ -398,6 +388,19 @@ def fuzz_file(name: str, load, folder: Path, damaged: str, arg_name: str = "path
             target.write_bytes(valid)
 
     run()
+
+
+def _load_as_format_error(load):
+    """``load()``, a ValueError that is not a FormatError turned into a RuntimeError: the library
+    promises one type for damaged files."""
+    from indoorloc.io import FormatError
+
+    try:
+        return load()
+    except FormatError:
+        raise
+    except ValueError as exc:
+        raise RuntimeError(f"ValueError that is not a FormatError: {exc}") from exc
 
 
 def _bad_field_values():
@@ -425,21 +428,12 @@ def fuzz_mat_fields(name: str, load, target: Path, build, paths) -> None:
     from hypothesis import strategies as st
     from scipy.io import savemat
 
-    from indoorloc.io import FormatError
     from property_harness import TALLY, Case, call
 
     valid = target.read_bytes()
     load()
 
-    def reload(**kwargs):
-        try:
-            return load()
-        except FormatError:
-            raise
-        except ValueError as exc:
-            raise RuntimeError(f"ValueError that is not a FormatError: {exc}") from exc
-
-    case = Case(name, lambda **kwargs: reload(), {target.name: None})
+    case = Case(name, lambda **kwargs: _load_as_format_error(load), {target.name: None})
     TALLY.cases += 1
 
     @given(where=st.sampled_from(paths), how=_bad_field_values())
@@ -548,14 +542,10 @@ def group_io() -> None:
                                 "timestamps": ts[[5, 25, 45]][None, :]})
     fuzz_file("load_pyshoe_trial", lambda: iio.load_pyshoe_trial(tmp / "trial.mat"), tmp, "trial.mat")
 
-    rooms = tmp / "rooms"
-    rooms.mkdir()
-    (rooms / "AP_position.txt").write_text("office\nAP X: 1,11,15\nAP Y: 5,-1,6\n")
-    head = "X,Y,AP1 RTT(mm),AP2 RTT(mm),AP3 RTT(mm),AP1 RSS(dBm),AP2 RSS(dBm),AP3 RSS(dBm),LOS APs\n"
-    for split in ("train", "test"):
-        (rooms / f"database_office_{split}.csv").write_text(
-            head + "0.0,1.0,4000.0,4000.0,4000.0,-50.0,-60.0,-70.0,1 3\n"
-                   "2.0,3.0,4000.0,4000.0,4000.0,-55.0,-65.0,-75.0,1\n")
+    from test_wifi_io import write_office_room  # the RSS/RTT room fixture
+
+    rooms = write_office_room(tmp / "rooms", "1,11,15", ["0.0,1.0,4000.0,4000.0,4000.0,-50.0,-60.0,-70.0,1 3",
+                                                        "2.0,3.0,4000.0,4000.0,4000.0,-55.0,-65.0,-75.0,1"])
     for damaged in ("AP_position.txt", "database_office_train.csv"):
         fuzz_file(f"load_rss_rtt_room[{damaged}]", lambda: iio.load_rss_rtt_room(rooms, "office"), rooms,
                   damaged, arg_name="root")
@@ -689,7 +679,8 @@ TRACKER_FIELDS = {
 
 
 def group_fusion() -> None:
-    from indoorloc import fusion, wifi_fixes
+    from indoorloc import fusion
+    from indoorloc.fusion import wifi_fixes
     from indoorloc import io as iio
     from indoorloc._core import fusion as cf
 

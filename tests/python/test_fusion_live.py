@@ -13,7 +13,7 @@ import pytest
 from indoorloc import fusion
 from indoorloc.pdr import handheld as ph
 from indoorloc.pdr import streaming as ps
-from indoorloc import wifi_fixes as wfx
+from indoorloc.fusion import wifi_fixes as wfx
 from indoorloc.fusion import live
 from indoorloc.io import load_floor_plan, read_ilc_floor, read_ilc_site
 from indoorloc.simulate.ilc_site import make_ilc_site

@@ -49,7 +49,7 @@ from indoorloc._core.fusion import GridFilterSession, GridTracker
 from indoorloc.io.ilc2020.walk_types import quaternion_from_rotation_vector
 from indoorloc.pdr import handheld as ph
 from indoorloc.pdr import streaming as ps
-from indoorloc import wifi_fixes as wfx
+from indoorloc.fusion import wifi_fixes as wfx
 from indoorloc import wifi_matcher as wm
 
 #: Per-step white noise given to the filter (the defaults of ``indoorloc fusion evaluate``,
@@ -66,22 +66,22 @@ EVENT_KINDS = ("gyroscope", "rotation_vector", "accelerometer", "wifi", "beacon"
 def _step_arrays(steps: ph.HandheldSteps, yaw_offset_rad: float, length_sd_fraction: float,
                  heading_sd_rad: float):
     """fusion.Steps of detected steps (headings rotated by the calibration's yaw offset)."""
-    from indoorloc import fusion
+    from indoorloc.fusion.steps import Steps
 
-    return fusion.Steps.from_polar(steps.t_s, steps.length_m, steps.heading_rad + yaw_offset_rad,
-                                   length_sd_fraction * steps.length_m, heading_sd_rad)
+    return Steps.from_polar(steps.t_s, steps.length_m, steps.heading_rad + yaw_offset_rad,
+                            length_sd_fraction * steps.length_m, heading_sd_rad)
 
 
 def _fixes_of_queries(times_s: np.ndarray, rss_dbm: np.ndarray, database: wfx.FingerprintDatabase,
                       with_floors: bool, shifts_m: Optional[np.ndarray] = None):
     """Fixes (fusion.Fixes) of query fingerprints (Q, K) at the given times (``fixes_for_walk``'s
     rule), every component of fix q moved by ``shifts_m[q]`` (Q, 2) [m] when given."""
-    from indoorloc import fusion
+    from indoorloc.fusion.fixes import Fixes
 
     s = database.settings
     k = min(s.k, database.n_scans)
     if times_s.size == 0:
-        return fusion.Fixes.from_arrays(np.zeros(0), np.zeros((0, k, 2)), np.zeros((0, k)), np.zeros((0, k)))
+        return Fixes.from_arrays(np.zeros(0), np.zeros((0, k, 2)), np.zeros((0, k)), np.zeros((0, k)))
     best, d_best, weights = wfx.nearest(rss_dbm, database)  # fixes_for_walk's matcher
     if database.weights is not None:  # grown fingerprints count less (as fixes_for_walk)
         weights = weights * database.weights[best]
@@ -89,7 +89,7 @@ def _fixes_of_queries(times_s: np.ndarray, rss_dbm: np.ndarray, database: wfx.Fi
     means = database.positions_m[best]
     if shifts_m is not None:
         means = means + shifts_m[:, None, :]
-    return fusion.Fixes.from_arrays(times_s, means, wfx.fix_sds(d_best[:, 0], s), weights, floors)
+    return Fixes.from_arrays(times_s, means, wfx.fix_sds(d_best[:, 0], s), weights, floors)
 
 
 def _delay_shift(step_times_s: np.ndarray, displacements_m: np.ndarray, described_s: float, k: int) -> np.ndarray:

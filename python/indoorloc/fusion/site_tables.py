@@ -15,9 +15,10 @@ from typing import Any, Optional, Sequence
 import numpy as np
 
 from indoorloc.pdr import handheld as ph
-from indoorloc import wifi_crowdsource as wc
-from indoorloc import wifi_fixes as wfx
-from indoorloc.fusion import FloorPlan, site_model
+from indoorloc.fusion import crowdsourced_map
+from indoorloc.fusion import wifi_fixes
+from indoorloc._core.fusion import FloorPlan
+from indoorloc.fusion import site_model
 from indoorloc.fusion import site_store as store
 from indoorloc.io.floor_plan import load_floor_plan, read_geojson_floor
 from indoorloc.io.survey_layout import floor_info_size_m
@@ -68,10 +69,10 @@ def insert_survey_walk(con: sqlite3.Connection, walk: Any, floor: str, seq: int,
     iv = ph.waypoint_intervals(steps, wt, wxy)
     con.execute(f"INSERT INTO calibration_intervals VALUES (?, ?, {', '.join('?' * len(store.INTERVAL_FIELDS))})",
                 (walk.walk_id, floor, *[store.f8(getattr(iv, f)) for f in store.INTERVAL_FIELDS]))
-    insert_fingerprints(con, floor, walk.walk_id, wfx.walk_fingerprints(walk, settings.fixes, steps), 1.0)
+    insert_fingerprints(con, floor, walk.walk_id, wifi_fixes.walk_fingerprints(walk, settings.fixes, steps), 1.0)
     b = walk.beacons
     if b.n_readings:
-        pos = wc.walk_positions(walk, b.t_s, None, steps)
+        pos = crowdsourced_map.walk_positions(walk, b.t_s, None, steps)
         keep = np.flatnonzero(pos.valid & np.isfinite(b.rssi_dbm))
         con.executemany("INSERT INTO beacons VALUES (?, ?, ?, ?, ?, ?, ?)",
                         [(floor, walk.walk_id, float(b.t_s[i]), float(pos.xy_m[i, 0]), float(pos.xy_m[i, 1]),
@@ -133,8 +134,8 @@ def calibration(con: sqlite3.Connection, name: str) -> ph.HandheldCalibration:
     return ph.HandheldCalibration(ph.HandheldOptions(**json.loads(options)), k, rms, n, yaw, spread, f, s)
 
 
-def database(con: sqlite3.Connection, floors: Sequence[str], settings: wfx.FixSettings,
-              exclude_walk: Optional[str] = None) -> wfx.FingerprintDatabase:
+def database(con: sqlite3.Connection, floors: Sequence[str], settings: wifi_fixes.FixSettings,
+              exclude_walk: Optional[str] = None) -> wifi_fixes.FingerprintDatabase:
     """The fingerprint database of the floors, as ``wifi_fixes.build_database`` of their walks
     (all but ``exclude_walk``)."""
     bssid = dict(con.execute("SELECT id, bssid FROM access_points").fetchall())
@@ -166,7 +167,7 @@ def database(con: sqlite3.Connection, floors: Sequence[str], settings: wfx.FixSe
             current, rows = r[0], []
         rows.append(tuple(r))
     flush()
-    return wfx.assemble_database(per_walk, settings, weights)
+    return wifi_fixes.assemble_database(per_walk, settings, weights)
 
 
 

@@ -102,11 +102,17 @@ def _origin(origin_lon_lat: Any) -> Tuple[float, float]:
     return lon, lat
 
 
+def _points2(value: Any, name: str, max_abs: float) -> np.ndarray:
+    """A finite float array of shape (..., 2) with entries within +-max_abs."""
+    a = real_array(value, name, max_abs=max_abs)
+    if a.ndim == 0 or a.shape[-1] != 2:
+        raise ValueError(f"indoorloc: argument '{name}': expected shape (..., 2), got {a.shape}")
+    return a
+
+
 def lonlat_to_local(lon_lat_deg: Any, origin_lon_lat: Tuple[float, float]) -> np.ndarray:
     """(N, 2) longitude/latitude [deg] -> (N, 2) east/north [m] of the origin (local frame)."""
-    ll = real_array(lon_lat_deg, "lon_lat_deg", max_abs=1e3)
-    if ll.ndim == 0 or ll.shape[-1] != 2:
-        raise ValueError(f"indoorloc: argument 'lon_lat_deg': expected shape (..., 2), got {ll.shape}")
+    ll = _points2(lon_lat_deg, "lon_lat_deg", 1e3)
     lon0, lat0 = _origin(origin_lon_lat)
     kx, ky = metres_per_degree(lat0)
     out = np.empty_like(ll)
@@ -117,9 +123,7 @@ def lonlat_to_local(lon_lat_deg: Any, origin_lon_lat: Tuple[float, float]) -> np
 
 def local_to_lonlat(east_north_m: Any, origin_lon_lat: Tuple[float, float]) -> np.ndarray:
     """Inverse of :func:`lonlat_to_local`: (N, 2) east/north [m] -> longitude/latitude [deg]."""
-    en = real_array(east_north_m, "east_north_m", max_abs=1e9)
-    if en.ndim == 0 or en.shape[-1] != 2:
-        raise ValueError(f"indoorloc: argument 'east_north_m': expected shape (..., 2), got {en.shape}")
+    en = _points2(east_north_m, "east_north_m", 1e9)
     lon0, lat0 = _origin(origin_lon_lat)
     kx, ky = metres_per_degree(lat0)
     out = np.empty_like(en)
