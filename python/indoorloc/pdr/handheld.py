@@ -58,6 +58,7 @@ from indoorloc.pdr.orientation import (  # noqa: F401  (re-exported: part of thi
     GRAVITY_MPS2,
     _check_time_base,
     _finite_array,
+    _quaternions,
     _up_row,
     complementary_heading,
     gyro_heading,
@@ -65,6 +66,7 @@ from indoorloc.pdr.orientation import (  # noqa: F401  (re-exported: part of thi
     vertical_acceleration,
     wrap_angle,
 )
+from indoorloc.validate import real_array
 
 HEADING_SOURCES = ("rotation_vector", "gyro", "complementary")
 
@@ -81,11 +83,8 @@ MAX_GYRO_RADPS = 1e3
 
 
 def _real_array(values: Any, arg: str) -> np.ndarray:
-    """float64 array of ``values``; complex, string and object arrays are refused by name."""
-    a = np.asarray(values)
-    if a.dtype.kind not in "biuf":
-        raise ValueError(f"indoorloc: argument '{arg}': expected real numbers, got dtype {a.dtype}")
-    return a.astype(np.float64, copy=False)
+    """float64 array of ``values``; None, complex, string, object and ragged input refused by name."""
+    return real_array(values, arg, finite=False)
 
 
 @dataclass
@@ -104,6 +103,8 @@ class HandheldArrays:
 
     def __post_init__(self) -> None:
         self.t_s = _real_array(self.t_s, "t_s")
+        if self.t_s.ndim != 1:
+            raise ValueError(f"indoorloc: argument 't_s': need a 1-D array of times, got shape {self.t_s.shape}")
         n = self.t_s.shape[0]
         if self.t_s.ndim != 1 or n < 2:
             raise ValueError("indoorloc: argument 't_s': need a 1-D array of at least 2 times")
@@ -122,11 +123,7 @@ class HandheldArrays:
                 raise ValueError(f"indoorloc: argument '{name}': entry ({r}, {c}) = {a[r, c]:g} is beyond "
                                  f"±{bound:g} (no phone sensor measures that: a unit or parsing error)")
             setattr(self, name, a)
-        norm = np.linalg.norm(self.quat_xyzw, axis=1)
-        off = np.flatnonzero(~((norm >= 0.5) & (norm <= 2.0)))
-        if off.size:
-            raise ValueError(f"indoorloc: argument 'quat_xyzw': row {off[0]} has norm {norm[off[0]]:g}: not a "
-                             f"rotation (unit quaternions (x, y, z, w) expected)")
+        _quaternions(self.quat_xyzw, "quat_xyzw")
 
     @property
     def rate_hz(self) -> float:

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from indoorloc._core.pdr import butterworth_sos, sos_filter
+from indoorloc.validate import real_array
 
 __all__ = ["GRAVITY_MPS2", "complementary_heading", "gyro_heading", "rotation_vector_heading",
            "vertical_acceleration", "wrap_angle"]
@@ -29,10 +30,7 @@ def rotation_vector_heading(quat_xyzw: np.ndarray) -> np.ndarray:
     R(q) rotates device into ENU; its second column is the +y axis in ENU:
     (2(xy - wz), 1 - 2(x^2 + z^2), 2(yz + wx)). Heading = atan2(north, east) of its horizontal part.
     """
-    q = np.asarray(quat_xyzw, dtype=np.float64)
-    if q.size % 4 != 0 or q.size == 0:
-        raise ValueError(f"indoorloc: argument 'quat_xyzw': expected (N, 4) quaternions (x, y, z, w), got shape {q.shape}")
-    q = _finite_array(q, "quat_xyzw").reshape(-1, 4)
+    q = _quaternions(quat_xyzw, "quat_xyzw")
     x, y, z, w = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
     east = 2.0 * (x * y - w * z)
     north = 1.0 - 2.0 * (x * x + z * z)
@@ -48,7 +46,7 @@ def _up_row(quat_xyzw: np.ndarray) -> np.ndarray:
 def vertical_acceleration(acc_mps2: np.ndarray, quat_xyzw: np.ndarray) -> np.ndarray:
     """Up component of the specific force minus g [m/s^2] (N,). ``acc_mps2`` (N, 3) and
     ``quat_xyzw`` (N, 4) finite (NaN is refused by name, not passed on)."""
-    acc, q = _rows(acc_mps2, 3, "acc_mps2"), _rows(quat_xyzw, 4, "quat_xyzw")
+    acc, q = _rows(acc_mps2, 3, "acc_mps2"), _quaternions(quat_xyzw, "quat_xyzw")
     _same_length(q, "quat_xyzw", acc.shape[0], "acc_mps2")
     return np.einsum("ij,ij->i", _up_row(q), acc) - GRAVITY_MPS2
 
@@ -59,7 +57,7 @@ def gyro_heading(t_s: np.ndarray, gyro_radps: np.ndarray, quat_xyzw: np.ndarray)
     rotation-vector heading. Unwrapped (continuous, not folded into (-pi, pi]).
     ``t_s`` (N,) [s] finite and increasing, ``gyro_radps`` (N, 3), ``quat_xyzw`` (N, 4) finite."""
     t_s = _times(t_s, "t_s")
-    gyro, q = _rows(gyro_radps, 3, "gyro_radps"), _rows(quat_xyzw, 4, "quat_xyzw")
+    gyro, q = _rows(gyro_radps, 3, "gyro_radps"), _quaternions(quat_xyzw, "quat_xyzw")
     _same_length(gyro, "gyro_radps", t_s.shape[0], "t_s")
     _same_length(q, "quat_xyzw", t_s.shape[0], "t_s")
     w_up = np.einsum("ij,ij->i", _up_row(q), gyro)
@@ -79,8 +77,8 @@ def complementary_heading(t_s: np.ndarray, heading_rv_rad: np.ndarray, heading_g
     heading_rv_rad = _headings(heading_rv_rad, "heading_rv_rad", t_s.shape[0])
     heading_gyro_rad = _headings(heading_gyro_rad, "heading_gyro_rad", t_s.shape[0])
     if isinstance(tau_s, bool) or not isinstance(tau_s, (int, float, np.integer, np.floating)) or not (
-            math.isfinite(float(tau_s)) and float(tau_s) > 0):
-        raise ValueError(f"indoorloc: argument 'tau_s': must be a finite time constant > 0 s, got {tau_s!r}")
+            0 < float(tau_s) <= 86400.0):  # one day, as HandheldOptions.complementary_tau_s
+        raise ValueError(f"indoorloc: argument 'tau_s': must be a time constant in (0, 86400] s, got {tau_s!r}")
     rate = (t_s.shape[0] - 1) / (t_s[-1] - t_s[0])
     d = np.unwrap(wrap_angle(np.asarray(heading_rv_rad) - np.asarray(heading_gyro_rad)))
     fc = 1.0 / (2.0 * np.pi * float(tau_s))
@@ -145,9 +143,25 @@ def _check_time_base(t_s: np.ndarray, arg: str) -> None:
                          f"[{MIN_SAMPLE_INTERVAL_S:g}, {MAX_SAMPLE_INTERVAL_S:g}] s, got {mean_dt:g} s")
 
 
+def _quaternions(values: Any, arg: str) -> np.ndarray:
+    """(N, 4) quaternions (x, y, z, w) of norm in [0.5, 2] (a (4,) array is one row), or
+    ValueError naming ``arg``: other norms are no rotation, and 1e300 entries overflowed the
+    heading formulas into NaN."""
+    q = _finite_array(values, arg)
+    if q.ndim not in (1, 2) or q.shape[-1] != 4 or q.size == 0:
+        raise ValueError(f"indoorloc: argument '{arg}': expected (N, 4) quaternions (x, y, z, w), got shape {q.shape}")
+    q = q.reshape(-1, 4)
+    norm = np.sqrt(np.sum((q / 2.0) ** 2, axis=1)) * 2.0  # halved: no overflow before the test
+    off = np.flatnonzero(~((norm >= 0.5) & (norm <= 2.0)))
+    if off.size:
+        raise ValueError(f"indoorloc: argument '{arg}': row {off[0]} has norm {norm[off[0]]:g}: not a "
+                         f"rotation (unit quaternions (x, y, z, w) expected)")
+    return q
+
+
 def _finite_array(values: Any, arg: str) -> np.ndarray:
-    if np.asarray(values).dtype.kind not in "biuf":
-        raise ValueError(f"indoorloc: argument '{arg}': expected real numbers, got dtype {np.asarray(values).dtype}")
+    """float64 array, finite; None, strings, objects, complex and ragged lists refused by name."""
+    real_array(values, arg, finite=False)  # the shared wording for what is not an array of numbers
     a = np.asarray(values, dtype=np.float64)
     if not np.all(np.isfinite(a)):
         raise ValueError(f"indoorloc: argument '{arg}': values must be finite (no NaN or inf)")
