@@ -97,6 +97,44 @@ def group_pdr() -> None:
     probe(Case("ins_zupt_increments", pdr.ins_zupt_increments,
                {"time_s": t, "acc_mps2": acc, "quaternions_wxyz": quats, "step_indices": np.array([10, 50, 90]),
                 "window_s": 0.05, "gravity_mps2": 9.81}))
+    _handheld_cases()
+
+
+def _handheld_cases() -> None:
+    """The hand-held phone PDR (issue 28: internal names 'x' and 'rate_hz' leaked, a walk without
+    steps raised numpy's reshape error). Results are dataclasses: probed as dicts of arrays."""
+    from dataclasses import asdict
+
+    from indoorloc.pdr import handheld as ph
+
+    n = 400
+    t = np.arange(n) / 50.0
+    acc = np.tile([0.0, 0.0, 9.81], (n, 1))
+    acc[:, 2] += 2.5 * np.sin(2 * np.pi * 1.8 * t) * (t > 1.0)
+    gyro = np.zeros((n, 3))
+    quat = np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))
+
+    def steps_of(t_s, acc_mps2, gyro_radps, quat_xyzw):
+        return asdict(ph.handheld_steps(ph.HandheldArrays(t_s, acc_mps2, gyro_radps, quat_xyzw)))
+
+    probe(Case("handheld_steps", steps_of, {"t_s": t, "acc_mps2": acc, "gyro_radps": gyro, "quat_xyzw": quat},
+               nan_outputs=("options",)))
+    steps = ph.handheld_steps(ph.HandheldArrays(t, acc, gyro, quat))
+    probe(Case("pdr_track", ph.pdr_track, {"steps": steps, "start_xy_m": np.array([1.0, 2.0]),
+                                           "t_query": np.array([1.0, 3.0, 7.0]), "heading": "gyro",
+                                           "yaw_offset_rad": 0.1}, vary=["start_xy_m", "t_query", "heading",
+                                                                         "yaw_offset_rad"]))
+    probe(Case("vertical_acceleration", ph.vertical_acceleration, {"acc_mps2": acc, "quat_xyzw": quat}))
+    probe(Case("gyro_heading", ph.gyro_heading, {"t_s": t, "gyro_radps": gyro, "quat_xyzw": quat}))
+    h = np.zeros(n)
+    probe(Case("complementary_heading", ph.complementary_heading,
+               {"t_s": t, "heading_rv_rad": h, "heading_gyro_rad": h + 0.1, "tau_s": 10.0}))
+    probe(Case("rotation_vector_heading", ph.rotation_vector_heading, {"quat_xyzw": quat}))
+    wt = np.array([1.0, 4.0, 7.0])
+    probe(Case("waypoint_intervals", lambda steps, waypoint_t_s, waypoint_xy_m: asdict(
+        ph.waypoint_intervals(steps, waypoint_t_s, waypoint_xy_m)),
+        {"steps": steps, "waypoint_t_s": wt, "waypoint_xy_m": np.array([[0.0, 0.0], [3.0, 0.0], [3.0, 4.0]])},
+        vary=["waypoint_t_s", "waypoint_xy_m"]))
 
 
 def _network():

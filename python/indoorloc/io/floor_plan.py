@@ -404,6 +404,8 @@ def read_geojson_floor(
 
 _RING_REF = re.compile(r"floors\[(\d+)\]\.(outlines|obstacles)\[(\d+)\]")
 _WALL_REF = re.compile(r"floors\[(\d+)\]\.walls': row (\d+)")
+_WALL_ENTRY_REF = re.compile(r"floors\[(\d+)\]\.walls': entry (\d+)")
+_FLOOR_REF = re.compile(r"floors\[(\d+)\]")
 
 
 @reads_file("sources", argument="path")
@@ -460,10 +462,17 @@ def load_floor_plan(
             r = read[int(m.group(1))]
             index = (r.outline_features if m.group(2) == "outlines" else r.obstacle_features)[int(m.group(3))]
             raise ValueError(f"{msg} ({r.label}: feature {index})") from None
-        m = _WALL_REF.search(msg)
+        m = _WALL_REF.search(msg) or _WALL_ENTRY_REF.search(msg)
         if m:
             r = read[int(m.group(1))]
-            raise ValueError(f"{msg} ({r.label}: feature {r.wall_features[int(m.group(2))]})") from None
+            row = int(m.group(2)) if m.re is _WALL_REF else int(m.group(2)) // 4  # (W, 4) row-major
+            if 0 <= row < len(r.wall_features):
+                raise ValueError(f"{msg} ({r.label}: feature {r.wall_features[row]})") from None
+        # Any other floor-level error (no outline, a repeated floor number, the index's memory):
+        # the file of every floor it names.
+        named = sorted({int(k) for k in _FLOOR_REF.findall(msg) if int(k) < len(read)})
+        if named:
+            raise ValueError(f"{msg} ({'; '.join(f'floors[{k}]: {read[k].label}' for k in named)})") from None
         raise
 
 
@@ -494,14 +503,20 @@ def floor_geometry_to_geojson(
         xy = np.asarray(xy, dtype=float)
         return xy if origin_lon_lat is None else local_to_lonlat(xy, origin_lon_lat)
 
+    # The readers' rule for floors (whole numbers within ±1e6): a NaN floor used to be written as
+    # the token NaN and blamed on a coordinate, a numpy integer failed in json.dumps.
+    floor = geometry.floor
+    if isinstance(floor, (float, np.floating)) and math.isfinite(floor) and float(floor).is_integer():
+        floor = int(floor)
+    floor = integer(floor, "geometry.floor", lo=-10**6, hi=10**6)
     features = []
     for role, rings in (("outline", geometry.outlines), ("obstacle", geometry.obstacles)):
         for ring in rings:
-            features.append({"type": "Feature", "properties": {"role": role, "floor": geometry.floor},
+            features.append({"type": "Feature", "properties": {"role": role, "floor": floor},
                              "geometry": {"type": "Polygon", "coordinates": [_closed(conv(ring))]}})
     for row in np.asarray(geometry.walls, dtype=float).reshape(-1, 4):
         xy = conv(row.reshape(2, 2))
-        features.append({"type": "Feature", "properties": {"role": "wall", "floor": geometry.floor},
+        features.append({"type": "Feature", "properties": {"role": "wall", "floor": floor},
                          "geometry": {"type": "LineString",
                                       "coordinates": [[float(x), float(y)] for x, y in xy]}})
     return {"type": "FeatureCollection", "features": features}
