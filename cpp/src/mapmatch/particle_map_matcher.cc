@@ -9,37 +9,34 @@
 #include "indoorloc/core/log_weights.h"
 #include "indoorloc/core/options.h"
 #include "indoorloc/core/validate.h"
-#include "indoorloc/mapmatch/trajectory_simulator.h"
 
 namespace indoorloc::mapmatch {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
-// log(2π I0(κ)) computed without overflow: I0(κ) = e^κ I0e(κ).
-double LogVonMisesNormaliser(double kappa) {
-  return std::log(2.0 * kPi) + kappa + std::log(std::cyl_bessel_i(0.0, kappa) * std::exp(-kappa));
+// The options validated before the motion model is built from them (so that an invalid field
+// is reported by the filter's own validation).
+CorridorMotionOptions ValidatedMotionOptions(const FilterOptions& options) {
+  ValidateOptions(options);
+  return options.corridor_motion();
 }
 
 }  // namespace
 
 bool FilterOptions::IsValid(std::string* error) const {
   Validator v(error);
-  // κ <= 300 keeps every likelihood factor e^{κ (d cos - 1)} >= e^{-600} representable; the
-  // junction weights use the same form (1e300 used to surface as "'heading_rad' gives zero
-  // likelihood").
-  v.AtLeast(num_particles, 1, "num_particles")
-      .IntInRange(num_particles, 1, 100000000, "num_particles")
-      .InRange(kappa, 0.0, 300.0, "kappa")
-      .InRange(noise_halfwidth_m, 0.0, 1e6, "noise_halfwidth_m");
+  v.AtLeast(num_particles, 1, "num_particles").IntInRange(num_particles, 1, 100000000, "num_particles");
+  if (!v) return false;
+  // kappa and junction_kappa: the corridor model's limits (κ <= 300 keeps every likelihood factor
+  // e^{κ (d cos - 1)} >= e^{-600} representable in this filter's linear weights).
+  if (!corridor_motion().IsValid(error)) return false;
+  v.InRange(noise_halfwidth_m, 0.0, 1e6, "noise_halfwidth_m");
   if (!v) return false;
   std::string inner;
   if (!resampling.IsValid(&inner)) {
     if (error) *error = "resampling." + inner;
     return false;
   }
-  return v.InRange(junction_kappa, 0.0, 300.0, "junction_kappa")
-      .InRange(bias_halfwidth_mps, 0.0, 1e6, "bias_halfwidth_mps")
+  return v.InRange(bias_halfwidth_mps, 0.0, 1e6, "bias_halfwidth_mps")
       .InRange(bias_jitter_mps, 0.0, 1e6, "bias_jitter_mps")
       .Scale(tracking_spread_m, "tracking_spread_m")
       .Scale(recovery_window_s, "recovery_window_s")
@@ -56,9 +53,7 @@ std::string FilterSummary::BriefReport() const {
 }
 
 ParticleMapMatcher::ParticleMapMatcher(const RoadNetwork& network, const FilterOptions& options)
-    : network_(network), options_(options) {
-  ValidateOptions(options_);
-  log_normaliser_ = LogVonMisesNormaliser(options_.kappa);
+    : network_(network), options_(options), motion_(network, ValidatedMotionOptions(options)) {
   Reset();
 }
 
@@ -94,28 +89,11 @@ void ParticleMapMatcher::Reset() {
   weight_scale_ = 1.0;
   weight_sum_ = n;
   factor_.assign(static_cast<size_t>(2 * network_.num_segments()), 1.0);
-  // Segment geometry as flat arrays: x = origin + along * unit direction.
-  const int m = network_.num_segments();
-  lengths_.resize(static_cast<size_t>(m));
-  origin_x_.resize(static_cast<size_t>(m));
-  origin_y_.resize(static_cast<size_t>(m));
-  unit_x_.resize(static_cast<size_t>(m));
-  unit_y_.resize(static_cast<size_t>(m));
-  for (int k = 0; k < m; ++k) {
-    const double len = network_.lengths_m()[k];
-    lengths_[static_cast<size_t>(k)] = len;
-    origin_x_[static_cast<size_t>(k)] = network_.segments_m()(k, 0);
-    origin_y_[static_cast<size_t>(k)] = network_.segments_m()(k, 1);
-    unit_x_[static_cast<size_t>(k)] = (network_.segments_m()(k, 2) - network_.segments_m()(k, 0)) / len;
-    unit_y_[static_cast<size_t>(k)] = (network_.segments_m()(k, 3) - network_.segments_m()(k, 1)) / len;
-  }
   disagree_.assign(static_cast<size_t>(2 * network_.num_segments()), 0.0);
   disagreement_window_.clear();
   window_pos_ = 0;
   window_filled_ = 0;
-  const int slots = options_.smoothing_lag_steps > 0 ? options_.smoothing_lag_steps + 1 : 0;
-  history_.assign(static_cast<size_t>(n) * static_cast<size_t>(slots) * 2, 0.0);
-  history_steps_ = 0;
+  lag_ring_.Reset(n, options_.smoothing_lag_steps);
   summary_ = FilterSummary();
   was_tracking_ = false;
 }
@@ -140,84 +118,19 @@ void ParticleMapMatcher::SetParticles(const std::vector<int>& segments, const st
   weight_sum_ = static_cast<double>(n);
 }
 
-double ParticleMapMatcher::Move(int i, double distance, double heading_rad, RandomStream& rng) {
-  const Eigen::VectorXd& lengths = network_.lengths_m();
-  int s = segment_[static_cast<size_t>(i)];
-  int d = direction_[static_cast<size_t>(i)];
-  double u = along_[static_cast<size_t>(i)] + d * distance;
-  double importance = 1.0;
-  for (int guard = 0; guard < 100000; ++guard) {
-    int end;
-    double leftover;
-    if (u > lengths[s]) {
-      end = 1;
-      leftover = u - lengths[s];
-    } else if (u < 0.0) {
-      end = 0;
-      leftover = -u;
-    } else {
-      break;
-    }
-    // A negative step (v Δt + η < 0: eq. 8-9 have no floor) moves the particle back, but not
-    // over the end behind it: it stops there. Backing onto a continuation chosen at random would
-    // put it on a branch it never came from (the filter keeps no history), which cost 7 m of
-    // error at κ_P = 5 in the §III experiment (docs/mapmatch.md).
-    if ((end == 1) != (d > 0)) {
-      u = end == 1 ? lengths[s] : 0.0;
-      break;
-    }
-    const std::vector<Continuation>& choices = network_.continuations(s, end);
-    size_t pick = 0;
-    if (choices.size() > 1) {
-      if (options_.junction_policy == JunctionPolicy::kUniform) {
-        pick = static_cast<size_t>(rng.UniformInt(choices.size()));
-      } else {
-        // Proposal q_j ∝ exp(κ_J cos(φ - heading_j)); the weight is multiplied by
-        // prior / proposal = (1 / n_choices) / q_j, so the posterior is unchanged.
-        q_.resize(choices.size());
-        double total = 0.0;
-        for (size_t j = 0; j < choices.size(); ++j) {
-          const double h = TravelHeading(network_, choices[j].segment, choices[j].enter_end == 0 ? 1 : -1);
-          q_[j] = std::exp(options_.junction_kappa * (std::cos(heading_rad - h) - 1.0));
-          total += q_[j];
-        }
-        double r = rng.Uniform01() * total;
-        while (pick + 1 < choices.size() && r >= q_[pick]) r -= q_[pick++];
-        importance *= (total / q_[pick]) / static_cast<double>(choices.size());
-      }
-    }
-    const Continuation& c = choices[pick];
-    s = c.segment;
-    d = c.enter_end == 0 ? 1 : -1;
-    u = c.enter_end == 0 ? leftover : lengths[s] - leftover;
-  }
-  segment_[static_cast<size_t>(i)] = s;
-  direction_[static_cast<size_t>(i)] = static_cast<signed char>(d);
-  along_[static_cast<size_t>(i)] = std::clamp(u, 0.0, lengths[s]);
-  return importance;
-}
-
 StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, double dt_s) {
   CheckArgument(std::isfinite(speed_mps), "speed_mps", "is not finite");
   CheckArgument(std::isfinite(heading_rad), "heading_rad", "is not finite");
   RequireScale(dt_s, "dt_s");  // recovery_window_s / dt_s sizes a buffer: 1e-290 asked for 1e290 slots
   WallTimer timer;
   const int n = options_.num_particles;
-  const int num_segments = network_.num_segments();
   StepEstimate est;
 
   // Per-step tables over the 2M (segment, direction) pairs: the von Mises factor of eq. 11
   // relative to its maximum, exp(κ (d cos(φ - β_s) - 1)) in [e^{-2κ}, 1], and the
   // disagreement 1 - d cos(φ - β_s) used by the recovery rule.
-  const Eigen::VectorXd& beta = network_.headings_rad();
   const double kappa = options_.kappa;
-  for (int s = 0; s < num_segments; ++s) {
-    const double c = std::cos(heading_rad - beta[s]);
-    factor_[static_cast<size_t>(2 * s + 1)] = std::exp(kappa * (c - 1.0));
-    factor_[static_cast<size_t>(2 * s)] = std::exp(kappa * (-c - 1.0));
-    disagree_[static_cast<size_t>(2 * s + 1)] = 1.0 - c;
-    disagree_[static_cast<size_t>(2 * s)] = 1.0 + c;
-  }
+  motion_.HeadingTables(heading_rad, factor_.data(), disagree_.data());
 
   // Prediction (eq. 8-10) and update (eq. 11) fused in one pass, with the sums needed for the
   // normalisation (eq. 12), the ESS (eq. 14), the estimate (eq. 13), its spread and the
@@ -231,11 +144,10 @@ StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, doub
   const double mean_distance = speed_mps * dt_s;
   const bool estimate_bias = options_.estimate_speed_bias;
   const double jitter = options_.bias_jitter_mps * std::sqrt(3.0);  // uniform with that sd
-  const double* length = lengths_.data();
-  const double* origin_x = origin_x_.data();
-  const double* origin_y = origin_y_.data();
-  const double* unit_x = unit_x_.data();
-  const double* unit_y = unit_y_.data();
+  const double* origin_x = motion_.origin_x_m();
+  const double* origin_y = motion_.origin_y_m();
+  const double* unit_x = motion_.unit_x();
+  const double* unit_y = motion_.unit_y();
   const double* factor = factor_.data();
   const double* disagree = disagree_.data();
   int* seg = segment_.data();
@@ -244,8 +156,6 @@ StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, doub
   double* weight = weights_.data();
   double* bias = bias_.data();
   double sum = 0, sum_sq = 0, sx = 0, sy = 0, sxx = 0, syy = 0, disagreement = 0, max_w = 0;
-  const int slots = options_.smoothing_lag_steps > 0 ? options_.smoothing_lag_steps + 1 : 0;
-  const int slot = slots > 0 ? history_steps_ % slots : 0;
   const double scale = weight_scale_;
   // A local copy of the stream keeps its state in registers (stores through the particle arrays
   // could alias a member); it is written back after the pass.
@@ -259,13 +169,8 @@ StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, doub
       distance -= bias[i] * dt_s;
     }
     if (a > 0) distance += two_a * rng.Uniform01() - a;
-    const double u = along[i] + dir[i] * distance;
-    if (u >= 0.0 && u <= length[seg[i]]) {
-      along[i] = u;  // fast path: no junction
-    } else {
-      const double importance = Move(i, distance, heading_rad, rng);
-      if (importance != 1.0) weight[i] *= importance;
-    }
+    const double importance = motion_.Move(&seg[i], &dir[i], &along[i], distance, heading_rad, rng);
+    if (importance != 1.0) weight[i] *= importance;
   }
   rng_ = rng;
   // Pass 2, update (eq. 11) with the sums for normalisation (eq. 12), ESS (eq. 14), estimate
@@ -286,12 +191,10 @@ StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, doub
     disagreement += w * disagree[key];
     max_w = std::max(max_w, w);
   }
-  if (slots > 0) {
+  if (lag_ring_.enabled()) {
     for (int i = 0; i < n; ++i) {
       const int si = seg[i];
-      const size_t base = (static_cast<size_t>(i) * static_cast<size_t>(slots) + static_cast<size_t>(slot)) * 2;
-      history_[base] = origin_x[si] + along[i] * unit_x[si];
-      history_[base + 1] = origin_y[si] + along[i] * unit_y[si];
+      lag_ring_.Record(i, origin_x[si] + along[i] * unit_x[si], origin_y[si] + along[i] * unit_y[si]);
     }
   }
   // The particle that had weight 1 before the step keeps at least e^{-2κ} >= e^{-600} (κ <= 300),
@@ -300,7 +203,7 @@ StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, doub
   est.ess = sum * sum / sum_sq;
   // log p(φ_k | φ_{1:k-1}) = log(Σ w_new / Σ w_old) + κ - log(2π I0(κ)); the old sum includes the
   // pending rescale.
-  est.log_likelihood = std::log(sum / (weight_sum_ * scale)) + kappa - log_normaliser_;
+  est.log_likelihood = std::log(sum / (weight_sum_ * scale)) + kappa - motion_.log_normaliser();
   const double inv = 1.0 / sum;
   est.weighted_mean_m = Eigen::Vector2d(sx * inv, sy * inv);
   est.spread_m = std::sqrt(std::max(0.0, sxx * inv - sx * sx * inv * inv + syy * inv - sy * sy * inv * inv));
@@ -309,18 +212,9 @@ StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, doub
   est.position_m = p.point_m;
   est.segment = p.segment;
   est.tracking = est.spread_m < options_.tracking_spread_m;
-  if (slots > 0) {
-    ++history_steps_;
-    if (history_steps_ >= slots) {
-      const int oldest = history_steps_ % slots;  // the slot written `lag` steps ago
-      double mx = 0, my = 0;
-      for (int i = 0; i < n; ++i) {
-        const size_t base = (static_cast<size_t>(i) * static_cast<size_t>(slots) + static_cast<size_t>(oldest)) * 2;
-        mx += weights_[static_cast<size_t>(i)] * history_[base];
-        my += weights_[static_cast<size_t>(i)] * history_[base + 1];
-      }
-      est.smoothed_m = network_.Nearest(Eigen::Vector2d(mx * inv, my * inv)).point_m;
-    }
+  if (lag_ring_.enabled()) {
+    lag_ring_.Advance();
+    if (lag_ring_.has_lagged()) est.smoothed_m = network_.Nearest(lag_ring_.WeightedSum(weights_.data()) * inv).point_m;
   }
 
   // Resampling (eq. 14) when N_eff < N_T, from the linear weights (core ResampleLinear).
@@ -343,15 +237,7 @@ StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, doub
     direction_.swap(direction_tmp_);
     along_.swap(along_tmp_);
     bias_.swap(bias_tmp_);
-    if (slots > 0) {
-      std::vector<double> gathered(history_.size());
-      const size_t row = static_cast<size_t>(slots) * 2;
-      for (int i = 0; i < n; ++i) {
-        std::copy_n(history_.begin() + static_cast<std::ptrdiff_t>(static_cast<size_t>(ancestors_[static_cast<size_t>(i)]) * row),
-                    row, gathered.begin() + static_cast<std::ptrdiff_t>(static_cast<size_t>(i) * row));
-      }
-      history_.swap(gathered);
-    }
+    lag_ring_.Gather(ancestors_);
     std::fill(weights_.begin(), weights_.end(), 1.0);
     weight_scale_ = 1.0;
     weight_sum_ = n;
