@@ -2,9 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <vector>
 
+#include <immintrin.h>
+
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/simd_dispatch.h"
 #include "indoorloc/core/validate.h"
 #include "indoorloc/mapmatch/trajectory_simulator.h"
 
@@ -50,6 +55,90 @@ CorridorMotion::CorridorMotion(const RoadNetwork& network, const CorridorMotionO
     unit_x_[k] = (ends(k, 2) - ends(k, 0)) / lengths_[k];
     unit_y_[k] = (ends(k, 3) - ends(k, 1)) / lengths_[k];
   }
+  continuation_begin_.assign(1, 0);
+  for (int k = 0; k < m; ++k) {
+    for (int end = 0; end < 2; ++end) {
+      for (const Continuation& c : network_.continuations(k, end)) {
+        continuation_segment_.push_back(c.segment);
+        continuation_enter_end_.push_back(c.enter_end);
+      }
+      continuation_begin_.push_back(static_cast<int>(continuation_segment_.size()));
+    }
+  }
+}
+
+namespace {
+
+// The in-segment pass of MoveAll for particles [begin, count): along += d · distance where the
+// particle stays on its segment, flag 1 where it reaches an end (portable version).
+void MoveWithinSegmentsScalar(int begin, int count, const double* distance_m, const int* segment,
+                              const signed char* direction, double* along_m, const double* lengths_m,
+                              unsigned char* flags) {
+  for (int i = begin; i < count; ++i) {
+    const double along = along_m[i];
+    const double u = along + direction[i] * distance_m[i];
+    const bool inside = (u >= 0.0) & (u <= lengths_m[segment[i]]);
+    along_m[i] = inside ? u : along;
+    flags[i] = static_cast<unsigned char>(!inside);
+  }
+}
+
+// The same pass with AVX2, four particles at a time (the same multiply and
+// add as the portable version, no FMA: bit-identical). Returns the first particle not done.
+__attribute__((target("avx2"))) int MoveWithinSegmentsAvx2(int count, const double* distance_m, const int* segment,
+                                                           const signed char* direction, double* along_m,
+                                                           const double* lengths_m, unsigned char* flags) {
+  // Byte j of kOutside[m] is 1 where bit j of the "inside" mask m is 0.
+  static constexpr std::uint32_t kOutside[16] = {
+      0x01010101, 0x01010100, 0x01010001, 0x01010000, 0x01000101, 0x01000100, 0x01000001, 0x01000000,
+      0x00010101, 0x00010100, 0x00010001, 0x00010000, 0x00000101, 0x00000100, 0x00000001, 0x00000000};
+  const __m256d zero = _mm256_setzero_pd();
+  int i = 0;
+  for (; i + 4 <= count; i += 4) {
+    // Scalar loads rather than vgatherdpd: faster on the machines measured (docs/performance.md).
+    const __m256d length =
+        _mm256_set_pd(lengths_m[segment[i + 3]], lengths_m[segment[i + 2]], lengths_m[segment[i + 1]], lengths_m[segment[i]]);
+    std::int32_t packed;
+    std::memcpy(&packed, direction + i, sizeof(packed));
+    const __m256d dir = _mm256_cvtepi32_pd(_mm_cvtepi8_epi32(_mm_cvtsi32_si128(packed)));
+    const __m256d along = _mm256_loadu_pd(along_m + i);
+    const __m256d u = _mm256_add_pd(along, _mm256_mul_pd(dir, _mm256_loadu_pd(distance_m + i)));
+    const __m256d inside = _mm256_and_pd(_mm256_cmp_pd(u, zero, _CMP_GE_OQ), _mm256_cmp_pd(u, length, _CMP_LE_OQ));
+    _mm256_storeu_pd(along_m + i, _mm256_blendv_pd(along, u, inside));
+    std::memcpy(flags + i, &kOutside[_mm256_movemask_pd(inside)], sizeof(std::uint32_t));
+  }
+  return i;
+}
+
+void MoveWithinSegments(int count, const double* distance_m, const int* segment, const signed char* direction,
+                        double* along_m, const double* lengths_m, unsigned char* flags) {
+  const int done = UseAvx2() ? MoveWithinSegmentsAvx2(count, distance_m, segment, direction, along_m, lengths_m, flags)
+                             : 0;
+  MoveWithinSegmentsScalar(done, count, distance_m, segment, direction, along_m, lengths_m, flags);
+}
+
+}  // namespace
+
+void CorridorMotion::MoveAll(int count, const double* distance_m, int* segment, signed char* direction,
+                             double* along_m, double heading_rad, RandomStream& rng, double* weight,
+                             std::vector<unsigned char>* flags) const {
+  if (count <= 0) return;
+  // Padded to whole 8-byte words, the padding zero, so that the scan reads words.
+  const size_t words = (static_cast<size_t>(count) + 7) / 8;
+  flags->assign(words * 8, 0);
+  MoveWithinSegments(count, distance_m, segment, direction, along_m, lengths_.data(), flags->data());
+  // The few particles that reached an end (a few percent per step), found 8 flags at a time.
+  for (size_t w = 0; w < words; ++w) {
+    std::uint64_t word;
+    std::memcpy(&word, flags->data() + 8 * w, sizeof(word));
+    while (word != 0) {
+      const int i = static_cast<int>(8 * w) + __builtin_ctzll(word) / 8;
+      word &= word - 1;
+      const double importance =
+          MoveAcrossEnds(&segment[i], &direction[i], &along_m[i], distance_m[i], heading_rad, rng);
+      if (importance != 1.0) weight[i] *= importance;
+    }
+  }
 }
 
 void CorridorMotion::HeadingTables(double heading_rad, double* factor, double* disagreement) const {
@@ -88,34 +177,36 @@ double CorridorMotion::MoveAcrossEnds(int* segment, signed char* direction, doub
       u = end == 1 ? lengths_[s] : 0.0;
       break;
     }
-    const std::vector<Continuation>& choices = network_.continuations(s, end);
+    const int first = continuation_begin_[static_cast<size_t>(2 * s + end)];
+    const size_t n_choices = static_cast<size_t>(continuation_begin_[static_cast<size_t>(2 * s + end + 1)] - first);
+    const int* choice_segment = continuation_segment_.data() + first;
+    const int* choice_enter_end = continuation_enter_end_.data() + first;
     size_t pick = 0;
-    if (choices.size() > 1) {
+    if (n_choices > 1) {
       if (options_.junction_policy == JunctionPolicy::kUniform) {
-        pick = static_cast<size_t>(rng.UniformInt(choices.size()));
+        pick = static_cast<size_t>(rng.UniformInt(n_choices));
       } else {
         // Proposal q_j ∝ exp(κ_J (cos(φ − heading_j) − 1)); the weight is multiplied by
         // prior / proposal = (1 / n) / (q_j / Σq). The q_j are computed twice (total, then the
         // pick) rather than kept in scratch, so that the model stays const and thread-safe.
         auto q = [&](size_t j) {
-          const double h = TravelHeading(network_, choices[j].segment, choices[j].enter_end == 0 ? 1 : -1);
+          const double h = TravelHeading(network_, choice_segment[j], choice_enter_end[j] == 0 ? 1 : -1);
           return std::exp(options_.junction_kappa * (std::cos(heading_rad - h) - 1.0));
         };
         double total = 0.0;
-        for (size_t j = 0; j < choices.size(); ++j) total += q(j);
+        for (size_t j = 0; j < n_choices; ++j) total += q(j);
         double r = rng.Uniform01() * total;
         double q_pick = q(0);
-        while (pick + 1 < choices.size() && r >= q_pick) {
+        while (pick + 1 < n_choices && r >= q_pick) {
           r -= q_pick;
           q_pick = q(++pick);
         }
-        importance *= (total / q_pick) / static_cast<double>(choices.size());
+        importance *= (total / q_pick) / static_cast<double>(n_choices);
       }
     }
-    const Continuation& c = choices[pick];
-    s = c.segment;
-    d = c.enter_end == 0 ? 1 : -1;
-    u = c.enter_end == 0 ? leftover : lengths_[s] - leftover;
+    s = choice_segment[pick];
+    d = choice_enter_end[pick] == 0 ? 1 : -1;
+    u = choice_enter_end[pick] == 0 ? leftover : lengths_[s] - leftover;
   }
   *segment = s;
   *direction = static_cast<signed char>(d);

@@ -5,9 +5,12 @@
 #include <cstdio>
 #include <numeric>
 
+#include <immintrin.h>
+
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/log_weights.h"
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/simd_dispatch.h"
 #include "indoorloc/core/validate.h"
 
 namespace indoorloc::mapmatch {
@@ -15,9 +18,126 @@ namespace {
 
 // The options validated before the motion model is built from them (so that an invalid field
 // is reported by the filter's own validation).
+// Stream family of the per-particle uniform draws (the junction choices and resampling use
+// stream 0, rng_).
+constexpr std::uint64_t kNoiseLanesStream = 1;
+
 CorridorMotionOptions ValidatedMotionOptions(const FilterOptions& options) {
   ValidateOptions(options);
   return options.corridor_motion();
+}
+
+// The sums of the update pass, for the normalisation, ESS, estimate, spread and disagreement.
+struct WeightSums {
+  double sum = 0, sum_sq = 0, sx = 0, sy = 0, sxx = 0, syy = 0, disagreement = 0, max_w = 0;
+};
+
+// Pass 2 of a step (eq. 11): w_i <- w_i · scale · factor[2 S_i + (d_i > 0)], and the weighted
+// sums. Four interleaved accumulators (particle i into lane i mod 4, lanes added pairwise at the
+// end) make the AVX2 version below a plain four-wide loop; the order is fixed, so both versions
+// give the same sums to the bit.
+constexpr int kSumLanes = 4;
+
+struct LaneSums {
+  double sum[kSumLanes] = {}, sum_sq[kSumLanes] = {}, sx[kSumLanes] = {}, sy[kSumLanes] = {}, sxx[kSumLanes] = {},
+         syy[kSumLanes] = {}, dis[kSumLanes] = {}, max_w[kSumLanes] = {};
+};
+
+struct WeighInputs {
+  int n;
+  const int* seg;
+  const signed char* dir;
+  const double* along;
+  double* weight;
+  double scale;
+  const double* factor;
+  const double* disagree;
+  const double* origin_x;
+  const double* origin_y;
+  const double* unit_x;
+  const double* unit_y;
+};
+
+// Particles [begin, n), particle i into lane i mod kSumLanes (portable version).
+void WeighScalar(const WeighInputs& in, int begin, LaneSums* acc) {
+  for (int i = begin; i < in.n; ++i) {
+    const int j = i % kSumLanes;
+    const int si = in.seg[i];
+    const int key = 2 * si + (in.dir[i] > 0);
+    const double w = in.weight[i] * in.scale * in.factor[key];
+    in.weight[i] = w;
+    const double x = in.origin_x[si] + in.along[i] * in.unit_x[si];
+    const double y = in.origin_y[si] + in.along[i] * in.unit_y[si];
+    acc->sum[j] += w;
+    acc->sum_sq[j] += w * w;
+    acc->sx[j] += w * x;
+    acc->sy[j] += w * y;
+    acc->sxx[j] += w * x * x;
+    acc->syy[j] += w * y * y;
+    acc->dis[j] += w * in.disagree[key];
+    acc->max_w[j] = acc->max_w[j] > w ? acc->max_w[j] : w;
+  }
+}
+
+// Whole groups of four with AVX2 (table entries loaded per particle; the same operations in the same order
+// as WeighScalar, no FMA). Returns the first particle not done.
+// Four table entries t[i0..i3] by scalar loads: faster than vgatherdpd on the machines measured
+// (docs/performance.md), and no uninitialised-source warning from GCC's gather intrinsic.
+#define INDOORLOC_GATHER4(t, i0, i1, i2, i3) _mm256_set_pd((t)[i3], (t)[i2], (t)[i1], (t)[i0])
+
+__attribute__((target("avx2"))) int WeighAvx2(const WeighInputs& in, LaneSums* acc) {
+  __m256d sum = _mm256_setzero_pd(), sum_sq = sum, sx = sum, sy = sum, sxx = sum, syy = sum, dis = sum, max_w = sum;
+  const __m256d scale = _mm256_set1_pd(in.scale);
+  int i = 0;
+  for (; i + kSumLanes <= in.n; i += kSumLanes) {
+    const int s0 = in.seg[i], s1 = in.seg[i + 1], s2 = in.seg[i + 2], s3 = in.seg[i + 3];
+    const int k0 = 2 * s0 + (in.dir[i] > 0), k1 = 2 * s1 + (in.dir[i + 1] > 0), k2 = 2 * s2 + (in.dir[i + 2] > 0),
+              k3 = 2 * s3 + (in.dir[i + 3] > 0);
+    const __m256d w = _mm256_mul_pd(_mm256_mul_pd(_mm256_loadu_pd(in.weight + i), scale),
+                                    INDOORLOC_GATHER4(in.factor, k0, k1, k2, k3));
+    _mm256_storeu_pd(in.weight + i, w);
+    const __m256d along = _mm256_loadu_pd(in.along + i);
+    const __m256d x = _mm256_add_pd(INDOORLOC_GATHER4(in.origin_x, s0, s1, s2, s3),
+                                    _mm256_mul_pd(along, INDOORLOC_GATHER4(in.unit_x, s0, s1, s2, s3)));
+    const __m256d y = _mm256_add_pd(INDOORLOC_GATHER4(in.origin_y, s0, s1, s2, s3),
+                                    _mm256_mul_pd(along, INDOORLOC_GATHER4(in.unit_y, s0, s1, s2, s3)));
+    const __m256d wx = _mm256_mul_pd(w, x), wy = _mm256_mul_pd(w, y);
+    sum = _mm256_add_pd(sum, w);
+    sum_sq = _mm256_add_pd(sum_sq, _mm256_mul_pd(w, w));
+    sx = _mm256_add_pd(sx, wx);
+    sy = _mm256_add_pd(sy, wy);
+    sxx = _mm256_add_pd(sxx, _mm256_mul_pd(wx, x));
+    syy = _mm256_add_pd(syy, _mm256_mul_pd(wy, y));
+    dis = _mm256_add_pd(dis, _mm256_mul_pd(w, INDOORLOC_GATHER4(in.disagree, k0, k1, k2, k3)));
+    max_w = _mm256_max_pd(max_w, w);  // max_w > w ? max_w : w, as the portable version
+  }
+  _mm256_storeu_pd(acc->sum, sum);
+  _mm256_storeu_pd(acc->sum_sq, sum_sq);
+  _mm256_storeu_pd(acc->sx, sx);
+  _mm256_storeu_pd(acc->sy, sy);
+  _mm256_storeu_pd(acc->sxx, sxx);
+  _mm256_storeu_pd(acc->syy, syy);
+  _mm256_storeu_pd(acc->dis, dis);
+  _mm256_storeu_pd(acc->max_w, max_w);
+  return i;
+}
+#undef INDOORLOC_GATHER4
+
+WeightSums WeighAndSum(const WeighInputs& in) {
+  LaneSums acc;
+  const int done = UseAvx2() ? WeighAvx2(in, &acc) : 0;
+  WeighScalar(in, done, &acc);
+  auto reduce = [](const double* v) { return (v[0] + v[1]) + (v[2] + v[3]); };
+  WeightSums out;
+  out.sum = reduce(acc.sum);
+  out.sum_sq = reduce(acc.sum_sq);
+  out.sx = reduce(acc.sx);
+  out.sy = reduce(acc.sy);
+  out.sxx = reduce(acc.sxx);
+  out.syy = reduce(acc.syy);
+  out.disagreement = reduce(acc.dis);
+  out.max_w = std::max(std::max(acc.max_w[0], acc.max_w[1]), std::max(acc.max_w[2], acc.max_w[3]));
+  return out;
 }
 
 }  // namespace
@@ -80,6 +200,7 @@ void ParticleMapMatcher::Spread(int first, int count, double offset_fraction) {
 void ParticleMapMatcher::Reset() {
   const int n = options_.num_particles;
   rng_ = RandomStream(options_.seed);
+  lanes_ = RandomLanes(options_.seed, kNoiseLanesStream);
   segment_.assign(static_cast<size_t>(n), 0);
   direction_.assign(static_cast<size_t>(n), 1);
   along_.assign(static_cast<size_t>(n), 0.0);
@@ -132,13 +253,11 @@ StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, doub
   const double kappa = options_.kappa;
   motion_.HeadingTables(heading_rad, factor_.data(), disagree_.data());
 
-  // Prediction (eq. 8-10) and update (eq. 11) fused in one pass, with the sums needed for the
-  // normalisation (eq. 12), the ESS (eq. 14), the estimate (eq. 13), its spread and the
-  // disagreement. A negative step v Δt + η moves a particle back within its segment (eq. 8-9
-  // have no floor: a floor at 0 biases the move forward by E[max(0, X)] - E[X], 5 % of the speed
-  // at 10 Hz with a = 0.27 m); it stops at the end behind it.
-  // Hoisted into locals so that the compiler keeps them in registers (the loop writes through
-  // several pointers, which would otherwise force reloads of every member).
+  // Prediction (eq. 8-10), then the update (eq. 11) with the sums needed for the normalisation
+  // (eq. 12), the ESS (eq. 14), the estimate (eq. 13), its spread and the disagreement. A
+  // negative step v Δt + η moves a particle back within its segment (eq. 8-9 have no floor: a
+  // floor at 0 biases the move forward by E[max(0, X)] - E[X], 5 % of the speed at 10 Hz with
+  // a = 0.27 m); it stops at the end behind it.
   const double a = options_.noise_halfwidth_m;
   const double two_a = 2.0 * a;
   const double mean_distance = speed_mps * dt_s;
@@ -148,49 +267,34 @@ StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, doub
   const double* origin_y = motion_.origin_y_m();
   const double* unit_x = motion_.unit_x();
   const double* unit_y = motion_.unit_y();
-  const double* factor = factor_.data();
-  const double* disagree = disagree_.data();
   int* seg = segment_.data();
   signed char* dir = direction_.data();
   double* along = along_.data();
-  double* weight = weights_.data();
   double* bias = bias_.data();
-  double sum = 0, sum_sq = 0, sx = 0, sy = 0, sxx = 0, syy = 0, disagreement = 0, max_w = 0;
+  // Pass 1, prediction (eq. 8-10): the uniform draws of every particle from the random lanes
+  // (vectorised), the distances, then the corridor model's batch move (in-segment moves
+  // vectorised, junction choices from rng_ afterwards, in particle order).
+  uniform_.resize(static_cast<size_t>(n));
+  distance_.resize(static_cast<size_t>(n));
+  double* uniform = uniform_.data();
+  double* distance = distance_.data();
+  if (estimate_bias && jitter > 0) {
+    lanes_.FillUniform01(uniform, n);
+    for (int i = 0; i < n; ++i) bias[i] += -jitter + 2.0 * jitter * uniform[i];
+  }
+  if (a > 0) lanes_.FillUniform01(uniform, n);
+  for (int i = 0; i < n; ++i) {
+    const double mean = estimate_bias ? mean_distance - bias[i] * dt_s : mean_distance;
+    distance[i] = a > 0 ? mean + (two_a * uniform[i] - a) : mean;
+  }
+  motion_.MoveAll(n, distance, seg, dir, along, heading_rad, rng_, weights_.data(), &flags_);
+  // Pass 2, update (eq. 11) with the sums.
+  const WeightSums sums = WeighAndSum({n, seg, dir, along, weights_.data(), weight_scale_, factor_.data(),
+                                       disagree_.data(), origin_x, origin_y, unit_x, unit_y});
+  const double sum = sums.sum, sum_sq = sums.sum_sq, sx = sums.sx, sy = sums.sy, sxx = sums.sxx, syy = sums.syy;
+  double disagreement = sums.disagreement;
+  const double max_w = sums.max_w;
   const double scale = weight_scale_;
-  // A local copy of the stream keeps its state in registers (stores through the particle arrays
-  // could alias a member); it is written back after the pass.
-  RandomStream rng = rng_;
-  // Pass 1, prediction (eq. 8-10): random moves and junction choices. Kept apart from the
-  // weighting pass so that the accumulators there stay in registers (no calls in that loop).
-  for (int i = 0; i < n; ++i) {
-    double distance = mean_distance;
-    if (estimate_bias) {
-      if (jitter > 0) bias[i] += rng.Uniform(-jitter, jitter);
-      distance -= bias[i] * dt_s;
-    }
-    if (a > 0) distance += two_a * rng.Uniform01() - a;
-    const double importance = motion_.Move(&seg[i], &dir[i], &along[i], distance, heading_rad, rng);
-    if (importance != 1.0) weight[i] *= importance;
-  }
-  rng_ = rng;
-  // Pass 2, update (eq. 11) with the sums for normalisation (eq. 12), ESS (eq. 14), estimate
-  // (eq. 13), spread and disagreement.
-  for (int i = 0; i < n; ++i) {
-    const int si = seg[i];
-    const int key = 2 * si + (dir[i] > 0);
-    const double w = weight[i] * scale * factor[key];
-    weight[i] = w;
-    const double x = origin_x[si] + along[i] * unit_x[si];
-    const double y = origin_y[si] + along[i] * unit_y[si];
-    sum += w;
-    sum_sq += w * w;
-    sx += w * x;
-    sy += w * y;
-    sxx += w * x * x;
-    syy += w * y * y;
-    disagreement += w * disagree[key];
-    max_w = std::max(max_w, w);
-  }
   if (lag_ring_.enabled()) {
     for (int i = 0; i < n; ++i) {
       const int si = seg[i];
@@ -231,12 +335,14 @@ StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, doub
       segment_tmp_[static_cast<size_t>(i)] = segment_[anc];
       direction_tmp_[static_cast<size_t>(i)] = direction_[anc];
       along_tmp_[static_cast<size_t>(i)] = along_[anc];
-      bias_tmp_[static_cast<size_t>(i)] = bias_[anc];
     }
     segment_.swap(segment_tmp_);
     direction_.swap(direction_tmp_);
     along_.swap(along_tmp_);
-    bias_.swap(bias_tmp_);
+    if (options_.estimate_speed_bias) {  // otherwise every bias is 0
+      for (int i = 0; i < n; ++i) bias_tmp_[static_cast<size_t>(i)] = bias_[static_cast<size_t>(ancestors_[static_cast<size_t>(i)])];
+      bias_.swap(bias_tmp_);
+    }
     lag_ring_.Gather(ancestors_);
     std::fill(weights_.begin(), weights_.end(), 1.0);
     weight_scale_ = 1.0;

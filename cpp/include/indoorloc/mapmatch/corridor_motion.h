@@ -24,6 +24,7 @@
 
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -71,6 +72,14 @@ class CorridorMotion {
     return MoveAcrossEnds(segment, direction, along_m, distance_m, heading_rad, rng);
   }
 
+  /// Moves particles [0, count) by distance_m[i] each, as Move: first every in-segment move in
+  /// one branch-free (vectorised) pass, then the particles that reached a segment end one by one
+  /// in index order (junction draws from `rng`). Where a junction proposal's importance factor
+  /// is not 1 it multiplies weight[i] (`weight` may be null with the uniform policy). `flags`
+  /// is caller-owned scratch (resized to count), so that the model stays const.
+  void MoveAll(int count, const double* distance_m, int* segment, signed char* direction, double* along_m,
+               double heading_rad, RandomStream& rng, double* weight, std::vector<unsigned char>* flags) const;
+
   /// log f_vM(φ; β(S, d), κ) = κ cos(φ − β(S, d)) − log(2π I0(κ)) [nats] (eq. 11), with
   /// β(S, d) = β_S (d > 0) or β_S + π (d < 0).
   double LogHeadingLikelihood(int segment, int direction, double heading_rad) const {
@@ -106,6 +115,9 @@ class CorridorMotion {
   CorridorMotionOptions options_;
   double log_normaliser_ = 0.0;
   Eigen::VectorXd lengths_, headings_, origin_x_, origin_y_, unit_x_, unit_y_;
+  // The network's continuations as flat arrays: those of end e of segment s are entries
+  // [continuation_begin_[2 s + e], continuation_begin_[2 s + e + 1]).
+  std::vector<int> continuation_begin_, continuation_segment_, continuation_enter_end_;
 };
 
 }  // namespace indoorloc::mapmatch

@@ -32,6 +32,7 @@
 
 #include "indoorloc/core/fixed_lag_ring.h"
 #include "indoorloc/core/random.h"
+#include "indoorloc/core/random_lanes.h"
 #include "indoorloc/core/resampling.h"
 #include "indoorloc/mapmatch/corridor_motion.h"
 #include "indoorloc/mapmatch/road_network.h"
@@ -131,7 +132,8 @@ class ParticleMapMatcher {
   // The network move, the von Mises heading weight and the junction policy (shared with the
   // fusion tracker's corridor mode).
   CorridorMotion motion_;
-  RandomStream rng_;
+  RandomStream rng_;     // junction choices, resampling, recovery
+  RandomLanes lanes_;    // the per-particle uniform draws of the prediction
   std::vector<int> segment_;
   std::vector<signed char> direction_;
   std::vector<double> along_;
@@ -149,6 +151,8 @@ class ParticleMapMatcher {
   std::vector<double> along_tmp_, bias_tmp_;
   std::vector<double> factor_;        // 2M: exp(κ (d cos(φ - β_s) - 1)), index 2 s + (d > 0)
   std::vector<double> disagree_;      // 2M: 1 - d cos(φ - β_s)
+  std::vector<double> uniform_, distance_;  // N: a step's draws and distances
+  std::vector<unsigned char> flags_;        // MoveAll's scratch
   // Recovery window of per-step disagreements.
   std::vector<double> disagreement_window_;
   size_t window_pos_ = 0;
