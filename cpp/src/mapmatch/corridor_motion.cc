@@ -70,29 +70,35 @@ CorridorMotion::CorridorMotion(const RoadNetwork& network, const CorridorMotionO
 namespace {
 
 // The in-segment pass of MoveAll for particles [begin, count): along += d · distance where the
-// particle stays on its segment, flag 1 where it reaches an end (portable version).
+// particle stays on its segment; appends the others to at_end[*num_at_end...] (portable
+// version, branch-free).
 void MoveWithinSegmentsScalar(int begin, int count, const double* distance_m, const int* segment,
-                              const signed char* direction, double* along_m, const double* lengths_m,
-                              unsigned char* flags) {
+                              const signed char* direction, double* along_m, const double* lengths_m, int* at_end,
+                              int* num_at_end) {
+  int listed = *num_at_end;
   for (int i = begin; i < count; ++i) {
     const double along = along_m[i];
     const double u = along + direction[i] * distance_m[i];
     const bool inside = (u >= 0.0) & (u <= lengths_m[segment[i]]);
     along_m[i] = inside ? u : along;
-    flags[i] = static_cast<unsigned char>(!inside);
+    at_end[listed] = i;
+    listed += !inside;
   }
+  *num_at_end = listed;
 }
 
-// The same pass with AVX2, four particles at a time (the same multiply and
-// add as the portable version, no FMA: bit-identical). Returns the first particle not done.
+// The same pass with AVX2, four particles at a time (the same multiply and add as the portable
+// version, no FMA: bit-identical), the listed indices compressed by a 16-entry shuffle table.
+// Returns the first particle not done.
 __attribute__((target("avx2"))) int MoveWithinSegmentsAvx2(int count, const double* distance_m, const int* segment,
                                                            const signed char* direction, double* along_m,
-                                                           const double* lengths_m, unsigned char* flags) {
-  // Byte j of kOutside[m] is 1 where bit j of the "inside" mask m is 0.
-  static constexpr std::uint32_t kOutside[16] = {
-      0x01010101, 0x01010100, 0x01010001, 0x01010000, 0x01000101, 0x01000100, 0x01000001, 0x01000000,
-      0x00010101, 0x00010100, 0x00010001, 0x00010000, 0x00000101, 0x00000100, 0x00000001, 0x00000000};
+                                                           const double* lengths_m, int* at_end, int* num_at_end) {
+  // kCompress[m]: the lanes j whose bit is 0 in the "inside" mask m, in order, then padding.
+  static const std::int32_t kCompress[16][4] = {
+      {0, 1, 2, 3}, {1, 2, 3, 0}, {0, 2, 3, 0}, {2, 3, 0, 0}, {0, 1, 3, 0}, {1, 3, 0, 0}, {0, 3, 0, 0}, {3, 0, 0, 0},
+      {0, 1, 2, 0}, {1, 2, 0, 0}, {0, 2, 0, 0}, {2, 0, 0, 0}, {0, 1, 0, 0}, {1, 0, 0, 0}, {0, 0, 0, 0}, {0, 0, 0, 0}};
   const __m256d zero = _mm256_setzero_pd();
+  int listed = *num_at_end;
   int i = 0;
   for (; i + 4 <= count; i += 4) {
     // Scalar loads rather than vgatherdpd: faster on the machines measured (docs/performance.md).
@@ -105,39 +111,55 @@ __attribute__((target("avx2"))) int MoveWithinSegmentsAvx2(int count, const doub
     const __m256d u = _mm256_add_pd(along, _mm256_mul_pd(dir, _mm256_loadu_pd(distance_m + i)));
     const __m256d inside = _mm256_and_pd(_mm256_cmp_pd(u, zero, _CMP_GE_OQ), _mm256_cmp_pd(u, length, _CMP_LE_OQ));
     _mm256_storeu_pd(along_m + i, _mm256_blendv_pd(along, u, inside));
-    std::memcpy(flags + i, &kOutside[_mm256_movemask_pd(inside)], sizeof(std::uint32_t));
+    const int mask = _mm256_movemask_pd(inside);
+    const __m128i lanes = _mm_loadu_si128(reinterpret_cast<const __m128i*>(kCompress[mask]));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(at_end + listed), _mm_add_epi32(lanes, _mm_set1_epi32(i)));
+    listed += 4 - __builtin_popcount(static_cast<unsigned>(mask));
   }
+  *num_at_end = listed;
   return i;
-}
-
-void MoveWithinSegments(int count, const double* distance_m, const int* segment, const signed char* direction,
-                        double* along_m, const double* lengths_m, unsigned char* flags) {
-  const int done = UseAvx2() ? MoveWithinSegmentsAvx2(count, distance_m, segment, direction, along_m, lengths_m, flags)
-                             : 0;
-  MoveWithinSegmentsScalar(done, count, distance_m, segment, direction, along_m, lengths_m, flags);
 }
 
 }  // namespace
 
 void CorridorMotion::MoveAll(int count, const double* distance_m, int* segment, signed char* direction,
-                             double* along_m, double heading_rad, RandomStream& rng, double* weight,
-                             std::vector<unsigned char>* flags) const {
+                             double* along_m, double heading_rad, RandomLanes& lanes, RandomStream& rng,
+                             double* weight, MoveScratch* scratch) const {
   if (count <= 0) return;
-  // Padded to whole 8-byte words, the padding zero, so that the scan reads words.
-  const size_t words = (static_cast<size_t>(count) + 7) / 8;
-  flags->assign(words * 8, 0);
-  MoveWithinSegments(count, distance_m, segment, direction, along_m, lengths_.data(), flags->data());
-  // The few particles that reached an end (a few percent per step), found 8 flags at a time.
-  for (size_t w = 0; w < words; ++w) {
-    std::uint64_t word;
-    std::memcpy(&word, flags->data() + 8 * w, sizeof(word));
-    while (word != 0) {
-      const int i = static_cast<int>(8 * w) + __builtin_ctzll(word) / 8;
-      word &= word - 1;
-      const double importance =
-          MoveAcrossEnds(&segment[i], &direction[i], &along_m[i], distance_m[i], heading_rad, rng);
-      if (importance != 1.0) weight[i] *= importance;
+  scratch->at_end.resize(static_cast<size_t>(count) + 4);  // + 4: the AVX2 pass stores whole groups
+  int* at_end = scratch->at_end.data();
+  int num_at_end = 0;
+  const int done = UseAvx2() ? MoveWithinSegmentsAvx2(count, distance_m, segment, direction, along_m, lengths_.data(),
+                                                      at_end, &num_at_end)
+                             : 0;
+  MoveWithinSegmentsScalar(done, count, distance_m, segment, direction, along_m, lengths_.data(), at_end, &num_at_end);
+  scratch->uniforms.resize(static_cast<size_t>(num_at_end));
+  lanes.FillUniform01(scratch->uniforms.data(), num_at_end);
+  const bool uniform_policy = options_.junction_policy == JunctionPolicy::kUniform;
+  for (int k = 0; k < num_at_end; ++k) {
+    const int i = at_end[k];
+    const int s = segment[i];
+    const int d = direction[i];
+    const double u = along_m[i] + d * distance_m[i];
+    // The common case: forward over the end ahead (u past it in the direction of travel), one
+    // hop, the rest of the move within the continuation.
+    const int end = d > 0 ? 1 : 0;
+    const double leftover = d > 0 ? u - lengths_[s] : -u;
+    if (uniform_policy && leftover > 0.0) {
+      const int first = continuation_begin_[static_cast<size_t>(2 * s + end)];
+      const int n_choices = continuation_begin_[static_cast<size_t>(2 * s + end + 1)] - first;
+      const int pick = std::min(n_choices - 1, static_cast<int>(scratch->uniforms[static_cast<size_t>(k)] * n_choices));
+      const int next = continuation_segment_[static_cast<size_t>(first + pick)];
+      if (leftover <= lengths_[next]) {
+        const bool enter_a = continuation_enter_end_[static_cast<size_t>(first + pick)] == 0;
+        segment[i] = next;
+        direction[i] = static_cast<signed char>(enter_a ? 1 : -1);
+        along_m[i] = enter_a ? leftover : lengths_[next] - leftover;
+        continue;
+      }
     }
+    const double importance = MoveAcrossEnds(&segment[i], &direction[i], &along_m[i], distance_m[i], heading_rad, rng);
+    if (importance != 1.0) weight[i] *= importance;
   }
 }
 

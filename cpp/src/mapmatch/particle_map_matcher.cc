@@ -287,7 +287,7 @@ StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, doub
     const double mean = estimate_bias ? mean_distance - bias[i] * dt_s : mean_distance;
     distance[i] = a > 0 ? mean + (two_a * uniform[i] - a) : mean;
   }
-  motion_.MoveAll(n, distance, seg, dir, along, heading_rad, rng_, weights_.data(), &flags_);
+  motion_.MoveAll(n, distance, seg, dir, along, heading_rad, lanes_, rng_, weights_.data(), &move_scratch_);
   // Pass 2, update (eq. 11) with the sums.
   const WeightSums sums = WeighAndSum({n, seg, dir, along, weights_.data(), weight_scale_, factor_.data(),
                                        disagree_.data(), origin_x, origin_y, unit_x, unit_y});

@@ -29,6 +29,7 @@
 #include <Eigen/Core>
 
 #include "indoorloc/core/random.h"
+#include "indoorloc/core/random_lanes.h"
 #include "indoorloc/mapmatch/road_network.h"
 
 namespace indoorloc::mapmatch {
@@ -72,13 +73,21 @@ class CorridorMotion {
     return MoveAcrossEnds(segment, direction, along_m, distance_m, heading_rad, rng);
   }
 
+  /// Caller-owned scratch of MoveAll (so that the model stays const and shareable).
+  struct MoveScratch {
+    std::vector<int> at_end;         ///< particles that reached a segment end
+    std::vector<double> uniforms;    ///< one junction draw per such particle
+  };
   /// Moves particles [0, count) by distance_m[i] each, as Move: first every in-segment move in
-  /// one branch-free (vectorised) pass, then the particles that reached a segment end one by one
-  /// in index order (junction draws from `rng`). Where a junction proposal's importance factor
-  /// is not 1 it multiplies weight[i] (`weight` may be null with the uniform policy). `flags`
-  /// is caller-owned scratch (resized to count), so that the model stays const.
+  /// one branch-free (vectorised) pass that also lists the particles reaching a segment end
+  /// (a few percent per step), then those in index order. Each listed particle takes one
+  /// uniform from `lanes`; with the uniform policy a single forward hop onto a continuation that
+  /// contains the rest of the move (the common case) picks continuation floor(U n) directly.
+  /// Every other case (several hops, a move backwards, the heading-aware policy) goes through
+  /// Move's general path with its draws from `rng`. Where a junction proposal's importance
+  /// factor is not 1 it multiplies weight[i] (`weight` may be null with the uniform policy).
   void MoveAll(int count, const double* distance_m, int* segment, signed char* direction, double* along_m,
-               double heading_rad, RandomStream& rng, double* weight, std::vector<unsigned char>* flags) const;
+               double heading_rad, RandomLanes& lanes, RandomStream& rng, double* weight, MoveScratch* scratch) const;
 
   /// log f_vM(φ; β(S, d), κ) = κ cos(φ − β(S, d)) − log(2π I0(κ)) [nats] (eq. 11), with
   /// β(S, d) = β_S (d > 0) or β_S + π (d < 0).

@@ -152,7 +152,7 @@ class ParticleMapMatcher {
   std::vector<double> factor_;        // 2M: exp(κ (d cos(φ - β_s) - 1)), index 2 s + (d > 0)
   std::vector<double> disagree_;      // 2M: 1 - d cos(φ - β_s)
   std::vector<double> uniform_, distance_;  // N: a step's draws and distances
-  std::vector<unsigned char> flags_;        // MoveAll's scratch
+  CorridorMotion::MoveScratch move_scratch_;
   // Recovery window of per-step disagreements.
   std::vector<double> disagreement_window_;
   size_t window_pos_ = 0;
