@@ -51,7 +51,7 @@ struct WeighInputs {
   double* weight;
   double scale;
   const double* factor;
-  const double* disagree;
+  const double* disagree;  // null: no disagreement sum (recovery off)
   const double* origin_x;
   const double* origin_y;
   const double* unit_x;
@@ -74,7 +74,7 @@ void WeighScalar(const WeighInputs& in, int begin, LaneSums* acc) {
     acc->sy[j] += w * y;
     acc->sxx[j] += w * x * x;
     acc->syy[j] += w * y * y;
-    acc->dis[j] += w * in.disagree[key];
+    if (in.disagree != nullptr) acc->dis[j] += w * in.disagree[key];
     acc->max_w[j] = acc->max_w[j] > w ? acc->max_w[j] : w;
   }
 }
@@ -85,22 +85,35 @@ void WeighScalar(const WeighInputs& in, int begin, LaneSums* acc) {
 // (docs/performance.md), and no uninitialised-source warning from GCC's gather intrinsic.
 #define INDOORLOC_GATHER4(t, i0, i1, i2, i3) _mm256_set_pd((t)[i3], (t)[i2], (t)[i1], (t)[i0])
 
+template <bool kDisagreement>
 __attribute__((target("avx2"))) int WeighAvx2(const WeighInputs& in, LaneSums* acc) {
+  // Locals (restrict) so that the weight stores do not force reloads of the inputs.
+  const int n = in.n;
+  const int* __restrict seg = in.seg;
+  const signed char* __restrict dir = in.dir;
+  const double* __restrict along_m = in.along;
+  double* __restrict weight = in.weight;
+  const double* __restrict factor = in.factor;
+  const double* __restrict disagree = in.disagree;
+  const double* __restrict origin_x = in.origin_x;
+  const double* __restrict origin_y = in.origin_y;
+  const double* __restrict unit_x = in.unit_x;
+  const double* __restrict unit_y = in.unit_y;
   __m256d sum = _mm256_setzero_pd(), sum_sq = sum, sx = sum, sy = sum, sxx = sum, syy = sum, dis = sum, max_w = sum;
   const __m256d scale = _mm256_set1_pd(in.scale);
   int i = 0;
-  for (; i + kSumLanes <= in.n; i += kSumLanes) {
-    const int s0 = in.seg[i], s1 = in.seg[i + 1], s2 = in.seg[i + 2], s3 = in.seg[i + 3];
-    const int k0 = 2 * s0 + (in.dir[i] > 0), k1 = 2 * s1 + (in.dir[i + 1] > 0), k2 = 2 * s2 + (in.dir[i + 2] > 0),
-              k3 = 2 * s3 + (in.dir[i + 3] > 0);
-    const __m256d w = _mm256_mul_pd(_mm256_mul_pd(_mm256_loadu_pd(in.weight + i), scale),
-                                    INDOORLOC_GATHER4(in.factor, k0, k1, k2, k3));
-    _mm256_storeu_pd(in.weight + i, w);
-    const __m256d along = _mm256_loadu_pd(in.along + i);
-    const __m256d x = _mm256_add_pd(INDOORLOC_GATHER4(in.origin_x, s0, s1, s2, s3),
-                                    _mm256_mul_pd(along, INDOORLOC_GATHER4(in.unit_x, s0, s1, s2, s3)));
-    const __m256d y = _mm256_add_pd(INDOORLOC_GATHER4(in.origin_y, s0, s1, s2, s3),
-                                    _mm256_mul_pd(along, INDOORLOC_GATHER4(in.unit_y, s0, s1, s2, s3)));
+  for (; i + kSumLanes <= n; i += kSumLanes) {
+    const int s0 = seg[i], s1 = seg[i + 1], s2 = seg[i + 2], s3 = seg[i + 3];
+    const int k0 = 2 * s0 + (dir[i] > 0), k1 = 2 * s1 + (dir[i + 1] > 0), k2 = 2 * s2 + (dir[i + 2] > 0),
+              k3 = 2 * s3 + (dir[i + 3] > 0);
+    const __m256d w =
+        _mm256_mul_pd(_mm256_mul_pd(_mm256_loadu_pd(weight + i), scale), INDOORLOC_GATHER4(factor, k0, k1, k2, k3));
+    _mm256_storeu_pd(weight + i, w);
+    const __m256d along = _mm256_loadu_pd(along_m + i);
+    const __m256d x = _mm256_add_pd(INDOORLOC_GATHER4(origin_x, s0, s1, s2, s3),
+                                    _mm256_mul_pd(along, INDOORLOC_GATHER4(unit_x, s0, s1, s2, s3)));
+    const __m256d y = _mm256_add_pd(INDOORLOC_GATHER4(origin_y, s0, s1, s2, s3),
+                                    _mm256_mul_pd(along, INDOORLOC_GATHER4(unit_y, s0, s1, s2, s3)));
     const __m256d wx = _mm256_mul_pd(w, x), wy = _mm256_mul_pd(w, y);
     sum = _mm256_add_pd(sum, w);
     sum_sq = _mm256_add_pd(sum_sq, _mm256_mul_pd(w, w));
@@ -108,7 +121,7 @@ __attribute__((target("avx2"))) int WeighAvx2(const WeighInputs& in, LaneSums* a
     sy = _mm256_add_pd(sy, wy);
     sxx = _mm256_add_pd(sxx, _mm256_mul_pd(wx, x));
     syy = _mm256_add_pd(syy, _mm256_mul_pd(wy, y));
-    dis = _mm256_add_pd(dis, _mm256_mul_pd(w, INDOORLOC_GATHER4(in.disagree, k0, k1, k2, k3)));
+    if (kDisagreement) dis = _mm256_add_pd(dis, _mm256_mul_pd(w, INDOORLOC_GATHER4(disagree, k0, k1, k2, k3)));
     max_w = _mm256_max_pd(max_w, w);  // max_w > w ? max_w : w, as the portable version
   }
   _mm256_storeu_pd(acc->sum, sum);
@@ -125,7 +138,8 @@ __attribute__((target("avx2"))) int WeighAvx2(const WeighInputs& in, LaneSums* a
 
 WeightSums WeighAndSum(const WeighInputs& in) {
   LaneSums acc;
-  const int done = UseAvx2() ? WeighAvx2(in, &acc) : 0;
+  int done = 0;
+  if (UseAvx2()) done = in.disagree != nullptr ? WeighAvx2<true>(in, &acc) : WeighAvx2<false>(in, &acc);
   WeighScalar(in, done, &acc);
   auto reduce = [](const double* v) { return (v[0] + v[1]) + (v[2] + v[3]); };
   WeightSums out;
@@ -289,8 +303,9 @@ StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, doub
   }
   motion_.MoveAll(n, distance, seg, dir, along, heading_rad, lanes_, rng_, weights_.data(), &move_scratch_);
   // Pass 2, update (eq. 11) with the sums.
+  const bool recovery = options_.recovery_disagreement > 0.0;  // the only user of the disagreement
   const WeightSums sums = WeighAndSum({n, seg, dir, along, weights_.data(), weight_scale_, factor_.data(),
-                                       disagree_.data(), origin_x, origin_y, unit_x, unit_y});
+                                       recovery ? disagree_.data() : nullptr, origin_x, origin_y, unit_x, unit_y});
   const double sum = sums.sum, sum_sq = sums.sum_sq, sx = sums.sx, sy = sums.sy, sxx = sums.sxx, syy = sums.syy;
   double disagreement = sums.disagreement;
   const double max_w = sums.max_w;
