@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -35,12 +36,29 @@ struct FingerprintFixer::State {
   Eigen::VectorXd weights;
   Eigen::Index columns = 0;
   std::unique_ptr<wifi::SharedApMatcher> matcher;
-  std::unordered_map<std::string, int> column;   // BSSID -> column
-  std::unordered_map<std::string, double> seen;  // "BSSID\x1fms" -> last-seen time [s]
-  // Kept measurements of known APs: last seen [s], column, RSSI [dBm].
-  std::vector<double> t;
-  std::vector<int> col;
-  std::vector<double> rss;
+  // Every BSSID met gets a small id (the map's columns first: id = column; unknown BSSIDs after,
+  // so that a measurement key is two integers, no string built per reading).
+  std::unordered_map<std::string, int> id_of;
+  struct Key {
+    int id;
+    long long ms;  // last-seen time [ms]
+    bool operator==(const Key& o) const { return id == o.id && ms == o.ms; }
+  };
+  struct KeyHash {
+    std::size_t operator()(const Key& k) const {
+      return std::hash<std::uint64_t>()(static_cast<std::uint64_t>(k.ms) * 1000003u + static_cast<std::uint32_t>(k.id));
+    }
+  };
+  std::unordered_map<Key, double, KeyHash> seen;  // measurement -> its last-seen time [s]
+  // Kept measurements of known APs, sorted by last-seen time (stably: equal times keep their
+  // arrival order, the order of pool_windows' stable sort, so the mean time sums alike).
+  struct Measurement {
+    double t;    // last seen [s]
+    int col;
+    double rss;  // [dBm]
+  };
+  std::vector<Measurement> kept;
+  std::vector<Measurement> fresh;  // reused buffer
   double latest_s = -std::numeric_limits<double>::infinity();
 };
 
@@ -68,7 +86,7 @@ FingerprintFixer::FingerprintFixer(const FingerprintMap& map, const FingerprintF
   s.weights = map.weights;
   s.columns = k;
   for (Eigen::Index j = 0; j < k; ++j) {
-    if (!s.column.emplace(map.bssids[static_cast<std::size_t>(j)], static_cast<int>(j)).second) {
+    if (!s.id_of.emplace(map.bssids[static_cast<std::size_t>(j)], static_cast<int>(j)).second) {
       ThrowInvalidArgument("map.bssids", "'" + map.bssids[static_cast<std::size_t>(j)] + "' appears twice");
     }
   }
@@ -96,60 +114,53 @@ bool FingerprintFixer::AddScan(double time_s, const std::vector<std::string>& bs
   CheckArgument(std::isfinite(time_s), "time_s", "must be finite");
   CheckFinite(rssi_dbm, "rssi_dbm");
   CheckFinite(last_seen_s, "last_seen_s");
+  CheckArgument(last_seen_s.size() == 0 || last_seen_s.cwiseAbs().maxCoeff() < 1e12, "last_seen_s",
+                "must be within +-1e12 s");
   CheckArgument(time_s >= s.latest_s, "time_s", "scans must come in non-decreasing time");
   s.latest_s = time_s;
   const double lo = time_s - s.options.query_window_s;
+  s.fresh.clear();
   for (std::size_t j = 0; j < m; ++j) {
     // The measurement key of python IlcWifi.new_measurement_mask: last-seen time in whole ms
     // (rounded half to even, as numpy's round).
-    const long long ms = static_cast<long long>(std::nearbyint(last_seen_s[static_cast<Eigen::Index>(j)] * 1000.0));
-    std::string key = bssids[j];
-    key += '\x1f';
-    key += std::to_string(ms);
-    if (!s.seen.emplace(std::move(key), last_seen_s[static_cast<Eigen::Index>(j)]).second) continue;
-    const auto it = s.column.find(bssids[j]);
-    if (it == s.column.end()) continue;
-    s.t.push_back(last_seen_s[static_cast<Eigen::Index>(j)]);
-    s.col.push_back(it->second);
-    s.rss.push_back(rssi_dbm[static_cast<Eigen::Index>(j)]);
+    const double seen = last_seen_s[static_cast<Eigen::Index>(j)];
+    const long long ms = static_cast<long long>(std::nearbyint(seen * 1000.0));
+    const int id = s.id_of.emplace(bssids[j], static_cast<int>(s.id_of.size())).first->second;
+    if (!s.seen.emplace(State::Key{id, ms}, seen).second) continue;
+    if (id >= s.columns) continue;  // not in the map
+    s.fresh.push_back({seen, id, rssi_dbm[static_cast<Eigen::Index>(j)]});
   }
+  auto by_time = [](const State::Measurement& a, const State::Measurement& b) { return a.t < b.t; };
+  std::stable_sort(s.fresh.begin(), s.fresh.end(), by_time);
+  const std::size_t old = s.kept.size();
+  s.kept.insert(s.kept.end(), s.fresh.begin(), s.fresh.end());
+  std::inplace_merge(s.kept.begin(), s.kept.begin() + static_cast<std::ptrdiff_t>(old), s.kept.end(), by_time);
   // Forget what no later window can hold (windows only move forward).
-  std::size_t w = 0;
-  for (std::size_t i = 0; i < s.t.size(); ++i) {
-    if (s.t[i] >= lo) {
-      s.t[w] = s.t[i];
-      s.col[w] = s.col[i];
-      s.rss[w] = s.rss[i];
-      ++w;
-    }
-  }
-  s.t.resize(w);
-  s.col.resize(w);
-  s.rss.resize(w);
+  const auto first = std::find_if(s.kept.begin(), s.kept.end(), [lo](const State::Measurement& x) { return x.t >= lo; });
+  s.kept.erase(s.kept.begin(), first);
   if (s.seen.size() > 4096) {
     for (auto it = s.seen.begin(); it != s.seen.end();) it = it->second >= lo ? std::next(it) : s.seen.erase(it);
   }
+  // Max-pool the measurements last seen by now (a prefix), summing their times in time order.
   Eigen::VectorXd q = Eigen::VectorXd::Constant(s.columns, std::numeric_limits<double>::quiet_NaN());
-  std::vector<double> used;
   int heard = 0;
-  for (std::size_t i = 0; i < s.t.size(); ++i) {
-    if (!(s.t[i] <= time_s)) continue;
-    double& v = q[s.col[i]];
+  std::size_t used = 0;
+  double total = 0.0;
+  for (; used < s.kept.size() && s.kept[used].t <= time_s; ++used) {
+    const State::Measurement& x = s.kept[used];
+    double& v = q[x.col];
     if (std::isnan(v)) {
-      v = s.rss[i];
+      v = x.rss;
       ++heard;
-    } else if (s.rss[i] > v) {
-      v = s.rss[i];
+    } else if (x.rss > v) {
+      v = x.rss;
     }
-    used.push_back(s.t[i]);
+    total += x.t;
   }
   if (heard < s.options.min_aps) return false;
-  std::stable_sort(used.begin(), used.end());
-  double total = 0.0;
-  for (double u : used) total += u;
   if (query) {
     query->rss_dbm = std::move(q);
-    query->described_time_s = total / static_cast<double>(std::max<std::size_t>(used.size(), 1));
+    query->described_time_s = total / static_cast<double>(std::max<std::size_t>(used, 1));
   }
   return true;
 }

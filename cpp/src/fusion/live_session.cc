@@ -225,7 +225,10 @@ bool LiveSession::AddWifiScan(double time_s, const std::vector<std::string>& bss
   if (!s.fixes.empty() && s.fixes.back().time_s == time_s) s.fixes.pop_back();
   if (got) {
     p.described_s = p.query.described_time_s;
-    if (!s.options.delay_compensation) p.fix = s.fixer->Fix(p.query, time_s);  // matched now
+    if (!s.options.delay_compensation) {  // matched now; the query is then no longer needed
+      p.fix = s.fixer->Fix(p.query, time_s);
+      p.query.rss_dbm.resize(0);
+    }
     s.fixes.push_back(std::move(p));
   }
   return s.has_estimate;
