@@ -106,6 +106,13 @@ def test_add_equals_build_with_the_walk(tmp_path, floor_dir):
     np.testing.assert_array_equal(a.database.positions_m, b.database.positions_m)
     assert a.database.bssids == b.database.bssids
     np.testing.assert_array_equal(a.database.ap_ratio, b.database.ap_ratio)
+    # The stored map columns (what the C++ reader uses) follow the add: equal to the models'.
+    for site, m in ((small, a), (full, b)):
+        with sqlite3.connect(site.path) as con:
+            rows = con.execute("SELECT bssid, ap_ratio FROM fingerprint_columns WHERE floor = ? ORDER BY col",
+                               (FLOOR,)).fetchall()
+        assert [r[0] for r in rows] == m.database.bssids
+        np.testing.assert_array_equal([r[1] for r in rows], m.database.ap_ratio)
     assert (a.calibration.k, a.calibration.yaw_offset_rad) == (b.calibration.k, b.calibration.yaw_offset_rad)
     test = read_ilc_walk(paths[N_SURVEY + 1])
     np.testing.assert_array_equal(Site.open(small.path).track(test).xy_m, full.track(test).xy_m)

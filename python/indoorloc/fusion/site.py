@@ -188,6 +188,7 @@ class Site:
                     if progress:
                         progress(wp.stem)
                 tables.recalibrate(con, fl.name)
+                tables.store_fingerprint_columns(con, fl.name, settings.fixes)
             con.execute("INSERT INTO meta VALUES ('skipped_walks', ?)", (json.dumps(skipped),))
             con.execute("COMMIT")
             con.close()
@@ -218,6 +219,7 @@ class Site:
                     progress(walk.walk_id)
             for name in sorted(touched):
                 tables.recalibrate(con, name)
+                tables.store_fingerprint_columns(con, name, self.settings.fixes)
         return added
 
     @contextlib.contextmanager
@@ -275,6 +277,8 @@ class Site:
                              float(walk.duration_s)))
                 seq += 1
                 out[walk.walk_id] = tables.insert_fingerprints(con, tr.floor, walk.walk_id, got, weight)
+            for name in sorted({tr.floor for _, tr, _ in placed}):
+                tables.store_fingerprint_columns(con, name, self.settings.fixes)
         return out
 
     # ---- reading ------------------------------------------------------------------------

@@ -117,6 +117,20 @@ def recalibrate(con: sqlite3.Connection, floor: str) -> None:
                  cal.heading_sd_rad, cal.k_rms_residual_m, cal.n_intervals, json.dumps(asdict(cal.options))))
 
 
+def store_fingerprint_columns(con: sqlite3.Connection, floor: str, settings: wfx.FixSettings) -> None:
+    """Store the floor's fingerprint-map columns and AP reliabilities as :func:`database` derives
+    them (the C++ reader, ``SiteFile::Fingerprints``, reads them instead of recomputing the
+    reliabilities: one implementation). Call after every change of the floor's fingerprints."""
+    con.execute(store.FINGERPRINT_COLUMNS_SCHEMA)
+    con.execute("DELETE FROM fingerprint_columns WHERE floor = ?", (floor,))
+    if not con.execute("SELECT 1 FROM fingerprints WHERE floor = ? LIMIT 1", (floor,)).fetchone():
+        return
+    db = database(con, [floor], settings)
+    ratio = db.ap_ratio if db.ap_ratio is not None else np.ones(len(db.bssids))
+    con.executemany("INSERT INTO fingerprint_columns VALUES (?, ?, ?, ?)",
+                    [(floor, j, b, float(r)) for j, (b, r) in enumerate(zip(db.bssids, ratio))])
+
+
 # ---- reading ---------------------------------------------------------------------------------
 def plan(con: sqlite3.Connection, name: str, number: int, origin: tuple) -> FloorPlan:
     """The floor's walkable plan from its stored GeoJSON, in the floor frame of ``origin`` (lon, lat) [deg]."""
@@ -171,4 +185,5 @@ def database(con: sqlite3.Connection, floors: Sequence[str], settings: wifi_fixe
 
 
 
-__all__ = ["calibrate", "calibration", "database", "insert_fingerprints", "insert_floor", "insert_survey_walk", "now", "plan", "recalibrate"]
+__all__ = ["calibrate", "calibration", "database", "insert_fingerprints", "insert_floor", "insert_survey_walk", "now", "plan", "recalibrate",
+           "store_fingerprint_columns"]
