@@ -357,13 +357,12 @@ inline void FillStartPrior(const FloorGrid& fg, const TrackStart& start, double 
     }
 }
 
-}  // namespace grid_ops
-
-// The tracker's grids and fix factors (the pimpl of GridTracker, shared with GridFilterSession).
-struct GridTracker::Impl {
+// The tracker's grids and fix factors (the body of GridTracker's pimpl, shared with
+// GridFilterSession and the pieces of the batch run, grid_run.h).
+struct TrackerGrids {
   const FloorPlan* plan = nullptr;
   GridTrackerOptions options;
-  std::vector<grid_ops::FloorGrid> grids;
+  std::vector<FloorGrid> grids;
   double total_area_m2 = 0;
 
   // Per step with fixes: per floor the factor Π_j L_j(c)^τ / max and the log of that max.
@@ -372,7 +371,7 @@ struct GridTracker::Impl {
     double log_scale = 0;
   };
 
-  FixFactor ComputeFixFactor(const std::vector<const PositionFix*>& fixes, const grid_ops::FloorGrid& fg) const {
+  FixFactor ComputeFixFactor(const std::vector<const PositionFix*>& fixes, const FloorGrid& fg) const {
     const double c = options.cell_size_m;
     const double eps = options.fix.outlier_probability, tau = options.fix.tempering;
     const double floor_density = eps / total_area_m2;
@@ -387,7 +386,7 @@ struct GridTracker::Impl {
         if (f != PositionFix::kAnyFloor && f != fg.floor_number) continue;
         const double sd = options.fix_tempering_by_variance ? fix->sds_m[k] / std::sqrt(tau) : fix->sds_m[k];
         const double inv2v = 0.5 / (sd * sd);
-        const double scale = (1.0 - eps) * w / (grid_ops::kTwoPi * sd * sd);
+        const double scale = (1.0 - eps) * w / (kTwoPi * sd * sd);
         // 6 sd: beyond it the Gaussian is below 1e-8 of its peak, far under ε / A on any floor.
         const double reach = 6.0 * sd;
         const double mx = fix->means_m(k, 0), my = fix->means_m(k, 1);
@@ -413,5 +412,9 @@ struct GridTracker::Impl {
     return out;
   }
 };
+
+}  // namespace grid_ops
+
+struct GridTracker::Impl : grid_ops::TrackerGrids {};
 
 }  // namespace indoorloc::fusion

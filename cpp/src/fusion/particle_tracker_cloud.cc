@@ -1,0 +1,191 @@
+// The particle tracker's cloud: storage (structure of arrays), the one-pass finish of an update
+// (linear weights, log normaliser, ESS, resampling, estimate), the weighted estimate, the
+// fixed-lag ring of past positions and the recorded history for the backward smoother.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "indoorloc/core/log_weights.h"
+#include "indoorloc/core/validate.h"
+#include "particle_tracker_impl.h"
+
+namespace indoorloc::fusion {
+
+namespace {
+// A recorded cloud (record_history): states, floor and log-weight per particle.
+constexpr double kHistoryBytesPerParticle = 4 * sizeof(double) + sizeof(int) + sizeof(double);
+
+void RequireHistoryMemory(double num_particles, double num_clouds, std::string_view name) {
+  RequireSizeLimit(num_particles * num_clouds, kHistoryBytesPerParticle, name,
+                   "recorded particles (num_particles x " + FormatValue(num_clouds) +
+                       " recorded steps, record_history / the smoother)");
+}
+}  // namespace
+
+void ParticleTracker::Impl::Resize(int count) {
+  n = count;
+  x.assign(n, 0.0);
+  y.assign(n, 0.0);
+  offset.assign(n, 0.0);
+  cos_offset.assign(n, 1.0);
+  sin_offset.assign(n, 0.0);
+  scale.assign(n, 1.0);
+  floor.assign(n, 0);
+  if (corridor_mode()) {
+    segment.assign(n, 0);
+    direction.assign(n, 1);
+    along.assign(n, 0.0);
+  }
+  log_w = Eigen::VectorXd::Constant(n, -std::log(static_cast<double>(n)));
+  lag_len = options.smoothing_lag_steps;
+  lag_ring.assign(lag_len > 0 ? static_cast<size_t>(n) * (lag_len + 1) * 2 : 0, std::numeric_limits<double>::quiet_NaN());
+}
+
+// Every state array (and the lag ring) takes the values of the particles' ancestors.
+void ParticleTracker::Impl::Gather(const std::vector<int>& anc) {
+  auto gather = [&](auto& v) {
+    auto tmp = v;
+    for (int i = 0; i < n; ++i) v[i] = tmp[anc[i]];
+  };
+  gather(x);
+  gather(y);
+  gather(offset);
+  gather(cos_offset);
+  gather(sin_offset);
+  gather(scale);
+  gather(floor);
+  if (corridor_mode()) {
+    gather(segment);
+    gather(direction);
+    gather(along);
+  }
+  if (lag_len > 0) {
+    const size_t stride = static_cast<size_t>(lag_len + 1) * 2;
+    std::vector<double> tmp = lag_ring;
+    for (int i = 0; i < n; ++i) {
+      std::copy_n(tmp.begin() + static_cast<std::ptrdiff_t>(anc[i] * stride), stride,
+                  lag_ring.begin() + static_cast<std::ptrdiff_t>(i * stride));
+    }
+  }
+}
+
+// After an update of log_w that was normalised before it: one pass of exp() gives the linear
+// weights, the log normaliser (the event's log-likelihood increment), the ESS and the estimate;
+// resamples (from the linear weights) when ESS < threshold N. Leaves log_w normalised.
+double ParticleTracker::Impl::FinishUpdate(double max_log_w, TrackerEstimate* est) {
+  weights.resize(static_cast<size_t>(n));
+  double sum = 0.0, sum_sq = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double w = std::exp(log_w[i] - max_log_w);
+    weights[i] = w;
+    sum += w;
+    sum_sq += w * w;
+  }
+  const double log_z = max_log_w + std::log(sum);
+  est->ess = sum * sum / sum_sq;
+  const double threshold = options.resampling.ess_threshold * n;
+  est->resampled = options.resampling.ess_threshold > 0.0 && est->ess < threshold;
+  if (est->resampled) {
+    ResampleLinear(weights.data(), n, sum, options.resampling.scheme, rng, &ancestors);
+    Gather(ancestors);
+    log_w.setConstant(-std::log(static_cast<double>(n)));
+    std::fill(weights.begin(), weights.end(), 1.0 / n);
+    ++summary.resamplings;
+  } else {
+    log_w.array() -= log_z;
+    const double inv = 1.0 / sum;
+    for (double& w : weights) w *= inv;
+  }
+  ess_sum += est->ess;
+  ++events;
+  summary.mean_ess = ess_sum / events;
+  FillEstimate(weights, est);
+  return log_z;
+}
+
+// The weighted estimate from normalised linear weights w: mean, covariance, circular mean
+// offset, mean scale, floor probabilities and the fixed-lag position.
+void ParticleTracker::Impl::FillEstimate(const std::vector<double>& w, TrackerEstimate* est) const {
+  double mx = 0.0, my = 0.0, so = 0.0, co = 0.0, sc = 0.0;
+  est->floor_probabilities = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(floors.size()));
+  for (int i = 0; i < n; ++i) {
+    mx += w[i] * x[i];
+    my += w[i] * y[i];
+    so += w[i] * sin_offset[i];
+    co += w[i] * cos_offset[i];
+    sc += w[i] * scale[i];
+    est->floor_probabilities[floor[i]] += w[i];
+  }
+  double cxx = 0.0, cxy = 0.0, cyy = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double dx = x[i] - mx, dy = y[i] - my;
+    cxx += w[i] * dx * dx;
+    cxy += w[i] * dx * dy;
+    cyy += w[i] * dy * dy;
+  }
+  est->mean_m = Eigen::Vector2d(mx, my);
+  est->covariance_m2 << cxx, cxy, cxy, cyy;
+  est->heading_offset_rad = std::atan2(so, co);
+  est->scale = sc;
+  Eigen::Index best = 0;
+  est->floor_probabilities.maxCoeff(&best);
+  est->floor_index = static_cast<int>(best);
+  if (lag_len > 0 && summary.steps > lag_len) {
+    const int slot = (summary.steps - 1 - lag_len) % (lag_len + 1);
+    const size_t stride = static_cast<size_t>(lag_len + 1) * 2;
+    Eigen::Vector2d lagged = Eigen::Vector2d::Zero();
+    for (int i = 0; i < n; ++i) {
+      const double* p = &lag_ring[i * stride + static_cast<size_t>(slot) * 2];
+      lagged += w[i] * Eigen::Vector2d(p[0], p[1]);
+    }
+    est->lagged_m = lagged;
+  }
+}
+
+// Estimate from the current log-weights (outside an update).
+void ParticleTracker::Impl::FillEstimate(TrackerEstimate* est) const {
+  const Eigen::VectorXd w = NormalizedWeights(log_w);
+  FillEstimate(std::vector<double>(w.data(), w.data() + w.size()), est);
+}
+
+// Fixed-lag ring: the positions after the current step go into slot (steps - 1) mod (L + 1).
+void ParticleTracker::Impl::PushLag() {
+  if (lag_len <= 0) return;
+  const int slot = (summary.steps - 1) % (lag_len + 1);
+  const size_t stride = static_cast<size_t>(lag_len + 1) * 2;
+  for (int i = 0; i < n; ++i) {
+    lag_ring[i * stride + static_cast<size_t>(slot) * 2] = x[i];
+    lag_ring[i * stride + static_cast<size_t>(slot) * 2 + 1] = y[i];
+  }
+}
+
+// record_history: the cloud after a step (replace_last: after an observation following it).
+void ParticleTracker::Impl::Snapshot(bool replace_last) {
+  if (!options.record_history || summary.steps == 0) return;
+  if (!(replace_last && !history.states.empty())) {
+    RequireHistoryMemory(n, static_cast<double>(history.states.size() + 1), "options.record_history");
+  }
+  RowMatrixXd states(n, 4);
+  Eigen::VectorXi fl(n);
+  for (int i = 0; i < n; ++i) {
+    states(i, 0) = x[i];
+    states(i, 1) = y[i];
+    states(i, 2) = offset[i];
+    states(i, 3) = scale[i];
+    fl[i] = floor[i];
+  }
+  Eigen::VectorXd lw = log_w;
+  NormalizeLogWeights(lw);
+  if (replace_last && !history.states.empty()) {
+    history.states.back() = std::move(states);
+    history.floor_indices.back() = std::move(fl);
+    history.log_weights.back() = std::move(lw);
+  } else {
+    history.states.push_back(std::move(states));
+    history.floor_indices.push_back(std::move(fl));
+    history.log_weights.push_back(std::move(lw));
+  }
+}
+
+}  // namespace indoorloc::fusion

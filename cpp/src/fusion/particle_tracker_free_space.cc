@@ -1,0 +1,84 @@
+// The particle tracker's free-space mode: every particle moves by the step motion model
+// (step_motion.h) and is tested against the floor plan's walls. A particle whose step p -> p'
+// crosses a wall gets log w += wall_log_penalty (-inf: dropped, and it stays at p), so with hard
+// walls no particle ever ends inside an obstacle; with floor_change_probability a particle may
+// move to another floor instead (then only p' must be walkable). When a whole cloud keeps being
+// blocked it is re-spread around its mean (Respread).
+#include <cmath>
+#include <vector>
+
+#include "particle_tracker_impl.h"
+
+namespace indoorloc::fusion {
+
+// Moves every particle by one step; blocked_mass[b] receives the weight (normalised before the
+// step) blocked by walls in particle block b.
+void ParticleTracker::Impl::MoveFreeSpace(const StepMotion& motion, std::vector<double>* blocked_mass) {
+  const double penalty = options.wall_log_penalty;
+  const int num_floors = static_cast<int>(floors.size());
+  const double p_change = num_floors > 1 ? options.floor_change_probability : 0.0;
+  ForBlocks(n, [&](int b, int begin, int end, RandomStream& block_rng) {
+    double blocked = 0.0;
+    for (int i = begin; i < end; ++i) {
+      double o, sc;
+      Eigen::Vector2d delta;
+      motion.Sample(offset[i], &cos_offset[i], &sin_offset[i], scale[i], block_rng, &o, &sc, &delta);
+      offset[i] = o;
+      scale[i] = sc;
+      const double qx = x[i] + delta.x(), qy = y[i] + delta.y();
+      int f = floor[i];
+      bool is_blocked;
+      if (p_change > 0.0 && block_rng.Uniform01() < p_change) {
+        int g = static_cast<int>(block_rng.UniformInt(static_cast<std::uint64_t>(num_floors - 1)));
+        if (g >= f) ++g;
+        f = g;
+        is_blocked = !Walkable(qx, qy, f);
+      } else {
+        is_blocked = Blocked(x[i], y[i], qx, qy, f);
+      }
+      if (is_blocked) {
+        blocked += std::exp(log_w[i]);
+        log_w[i] += penalty;
+        if (std::isinf(penalty)) continue;  // dropped: stays where it was
+      }
+      x[i] = qx;
+      y[i] = qy;
+      floor[i] = f;
+    }
+    (*blocked_mass)[b] = blocked;
+  });
+}
+
+// Gaussian cloud (sd respread_sd_m) around the current mean on its most probable floor, kept
+// on walkable points; heading offsets and scales are kept, weights become uniform.
+void ParticleTracker::Impl::Respread() {
+  TrackerEstimate est;
+  FillEstimate(&est);
+  const int f = est.floor_index;
+  for (int i = 0; i < n; ++i) {
+    double px = est.mean_m.x(), py = est.mean_m.y();
+    for (int attempt = 0; attempt < 50; ++attempt) {
+      const double qx = est.mean_m.x() + options.respread_sd_m * rng.Normal();
+      const double qy = est.mean_m.y() + options.respread_sd_m * rng.Normal();
+      if (Walkable(qx, qy, f)) {
+        px = qx;
+        py = qy;
+        break;
+      }
+    }
+    int pf = f;
+    if (!Walkable(px, py, f)) {  // the mean itself is inside an obstacle: keep the particle
+      px = x[i];
+      py = y[i];
+      pf = floor[i];
+    }
+    const double o = offset[i];
+    const double s = scale[i];
+    PlaceFree(i, px, py, pf, o);
+    scale[i] = s;
+  }
+  log_w.setConstant(-std::log(static_cast<double>(n)));
+  ++summary.respreads;
+}
+
+}  // namespace indoorloc::fusion

@@ -1,0 +1,149 @@
+// The particle tracker's private state (ParticleTracker::Impl) and the map of where each part
+// of the filter lives. Private header: only the particle_tracker*.cc files include it.
+//
+//   particle_tracker.cc             public API: options check, construction, the event entry
+//                                   points (Step, Wifi, Fix, starts), particle access
+//   particle_tracker_free_space.cc  free-space mode: motion, wall test, floor change, re-spread
+//   particle_tracker_corridor.cc    corridor mode: network move + von Mises heading weight
+//                                   (paper 000 eq. 8-11); to be replaced by the shared corridor
+//                                   motion model of mapmatch and fusion
+//   particle_tracker_seeking.cc     placing particles without a known start: candidate grid,
+//                                   draws from an observation's likelihood, uniform cloud
+//   particle_tracker_observation.cc absolute observations (WiFi scan, fix) and recovery
+//   particle_tracker_cloud.cc       the cloud: storage, weights + ESS + resampling in one pass,
+//                                   the estimate, the fixed-lag ring, the recorded history
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "indoorloc/core/parallel.h"
+#include "indoorloc/core/random.h"
+#include "indoorloc/fusion/particle_tracker.h"
+
+namespace indoorloc::fusion {
+
+/// Log-likelihood of an absolute observation at a point: (x [m], y [m], tracker floor index).
+using PointLogLikelihood = std::function<double(double, double, int)>;
+
+namespace tracker_detail {
+constexpr double kNegInf = -std::numeric_limits<double>::infinity();
+/// Plan and particle coordinates are bounded like the floor plan's (+-1e7 m).
+constexpr double kMaxCoordinate = 1e7;
+/// Systematic resampling stream id of the tracker's own stream family: the per-event block
+/// streams use DeriveSeed(seed, event) instead, so the two never overlap.
+constexpr std::uint64_t kTrackerStream = 0x7f3a5c11ULL;
+
+/// Angle wrapped to [-pi, pi] [rad].
+inline double WrapAngle(double a) { return std::remainder(a, 2.0 * M_PI); }
+}  // namespace tracker_detail
+
+struct ParticleTracker::Impl {
+  // ---- sources and options (fixed after construction)
+  const FloorPlan* plan = nullptr;
+  const wifi::RssModel* model = nullptr;
+  const mapmatch::RoadNetwork* corridors = nullptr;
+  TrackerOptions options;
+  std::unique_ptr<WifiLikelihood> wifi;
+
+  std::vector<int> floors;              // tracker floor numbers
+  std::vector<int> plan_floor;          // tracker floor index -> plan floor index (or -1)
+  std::vector<int> model_floor;         // tracker floor index -> model floor index (or -1)
+  std::vector<RowMatrixXd> candidates;  // per tracker floor: candidate points (unknown start, recovery)
+  std::vector<double> floor_area;       // per tracker floor: walkable area [m²]
+  double total_area = 0.0;              // over all floors: the outlier density of a fix is ε / total_area
+
+  // ---- the cloud (structure of arrays)
+  int n = 0;
+  std::vector<double> x, y, offset, scale;
+  std::vector<double> cos_offset, sin_offset;  // of `offset`, kept for the estimates (no trig there)
+  std::vector<double> weights;                 // normalised linear weights of the last update
+  std::vector<int> floor;
+  std::vector<int> segment;                    // corridor mode: network segment,
+  std::vector<signed char> direction;          //   direction of travel (+1 / -1),
+  std::vector<double> along;                   //   distance along the segment [m]
+  Eigen::VectorXd log_w;
+  std::vector<double> lag_ring;  // n x (L + 1) x 2
+  int lag_len = 0;
+
+  // ---- filter state
+  RandomStream rng;
+  std::uint64_t event = 0;
+  bool initialized = false;
+  bool awaiting_first_fix = false;
+  double last_time = -std::numeric_limits<double>::infinity();
+  int consecutive_blocked = 0;
+  int consecutive_disagreement = 0;
+  double ess_sum = 0.0;
+  int events = 0;
+  ParticleHistory history;
+  TrackerSummary summary;
+  std::vector<int> ancestors;
+
+  bool corridor_mode() const { return corridors != nullptr; }
+
+  // Every event (step, WiFi observation, fix) at or after the previous one (or the start).
+  void CheckTime(double time_s, const char* name) const;
+
+  // Runs fn(block, begin, end, rng) over fixed particle blocks; the stream of block b depends
+  // only on (seed, event, b), never on the thread count.
+  template <typename Fn>
+  void ForBlocks(int count, const Fn& fn) {
+    const int blocks = (count + kBlockSize - 1) / kBlockSize;
+    const std::uint64_t seed = DeriveSeed(options.seed, ++event);
+    ParallelForRuns(blocks, options.num_threads, seed, [&](int b, RandomStream& block_rng) {
+      const int begin = b * kBlockSize;
+      const int end = std::min(count, begin + kBlockSize);
+      fn(b, begin, end, block_rng);
+    });
+  }
+
+  bool Walkable(double px, double py, int f) const {
+    if (!plan) return true;
+    return plan->IsWalkable(px, py, plan_floor[f]);
+  }
+  bool Blocked(double x0, double y0, double x1, double y1, int f) const {
+    if (!plan) return false;
+    return plan->CrossesWall(x0, y0, x1, y1, plan_floor[f]);
+  }
+
+  // ---- the cloud (particle_tracker_cloud.cc)
+  void Resize(int count);
+  void Gather(const std::vector<int>& anc);
+  double FinishUpdate(double max_log_w, TrackerEstimate* est);
+  void FillEstimate(const std::vector<double>& w, TrackerEstimate* est) const;
+  void FillEstimate(TrackerEstimate* est) const;
+  void PushLag();
+  void Snapshot(bool replace_last);
+
+  // ---- free-space mode (particle_tracker_free_space.cc)
+  void MoveFreeSpace(const StepMotion& motion, std::vector<double>* blocked_mass);
+  void Respread();
+
+  // ---- corridor mode (particle_tracker_corridor.cc)
+  void MoveAlongCorridors(const StepMotion& motion);
+  void PlaceOnCorridors(int i, double px, double py);
+  Eigen::Vector2d UniformOnCorridors();
+
+  // ---- placing particles without a known start (particle_tracker_seeking.cc)
+  void BuildCandidates();
+  Eigen::VectorXd CandidateLogLikelihoods(const PointLogLikelihood& point_ll, std::vector<int>* candidate_floor,
+                                          std::vector<int>* candidate_row);
+  void DrawFromCandidates(const PointLogLikelihood& point_ll, const std::vector<int>& slots);
+  double UnknownOffset();
+  void PlaceFree(int i, double px, double py, int f, double o);
+  void UniformCloud();
+
+  // ---- absolute observations and recovery (particle_tracker_observation.cc)
+  TrackerEstimate Observe(double time_s, bool informative, const PointLogLikelihood& point_ll);
+  PointLogLikelihood WifiPointLL(const WifiObservation& obs) const;
+};
+
+}  // namespace indoorloc::fusion
