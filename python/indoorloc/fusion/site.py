@@ -315,7 +315,7 @@ class Site:
         return self._models[name]
 
     def _all_floors(self) -> tuple:
-        """(all-floor identification tracker, floor numbers, database, offset sd) for --floor auto."""
+        """(all-floor identification tracker, floor numbers, database, its per-floor AP rates) for --floor auto."""
         if self._all is None:
             models = [self.floor_models(n) for n in self.floors]
             plan = FloorPlan([m.plan.geometry(0) for m in models], FloorPlanOptions())
@@ -327,7 +327,8 @@ class Site:
                 database = tables.database(con, self.floors, self.settings.fixes)
             finally:
                 con.close()
-            self._all = (tracker, [m.number for m in models], database)
+            numbers = [m.number for m in models]
+            self._all = (tracker, numbers, database, site_model.ap_floor_rates(database, numbers, self.settings))
         return self._all
 
     def track(self, walk: WalkLike, floor: Optional[str] = None, smooth: bool = True) -> WalkTrack:
@@ -347,11 +348,18 @@ class Site:
         steps_raw = ph.handheld_steps(walk)
         probabilities = {}
         if floor == "auto":
-            tracker_all, numbers, database = self._all_floors()
+            tracker_all, numbers, database, rates = self._all_floors()
             # Steps rotated with the first floor's calibration for identification; then the floor's own.
+            # The same code as ``fusion evaluate``'s floor identification (site_model.identify_floor).
             first = self.floor_models(self.floors[0])
+            weight = self.settings.identification_ap_weight
+            ap = site_model.walk_ap_log_likelihood(walk, database, rates, self.settings) if weight > 0 else None
             ident = site_model.identify_floor(tracker_all, numbers, site_model.tracker_steps(
+<<<<<<< HEAD
                 steps_raw, first.calibration, self.settings), wifi_fixes.fixes_for_walk(walk, database))
+=======
+                steps_raw, first.calibration, self.settings), wfx.fixes_for_walk(walk, database), ap, weight)
+>>>>>>> floorid
             by_number = {n: name for name, (n, _) in self._floors.items()}
             floor = by_number[ident["floor"]]
             probabilities = {by_number[n]: p for n, p in ident["probabilities"].items()}
