@@ -124,10 +124,12 @@ inline void ResampleAt(const std::vector<float>& g, std::vector<float>& out, std
   for (int y = 0; y < ny; ++y) {
     const float* in = g.data() + static_cast<std::size_t>(y) * nx;
     float* o = scratch.data() + static_cast<std::size_t>(y) * nx;
-    for (int x = 0; x < nx; ++x) {
-      const int x2 = std::min(nx - 1, std::max(0, x + dx));
-      o[x] = (1.0f - ax) * in[x] + ax * in[x2];
-    }
+    // Interior cells (x + dx inside the row) in one loop that vectorises; the clamped edge cell apart.
+    const int lo = dx > 0 ? 0 : 1, hi = dx > 0 ? nx - 1 : nx;
+    const float* in2 = in + dx;
+    for (int x = lo; x < hi; ++x) o[x] = (1.0f - ax) * in[x] + ax * in2[x];
+    const int edge = dx > 0 ? nx - 1 : 0;
+    o[edge] = (1.0f - ax) * in[edge] + ax * in[edge];
   }
   for (int y = 0; y < ny; ++y) {
     const int y2 = std::min(ny - 1, std::max(0, y + dy));
@@ -205,6 +207,30 @@ struct Moments {
   double mass = 0, sx = 0, sy = 0, sxx = 0, sxy = 0, syy = 0;
 };
 
+// Adds row y's sums (mass, Σ v x, Σ v x²) to the grid's sums about cell indices.
+inline void AddRowMoments(double r_mass, double r_sx, double r_sxx, int y, Moments* m) {
+  m->mass += r_mass;
+  m->sx += r_sx;
+  m->sy += r_mass * y;
+  m->sxx += r_sxx;
+  m->sxy += r_sx * y;
+  m->syy += r_mass * y * static_cast<double>(y);
+}
+
+// Sums about cell indices -> mean [m] (sx, sy) and covariance [m²] (sxx, sxy, syy) of the cell centres.
+inline Moments MomentsInMetres(const Moments& m, const FloorGrid& fg, double cell) {
+  Moments out;
+  out.mass = m.mass;
+  if (m.mass <= 0) return out;
+  const double mx = m.sx / m.mass, my = m.sy / m.mass;
+  out.sx = fg.x0 + (mx + 0.5) * cell;
+  out.sy = fg.y0 + (my + 0.5) * cell;
+  out.sxx = (m.sxx / m.mass - mx * mx) * cell * cell;
+  out.sxy = (m.sxy / m.mass - mx * my) * cell * cell;
+  out.syy = (m.syy / m.mass - my * my) * cell * cell;
+  return out;
+}
+
 // Sums over a row of v, v x and v x² (v = row, or row * weight when kWeighted), x the cell
 // index, in float lanes (kLanes), totals in double.
 template <bool kWeighted>
@@ -278,27 +304,40 @@ inline Moments GridMoments(const float* g, const float* weight, const FloorGrid&
         }
       }
     }
-    m.mass += r_mass;
-    m.sx += r_sx;
-    m.sy += r_mass * y;
-    m.sxx += r_sxx;
-    m.sxy += r_sx * y;
-    m.syy += r_mass * y * static_cast<double>(y);
+    AddRowMoments(r_mass, r_sx, r_sxx, y, &m);
   }
   // The smoother's product alpha * beta in float can underflow where both are small: when its
   // total is that small, redo the sums in double.
   if (weight && !coarse && !force_double && m.mass < 1e-20) return GridMoments(g, weight, fg, cell, q, coarse, true);
-  // Cell indices -> metres (centres).
-  Moments out;
-  out.mass = m.mass;
-  if (m.mass <= 0) return out;
-  const double mx = m.sx / m.mass, my = m.sy / m.mass;
-  out.sx = fg.x0 + (mx + 0.5) * cell;
-  out.sy = fg.y0 + (my + 0.5) * cell;
-  out.sxx = (m.sxx / m.mass - mx * mx) * cell * cell;
-  out.sxy = (m.sxy / m.mass - mx * my) * cell * cell;
-  out.syy = (m.syy / m.mass - my * my) * cell * cell;
-  return out;  // sx, sy: mean [m]; sxx, sxy, syy: covariance [m²]
+  return MomentsInMetres(m, fg, cell);
+}
+
+// NormaliseAndFlush(g, scale) and then GridMoments(g) (no blocks) in one pass over the rows, each
+// row also copied to `store` when given: the same operations in the same order, so the same bits.
+inline Moments NormaliseMomentsAndStore(std::vector<float>& g, double scale, const FloorGrid& fg, double cell,
+                                        float* store) {
+  Moments m;
+  const bool in_float = scale < 1e30;  // NormaliseAndFlush's two cases
+  const float f = static_cast<float>(scale);
+  for (int y = 0; y < fg.ny; ++y) {
+    float* row = g.data() + static_cast<std::size_t>(y) * fg.nx;
+    if (in_float) {
+      for (int x = 0; x < fg.nx; ++x) {
+        const float v = row[x] * f;
+        row[x] = v < 1e-30f ? 0.0f : v;
+      }
+    } else {
+      for (int x = 0; x < fg.nx; ++x) {
+        const double v = static_cast<double>(row[x]) * scale;
+        row[x] = v < 1e-30 ? 0.0f : static_cast<float>(v);
+      }
+    }
+    double r_mass = 0, r_sx = 0, r_sxx = 0;
+    RowMomentsInFloat<false>(row, nullptr, fg.nx, &r_mass, &r_sx, &r_sxx);
+    AddRowMoments(r_mass, r_sx, r_sxx, y, &m);
+    if (store) std::memcpy(store + static_cast<std::size_t>(y) * fg.nx, row, static_cast<std::size_t>(fg.nx) * sizeof(float));
+  }
+  return MomentsInMetres(m, fg, cell);
 }
 
 // A layer's per-step estimate: mean, covariance, cumulative log evidence.

@@ -183,6 +183,8 @@ class FoldModels:
     database: wfx.FingerprintDatabase
     all_plan: Any = None
     all_database: Optional[wfx.FingerprintDatabase] = None
+    #: ``scipy.spatial.cKDTree`` of the floor's training scan positions (survey coverage), or None.
+    coverage_tree: Any = None
 
 
 def default_site_root() -> Path:
