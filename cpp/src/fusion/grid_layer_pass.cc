@@ -171,7 +171,7 @@ class LayerPass {
 
   // beta_{k-1} from beta_k, rescaled by its maximum.
   void BackwardStep(int k, std::vector<float>* beta) {
-    MultiplyAndSum(*beta, fg_.wall_factor, p_.has_fix(k) ? layer_factor_[k].data() : nullptr, fg_.nx, fg_.ny);
+    Multiply(*beta, fg_.wall_factor, p_.has_fix(k) ? layer_factor_[k].data() : nullptr);
     if (ops_[k].blur_var_cells2 > 1e-6) Blur(*beta, scratch_, fg_.nx, fg_.ny, ops_[k].blur_var_cells2);
     Shift(*beta, fg_.nx, fg_.ny, -ops_[k].shift_x, -ops_[k].shift_y);
     // Rescale by the maximum.

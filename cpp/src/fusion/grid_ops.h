@@ -59,16 +59,19 @@ inline std::vector<float> GaussianKernel(double var_cells2) {
 inline void Blur(std::vector<float>& g, std::vector<float>& scratch, int nx, int ny, double var_cells2) {
   const std::vector<float> k = GaussianKernel(var_cells2);
   const int r = static_cast<int>(k.size() / 2);
-  scratch.assign(g.size(), 0.0f);
-  // Along y: whole rows at a time.
+  scratch.resize(g.size());
+  // Along y: whole rows at a time; the first tap inside the grid sets the row (0 + a is a).
   for (int y = 0; y < ny; ++y) {
     float* out = scratch.data() + static_cast<std::size_t>(y) * nx;
-    for (int j = -r; j <= r; ++j) {
-      const int ys = y + j;
-      if (ys < 0 || ys >= ny) continue;
+    const int j_lo = std::max(-r, -y), j_hi = std::min(r, ny - 1 - y);
+    for (int j = j_lo; j <= j_hi; ++j) {
       const float w = k[j + r];
-      const float* in = g.data() + static_cast<std::size_t>(ys) * nx;
-      for (int x = 0; x < nx; ++x) out[x] += w * in[x];
+      const float* in = g.data() + static_cast<std::size_t>(y + j) * nx;
+      if (j == j_lo) {
+        for (int x = 0; x < nx; ++x) out[x] = w * in[x];
+      } else {
+        for (int x = 0; x < nx; ++x) out[x] += w * in[x];
+      }
     }
   }
   // Along x: tap j adds k_j in(x + j) to every x with x + j inside the row.
@@ -188,6 +191,18 @@ inline double MultiplyAndSum(std::vector<float>& g, const std::vector<float>& wa
     total += LaneTotal(acc);
   }
   return total;
+}
+
+// g *= wall (and *= fix when given), the products of MultiplyAndSum without its sum.
+inline void Multiply(std::vector<float>& g, const std::vector<float>& wall, const float* fix) {
+  const std::size_t n = g.size();
+  float* d = g.data();
+  const float* w = wall.data();
+  if (fix) {
+    for (std::size_t i = 0; i < n; ++i) d[i] *= w[i] * fix[i];
+  } else {
+    for (std::size_t i = 0; i < n; ++i) d[i] *= w[i];
+  }
 }
 
 // The largest entry of g (0 for an empty or all-zero grid), in lanes (the maximum is exact).

@@ -11,7 +11,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from indoorloc import fusion, wifi_crowdsource as wc, wifi_fixes as wfx
+from indoorloc import fusion, wifi, wifi_crowdsource as wc, wifi_fixes as wfx
 from indoorloc.fusion import site_model
 from indoorloc.pdr import handheld as ph
 from indoorloc.io import ilc_floor_names, load_floor_plan, read_ilc_floor
@@ -71,7 +71,9 @@ def _fold_models(floors: Sequence[FloorData], fold_of: Dict[str, List[np.ndarray
         cal = site_model.calibrate_floor(train, train_steps)
         crowd = wc.build_crowd_map(train, wc.CrowdMapSettings(), fl.number) if with_crowd_map else None
         database = site_model.build_fingerprints(train, train_steps, fl.number, settings.fixes)
-        out[fl.name] = FoldModels(fl, cal, crowd, database, coverage_tree=_coverage_tree(database, fl.number))
+        crowd_grid = wifi.GridPosterior(crowd.model, settings.grid_spacing_m) if crowd is not None else None
+        out[fl.name] = FoldModels(fl, cal, crowd, database, coverage_tree=_coverage_tree(database, fl.number),
+                                  crowd_grid=crowd_grid)
         all_walks += train
         all_steps += train_steps
         all_numbers += [fl.number] * len(train)

@@ -185,6 +185,8 @@ class FoldModels:
     all_database: Optional[wfx.FingerprintDatabase] = None
     #: ``scipy.spatial.cKDTree`` of the floor's training scan positions (survey coverage), or None.
     coverage_tree: Any = None
+    #: ``wifi.GridPosterior`` of ``crowd`` (the wifi_model method), built once per fold, or None.
+    crowd_grid: Any = None
 
 
 def default_site_root() -> Path:

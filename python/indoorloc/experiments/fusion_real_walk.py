@@ -91,7 +91,8 @@ def _score_walk(walk, steps_raw: ph.HandheldSteps, models: FoldModels, settings:
         scan_t, rss_fresh, _ = wc.scan_matrix(walk, models.crowd.bssids, dedup=False, max_age_s=settings.wifi_max_age_s)
         if scan_t.size:
             q = wc.prepare(_nearest_rows(wt, scan_t, rss_fresh), models.crowd.settings.not_heard_dbm)
-            grid = wifi.GridPosterior(models.crowd.model, settings.grid_spacing_m)
+            grid = (models.crowd_grid if models.crowd_grid is not None
+                    else wifi.GridPosterior(models.crowd.model, settings.grid_spacing_m))
             put("wifi_model", np.asarray(grid.locate(q)["positions_m"]))
     # PDR: calibrated steps, headings rotated into the floor frame by the training yaw offset.
     cal = models.cal
