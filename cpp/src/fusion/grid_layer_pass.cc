@@ -156,9 +156,8 @@ class LayerPass {
     MultiplyAndSum(*beta, fg_.wall_factor, p_.has_fix(k) ? layer_factor_[k].data() : nullptr, fg_.nx, fg_.ny);
     if (ops_[k].blur_var_cells2 > 1e-6) Blur(*beta, scratch_, fg_.nx, fg_.ny, ops_[k].blur_var_cells2);
     Shift(*beta, fg_.nx, fg_.ny, -ops_[k].shift_x, -ops_[k].shift_y);
-    // Rescale by the maximum (a branch-free loop that vectorises).
-    float mx = 0.0f;
-    for (const float v : *beta) mx = v > mx ? v : mx;
+    // Rescale by the maximum.
+    const float mx = MaxOf(*beta);
     if (mx > 0) NormaliseAndFlush(*beta, 1.0 / static_cast<double>(mx));
   }
 

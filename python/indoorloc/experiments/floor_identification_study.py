@@ -32,7 +32,7 @@ from typing import Any, Dict, List, Optional, Sequence
 
 import numpy as np
 
-from indoorloc import wifi_fixes as wfx
+from indoorloc.fusion import wifi_fixes as wfx
 from indoorloc.fusion import floor_evidence, site_model
 from indoorloc.experiments import fusion_real as fr
 

@@ -14,7 +14,7 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from indoorloc import wifi_fixes as wfx
+from indoorloc.fusion import wifi_fixes as wfx
 from indoorloc.experiments import fusion_real as fr
 from indoorloc.experiments.wifi_matcher_study import OLD
 

@@ -4,7 +4,7 @@ A floor's model is built from survey walks with waypoints (docs/your_building.md
 
 - the handheld-PDR calibration (Weinberg K, the yaw offset between the phone's rotation-vector
   heading and the floor frame, its spread over walks: :func:`indoorloc.pdr.handheld.calibrate_handheld`);
-- the WiFi fingerprint database (:func:`indoorloc.wifi_fixes.build_database`);
+- the WiFi fingerprint database (:func:`indoorloc.fusion.wifi_fixes.build_database`);
 - the walkable plan (:func:`indoorloc.io.load_floor_plan`, origin at the outline's south-west corner).
 
 A walk is then tracked by the default tracker of docs/fusion_real.md: the grid tracker from an
@@ -23,8 +23,8 @@ from typing import Any, Dict, List, Optional, Sequence
 import numpy as np
 
 from indoorloc.pdr import handheld as ph
-from indoorloc import wifi_fixes as wfx
-from indoorloc.fusion import Steps, floor_evidence
+from indoorloc.fusion import wifi_fixes, floor_evidence
+from indoorloc.fusion.steps import Steps
 from indoorloc.fusion.grid import GridTracker, GridTrackerOptions, track_grid
 
 
@@ -39,7 +39,7 @@ class TrackSettings:
     step_length_sd_fraction: float = 0.15
     step_heading_sd_rad: float = math.radians(10.0)
     #: The fingerprint fixes (``wifi_fixes.FixSettings``; leave-one-floor-out defaults).
-    fixes: wfx.FixSettings = field(default_factory=wfx.FixSettings)
+    fixes: wifi_fixes.FixSettings = field(default_factory=wifi_fixes.FixSettings)
     #: The grid tracker's options (``fusion.GridTrackerOptions``, defaults read from C++).
     grid_options: Any = field(default_factory=GridTrackerOptions)
     #: "mean" or "median" (spatial median) of the posterior as the point estimate.
@@ -97,7 +97,7 @@ class TrackSettings:
     def from_dict(cls, d: Dict[str, Any]) -> "TrackSettings":
         """Inverse of :meth:`to_dict`; unknown keys raise ValueError naming them."""
         d = dict(d)
-        fixes = wfx.FixSettings(**d.pop("fixes", {}))
+        fixes = wifi_fixes.FixSettings(**d.pop("fixes", {}))
         g = {k: (-math.inf if k == "wall_log_penalty" and v is None else v) for k, v in d.pop("grid_options", {}).items()}
         known = {f for f in cls.__dataclass_fields__}
         unknown = sorted(set(d) - known)
@@ -113,10 +113,10 @@ def calibrate_floor(walks: Sequence[Any], steps: Sequence[ph.HandheldSteps]) -> 
 
 
 def build_fingerprints(walks: Sequence[Any], steps: Sequence[ph.HandheldSteps], floor_number: int,
-                       settings: wfx.FixSettings) -> wfx.FingerprintDatabase:
+                       settings: wifi_fixes.FixSettings) -> wifi_fixes.FingerprintDatabase:
     """The floor's fingerprint database from its survey walks, each fingerprint placed by PDR
     between the waypoints (``wifi_fixes.build_database``)."""
-    return wfx.build_database(walks, settings, steps, floors=[floor_number] * len(walks))
+    return wifi_fixes.build_database(walks, settings, steps, floors=[floor_number] * len(walks))
 
 
 def tracker_steps(steps_raw: ph.HandheldSteps, cal: ph.HandheldCalibration, settings: TrackSettings) -> Steps:
@@ -158,7 +158,7 @@ def run_default(tracker: GridTracker, steps: Steps, fixes, smooth: bool = True) 
     return dict(track_grid(tracker, steps, fixes=fixes, start=None, smooth=smooth))
 
 
-def ap_floor_rates(database: wfx.FingerprintDatabase, floors: Sequence[int], settings: TrackSettings
+def ap_floor_rates(database: wifi_fixes.FingerprintDatabase, floors: Sequence[int], settings: TrackSettings
                    ) -> floor_evidence.ApFloorRates:
     """The per-floor AP detection rates of an all-floor fingerprint database (rows in the order of
     ``floors``, the identification tracker's), for :func:`identify_floor`."""
@@ -166,11 +166,11 @@ def ap_floor_rates(database: wfx.FingerprintDatabase, floors: Sequence[int], set
                                                        settings.identification_ap_rate_floor)
 
 
-def walk_ap_log_likelihood(walk: Any, database: wfx.FingerprintDatabase, rates: floor_evidence.ApFloorRates,
+def walk_ap_log_likelihood(walk: Any, database: wifi_fixes.FingerprintDatabase, rates: floor_evidence.ApFloorRates,
                            settings: TrackSettings) -> np.ndarray:
     """The walk's AP evidence per floor (F,) [nats] (``floor_evidence.walk_floor_log_likelihood``
     on the walk's query fingerprints in the database's columns)."""
-    _, queries = wfx.walk_queries(walk, database)
+    _, queries = wifi_fixes.walk_queries(walk, database)
     return floor_evidence.walk_floor_log_likelihood(rates, queries, settings.identification_ap_count,
                                                     settings.identification_ap_outlier_probability)
 
