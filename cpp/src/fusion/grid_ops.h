@@ -59,16 +59,19 @@ inline std::vector<float> GaussianKernel(double var_cells2) {
 inline void Blur(std::vector<float>& g, std::vector<float>& scratch, int nx, int ny, double var_cells2) {
   const std::vector<float> k = GaussianKernel(var_cells2);
   const int r = static_cast<int>(k.size() / 2);
-  scratch.assign(g.size(), 0.0f);
-  // Along y: whole rows at a time.
+  scratch.resize(g.size());
+  // Along y: whole rows at a time; the first tap inside the grid sets the row (0 + a is a).
   for (int y = 0; y < ny; ++y) {
     float* out = scratch.data() + static_cast<std::size_t>(y) * nx;
-    for (int j = -r; j <= r; ++j) {
-      const int ys = y + j;
-      if (ys < 0 || ys >= ny) continue;
+    const int j_lo = std::max(-r, -y), j_hi = std::min(r, ny - 1 - y);
+    for (int j = j_lo; j <= j_hi; ++j) {
       const float w = k[j + r];
-      const float* in = g.data() + static_cast<std::size_t>(ys) * nx;
-      for (int x = 0; x < nx; ++x) out[x] += w * in[x];
+      const float* in = g.data() + static_cast<std::size_t>(y + j) * nx;
+      if (j == j_lo) {
+        for (int x = 0; x < nx; ++x) out[x] = w * in[x];
+      } else {
+        for (int x = 0; x < nx; ++x) out[x] += w * in[x];
+      }
     }
   }
   // Along x: tap j adds k_j in(x + j) to every x with x + j inside the row.
@@ -124,10 +127,12 @@ inline void ResampleAt(const std::vector<float>& g, std::vector<float>& out, std
   for (int y = 0; y < ny; ++y) {
     const float* in = g.data() + static_cast<std::size_t>(y) * nx;
     float* o = scratch.data() + static_cast<std::size_t>(y) * nx;
-    for (int x = 0; x < nx; ++x) {
-      const int x2 = std::min(nx - 1, std::max(0, x + dx));
-      o[x] = (1.0f - ax) * in[x] + ax * in[x2];
-    }
+    // Interior cells (x + dx inside the row) in one loop that vectorises; the clamped edge cell apart.
+    const int lo = dx > 0 ? 0 : 1, hi = dx > 0 ? nx - 1 : nx;
+    const float* in2 = in + dx;
+    for (int x = lo; x < hi; ++x) o[x] = (1.0f - ax) * in[x] + ax * in2[x];
+    const int edge = dx > 0 ? nx - 1 : 0;
+    o[edge] = (1.0f - ax) * in[edge] + ax * in[edge];
   }
   for (int y = 0; y < ny; ++y) {
     const int y2 = std::min(ny - 1, std::max(0, y + dy));
@@ -188,6 +193,18 @@ inline double MultiplyAndSum(std::vector<float>& g, const std::vector<float>& wa
   return total;
 }
 
+// g *= wall (and *= fix when given), the products of MultiplyAndSum without its sum.
+inline void Multiply(std::vector<float>& g, const std::vector<float>& wall, const float* fix) {
+  const std::size_t n = g.size();
+  float* d = g.data();
+  const float* w = wall.data();
+  if (fix) {
+    for (std::size_t i = 0; i < n; ++i) d[i] *= w[i] * fix[i];
+  } else {
+    for (std::size_t i = 0; i < n; ++i) d[i] *= w[i];
+  }
+}
+
 // The largest entry of g (0 for an empty or all-zero grid), in lanes (the maximum is exact).
 inline float MaxOf(const std::vector<float>& g) {
   Lanes m = LanesOf(0.0f);
@@ -204,6 +221,30 @@ inline float MaxOf(const std::vector<float>& g) {
 struct Moments {
   double mass = 0, sx = 0, sy = 0, sxx = 0, sxy = 0, syy = 0;
 };
+
+// Adds row y's sums (mass, Σ v x, Σ v x²) to the grid's sums about cell indices.
+inline void AddRowMoments(double r_mass, double r_sx, double r_sxx, int y, Moments* m) {
+  m->mass += r_mass;
+  m->sx += r_sx;
+  m->sy += r_mass * y;
+  m->sxx += r_sxx;
+  m->sxy += r_sx * y;
+  m->syy += r_mass * y * static_cast<double>(y);
+}
+
+// Sums about cell indices -> mean [m] (sx, sy) and covariance [m²] (sxx, sxy, syy) of the cell centres.
+inline Moments MomentsInMetres(const Moments& m, const FloorGrid& fg, double cell) {
+  Moments out;
+  out.mass = m.mass;
+  if (m.mass <= 0) return out;
+  const double mx = m.sx / m.mass, my = m.sy / m.mass;
+  out.sx = fg.x0 + (mx + 0.5) * cell;
+  out.sy = fg.y0 + (my + 0.5) * cell;
+  out.sxx = (m.sxx / m.mass - mx * mx) * cell * cell;
+  out.sxy = (m.sxy / m.mass - mx * my) * cell * cell;
+  out.syy = (m.syy / m.mass - my * my) * cell * cell;
+  return out;
+}
 
 // Sums over a row of v, v x and v x² (v = row, or row * weight when kWeighted), x the cell
 // index, in float lanes (kLanes), totals in double.
@@ -278,27 +319,40 @@ inline Moments GridMoments(const float* g, const float* weight, const FloorGrid&
         }
       }
     }
-    m.mass += r_mass;
-    m.sx += r_sx;
-    m.sy += r_mass * y;
-    m.sxx += r_sxx;
-    m.sxy += r_sx * y;
-    m.syy += r_mass * y * static_cast<double>(y);
+    AddRowMoments(r_mass, r_sx, r_sxx, y, &m);
   }
   // The smoother's product alpha * beta in float can underflow where both are small: when its
   // total is that small, redo the sums in double.
   if (weight && !coarse && !force_double && m.mass < 1e-20) return GridMoments(g, weight, fg, cell, q, coarse, true);
-  // Cell indices -> metres (centres).
-  Moments out;
-  out.mass = m.mass;
-  if (m.mass <= 0) return out;
-  const double mx = m.sx / m.mass, my = m.sy / m.mass;
-  out.sx = fg.x0 + (mx + 0.5) * cell;
-  out.sy = fg.y0 + (my + 0.5) * cell;
-  out.sxx = (m.sxx / m.mass - mx * mx) * cell * cell;
-  out.sxy = (m.sxy / m.mass - mx * my) * cell * cell;
-  out.syy = (m.syy / m.mass - my * my) * cell * cell;
-  return out;  // sx, sy: mean [m]; sxx, sxy, syy: covariance [m²]
+  return MomentsInMetres(m, fg, cell);
+}
+
+// NormaliseAndFlush(g, scale) and then GridMoments(g) (no blocks) in one pass over the rows, each
+// row also copied to `store` when given: the same operations in the same order, so the same bits.
+inline Moments NormaliseMomentsAndStore(std::vector<float>& g, double scale, const FloorGrid& fg, double cell,
+                                        float* store) {
+  Moments m;
+  const bool in_float = scale < 1e30;  // NormaliseAndFlush's two cases
+  const float f = static_cast<float>(scale);
+  for (int y = 0; y < fg.ny; ++y) {
+    float* row = g.data() + static_cast<std::size_t>(y) * fg.nx;
+    if (in_float) {
+      for (int x = 0; x < fg.nx; ++x) {
+        const float v = row[x] * f;
+        row[x] = v < 1e-30f ? 0.0f : v;
+      }
+    } else {
+      for (int x = 0; x < fg.nx; ++x) {
+        const double v = static_cast<double>(row[x]) * scale;
+        row[x] = v < 1e-30 ? 0.0f : static_cast<float>(v);
+      }
+    }
+    double r_mass = 0, r_sx = 0, r_sxx = 0;
+    RowMomentsInFloat<false>(row, nullptr, fg.nx, &r_mass, &r_sx, &r_sxx);
+    AddRowMoments(r_mass, r_sx, r_sxx, y, &m);
+    if (store) std::memcpy(store + static_cast<std::size_t>(y) * fg.nx, row, static_cast<std::size_t>(fg.nx) * sizeof(float));
+  }
+  return MomentsInMetres(m, fg, cell);
 }
 
 // A layer's per-step estimate: mean, covariance, cumulative log evidence.

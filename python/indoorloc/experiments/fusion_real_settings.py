@@ -199,6 +199,10 @@ class FoldModels:
     all_plan: Any = None
     all_database: Optional[wfx.FingerprintDatabase] = None
     all_ap_rates: Any = None  #: per-floor AP detection rates of all_database (fusion.floor_evidence)
+    #: ``scipy.spatial.cKDTree`` of the floor's training scan positions (survey coverage), or None.
+    coverage_tree: Any = None
+    #: ``wifi.GridPosterior`` of ``crowd`` (the wifi_model method), built once per fold, or None.
+    crowd_grid: Any = None
 
 
 def default_site_root() -> Path:

@@ -46,6 +46,23 @@ def _walkable_start(plan, xy: np.ndarray, floor_index: int = 0) -> np.ndarray:
     return np.asarray(xy, float)
 
 
+def survey_coverage_m(waypoints_xy_m: np.ndarray, train_xy_m: np.ndarray, tree=None) -> np.ndarray:
+    """Distance [m] from each waypoint (W, 2) to the nearest training scan position (N, 2), N > 0.
+
+    With ``tree`` (a ``scipy.spatial.cKDTree`` of ``train_xy_m``, built once per fold) only the
+    scans within the tree's nearest distance (plus a rounding margin) are measured, by the same
+    formula as the brute-force minimum over all N, so the values equal it bit for bit."""
+    wxy = np.asarray(waypoints_xy_m, float)
+    if tree is None:
+        return np.sqrt(((wxy[:, None, :] - train_xy_m[None, :, :]) ** 2).sum(axis=2)).min(axis=1)
+    d_tree, _ = tree.query(wxy, k=1)
+    out = np.empty(wxy.shape[0])
+    for i, near in enumerate(tree.query_ball_point(wxy, d_tree * (1.0 + 1e-9) + 1e-9)):
+        cand = train_xy_m[np.asarray(near, dtype=np.intp)]
+        out[i] = np.sqrt(((wxy[i][None, None, :] - cand[None, :, :]) ** 2).sum(axis=2)).min()
+    return out
+
+
 def replace_options(options: fusion.TrackerOptions, **changes) -> fusion.TrackerOptions:
     """A copy of TrackerOptions with some fields changed (its bound ``replace``, which validates)."""
     return options.replace(**changes)
@@ -59,7 +76,7 @@ def _score_walk(walk, steps_raw: ph.HandheldSteps, models: FoldModels, settings:
     score = WalkScore(fl.name, walk.walk_id, wt - wt[0], waypoint_t0=float(wt[0]), waypoint_xy_m=wxy)
     train_xy = models.database.positions_m[models.database.floors == fl.number]
     if train_xy.size:
-        score.coverage_m = np.sqrt(((wxy[:, None, :] - train_xy[None, :, :]) ** 2).sum(axis=2)).min(axis=1)
+        score.coverage_m = survey_coverage_m(wxy, train_xy, models.coverage_tree)
     err = score.errors_m
     want = set(methods)
 
@@ -75,7 +92,8 @@ def _score_walk(walk, steps_raw: ph.HandheldSteps, models: FoldModels, settings:
         scan_t, rss_fresh, _ = wc.scan_matrix(walk, models.crowd.bssids, dedup=False, max_age_s=settings.wifi_max_age_s)
         if scan_t.size:
             q = wc.prepare(_nearest_rows(wt, scan_t, rss_fresh), models.crowd.settings.not_heard_dbm)
-            grid = wifi.GridPosterior(models.crowd.model, settings.grid_spacing_m)
+            grid = (models.crowd_grid if models.crowd_grid is not None
+                    else wifi.GridPosterior(models.crowd.model, settings.grid_spacing_m))
             put("wifi_model", np.asarray(grid.locate(q)["positions_m"]))
     # PDR: calibrated steps, headings rotated into the floor frame by the training yaw offset.
     cal = models.cal

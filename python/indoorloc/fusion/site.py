@@ -355,11 +355,7 @@ class Site:
             weight = self.settings.identification_ap_weight
             ap = site_model.walk_ap_log_likelihood(walk, database, rates, self.settings) if weight > 0 else None
             ident = site_model.identify_floor(tracker_all, numbers, site_model.tracker_steps(
-<<<<<<< HEAD
-                steps_raw, first.calibration, self.settings), wifi_fixes.fixes_for_walk(walk, database))
-=======
-                steps_raw, first.calibration, self.settings), wfx.fixes_for_walk(walk, database), ap, weight)
->>>>>>> floorid
+                steps_raw, first.calibration, self.settings), wifi_fixes.fixes_for_walk(walk, database), ap, weight)
             by_number = {n: name for name, (n, _) in self._floors.items()}
             floor = by_number[ident["floor"]]
             probabilities = {by_number[n]: p for n, p in ident["probabilities"].items()}
