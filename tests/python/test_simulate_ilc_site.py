@@ -4,7 +4,6 @@ evaluate`` run on them end to end and recover what the generator put in."""
 
 import json
 import math
-import time
 
 import numpy as np
 import pytest
@@ -93,10 +92,10 @@ def test_walk_files_look_like_the_competition_data(site):
     assert 30 <= floor.bssid_vocabulary().size <= 60
 
 
-def test_deterministic_small_and_fast(tmp_path):
-    tic = time.perf_counter()
+def test_deterministic_and_small(tmp_path):
+    # No timing threshold here (house rule: timings live in benchmarks/, a loaded machine made
+    # this flaky); the size bound keeps the fixture cheap.
     a = write_ilc_site(tmp_path / "a", seed=5)
-    seconds = time.perf_counter() - tic
     b = write_ilc_site(tmp_path / "b", seed=5)
     c = write_ilc_site(tmp_path / "c", seed=6, walks_per_floor=2)
     files_a = sorted(p.relative_to(a) for p in a.rglob("*") if p.is_file())
@@ -106,7 +105,6 @@ def test_deterministic_small_and_fast(tmp_path):
         assert (a / rel).read_bytes() == (b / rel).read_bytes()
     assert sorted(p.name for p in (c / "F1" / "path_data_files").iterdir()) != \
         sorted(p.name for p in (a / "F1" / "path_data_files").iterdir())
-    assert seconds < 2.0
     assert sum((a / rel).stat().st_size for rel in files_a) < 8e6
 
 
