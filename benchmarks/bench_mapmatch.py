@@ -294,10 +294,11 @@ def markdown(result: dict) -> str:
     if result["notes"]:
         lines += [""] + [f"- {note}" for note in result["notes"]]
     lines += ["", (
-        "Against the machine (docs/performance.md): about 29 flops, 14 integer operations (the random lanes) and"
-        " 100 bytes of L2-resident arrays per particle-step, plus about 9 scalar table loads; one-core limits about"
-        " 0.7 ns (AVX2 flops), 1.4 ns (loads: 3 per cycle). Bound now by the table loads and their shuffles into"
-        " vectors (segment geometry, von Mises factor, lengths) and the junction path (the few percent of particles"
-        " reaching a segment end each step, about 40 cycles each)."
+        "Against the machine (docs/performance.md): per particle-step about 29 flops, 14 integer operations (the"
+        " random lanes), 100 bytes of L2-resident arrays, about 8 loads (3 from the segment tables: length,"
+        " von Mises factor, one 32-byte geometry row) and 3-4 shuffles to put table entries in vectors;"
+        " one-core limits about 0.7 ns (AVX2 flops) and 1 ns (3 loads per cycle at 2.6 GHz). Bound now by those"
+        " loads and shuffles and by the junction path (the few percent of particles reaching a segment end each"
+        " step, handled one by one, about 12 % of the time)."
     )]
     return "\n".join(lines)
