@@ -82,28 +82,43 @@ class LayerPass {
     if (has_fix && record) ResampleAt(fix->factor, layer_factor_[k], scratch_, fg_.nx, fg_.ny, op.rx / c_, op.ry / c_);
     const double s = MultiplyAndSum(alpha_, fg_.wall_factor, has_fix ? layer_factor_[k].data() : nullptr, fg_.nx, fg_.ny);
     if (!(s > 0)) return false;
-    NormaliseAndFlush(alpha_, 1.0 / s);
+    if (record && !o_.spatial_median) {
+      // The filtered estimate (and the smoother's copy) in the normalising pass.
+      float* store = p_.store_all ? store_->data() + static_cast<std::size_t>(k - p_.k0) * n_ : nullptr;
+      filtered_moments_ = NormaliseMomentsAndStore(alpha_, 1.0 / s, fg_, c_, store);
+    } else {
+      NormaliseAndFlush(alpha_, 1.0 / s);
+      if (record) filtered_moments_ = GridMoments(alpha_.data(), nullptr, fg_, c_, p_.q, BlockSums());
+    }
     if (record) log_z_ += std::log(s) + (has_fix ? fix->log_scale : 0.0);
     return true;
   }
 
-  // The layer's estimate at step k from grid g (times `weight`, the smoother's beta, if given);
-  // with spatial medians also the step's block summaries.
-  LayerStep Estimate(const float* g, const std::vector<float>* weight, int k) {
-    std::vector<float>* blocks = nullptr;
-    if (o_.spatial_median) blocks = weight ? &out_->smoothed_blocks : &out_->filtered_blocks;
-    if (blocks) std::fill(block_sums_.begin(), block_sums_.end(), 0.0);
-    const Moments mo = GridMoments(g, weight ? weight->data() : nullptr, fg_, c_, p_.q, blocks ? block_sums_.data() : nullptr);
-    if (blocks && mo.mass > 0) {
-      float* out = blocks->data() + static_cast<std::size_t>(k) * nb_ * 3;
-      for (std::size_t b = 0; b < nb_; ++b) {
-        const double m = block_sums_[3 * b];
-        if (!(m > 0)) continue;
-        out[3 * b] = static_cast<float>(m / mo.mass);
-        out[3 * b + 1] = static_cast<float>(fg_.x0 + (block_sums_[3 * b + 1] / m + 0.5) * c_ + ops_[k].rx);
-        out[3 * b + 2] = static_cast<float>(fg_.y0 + (block_sums_[3 * b + 2] / m + 0.5) * c_ + ops_[k].ry);
-      }
+  // The block sums, zeroed, when spatial medians are asked, else null.
+  double* BlockSums() {
+    if (!o_.spatial_median) return nullptr;
+    std::fill(block_sums_.begin(), block_sums_.end(), 0.0);
+    return block_sums_.data();
+  }
+
+  // Stores the step's block summaries (spatial medians) from block_sums_ and the moments' mass.
+  void StoreBlocks(std::vector<float>* blocks, double mass, int k) {
+    if (!(mass > 0)) return;
+    float* out = blocks->data() + static_cast<std::size_t>(k) * nb_ * 3;
+    for (std::size_t b = 0; b < nb_; ++b) {
+      const double m = block_sums_[3 * b];
+      if (!(m > 0)) continue;
+      out[3 * b] = static_cast<float>(m / mass);
+      out[3 * b + 1] = static_cast<float>(fg_.x0 + (block_sums_[3 * b + 1] / m + 0.5) * c_ + ops_[k].rx);
+      out[3 * b + 2] = static_cast<float>(fg_.y0 + (block_sums_[3 * b + 2] / m + 0.5) * c_ + ops_[k].ry);
     }
+  }
+
+  // The smoother's estimate at step k from alpha ⊙ beta; with spatial medians also the step's
+  // block summaries.
+  LayerStep SmoothedEstimate(const float* alpha, const std::vector<float>& beta, int k) {
+    const Moments mo = GridMoments(alpha, beta.data(), fg_, c_, p_.q, BlockSums());
+    if (o_.spatial_median) StoreBlocks(&out_->smoothed_blocks, mo.mass, k);
     // Positions of the layer are cell centres + the remainder; within-cell spread c²/12.
     return FilteredLayerEstimate(mo, ops_[k], c_);
   }
@@ -116,11 +131,14 @@ class LayerPass {
     for (int k = k0; k < p_.m_steps; ++k) {
       if (p_.smooth && !p_.store_all && (k - k0) % p_.segment == 0) checkpoints_.push_back(alpha_);
       if (!Forward(k, true)) return false;
-      out_->filtered[k] = Estimate(alpha_.data(), nullptr, k);
-      out_->filtered[k].log_evidence = log_z_;
-      if (p_.store_all) {
-        std::copy(alpha_.begin(), alpha_.end(), store_->begin() + static_cast<std::ptrdiff_t>((k - k0) * n_));
+      if (o_.spatial_median) {
+        StoreBlocks(&out_->filtered_blocks, filtered_moments_.mass, k);
+        if (p_.store_all) {
+          std::copy(alpha_.begin(), alpha_.end(), store_->begin() + static_cast<std::ptrdiff_t>((k - k0) * n_));
+        }
       }
+      out_->filtered[k] = FilteredLayerEstimate(filtered_moments_, ops_[k], c_);
+      out_->filtered[k].log_evidence = log_z_;
     }
     if (p_.store_all) checkpoints_.emplace_back();  // one segment, nothing to recompute
     return true;
@@ -145,7 +163,7 @@ class LayerPass {
       }
       for (int k = k_end - 1; k >= k_begin; --k) {
         const float* a = p_.store_all ? store_->data() + static_cast<std::size_t>(k - k0) * n_ : seg_alpha[k - k_begin].data();
-        out_->smoothed[k] = Estimate(a, &beta, k);
+        out_->smoothed[k] = SmoothedEstimate(a, beta, k);
         BackwardStep(k, &beta);
       }
     }
@@ -153,12 +171,11 @@ class LayerPass {
 
   // beta_{k-1} from beta_k, rescaled by its maximum.
   void BackwardStep(int k, std::vector<float>* beta) {
-    MultiplyAndSum(*beta, fg_.wall_factor, p_.has_fix(k) ? layer_factor_[k].data() : nullptr, fg_.nx, fg_.ny);
+    Multiply(*beta, fg_.wall_factor, p_.has_fix(k) ? layer_factor_[k].data() : nullptr);
     if (ops_[k].blur_var_cells2 > 1e-6) Blur(*beta, scratch_, fg_.nx, fg_.ny, ops_[k].blur_var_cells2);
     Shift(*beta, fg_.nx, fg_.ny, -ops_[k].shift_x, -ops_[k].shift_y);
-    // Rescale by the maximum (a branch-free loop that vectorises).
-    float mx = 0.0f;
-    for (const float v : *beta) mx = v > mx ? v : mx;
+    // Rescale by the maximum.
+    const float mx = MaxOf(*beta);
     if (mx > 0) NormaliseAndFlush(*beta, 1.0 / static_cast<double>(mx));
   }
 
@@ -177,6 +194,7 @@ class LayerPass {
   std::vector<StepOps> ops_;
   std::vector<std::vector<float>> layer_factor_;    // fix factors at the layer's positions, per step
   std::vector<double> block_sums_;
+  Moments filtered_moments_;                        // of the latest recorded forward step
   std::vector<std::vector<float>> checkpoints_;     // alpha before steps k0, k0 + segment, ...
 };
 

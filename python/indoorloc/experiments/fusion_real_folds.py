@@ -11,7 +11,8 @@ from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from indoorloc import fusion, wifi_crowdsource as wc, wifi_fixes as wfx
+from indoorloc import fusion, wifi
+from indoorloc.fusion import crowdsourced_map as wc, wifi_fixes as wfx
 from indoorloc.fusion import site_model
 from indoorloc.pdr import handheld as ph
 from indoorloc.io import ilc_floor_names, load_floor_plan, read_ilc_floor
@@ -48,6 +49,14 @@ def load_floor(root: Path, name: str) -> FloorData:
                      outline, report)
 
 
+def _coverage_tree(database: wfx.FingerprintDatabase, floor: int):
+    """A KD-tree of the floor's training scan positions (``survey_coverage_m``), None when empty."""
+    from scipy.spatial import cKDTree
+
+    xy = database.positions_m[database.floors == floor]
+    return cKDTree(xy) if xy.size else None
+
+
 def _fold_models(floors: Sequence[FloorData], fold_of: Dict[str, List[np.ndarray]], j: int,
                  settings: RealSettings, all_plan, with_crowd_map: bool = True) -> Dict[str, FoldModels]:
     """Fold j's training models of every floor (and the all-floor database when identifying
@@ -63,14 +72,17 @@ def _fold_models(floors: Sequence[FloorData], fold_of: Dict[str, List[np.ndarray
         cal = site_model.calibrate_floor(train, train_steps)
         crowd = wc.build_crowd_map(train, wc.CrowdMapSettings(), fl.number) if with_crowd_map else None
         database = site_model.build_fingerprints(train, train_steps, fl.number, settings.fixes)
-        out[fl.name] = FoldModels(fl, cal, crowd, database)
+        crowd_grid = wifi.GridPosterior(crowd.model, settings.grid_spacing_m) if crowd is not None else None
+        out[fl.name] = FoldModels(fl, cal, crowd, database, coverage_tree=_coverage_tree(database, fl.number),
+                                  crowd_grid=crowd_grid)
         all_walks += train
         all_steps += train_steps
         all_numbers += [fl.number] * len(train)
     if all_plan is not None:
         all_database = wfx.build_database(all_walks, settings.fixes, all_steps, floors=all_numbers)
+        all_rates = site_model.ap_floor_rates(all_database, list(all_plan.floors), settings.track_settings())
         for m in out.values():
-            m.all_plan, m.all_database = all_plan, all_database
+            m.all_plan, m.all_database, m.all_ap_rates = all_plan, all_database, all_rates
     return out
 
 
@@ -87,26 +99,36 @@ def evaluate_floors(floors: Sequence[FloorData], settings: RealSettings, peer=No
     fold_of = {fl.name: (_folds(len(fl.walks), n_folds, settings.seed) + [np.zeros(0, int)] * n_folds)[:n_folds]
                for fl in floors}
     scores: List[WalkScore] = []
-    for j in range(n_folds) if only_folds is None else only_folds:
-        jobs_idx = [(fl, i) for fl in floors for i in fold_of[fl.name][j]]
-        if not jobs_idx:
-            continue
-        # --select passes one cache for all its grid points (the models do not depend on the
-        # tracker's settings); it lives as long as that call, keyed by fold, fixes and map use.
-        key = (j, repr(settings.fixes), all_plan is None, "wifi_model" in methods)
-        models = None if models_cache is None else models_cache.get(key)
-        if models is None:
-            models = _fold_models(floors, fold_of, j, settings, all_plan, "wifi_model" in methods)
-            if models_cache is not None:
-                models_cache[key] = models
-        jobs = [(fl.walks[i], fl.steps[i], models[fl.name]) for fl, i in jobs_idx]
-        with ThreadPoolExecutor(max_workers=max(1, settings.threads)) as pool:
-            futures = [pool.submit(_score_walk, w, s, m, settings, peer, methods) for w, s, m in jobs]
-            for f in futures:
-                scores.append(f.result())
-                if progress:
-                    progress()
+    # Fold j's training models are built in this thread while fold j - 1's walks are scored by the
+    # pool (the models do not depend on the scheduling: the results are those of a serial run).
+    with ThreadPoolExecutor(max_workers=max(1, settings.threads)) as pool:
+        running: List = []
+        for j in range(n_folds) if only_folds is None else only_folds:
+            jobs_idx = [(fl, i) for fl in floors for i in fold_of[fl.name][j]]
+            if not jobs_idx:
+                continue
+            # --select passes one cache for all its grid points (the models do not depend on the
+            # tracker's settings); it lives as long as that call, keyed by fold, fixes and map use.
+            key = (j, repr(settings.fixes), all_plan is None, "wifi_model" in methods)
+            models = None if models_cache is None else models_cache.get(key)
+            if models is None:
+                models = _fold_models(floors, fold_of, j, settings, all_plan, "wifi_model" in methods)
+                if models_cache is not None:
+                    models_cache[key] = models
+            _collect(running, scores, progress)
+            running = [pool.submit(_score_walk, fl.walks[i], fl.steps[i], models[fl.name], settings, peer, methods)
+                       for fl, i in jobs_idx]
+        _collect(running, scores, progress)
     return scores
+
+
+def _collect(futures: List, scores: List[WalkScore], progress) -> None:
+    """The futures' walk scores appended in submission order."""
+    for f in futures:
+        scores.append(f.result())
+        if progress:
+            progress()
+
 
 def load_site(data_root: Optional[Path], floors: Sequence[str]) -> Tuple[Path, List[FloorData]]:
     """The site folder (default: the shared data) and its floors; clear errors for a missing folder."""
