@@ -18,6 +18,25 @@ namespace {
 
 // The options validated before the motion model is built from them (so that an invalid field
 // is reported by the filter's own validation).
+// The distances of a step, v Δt - b Δt + η with η ~ U(-a, a) (eq. 8-9), the odometer bias b
+// first taking its random-walk step when it is estimated; every draw from the random lanes.
+void DrawDistances(const FilterOptions& options, double mean_distance, double dt_s, int n, RandomLanes& lanes,
+                   double* bias, double* uniform, double* distance) {
+  const double a = options.noise_halfwidth_m;
+  const double two_a = 2.0 * a;
+  const bool estimate_bias = options.estimate_speed_bias;
+  const double jitter = options.bias_jitter_mps * std::sqrt(3.0);  // uniform with that sd
+  if (estimate_bias && jitter > 0) {
+    lanes.FillUniform01(uniform, n);
+    for (int i = 0; i < n; ++i) bias[i] += -jitter + 2.0 * jitter * uniform[i];
+  }
+  if (a > 0) lanes.FillUniform01(uniform, n);
+  for (int i = 0; i < n; ++i) {
+    const double mean = estimate_bias ? mean_distance - bias[i] * dt_s : mean_distance;
+    distance[i] = a > 0 ? mean + (two_a * uniform[i] - a) : mean;
+  }
+}
+
 // Stream family of the per-particle uniform draws (the junction choices and resampling use
 // stream 0, rng_).
 constexpr std::uint64_t kNoiseLanesStream = 1;
@@ -276,11 +295,6 @@ StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, doub
   // negative step v Δt + η moves a particle back within its segment (eq. 8-9 have no floor: a
   // floor at 0 biases the move forward by E[max(0, X)] - E[X], 5 % of the speed at 10 Hz with
   // a = 0.27 m); it stops at the end behind it.
-  const double a = options_.noise_halfwidth_m;
-  const double two_a = 2.0 * a;
-  const double mean_distance = speed_mps * dt_s;
-  const bool estimate_bias = options_.estimate_speed_bias;
-  const double jitter = options_.bias_jitter_mps * std::sqrt(3.0);  // uniform with that sd
   const double* origin_x = motion_.origin_x_m();
   const double* origin_y = motion_.origin_y_m();
   const double* unit_x = motion_.unit_x();
@@ -288,24 +302,13 @@ StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, doub
   int* seg = segment_.data();
   signed char* dir = direction_.data();
   double* along = along_.data();
-  double* bias = bias_.data();
-  // Pass 1, prediction (eq. 8-10): the uniform draws of every particle from the random lanes
-  // (vectorised), the distances, then the corridor model's batch move (in-segment moves
-  // vectorised, junction choices from rng_ afterwards, in particle order).
+  // Pass 1, prediction (eq. 8-10): the distances from the random lanes (vectorised), then the
+  // corridor model's batch move (in-segment moves vectorised, junction choices afterwards, in
+  // particle order).
   uniform_.resize(static_cast<size_t>(n));
   distance_.resize(static_cast<size_t>(n));
-  double* uniform = uniform_.data();
-  double* distance = distance_.data();
-  if (estimate_bias && jitter > 0) {
-    lanes_.FillUniform01(uniform, n);
-    for (int i = 0; i < n; ++i) bias[i] += -jitter + 2.0 * jitter * uniform[i];
-  }
-  if (a > 0) lanes_.FillUniform01(uniform, n);
-  for (int i = 0; i < n; ++i) {
-    const double mean = estimate_bias ? mean_distance - bias[i] * dt_s : mean_distance;
-    distance[i] = a > 0 ? mean + (two_a * uniform[i] - a) : mean;
-  }
-  motion_.MoveAll(n, distance, seg, dir, along, heading_rad, lanes_, rng_, weights_.data(), &move_scratch_);
+  DrawDistances(options_, speed_mps * dt_s, dt_s, n, lanes_, bias_.data(), uniform_.data(), distance_.data());
+  motion_.MoveAll(n, distance_.data(), seg, dir, along, heading_rad, lanes_, rng_, weights_.data(), &move_scratch_);
   // Pass 2, update (eq. 11) with the sums.
   const bool recovery = options_.recovery_disagreement > 0.0;  // the only user of the disagreement
   const WeightSums sums = WeighAndSum({n, seg, dir, along, weights_.data(), weight_scale_, factor_.data(),
