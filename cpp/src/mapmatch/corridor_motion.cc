@@ -55,6 +55,8 @@ CorridorMotion::CorridorMotion(const RoadNetwork& network, const CorridorMotionO
     unit_x_[k] = (ends(k, 2) - ends(k, 0)) / lengths_[k];
     unit_y_[k] = (ends(k, 3) - ends(k, 1)) / lengths_[k];
   }
+  geometry_rows_.resize(m, 4);
+  for (int k = 0; k < m; ++k) geometry_rows_.row(k) << origin_x_[k], origin_y_[k], unit_x_[k], unit_y_[k];
   continuation_begin_.assign(1, 0);
   for (int k = 0; k < m; ++k) {
     for (int end = 0; end < 2; ++end) {

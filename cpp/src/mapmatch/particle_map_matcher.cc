@@ -18,6 +18,25 @@ namespace {
 
 // The options validated before the motion model is built from them (so that an invalid field
 // is reported by the filter's own validation).
+// The distances of a step, v Δt - b Δt + η with η ~ U(-a, a) (eq. 8-9), the odometer bias b
+// first taking its random-walk step when it is estimated; every draw from the random lanes.
+void DrawDistances(const FilterOptions& options, double mean_distance, double dt_s, int n, RandomLanes& lanes,
+                   double* bias, double* uniform, double* distance) {
+  const double a = options.noise_halfwidth_m;
+  const double two_a = 2.0 * a;
+  const bool estimate_bias = options.estimate_speed_bias;
+  const double jitter = options.bias_jitter_mps * std::sqrt(3.0);  // uniform with that sd
+  if (estimate_bias && jitter > 0) {
+    lanes.FillUniform01(uniform, n);
+    for (int i = 0; i < n; ++i) bias[i] += -jitter + 2.0 * jitter * uniform[i];
+  }
+  if (a > 0) lanes.FillUniform01(uniform, n);
+  for (int i = 0; i < n; ++i) {
+    const double mean = estimate_bias ? mean_distance - bias[i] * dt_s : mean_distance;
+    distance[i] = a > 0 ? mean + (two_a * uniform[i] - a) : mean;
+  }
+}
+
 // Stream family of the per-particle uniform draws (the junction choices and resampling use
 // stream 0, rng_).
 constexpr std::uint64_t kNoiseLanesStream = 1;
@@ -56,6 +75,7 @@ struct WeighInputs {
   const double* origin_y;
   const double* unit_x;
   const double* unit_y;
+  const double* geometry_rows;  // M x 4: origin x, origin y, unit x, unit y
 };
 
 // Particles [begin, n), particle i into lane i mod kSumLanes (portable version).
@@ -95,10 +115,7 @@ __attribute__((target("avx2"))) int WeighAvx2(const WeighInputs& in, LaneSums* a
   double* __restrict weight = in.weight;
   const double* __restrict factor = in.factor;
   const double* __restrict disagree = in.disagree;
-  const double* __restrict origin_x = in.origin_x;
-  const double* __restrict origin_y = in.origin_y;
-  const double* __restrict unit_x = in.unit_x;
-  const double* __restrict unit_y = in.unit_y;
+  const double* __restrict geometry = in.geometry_rows;
   __m256d sum = _mm256_setzero_pd(), sum_sq = sum, sx = sum, sy = sum, sxx = sum, syy = sum, dis = sum, max_w = sum;
   const __m256d scale = _mm256_set1_pd(in.scale);
   int i = 0;
@@ -110,10 +127,16 @@ __attribute__((target("avx2"))) int WeighAvx2(const WeighInputs& in, LaneSums* a
         _mm256_mul_pd(_mm256_mul_pd(_mm256_loadu_pd(weight + i), scale), INDOORLOC_GATHER4(factor, k0, k1, k2, k3));
     _mm256_storeu_pd(weight + i, w);
     const __m256d along = _mm256_loadu_pd(along_m + i);
-    const __m256d x = _mm256_add_pd(INDOORLOC_GATHER4(origin_x, s0, s1, s2, s3),
-                                    _mm256_mul_pd(along, INDOORLOC_GATHER4(unit_x, s0, s1, s2, s3)));
-    const __m256d y = _mm256_add_pd(INDOORLOC_GATHER4(origin_y, s0, s1, s2, s3),
-                                    _mm256_mul_pd(along, INDOORLOC_GATHER4(unit_y, s0, s1, s2, s3)));
+    // The four particles' geometry rows, transposed: 4 vector loads and 8 shuffles instead of 16
+    // scalar loads.
+    const __m256d r0 = _mm256_loadu_pd(geometry + 4 * s0), r1 = _mm256_loadu_pd(geometry + 4 * s1);
+    const __m256d r2 = _mm256_loadu_pd(geometry + 4 * s2), r3 = _mm256_loadu_pd(geometry + 4 * s3);
+    const __m256d t0 = _mm256_unpacklo_pd(r0, r1), t1 = _mm256_unpackhi_pd(r0, r1);  // ox oy / ux uy of 0, 1
+    const __m256d t2 = _mm256_unpacklo_pd(r2, r3), t3 = _mm256_unpackhi_pd(r2, r3);
+    const __m256d origin_x = _mm256_permute2f128_pd(t0, t2, 0x20), unit_x = _mm256_permute2f128_pd(t0, t2, 0x31);
+    const __m256d origin_y = _mm256_permute2f128_pd(t1, t3, 0x20), unit_y = _mm256_permute2f128_pd(t1, t3, 0x31);
+    const __m256d x = _mm256_add_pd(origin_x, _mm256_mul_pd(along, unit_x));
+    const __m256d y = _mm256_add_pd(origin_y, _mm256_mul_pd(along, unit_y));
     const __m256d wx = _mm256_mul_pd(w, x), wy = _mm256_mul_pd(w, y);
     sum = _mm256_add_pd(sum, w);
     sum_sq = _mm256_add_pd(sum_sq, _mm256_mul_pd(w, w));
@@ -272,11 +295,6 @@ StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, doub
   // negative step v Δt + η moves a particle back within its segment (eq. 8-9 have no floor: a
   // floor at 0 biases the move forward by E[max(0, X)] - E[X], 5 % of the speed at 10 Hz with
   // a = 0.27 m); it stops at the end behind it.
-  const double a = options_.noise_halfwidth_m;
-  const double two_a = 2.0 * a;
-  const double mean_distance = speed_mps * dt_s;
-  const bool estimate_bias = options_.estimate_speed_bias;
-  const double jitter = options_.bias_jitter_mps * std::sqrt(3.0);  // uniform with that sd
   const double* origin_x = motion_.origin_x_m();
   const double* origin_y = motion_.origin_y_m();
   const double* unit_x = motion_.unit_x();
@@ -284,28 +302,18 @@ StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, doub
   int* seg = segment_.data();
   signed char* dir = direction_.data();
   double* along = along_.data();
-  double* bias = bias_.data();
-  // Pass 1, prediction (eq. 8-10): the uniform draws of every particle from the random lanes
-  // (vectorised), the distances, then the corridor model's batch move (in-segment moves
-  // vectorised, junction choices from rng_ afterwards, in particle order).
+  // Pass 1, prediction (eq. 8-10): the distances from the random lanes (vectorised), then the
+  // corridor model's batch move (in-segment moves vectorised, junction choices afterwards, in
+  // particle order).
   uniform_.resize(static_cast<size_t>(n));
   distance_.resize(static_cast<size_t>(n));
-  double* uniform = uniform_.data();
-  double* distance = distance_.data();
-  if (estimate_bias && jitter > 0) {
-    lanes_.FillUniform01(uniform, n);
-    for (int i = 0; i < n; ++i) bias[i] += -jitter + 2.0 * jitter * uniform[i];
-  }
-  if (a > 0) lanes_.FillUniform01(uniform, n);
-  for (int i = 0; i < n; ++i) {
-    const double mean = estimate_bias ? mean_distance - bias[i] * dt_s : mean_distance;
-    distance[i] = a > 0 ? mean + (two_a * uniform[i] - a) : mean;
-  }
-  motion_.MoveAll(n, distance, seg, dir, along, heading_rad, lanes_, rng_, weights_.data(), &move_scratch_);
+  DrawDistances(options_, speed_mps * dt_s, dt_s, n, lanes_, bias_.data(), uniform_.data(), distance_.data());
+  motion_.MoveAll(n, distance_.data(), seg, dir, along, heading_rad, lanes_, rng_, weights_.data(), &move_scratch_);
   // Pass 2, update (eq. 11) with the sums.
   const bool recovery = options_.recovery_disagreement > 0.0;  // the only user of the disagreement
   const WeightSums sums = WeighAndSum({n, seg, dir, along, weights_.data(), weight_scale_, factor_.data(),
-                                       recovery ? disagree_.data() : nullptr, origin_x, origin_y, unit_x, unit_y});
+                                       recovery ? disagree_.data() : nullptr, origin_x, origin_y, unit_x, unit_y,
+                                       motion_.geometry_rows()});
   const double sum = sums.sum, sum_sq = sums.sum_sq, sx = sums.sx, sy = sums.sy, sxx = sums.sxx, syy = sums.syy;
   double disagreement = sums.disagreement;
   const double max_w = sums.max_w;
