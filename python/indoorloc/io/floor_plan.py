@@ -110,26 +110,25 @@ def _points2(value: Any, name: str, max_abs: float) -> np.ndarray:
     return a
 
 
+def _local_frame(origin_lon_lat: Any) -> Tuple[float, float, float, float]:
+    """(lon0, lat0) [deg] of the origin and (kx, ky) [m/deg] there."""
+    lon0, lat0 = _origin(origin_lon_lat)
+    kx, ky = metres_per_degree(lat0)
+    return lon0, lat0, kx, ky
+
+
 def lonlat_to_local(lon_lat_deg: Any, origin_lon_lat: Tuple[float, float]) -> np.ndarray:
     """(N, 2) longitude/latitude [deg] -> (N, 2) east/north [m] of the origin (local frame)."""
     ll = _points2(lon_lat_deg, "lon_lat_deg", 1e3)
-    lon0, lat0 = _origin(origin_lon_lat)
-    kx, ky = metres_per_degree(lat0)
-    out = np.empty_like(ll)
-    out[..., 0] = (ll[..., 0] - lon0) * kx
-    out[..., 1] = (ll[..., 1] - lat0) * ky
-    return out
+    lon0, lat0, kx, ky = _local_frame(origin_lon_lat)
+    return np.stack([(ll[..., 0] - lon0) * kx, (ll[..., 1] - lat0) * ky], axis=-1)
 
 
 def local_to_lonlat(east_north_m: Any, origin_lon_lat: Tuple[float, float]) -> np.ndarray:
     """Inverse of :func:`lonlat_to_local`: (N, 2) east/north [m] -> longitude/latitude [deg]."""
     en = _points2(east_north_m, "east_north_m", 1e9)
-    lon0, lat0 = _origin(origin_lon_lat)
-    kx, ky = metres_per_degree(lat0)
-    out = np.empty_like(en)
-    out[..., 0] = lon0 + en[..., 0] / kx
-    out[..., 1] = lat0 + en[..., 1] / ky
-    return out
+    lon0, lat0, kx, ky = _local_frame(origin_lon_lat)
+    return np.stack([lon0 + en[..., 0] / kx, lat0 + en[..., 1] / ky], axis=-1)
 
 
 # ---- reading -----------------------------------------------------------------------------
@@ -221,15 +220,21 @@ def _ring(coords: Any, where: str, label: str) -> np.ndarray:
     return ring
 
 
+def _parts(geom: Mapping[str, Any], single_type: str, noun: str, where: str, label: str) -> List[Tuple[str, Any]]:
+    """The coordinates of each part of a geometry (the one part of ``single_type``, every part of
+    its multi- form) with the place a message names it by (``where``, or ``where: <noun> k``)."""
+    coords = geom.get("coordinates")
+    single = geom["type"] == single_type
+    parts = [coords] if single else coords
+    if not isinstance(parts, list) or not parts:
+        raise _error("path", f"{label}: {where}: expected {noun} coordinates")
+    return [(where if single else f"{where}: {noun} {k}", part) for k, part in enumerate(parts)]
+
+
 def _polygons(geom: Mapping[str, Any], where: str, label: str) -> List[List[np.ndarray]]:
     """Polygon / MultiPolygon -> list of polygons, each [exterior, hole, ...]."""
-    coords = geom.get("coordinates")
-    polys = [coords] if geom["type"] == "Polygon" else coords
-    if not isinstance(polys, list) or not polys:
-        raise _error("path", f"{label}: {where}: expected polygon coordinates")
     out = []
-    for p, poly in enumerate(polys):
-        pw = where if geom["type"] == "Polygon" else f"{where}: polygon {p}"
+    for pw, poly in _parts(geom, "Polygon", "polygon", where, label):
         if not isinstance(poly, list) or not poly:
             raise _error("path", f"{label}: {pw}: expected a list of rings")
         out.append([_ring(r, f"{pw}: ring {k}", label) for k, r in enumerate(poly)])
@@ -237,13 +242,9 @@ def _polygons(geom: Mapping[str, Any], where: str, label: str) -> List[List[np.n
 
 
 def _lines(geom: Mapping[str, Any], where: str, label: str) -> List[np.ndarray]:
-    coords = geom.get("coordinates")
-    lines = [coords] if geom["type"] == "LineString" else coords
-    if not isinstance(lines, list) or not lines:
-        raise _error("path", f"{label}: {where}: expected line coordinates")
+    """LineString / MultiLineString -> list of (M, 2) vertex arrays."""
     out = []
-    for k, line in enumerate(lines):
-        lw = where if geom["type"] == "LineString" else f"{where}: line {k}"
+    for lw, line in _parts(geom, "LineString", "line", where, label):
         pts = _positions(line, lw, label)
         if len(pts) < 2:
             raise _error("path", f"{label}: {lw}: a line needs at least 2 vertices")
