@@ -194,14 +194,14 @@ def test_settings_outside_the_maps_ranges_are_named_not_variance_db2(tmp_path):
             if not (b == "aa" and t > 4000) and not (b == "cc" and t < 6000)]
     walk = _write(tmp_path / "w.txt", rows)
     kw = dict(positioning="linear", min_walks=1, min_cells=1, cell_size_m=2.0)
-    cm = wc.build_crowd_map([walk], wc.CrowdMapSettings(**kw))
+    cm = crowdsourced_map.build_crowd_map([walk], crowdsourced_map.CrowdMapSettings(**kw))
     assert np.isfinite(cm.signal_map.variance_db2).all()
     for field, value in (("not_heard_dbm", 1e300), ("not_heard_dbm", 1e20), ("not_heard_dbm", 60.0),
                          ("variance_floor_db2", 1e300), ("cell_size_m", 1e-300)):
         with pytest.raises(ValueError, match=f"CrowdMapSettings.{field}"):
-            wc.build_crowd_map([walk], wc.CrowdMapSettings(**dict(kw, **{field: value})))
+            crowdsourced_map.build_crowd_map([walk], crowdsourced_map.CrowdMapSettings(**dict(kw, **{field: value})))
     with pytest.raises(ValueError, match="'not_heard_dbm'"):
-        wc.prepare(np.array([[-60.0, np.nan]]), 1e300)
+        crowdsourced_map.prepare(np.array([[-60.0, np.nan]]), 1e300)
 
 
 def test_walk_positions_refuses_waypoints_of_the_wrong_shape(tmp_path):
@@ -211,12 +211,12 @@ def test_walk_positions_refuses_waypoints_of_the_wrong_shape(tmp_path):
     w = SimpleNamespace(accelerometer=walk.accelerometer, waypoint_t_s=walk.waypoint_t_s,
                         waypoint_xy_m=np.asarray(walk.waypoint_xy_m).T)  # (2, 3): was reshaped to (3, 2)
     with pytest.raises(ValueError, match=r"waypoint_xy_m has shape \(2, 3\), expected \(3, 2\)"):
-        wc.walk_positions(w, np.array([walk.waypoint_t_s[0] + 1.0]), wc.CrowdMapSettings(positioning="linear"))
+        crowdsourced_map.walk_positions(w, np.array([walk.waypoint_t_s[0] + 1.0]), crowdsourced_map.CrowdMapSettings(positioning="linear"))
 
 
 def test_walk_positions_of_a_walk_without_steps(tmp_path):
     # The fixture's phone lies still (no step): PDR mode fell over in cumulative_at's reshape.
     walk = _write(tmp_path / "w.txt", [])
     q = np.array([walk.waypoint_t_s[0] + 2.5])
-    pos = wc.walk_positions(walk, q, wc.CrowdMapSettings(positioning="pdr"))
+    pos = crowdsourced_map.walk_positions(walk, q, crowdsourced_map.CrowdMapSettings(positioning="pdr"))
     np.testing.assert_allclose(pos.xy_m, [[3.0, 0.0]])  # linear: PDR unusable without steps

@@ -59,9 +59,10 @@ class RealSettings:
     wifi_max_age_s: float = 2.5
     grid_spacing_m: float = 2.0         #: GridPosterior spacing of the model fixes (docs/fusion_real.md)
     #: Per-step white noise of the handheld PDR given to the filter: length sd as a fraction of the
-    #: stride and heading sd [rad]; the systematic parts are the filter's scale and offset states.
-    step_length_sd_fraction: float = 0.15
-    step_heading_sd_rad: float = math.radians(10.0)
+    #: stride and heading sd [rad] (LOFO: 20 deg); the systematic parts are the filter's scale and
+    #: offset states. Defaults: the site model's (read from the C++ live session's options).
+    step_length_sd_fraction: float = field(default_factory=lambda: site_model.TrackSettings().step_length_sd_fraction)
+    step_heading_sd_rad: float = field(default_factory=lambda: site_model.TrackSettings().step_heading_sd_rad)
     #: LOFO: log-weight of a step through a shop wall (-inf: the particle is dropped; log 0.02 in
     #: the grid: shops are polygons without doors and 12 of 866 waypoints lie inside one). A known
     #: start inside a shop is moved to the nearest walkable point.
@@ -103,8 +104,8 @@ class RealSettings:
     #: The grid engine's options (the heading-offset prior sd is the fold's calibrated spread).
     grid_options: Any = field(default_factory=lambda: fusion.GridTrackerOptions())
     #: Point estimate of the grid engine's unknown-start methods: "mean" or "median" (spatial
-    #: median) of the posterior (LOFO).
-    point_estimate: str = "mean"
+    #: median) of the posterior (LOFO; the site model's default).
+    point_estimate: str = field(default_factory=lambda: site_model.TrackSettings().point_estimate)
     #: Also score the other point estimate (hidden keys): set by --select, which chooses it.
     score_both_point_estimates: bool = False
     #: Cells [m] and offset bins of the floor-identification pass (all floors, filter only).

@@ -54,8 +54,8 @@ from indoorloc import wifi_matcher as wm
 #: Per-step white noise given to the filter (the defaults of ``indoorloc fusion evaluate``,
 #: RealSettings.step_length_sd_fraction and step_heading_sd_rad): length sd as a fraction of the
 #: stride, heading sd [rad]; the systematic parts are the filter's offset and scale layers.
-STEP_LENGTH_SD_FRACTION = 0.15
-STEP_HEADING_SD_RAD = math.radians(10.0)
+STEP_LENGTH_SD_FRACTION = LiveSessionOptions().step_length_sd_fraction
+STEP_HEADING_SD_RAD = LiveSessionOptions().step_heading_sd_rad
 
 #: Event kinds of :meth:`LiveTracker.add_event` and :func:`walk_events`, in their order at equal
 #: times (the held IMU streams before the accelerometer sample that uses them).

@@ -26,6 +26,10 @@ from indoorloc.pdr import handheld as ph
 from indoorloc.fusion import wifi_fixes, floor_evidence
 from indoorloc.fusion.steps import Steps
 from indoorloc.fusion.grid import GridTracker, GridTrackerOptions, track_grid
+from indoorloc._core.fusion import LiveSessionOptions
+
+#: The C++ live session's defaults: the one definition of the per-step PDR noise.
+_LIVE_DEFAULTS = LiveSessionOptions()
 
 
 @dataclass
@@ -34,16 +38,18 @@ class TrackSettings:
 
     The heading-offset prior sd of the grid is not here: it is each floor's calibrated spread."""
 
-    #: Per-step white noise of the handheld PDR: length sd as a fraction of the stride, heading sd
-    #: [rad]; the systematic parts are the tracker's scale and offset states (fixed in advance).
-    step_length_sd_fraction: float = 0.15
-    step_heading_sd_rad: float = math.radians(10.0)
+    #: Per-step white noise of the handheld PDR: length sd as a fraction of the stride (fixed in
+    #: advance), heading sd [rad] (leave-one-floor-out: 20 deg); the systematic parts are the
+    #: tracker's scale and offset states. Both read from the C++ live session's options.
+    step_length_sd_fraction: float = _LIVE_DEFAULTS.step_length_sd_fraction
+    step_heading_sd_rad: float = _LIVE_DEFAULTS.step_heading_sd_rad
     #: The fingerprint fixes (``wifi_fixes.FixSettings``; leave-one-floor-out defaults).
     fixes: wifi_fixes.FixSettings = field(default_factory=wifi_fixes.FixSettings)
     #: The grid tracker's options (``fusion.GridTrackerOptions``, defaults read from C++).
     grid_options: Any = field(default_factory=GridTrackerOptions)
-    #: "mean" or "median" (spatial median) of the posterior as the point estimate.
-    point_estimate: str = "mean"
+    #: "mean" or "median" (spatial median) of the posterior as the point estimate (leave-one-floor-
+    #: out: "median", which flips with "mean" from floor to floor within 0.3 m).
+    point_estimate: str = "median"
     #: Floor identification (``--floor auto``): cells [m] and offset bins of the all-floor filter.
     identification_cell_m: float = 2.0
     identification_offset_bins: int = 3

@@ -53,7 +53,10 @@ struct LiveSessionOptions {
   StepHeadingSource heading_source = StepHeadingSource::kRotationVector;
   double yaw_offset_rad = 0.0;         ///< floor-frame minus phone heading (calibration) [rad]
   double step_length_sd_fraction = 0.15;             ///< length sd / length, > 0
-  double step_heading_sd_rad = 0.17453292519943295;  ///< per-step heading sd (10 deg) [rad], > 0
+  /// Per-step heading sd [rad], > 0: 20 deg, chosen by leave-one-floor-out over {10, 20, 30} deg
+  /// with the grid tracker on the competition site (docs/fusion_real.md, "Second round"); the
+  /// Python settings (fusion.site_model.TrackSettings, fusion_real.RealSettings) read it from here.
+  double step_heading_sd_rad = 0.3490658503988659;
   bool delay_compensation = false;     ///< move fixes by the PDR since the time they describe
 
   bool IsValid(std::string* error) const;
