@@ -91,9 +91,10 @@ class RealSettings:
     known_start_fix_tempering_by_variance: bool = False
     #: The known start's calibration of its returned covariance (a, b [m], g of
     #: GridTrackerOptions.filtered_covariance_*): the all-floor choice of
-    #: ``experiments/fusion_uncertainty`` (LOFO coverage 0.956, 0.93-0.98 per floor).
+    #: ``experiments/fusion_uncertainty`` (LOFO coverage 0.951, 0.93-0.98 per floor; re-chosen
+    #: after the second settings round).
     known_start_covariance_scale: float = 3.0
-    known_start_covariance_floor_m: float = 1.5
+    known_start_covariance_floor_m: float = 0.5
     known_start_covariance_fix_gain: float = 0.0
     floor_identification: bool = True   #: also run the default with the floor not given
     threads: int = 2                    #: walks tracked in parallel (results do not depend on it)
