@@ -63,6 +63,17 @@ MatrixArg ToQueries(const py::object& obj, const char* name, Eigen::Index cols) 
   return m;
 }
 
+// One batch query of the plan: the (Q, cols) queries and their floor indices checked with the
+// GIL held, then `query(queries, floor_indices, num_threads)` run without it.
+template <typename Query>
+auto BatchQuery(const py::object& queries, const char* name, Eigen::Index cols, const py::object& floor_indices,
+                int num_threads, const Query& query) {
+  MatrixArg q = ToQueries(queries, name, cols);
+  const Eigen::VectorXi f = ToFloorIndices(floor_indices, "floor_indices");
+  py::gil_scoped_release release;
+  return query(q.map, f, num_threads);
+}
+
 py::list RingsToList(const std::vector<RowMatrixXd>& rings) {
   py::list out;
   for (const RowMatrixXd& r : rings) out.append(py::cast(r));
@@ -295,40 +306,28 @@ Returns
   floor_plan
       .def("is_walkable", [](const FloorPlan& plan, const py::object& points_m,
                              const py::object& floor_indices, int num_threads) {
-             MatrixArg p = ToQueries(points_m, "points_m", 2);
-             const Eigen::VectorXi f = ToFloorIndices(floor_indices, "floor_indices");
-             fusion::VectorXb out;
-             {
-               py::gil_scoped_release release;
-               out = plan.IsWalkableBatch(p.map, f, num_threads);
-             }
-             return ToNumpyBool(out);
+             return ToNumpyBool(BatchQuery(points_m, "points_m", 2, floor_indices, num_threads,
+                                           [&plan](const auto& p, const auto& f, int t) {
+                                             return plan.IsWalkableBatch(p, f, t);
+                                           }));
            },
            py::arg("points_m"), py::arg("floor_indices") = 0, py::arg("num_threads") = 1,
            is_walkable_doc.c_str())
       .def("crosses_wall", [](const FloorPlan& plan, const py::object& segments_m,
                               const py::object& floor_indices, int num_threads) {
-             MatrixArg s = ToQueries(segments_m, "segments_m", 4);
-             const Eigen::VectorXi f = ToFloorIndices(floor_indices, "floor_indices");
-             fusion::VectorXb out;
-             {
-               py::gil_scoped_release release;
-               out = plan.CrossesWallBatch(s.map, f, num_threads);
-             }
-             return ToNumpyBool(out);
+             return ToNumpyBool(BatchQuery(segments_m, "segments_m", 4, floor_indices, num_threads,
+                                           [&plan](const auto& s, const auto& f, int t) {
+                                             return plan.CrossesWallBatch(s, f, t);
+                                           }));
            },
            py::arg("segments_m"), py::arg("floor_indices") = 0, py::arg("num_threads") = 1,
            crosses_wall_doc.c_str())
       .def("distance_to_wall", [](const FloorPlan& plan, const py::object& points_m,
                                   const py::object& floor_indices, int num_threads) {
-             MatrixArg p = ToQueries(points_m, "points_m", 2);
-             const Eigen::VectorXi f = ToFloorIndices(floor_indices, "floor_indices");
-             Eigen::VectorXd out;
-             {
-               py::gil_scoped_release release;
-               out = plan.DistanceToWallBatch(p.map, f, num_threads);
-             }
-             return ToNumpy(out);
+             return ToNumpy(BatchQuery(points_m, "points_m", 2, floor_indices, num_threads,
+                                       [&plan](const auto& p, const auto& f, int t) {
+                                         return plan.DistanceToWallBatch(p, f, t);
+                                       }));
            },
            py::arg("points_m"), py::arg("floor_indices") = 0, py::arg("num_threads") = 1,
            distance_doc.c_str())

@@ -50,14 +50,24 @@ DoubleArray ToDoubleArray(const py::handle& obj, const char* name) {
   return array;
 }
 
+namespace {
+
+// ToDoubleArray of an array with `ndim` dimensions (ValueError naming the argument otherwise).
+DoubleArray ToDoubleArrayOfRank(const py::handle& obj, const char* name, int ndim) {
+  DoubleArray array = ToDoubleArray(obj, name);
+  if (array.ndim() != ndim) {
+    ThrowInvalidArgument(name, "expected a " + std::to_string(ndim) + "-D array, got " +
+                                   std::to_string(array.ndim()) + "-D");
+  }
+  return array;
+}
+
+}  // namespace
+
 VectorArg ToVector(const py::handle& obj, const char* name, Eigen::Index size,
                    Finiteness finiteness) {
   VectorArg arg;
-  arg.array = ToDoubleArray(obj, name);
-  if (arg.array.ndim() != 1) {
-    ThrowInvalidArgument(name, "expected a 1-D array, got " + std::to_string(arg.array.ndim()) +
-                                   "-D");
-  }
+  arg.array = ToDoubleArrayOfRank(obj, name, 1);
   const Eigen::Index n = static_cast<Eigen::Index>(arg.array.shape(0));
   if (size >= 0 && n != size) {
     ThrowInvalidArgument(name, "expected length " + std::to_string(size) + ", got " +
@@ -71,11 +81,7 @@ VectorArg ToVector(const py::handle& obj, const char* name, Eigen::Index size,
 MatrixArg ToMatrix(const py::handle& obj, const char* name, Eigen::Index rows, Eigen::Index cols,
                    Finiteness finiteness) {
   MatrixArg arg;
-  arg.array = ToDoubleArray(obj, name);
-  if (arg.array.ndim() != 2) {
-    ThrowInvalidArgument(name, "expected a 2-D array, got " + std::to_string(arg.array.ndim()) +
-                                   "-D");
-  }
+  arg.array = ToDoubleArrayOfRank(obj, name, 2);
   const Eigen::Index r = static_cast<Eigen::Index>(arg.array.shape(0));
   const Eigen::Index c = static_cast<Eigen::Index>(arg.array.shape(1));
   if ((rows >= 0 && r != rows) || (cols >= 0 && c != cols)) {

@@ -156,3 +156,45 @@ def test_leave_one_walk_out_scores_every_walk_once(two_floor_site, tmp_path, mon
     walks = {(w["floor"], w["walk"]) for w in data["waypoints"] if w["method"] == "fusion_smoother"}
     assert len(walks) == 6  # every walk of F1, each its own fold
     assert data["settings"]["folds"] == 0 and "floor_identification" not in data
+
+
+def test_select_grid_is_checked_before_any_walk_is_tracked(two_floor_site, capsys):
+    """--select-grid: an unknown setting or an empty value list is a ValueError naming 'grid'
+    (before the site is even read); bad JSON is a usage error of the CLI."""
+    with pytest.raises(ValueError, match="argument 'grid'.*no_such_setting"):
+        fr.select_settings(two_floor_site, ["F1"], fr.RealSettings(**FAST), {"no_such_setting": [1]})
+    with pytest.raises(ValueError, match="argument 'grid'.*grid.wall_margin_m"):
+        fr.select_settings(two_floor_site, ["F1"], fr.RealSettings(**FAST), {"grid.wall_margin_m": []})
+    with pytest.raises(SystemExit):
+        cli.main(["fusion", "evaluate", "--data-root", str(two_floor_site), "--select", "--select-grid", "{not json"])
+    assert "--select-grid" in capsys.readouterr().err
+
+
+def test_survey_coverage_with_the_fold_tree_equals_the_brute_force_minimum():
+    """The KD-tree shortcut of the coverage distance gives the brute-force values bit for bit,
+    ties included (half the training positions on whole metres, waypoints on them too)."""
+    from scipy.spatial import cKDTree
+
+    from indoorloc.experiments.fusion_real_walk import survey_coverage_m
+
+    rng = np.random.default_rng(1)
+    for n in (1, 7, 3000):
+        train = rng.uniform(0, 200, (n, 2))
+        train[n // 2:] = np.round(train[n // 2:])
+        way = np.r_[rng.uniform(-20, 220, (40, 2)), train[:3], np.round(rng.uniform(0, 200, (20, 2)))]
+        brute = survey_coverage_m(way, train)
+        assert np.array_equal(survey_coverage_m(way, train, cKDTree(train)), brute)
+        assert np.allclose(brute, np.hypot(*(way[:, None, :] - train[None, :, :]).T).min(axis=0))
+
+
+def test_evaluate_scores_do_not_depend_on_the_worker_count(two_floor_site):
+    """Fold models built while the previous fold's walks run: the scores equal a serial run's."""
+    data = fr.load_site(two_floor_site, ["F1", "F2"])[1]
+    one = fr.evaluate_floors(data, fr.RealSettings(**FAST, threads=1), methods=("wifi_knn", "fusion_smoother"))
+    two = fr.evaluate_floors(data, fr.RealSettings(**FAST, threads=2), methods=("wifi_knn", "fusion_smoother"))
+    assert [(s.floor, s.walk) for s in one] == [(s.floor, s.walk) for s in two]
+    for a, b in zip(one, two):
+        assert a.errors_m.keys() == b.errors_m.keys()
+        for k in a.errors_m:
+            assert np.array_equal(a.errors_m[k], b.errors_m[k])
+        assert np.array_equal(a.coverage_m, b.coverage_m)

@@ -13,6 +13,7 @@
 #include <Eigen/Core>
 
 #include "indoorloc/fusion/grid_tracker.h"
+#include "grid_lanes.h"
 
 namespace indoorloc::fusion {
 namespace grid_ops {
@@ -52,31 +53,37 @@ inline std::vector<float> GaussianKernel(double var_cells2) {
   return out;
 }
 
-// Separable blur with zero outside the grid: a symmetric operator (its own transpose).
+// Separable blur with zero outside the grid: a symmetric operator (its own transpose). Both
+// passes add the taps in kernel order to each cell (from 0), one tap over a whole row at a time,
+// so that the loops vectorise; the order of the additions per cell is that of a per-cell loop.
 inline void Blur(std::vector<float>& g, std::vector<float>& scratch, int nx, int ny, double var_cells2) {
   const std::vector<float> k = GaussianKernel(var_cells2);
   const int r = static_cast<int>(k.size() / 2);
-  scratch.assign(g.size(), 0.0f);
-  // Along y: whole rows at a time (vectorises).
+  scratch.resize(g.size());
+  // Along y: whole rows at a time; the first tap inside the grid sets the row (0 + a is a).
   for (int y = 0; y < ny; ++y) {
     float* out = scratch.data() + static_cast<std::size_t>(y) * nx;
-    for (int j = -r; j <= r; ++j) {
-      const int ys = y + j;
-      if (ys < 0 || ys >= ny) continue;
+    const int j_lo = std::max(-r, -y), j_hi = std::min(r, ny - 1 - y);
+    for (int j = j_lo; j <= j_hi; ++j) {
       const float w = k[j + r];
-      const float* in = g.data() + static_cast<std::size_t>(ys) * nx;
-      for (int x = 0; x < nx; ++x) out[x] += w * in[x];
+      const float* in = g.data() + static_cast<std::size_t>(y + j) * nx;
+      if (j == j_lo) {
+        for (int x = 0; x < nx; ++x) out[x] = w * in[x];
+      } else {
+        for (int x = 0; x < nx; ++x) out[x] += w * in[x];
+      }
     }
   }
-  // Along x.
+  // Along x: tap j adds k_j in(x + j) to every x with x + j inside the row.
   for (int y = 0; y < ny; ++y) {
     const float* in = scratch.data() + static_cast<std::size_t>(y) * nx;
     float* out = g.data() + static_cast<std::size_t>(y) * nx;
-    for (int x = 0; x < nx; ++x) {
-      const int lo = std::max(-r, -x), hi = std::min(r, nx - 1 - x);
-      float acc = 0.0f;
-      for (int j = lo; j <= hi; ++j) acc += k[j + r] * in[x + j];
-      out[x] = acc;
+    std::fill(out, out + nx, 0.0f);
+    for (int j = -r; j <= r; ++j) {
+      const float w = k[j + r];
+      const int lo = std::max(0, -j), hi = std::min(nx, nx - j);
+      const float* src = in + j;
+      for (int x = lo; x < hi; ++x) out[x] += w * src[x];
     }
   }
 }
@@ -120,10 +127,12 @@ inline void ResampleAt(const std::vector<float>& g, std::vector<float>& out, std
   for (int y = 0; y < ny; ++y) {
     const float* in = g.data() + static_cast<std::size_t>(y) * nx;
     float* o = scratch.data() + static_cast<std::size_t>(y) * nx;
-    for (int x = 0; x < nx; ++x) {
-      const int x2 = std::min(nx - 1, std::max(0, x + dx));
-      o[x] = (1.0f - ax) * in[x] + ax * in[x2];
-    }
+    // Interior cells (x + dx inside the row) in one loop that vectorises; the clamped edge cell apart.
+    const int lo = dx > 0 ? 0 : 1, hi = dx > 0 ? nx - 1 : nx;
+    const float* in2 = in + dx;
+    for (int x = lo; x < hi; ++x) o[x] = (1.0f - ax) * in[x] + ax * in2[x];
+    const int edge = dx > 0 ? nx - 1 : 0;
+    o[edge] = (1.0f - ax) * in[edge] + ax * in[edge];
   }
   for (int y = 0; y < ny; ++y) {
     const int y2 = std::min(ny - 1, std::max(0, y + dy));
@@ -152,34 +161,115 @@ inline void NormaliseAndFlush(std::vector<float>& g, double scale) {
   }
 }
 
-// g *= wall (and *= fix when given); returns the sum (float per row, double over rows).
+// g *= wall (and *= fix when given); returns the sum (float lanes per row, grid_lanes.h; double
+// over rows).
 inline double MultiplyAndSum(std::vector<float>& g, const std::vector<float>& wall, const float* fix, int nx, int ny) {
   double total = 0;
   for (int y = 0; y < ny; ++y) {
     float* row = g.data() + static_cast<std::size_t>(y) * nx;
     const float* w = wall.data() + static_cast<std::size_t>(y) * nx;
-    float sum = 0.0f;
-    if (fix) {
-      const float* f = fix + static_cast<std::size_t>(y) * nx;
-      for (int x = 0; x < nx; ++x) {
-        row[x] *= w[x] * f[x];
-        sum += row[x];
+    const float* f = fix ? fix + static_cast<std::size_t>(y) * nx : nullptr;
+    Lanes acc = LanesOf(0.0f);
+    int x = 0;
+    if (f) {
+      for (; x + kLanes <= nx; x += kLanes) {
+        const Lanes v = LoadLanes(row + x) * (LoadLanes(w + x) * LoadLanes(f + x));
+        StoreLanes(row + x, v);
+        acc += v;
       }
     } else {
-      for (int x = 0; x < nx; ++x) {
-        row[x] *= w[x];
-        sum += row[x];
+      for (; x + kLanes <= nx; x += kLanes) {
+        const Lanes v = LoadLanes(row + x) * LoadLanes(w + x);
+        StoreLanes(row + x, v);
+        acc += v;
       }
     }
-    total += sum;
+    for (; x < nx; ++x) {
+      row[x] *= f ? w[x] * f[x] : w[x];
+      acc.Add(x % kLanes, row[x]);
+    }
+    total += LaneTotal(acc);
   }
   return total;
+}
+
+// g *= wall (and *= fix when given), the products of MultiplyAndSum without its sum.
+inline void Multiply(std::vector<float>& g, const std::vector<float>& wall, const float* fix) {
+  const std::size_t n = g.size();
+  float* d = g.data();
+  const float* w = wall.data();
+  if (fix) {
+    for (std::size_t i = 0; i < n; ++i) d[i] *= w[i] * fix[i];
+  } else {
+    for (std::size_t i = 0; i < n; ++i) d[i] *= w[i];
+  }
+}
+
+// The largest entry of g (0 for an empty or all-zero grid), in lanes (the maximum is exact).
+inline float MaxOf(const std::vector<float>& g) {
+  Lanes m = LanesOf(0.0f);
+  const std::size_t n = g.size();
+  std::size_t i = 0;
+  for (; i + kLanes <= n; i += kLanes) m = MaxLanes(LoadLanes(g.data() + i), m);
+  float mx = 0.0f;
+  for (; i < n; ++i) mx = g[i] > mx ? g[i] : mx;
+  for (int j = 0; j < kLanes; ++j) mx = m[j] > mx ? m[j] : mx;
+  return mx;
 }
 
 // Mean and second moments of a grid about the cell centres (double accumulation).
 struct Moments {
   double mass = 0, sx = 0, sy = 0, sxx = 0, sxy = 0, syy = 0;
 };
+
+// Adds row y's sums (mass, Σ v x, Σ v x²) to the grid's sums about cell indices.
+inline void AddRowMoments(double r_mass, double r_sx, double r_sxx, int y, Moments* m) {
+  m->mass += r_mass;
+  m->sx += r_sx;
+  m->sy += r_mass * y;
+  m->sxx += r_sxx;
+  m->sxy += r_sx * y;
+  m->syy += r_mass * y * static_cast<double>(y);
+}
+
+// Sums about cell indices -> mean [m] (sx, sy) and covariance [m²] (sxx, sxy, syy) of the cell centres.
+inline Moments MomentsInMetres(const Moments& m, const FloorGrid& fg, double cell) {
+  Moments out;
+  out.mass = m.mass;
+  if (m.mass <= 0) return out;
+  const double mx = m.sx / m.mass, my = m.sy / m.mass;
+  out.sx = fg.x0 + (mx + 0.5) * cell;
+  out.sy = fg.y0 + (my + 0.5) * cell;
+  out.sxx = (m.sxx / m.mass - mx * mx) * cell * cell;
+  out.sxy = (m.sxy / m.mass - mx * my) * cell * cell;
+  out.syy = (m.syy / m.mass - my * my) * cell * cell;
+  return out;
+}
+
+// Sums over a row of v, v x and v x² (v = row, or row * weight when kWeighted), x the cell
+// index, in float lanes (kLanes), totals in double.
+template <bool kWeighted>
+inline void RowMomentsInFloat(const float* row, const float* weight, int nx, double* mass, double* sx, double* sxx) {
+  Lanes m = LanesOf(0.0f), s1 = m, s2 = m, fx = Iota();
+  const Lanes step = LanesOf(static_cast<float>(kLanes));
+  int x = 0;
+  for (; x + kLanes <= nx; x += kLanes) {
+    const Lanes v = kWeighted ? LoadLanes(row + x) * LoadLanes(weight + x) : LoadLanes(row + x);
+    m += v;
+    s1 += v * fx;
+    s2 += v * fx * fx;
+    fx += step;  // exact: cell indices far below 2^24
+  }
+  for (; x < nx; ++x) {
+    const float v = kWeighted ? row[x] * weight[x] : row[x], f = static_cast<float>(x);
+    m.Add(x % kLanes, v);
+    s1.Add(x % kLanes, v * f);
+    s2.Add(x % kLanes, v * f * f);
+  }
+  *mass = LaneTotal(m);
+  *sx = LaneTotal(s1);
+  *sxx = LaneTotal(s2);
+}
 
 // Of g, or of the product g * weight (the smoother's alpha * beta, formed in double: both are
 // flushed at 1e-30, so the product stays far above double's underflow).
@@ -195,26 +285,12 @@ inline Moments GridMoments(const float* g, const float* weight, const FloorGrid&
     double r_mass = 0, r_sx = 0, r_sxx = 0;
     double* crow = coarse ? coarse + static_cast<std::size_t>(y / q) * nqx * 3 : nullptr;
     const bool in_float = !crow && (!wrow || !force_double);
-    if (in_float) {  // the common case: float accumulators along the row (vectorises)
-      float f_mass = 0.0f, f_sx = 0.0f, f_sxx = 0.0f;
+    if (in_float) {  // the common case: float lane accumulators along the row (vectorises)
       if (wrow) {
-        for (int x = 0; x < fg.nx; ++x) {
-          const float v = row[x] * wrow[x], fx = static_cast<float>(x);
-          f_mass += v;
-          f_sx += v * fx;
-          f_sxx += v * fx * fx;
-        }
+        RowMomentsInFloat<true>(row, wrow, fg.nx, &r_mass, &r_sx, &r_sxx);
       } else {
-        for (int x = 0; x < fg.nx; ++x) {
-          const float v = row[x], fx = static_cast<float>(x);
-          f_mass += v;
-          f_sx += v * fx;
-          f_sxx += v * fx * fx;
-        }
+        RowMomentsInFloat<false>(row, nullptr, fg.nx, &r_mass, &r_sx, &r_sxx);
       }
-      r_mass = f_mass;
-      r_sx = f_sx;
-      r_sxx = f_sxx;
     } else {
       // The row's values (the product alpha * beta in double), then its sums and block sums.
       thread_local std::vector<double> v;
@@ -243,27 +319,40 @@ inline Moments GridMoments(const float* g, const float* weight, const FloorGrid&
         }
       }
     }
-    m.mass += r_mass;
-    m.sx += r_sx;
-    m.sy += r_mass * y;
-    m.sxx += r_sxx;
-    m.sxy += r_sx * y;
-    m.syy += r_mass * y * static_cast<double>(y);
+    AddRowMoments(r_mass, r_sx, r_sxx, y, &m);
   }
   // The smoother's product alpha * beta in float can underflow where both are small: when its
   // total is that small, redo the sums in double.
   if (weight && !coarse && !force_double && m.mass < 1e-20) return GridMoments(g, weight, fg, cell, q, coarse, true);
-  // Cell indices -> metres (centres).
-  Moments out;
-  out.mass = m.mass;
-  if (m.mass <= 0) return out;
-  const double mx = m.sx / m.mass, my = m.sy / m.mass;
-  out.sx = fg.x0 + (mx + 0.5) * cell;
-  out.sy = fg.y0 + (my + 0.5) * cell;
-  out.sxx = (m.sxx / m.mass - mx * mx) * cell * cell;
-  out.sxy = (m.sxy / m.mass - mx * my) * cell * cell;
-  out.syy = (m.syy / m.mass - my * my) * cell * cell;
-  return out;  // sx, sy: mean [m]; sxx, sxy, syy: covariance [m²]
+  return MomentsInMetres(m, fg, cell);
+}
+
+// NormaliseAndFlush(g, scale) and then GridMoments(g) (no blocks) in one pass over the rows, each
+// row also copied to `store` when given: the same operations in the same order, so the same bits.
+inline Moments NormaliseMomentsAndStore(std::vector<float>& g, double scale, const FloorGrid& fg, double cell,
+                                        float* store) {
+  Moments m;
+  const bool in_float = scale < 1e30;  // NormaliseAndFlush's two cases
+  const float f = static_cast<float>(scale);
+  for (int y = 0; y < fg.ny; ++y) {
+    float* row = g.data() + static_cast<std::size_t>(y) * fg.nx;
+    if (in_float) {
+      for (int x = 0; x < fg.nx; ++x) {
+        const float v = row[x] * f;
+        row[x] = v < 1e-30f ? 0.0f : v;
+      }
+    } else {
+      for (int x = 0; x < fg.nx; ++x) {
+        const double v = static_cast<double>(row[x]) * scale;
+        row[x] = v < 1e-30 ? 0.0f : static_cast<float>(v);
+      }
+    }
+    double r_mass = 0, r_sx = 0, r_sxx = 0;
+    RowMomentsInFloat<false>(row, nullptr, fg.nx, &r_mass, &r_sx, &r_sxx);
+    AddRowMoments(r_mass, r_sx, r_sxx, y, &m);
+    if (store) std::memcpy(store + static_cast<std::size_t>(y) * fg.nx, row, static_cast<std::size_t>(fg.nx) * sizeof(float));
+  }
+  return MomentsInMetres(m, fg, cell);
 }
 
 // A layer's per-step estimate: mean, covariance, cumulative log evidence.
@@ -353,17 +442,18 @@ inline void FillStartPrior(const FloorGrid& fg, const TrackStart& start, double 
     for (int x = 0; x < fg.nx; ++x) {
       const double dx = fg.x0 + (x + 0.5) * cell - start.position_m.x();
       const double dy = fg.y0 + (y + 0.5) * cell - start.position_m.y();
-      (*alpha)[static_cast<std::size_t>(y) * fg.nx + x] = static_cast<float>(std::exp(-0.5 * (dx * dx + dy * dy) / (sd * sd)));
+      const double e = -0.5 * (dx * dx + dy * dy) / (sd * sd);
+      // exp(e) < 1e-47 rounds to float 0 (below the smallest denormal): no exp needed there.
+      (*alpha)[static_cast<std::size_t>(y) * fg.nx + x] = e < -108.0 ? 0.0f : static_cast<float>(std::exp(e));
     }
 }
 
-}  // namespace grid_ops
-
-// The tracker's grids and fix factors (the pimpl of GridTracker, shared with GridFilterSession).
-struct GridTracker::Impl {
+// The tracker's grids and fix factors (the body of GridTracker's pimpl, shared with
+// GridFilterSession and the pieces of the batch run, grid_run.h).
+struct TrackerGrids {
   const FloorPlan* plan = nullptr;
   GridTrackerOptions options;
-  std::vector<grid_ops::FloorGrid> grids;
+  std::vector<FloorGrid> grids;
   double total_area_m2 = 0;
 
   // Per step with fixes: per floor the factor Π_j L_j(c)^τ / max and the log of that max.
@@ -372,46 +462,12 @@ struct GridTracker::Impl {
     double log_scale = 0;
   };
 
-  FixFactor ComputeFixFactor(const std::vector<const PositionFix*>& fixes, const grid_ops::FloorGrid& fg) const {
-    const double c = options.cell_size_m;
-    const double eps = options.fix.outlier_probability, tau = options.fix.tempering;
-    const double floor_density = eps / total_area_m2;
-    std::vector<double> log_l(fg.size(), 0.0), acc(fg.size());
-    for (const PositionFix* fix : fixes) {
-      std::fill(acc.begin(), acc.end(), 0.0);
-      const double wsum = fix->weights.sum();
-      for (Eigen::Index k = 0; k < fix->means_m.rows(); ++k) {
-        const double w = fix->weights[k] / wsum;
-        if (w <= 0) continue;
-        const int f = fix->floors.size() ? fix->floors[k] : PositionFix::kAnyFloor;
-        if (f != PositionFix::kAnyFloor && f != fg.floor_number) continue;
-        const double sd = options.fix_tempering_by_variance ? fix->sds_m[k] / std::sqrt(tau) : fix->sds_m[k];
-        const double inv2v = 0.5 / (sd * sd);
-        const double scale = (1.0 - eps) * w / (grid_ops::kTwoPi * sd * sd);
-        // 6 sd: beyond it the Gaussian is below 1e-8 of its peak, far under ε / A on any floor.
-        const double reach = 6.0 * sd;
-        const double mx = fix->means_m(k, 0), my = fix->means_m(k, 1);
-        const int x_lo = std::max(0, static_cast<int>(std::floor((mx - reach - fg.x0) / c)));
-        const int x_hi = std::min(fg.nx - 1, static_cast<int>(std::floor((mx + reach - fg.x0) / c)));
-        const int y_lo = std::max(0, static_cast<int>(std::floor((my - reach - fg.y0) / c)));
-        const int y_hi = std::min(fg.ny - 1, static_cast<int>(std::floor((my + reach - fg.y0) / c)));
-        for (int y = y_lo; y <= y_hi; ++y) {
-          const double dy = fg.y0 + (y + 0.5) * c - my;
-          for (int x = x_lo; x <= x_hi; ++x) {
-            const double dx = fg.x0 + (x + 0.5) * c - mx;
-            acc[static_cast<std::size_t>(y) * fg.nx + x] += scale * std::exp(-(dx * dx + dy * dy) * inv2v);
-          }
-        }
-      }
-      const double power = options.fix_tempering_by_variance ? 1.0 : tau;
-      for (std::size_t i = 0; i < acc.size(); ++i) log_l[i] += power * std::log(floor_density + acc[i]);
-    }
-    FixFactor out;
-    out.log_scale = *std::max_element(log_l.begin(), log_l.end());
-    out.factor.resize(fg.size());
-    for (std::size_t i = 0; i < log_l.size(); ++i) out.factor[i] = static_cast<float>(std::exp(log_l[i] - out.log_scale));
-    return out;
-  }
+  // The factor of the fixes applied at one step on one floor's grid (grid_fix_factor.cc).
+  FixFactor ComputeFixFactor(const std::vector<const PositionFix*>& fixes, const FloorGrid& fg) const;
 };
+
+}  // namespace grid_ops
+
+struct GridTracker::Impl : grid_ops::TrackerGrids {};
 
 }  // namespace indoorloc::fusion

@@ -49,13 +49,7 @@ AttitudeOutput RunMahony(const Eigen::Ref<const Eigen::VectorXd>& time_s, const 
   CheckArgument(time_s.size() == n, "time_s", "must have one entry per sample");
   const bool use_mag = mag.rows() > 0;
   if (use_mag) CheckShape(mag, n, 3, "mag");
-  CheckArgument(n >= 2, "acc_mps2", "needs at least 2 samples");
-  CheckFinite(time_s, "time_s");
-  CheckFinite(acc, "acc_mps2");
-  CheckFinite(gyro, "gyro_radps");
-  internal::CheckTimeRange(time_s);
-  internal::CheckAccRange(acc);
-  internal::CheckGyroRange(gyro);
+  internal::CheckImuSamples(time_s, acc, gyro);
   if (use_mag) CheckFinite(mag, "mag");
   if (use_mag) RequireAllInRange(mag, -internal::kMaxAbsMag, internal::kMaxAbsMag, "mag");
   const double median_dt = internal::MedianSamplePeriod(time_s);

@@ -1,6 +1,6 @@
 // Private helpers shared by the pdr algorithms that integrate IMU samples (ZUPT EKF, Mahony,
-// INS-ZUPT increments): the sample period used where timestamps repeat or go backwards, and
-// the gravity check on the first samples.
+// INS-ZUPT increments): the checks of their samples, the sample period used where timestamps
+// repeat or go backwards, and the gravity check on the first samples.
 #pragma once
 
 #include <algorithm>
@@ -34,6 +34,34 @@ void CheckAccRange(const Matrix& acc, const char* name = "acc_mps2") {
 template <typename Matrix>
 void CheckGyroRange(const Matrix& gyro, const char* name = "gyro_radps") {
   RequireAllInRange(gyro, -kMaxAbsGyroRadps, kMaxAbsGyroRadps, name);
+}
+
+/// (N, 3) samples of one sensor as the detectors need them: any N, three columns, finite, within
+/// the plausibility bounds above.
+template <typename Matrix>
+void CheckAccSamples(const Matrix& acc, const char* name = "acc_mps2") {
+  CheckShape(acc, -1, 3, name);
+  CheckFinite(acc, name);
+  CheckAccRange(acc, name);
+}
+template <typename Matrix>
+void CheckGyroSamples(const Matrix& gyro, const char* name = "gyro_radps") {
+  CheckShape(gyro, -1, 3, name);
+  CheckFinite(gyro, name);
+  CheckGyroRange(gyro, name);
+}
+
+/// The samples of an IMU recording as every integrating algorithm (ZUPT EKF, Mahony) needs
+/// them, once their shapes are checked: at least 2 samples, finite, within the bounds above.
+template <typename Vector, typename Matrix>
+void CheckImuSamples(const Vector& time_s, const Matrix& acc, const Matrix& gyro) {
+  CheckArgument(acc.rows() >= 2, "acc_mps2", "needs at least 2 samples");
+  CheckFinite(time_s, "time_s");
+  CheckFinite(acc, "acc_mps2");
+  CheckFinite(gyro, "gyro_radps");
+  CheckTimeRange(time_s);
+  CheckAccRange(acc);
+  CheckGyroRange(gyro);
 }
 
 /// A sample count computed in double (a window in seconds times a rate), rounded and clamped

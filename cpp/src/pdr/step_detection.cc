@@ -83,9 +83,7 @@ std::vector<int> DetectStepsAcceleration(double rate_hz, const Eigen::Ref<const 
                                          const AccelerationStepOptions& options, Eigen::VectorXd* sigma_out) {
   ValidateOptions(options);
   CheckRate(rate_hz);
-  CheckShape(acc, -1, 3, "acc_mps2");
-  CheckFinite(acc, "acc_mps2");
-  internal::CheckAccRange(acc);
+  internal::CheckAccSamples(acc);
   const Eigen::Index n = acc.rows();
   const int w = Samples(options.window_s, rate_hz);
   CheckArgument(n >= 2 * Eigen::Index{w} + 1, "acc_mps2",
@@ -135,9 +133,7 @@ std::vector<int> DetectStepsAcceleration(double rate_hz, const Eigen::Ref<const 
 std::vector<int> DetectStepsGyro(double rate_hz, const Eigen::Ref<const RowMatrixXd>& gyro, const GyroStepOptions& options) {
   ValidateOptions(options);
   CheckRate(rate_hz);
-  CheckShape(gyro, -1, 3, "gyro_radps");
-  CheckFinite(gyro, "gyro_radps");
-  internal::CheckGyroRange(gyro);
+  internal::CheckGyroSamples(gyro);
   const Eigen::Index n = gyro.rows();
   const int half = Samples(options.median_window_s, rate_hz) / 2;
   CheckArgument(n >= 2 * Eigen::Index{half} + 1, "gyro_radps",

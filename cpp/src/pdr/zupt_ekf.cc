@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <string>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -152,22 +153,18 @@ ZuptEkfSummary CheckZuptHealth(const Eigen::Ref<const Eigen::VectorXd>& time_s, 
     h.reasons.push_back("only " + std::to_string(100.0 * h.walking_stance_fraction) +
                         " % of the walking span is stance: zero-velocity updates are missing");
   }
-  if (h.swing_max_s > options.max_plausible_swing_s) {
-    h.reasons.push_back("a swing of " + std::to_string(h.swing_max_s) + " s between stances (limit " +
-                        std::to_string(options.max_plausible_swing_s) + " s): stances are missing");
-  }
-  if (h.longest_stride_m > options.max_plausible_stride_m) {
-    h.reasons.push_back("a stride of " + std::to_string(h.longest_stride_m) + " m (limit " +
-                        std::to_string(options.max_plausible_stride_m) + " m)");
-  }
-  if (h.median_stride_m > options.max_median_stride_m) {
-    h.reasons.push_back("the median stride is " + std::to_string(h.median_stride_m) + " m (limit " +
-                        std::to_string(options.max_median_stride_m) + " m): the path is stretched");
-  }
-  if (h.speed_at_stance_max_mps > options.max_stance_speed_mps) {
-    h.reasons.push_back("a speed of " + std::to_string(h.speed_at_stance_max_mps) + " m/s at a stance onset (limit " +
-                        std::to_string(options.max_stance_speed_mps) + " m/s)");
-  }
+  // A measured value above its limit: "<what><value> <unit><where> (limit <limit> <unit>)<consequence>".
+  const auto above = [&h](double value, double limit, const char* what, const char* unit, const char* where,
+                          const char* consequence) {
+    if (value > limit) {
+      h.reasons.push_back(what + std::to_string(value) + " " + unit + where + " (limit " + std::to_string(limit) +
+                          " " + unit + ")" + consequence);
+    }
+  };
+  above(h.swing_max_s, options.max_plausible_swing_s, "a swing of ", "s", " between stances", ": stances are missing");
+  above(h.longest_stride_m, options.max_plausible_stride_m, "a stride of ", "m", "", "");
+  above(h.median_stride_m, options.max_median_stride_m, "the median stride is ", "m", "", ": the path is stretched");
+  above(h.speed_at_stance_max_mps, options.max_stance_speed_mps, "a speed of ", "m/s", " at a stance onset", "");
   h.implausible = !h.reasons.empty();
   return h;
 }
@@ -181,13 +178,7 @@ ZuptEkfOutput RunZuptEkf(const Eigen::Ref<const Eigen::VectorXd>& time_s, const 
   CheckShape(gyro, n, 3, "gyro_radps");
   CheckArgument(time_s.size() == n, "time_s", "must have one entry per sample");
   CheckArgument(stance.size() == n, "stance", "must have one entry per sample");
-  CheckArgument(n >= 2, "acc_mps2", "needs at least 2 samples");
-  CheckFinite(time_s, "time_s");
-  CheckFinite(acc, "acc_mps2");
-  CheckFinite(gyro, "gyro_radps");
-  internal::CheckTimeRange(time_s);
-  internal::CheckAccRange(acc);
-  internal::CheckGyroRange(gyro);
+  internal::CheckImuSamples(time_s, acc, gyro);
   // Median positive sample period, used where timestamps repeat or go backwards.
   const double median_dt = internal::MedianSamplePeriod(time_s);
 

@@ -32,6 +32,21 @@ thread_local RowMatrixXd RssModel::gradients_;
 
 namespace {
 constexpr double kLog2Pi = 1.8378770664093453;
+
+// One access point's variance δ floored at `floor` (locally constant there, so its gradient
+// vanishes), and the Fisher information of n scans added to *fisher:
+// n (∇m ∇mᵀ / δ + ∇δ ∇δᵀ / (2 δ²)). Returns 1 / δ.
+inline double FloorVarianceAddFisher(double floor, double n, const Eigen::Vector2d& grad_mean, double* variance,
+                                     Eigen::Vector2d* grad_variance, Eigen::Matrix2d* fisher) {
+  if (*variance < floor) {
+    *variance = floor;
+    grad_variance->setZero();
+  }
+  const double inv_var = 1.0 / *variance;
+  *fisher += n * (inv_var * grad_mean * grad_mean.transpose() +
+                  0.5 * inv_var * inv_var * *grad_variance * grad_variance->transpose());
+  return inv_var;
+}
 }  // namespace
 
 bool RssModelOptions::IsValid(std::string* error) const {
@@ -159,14 +174,8 @@ RssLikelihood RssModel::EvaluateEveryAccessPoint(const Eigen::Ref<const RowMatri
     double variance = values[k + i];
     Eigen::Vector2d grad_mean(gradients(0, i), gradients(1, i));
     Eigen::Vector2d grad_variance(gradients(0, k + i), gradients(1, k + i));
-    if (variance < options_.variance_floor_db2) {  // floored: locally constant
-      variance = options_.variance_floor_db2;
-      grad_variance.setZero();
-    }
-    const double inv_var = 1.0 / variance;
-    // Fisher information of n scans: n (∇m ∇mᵀ / δ + ∇δ ∇δᵀ / (2 δ²)).
-    out.fisher += n * (inv_var * grad_mean * grad_mean.transpose() +
-                       0.5 * inv_var * inv_var * grad_variance * grad_variance.transpose());
+    const double inv_var = FloorVarianceAddFisher(options_.variance_floor_db2, n, grad_mean, &variance,
+                                                  &grad_variance, &out.fisher);
     for (Eigen::Index s = 0; s < rss_dbm.rows(); ++s) {
       const double r = rss_dbm(s, i) - mean;
       const double term = 0.5 * r * r * inv_var;
@@ -230,13 +239,8 @@ RssLikelihood RssModel::Evaluate(const Eigen::Ref<const RowMatrixXd>& rss_dbm, c
     const Eigen::Vector2d grad_mean(dm1 * loc.grad_b1[0] + dm2 * loc.grad_b2[0], dm1 * loc.grad_b1[1] + dm2 * loc.grad_b2[1]);
     Eigen::Vector2d grad_variance(dv1 * loc.grad_b1[0] + dv2 * loc.grad_b2[0],
                                   dv1 * loc.grad_b1[1] + dv2 * loc.grad_b2[1]);
-    if (variance < options_.variance_floor_db2) {  // floored: locally constant
-      variance = options_.variance_floor_db2;
-      grad_variance.setZero();
-    }
-    const double inv_var = 1.0 / variance;
-    out.fisher += n * (inv_var * grad_mean * grad_mean.transpose() +
-                       0.5 * inv_var * inv_var * grad_variance * grad_variance.transpose());
+    const double inv_var = FloorVarianceAddFisher(options_.variance_floor_db2, n, grad_mean, &variance,
+                                                  &grad_variance, &out.fisher);
     for (Eigen::Index s = 0; s < n_scans; ++s) {
       const double v = rss_dbm(s, i);
       const double r0 = v - bg_mean[i];

@@ -24,6 +24,17 @@ RowMatrixXd Circle(int n, double phase, double noise, std::uint64_t seed) {
   return x;
 }
 
+// An analog HMM on a noisy circle catalog of n states (seed 3) with k analogs, observing x only
+// with variance 0.01.
+AnalogHMM CircleHmm(int n, int k) {
+  auto catalog = std::make_shared<Catalog>(std::vector<RowMatrixXd>{Circle(n, 0.0, 0.01, 3)});
+  AnalogHmmOptions o;
+  o.k = k;
+  o.observed = {0};
+  o.R = Eigen::MatrixXd::Constant(1, 1, 0.01);
+  return AnalogHMM(catalog, o);
+}
+
 TEST(Catalog, PairsLagAndStride) {
   RowMatrixXd a(5, 1), b(3, 1);
   a << 0, 1, 2, 3, 4;
@@ -133,12 +144,7 @@ TEST(KnnTransitions, IncrementalRuleOnACircleMatchesBruteForce) {
 }
 
 TEST(AnalogHMM, ReconstructsAHiddenComponentAndHandlesMissingValues) {
-  auto catalog = std::make_shared<Catalog>(std::vector<RowMatrixXd>{Circle(3000, 0.0, 0.01, 3)});
-  AnalogHmmOptions o;
-  o.k = 8;
-  o.observed = {0};
-  o.R = Eigen::MatrixXd::Constant(1, 1, 0.01);
-  const AnalogHMM hmm(catalog, o);
+  const AnalogHMM hmm = CircleHmm(3000, 8);
   const RowMatrixXd truth = Circle(200, 0.35, 0.0, 4);
   RowMatrixXd obs(200, 1);
   RandomStream rng(5);
@@ -187,23 +193,18 @@ TEST(AnalogHMM, BadInputGivesClearErrors) {
 }
 
 TEST(AnalogHMM, InitialPriorIsUsedAndUniformIsTheDefault) {
-  auto catalog = std::make_shared<Catalog>(std::vector<RowMatrixXd>{Circle(400, 0.0, 0.01, 3)});
-  AnalogHmmOptions o;
-  o.k = 6;
-  o.observed = {0};
-  o.R = Eigen::MatrixXd::Constant(1, 1, 0.01);
-  const AnalogHMM hmm(catalog, o);
+  const AnalogHMM hmm = CircleHmm(400, 6);
   RowMatrixXd obs = RowMatrixXd::Constant(20, 1, std::nan(""));
   obs(0, 0) = 0.5;  // x = cos = 0.5: two equally likely phases (y = +-0.87) under a uniform prior
   SmoothOptions so;
   const SmoothingOutput uniform = hmm.Smooth(obs, so);
   SmoothOptions given = so;
-  given.initial = Eigen::VectorXd::Ones(catalog->num_states());
+  given.initial = Eigen::VectorXd::Ones(hmm.catalog().num_states());
   const SmoothingOutput explicit_uniform = hmm.Smooth(obs, given);
   EXPECT_LT((uniform.mean - explicit_uniform.mean).cwiseAbs().maxCoeff(), 1e-12);
   EXPECT_LT(std::abs(uniform.filtering_mean(0, 1)), 0.15);  // the two phases cancel
   // A prior on the upper half (y > 0) picks the phase y = +0.87.
-  for (int i = 0; i < catalog->num_states(); ++i) given.initial[i] = catalog->states()(i, 1) > 0.0 ? 1.0 : 0.0;
+  for (int i = 0; i < hmm.catalog().num_states(); ++i) given.initial[i] = hmm.catalog().states()(i, 1) > 0.0 ? 1.0 : 0.0;
   const SmoothingOutput upper = hmm.Smooth(obs, given);
   EXPECT_NEAR(upper.filtering_mean(0, 1), std::sqrt(0.75), 0.1);
 }

@@ -6,19 +6,12 @@
 
 #include <gtest/gtest.h>
 
+#include "invalid_argument_message.h"
+
 #include "indoorloc/core/options.h"
 
 namespace indoorloc {
 namespace {
-
-std::string MessageOf(const std::function<void()>& fn) {
-  try {
-    fn();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "<no exception>";
-}
 
 TEST(Check, MessageNamesArgumentAndProblem) {
   EXPECT_EQ(MessageOf([] { ThrowInvalidArgument("speed_mps", "must be >= 0"); }),

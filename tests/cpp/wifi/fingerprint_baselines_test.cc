@@ -13,6 +13,8 @@
 
 #include <gtest/gtest.h>
 
+#include "invalid_argument_message.h"
+
 namespace indoorloc::wifi {
 namespace {
 
@@ -62,15 +64,6 @@ RowMatrixXd RandomScans(int count, unsigned seed, double noise_db) {
   RowMatrixXd scans = PathLossRss(positions);
   for (Eigen::Index i = 0; i < scans.size(); ++i) scans.data()[i] += noise(rng);
   return scans;
-}
-
-std::string MessageOf(const std::function<void()>& fn) {
-  try {
-    fn();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "<no exception>";
 }
 
 // Rows sorted by (cost, index), the first k kept.

@@ -52,9 +52,11 @@ namespace indoorloc::fusion {
 
 // Defaults of λ, ε, τ and the tempering mode: the leave-one-floor-out choice on the six floors of
 // the competition mall with the pooled shared-AP WiFi fixes (docs/fusion_real.md, "Settings by
-// leave-one-floor-out"): τ = 1 (no tempering) and ε = 0.1 were chosen for every held-out floor,
-// λ = -1 for five of six. The cell size (1 m), the offset bins (9 over ±2.5 sd) and the process
-// noise were fixed in advance (a cell well below the fixes' spread and the waypoints' 5 m spacing).
+// leave-one-floor-out"): τ = 1 (no tempering) was chosen for every held-out floor, λ = -1 for five
+// of six; ε = 0.01 in a second round (with the PDR's heading sd, 20 deg) for five of six. The cell
+// size (1 m), the offset bins (9 over ±2.5 sd) and the process noise (0.1 m; 0.3 m was worse in the
+// second round) were fixed in advance (a cell well below the fixes' spread and the waypoints' 5 m
+// spacing).
 struct GridTrackerOptions {
   /// Side of the grid's square cells [m].
   double cell_size_m = 1.0;
@@ -73,8 +75,15 @@ struct GridTrackerOptions {
   double position_noise_m = 0.1;
   /// λ: log-weight per step of a cell outside walkable space; -inf: hard walls.
   double wall_log_penalty = -1.0;
-  /// ε and τ of the position fixes (position_fix.h).
-  FixLikelihoodOptions fix{/*outlier_probability=*/0.1, /*tempering=*/1.0};
+  /// Obstacles eroded by this margin [m]: a point inside an obstacle (or outside the outline)
+  /// closer than this to its boundary counts as walkable. Why: surveyors and shoppers walk
+  /// within a metre of shop fronts, and a path that grazes a front would otherwise pay λ at
+  /// every step, which a fix bounded by ε cannot outweigh. 0: the plan as drawn.
+  double wall_margin_m = 0.0;
+  /// ε and τ of the position fixes (position_fix.h). ε: leave-one-floor-out over {0.01, 0.02,
+  /// 0.05, 0.1, 0.3} with the PDR heading sd (docs/fusion_real.md, "Second round"): 0.01 for
+  /// five of six held-out floors, the grid's lower edge (0.02 within 0.04 m).
+  FixLikelihoodOptions fix{/*outlier_probability=*/0.01, /*tempering=*/1.0};
   /// How τ weakens a fix: false, the whole likelihood to the power τ (position_fix.h, as the
   /// particle tracker); true, the components' variances divided by τ with the outlier floor kept
   /// at ε / A (a tempered Gaussian is the Gaussian with variance σ² / τ), so that one fix still

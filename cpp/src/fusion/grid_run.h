@@ -1,0 +1,63 @@
+// Internal to the grid tracker's batch run (not installed): the pieces of GridTracker::Run,
+// one concept per file.
+//   grid_tracker.cc      the tracker (grid construction) and Run: input checks, the run plan
+//                        (fixes attached to steps, fix factors, memory), the layers in parallel
+//   grid_layers.cc       the layer set: floors x heading-offset bins x scale bins and their prior
+//   grid_layer_pass.cc   one layer's forward filter and forward-backward smoother
+//   grid_combine.cc      the layers' mixture per step: means, covariances, floor and offset
+//                        posteriors, spatial medians, the covariance calibration
+// The model is in cpp/include/indoorloc/fusion/grid_tracker.h; the operators in grid_ops.h.
+#pragma once
+#include <cstddef>
+#include <vector>
+
+#include "grid_ops.h"
+
+namespace indoorloc::fusion::grid_run {
+
+// What Run decided before the layers run; read-only while they do.
+struct RunPlan {
+  const grid_ops::TrackerGrids* impl = nullptr;
+  const std::vector<StepInput>* steps = nullptr;
+  const std::vector<PositionFix>* fixes = nullptr;
+  const TrackStart* start = nullptr;
+  int start_floor_index = -1;                    // known start: its floor's index
+  int m_steps = 0;
+  int k0 = 0;                                    // first step after a known start (0: unknown)
+  bool smooth = false;
+  grid_ops::GridLayers layer_set;
+  std::vector<std::vector<const PositionFix*>> fixes_at;  // per step: the fixes applied there
+  int n_fixes = 0;
+  // Per step with fixes, per floor in use: the fix factor (shared by the layers of a floor).
+  std::vector<std::vector<grid_ops::TrackerGrids::FixFactor>> factor;
+  int threads = 1;
+  bool store_all = false;  // the smoother keeps every forward grid (else checkpoints)
+  int segment = 1;         // steps per checkpointed segment
+  int q = 1;               // cells per side of a spatial-median block
+  double bytes = 0;        // memory at the peak (the summary's)
+
+  int num_floors() const { return static_cast<int>(impl->grids.size()); }
+  bool has_fix(int k) const { return !fixes_at[k].empty(); }
+  // Blocks of q x q cells of a floor's grid.
+  std::size_t BlocksOf(int floor_index) const {
+    const grid_ops::FloorGrid& g = impl->grids[floor_index];
+    return static_cast<std::size_t>((g.nx + q - 1) / q) * static_cast<std::size_t>((g.ny + q - 1) / q);
+  }
+};
+
+// One layer's outputs per step (steps before k0 left default).
+struct LayerRun {
+  std::vector<grid_ops::LayerStep> filtered, smoothed;
+  // Spatial medians: per step the block summaries (mass fraction, x [m], y [m]), step-major.
+  std::vector<float> filtered_blocks, smoothed_blocks;
+  bool dead = false;  // every cell ruled out (hard walls)
+};
+
+// Filters (and with plan.smooth smooths) layer `layer_index` into *out. `store` holds the
+// smoother's forward grids when plan.store_all (reused across the layers of one thread).
+void RunLayer(const RunPlan& plan, int layer_index, std::vector<float>* store, LayerRun* out);
+
+// The result of the run from its layers (the summary's counts filled; its seconds not).
+GridTrackResult CombineLayers(const RunPlan& plan, const std::vector<LayerRun>& runs);
+
+}  // namespace indoorloc::fusion::grid_run

@@ -1,0 +1,143 @@
+"""The output of ``indoorloc fusion evaluate`` (:mod:`indoorloc.experiments.fusion_real`): the
+JSON contract from the walk scores (:func:`summarize`, docs/fusion_real.md) and its Markdown
+tables (:func:`markdown`)."""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Dict, Sequence
+
+import numpy as np
+
+from indoorloc.experiments.fusion_real_settings import METHODS, SELECT_OBJECTIVE, RealSettings, WalkScore
+from indoorloc.experiments.fusion_real_walk import _wrap
+
+
+def _stats(errors: np.ndarray) -> Dict[str, float]:
+    return {"mean_m": float(np.mean(errors)), "median_m": float(np.median(errors)),
+            "p90_m": float(np.percentile(errors, 90)), "n_waypoints": int(errors.size)}
+
+
+#: Survey-coverage classes: distance from a test waypoint to the nearest training scan [m].
+COVERAGE_CLASSES = (("within_5m", 0.0, 5.0), ("5_to_10m", 5.0, 10.0), ("beyond_10m", 10.0, math.inf))
+
+
+def _extra_stats(scores: Sequence[WalkScore], name: str) -> Dict[str, Any]:
+    """The keys added beside issue 15's (docs/fusion_real.md): ``first_10s_mean_m`` (mean error
+    at waypoints in the walk's first 10 s), ``by_coverage`` (stats per coverage class),
+    ``region95_coverage`` (fraction of waypoints in the estimate's 95 % ellipse, methods with a
+    covariance), ``offset_error_deg`` (mean and median |final heading offset - the walk's
+    residual|, methods with an offset state)."""
+    sel = [s for s in scores if name in s.errors_m]
+    e = np.concatenate([s.errors_m[name] for s in sel])
+    t = np.concatenate([s.t_s for s in sel])
+    out: Dict[str, Any] = {"first_10s_mean_m": float(e[t < 10.0].mean()) if (t < 10.0).any() else None}
+    cov = [s.coverage_m if s.coverage_m is not None else np.full(s.t_s.size, np.nan) for s in sel]
+    c = np.concatenate(cov)
+    out["by_coverage"] = {}
+    for key, lo, hi in COVERAGE_CLASSES:
+        m = (c >= lo) & (c < hi)
+        out["by_coverage"][key] = _stats(e[m]) if m.any() else None
+    inside = [s.in_region95[name] for s in sel if name in s.in_region95]
+    if inside:
+        out["region95_coverage"] = float(np.concatenate(inside).mean())
+    off = np.array([s.offset_error_rad[name] for s in sel if name in s.offset_error_rad])
+    if off.size:
+        out["offset_error_deg"] = {"mean_abs": float(np.degrees(np.abs(off)).mean()),
+                                   "median_abs": float(np.degrees(np.median(np.abs(off)))), "n_walks": int(off.size)}
+    return out
+
+
+#: Bins of the time since the walk's first waypoint for "error against time" [s].
+TIME_BINS_S = (0.0, 10.0, 20.0, 30.0, 45.0, math.inf)
+
+
+def summarize(scores: Sequence[WalkScore], settings: RealSettings, seconds: float) -> dict:
+    """The JSON contract of ``indoorloc fusion evaluate`` (docs/fusion_real.md):
+    ``{"methods": {NAME: {"mean_m", "median_m", "p90_m", "n_waypoints"}}, "waypoints": [{"floor",
+    "walk", "method", "t_s", "error_m"}], "settings": {...}}`` plus informative extras:
+    ``per_floor``, ``error_vs_time`` (mean error per bin of time since the walk's start),
+    ``floor_identification`` (accuracy when the floor is not given), ``seconds``,
+    ``mean_seconds_per_walk``."""
+    methods, per_floor, rows, by_time = {}, {}, [], {}
+    for name in METHODS:
+        e = [s.errors_m[name] for s in scores if name in s.errors_m]
+        if not e:
+            continue
+        methods[name] = _stats(np.concatenate(e))
+        methods[name].update(_extra_stats(scores, name))
+        for fl in sorted({s.floor for s in scores}):
+            ef = [s.errors_m[name] for s in scores if s.floor == fl and name in s.errors_m]
+            if ef:
+                per_floor.setdefault(fl, {})[name] = _stats(np.concatenate(ef))
+        t = np.concatenate([s.t_s for s in scores if name in s.errors_m])
+        ev = np.concatenate(e)
+        bins = []
+        for lo, hi in zip(TIME_BINS_S[:-1], TIME_BINS_S[1:]):
+            sel = (t >= lo) & (t < hi)
+            bins.append({"from_s": lo, "to_s": None if math.isinf(hi) else hi, "n_waypoints": int(sel.sum()),
+                         "mean_m": float(ev[sel].mean()) if sel.any() else None})
+        by_time[name] = bins
+    for s in scores:
+        for name, e in s.errors_m.items():
+            if name.startswith("_"):  # the alternatives kept for --select
+                continue
+            for t, v in zip(s.t_s, e):
+                rows.append({"floor": s.floor, "walk": s.walk, "method": name, "t_s": round(float(t), 3),
+                             "error_m": round(float(v), 4)})
+    walk_seconds = {}
+    for name in tuple(METHODS) + ("floor_identification",):
+        v = [s.seconds[name] for s in scores if name in s.seconds]
+        if v:
+            walk_seconds[name] = float(np.mean(v))
+    out = {"methods": methods, "waypoints": rows, "settings": settings.to_dict(), "per_floor": per_floor,
+           "error_vs_time": by_time, "seconds": round(seconds, 2), "mean_seconds_per_walk": walk_seconds}
+    # Per walk: the final heading offset of each method with an offset state against the walk's
+    # residual measured from its waypoints (both relative to the training yaw offset) [deg].
+    out["heading_offsets"] = [
+        {"floor": s.floor, "walk": s.walk, "residual_deg": round(math.degrees(s.heading_residual_rad), 3),
+         "final_deg": {name: round(math.degrees(_wrap(s.heading_residual_rad + err)), 3)
+                       for name, err in s.offset_error_rad.items() if name != "fusion_no_heading_offset"}}
+        for s in scores if s.heading_residual_rad is not None and math.isfinite(s.heading_residual_rad)]
+    ident = [s for s in scores if s.floor_correct is not None]
+    if ident:
+        correct = np.concatenate([s.floor_correct for s in ident])
+        free = np.concatenate([s.floor_free_errors_m for s in ident])
+        out["floor_identification"] = {
+            "accuracy": float(correct.mean()), "n_waypoints": int(correct.size),
+            "walks_all_correct": int(sum(bool(s.floor_correct.all()) for s in ident)), "n_walks": len(ident),
+            "per_floor": {fl: float(np.concatenate([s.floor_correct for s in ident if s.floor == fl]).mean())
+                          for fl in sorted({s.floor for s in ident})},
+            # Position error of that run where the floor was right (the floor-given default is fusion_smoother).
+            "mean_m_where_floor_correct": float(np.nanmean(free)) if np.isfinite(free).any() else None,
+        }
+    return out
+
+def markdown(result: dict) -> str:
+    lines = ["| method | mean [m] | median [m] | p90 [m] | waypoints |", "|---|---|---|---|---|"]
+    for name, m in result["methods"].items():
+        lines.append(f"| {name} | {m['mean_m']:.2f} | {m['median_m']:.2f} | {m['p90_m']:.2f} | {m['n_waypoints']} |")
+    lines += ["", "Per floor (mean / median / p90 [m]):", "",
+              "| method | " + " | ".join(result["per_floor"]) + " |", "|---|" + "---|" * len(result["per_floor"])]
+    for name in result["methods"]:
+        cells = []
+        for fl, m in result["per_floor"].items():
+            s = m.get(name)
+            cells.append(f"{s['mean_m']:.1f} / {s['median_m']:.1f} / {s['p90_m']:.1f}" if s else "-")
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    bins = next(iter(result["error_vs_time"].values()), [])
+    if bins:
+        heads = [f"{b['from_s']:.0f}-{b['to_s']:.0f} s" if b["to_s"] is not None else f">= {b['from_s']:.0f} s" for b in bins]
+        lines += ["", "Mean error [m] against time since the walk's first waypoint:", "",
+                  "| method | " + " | ".join(heads) + " |", "|---|" + "---|" * len(heads)]
+        for name, bs in result["error_vs_time"].items():
+            lines.append(f"| {name} | " + " | ".join("-" if b["mean_m"] is None else f"{b['mean_m']:.1f}" for b in bs) + " |")
+    fi = result.get("floor_identification")
+    if fi:
+        lines += ["", f"Floor identification (floor not given, {SELECT_OBJECTIVE} on all floors' plans and fixes): "
+                  f"{100 * fi['accuracy']:.1f} % of {fi['n_waypoints']} waypoints, {fi['walks_all_correct']} of "
+                  f"{fi['n_walks']} walks right throughout; per floor "
+                  + ", ".join(f"{k} {100 * v:.1f} %" for k, v in fi["per_floor"].items()) + "."]
+    lines.append("")
+    lines.append(f"{len({(w['floor'], w['walk']) for w in result['waypoints']})} walks in {result['seconds']:.0f} s.")
+    return "\n".join(lines)

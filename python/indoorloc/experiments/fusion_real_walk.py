@@ -1,0 +1,314 @@
+"""One test walk scored by every method of ``indoorloc fusion evaluate``
+(:mod:`indoorloc.experiments.fusion_real`): WiFi only, PDR, the peer, the trackers of both
+engines and their ablations, and floor identification; each scored at the walk's waypoints."""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from dataclasses import replace
+from typing import Any, Dict, Sequence, Tuple
+
+import numpy as np
+
+from indoorloc import fusion, wifi
+from indoorloc.fusion import crowdsourced_map as wc, wifi_fixes as wfx
+from indoorloc.fusion import site_model
+from indoorloc.pdr import handheld as ph
+from indoorloc.experiments.fusion_real_settings import COVARIANCE_METHODS, FoldModels, RealSettings, WalkScore
+
+
+def _nearest_rows(times_s: np.ndarray, row_t: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    idx = np.clip(np.searchsorted(row_t, times_s), 0, len(row_t) - 1)
+    prev = np.clip(idx - 1, 0, len(row_t) - 1)
+    use_prev = np.abs(row_t[prev] - times_s) < np.abs(row_t[idx] - times_s)
+    return rows[np.where(use_prev, prev, idx)]
+
+
+def _interp_track(t_query: np.ndarray, t_steps: np.ndarray, xy: np.ndarray) -> np.ndarray:
+    if t_steps.size == 0:
+        return np.full((t_query.size, 2), np.nan)
+    return np.stack([np.interp(t_query, t_steps, xy[:, 0]), np.interp(t_query, t_steps, xy[:, 1])], axis=1)
+
+
+def _walkable_start(plan, xy: np.ndarray, floor_index: int = 0) -> np.ndarray:
+    """The surveyed start, or with hard walls the nearest walkable point on rings around it
+    (a few starts lie inside a shop polygon; the tracker refuses those with hard walls)."""
+    if plan.is_walkable(np.asarray(xy, float)[None, :], floor_index)[0]:
+        return np.asarray(xy, float)
+    angles = np.linspace(0.0, 2.0 * np.pi, 32, endpoint=False)
+    for r in np.arange(0.25, 30.0, 0.25):
+        ring = np.asarray(xy, float) + r * np.c_[np.cos(angles), np.sin(angles)]
+        ok = plan.is_walkable(ring, floor_index)
+        if ok.any():
+            return ring[np.flatnonzero(ok)[0]]
+    return np.asarray(xy, float)
+
+
+def survey_coverage_m(waypoints_xy_m: np.ndarray, train_xy_m: np.ndarray, tree=None) -> np.ndarray:
+    """Distance [m] from each waypoint (W, 2) to the nearest training scan position (N, 2), N > 0.
+
+    With ``tree`` (a ``scipy.spatial.cKDTree`` of ``train_xy_m``, built once per fold) only the
+    scans within the tree's nearest distance (plus a rounding margin) are measured, by the same
+    formula as the brute-force minimum over all N, so the values equal it bit for bit."""
+    wxy = np.asarray(waypoints_xy_m, float)
+    if tree is None:
+        return np.sqrt(((wxy[:, None, :] - train_xy_m[None, :, :]) ** 2).sum(axis=2)).min(axis=1)
+    d_tree, _ = tree.query(wxy, k=1)
+    out = np.empty(wxy.shape[0])
+    for i, near in enumerate(tree.query_ball_point(wxy, d_tree * (1.0 + 1e-9) + 1e-9)):
+        cand = train_xy_m[np.asarray(near, dtype=np.intp)]
+        out[i] = np.sqrt(((wxy[i][None, None, :] - cand[None, :, :]) ** 2).sum(axis=2)).min()
+    return out
+
+
+def replace_options(options: fusion.TrackerOptions, **changes) -> fusion.TrackerOptions:
+    """A copy of TrackerOptions with some fields changed (its bound ``replace``, which validates)."""
+    return options.replace(**changes)
+
+
+def _score_walk(walk, steps_raw: ph.HandheldSteps, models: FoldModels, settings: RealSettings, peer,
+                methods: Sequence[str]) -> WalkScore:
+    fl = models.floor
+    wt = np.asarray(walk.waypoint_t_s, float)
+    wxy = np.asarray(walk.waypoint_xy_m, float)
+    score = WalkScore(fl.name, walk.walk_id, wt - wt[0], waypoint_t0=float(wt[0]), waypoint_xy_m=wxy)
+    train_xy = models.database.positions_m[models.database.floors == fl.number]
+    if train_xy.size:
+        score.coverage_m = survey_coverage_m(wxy, train_xy, models.coverage_tree)
+    err = score.errors_m
+    want = set(methods)
+
+    def put(name: str, est: np.ndarray) -> None:
+        err[name] = np.hypot(*(np.asarray(est) - wxy).T)
+
+    fixes = wfx.fixes_for_walk(walk, models.database)
+    centres = wfx.fix_centres(fixes) if len(fixes) else np.zeros((0, 2))
+    # WiFi only: the scan nearest in time to each waypoint.
+    if len(fixes) and "wifi_knn" in want:
+        put("wifi_knn", _nearest_rows(wt, fixes.times_s, centres))
+    if "wifi_model" in want:
+        scan_t, rss_fresh, _ = wc.scan_matrix(walk, models.crowd.bssids, dedup=False, max_age_s=settings.wifi_max_age_s)
+        if scan_t.size:
+            q = wc.prepare(_nearest_rows(wt, scan_t, rss_fresh), models.crowd.settings.not_heard_dbm)
+            grid = (models.crowd_grid if models.crowd_grid is not None
+                    else wifi.GridPosterior(models.crowd.model, settings.grid_spacing_m))
+            put("wifi_model", np.asarray(grid.locate(q)["positions_m"]))
+    # PDR: calibrated steps, headings rotated into the floor frame by the training yaw offset.
+    cal = models.cal
+    steps = ph.rescale(steps_raw, cal.options)
+    pdr_steps = site_model.tracker_steps(steps_raw, cal, settings.track_settings())
+    if "pdr_only" in want:
+        put("pdr_only", ph.pdr_track(steps, wxy[0], wt, yaw_offset_rad=cal.yaw_offset_rad))
+    if peer is not None and "peer_costmin" in want and len(fixes) and len(pdr_steps):
+        tic = time.perf_counter()
+        # Positions before the first step and after each step: M + 1 times, M displacements.
+        t_nodes = np.r_[min(float(wt[0]), float(pdr_steps.times_s[0]) - 0.5), pdr_steps.times_s]
+        track = peer.costmin_track(t_nodes, pdr_steps.displacements_m, fixes.times_s, centres)
+        score.seconds["peer_costmin"] = time.perf_counter() - tic
+        put("peer_costmin", peer.evaluate_at(wt, t_nodes, track))
+    if len(pdr_steps) == 0:
+        return score
+    spread = max(cal.yaw_offset_spread_rad, 1e-3)
+    residual = heading_residual_rad(steps, cal.yaw_offset_rad, wt, wxy)
+    score.heading_residual_rad = residual
+    options = settings.tracker_options(unknown_start_heading_sd_rad=spread, start_heading_offset_sd_rad=spread)
+    start_xy = wxy[0] if not math.isinf(settings.wall_log_penalty) else _walkable_start(fl.plan, wxy[0])
+    known = {"position_m": start_xy, "floor": fl.number, "heading_offset_rad": 0.0, "time_s": float(wt[0])}
+    smoother = fusion.SmootherOptions(num_trajectories=settings.smoother_trajectories,
+                                      max_particles=settings.smoother_max_particles, seed=settings.seed)
+    known_options = replace_options(options, fix_tempering=settings.known_start_fix_tempering,
+                                    fix_outlier_probability=settings.known_start_fix_outlier_probability)
+    known_fixes = fixes
+    if settings.known_start_fix_metric != models.database.settings.metric and "fusion_known_start" in want:
+        known_db = models.database.with_settings(replace(models.database.settings, metric=settings.known_start_fix_metric))
+        known_fixes = wfx.fixes_for_walk(walk, known_db)
+    particle = settings.engine == "particle"
+    # The particle engine's runs: the fusion_* methods when it is the engine, else particle_*.
+    p_unknown, p_smoother, p_known = (("fusion_unknown_start", "fusion_smoother", "fusion_known_start") if particle
+                                      else ("particle_unknown_start", "particle_smoother", "particle_known_start"))
+    runs = {
+        "unknown": dict(start=None, smoother=smoother, keys=(p_unknown, p_smoother)),
+        "known": dict(start=known, smoother=None, keys=(p_known,), options=known_options, fixes=known_fixes),
+    }
+    if particle:
+        runs.update({
+            "fusion_no_walls": dict(start=None, smoother=smoother, keys=(None, "fusion_no_walls")),
+            "fusion_no_wifi": dict(start=known, smoother=smoother, fixes=None, keys=(None, "fusion_no_wifi")),
+            "fusion_no_heading_offset": dict(start=None, smoother=smoother, keys=(None, "fusion_no_heading_offset"),
+                                             options=replace_options(options, heading_offset_walk_rad=0.0,
+                                                                     unknown_start_heading_sd_rad=0.0)),
+        })
+    for name, run in runs.items():
+        if not want.intersection(k for k in run["keys"] if k):
+            continue
+        tic = time.perf_counter()
+        # No walls: the outline without its shops, so that the start and the fixes' outlier
+        # density still cover the building's extent.
+        run_plan = fl.outline_plan if name == "fusion_no_walls" else fl.plan
+        result = fusion.track(pdr_steps, plan=run_plan, start=run["start"], options=run.get("options", options),
+                              smoother=run["smoother"], fixes=run.get("fixes", fixes))
+        seconds = time.perf_counter() - tic
+        filtered, smoothed = run["keys"][0], run["keys"][-1] if len(run["keys"]) > 1 else None
+        idx = np.clip(np.searchsorted(pdr_steps.times_s, wt), 0, len(pdr_steps) - 1)
+        if filtered:
+            put(filtered, _interp_track(wt, pdr_steps.times_s, result["mean_m"]))
+            score.seconds[filtered] = seconds
+            if filtered in COVARIANCE_METHODS:
+                score.in_region95[filtered] = fusion.region95_contains(
+                    _interp_track(wt, pdr_steps.times_s, result["mean_m"]), np.asarray(result["covariance_m2"])[idx], wxy)
+        if smoothed:
+            put(smoothed, _interp_track(wt, pdr_steps.times_s, result["smoothed_m"]))
+            score.seconds[smoothed] = seconds
+            if smoothed in COVARIANCE_METHODS:
+                score.in_region95[smoothed] = fusion.region95_contains(
+                    _interp_track(wt, pdr_steps.times_s, result["smoothed_m"]),
+                    np.asarray(result["smoothed_covariance_m2"])[idx], wxy)
+        if name == "unknown" and smoothed:
+            score.offset_error_rad[smoothed] = _wrap(float(np.asarray(result["heading_offset_rad"])[-1]) - residual)
+    if not particle:
+        _score_walk_grid(score, put, pdr_steps, fixes, known_fixes, known, models, settings, want, residual)
+    if settings.floor_identification and models.all_plan is not None and "fusion_smoother" in want:
+        _identify_floor(score, walk, pdr_steps, models, settings, options, smoother, spread)
+    return score
+
+
+def _identify_floor(score: WalkScore, walk, pdr_steps, models: FoldModels, settings: RealSettings, options, smoother,
+                    spread: float) -> None:
+    """Floor identification of one walk (``score.floor_correct``, ``score.floor_free_errors_m``):
+    the default with the floor not given, on the all-floor plan and database of the fold."""
+    fl = models.floor
+    wt = score.t_s + score.waypoint_t0
+    wxy = score.waypoint_xy_m
+    all_fixes = wfx.fixes_for_walk(walk, models.all_database)
+    tic = time.perf_counter()
+    plan_floors = list(models.all_plan.floors)
+    step_idx = np.clip(np.searchsorted(pdr_steps.times_s, wt), 0, len(pdr_steps) - 1)
+    if settings.engine == "particle":
+        result = fusion.track(pdr_steps, plan=models.all_plan, options=options, smoother=smoother, fixes=all_fixes)
+        est_floor = np.asarray(plan_floors)[np.asarray(result["smoothed_floor_index"])[step_idx]]
+        track_m = result["smoothed_m"]
+    else:
+        # All floors, filter only, coarse cells, plus the APs' evidence: the floor with the most
+        # evidence (site_model.identify_floor, the code of ``indoorloc track --floor auto``);
+        # then the floor-given smoother on it (a walk stays on one floor in this model).
+        ts = settings.track_settings()
+        ident = _grid_tracker(models.all_plan, _identification_options(settings, spread), fl.name + "/all")
+        ap = (site_model.walk_ap_log_likelihood(walk, models.all_database, models.all_ap_rates, ts)
+              if ts.identification_ap_weight > 0 and models.all_ap_rates is not None else None)
+        found = site_model.identify_floor(ident, plan_floors, pdr_steps, all_fixes, ap, ts.identification_ap_weight)
+        est_floor = np.full(wt.size, found["floor"])
+        track_m = score.smoothed_track_m if found["floor"] == fl.number else np.asarray(found["result"]["mean_m"])
+    score.seconds["floor_identification"] = time.perf_counter() - tic
+    score.floor_correct = est_floor == fl.number
+    score.floor_free_errors_m = np.where(score.floor_correct,
+                                         np.hypot(*(_interp_track(wt, pdr_steps.times_s, track_m) - wxy).T), np.nan)
+
+
+def _wrap(angle_rad: float) -> float:
+    return float(math.remainder(angle_rad, 2.0 * math.pi))
+
+
+def heading_residual_rad(steps: ph.HandheldSteps, yaw_offset_rad: float, waypoint_t_s: np.ndarray,
+                         waypoint_xy_m: np.ndarray) -> float:
+    """The walk's residual heading offset [rad]: the rotation that best maps the PDR displacements
+    between consecutive waypoints (headings already rotated by ``yaw_offset_rad``) onto the
+    surveyed ones, in the least-squares sense (Procrustes angle). The truth the trackers' learnt
+    offset is compared with."""
+    pdr = ph.pdr_track(steps, waypoint_xy_m[0], waypoint_t_s, yaw_offset_rad=yaw_offset_rad)
+    p, w = np.diff(pdr, axis=0), np.diff(waypoint_xy_m, axis=0)
+    return float(math.atan2(np.sum(p[:, 0] * w[:, 1] - p[:, 1] * w[:, 0]), np.sum(p * w)))
+
+
+_TRACKERS: Dict[Tuple[str, Tuple], Any] = {}
+_TRACKERS_LOCK = threading.Lock()
+
+
+def _grid_tracker(plan, options, key: str):
+    """The GridTracker of a plan and options, built once (its walkable fractions cost a batch of
+    point queries) and shared by the threads (its runs are thread-safe)."""
+    k = (key, tuple(sorted(options.to_dict().items())))
+    with _TRACKERS_LOCK:
+        tracker = _TRACKERS.get(k)
+        if tracker is None or tracker[0] is not plan:
+            tracker = (plan, fusion.GridTracker(plan, options))
+            _TRACKERS[k] = tracker
+        return tracker[1]
+
+
+def _grid_options(settings: RealSettings, spread_rad: float, **changes):
+    median = settings.point_estimate == "median" or settings.score_both_point_estimates
+    return settings.grid_options.replace(heading_offset_sd_rad=spread_rad, spatial_median=median, **changes)
+
+
+def _identification_options(settings: RealSettings, spread_rad: float):
+    median = settings.point_estimate == "median" or settings.score_both_point_estimates
+    return site_model.identification_grid_options(settings.track_settings(), spread_rad, median)
+
+
+def _score_walk_grid(score: WalkScore, put, pdr_steps, fixes, known_fixes, known: dict, models: FoldModels,
+                     settings: RealSettings, want, residual: float) -> None:
+    """The fusion_* methods on the grid engine (unknown start: filter and smoother; known start;
+    the ablations)."""
+    fl = models.floor
+    wt = score.t_s + score.waypoint_t0
+    wxy = score.waypoint_xy_m
+    idx = np.clip(np.searchsorted(pdr_steps.times_s, wt), 0, len(pdr_steps) - 1)
+    spread = max(models.cal.yaw_offset_spread_rad, 1e-3)
+    base = _grid_options(settings, spread)
+    tracker = _grid_tracker(fl.plan, base, fl.name)
+
+    median = settings.point_estimate == "median"
+
+    def run(name_filtered, name_smoothed, tracker_, start, fx, smooth=True):
+        tic = time.perf_counter()
+        r = fusion.track_grid(tracker_, pdr_steps, fixes=fx, start=start, smooth=smooth)
+        seconds = time.perf_counter() - tic
+        for name, key, cov_key in ((name_filtered, "mean_m", "covariance_m2"),
+                                   (name_smoothed, "smoothed_m", "smoothed_covariance_m2")):
+            if not name or key not in r:
+                continue
+            # Both point estimates are kept (hidden keys) for the leave-one-floor-out choice.
+            median_key = "median_m" if key == "mean_m" else "smoothed_median_m"
+            alternatives = {"mean": _interp_track(wt, pdr_steps.times_s, r[key])}
+            if median_key in r and start is None:
+                alternatives["median"] = _interp_track(wt, pdr_steps.times_s, r[median_key])
+            for pe, est_pe in alternatives.items():
+                put(f"_alt/{name}/{pe}", est_pe)
+            est = alternatives["median"] if median and "median" in alternatives else alternatives["mean"]
+            put(name, est)
+            score.seconds[name] = seconds
+            if name in COVARIANCE_METHODS:
+                score.in_region95[name] = fusion.region95_contains(est, np.asarray(r[cov_key])[idx], wxy)
+                prefix = "" if key == "mean_m" else "smoothed_"
+                score.calibration_inputs[name] = {
+                    "error_m": est - wxy,
+                    "posterior_covariance_m2": np.asarray(r[prefix + "posterior_covariance_m2"])[idx],
+                    "fix_distance_m": np.asarray(r[prefix + "fix_distance_m"])[idx]}
+        return r
+
+    if want & {"fusion_unknown_start", "fusion_smoother"} or settings.floor_identification:
+        r = run("fusion_unknown_start", "fusion_smoother", tracker, None, fixes)
+        score.offset_error_rad["fusion_smoother"] = _wrap(float(r["walk_heading_offset_rad"]) - residual)
+        # The offset prior's own error (its centre, 0: the training yaw offset), for comparison.
+        score.offset_error_rad["fusion_no_heading_offset"] = _wrap(0.0 - residual)
+        score.smoothed_track_m = np.asarray(r["smoothed_m"])
+    # The known start's own choice of τ, ε, walls and tempering mode (LOFO on its own error).
+    known_tracker = _grid_tracker(fl.plan, base.replace(
+        fix_tempering=settings.known_start_fix_tempering,
+        fix_outlier_probability=settings.known_start_fix_outlier_probability,
+        wall_log_penalty=settings.known_start_wall_log_penalty,
+        fix_tempering_by_variance=settings.known_start_fix_tempering_by_variance,
+        filtered_covariance_scale=settings.known_start_covariance_scale,
+        filtered_covariance_floor_m=settings.known_start_covariance_floor_m,
+        filtered_covariance_fix_gain=settings.known_start_covariance_fix_gain), fl.name)
+    if "fusion_known_start" in want:
+        run("fusion_known_start", None, known_tracker, known, known_fixes, smooth=False)
+    if "fusion_no_walls" in want:
+        run(None, "fusion_no_walls", _grid_tracker(fl.outline_plan, base, fl.name + "/outline"), None, fixes)
+    if "fusion_no_wifi" in want:
+        run(None, "fusion_no_wifi", known_tracker, known, None)
+    if "fusion_no_heading_offset" in want:
+        run(None, "fusion_no_heading_offset", _grid_tracker(fl.plan, base.replace(heading_offset_sd_rad=0.0), fl.name),
+            None, fixes)
