@@ -619,9 +619,10 @@ def markdown(result: dict) -> str:
               f"allow. Load average (1 min) {load['before']:.1f} before, {load['after']:.1f} after, on "
               f"{load['cpus']} CPUs."]
     lines += ["", (
-        "Against the machine (docs/performance.md): about 165 flops and 300 bytes per particle-step with the "
-        "pillars (95 without a plan); one core's limit is about 8 ns (21 Gflop/s SSE2) or 12 ns if every byte"
-        " came from memory, so the loop is bound by its scalar, branchy code (ziggurat and wall-test "
-        "branches, one exp), not by the hardware."
+        "Against the machine (docs/performance.md): about 130 flops and 310 bytes per particle-step with the "
+        "pillars (about 90 without a plan); one core's limit is about 6 ns (21 Gflop/s SSE2) or 12 ns if every "
+        "byte came from memory, so the loop is bound by its scalar code (the generator's serial state, the "
+        "wall test's mask loads in the particles' random order and the exact test of the steps near an "
+        "edge), not by the hardware."
     )]
     return "\n".join(lines)

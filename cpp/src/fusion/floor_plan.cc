@@ -117,6 +117,7 @@ FloorPlan::FloorPlan(std::vector<FloorGeometry> floors, const FloorPlanOptions& 
   }
   for (size_t f = 0; f < floors.size(); ++f) {
     impl_->floors.push_back(BuildFloor(floors[f], static_cast<int>(f), options));
+    impl_->floors.back().BuildSubcellMasks();  // the wall test's fast path (floor_plan_index.h)
     impl_->floor_numbers.push_back(floors[f].floor);
   }
 }
@@ -186,6 +187,25 @@ bool FloorPlan::CrossesWall(double x0_m, double y0_m, double x1_m, double y1_m,
                             int floor_index) const {
   assert(floor_index >= 0 && floor_index < num_floors());
   return impl_->floors[static_cast<size_t>(floor_index)].CrossesWall(x0_m, y0_m, x1_m, y1_m);
+}
+
+void FloorPlan::CrossesWallSpan(int count, const double* x0_m, const double* y0_m, const double* x1_m,
+                                const double* y1_m, const int* floor_indices, bool* out) const {
+  const FloorData* floors = impl_->floors.data();
+  constexpr int kAhead = 8;  // queries between a mask's prefetch and its use
+  for (int k = 0; k < std::min(count, kAhead); ++k) {
+    floors[floor_indices[k]].PrefetchMask(x0_m[k], y0_m[k]);
+    floors[floor_indices[k]].PrefetchMask(x1_m[k], y1_m[k]);
+  }
+  for (int k = 0; k < count; ++k) {
+    assert(floor_indices[k] >= 0 && floor_indices[k] < num_floors());
+    if (k + kAhead < count) {
+      const int a = k + kAhead;
+      floors[floor_indices[a]].PrefetchMask(x0_m[a], y0_m[a]);
+      floors[floor_indices[a]].PrefetchMask(x1_m[a], y1_m[a]);
+    }
+    out[k] = floors[floor_indices[k]].CrossesWall(x0_m[k], y0_m[k], x1_m[k], y1_m[k]);
+  }
 }
 
 double FloorPlan::DistanceToWall(double x_m, double y_m, int floor_index) const {

@@ -97,6 +97,11 @@ struct FloorData {
   // Chebyshev distance (in cells) from each cell to the nearest cell with an entry: the rings
   // DistanceToWall may skip.
   std::vector<std::int32_t> empty_rings;
+  // Per cell, 8 x 8 sub-cells (bit 8 r + c: sub-row r, sub-column c) that the bounding box of one
+  // of the cell's entries reaches (BuildSubcellMasks): a segment whose box reaches no marked
+  // sub-cell meets no edge, which decides most wall tests without touching an edge.
+  std::vector<std::uint64_t> subcell_masks;
+  static constexpr int kSubcells = 8;
 
   int CellOf(double x, double y, int* i, int* j) const {
     const double fx = (x - gx) * inv_h, fy = (y - gy) * inv_h;
@@ -115,11 +120,98 @@ struct FloorData {
     return false;
   }
 
+  // Sub-cell index of a grid coordinate f = (x - gx) inv_h >= 0 (scaling by 8 is exact, so
+  // index >> 3 is the cell of the point as CellOf and CrossesWall compute it).
+  static int SubcellOf(double f) { return static_cast<int>(f * kSubcells); }
+
+  // Marks, in each cell, the sub-cells reached by the bounding box of each of its entries.
+  // Exactness: the sub-cell index is a monotone function of the coordinate (each rounding is),
+  // so any point X of an entry lies in a sub-cell inside the entry's marked box; if X is also on
+  // a query segment, that sub-cell lies in the segment's box too, and the entry is registered in
+  // X's cell (registration covers every cell an edge meets, with margin). Hence a segment whose
+  // box reaches no marked sub-cell meets no entry: BoxIsFree never hides a crossing.
+  void BuildSubcellMasks() {
+    subcell_masks.assign(static_cast<size_t>(nx) * static_cast<size_t>(ny), 0);
+    const int max_sx = kSubcells * nx - 1, max_sy = kSubcells * ny - 1;
+    auto sub = [](double f, int hi) {
+      const double s = std::floor(f * kSubcells);
+      return static_cast<int>(std::clamp(s, -1.0, static_cast<double>(hi) + 1.0));
+    };
+    for (int j = 0; j < ny; ++j) {
+      for (int i = 0; i < nx; ++i) {
+        const size_t c = static_cast<size_t>(j) * nx + i;
+        std::uint64_t mask = 0;
+        for (std::int32_t m = cell_begin[c]; m < cell_begin[c + 1]; ++m) {
+          const Segment& e = entries[static_cast<size_t>(m)];
+          const int x_lo = std::max(sub((std::min(e.x0, e.x1) - gx) * inv_h, max_sx), kSubcells * i);
+          const int x_hi = std::min(sub((std::max(e.x0, e.x1) - gx) * inv_h, max_sx), kSubcells * i + 7);
+          const int y_lo = std::max(sub((std::min(e.y0, e.y1) - gy) * inv_h, max_sy), kSubcells * j);
+          const int y_hi = std::min(sub((std::max(e.y0, e.y1) - gy) * inv_h, max_sy), kSubcells * j + 7);
+          if (x_lo > x_hi || y_lo > y_hi) continue;  // the box only grazes the cell within margin
+          mask |= BoxMask(x_lo - kSubcells * i, x_hi - kSubcells * i, y_lo - kSubcells * j, y_hi - kSubcells * j);
+        }
+        subcell_masks[c] = mask;
+      }
+    }
+  }
+
+  // Bits of sub-columns c0..c1 in sub-rows r0..r1 of a cell's mask (all within 0..7).
+  static std::uint64_t BoxMask(int c0, int c1, int r0, int r1) {
+    const std::uint64_t columns = (0xFFULL >> (7 - c1)) & (0xFFULL << c0);
+    const std::uint64_t rows = (~0ULL >> (8 * (7 - r1))) & (~0ULL << (8 * r0));
+    return columns * 0x0101010101010101ULL & rows;
+  }
+
+  // Whether the box of sub-cells [sx0, sx1] x [sy0, sy1] (inside the grid, spanning at most
+  // 2 x 2 cells) reaches no marked sub-cell. Branch-free: always four cells, the masks of those
+  // the box does not reach being empty (which cells it reaches varies from step to step).
+  bool BoxIsFree(int sx0, int sx1, int sy0, int sy1) const {
+    const int i0 = sx0 >> 3, i1 = sx1 >> 3, j0 = sy0 >> 3, j1 = sy1 >> 3;
+    const std::uint64_t to_c1 = 0xFFULL >> (7 - (sx1 & 7)), from_c0 = 0xFFULL << (sx0 & 7);
+    const std::uint64_t cols_a = from_c0 & (i1 == i0 ? to_c1 : 0xFFULL) & 0xFFULL;
+    const std::uint64_t cols_b = i1 == i0 ? 0 : to_c1;
+    const std::uint64_t to_r1 = ~0ULL >> (8 * (7 - (sy1 & 7))), from_r0 = ~0ULL << (8 * (sy0 & 7));
+    const std::uint64_t rows_a = from_r0 & (j1 == j0 ? to_r1 : ~0ULL);
+    const std::uint64_t rows_b = j1 == j0 ? 0 : to_r1;
+    constexpr std::uint64_t kEveryRow = 0x0101010101010101ULL;
+    const std::uint64_t* row0 = subcell_masks.data() + static_cast<size_t>(j0) * nx;
+    const std::uint64_t* row1 = subcell_masks.data() + static_cast<size_t>(j1) * nx;
+    const std::uint64_t hit = (row0[i0] & cols_a * kEveryRow & rows_a) | (row0[i1] & cols_b * kEveryRow & rows_a) |
+                              (row1[i0] & cols_a * kEveryRow & rows_b) | (row1[i1] & cols_b * kEveryRow & rows_b);
+    return hit == 0;
+  }
+
+  // Starts loading the sub-cell mask of the cell of (x, y) (clamped to the grid): the wall test
+  // of a block of particles reads masks in random order, mostly from beyond the L2 cache.
+  void PrefetchMask(double x, double y) const {
+    const double fx = std::clamp((x - gx) * inv_h, 0.0, static_cast<double>(nx - 1));
+    const double fy = std::clamp((y - gy) * inv_h, 0.0, static_cast<double>(ny - 1));
+    __builtin_prefetch(subcell_masks.data() + static_cast<size_t>(fy) * nx + static_cast<size_t>(fx));
+  }
+
+  // The wall test: the common case of a short step inside the grid whose box reaches no marked
+  // sub-cell is decided here without touching an edge; the rest by CrossesWallExact.
   bool CrossesWall(double px, double py, double qx, double qy) const {
+    const double fx0 = (px - gx) * inv_h, fy0 = (py - gy) * inv_h;
+    const double fx1 = (qx - gx) * inv_h, fy1 = (qy - gy) * inv_h;
+    const double lo_x = std::min(fx0, fx1), hi_x = std::max(fx0, fx1);
+    const double lo_y = std::min(fy0, fy1), hi_y = std::max(fy0, fy1);
+    if (lo_x >= 0 && hi_x < static_cast<double>(nx) && lo_y >= 0 && hi_y < static_cast<double>(ny)) {
+      const int sx0 = SubcellOf(lo_x), sx1 = SubcellOf(hi_x);
+      const int sy0 = SubcellOf(lo_y), sy1 = SubcellOf(hi_y);
+      if ((sx1 >> 3) - (sx0 >> 3) <= 1 && (sy1 >> 3) - (sy0 >> 3) <= 1 && BoxIsFree(sx0, sx1, sy0, sy1)) {
+        return false;
+      }
+    }
+    return CrossesWallExact(px, py, qx, qy);
+  }
+
+  // The exact wall test: the edges of the cells the segment crosses (grid walk).
+  [[gnu::noinline]] bool CrossesWallExact(double px, double py, double qx, double qy) const {
     const double wx = static_cast<double>(nx), wy = static_cast<double>(ny);
     const double fx0 = (px - gx) * inv_h, fy0 = (py - gy) * inv_h;
     const double fx1 = (qx - gx) * inv_h, fy1 = (qy - gy) * inv_h;
-    // Fast path: both ends inside the grid; one cell, two neighbouring cells, or a traversal.
+    // Both ends inside the grid: one cell, two neighbouring cells, or a traversal.
     if (fx0 >= 0 && fx0 < wx && fy0 >= 0 && fy0 < wy && fx1 >= 0 && fx1 < wx && fy1 >= 0 &&
         fy1 < wy) {
       const SegmentQuery query(px, py, qx, qy, inside_bound);

@@ -234,7 +234,7 @@ TrackerEstimate ParticleTracker::Step(const StepInput& step) {
   s.CheckTime(step.time_s, "step.time_s");
   s.last_time = step.time_s;
   const StepMotion motion(step, s.options.motion);
-  const Eigen::VectorXd old_log_w = s.log_w;  // normalised (the invariant between events)
+  s.step_start_log_w = s.log_w;  // normalised (the invariant between events); storage reused
   const int blocks = (s.n + kBlockSize - 1) / kBlockSize;
   std::vector<double> blocked_mass(static_cast<size_t>(blocks), 0.0);
   if (s.corridor_mode()) {
@@ -254,7 +254,7 @@ TrackerEstimate ParticleTracker::Step(const StepInput& step) {
     // Every particle blocked: the step contradicts the plan (an unmapped door, a wrong heading
     // offset). Ignore it rather than lose the cloud (a dropped particle stayed where it was);
     // re-spread if it keeps happening.
-    s.log_w = old_log_w;
+    s.log_w = s.step_start_log_w;
     ++s.summary.all_blocked_steps;
     if (++s.consecutive_blocked >= s.options.respread_after_blocked_steps) {
       s.Respread();

@@ -14,6 +14,7 @@ namespace indoorloc::fusion {
 
 namespace {
 // A recorded cloud (record_history): states, floor and log-weight per particle.
+constexpr double kNegInfinity = -std::numeric_limits<double>::infinity();
 constexpr double kHistoryBytesPerParticle = 4 * sizeof(double) + sizeof(int) + sizeof(double);
 
 void RequireHistoryMemory(double num_particles, double num_clouds, std::string_view name) {
@@ -43,21 +44,24 @@ void ParticleTracker::Impl::Resize(int count) {
 
 // Every state array (and the lag ring) takes the values of the particles' ancestors.
 void ParticleTracker::Impl::Gather(const std::vector<int>& anc) {
-  auto gather = [&](auto& v) {
-    auto tmp = v;
-    for (int i = 0; i < n; ++i) v[i] = tmp[anc[i]];
+  // Through one scratch array per type, swapped in: no allocation after the first resampling.
+  auto gather = [&](auto& v, auto& scratch) {
+    scratch.resize(v.size());
+    for (int i = 0; i < n; ++i) scratch[i] = v[anc[i]];
+    v.swap(scratch);
   };
-  gather(x);
-  gather(y);
-  gather(offset);
-  gather(cos_offset);
-  gather(sin_offset);
-  gather(scale);
-  gather(floor);
+  gather(x, gather_scratch);
+  gather(y, gather_scratch);
+  gather(offset, gather_scratch);
+  gather(cos_offset, gather_scratch);
+  gather(sin_offset, gather_scratch);
+  gather(scale, gather_scratch);
+  gather(floor, gather_scratch_int);
   if (corridor_mode()) {
-    gather(segment);
-    gather(direction);
-    gather(along);
+    gather(segment, gather_scratch_int);
+    std::vector<signed char> scratch;
+    gather(direction, scratch);
+    gather(along, gather_scratch);
   }
   lag_ring.Gather(anc);
 }
@@ -69,7 +73,10 @@ double ParticleTracker::Impl::FinishUpdate(double max_log_w, TrackerEstimate* es
   weights.resize(static_cast<size_t>(n));
   double sum = 0.0, sum_sq = 0.0;
   for (int i = 0; i < n; ++i) {
-    const double w = std::exp(log_w[i] - max_log_w);
+    // exp(0) = 1 and exp(-inf) = 0 exactly: equal weights (after resampling, with walls only)
+    // and dropped particles need no exp call.
+    const double d = log_w[i] - max_log_w;
+    const double w = d == 0.0 ? 1.0 : (d == kNegInfinity ? 0.0 : std::exp(d));
     weights[i] = w;
     sum += w;
     sum_sq += w * w;

@@ -5,6 +5,7 @@
 // move to another floor instead (then only p' must be walkable). When a whole cloud keeps being
 // blocked it is re-spread around its mean (Respread).
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include "particle_tracker_impl.h"
@@ -12,11 +13,57 @@
 namespace indoorloc::fusion {
 
 // Moves every particle by one step; blocked_mass[b] receives the weight (normalised before the
-// step) blocked by walls in particle block b.
+// step) blocked by walls in particle block b. Per block in three passes: the motion of every
+// particle into block-local end points, the wall test of the block's steps in one call, then
+// blocked particles penalised (and, with hard walls, left where they were) and the others moved.
 void ParticleTracker::Impl::MoveFreeSpace(const StepMotion& motion, std::vector<double>* blocked_mass) {
+  const int num_floors = static_cast<int>(floors.size());
+  if (num_floors > 1 && options.floor_change_probability > 0.0) {
+    MoveFreeSpaceChangingFloors(motion, blocked_mass);
+    return;
+  }
+  const double penalty = options.wall_log_penalty;
+  const bool drop = std::isinf(penalty);
+  ForBlocks(n, [&](int b, int begin, int end, RandomStream& block_rng) {
+    const int count = end - begin;
+    double qx[kBlockSize], qy[kBlockSize];
+    bool hit[kBlockSize];
+    motion.SampleBlock(count, offset.data() + begin, cos_offset.data() + begin, sin_offset.data() + begin,
+                       scale.data() + begin, block_rng, qx, qy);
+    for (int k = 0; k < count; ++k) {
+      qx[k] = x[begin + k] + qx[k];
+      qy[k] = y[begin + k] + qy[k];
+    }
+    if (!plan) {
+      for (int k = 0; k < count; ++k) {
+        x[begin + k] = qx[k];
+        y[begin + k] = qy[k];
+      }
+      return;
+    }
+    // Tracker floor index f is plan floor index f whenever there is a plan.
+    plan->CrossesWallSpan(count, x.data() + begin, y.data() + begin, qx, qy, floor.data() + begin, hit);
+    double blocked = 0.0;
+    for (int k = 0; k < count; ++k) {
+      const int i = begin + k;
+      if (hit[k]) {
+        blocked += std::exp(log_w[i]);
+        log_w[i] += penalty;
+        if (drop) continue;  // dropped: stays where it was
+      }
+      x[i] = qx[k];
+      y[i] = qy[k];
+    }
+    (*blocked_mass)[b] = blocked;
+  });
+}
+
+// MoveFreeSpace with floor changes: a particle may move to another floor (uniformly chosen) with
+// probability floor_change_probability, and then only its end point must be walkable there.
+void ParticleTracker::Impl::MoveFreeSpaceChangingFloors(const StepMotion& motion, std::vector<double>* blocked_mass) {
   const double penalty = options.wall_log_penalty;
   const int num_floors = static_cast<int>(floors.size());
-  const double p_change = num_floors > 1 ? options.floor_change_probability : 0.0;
+  const double p_change = options.floor_change_probability;
   ForBlocks(n, [&](int b, int begin, int end, RandomStream& block_rng) {
     double blocked = 0.0;
     for (int i = begin; i < end; ++i) {
@@ -28,7 +75,7 @@ void ParticleTracker::Impl::MoveFreeSpace(const StepMotion& motion, std::vector<
       const double qx = x[i] + delta.x(), qy = y[i] + delta.y();
       int f = floor[i];
       bool is_blocked;
-      if (p_change > 0.0 && block_rng.Uniform01() < p_change) {
+      if (block_rng.Uniform01() < p_change) {
         int g = static_cast<int>(block_rng.UniformInt(static_cast<std::uint64_t>(num_floors - 1)));
         if (g >= f) ++g;
         f = g;

@@ -87,6 +87,9 @@ struct ParticleTracker::Impl {
   ParticleHistory history;
   TrackerSummary summary;
   std::vector<int> ancestors;
+  std::vector<double> gather_scratch;   // Gather's temporaries (kept: no allocation per resampling)
+  std::vector<int> gather_scratch_int;
+  Eigen::VectorXd step_start_log_w;     // Step: the log-weights before the step (all-blocked restore)
 
   // Corridor mode: the network move and heading weight shared with mapmatch (null otherwise).
   std::unique_ptr<mapmatch::CorridorMotion> corridor_motion;
@@ -129,6 +132,7 @@ struct ParticleTracker::Impl {
 
   // ---- free-space mode (particle_tracker_free_space.cc)
   void MoveFreeSpace(const StepMotion& motion, std::vector<double>* blocked_mass);
+  void MoveFreeSpaceChangingFloors(const StepMotion& motion, std::vector<double>* blocked_mass);
   void Respread();
 
   // ---- corridor mode (particle_tracker_corridor.cc)

@@ -6,6 +6,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <memory>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -740,6 +741,47 @@ TEST(FloorPlan, IndexMemoryIsRefusedBeforeAllocating) {
                 {"options.cell_size_m", "edge-cell registrations", "would need at least"});
   // The same plan with the automatic cell size builds.
   EXPECT_NO_THROW(FloorPlan({OneRing(Star(2000, 250.0, 1.0))}));
+}
+
+// The wall test's fast path (sub-cell masks, floor_plan_index.h) against brute force on a hall of
+// pillars whose sides lie on cell and sub-cell boundaries, with short steps starting and ending
+// on those boundaries and on the pillars' corners; and the span form equal to the single form.
+TEST(FloorPlan, PillarHallFastPathAndSpanMatchBruteForce) {
+  FloorGeometry g;
+  g.outlines.push_back(Box(0, 0, 40, 40));
+  for (int i = 0; i < 10; ++i) {
+    for (int j = 0; j < 10; ++j) g.obstacles.push_back(Box(4 * i + 1.5, 4 * j + 1.5, 4 * i + 2.5, 4 * j + 2.5));
+  }
+  FloorGeometry upper = g;
+  upper.floor = 1;
+  upper.obstacles.resize(50);
+  for (double cell : {0.0, 1.0, 0.5}) {
+    FloorPlanOptions options;
+    options.cell_size_m = cell;
+    const FloorPlan plan({g, upper}, options);
+    const BruteForce brute0(plan, 0), brute1(plan, 1);
+    RandomStream rng(12);
+    const int count = 3000;
+    std::vector<double> x0(count), y0(count), x1(count), y1(count);
+    std::vector<int> floor(count);
+    int crossing = 0;
+    for (int q = 0; q < count; ++q) {
+      // Coordinates on a 1/16 m lattice (every sub-cell boundary of a 1 m or 0.5 m grid).
+      x0[q] = static_cast<double>(rng.UniformInt(40 * 16)) / 16.0;
+      y0[q] = static_cast<double>(rng.UniformInt(40 * 16)) / 16.0;
+      x1[q] = x0[q] + (static_cast<double>(rng.UniformInt(25)) - 12.0) / 16.0;
+      y1[q] = y0[q] + (static_cast<double>(rng.UniformInt(25)) - 12.0) / 16.0;
+      floor[q] = static_cast<int>(rng.UniformInt(2));
+      const bool expected = (floor[q] == 0 ? brute0 : brute1).Crosses(Eigen::Vector4d(x0[q], y0[q], x1[q], y1[q]));
+      crossing += expected;
+      ASSERT_EQ(plan.CrossesWall(x0[q], y0[q], x1[q], y1[q], floor[q]), expected)
+          << "cell " << cell << " floor " << floor[q] << ": " << x0[q] << ", " << y0[q] << " -> " << x1[q] << ", " << y1[q];
+    }
+    EXPECT_GT(crossing, 200);
+    std::unique_ptr<bool[]> out(new bool[count]);
+    plan.CrossesWallSpan(count, x0.data(), y0.data(), x1.data(), y1.data(), floor.data(), out.get());
+    for (int q = 0; q < count; ++q) ASSERT_EQ(out[q], plan.CrossesWall(x0[q], y0[q], x1[q], y1[q], floor[q])) << q;
+  }
 }
 
 }  // namespace

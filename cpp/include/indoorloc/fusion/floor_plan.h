@@ -141,6 +141,11 @@ class FloorPlan {
   /// True if the segment (x0, y0) -> (x1, y1) [m] intersects or touches any wall edge of the
   /// floor. Does not test whether the ends are walkable.
   bool CrossesWall(double x0_m, double y0_m, double x1_m, double y1_m, int floor_index) const;
+  /// CrossesWall of `count` segments (x0[k], y0[k]) -> (x1[k], y1[k]) [m] on floor index
+  /// floor_indices[k]: out[k] = CrossesWall(...). One call per block of particles (the
+  /// tracker's wall test); indices must be valid and coordinates finite (not checked).
+  void CrossesWallSpan(int count, const double* x0_m, const double* y0_m, const double* x1_m, const double* y1_m,
+                       const int* floor_indices, bool* out) const;
   /// Euclidean distance [m] from (x, y) to the nearest wall edge of the floor.
   double DistanceToWall(double x_m, double y_m, int floor_index) const;
 

@@ -19,6 +19,7 @@
 // Σ_d = J diag(σ_L², σ_h²) Jᵀ, J = [[cos h, -L sin h], [sin h, L cos h]] (first-order
 // propagation, adequate for per-step heading noise of a few degrees).
 #pragma once
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <Eigen/Core>
@@ -75,7 +76,47 @@ class StepMotion {
   /// sincos call; normal draws by the ziggurat method (RandomStream::NormalZiggurat).
   void Sample(double offset_rad, double* cos_offset, double* sin_offset, double scale, RandomStream& rng,
               double* new_offset_rad, double* new_scale, Eigen::Vector2d* displacement_m) const {
-    const double delta = options_.heading_offset_walk_rad * rng.NormalZiggurat();
+    const double z_offset = rng.NormalZiggurat();
+    const double z_scale = rng.NormalZiggurat();
+    const double z1 = rng.NormalZiggurat();
+    const double z2 = rng.NormalZiggurat();
+    double dx, dy;
+    Move(z_offset, z_scale, z1, z2, offset_rad, cos_offset, sin_offset, scale, new_offset_rad, new_scale, &dx, &dy);
+    *displacement_m = Eigen::Vector2d(dx, dy);
+  }
+  /// Sample for particles 0..count-1 of structure-of-arrays state, in place: offset_rad,
+  /// cos_offset, sin_offset and scale become o', cos o', sin o', s'; the displacements go to
+  /// dx_m, dy_m. The same draws in the same order as `count` calls of Sample (identical results),
+  /// the normals drawn first for a chunk of particles so that the arithmetic runs without
+  /// waiting on the generator.
+  void SampleBlock(int count, double* offset_rad, double* cos_offset, double* sin_offset, double* scale,
+                   RandomStream& rng, double* dx_m, double* dy_m) const {
+    constexpr int kChunk = 256;
+    double z[4 * kChunk];
+    for (int begin = 0; begin < count; begin += kChunk) {
+      const int m = std::min(kChunk, count - begin);
+      for (int k = 0; k < 4 * m; ++k) z[k] = rng.NormalZiggurat();
+      for (int k = 0; k < m; ++k) {
+        const int i = begin + k;
+        Move(z[4 * k], z[4 * k + 1], z[4 * k + 2], z[4 * k + 3], offset_rad[i], cos_offset + i, sin_offset + i,
+             scale[i], offset_rad + i, scale + i, dx_m + i, dy_m + i);
+      }
+    }
+  }
+  /// log p(p', o', s' | p, o, s) up to the constant common to all pairs (the backward smoother
+  /// only needs ratios over the predecessor (p, o, s)).
+  double TransitionLogDensity(const Eigen::Vector2d& from_m, double from_offset_rad, double from_scale,
+                              const Eigen::Vector2d& to_m, double to_offset_rad, double to_scale) const;
+  const StepInput& step() const { return step_; }
+  /// Lower Cholesky factor of Σ_d + σ_p² I.
+  const Eigen::Matrix2d& cholesky() const { return chol_; }
+
+ private:
+  // The motion given the four standard normal draws (offset walk, scale walk, step noise 1, 2).
+  void Move(double z_offset, double z_scale, double z1, double z2, double offset_rad, double* cos_offset,
+            double* sin_offset, double scale, double* new_offset_rad, double* new_scale, double* dx_m,
+            double* dy_m) const {
+    const double delta = options_.heading_offset_walk_rad * z_offset;
     double o = offset_rad + delta;
     double c, sn;
     if (std::abs(delta) < 0.1) {
@@ -90,28 +131,19 @@ class StepMotion {
     }
     if (o > M_PI) o -= 2.0 * M_PI;
     if (o <= -M_PI) o += 2.0 * M_PI;
-    double s = scale + options_.scale_walk * rng.NormalZiggurat();
+    double s = scale + options_.scale_walk * z_scale;
     s = s < options_.min_scale ? options_.min_scale : (s > options_.max_scale ? options_.max_scale : s);
-    const double n1 = rng.NormalZiggurat();
-    const double n2 = rng.NormalZiggurat();
     // e = L n with L the lower Cholesky factor of Σ_d + σ_p² I.
-    const double dx = step_.displacement_m.x() + chol_(0, 0) * n1;
-    const double dy = step_.displacement_m.y() + chol_(1, 0) * n1 + chol_(1, 1) * n2;
+    const double dx = step_.displacement_m.x() + chol_(0, 0) * z1;
+    const double dy = step_.displacement_m.y() + chol_(1, 0) * z1 + chol_(1, 1) * z2;
     *new_offset_rad = o;
     *new_scale = s;
     *cos_offset = c;
     *sin_offset = sn;
-    *displacement_m = Eigen::Vector2d(s * (c * dx - sn * dy), s * (sn * dx + c * dy));
+    *dx_m = s * (c * dx - sn * dy);
+    *dy_m = s * (sn * dx + c * dy);
   }
-  /// log p(p', o', s' | p, o, s) up to the constant common to all pairs (the backward smoother
-  /// only needs ratios over the predecessor (p, o, s)).
-  double TransitionLogDensity(const Eigen::Vector2d& from_m, double from_offset_rad, double from_scale,
-                              const Eigen::Vector2d& to_m, double to_offset_rad, double to_scale) const;
-  const StepInput& step() const { return step_; }
-  /// Lower Cholesky factor of Σ_d + σ_p² I.
-  const Eigen::Matrix2d& cholesky() const { return chol_; }
 
- private:
   StepInput step_;
   StepMotionOptions options_;
   Eigen::Matrix2d chol_;
