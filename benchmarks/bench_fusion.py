@@ -531,6 +531,17 @@ def run(quick: bool = False) -> dict:
     }
 
 
+def _rate_rows(rates: dict, cpu_seconds: dict, seconds: dict, middle) -> list:
+    """Table rows "| name | rate | middle(name) | CPU / wall | rate per CPU-s |" per implementation
+    (the last column empty for the 2-thread runs)."""
+    rows = []
+    for name, rate in rates.items():
+        cpu = cpu_seconds[name]
+        per_cpu = "" if "2 threads" in name else f"{rate * seconds[name] / cpu:,.0f}"
+        rows.append(f"| {name} | {rate:,.0f} | {middle(name)} | {cpu / seconds[name]:.2f} | {per_cpu} |")
+    return rows
+
+
 def markdown(result: dict) -> str:
     m, w = result["motion"], result["wifi"]
     mc, wc = m["checks"], w["checks"]
@@ -546,11 +557,8 @@ def markdown(result: dict) -> str:
         "particle-steps per CPU-s |",
         "|---|---|---|---|---|---|",
     ]
-    for name, rate in m["particle_steps_per_s"].items():
-        cpu = m["cpu_seconds"][name]
-        per_cpu = "" if "2 threads" in name else f"{rate * m['seconds'][name] / cpu:,.0f}"
-        lines.append(f"| {name} | {rate:,.0f} | {m['ns_per_particle_step'][name]:.1f} | "
-                     f"{m['us_per_step_call'][name]:.0f} | {cpu / m['seconds'][name]:.2f} | {per_cpu} |")
+    lines += _rate_rows(m["particle_steps_per_s"], m["cpu_seconds"], m["seconds"],
+                        lambda name: f"{m['ns_per_particle_step'][name]:.1f} | {m['us_per_step_call'][name]:.0f}")
     lines += ["", f"C++ / peer (pillars, 1 thread): **{m['cpp_over_peer']:.1f}x** (goal 20x); "
               f"goal 2e7 particle-steps/s: {m['particle_steps_per_s'][CPP + ', pillars']:.3g}.", "",
               "Where the time goes (ns per particle-step, from Python: the same filter without plan, with the "
@@ -586,11 +594,8 @@ def markdown(result: dict) -> str:
         "particle-APs per CPU-s |",
         "|---|---|---|---|---|---|",
     ]
-    for name, rate in w["particle_aps_per_s"].items():
-        cpu = w["cpu_seconds"][name]
-        per_cpu = "" if "2 threads" in name else f"{rate * w['seconds'][name] / cpu:,.0f}"
-        lines.append(f"| {name} | {rate:,.0f} | {w['ns_per_particle'][name]:.0f} | {1e3 * w['seconds'][name]:.2f} | "
-                     f"{cpu / w['seconds'][name]:.2f} | {per_cpu} |")
+    lines += _rate_rows(w["particle_aps_per_s"], w["cpu_seconds"], w["seconds"],
+                        lambda name: f"{w['ns_per_particle'][name]:.0f} | {1e3 * w['seconds'][name]:.2f}")
     lines += [
         "", f"C++ / peer (1 thread): **{w['cpp_over_peer']:.1f}x**; goal 5e6 particle-APs/s: "
         f"{w['particle_aps_per_s'][CPP]:.3g}.", "",

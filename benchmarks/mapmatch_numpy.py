@@ -163,7 +163,24 @@ def systematic_resample(w: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     return np.minimum(np.searchsorted(np.cumsum(w), positions), n - 1)
 
 
-class NumpyMapMatcher:
+class MatcherSettings:
+    """What both peers are built from (this one and mapmatch_particles.ParticlesMapMatcher):
+    the network of segment ends (M, 4) [m], κ, the half-width a [m] of the travelled-distance
+    noise, N particles, the seed and the ESS threshold (a fraction of N)."""
+
+    def __init__(self, ends, kappa: float, noise_halfwidth_m: float, num_particles: int,
+                 seed: int = 0, ess_threshold: float = 0.5):
+        if num_particles < 1:
+            raise ValueError("num_particles must be >= 1")
+        self.network = ends if isinstance(ends, Network) else Network(ends)
+        self.kappa = float(kappa)
+        self.noise_halfwidth_m = float(noise_halfwidth_m)
+        self.num_particles = int(num_particles)
+        self.seed = seed
+        self.ess_threshold = float(ess_threshold)
+
+
+class NumpyMapMatcher(MatcherSettings):
     """Particle map matching with numpy (paper 000, Algorithm 1).
 
     Parameters
@@ -178,14 +195,7 @@ class NumpyMapMatcher:
 
     def __init__(self, ends, kappa: float, noise_halfwidth_m: float, num_particles: int,
                  seed: int = 0, ess_threshold: float = 0.5):
-        if num_particles < 1:
-            raise ValueError("num_particles must be >= 1")
-        self.network = ends if isinstance(ends, Network) else Network(ends)
-        self.kappa = float(kappa)
-        self.noise_halfwidth_m = float(noise_halfwidth_m)
-        self.num_particles = int(num_particles)
-        self.seed = seed
-        self.ess_threshold = float(ess_threshold)
+        MatcherSettings.__init__(self, ends, kappa, noise_halfwidth_m, num_particles, seed, ess_threshold)
         self.reset()
 
     def reset(self, seed=None):

@@ -27,7 +27,7 @@ from particles import distributions as dists
 from particles import state_space_models as ssm
 from scipy.special import i0e
 
-from mapmatch_numpy import Network
+from mapmatch_numpy import MatcherSettings, Network
 
 
 class _MoveOnNetwork(dists.ProbDist):
@@ -107,17 +107,12 @@ class _InitialMove(dists.ProbDist):
         return _MoveOnNetwork(m.network, grid, m.speeds[0] * m.dt, m.noise_halfwidth_m, m.rng).rvs()
 
 
-class ParticlesMapMatcher:
+class ParticlesMapMatcher(MatcherSettings):
     """Same constructor and `run` as mapmatch_numpy.NumpyMapMatcher, on `particles.SMC`."""
 
     def __init__(self, ends, kappa: float, noise_halfwidth_m: float, num_particles: int,
                  seed: int = 0, ess_threshold: float = 0.5):
-        self.network = ends if isinstance(ends, Network) else Network(ends)
-        self.kappa = float(kappa)
-        self.noise_halfwidth_m = float(noise_halfwidth_m)
-        self.num_particles = int(num_particles)
-        self.seed = seed
-        self.ess_threshold = float(ess_threshold)
+        super().__init__(ends, kappa, noise_halfwidth_m, num_particles, seed, ess_threshold)
         self.smc = None
 
     def _mean_position(self, W, X):

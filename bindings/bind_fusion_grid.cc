@@ -67,6 +67,8 @@ equality and pickling as for every Options class. The fix likelihood's ε and τ
       .def_readwrite("position_noise_m", &GridTrackerOptions::position_noise_m, "Process noise per step [m].")
       .def_readwrite("wall_log_penalty", &GridTrackerOptions::wall_log_penalty,
                      "Log-weight per step outside walkable space; -inf: hard walls.")
+      .def_readwrite("wall_margin_m", &GridTrackerOptions::wall_margin_m,
+                     "Obstacles eroded by this margin [m]: points this close to a wall edge count as walkable.")
       .def_property("fix_outlier_probability", [](const GridTrackerOptions& o) { return o.fix.outlier_probability; },
                     [](GridTrackerOptions& o, double v) { o.fix.outlier_probability = v; }, "ε of the position fixes.")
       .def_property("fix_tempering", [](const GridTrackerOptions& o) { return o.fix.tempering; },

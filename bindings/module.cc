@@ -38,6 +38,8 @@ void BindCore(py::module_& m);
 void BindFusionFloorPlan(py::module_& m);
 void BindFusionGrid(py::module_& m);
 void BindFusionGridSession(py::module_& m);
+void BindFusionLive(py::module_& m);
+void BindPdrStreaming(py::module_& m);
 void BindFusionTracker(py::module_& m);
 void BindMapmatch(py::module_& m);
 void BindNetworkScale(py::module_& m);
@@ -89,6 +91,7 @@ PYBIND11_MODULE(_core, m) {
   indoorloc::bindings::BindAnalog(analog);
   py::module_ pdr = m.def_submodule("pdr", "Pedestrian dead reckoning with a foot-mounted IMU (paper 002).");
   indoorloc::bindings::BindPdr(pdr);
+  indoorloc::bindings::BindPdrStreaming(pdr);
   py::module_ network = m.def_submodule("network", "INS/GPS network adjustment (paper 003).");
   indoorloc::bindings::BindNetworkScale(network);
   indoorloc::bindings::BindNetwork(network);
@@ -101,4 +104,5 @@ PYBIND11_MODULE(_core, m) {
   indoorloc::bindings::BindFusionTracker(fusion);
   indoorloc::bindings::BindFusionGrid(fusion);
   indoorloc::bindings::BindFusionGridSession(fusion);
+  indoorloc::bindings::BindFusionLive(fusion);
 }

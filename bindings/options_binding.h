@@ -54,6 +54,14 @@ T OptionsWithFields(const T& base, const py::dict& fields, const char* type_name
       py::setattr(obj, item.first, item.second);
     } catch (const py::error_already_set& e) {
       if (!e.matches(PyExc_TypeError)) throw;
+      // An int that does not fit an integer field is a value out of range, not a wrong type
+      // (num_particles = 2**31 read "has the wrong type ...: got int").
+      const py::object current = py::getattr(obj, item.first);
+      if (py::isinstance<py::int_>(item.second) && !py::isinstance<py::bool_>(item.second) &&
+          py::isinstance<py::int_>(current) && !py::isinstance<py::bool_>(current)) {
+        ThrowInvalidArgument(key, std::string(py::str(item.second)) + " does not fit " + type_name + "." + key +
+                                      " (a machine integer; see its limits in docs/errors.md)");
+      }
       // pybind11's setter error names neither the field nor the type it wanted.
       throw py::type_error("indoorloc: argument '" + key + "': has the wrong type for " + type_name + "." +
                            key + ": got " + std::string(Py_TYPE(item.second.ptr())->tp_name));

@@ -5,11 +5,14 @@
     python export_walk.py walk DIR     # after 'indoorloc site build DIR/survey -o DIR/site.db': the
                                        # held-out walk's tracker inputs and the Python track, DIR/walk_events.txt
 
-walk_events.txt (text, numbers with 17 significant digits):
+walk_events.txt (text, numbers with 17 significant digits), the held-out walk's raw sensor events
+in time order (indoorloc.fusion.live.walk_events) and Python's causal track of it:
     floor NAME
-    steps M                 then M lines: t_s dx_m dy_m cov_xx cov_xy cov_yy
-    fixes F                 then per fix: "t_s K" and K lines: x_m y_m sd_m weight floor
-    expected M              then M lines: x_m y_m (Python's smoothed track from the same site file)
+    events E                then E lines, one event each:
+                              acc T AX AY AZ | gyro T GX GY GZ | rv T N V1..VN | beacon T
+                              wifi T N  followed by N lines: BSSID RSSI_DBM LAST_SEEN_S
+    expected M              then M lines: t_s x_m y_m (the batch causal filter, live.causal_track,
+                            on the site's models: the track a live replay must give)
 """
 
 import shutil
@@ -18,9 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from indoorloc.pdr import handheld as ph
-from indoorloc import wifi_fixes as wfx
-from indoorloc.fusion import site_model
+from indoorloc.fusion import live
 from indoorloc.fusion.site import Site
 from indoorloc.io.ilc2020 import read_ilc_walk
 from indoorloc.simulate.ilc_site import write_ilc_site
@@ -37,28 +38,31 @@ def survey(out: Path) -> None:
 def walk(out: Path) -> None:
     site = Site.open(out / "site.db")
     w = read_ilc_walk(out / "heldout.txt")
-    track = site.track(w, floor="F1")
     m = site.floor_models("F1")
-    steps = site_model.tracker_steps(ph.handheld_steps(w), m.calibration, site.settings)
-    fixes = wfx.fixes_for_walk(w, m.database)
+    track = live.causal_track(m.tracker, w, m.calibration, m.database,
+                              step_length_sd_fraction=site.settings.step_length_sd_fraction,
+                              step_heading_sd_rad=site.settings.step_heading_sd_rad)
     g = lambda v: f"{float(v):.17g}"  # noqa: E731
-    lines = ["floor F1", f"steps {len(steps)}"]
-    cov = np.asarray(steps.covariances_m2).reshape(len(steps), -1)
-    for t, d, c in zip(steps.times_s, steps.displacements_m, cov):
-        c3 = (c[0], c[1], c[3]) if c.size == 4 else tuple(c)
-        lines.append(" ".join(g(v) for v in (t, d[0], d[1], *c3)))
-    lines.append(f"fixes {len(fixes)}")
-    for i in range(len(fixes)):
-        keep = np.flatnonzero(fixes.weights[i] > 0)
-        lines.append(f"{g(fixes.times_s[i])} {keep.size}")
-        for k in keep:
-            lines.append(" ".join([g(fixes.means_m[i, k, 0]), g(fixes.means_m[i, k, 1]), g(fixes.sds_m[i, k]),
-                                   g(fixes.weights[i, k]), str(int(fixes.floors[i, k]))]))
-    lines.append(f"expected {track.xy_m.shape[0]}")
-    lines += [f"{g(x)} {g(y)}" for x, y in track.xy_m]
+    events = list(live.walk_events(w, beacons=True))
+    lines = ["floor F1", f"events {len(events)}"]
+    short = {"accelerometer": "acc", "gyroscope": "gyro"}
+    for kind, t, *values in events:
+        if kind in short:
+            lines.append(" ".join([short[kind], g(t)] + [g(v) for v in values[0][:3]]))
+        elif kind == "rotation_vector":
+            v = np.asarray(values[0], float).reshape(-1)
+            lines.append(" ".join(["rv", g(t), str(v.size)] + [g(x) for x in v]))
+        elif kind == "wifi":
+            names, rssi, seen = values
+            lines.append(f"wifi {g(t)} {len(names)}")
+            lines += [f"{b} {g(r)} {g(s)}" for b, r, s in zip(names, rssi, seen)]
+        else:
+            lines.append(f"beacon {g(t)}")
+    lines.append(f"expected {len(track['times_s'])}")
+    lines += [f"{g(t)} {g(x)} {g(y)}" for t, (x, y) in zip(track["times_s"], track["mean_m"])]
     (out / "walk_events.txt").write_text("\n".join(lines) + "\n")
-    print(f"export_walk: {len(steps)} steps, {len(fixes)} fixes of walk {w.walk_id}; Python track error "
-          f"mean {np.mean(track.errors_m):.2f} m")
+    print(f"export_walk: {len(events)} raw events of walk {w.walk_id}; Python's causal track: "
+          f"{len(track['times_s'])} steps, {track['summary'].fixes} WiFi fixes")
 
 
 if __name__ == "__main__":

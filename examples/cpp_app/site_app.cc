@@ -1,9 +1,13 @@
-// An outside application that tracks a walk on a site model written by the Python side
+// An outside application that tracks a walk live on a site model written by the Python side
 // (`indoorloc site build`), through the installed package only: the site file gives the floor's
-// plan and the default tracker's options; the walk's steps and WiFi fixes come from
-// walk_events.txt (examples/cpp_app/export_walk.py, which also gives Python's track of the same
-// walk from the same file). Exit 0 when the C++ track equals Python's.
+// plan, the PDR calibration, the WiFi fingerprint map and the tracker's options; the walk's RAW
+// sensor events (accelerometer, gyroscope, rotation vector, WiFi scans with last-seen times,
+// beacons) come from walk_events.txt (examples/cpp_app/export_walk.py, which also gives Python's
+// causal track of the same walk on the same file). Each event goes to a LiveSession; the estimate
+// after each new step is compared with Python's. Exit 0 when the two tracks are equal.
 //   site_app SITE.db walk_events.txt
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -14,6 +18,7 @@
 
 #include <indoorloc/fusion/floor_plan.h>
 #include <indoorloc/fusion/grid_tracker.h>
+#include <indoorloc/fusion/live_session.h>
 #include <indoorloc/fusion/site_file.h>
 
 namespace fusion = indoorloc::fusion;
@@ -23,6 +28,37 @@ namespace {
 void Expect(std::istream& in, const std::string& word) {
   std::string got;
   if (!(in >> got) || got != word) throw std::runtime_error("walk_events.txt: expected '" + word + "', got '" + got + "'");
+}
+
+// Reads one event line and feeds it to the session.
+void FeedEvent(std::istream& in, fusion::LiveSession* session) {
+  std::string kind;
+  double t = 0;
+  in >> kind >> t;
+  if (kind == "acc" || kind == "gyro") {
+    Eigen::Vector3d v;
+    in >> v[0] >> v[1] >> v[2];
+    if (kind == "acc") session->AddAccelerometer(t, v);
+    else session->AddGyroscope(t, v);
+  } else if (kind == "rv") {
+    int n = 0;
+    in >> n;
+    Eigen::VectorXd v(n);
+    for (int i = 0; i < n; ++i) in >> v[i];
+    session->AddRotationVector(t, v);
+  } else if (kind == "wifi") {
+    int n = 0;
+    in >> n;
+    std::vector<std::string> bssids(static_cast<std::size_t>(n));
+    Eigen::VectorXd rssi(n), seen(n);
+    for (int i = 0; i < n; ++i) in >> bssids[static_cast<std::size_t>(i)] >> rssi[i] >> seen[i];
+    session->AddWifiScan(t, bssids, rssi, seen);
+  } else if (kind == "beacon") {
+    session->AddBeacon(t);
+  } else {
+    throw std::runtime_error("walk_events.txt: unknown event kind '" + kind + "'");
+  }
+  if (!in) throw std::runtime_error("walk_events.txt: truncated event");
 }
 
 }  // namespace
@@ -40,50 +76,50 @@ int main(int argc, char** argv) {
     Expect(in, "floor");
     in >> floor;
     const fusion::SiteFloor f = site.Floor(floor);
-    std::printf("site %s: %zu floor(s), %d walks, written by indoorloc %s; floor %s: %zu outline(s), %zu obstacles\n",
+    const fusion::FingerprintMap map = site.Fingerprints(floor);
+    std::printf("site %s: %zu floor(s), %d walks, written by indoorloc %s; floor %s: %zu outline(s), %zu obstacles, "
+                "%ld fingerprints of %zu APs\n",
                 argv[1], site.FloorNames().size(), site.WalkCount(), site.Meta("library_version").c_str(),
-                floor.c_str(), f.geometry.outlines.size(), f.geometry.obstacles.size());
-    int m = 0;
-    Expect(in, "steps");
-    in >> m;
-    std::vector<fusion::StepInput> steps(m);
-    for (auto& s : steps) {
-      double cxx, cxy, cyy;
-      in >> s.time_s >> s.displacement_m.x() >> s.displacement_m.y() >> cxx >> cxy >> cyy;
-      s.covariance_m2 << cxx, cxy, cxy, cyy;
-    }
-    int n = 0;
-    Expect(in, "fixes");
-    in >> n;
-    std::vector<fusion::PositionFix> fixes(n);
-    for (auto& fx : fixes) {
-      int k = 0;
-      in >> fx.time_s >> k;
-      fx.means_m.resize(k, 2);
-      fx.sds_m.resize(k);
-      fx.weights.resize(k);
-      fx.floors.resize(k);
-      for (int j = 0; j < k; ++j) in >> fx.means_m(j, 0) >> fx.means_m(j, 1) >> fx.sds_m(j) >> fx.weights(j) >> fx.floors(j);
+                floor.c_str(), f.geometry.outlines.size(), f.geometry.obstacles.size(),
+                static_cast<long>(map.rss_dbm.rows()), map.bssids.size());
+    const fusion::FloorPlan plan({f.geometry});
+    const fusion::GridTracker tracker(&plan, site.TrackerOptions(floor));
+    fusion::LiveSession session(&tracker, &map, site.LiveOptions(floor), site.FixOptions());
+
+    long events = 0;
+    Expect(in, "events");
+    in >> events;
+    std::vector<fusion::GridFilterEstimate> track;
+    double worst_event_s = 0.0;
+    for (long i = 0; i < events; ++i) {
+      const auto start = std::chrono::steady_clock::now();
+      FeedEvent(in, &session);
+      worst_event_s = std::max(worst_event_s, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+      if (session.HasEstimate() && (track.empty() || track.back().steps != session.Estimate().steps)) {
+        track.push_back(session.Estimate());
+      }
     }
     int e = 0;
     Expect(in, "expected");
     in >> e;
-    fusion::RowMatrixXd expected(e, 2);
-    for (int i = 0; i < e; ++i) in >> expected(i, 0) >> expected(i, 1);
-    if (!in) throw std::runtime_error("walk_events.txt: truncated");
-
-    const fusion::FloorPlan plan({f.geometry});
-    const fusion::GridTracker tracker(&plan, site.TrackerOptions(floor));
-    const fusion::GridTrackResult r = tracker.Run(steps, fixes, fusion::TrackStart(), /*smooth=*/true);
-    const fusion::RowMatrixXd& xy = site.TrackerOptions(floor).spatial_median ? r.smoothed_median_m : r.smoothed_mean_m;
-    double worst = 0.0;
-    for (int i = 0; i < e && i < xy.rows(); ++i) {
-      worst = std::max(worst, std::hypot(xy(i, 0) - expected(i, 0), xy(i, 1) - expected(i, 1)));
+    double worst = 0.0, worst_t = 0.0;
+    for (int i = 0; i < e; ++i) {
+      double t, x, y;
+      in >> t >> x >> y;
+      if (i < static_cast<int>(track.size())) {
+        const fusion::GridFilterEstimate& k = track[static_cast<std::size_t>(i)];
+        worst = std::max({worst, std::hypot(k.mean_m.x() - x, k.mean_m.y() - y)});
+        worst_t = std::max(worst_t, std::abs(k.time_s - t));
+      }
     }
-    std::printf("tracked %d steps and %d WiFi fixes from an unknown start: last position (%.2f, %.2f) m; "
-                "largest difference to Python's track %.3g m; %s\n",
-                m, n, xy(xy.rows() - 1, 0), xy(xy.rows() - 1, 1), worst, r.summary.BriefReport().c_str());
-    return (xy.rows() == e && worst < 1e-6) ? 0 : 1;
+    if (!in) throw std::runtime_error("walk_events.txt: truncated");
+    const fusion::LiveSessionSummary u = session.Summary();
+    std::printf("tracked %ld raw events live (%lld IMU samples, %d scans): %d steps, %d WiFi fixes; last position "
+                "(%.2f, %.2f) m; largest difference to Python's causal track %.3g m (step times %.3g s) over %d "
+                "steps; slowest event %.3f ms\n",
+                events, u.imu_samples, u.scans, u.steps, u.fixes, track.empty() ? 0.0 : track.back().mean_m.x(),
+                track.empty() ? 0.0 : track.back().mean_m.y(), worst, worst_t, e, 1e3 * worst_event_s);
+    return (static_cast<int>(track.size()) == e && e > 0 && worst == 0.0 && worst_t == 0.0) ? 0 : 1;
   } catch (const std::exception& ex) {
     std::fprintf(stderr, "site_app: %s\n", ex.what());
     return 1;

@@ -12,6 +12,15 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 
+
+def _save(fig, path, **savefig_kwargs) -> Path:
+    """Lays out ``fig``, writes it to ``path`` and closes it; returns ``Path(path)``."""
+    fig.tight_layout()
+    fig.savefig(path, **savefig_kwargs)
+    plt.close(fig)
+    return Path(path)
+
+
 def resampling_variance(stats: Mapping[str, object], path: Path) -> Path:
     """Bar chart of the mean offspring-count variance per resampling scheme; saves PNG."""
     names = list(stats)
@@ -20,10 +29,7 @@ def resampling_variance(stats: Mapping[str, object], path: Path) -> Path:
     ax.bar(names, values, color=["#888", "#4a90d9", "#2a6", "#d94"])
     ax.set_ylabel("mean Var(offspring count)")
     ax.set_title("Resampling schemes: offspring variance")
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return Path(path)
+    return _save(fig, path)
 
 
 def wifi_path_result(model, result, path: Path) -> Path:
@@ -52,10 +58,7 @@ def wifi_path_result(model, result, path: Path) -> Path:
     ax2.set_xlabel("step")
     ax2.set_ylabel("cumulative error E_t [m]")
     ax2.legend(fontsize=6)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return Path(path)
+    return _save(fig, path)
 
 
 def error_cdfs(errors_by_method: Mapping[str, object], path: Path, xmax_m: float = 8.0,
@@ -74,10 +77,7 @@ def error_cdfs(errors_by_method: Mapping[str, object], path: Path, xmax_m: float
     if title:
         ax.set_title(title, fontsize=9)
     ax.legend(fontsize=6, ncol=2)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return Path(path)
+    return _save(fig, path)
 
 
 def heading_offsets(rows, path: Path, method: str = "fusion_smoother") -> Path:
@@ -99,10 +99,7 @@ def heading_offsets(rows, path: Path, method: str = "fusion_smoother") -> Path:
     ax.set_ylabel("tracker's final heading offset [deg]")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return Path(path)
+    return _save(fig, path)
 
 
 def mapmatch_clouds(network, trajectory, clouds: Mapping[float, tuple], path: Path) -> Path:
@@ -128,10 +125,7 @@ def mapmatch_clouds(network, trajectory, clouds: Mapping[float, tuple], path: Pa
         ax.set_xticks([])
         ax.set_yticks([])
     axes[0][0].legend(fontsize=7, loc="upper left")
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return Path(path)
+    return _save(fig, path)
 
 
 def mapmatch_curves(results: Mapping[float, object], path: Path) -> Path:
@@ -147,10 +141,7 @@ def mapmatch_curves(results: Mapping[float, object], path: Path) -> Path:
     ax2.set_ylabel("P(correct segment)")
     ax2.set_ylim(0, 1)
     ax1.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return Path(path)
+    return _save(fig, path)
 
 
 def analog_lorenz(example: Mapping[str, object], path: Path) -> Path:
@@ -178,10 +169,7 @@ def analog_lorenz(example: Mapping[str, object], path: Path) -> Path:
             obs = np.asarray(example["observations"])[:, 0]
             a.plot(t, obs, "r.", ms=3)
         a.set_ylabel(label)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return Path(path)
+    return _save(fig, path)
 
 
 def pdr_paths(figure8_xy, trial_name: str, trial_xy, truth_xy, path: Path) -> Path:
@@ -201,10 +189,7 @@ def pdr_paths(figure8_xy, trial_name: str, trial_xy, truth_xy, path: Path) -> Pa
     for ax in (ax1, ax2):
         ax.set_xlabel("x [m]")
         ax.set_ylabel("y [m]")
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return Path(path)
+    return _save(fig, path)
 
 
 def network_gravity_line(x_m, truth_mgal, series_mgal: Mapping[str, object], path: Path) -> Path:
@@ -217,10 +202,7 @@ def network_gravity_line(x_m, truth_mgal, series_mgal: Mapping[str, object], pat
     ax.set_ylabel("gravity disturbance [mGal]")
     ax.grid(True, alpha=0.3)
     ax.legend()
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return _save(fig, path, dpi=120)
 
 
 def fusion_walk(snapshot: Mapping[str, object], path: Path) -> Path:
@@ -264,10 +246,7 @@ def _finish_walk_figure(fig, ax_err, series, xlabel: str, ylabel: str, log_y: bo
         ax_err.set_yscale("log")
     ax_err.legend(fontsize=8)
     ax_err.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return Path(path)
+    return _save(fig, path)
 
 
 def fusion_real_walk(snapshot: Mapping[str, object], path: Path) -> Path:
@@ -343,7 +322,4 @@ def site_coverage(coverage: Mapping[str, object], path: Path, title: str = "",
     ax.set_ylabel("y [m]")
     ax.set_title(title or f"survey coverage: {100 * coverage['fraction_within_5m']:.0f} % of the walkable area within 5 m")
     ax.legend(loc="upper right", fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return Path(path)
+    return _save(fig, path)

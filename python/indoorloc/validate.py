@@ -18,8 +18,12 @@ MIN_SCALE = 1e-12
 MAX_SCALE = 1e12
 
 
-def _error(name: str, rule: str) -> ValueError:
+def argument_error(name: str, rule: str) -> ValueError:
+    """The ValueError of a bad argument: ``indoorloc: argument '<name>': <rule>``."""
     return ValueError(f"indoorloc: argument '{name}': {rule}")
+
+
+_error = argument_error
 
 
 def real_array(value: Any, name: str, *, ndim: Optional[int] = None,

@@ -3,7 +3,7 @@
 
 When to use: to turn a crowdsourced set of walks (waypoints + WiFi, the Indoor Location Competition
 2.0 format) into reference fingerprints and to match the fingerprints of another walk against
-them. :mod:`indoorloc.wifi_fixes` builds the tracker's position fixes on top of this.
+them. :mod:`indoorloc.fusion.wifi_fixes` builds the tracker's position fixes on top of this.
 
 1. **Measurements, not scans** (:func:`walk_measurements`). A reading's RSSI was measured at its
    last-seen time; Android repeats cached measurements in later scans. Each distinct
@@ -14,7 +14,7 @@ them. :mod:`indoorloc.wifi_fixes` builds the tracker's position fixes on top of 
    BSSID, the strongest measurement last seen in [t - before, t + after]. References are pooled
    in a window centred on times every ``ref_spacing_s`` along each training walk and placed at
    the walker's position at that time (PDR between the waypoints,
-   ``wifi_crowdsource.walk_positions``): "fingerprints interpolated along the survey paths",
+   ``crowdsourced_map.walk_positions``): "fingerprints interpolated along the survey paths",
    several per waypoint interval instead of one per scan. A query at scan time t pools the
    measurements last seen in [t - w, t] that scans up to t have reported (causal), and is timed
    at the mean last-seen time of those measurements.

@@ -97,6 +97,44 @@ def group_pdr() -> None:
     probe(Case("ins_zupt_increments", pdr.ins_zupt_increments,
                {"time_s": t, "acc_mps2": acc, "quaternions_wxyz": quats, "step_indices": np.array([10, 50, 90]),
                 "window_s": 0.05, "gravity_mps2": 9.81}))
+    _handheld_cases()
+
+
+def _handheld_cases() -> None:
+    """The hand-held phone PDR (issue 28: internal names 'x' and 'rate_hz' leaked, a walk without
+    steps raised numpy's reshape error). Results are dataclasses: probed as dicts of arrays."""
+    from dataclasses import asdict
+
+    from indoorloc.pdr import handheld as ph
+
+    n = 400
+    t = np.arange(n) / 50.0
+    acc = np.tile([0.0, 0.0, 9.81], (n, 1))
+    acc[:, 2] += 2.5 * np.sin(2 * np.pi * 1.8 * t) * (t > 1.0)
+    gyro = np.zeros((n, 3))
+    quat = np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))
+
+    def steps_of(t_s, acc_mps2, gyro_radps, quat_xyzw):
+        return asdict(ph.handheld_steps(ph.HandheldArrays(t_s, acc_mps2, gyro_radps, quat_xyzw)))
+
+    probe(Case("handheld_steps", steps_of, {"t_s": t, "acc_mps2": acc, "gyro_radps": gyro, "quat_xyzw": quat},
+               nan_outputs=("options",)))
+    steps = ph.handheld_steps(ph.HandheldArrays(t, acc, gyro, quat))
+    probe(Case("pdr_track", ph.pdr_track, {"steps": steps, "start_xy_m": np.array([1.0, 2.0]),
+                                           "t_query": np.array([1.0, 3.0, 7.0]), "heading": "gyro",
+                                           "yaw_offset_rad": 0.1}, vary=["start_xy_m", "t_query", "heading",
+                                                                         "yaw_offset_rad"]))
+    probe(Case("vertical_acceleration", ph.vertical_acceleration, {"acc_mps2": acc, "quat_xyzw": quat}))
+    probe(Case("gyro_heading", ph.gyro_heading, {"t_s": t, "gyro_radps": gyro, "quat_xyzw": quat}))
+    h = np.zeros(n)
+    probe(Case("complementary_heading", ph.complementary_heading,
+               {"t_s": t, "heading_rv_rad": h, "heading_gyro_rad": h + 0.1, "tau_s": 10.0}))
+    probe(Case("rotation_vector_heading", ph.rotation_vector_heading, {"quat_xyzw": quat}))
+    wt = np.array([1.0, 4.0, 7.0])
+    probe(Case("waypoint_intervals", lambda steps, waypoint_t_s, waypoint_xy_m: asdict(
+        ph.waypoint_intervals(steps, waypoint_t_s, waypoint_xy_m)),
+        {"steps": steps, "waypoint_t_s": wt, "waypoint_xy_m": np.array([[0.0, 0.0], [3.0, 0.0], [3.0, 4.0]])},
+        vary=["waypoint_t_s", "waypoint_xy_m"]))
 
 
 def _network():
@@ -369,24 +407,14 @@ def fuzz_file(name: str, load, folder: Path, damaged: str, arg_name: str = "path
     naming the damaged file (`arg_name` is the loader's parameter, for the record)."""
     from hypothesis import given
 
-    from indoorloc.io import FormatError
     from property_harness import TALLY, Case, call
 
     target = folder / damaged
     valid = target.read_bytes()
     load()  # the undamaged file loads
 
-    def reload(**kwargs):
-        try:
-            return load()
-        except FormatError:
-            raise
-        except ValueError as exc:
-            # The library promises one type for damaged files.
-            raise RuntimeError(f"ValueError that is not a FormatError: {exc}") from exc
-
     # The "argument" spoiled is the file: an error message must name it.
-    case = Case(name, lambda **kwargs: reload(), {damaged: None})
+    case = Case(name, lambda **kwargs: _load_as_format_error(load), {damaged: None})
     TALLY.cases += 1
 
     @given(how=_damage())
@@ -398,6 +426,19 @@ def fuzz_file(name: str, load, folder: Path, damaged: str, arg_name: str = "path
             target.write_bytes(valid)
 
     run()
+
+
+def _load_as_format_error(load):
+    """``load()``, a ValueError that is not a FormatError turned into a RuntimeError: the library
+    promises one type for damaged files."""
+    from indoorloc.io import FormatError
+
+    try:
+        return load()
+    except FormatError:
+        raise
+    except ValueError as exc:
+        raise RuntimeError(f"ValueError that is not a FormatError: {exc}") from exc
 
 
 def _bad_field_values():
@@ -425,21 +466,12 @@ def fuzz_mat_fields(name: str, load, target: Path, build, paths) -> None:
     from hypothesis import strategies as st
     from scipy.io import savemat
 
-    from indoorloc.io import FormatError
     from property_harness import TALLY, Case, call
 
     valid = target.read_bytes()
     load()
 
-    def reload(**kwargs):
-        try:
-            return load()
-        except FormatError:
-            raise
-        except ValueError as exc:
-            raise RuntimeError(f"ValueError that is not a FormatError: {exc}") from exc
-
-    case = Case(name, lambda **kwargs: reload(), {target.name: None})
+    case = Case(name, lambda **kwargs: _load_as_format_error(load), {target.name: None})
     TALLY.cases += 1
 
     @given(where=st.sampled_from(paths), how=_bad_field_values())
@@ -548,14 +580,10 @@ def group_io() -> None:
                                 "timestamps": ts[[5, 25, 45]][None, :]})
     fuzz_file("load_pyshoe_trial", lambda: iio.load_pyshoe_trial(tmp / "trial.mat"), tmp, "trial.mat")
 
-    rooms = tmp / "rooms"
-    rooms.mkdir()
-    (rooms / "AP_position.txt").write_text("office\nAP X: 1,11,15\nAP Y: 5,-1,6\n")
-    head = "X,Y,AP1 RTT(mm),AP2 RTT(mm),AP3 RTT(mm),AP1 RSS(dBm),AP2 RSS(dBm),AP3 RSS(dBm),LOS APs\n"
-    for split in ("train", "test"):
-        (rooms / f"database_office_{split}.csv").write_text(
-            head + "0.0,1.0,4000.0,4000.0,4000.0,-50.0,-60.0,-70.0,1 3\n"
-                   "2.0,3.0,4000.0,4000.0,4000.0,-55.0,-65.0,-75.0,1\n")
+    from test_wifi_io import write_office_room  # the RSS/RTT room fixture
+
+    rooms = write_office_room(tmp / "rooms", "1,11,15", ["0.0,1.0,4000.0,4000.0,4000.0,-50.0,-60.0,-70.0,1 3",
+                                                        "2.0,3.0,4000.0,4000.0,4000.0,-55.0,-65.0,-75.0,1"])
     for damaged in ("AP_position.txt", "database_office_train.csv"):
         fuzz_file(f"load_rss_rtt_room[{damaged}]", lambda: iio.load_rss_rtt_room(rooms, "office"), rooms,
                   damaged, arg_name="root")
@@ -689,7 +717,8 @@ TRACKER_FIELDS = {
 
 
 def group_fusion() -> None:
-    from indoorloc import fusion, wifi_fixes
+    from indoorloc import fusion
+    from indoorloc.fusion import wifi_fixes
     from indoorloc import io as iio
     from indoorloc._core import fusion as cf
 

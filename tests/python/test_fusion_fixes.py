@@ -1,12 +1,12 @@
 """Position fixes (fusion.Fixes, ParticleTracker.fix) and WiFi fingerprint fixes
-(indoorloc.wifi_fixes): shapes, validation, the scan dissimilarity by hand, and a walk tracked
+(indoorloc.fusion.wifi_fixes): shapes, validation, the scan dissimilarity by hand, and a walk tracked
 from fixes alone."""
 
 import numpy as np
 import pytest
 
 from indoorloc import fusion
-from indoorloc import wifi_fixes as wfx
+from indoorloc.fusion import wifi_fixes
 
 HALL = [[0, 0], [40, 0], [40, 10], [0, 10]]
 
@@ -91,16 +91,16 @@ def test_scan_dissimilarity_by_hand():
                   [-50.0, -60.0, nan, nan],    # identical -> 0
                   [nan, nan, nan, -40.0],      # nothing shared: (0 + 3c) / 3 = c
                   [nan, nan, nan, nan]])       # empty database scan: union {AP0, AP1} -> c
-    d = wfx.scan_dissimilarity(q, x, unshared_cost_db=10.0)
+    d = wifi_fixes.scan_dissimilarity(q, x, unshared_cost_db=10.0)
     np.testing.assert_allclose(d, [[(2 + 20) / 3, 0.0, 10.0, 10.0]])
-    assert np.isinf(wfx.scan_dissimilarity(np.full((1, 4), nan), np.full((1, 4), nan), 10.0))[0, 0]
+    assert np.isinf(wifi_fixes.scan_dissimilarity(np.full((1, 4), nan), np.full((1, 4), nan), 10.0))[0, 0]
 
 
 def test_fix_settings_are_validated():
     with pytest.raises(ValueError, match="FixSettings.sd_m"):
-        wfx.FixSettings(sd_m=0.0).validate()
+        wifi_fixes.FixSettings(sd_m=0.0).validate()
     with pytest.raises(ValueError, match="FixSettings.k"):
-        wfx.FixSettings(k=0).validate()
+        wifi_fixes.FixSettings(k=0).validate()
 
 
 def test_strongest_ap_dissimilarity_by_hand():
@@ -108,11 +108,11 @@ def test_strongest_ap_dissimilarity_by_hand():
     q = np.array([[-40.0, -50.0, -90.0, nan]])
     x = np.array([[-42.0, -50.0, nan, -30.0],   # top-2 of the query: AP0, AP1 -> sqrt((4 + 0) / 2)
                   [nan, -60.0, -90.0, nan]])    # AP0 not heard -> -100: sqrt((60² + 10²) / 2)
-    d = wfx.strongest_ap_dissimilarity(q, x, n=2, not_heard_dbm=-100.0)
+    d = wifi_fixes.strongest_ap_dissimilarity(q, x, n=2, not_heard_dbm=-100.0)
     np.testing.assert_allclose(d, [[np.sqrt(2.0), np.sqrt((60.0 ** 2 + 10.0 ** 2) / 2)]])
-    assert np.isinf(wfx.strongest_ap_dissimilarity(np.full((1, 4), nan), x, 2, -100.0)).all()
-    db = wfx.FingerprintDatabase(x, np.array([[0.0, 0.0], [10.0, 0.0]]), ["a", "b", "c", "d"],
-                                 wfx.FixSettings(metric="strongest", strongest_n=2, k=1))
-    np.testing.assert_allclose(wfx.locate_scans(q, db), [[0.0, 0.0]])
+    assert np.isinf(wifi_fixes.strongest_ap_dissimilarity(np.full((1, 4), nan), x, 2, -100.0)).all()
+    db = wifi_fixes.FingerprintDatabase(x, np.array([[0.0, 0.0], [10.0, 0.0]]), ["a", "b", "c", "d"],
+                                 wifi_fixes.FixSettings(metric="strongest", strongest_n=2, k=1))
+    np.testing.assert_allclose(wifi_fixes.locate_scans(q, db), [[0.0, 0.0]])
     with pytest.raises(ValueError, match="FixSettings.metric"):
-        wfx.FixSettings(metric="cosine").validate()
+        wifi_fixes.FixSettings(metric="cosine").validate()

@@ -366,6 +366,41 @@ def test_geojson_damaged_input_names_file_and_feature(tmp_path):
                  "floors[0].obstacles[3]", "self-intersecting", "selfx.geojson: feature 3")
 
 
+
+def test_load_floor_plan_names_the_file_for_every_floor_plan_error(tmp_path):
+    # Only ring errors named the file; a wall's coordinates, a floor without an outline, a repeated
+    # floor number and the index's memory named floors[i] alone.
+    def write(name, features):
+        p = tmp_path / name
+        p.write_text(json.dumps({"type": "FeatureCollection", "features": [
+            {"type": "Feature", "properties": {"role": role}, "geometry": {"type": kind, "coordinates": c}}
+            for role, kind, c in features]}))
+        return p
+
+    square = ("outline", "Polygon", [[[0, 0], [20, 0], [20, 10], [0, 10], [0, 0]]])
+    good = write("good.geojson", [square])
+    wall = write("wall.geojson", [square, ("wall", "LineString", [[1, 1], [1e9, 1]])])
+    expect_error(lambda: load_floor_plan(wall), "floors[0].walls", "wall.geojson: feature 1")
+    bare = write("bare.geojson", [("wall", "LineString", [[1, 1], [2, 2]])])
+    expect_error(lambda: load_floor_plan(bare), "at least one outline", "bare.geojson")
+    expect_error(lambda: load_floor_plan([good, bare], floors=[3, 3]), "repeated", "floors[1]: ")
+    big = write("big.geojson", [("outline", "Polygon", [[[0, 0], [9000, 0], [9000, 9000], [0, 9000], [0, 0]]])])
+    expect_error(lambda: load_floor_plan(big, options=FloorPlanOptions(cell_size_m=1.0, max_cells=100_000_000)),
+                 "options.cell_size_m", "GB", "big.geojson")
+
+
+def test_write_geojson_floor_checks_the_floor_number(tmp_path):
+    from types import SimpleNamespace
+
+    ring = box(0, 0, 5, 5)
+    nan_floor = SimpleNamespace(floor=float("nan"), outlines=[ring], obstacles=[], walls=np.zeros((0, 4)))
+    expect_error(lambda: write_geojson_floor(tmp_path / "a.geojson", nan_floor), "'geometry.floor'")  # was "a coordinate"
+    assert not (tmp_path / "a.geojson").exists()
+    numpy_floor = SimpleNamespace(floor=np.int64(2), outlines=[ring], obstacles=[], walls=np.zeros((0, 4)))
+    write_geojson_floor(tmp_path / "b.geojson", numpy_floor)  # was json's "int64 is not JSON serializable"
+    assert json.loads((tmp_path / "b.geojson").read_text())["features"][0]["properties"]["floor"] == 2
+
+
 # ---- the ILC 2020 floor in ../shared/data -------------------------------------------------
 
 def test_ilc2020_site2_floor3(shared_data):

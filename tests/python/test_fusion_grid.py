@@ -118,3 +118,19 @@ def test_region95_contains():
     cov = np.tile([1.0, 0.0, 1.0], (3, 1))
     truth = np.array([[0.5, 0.5], [2.0, 2.0], [0.0, 2.4]])
     assert fusion.region95_contains(means, cov, truth).tolist() == [True, False, True]
+
+
+def test_wall_margin_erodes_obstacles_by_the_margin_only():
+    """wall_margin_m: cells within the margin of the shop's edges become walkable, the shop's
+    core stays an obstacle, and 0 leaves the plan as drawn."""
+    plan = _hall()
+    drawn = fusion.GridTracker(plan, fusion.GridTrackerOptions()).walkable_fraction(0)
+    eroded = fusion.GridTracker(plan, fusion.GridTrackerOptions(wall_margin_m=1.0)).walkable_fraction(0)
+    assert fusion.GridTrackerOptions().wall_margin_m == 0.0
+    # 1 m cells, the shop spans cells x 15..24, y 10..19 (row-major y, x).
+    assert drawn[15, 20] == 0.0 and eroded[15, 20] == 0.0          # the shop's core
+    assert drawn[10, 20] == 0.0 and eroded[10, 20] == 1.0          # the row just inside its south edge
+    assert drawn[5, 5] == 1.0 and eroded[5, 5] == 1.0              # open floor
+    assert (eroded >= drawn).all() and eroded.sum() > drawn.sum()
+    with pytest.raises(ValueError, match="wall_margin_m"):
+        fusion.GridTracker(plan, fusion.GridTrackerOptions(wall_margin_m=-1.0))

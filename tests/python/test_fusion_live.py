@@ -13,7 +13,7 @@ import pytest
 from indoorloc import fusion
 from indoorloc.pdr import handheld as ph
 from indoorloc.pdr import streaming as ps
-from indoorloc import wifi_fixes as wfx
+from indoorloc.fusion import wifi_fixes as wfx
 from indoorloc.fusion import live
 from indoorloc.io import load_floor_plan, read_ilc_floor, read_ilc_site
 from indoorloc.simulate.ilc_site import make_ilc_site
@@ -236,3 +236,49 @@ def test_live_queries_are_walk_queries_and_weighted_maps_replay_equal(synthetic_
     if hasattr(db.settings, "beacons"):
         with pytest.raises(ValueError, match=r"beacons off"):
             live.LiveTracker(tracker, cal, db.with_settings(replace(db.settings, beacons=True)))
+
+
+# ------------------------------------------------------------------ one model: the C++ session
+def test_cpp_defaults_equal_the_python_settings_they_mirror():
+    """The C++ detector, fix and session options restate no default of their own: each equals the
+    Python settings class where it was chosen."""
+    from indoorloc._core.fusion import FingerprintFixOptions, LiveSessionOptions
+    from indoorloc._core.pdr import StreamingStepOptions
+    from indoorloc.fusion.site_model import TrackSettings
+
+    h = ph.HandheldOptions()
+    for name, value in StreamingStepOptions().to_dict().items():
+        if name != "rate_samples":
+            assert getattr(h, name) == value, name
+    assert ps.RATE_SAMPLES == 25
+    f, c = wfx.FixSettings(), FingerprintFixOptions()
+    assert (c.query_window_s, c.min_aps, c.sd_m, c.sd_per_db) == (f.query_window_s, f.min_aps, f.sd_m, f.sd_per_db)
+    assert (c.matcher.penalty_db, c.matcher.k, c.matcher.temperature_db, c.matcher.strength_scale_db) == \
+        (f.penalty_db, f.k, f.temperature_db, f.strength_scale_db)
+    o, t = LiveSessionOptions(), TrackSettings()
+    assert (o.step_length_sd_fraction, o.step_heading_sd_rad) == (t.step_length_sd_fraction, t.step_heading_sd_rad)
+    assert (o.step_length_sd_fraction, o.step_heading_sd_rad) == (live.STEP_LENGTH_SD_FRACTION, live.STEP_HEADING_SD_RAD)
+    assert o.step_length_k == h.k and o.heading_source == h.heading_source
+
+
+def test_bound_session_errors_name_the_argument_and_the_event(synthetic_floor):
+    from indoorloc._core.fusion import LiveSession
+
+    floor = synthetic_floor
+    plan = load_floor_plan(floor.geojson_path, floors=[1], origin_lon_lat="outline_sw")
+    tracker = fusion.GridTracker(plan, fusion.GridTrackerOptions())
+    s = LiveSession(tracker, live.session_options())
+    assert s.add_gyroscope(1.0, [0.0, 0.0, 0.0]) is None and s.events == 1
+    with pytest.raises(ValueError, match=r"argument 'acc_mps2'"):
+        s.add_accelerometer(2.0, [0.0, 1.0])
+    with pytest.raises(ValueError, match=r"argument 't_s'"):
+        s.add_beacon("soon")
+    with pytest.raises(ValueError, match=r"event 1 \(beacon at t = 0.5 s\) is out of time order: before event 0 "
+                                         r"\(gyroscope at t = 1.0 s\)"):
+        s.add_beacon(0.5)
+    with pytest.raises(ValueError, match=r"argument 'map.positions_m'"):
+        LiveSession(tracker, live.session_options(), (["a"], np.zeros((2, 1)), np.zeros((3, 2)), np.zeros(2),
+                                                      None, None))
+    with pytest.raises(ValueError, match=r"step_length_k"):
+        LiveSession(tracker, live.session_options().replace(step_length_k=-1.0))
+    assert s.events == 1 and s.summary["steps"] == 0

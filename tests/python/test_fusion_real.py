@@ -158,6 +158,18 @@ def test_leave_one_walk_out_scores_every_walk_once(two_floor_site, tmp_path, mon
     assert data["settings"]["folds"] == 0 and "floor_identification" not in data
 
 
+def test_select_grid_is_checked_before_any_walk_is_tracked(two_floor_site, capsys):
+    """--select-grid: an unknown setting or an empty value list is a ValueError naming 'grid'
+    (before the site is even read); bad JSON is a usage error of the CLI."""
+    with pytest.raises(ValueError, match="argument 'grid'.*no_such_setting"):
+        fr.select_settings(two_floor_site, ["F1"], fr.RealSettings(**FAST), {"no_such_setting": [1]})
+    with pytest.raises(ValueError, match="argument 'grid'.*grid.wall_margin_m"):
+        fr.select_settings(two_floor_site, ["F1"], fr.RealSettings(**FAST), {"grid.wall_margin_m": []})
+    with pytest.raises(SystemExit):
+        cli.main(["fusion", "evaluate", "--data-root", str(two_floor_site), "--select", "--select-grid", "{not json"])
+    assert "--select-grid" in capsys.readouterr().err
+
+
 def test_survey_coverage_with_the_fold_tree_equals_the_brute_force_minimum():
     """The KD-tree shortcut of the coverage distance gives the brute-force values bit for bit,
     ties included (half the training positions on whole metres, waypoints on them too)."""

@@ -66,7 +66,7 @@ def test_round_trip_equals_in_memory_models(built, floor_dir):
     """A site saved and re-opened tracks a held-out walk exactly as the models built in memory
     from the same walks (fusion.site_model, what fusion evaluate uses)."""
     from indoorloc.pdr import handheld as ph
-    from indoorloc import wifi_fixes as wfx
+    from indoorloc.fusion import wifi_fixes
     from indoorloc.fusion import GridTracker, site_model
     from indoorloc.fusion.site import Site
     from indoorloc.io import load_floor_plan
@@ -82,7 +82,7 @@ def test_round_trip_equals_in_memory_models(built, floor_dir):
     tracker = GridTracker(plan, site_model.floor_grid_options(settings, cal))
     test = read_ilc_walk(paths[N_SURVEY + 2])
     r = site_model.run_default(tracker, site_model.tracker_steps(ph.handheld_steps(test), cal, settings),
-                               wfx.fixes_for_walk(test, db))
+                               wifi_fixes.fixes_for_walk(test, db))
     reopened = Site.open(site.path)
     track = reopened.track(test, floor=FLOOR)
     np.testing.assert_array_equal(track.xy_m, r["smoothed_m"])
@@ -106,6 +106,13 @@ def test_add_equals_build_with_the_walk(tmp_path, floor_dir):
     np.testing.assert_array_equal(a.database.positions_m, b.database.positions_m)
     assert a.database.bssids == b.database.bssids
     np.testing.assert_array_equal(a.database.ap_ratio, b.database.ap_ratio)
+    # The stored map columns (what the C++ reader uses) follow the add: equal to the models'.
+    for site, m in ((small, a), (full, b)):
+        with sqlite3.connect(site.path) as con:
+            rows = con.execute("SELECT bssid, ap_ratio FROM fingerprint_columns WHERE floor = ? ORDER BY col",
+                               (FLOOR,)).fetchall()
+        assert [r[0] for r in rows] == m.database.bssids
+        np.testing.assert_array_equal([r[1] for r in rows], m.database.ap_ratio)
     assert (a.calibration.k, a.calibration.yaw_offset_rad) == (b.calibration.k, b.calibration.yaw_offset_rad)
     test = read_ilc_walk(paths[N_SURVEY + 1])
     np.testing.assert_array_equal(Site.open(small.path).track(test).xy_m, full.track(test).xy_m)

@@ -878,3 +878,9 @@ def test_describe_floor_measures_the_fixture(tmp_path):
     assert d["rate_hz"]["TYPE_ACCELEROMETER"]["p50"] == pytest.approx(50.0)
     assert d["max_gap_s"]["TYPE_GYROSCOPE"] == pytest.approx(0.02)
     assert d["n_beacon_readings"] == 4 and d["unknown_type_counts"]["TYPE_BLUE"] == 10
+
+
+def test_describe_ilc_floor_refuses_a_folder_path_by_name(tmp_path):
+    """describe_ilc_floor(path) raised AttributeError ('PosixPath' object has no attribute 'walks')."""
+    with pytest.raises(TypeError, match="argument 'floor': expected an IlcFloor"):
+        describe_ilc_floor(tmp_path)

@@ -64,6 +64,16 @@ def test_options_protocol(modname, name, cls):
         cls(**{key: object()})
 
 
+@pytest.mark.parametrize("modname,name,cls", OPTIONS, ids=[n for _, n, _ in OPTIONS])
+def test_an_int_too_large_for_an_integer_field_is_a_value_error(modname, name, cls):
+    # num_particles = 2**31 read "has the wrong type for TrackerOptions.num_particles: got int".
+    ints = [k for k, v in cls().to_dict().items() if isinstance(v, int) and not isinstance(v, bool)]
+    for key in ints:
+        for value in (2**64, -(2**64)):
+            with pytest.raises(ValueError, match=f"argument '{key}': {value} does not fit {name}.{key}"):
+                cls(**{key: value})
+
+
 def test_deprecated_positional_form_still_works():
     from indoorloc.fusion import SmootherOptions
     with warnings.catch_warnings(record=True) as caught:

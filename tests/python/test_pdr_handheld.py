@@ -223,3 +223,63 @@ def test_huge_windows_are_refused_by_name():
 def test_calibrate_handheld_refuses_no_walks():
     with pytest.raises(ValueError, match="'walks'"):
         ph.calibrate_handheld([])
+
+
+def test_absurd_sensor_values_are_named_by_the_user_argument():
+    # 1e160 m/s^2 reached the step filter and was refused as its internal argument 'x'; times at
+    # 1e300 (or 1e-300 apart) as the filter's 'rate_hz'; a zero quaternion gave a constant heading.
+    arrays, _ = _synthetic(n_steps=4)
+    t, acc, gyro, q = arrays.t_s, arrays.acc_mps2, arrays.gyro_radps, arrays.quat_xyzw
+    spoiled = acc.copy()
+    spoiled[10, 2] = 1e160
+    with pytest.raises(ValueError, match=r"'acc_mps2': entry \(10, 2\)"):
+        ph.HandheldArrays(t, spoiled, gyro, q)
+    spoiled = gyro.copy()
+    spoiled[3, 0] = -1e300
+    with pytest.raises(ValueError, match=r"'gyro_radps': entry \(3, 0\)"):
+        ph.HandheldArrays(t, acc, spoiled, q)
+    with pytest.raises(ValueError, match=r"'t_s': times must be within"):
+        ph.HandheldArrays(t * 1e300, acc, gyro, q)
+    with pytest.raises(ValueError, match=r"'t_s': the mean sample interval"):
+        ph.HandheldArrays(t * 1e-300, acc, gyro, q)
+    with pytest.raises(ValueError, match=r"'quat_xyzw': row 0 has norm 0"):
+        ph.HandheldArrays(t, acc, gyro, np.zeros_like(q))
+    with pytest.raises(ValueError, match=r"'quat_xyzw'.*complex"):
+        ph.HandheldArrays(t, acc, gyro, q.astype(complex))
+    # A sample rate the band-pass cannot run at names the option and the times, not 'cutoff_hz'.
+    slow = ph.HandheldArrays(t * 60.0, acc, gyro, q)  # 100 Hz -> 1.7 Hz
+    with pytest.raises(ValueError, match=r"HandheldOptions.highpass_hz.*t_s"):
+        ph.handheld_steps(slow, ph.HandheldOptions(highpass_hz=1.0))
+
+
+def test_orientation_helpers_refuse_nan_and_name_their_arguments():
+    arrays, _ = _synthetic(n_steps=4)
+    t, acc, gyro, q = arrays.t_s, arrays.acc_mps2, arrays.gyro_radps, arrays.quat_xyzw
+    with pytest.raises(ValueError, match="'acc_mps2'"):
+        ph.vertical_acceleration(np.full_like(acc, np.nan), q)  # returned NaN silently
+    with pytest.raises(ValueError, match="'gyro_radps'"):
+        ph.gyro_heading(t, np.full_like(gyro, np.nan), q)  # returned NaN silently
+    with pytest.raises(ValueError, match="'quat_xyzw'"):
+        ph.gyro_heading(t, gyro, q[:-1])
+    h = np.zeros(t.size)
+    with pytest.raises(ValueError, match="'t_s'"):
+        ph.complementary_heading(np.zeros(5), np.zeros(5), np.zeros(5), 1.0)  # was 'rate_hz'
+    with pytest.raises(ValueError, match="'tau_s'"):
+        ph.complementary_heading(t, h, h, math.nan)  # was 'cutoff_hz'
+    with pytest.raises(ValueError, match="'heading_gyro_rad'"):
+        ph.complementary_heading(t, h, h[:-1], 1.0)
+    assert np.all(np.isfinite(ph.complementary_heading(t, h, h, 10.0)))
+    assert np.all(np.isfinite(ph.gyro_heading(t, gyro, q)))
+
+
+def test_a_walk_without_steps_gives_positions_instead_of_a_reshape_error():
+    # cumulative_at reshaped (0,) values to (0, -1): numpy's "cannot reshape array of size 0",
+    # which ended build_crowd_map for any training walk of a phone held still.
+    arrays, _ = _synthetic(n_steps=0)
+    st = ph.handheld_steps(arrays)
+    assert st.n_steps == 0
+    t = np.array([arrays.t_s[0], arrays.t_s[-1]])
+    np.testing.assert_array_equal(ph.pdr_track(st, [1.0, 2.0], t), [[1.0, 2.0], [1.0, 2.0]])
+    assert ph.cumulative_at(st, np.zeros((0, 3)), t).shape == (2, 3)
+    with pytest.raises(ValueError, match="'values'"):
+        ph.cumulative_at(st, np.ones(3), t)

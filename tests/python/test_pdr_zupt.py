@@ -303,9 +303,31 @@ def test_the_health_check_flags_each_implausible_result():
     assert "step rhythm implies" in recommended.gait_plausibility(ok, walking, 1.0, 30)[0]
     assert "strides counted" in recommended.gait_plausibility(ok, walking, 36.0, 3)[0]
     assert "no threshold" in recommended.gait_plausibility(dict(ok, guard_satisfied=False), walking, 36.0, 30)[0]
+    assert "called stance move" in recommended.gait_plausibility(dict(ok, stance_motion_ratio=0.3), walking, 36.0,
+                                                                 30)[0]
+    assert recommended.gait_plausibility(dict(ok, stance_motion_ratio=0.01), walking, 36.0, 30) == []
     # no walking in the IMU: short strides and a short path are no contradiction
     still = {"energy_mps2": 0.05, "strength": 0.05, "period_s": float("nan"), "rhythm_strides": 0.0}
     assert recommended.gait_plausibility(dict(ok, median_stride_m=0.0), still, 0.0, 0) == []
+    assert recommended.gait_plausibility(dict(ok, stance_motion_ratio=0.9), still, 0.0, 0) == []
+
+
+def test_a_uniformly_short_slow_walk_is_flagged_by_the_motion_inside_stance():
+    """The failure the other checks miss (docs/errors.md): a slow shuffle whose stance took in the
+    slow ends of the swings; strides are all there but 15-20 % short (ARMSE 0.91 m on 8.4 m)."""
+    from indoorloc.simulate.foot_gait import slow_low_motion_gait
+
+    rec = slow_low_motion_gait(seed=101, pitch_deg=10.0, stance_rate_radps=0.3, swing_s=0.8)  # study's 2nd gait
+    out = recommended.run_recommended(rec)
+    assert _final_error(rec, out["positions_m"]) > 0.05 * rec.distance_m
+    assert out["health"]["stance_motion_ratio"] > 0.4
+    reasons = out["health"]["reasons"]
+    assert out["health"]["implausible"] and [r for r in reasons if "called stance move" in r] == reasons
+    # a good run of the same generator reads sensor noise in its stance
+    good = recommended.run_recommended(slow_low_motion_gait(seed=106, pitch_deg=20.0, stance_rate_radps=0.3,
+                                                            swing_s=0.6))
+    assert good["health"]["stance_motion_ratio"] < 0.12
+    assert not any("called stance move" in r for r in good["health"]["reasons"])
 
 
 def test_gait_evidence_reads_the_rhythm_of_a_walk():

@@ -223,13 +223,9 @@ def test_delaunay_with_a_tiny_triangle_and_huge_rss_stay_finite_or_refuse():
 
 
 def test_load_rss_rtt_room_refuses_nan_ap_positions(tmp_path):
-    root = tmp_path / "rooms"
-    root.mkdir()
-    (root / "AP_position.txt").write_text("office\nAP X: 1,nan,15\nAP Y: 5,-1,6\n")
-    head = "X,Y,AP1 RTT(mm),AP2 RTT(mm),AP3 RTT(mm),AP1 RSS(dBm),AP2 RSS(dBm),AP3 RSS(dBm),LOS APs\n"
-    for split in ("train", "test"):
-        (root / f"database_office_{split}.csv").write_text(
-            head + "0.0,1.0,4000.0,4000.0,4000.0,-50.0,-60.0,-70.0,1\n")
+    from test_wifi_io import write_office_room
+
+    root = write_office_room(tmp_path / "rooms", "1,nan,15", ["0.0,1.0,4000.0,4000.0,4000.0,-50.0,-60.0,-70.0,1"])
     with pytest.raises(io.FormatError, match="AP_position.txt.*NaN or infinite AP coordinate"):
         io.load_rss_rtt_room(root, "office")
 

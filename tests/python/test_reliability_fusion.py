@@ -317,16 +317,16 @@ def test_write_geojson_floor_refuses_nan_and_writes_atomically(tmp_path):
 def test_wifi_helpers_refuse_non_finite_arguments_and_name_the_query():
     from types import SimpleNamespace
 
-    from indoorloc import wifi_crowdsource, wifi_fixes
+    from indoorloc.fusion import crowdsourced_map, wifi_fixes
 
     with pytest.raises(ValueError, match="not_heard_dbm"):
-        wifi_crowdsource.prepare(np.array([[-60.0, np.nan]]), np.nan)
+        crowdsourced_map.prepare(np.array([[-60.0, np.nan]]), np.nan)
     with pytest.raises(ValueError, match="rss_dbm"):
-        wifi_crowdsource.prepare(np.array([[-np.inf, -50.0]]), -100.0)
-    assert wifi_crowdsource.prepare(np.array([[np.nan, -50.0]]), -100.0).tolist() == [[-100.0, -50.0]]
+        crowdsourced_map.prepare(np.array([[-np.inf, -50.0]]), -100.0)
+    assert crowdsourced_map.prepare(np.array([[np.nan, -50.0]]), -100.0).tolist() == [[-100.0, -50.0]]
     for bad in (np.nan, -1.0, "2"):
         with pytest.raises(ValueError, match="fresh_age_s"):
-            wifi_crowdsource.scan_epochs(SimpleNamespace(), bad)
+            crowdsourced_map.scan_epochs(SimpleNamespace(), bad)
     rss = np.array([[-50.0, -60.0], [-70.0, np.nan], [-55.0, -65.0], [-52.0, -61.0]])
     xy = np.array([[0.0, 0.0], [5.0, 0.0], [10.0, 0.0], [0.5, 0.0]])
     db = wifi_fixes.assemble_database([(rss, xy, ["a", "b"], np.zeros(4, int), np.arange(4))],
@@ -343,14 +343,14 @@ def test_wifi_helpers_refuse_non_finite_arguments_and_name_the_query():
 def test_scan_matrix_of_a_walk_that_heard_none_of_the_maps_aps_is_all_nan():
     from types import SimpleNamespace
 
-    from indoorloc import wifi_crowdsource
+    from indoorloc.fusion import crowdsourced_map
     from indoorloc.io.ilc2020 import IlcWifi
 
     wf = IlcWifi(np.array([1.0, 1.0, 3.0]), np.array([0, 1, 0]), np.array([-50.0, -60.0, -55.0]),
                  np.full(3, 2412.0), np.array([0.9, 0.5, 2.9]), ["a", "b"], ["", ""], np.array([0, 2]))
     walk = SimpleNamespace(wifi=wf)
     for bssids, kw in ((["zz"], {}), (["a"], {"max_age_s": 1e-9})):
-        t, rss, ages = wifi_crowdsource.scan_matrix(walk, bssids, **kw)
+        t, rss, ages = crowdsourced_map.scan_matrix(walk, bssids, **kw)
         assert t.tolist() == [1.0, 3.0] and rss.shape == (2, 1) and np.isnan(rss).all() and np.isnan(ages).all()
-    t, rss, _ = wifi_crowdsource.scan_matrix(walk, ["a", "b"])
+    t, rss, _ = crowdsourced_map.scan_matrix(walk, ["a", "b"])
     assert rss.tolist() == [[-50.0, -60.0], [-55.0, np.nan]] or np.allclose(np.nan_to_num(rss), [[-50, -60], [-55, 0]])

@@ -4,15 +4,14 @@ evaluate`` run on them end to end and recover what the generator put in."""
 
 import json
 import math
-import time
 
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
 from indoorloc.pdr import handheld as ph
-from indoorloc import wifi_crowdsource as wc
-from indoorloc import wifi_fixes as wfx
+from indoorloc.fusion import crowdsourced_map
+from indoorloc.fusion import wifi_fixes
 from indoorloc.experiments import fusion_real as fr
 from indoorloc.io import ilc_floor_origin_lonlat, load_floor_plan, read_ilc_site
 from indoorloc.simulate.ilc_site import IlcSiteConfig, floor_number, make_ilc_site, write_ilc_site
@@ -93,10 +92,10 @@ def test_walk_files_look_like_the_competition_data(site):
     assert 30 <= floor.bssid_vocabulary().size <= 60
 
 
-def test_deterministic_small_and_fast(tmp_path):
-    tic = time.perf_counter()
+def test_deterministic_and_small(tmp_path):
+    # No timing threshold here (house rule: timings live in benchmarks/, a loaded machine made
+    # this flaky); the size bound keeps the fixture cheap.
     a = write_ilc_site(tmp_path / "a", seed=5)
-    seconds = time.perf_counter() - tic
     b = write_ilc_site(tmp_path / "b", seed=5)
     c = write_ilc_site(tmp_path / "c", seed=6, walks_per_floor=2)
     files_a = sorted(p.relative_to(a) for p in a.rglob("*") if p.is_file())
@@ -106,7 +105,6 @@ def test_deterministic_small_and_fast(tmp_path):
         assert (a / rel).read_bytes() == (b / rel).read_bytes()
     assert sorted(p.name for p in (c / "F1" / "path_data_files").iterdir()) != \
         sorted(p.name for p in (a / "F1" / "path_data_files").iterdir())
-    assert seconds < 2.0
     assert sum((a / rel).stat().st_size for rel in files_a) < 8e6
 
 
@@ -172,20 +170,20 @@ def test_crowd_map_and_wifi_fixes_run_and_are_accurate(site):
     truth, _, floor = site
     walks = [w for w, _ in _walks(floor, truth)]
     train, test = walks[:6], walks[6:]
-    crowd = wc.build_crowd_map(train, wc.CrowdMapSettings(), 1)
+    crowd = crowdsourced_map.build_crowd_map(train, crowdsourced_map.CrowdMapSettings(), 1)
     m = crowd.signal_map
     assert m.positions_m.shape[0] >= 15 and len(crowd.bssids) >= 20
     assert np.all(np.asarray(m.floors) == 1)
-    db = wfx.build_database(train, floors=[1] * len(train))
+    db = wifi_fixes.build_database(train, floors=[1] * len(train))
     assert db.n_scans >= 50 and np.all(db.floors == 1)
     errors = []
     for w in test:
-        fixes = wfx.fixes_for_walk(w, db)
+        fixes = wifi_fixes.fixes_for_walk(w, db)
         assert len(fixes) >= 0.8 * w.wifi.n_scans
         assert np.all(fixes.floors[fixes.weights > 0] == 1)
-        t, rss = wfx.walk_queries(w, db)   # the query fingerprints the fixes are made of
+        t, rss = wifi_fixes.walk_queries(w, db)   # the query fingerprints the fixes are made of
         np.testing.assert_allclose(t, fixes.times_s)
-        est = wfx.locate_scans(rss, db)
+        est = wifi_fixes.locate_scans(rss, db)
         at = np.column_stack([np.interp(t, w.waypoint_t_s, w.waypoint_xy_m[:, i]) for i in range(2)])
         inside = (t >= w.waypoint_t_s[0]) & (t <= w.waypoint_t_s[-1])
         errors.append(np.hypot(*(est - at).T)[inside])

@@ -162,6 +162,17 @@ def _room_line(x: int, y: int, rss: Sequence[float], los: str = "1 3 4") -> str:
     return f"{x:.1f},{y:.1f},{rtt}," + ",".join(f"{r:.1f}" for r in rss) + f",{los}\n"
 
 
+def write_office_room(root: Path, ap_x: str, rows: Sequence[str]) -> Path:
+    """A three-AP office of the RSS/RTT format under ``root``: AP_position.txt with the x line
+    ``ap_x`` (e.g. "1,11,15") and both splits holding ``rows`` ("X,Y,3 RTTs,3 RSSs,LOS")."""
+    root.mkdir(parents=True)
+    (root / "AP_position.txt").write_text(f"office\nAP X: {ap_x}\nAP Y: 5,-1,6\n")
+    head = "X,Y,AP1 RTT(mm),AP2 RTT(mm),AP3 RTT(mm),AP1 RSS(dBm),AP2 RSS(dBm),AP3 RSS(dBm),LOS APs\n"
+    for split in ("train", "test"):
+        (root / f"database_office_{split}.csv").write_text(head + "".join(r + "\n" for r in rows))
+    return root
+
+
 def _rss_rtt_fixture(root: Path) -> Path:
     root.mkdir(parents=True)
     (root / "AP_position.txt").write_text(_AP_POSITIONS)

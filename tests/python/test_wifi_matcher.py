@@ -1,5 +1,5 @@
 """WiFi fingerprints pooled along the walks and the shared-AP dissimilarity (indoorloc.wifi_matcher,
-indoorloc.wifi_fixes with pooling="window"): small synthetic fixtures, checked by hand or against
+indoorloc.fusion.wifi_fixes with pooling="window"): small synthetic fixtures, checked by hand or against
 a brute-force reference."""
 
 from types import SimpleNamespace
@@ -7,7 +7,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from indoorloc import wifi_fixes as wfx
+from indoorloc.fusion import wifi_fixes
 from indoorloc import wifi_matcher as wm
 from indoorloc.io.ilc2020 import IlcWifi
 
@@ -70,15 +70,15 @@ def test_a_query_identical_to_a_reference_matches_it_first():
     x[rng.random(x.shape) < 0.5] = nan
     positions = rng.uniform(0, 100, (50, 2))
     for beta, power in ((0.0, 0.0), (5.0, 1.0)):
-        s = wfx.FixSettings(k=3, strength_scale_db=beta, ap_weight_power=power)
-        db = wfx.FingerprintDatabase(x, positions, [f"ap{i}" for i in range(30)], s,
+        s = wifi_fixes.FixSettings(k=3, strength_scale_db=beta, ap_weight_power=power)
+        db = wifi_fixes.FingerprintDatabase(x, positions, [f"ap{i}" for i in range(30)], s,
                                      ap_ratio=rng.uniform(0.5, 2.0, 30))
-        d = wfx.dissimilarity(x[[7, 21]], db)
+        d = wifi_fixes.dissimilarity(x[[7, 21]], db)
         assert np.argmin(d[0]) == 7 and np.argmin(d[1]) == 21
         np.testing.assert_allclose(d[[0, 1], [7, 21]], 0.0, atol=1e-3)
         best, dist, w = wm.knn(d, 3, s.temperature_db)
         assert best[:, 0].tolist() == [7, 21] and np.all(w[:, 0] == 1.0) and np.all(np.diff(dist, axis=1) >= 0)
-        np.testing.assert_allclose(wfx.locate_scans(x[[7]], db.with_settings(wfx.FixSettings(k=1))), positions[[7]])
+        np.testing.assert_allclose(wifi_fixes.locate_scans(x[[7]], db.with_settings(wifi_fixes.FixSettings(k=1))), positions[[7]])
 
 
 def test_a_reading_last_seen_10_s_ago_is_used_at_its_own_time():
@@ -92,7 +92,7 @@ def test_a_reading_last_seen_10_s_ago_is_used_at_its_own_time():
     i = int(np.flatnonzero(meas.bssid_index == b)[0])
     assert meas.t_s[i] == 10.0 and meas.reported_s[i] == 20.0
     # The 2.5 s staleness filter of "fresh" pooling drops it ...
-    _, fresh, names = wfx.fresh_scans(SimpleNamespace(wifi=wf), 2.5)
+    _, fresh, names = wifi_fixes.fresh_scans(SimpleNamespace(wifi=wf), 2.5)
     assert np.isnan(fresh[:, names.index("b")]).all()
     # ... a window around its own last-seen time holds it, a window around the scan time does not.
     rss, mean_t, n = wm.pool_windows(meas.t_s, meas.bssid_index, meas.rssi_dbm, 2, [10.0, 20.0], 1.0, 1.0)
@@ -123,12 +123,12 @@ def test_query_window_and_reference_positions_on_a_straight_walk():
         t = np.asarray(t, float)
         return np.column_stack([t, np.zeros_like(t)]), np.ones(t.size, bool)
 
-    s = wfx.FixSettings(ref_window_s=2.0, query_window_s=2.0, min_scans=1, min_aps=1, k=1, ap_weight_power=0.0)
-    db = wfx.build_database([walk], s, positions_at=[along])
+    s = wifi_fixes.FixSettings(ref_window_s=2.0, query_window_s=2.0, min_scans=1, min_aps=1, k=1, ap_weight_power=0.0)
+    db = wifi_fixes.build_database([walk], s, positions_at=[along])
     assert db.n_scans > 20 and sorted(db.bssids) == ["common", "near0", "near20"]
-    t, rss = wfx.walk_queries(walk, db)
+    t, rss = wifi_fixes.walk_queries(walk, db)
     assert np.all(np.diff(t) >= 0) and rss.shape == (t.size, 3)
-    est = wfx.locate_scans(rss, db)
+    est = wifi_fixes.locate_scans(rss, db)
     heard20 = np.isfinite(rss[:, db.bssids.index("near20")])
     assert np.all(np.abs(est[heard20, 0] - 22.0) < 4.0)
 
@@ -152,7 +152,7 @@ def test_ap_reliability_down_weights_a_noisy_ap():
 ])
 def test_settings_validation_names_the_field(field, value):
     with pytest.raises(ValueError, match=f"FixSettings.{field}"):
-        wfx.FixSettings(**{field: value}).validate()
+        wifi_fixes.FixSettings(**{field: value}).validate()
 
 
 def test_shared_dissimilarity_refuses_wrong_columns():
@@ -162,11 +162,11 @@ def test_shared_dissimilarity_refuses_wrong_columns():
 
 
 def test_fix_sd_grows_with_the_best_dissimilarity():
-    s = wfx.FixSettings(sd_m=4.0, sd_per_db=0.2)
-    np.testing.assert_allclose(wfx.fix_sds(np.array([0.0, 10.0, np.inf]), s), [4.0, 6.0, 4.0])
-    np.testing.assert_allclose(wfx.fix_sds(np.array([50.0]), wfx.FixSettings(sd_m=3.0, sd_per_db=0.0)), [3.0])
+    s = wifi_fixes.FixSettings(sd_m=4.0, sd_per_db=0.2)
+    np.testing.assert_allclose(wifi_fixes.fix_sds(np.array([0.0, 10.0, np.inf]), s), [4.0, 6.0, 4.0])
+    np.testing.assert_allclose(wifi_fixes.fix_sds(np.array([50.0]), wifi_fixes.FixSettings(sd_m=3.0, sd_per_db=0.0)), [3.0])
     with pytest.raises(ValueError, match="FixSettings.sd_per_db"):
-        wfx.FixSettings(sd_per_db=-0.1).validate()
+        wifi_fixes.FixSettings(sd_per_db=-0.1).validate()
 
 
 def test_ibeacon_readings_become_fingerprint_columns_at_their_own_time():
@@ -240,23 +240,23 @@ def test_fixes_for_walk_components_equal_the_numpy_knn():
     rng = np.random.default_rng(13)
     x = _sparse_fingerprints(rng, 300, 40, 0.2)
     positions = rng.uniform(0, 60, (300, 2))
-    db = wfx.FingerprintDatabase(x, positions, [f"ap{i}" for i in range(40)], wfx.FixSettings(),
+    db = wifi_fixes.FingerprintDatabase(x, positions, [f"ap{i}" for i in range(40)], wifi_fixes.FixSettings(),
                                  ap_ratio=rng.uniform(0.5, 2.0, 40))
     q = _sparse_fingerprints(rng, 25, 40, 0.25)
     s = db.settings
     best_n, d_n, w_n = wm.knn(wm.shared_dissimilarity_numpy(q, db.index, s.penalty_db), s.k, s.temperature_db)
-    best_c, d_c, w_c = wfx.nearest(q, db)
+    best_c, d_c, w_c = wifi_fixes.nearest(q, db)
     np.testing.assert_allclose(w_c, w_n, atol=1e-9)
-    np.testing.assert_allclose(wfx.fix_sds(d_c[:, 0], s), wfx.fix_sds(d_n[:, 0], s), atol=1e-9)
+    np.testing.assert_allclose(wifi_fixes.fix_sds(d_c[:, 0], s), wifi_fixes.fix_sds(d_n[:, 0], s), atol=1e-9)
     np.testing.assert_allclose(positions[best_c][w_n > 0], positions[best_n][w_n > 0])
     expected = (w_n[:, :, None] * positions[best_n]).sum(1) / w_n.sum(1, keepdims=True)
-    np.testing.assert_allclose(wfx.locate_scans(q, db), expected, atol=1e-9)
+    np.testing.assert_allclose(wifi_fixes.locate_scans(q, db), expected, atol=1e-9)
 
 
 def test_fix_settings_defaults_are_the_compiled_matcher_defaults():
     from indoorloc.wifi import SharedApMatcherOptions
 
-    o, s = SharedApMatcherOptions(), wfx.FixSettings()
+    o, s = SharedApMatcherOptions(), wifi_fixes.FixSettings()
     assert (s.penalty_db, s.strength_scale_db, s.k, s.temperature_db) == (
         o.penalty_db, o.strength_scale_db, o.k, o.temperature_db) == (160.0, 5.0, 20, 3.0)
     assert o.replace(k=5).k == 5 and o.to_dict()["penalty_db"] == 160.0
@@ -389,8 +389,8 @@ def test_a_database_with_its_compiled_matcher_pickles_and_copies():
 
     rss = np.array([[-50.0, -60.0], [-70.0, nan], [-55.0, -65.0], [-52.0, -61.0]])
     xy = np.array([[0.0, 0.0], [5.0, 0.0], [10.0, 0.0], [0.5, 0.0]])
-    db = wfx.assemble_database([(rss, xy, ["a", "b"], np.zeros(4, int), np.arange(4))], wfx.FixSettings(k=2))
+    db = wifi_fixes.assemble_database([(rss, xy, ["a", "b"], np.zeros(4, int), np.arange(4))], wifi_fixes.FixSettings(k=2))
     q = np.array([[-51.0, -60.5]])
-    before = wfx.locate_scans(q, db)  # builds the compiled matcher
+    before = wifi_fixes.locate_scans(q, db)  # builds the compiled matcher
     for other in (pickle.loads(pickle.dumps(db)), copy.deepcopy(db)):
-        np.testing.assert_array_equal(wfx.locate_scans(q, other), before)
+        np.testing.assert_array_equal(wifi_fixes.locate_scans(q, other), before)

@@ -34,6 +34,7 @@ bool GridTrackerOptions::IsValid(std::string* error) const {
       .InRange(position_noise_m, 0.0, 100.0, "position_noise_m")
       .Check(wall_log_penalty <= 0.0 && !std::isnan(wall_log_penalty), "wall_log_penalty",
              "must be <= 0 or -inf, got " + FormatValue(wall_log_penalty))
+      .InRange(wall_margin_m, 0.0, 100.0, "wall_margin_m")
       .Check(fix_ok, "fix", fix_error)
       .InRange(median_block_m, 0.1, 100.0, "median_block_m")
       .InRange(start_position_sd_m, 0.01, 1e4, "start_position_sd_m")
@@ -54,6 +55,25 @@ std::string GridTrackSummary::BriefReport() const {
       << " s";
   return out.str();
 }
+
+namespace {
+
+// Marks as walkable the points not walkable as drawn but within `margin_m` of a wall edge (the
+// obstacles eroded by the margin; only those points are queried for their distance).
+void ErodeObstacles(const FloorPlan& plan, int floor_index, const RowMatrixXd& pts, double margin_m, int threads,
+                    VectorXb* walk) {
+  std::vector<Eigen::Index> blocked;
+  for (Eigen::Index i = 0; i < walk->size(); ++i)
+    if (!(*walk)[i]) blocked.push_back(i);
+  if (blocked.empty()) return;
+  RowMatrixXd q(static_cast<Eigen::Index>(blocked.size()), 2);
+  for (std::size_t j = 0; j < blocked.size(); ++j) q.row(static_cast<Eigen::Index>(j)) = pts.row(blocked[j]);
+  const Eigen::VectorXd d = plan.DistanceToWallBatch(q, Eigen::VectorXi::Constant(1, floor_index), threads);
+  for (std::size_t j = 0; j < blocked.size(); ++j)
+    if (d[static_cast<Eigen::Index>(j)] <= margin_m) (*walk)[blocked[j]] = true;
+}
+
+}  // namespace
 
 GridTracker::GridTracker(const FloorPlan* plan, const GridTrackerOptions& options) : impl_(new Impl) {
   CheckArgument(plan != nullptr, "plan", "must not be None");
@@ -92,7 +112,8 @@ GridTracker::GridTracker(const FloorPlan* plan, const GridTrackerOptions& option
             pts(row, 1) = g.y0 + (y + (j + 0.5) / n_sub) * c;
             ++row;
           }
-    const VectorXb walk = plan->IsWalkableBatch(pts, Eigen::VectorXi::Constant(1, f), options.num_threads);
+    VectorXb walk = plan->IsWalkableBatch(pts, Eigen::VectorXi::Constant(1, f), options.num_threads);
+    if (options.wall_margin_m > 0) ErodeObstacles(*plan, f, pts, options.wall_margin_m, options.num_threads, &walk);
     g.walkable_fraction.resize(g.size());
     g.wall_factor.resize(g.size());
     for (std::size_t i = 0; i < g.size(); ++i) {

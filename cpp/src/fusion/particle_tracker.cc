@@ -34,7 +34,7 @@ using tracker_detail::WrapAngle;
 void RequireParticleMemory(double num_particles, const TrackerOptions& options, bool corridor_mode,
                            std::string_view name) {
   const double lag = options.smoothing_lag_steps;
-  const double per_particle = 96.0 + (corridor_mode ? 16.0 : 0.0) + (lag > 0 ? 32.0 * (lag + 1.0) : 0.0);
+  const double per_particle = 96.0 + (corridor_mode ? 16.0 : 0.0) + FixedLagRing::BytesPerParticle(static_cast<int>(lag));
   RequireSizeLimit(num_particles, per_particle, name,
                    "particles (with smoothing_lag_steps = " + std::to_string(options.smoothing_lag_steps) + ")");
 }
@@ -74,7 +74,7 @@ bool TrackerOptions::IsValid(std::string* error) const {
       .Check(recovery_fraction > 0.0 && recovery_fraction <= 1.0, "recovery_fraction",
              "must be in (0, 1], got " + FormatValue(recovery_fraction))
       .InRange(floor_change_probability, 0.0, 1.0, "floor_change_probability")
-      .InRange(corridor_kappa, 0.0, 500.0, "corridor_kappa")
+      .InRange(corridor_kappa, 0.0, mapmatch::kMaxCorridorKappa, "corridor_kappa")
       .IntInRange(smoothing_lag_steps, 0, 10000, "smoothing_lag_steps")
       .IntInRange(num_threads, 0, 1024, "num_threads");
 }
@@ -140,6 +140,9 @@ ParticleTracker::ParticleTracker(const FloorPlan* plan, const wifi::RssModel* wi
     CheckArgument(s.floors.size() == 1, "corridors", "corridor mode supports one floor only (the plan or map has " +
                                                          std::to_string(s.floors.size()) + ")");
     CheckArgument(corridors->num_segments() > 0 && corridors->total_length_m() > 0.0, "corridors", "is empty");
+    mapmatch::CorridorMotionOptions corridor_options;
+    corridor_options.kappa = options.corridor_kappa;
+    s.corridor_motion = std::make_unique<mapmatch::CorridorMotion>(*corridors, corridor_options);
   }
   if (wifi_model) s.wifi = std::make_unique<WifiLikelihood>(*wifi_model, options.wifi);
   if (plan || wifi_model) s.BuildCandidates();

@@ -38,8 +38,7 @@ void ParticleTracker::Impl::Resize(int count) {
     along.assign(n, 0.0);
   }
   log_w = Eigen::VectorXd::Constant(n, -std::log(static_cast<double>(n)));
-  lag_len = options.smoothing_lag_steps;
-  lag_ring.assign(lag_len > 0 ? static_cast<size_t>(n) * (lag_len + 1) * 2 : 0, std::numeric_limits<double>::quiet_NaN());
+  lag_ring.Reset(n, options.smoothing_lag_steps);
 }
 
 // Every state array (and the lag ring) takes the values of the particles' ancestors.
@@ -60,14 +59,7 @@ void ParticleTracker::Impl::Gather(const std::vector<int>& anc) {
     gather(direction);
     gather(along);
   }
-  if (lag_len > 0) {
-    const size_t stride = static_cast<size_t>(lag_len + 1) * 2;
-    std::vector<double> tmp = lag_ring;
-    for (int i = 0; i < n; ++i) {
-      std::copy_n(tmp.begin() + static_cast<std::ptrdiff_t>(anc[i] * stride), stride,
-                  lag_ring.begin() + static_cast<std::ptrdiff_t>(i * stride));
-    }
-  }
+  lag_ring.Gather(anc);
 }
 
 // After an update of log_w that was normalised before it: one pass of exp() gives the linear
@@ -131,16 +123,7 @@ void ParticleTracker::Impl::FillEstimate(const std::vector<double>& w, TrackerEs
   Eigen::Index best = 0;
   est->floor_probabilities.maxCoeff(&best);
   est->floor_index = static_cast<int>(best);
-  if (lag_len > 0 && summary.steps > lag_len) {
-    const int slot = (summary.steps - 1 - lag_len) % (lag_len + 1);
-    const size_t stride = static_cast<size_t>(lag_len + 1) * 2;
-    Eigen::Vector2d lagged = Eigen::Vector2d::Zero();
-    for (int i = 0; i < n; ++i) {
-      const double* p = &lag_ring[i * stride + static_cast<size_t>(slot) * 2];
-      lagged += w[i] * Eigen::Vector2d(p[0], p[1]);
-    }
-    est->lagged_m = lagged;
-  }
+  if (lag_ring.has_lagged()) est->lagged_m = lag_ring.WeightedSum(w.data());
 }
 
 // Estimate from the current log-weights (outside an update).
@@ -149,15 +132,11 @@ void ParticleTracker::Impl::FillEstimate(TrackerEstimate* est) const {
   FillEstimate(std::vector<double>(w.data(), w.data() + w.size()), est);
 }
 
-// Fixed-lag ring: the positions after the current step go into slot (steps - 1) mod (L + 1).
+// Fixed-lag ring: the positions after the current step.
 void ParticleTracker::Impl::PushLag() {
-  if (lag_len <= 0) return;
-  const int slot = (summary.steps - 1) % (lag_len + 1);
-  const size_t stride = static_cast<size_t>(lag_len + 1) * 2;
-  for (int i = 0; i < n; ++i) {
-    lag_ring[i * stride + static_cast<size_t>(slot) * 2] = x[i];
-    lag_ring[i * stride + static_cast<size_t>(slot) * 2 + 1] = y[i];
-  }
+  if (!lag_ring.enabled()) return;
+  for (int i = 0; i < n; ++i) lag_ring.Record(i, x[i], y[i]);
+  lag_ring.Advance();
 }
 
 // record_history: the cloud after a step (replace_last: after an observation following it).

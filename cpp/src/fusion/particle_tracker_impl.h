@@ -4,9 +4,9 @@
 //   particle_tracker.cc             public API: options check, construction, the event entry
 //                                   points (Step, Wifi, Fix, starts), particle access
 //   particle_tracker_free_space.cc  free-space mode: motion, wall test, floor change, re-spread
-//   particle_tracker_corridor.cc    corridor mode: network move + von Mises heading weight
-//                                   (paper 000 eq. 8-11); to be replaced by the shared corridor
-//                                   motion model of mapmatch and fusion
+//   particle_tracker_corridor.cc    corridor mode: the shared corridor motion model
+//                                   (mapmatch/corridor_motion.h: network move + von Mises heading
+//                                   weight, paper 000 eq. 8-11) driven by the sampled steps
 //   particle_tracker_seeking.cc     placing particles without a known start: candidate grid,
 //                                   draws from an observation's likelihood, uniform cloud
 //   particle_tracker_observation.cc absolute observations (WiFi scan, fix) and recovery
@@ -24,9 +24,11 @@
 
 #include <Eigen/Core>
 
+#include "indoorloc/core/fixed_lag_ring.h"
 #include "indoorloc/core/parallel.h"
 #include "indoorloc/core/random.h"
 #include "indoorloc/fusion/particle_tracker.h"
+#include "indoorloc/mapmatch/corridor_motion.h"
 
 namespace indoorloc::fusion {
 
@@ -70,8 +72,7 @@ struct ParticleTracker::Impl {
   std::vector<signed char> direction;          //   direction of travel (+1 / -1),
   std::vector<double> along;                   //   distance along the segment [m]
   Eigen::VectorXd log_w;
-  std::vector<double> lag_ring;  // n x (L + 1) x 2
-  int lag_len = 0;
+  FixedLagRing lag_ring;  // the last L + 1 positions of every particle
 
   // ---- filter state
   RandomStream rng;
@@ -86,6 +87,9 @@ struct ParticleTracker::Impl {
   ParticleHistory history;
   TrackerSummary summary;
   std::vector<int> ancestors;
+
+  // Corridor mode: the network move and heading weight shared with mapmatch (null otherwise).
+  std::unique_ptr<mapmatch::CorridorMotion> corridor_motion;
 
   bool corridor_mode() const { return corridors != nullptr; }
 

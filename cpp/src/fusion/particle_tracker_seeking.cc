@@ -125,7 +125,12 @@ void ParticleTracker::Impl::PlaceFree(int i, double px, double py, int f, double
 void ParticleTracker::Impl::UniformCloud() {
   std::vector<double> mass(floors.size());
   for (size_t f = 0; f < floors.size(); ++f) {
-    mass[f] = plan ? plan->WalkableArea(plan_floor[f]) : static_cast<double>(candidates[f].rows());
+    if (corridor_mode()) {
+      // One floor (checked at construction); without a plan or a map there are no candidates.
+      mass[f] = corridors->total_length_m();
+    } else {
+      mass[f] = plan ? plan->WalkableArea(plan_floor[f]) : static_cast<double>(candidates[f].rows());
+    }
   }
   double total = 0.0;
   for (double m : mass) total += m;

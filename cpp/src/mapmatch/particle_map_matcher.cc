@@ -5,41 +5,195 @@
 #include <cstdio>
 #include <numeric>
 
+#include <immintrin.h>
+
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/log_weights.h"
 #include "indoorloc/core/options.h"
+#include "indoorloc/core/simd_dispatch.h"
 #include "indoorloc/core/validate.h"
-#include "indoorloc/mapmatch/trajectory_simulator.h"
 
 namespace indoorloc::mapmatch {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+// The options validated before the motion model is built from them (so that an invalid field
+// is reported by the filter's own validation).
+// The distances of a step, v Δt - b Δt + η with η ~ U(-a, a) (eq. 8-9), the odometer bias b
+// first taking its random-walk step when it is estimated; every draw from the random lanes.
+void DrawDistances(const FilterOptions& options, double mean_distance, double dt_s, int n, RandomLanes& lanes,
+                   double* bias, double* uniform, double* distance) {
+  const double a = options.noise_halfwidth_m;
+  const double two_a = 2.0 * a;
+  const bool estimate_bias = options.estimate_speed_bias;
+  const double jitter = options.bias_jitter_mps * std::sqrt(3.0);  // uniform with that sd
+  if (estimate_bias && jitter > 0) {
+    lanes.FillUniform01(uniform, n);
+    for (int i = 0; i < n; ++i) bias[i] += -jitter + 2.0 * jitter * uniform[i];
+  }
+  if (a > 0) lanes.FillUniform01(uniform, n);
+  for (int i = 0; i < n; ++i) {
+    const double mean = estimate_bias ? mean_distance - bias[i] * dt_s : mean_distance;
+    distance[i] = a > 0 ? mean + (two_a * uniform[i] - a) : mean;
+  }
+}
 
-// log(2π I0(κ)) computed without overflow: I0(κ) = e^κ I0e(κ).
-double LogVonMisesNormaliser(double kappa) {
-  return std::log(2.0 * kPi) + kappa + std::log(std::cyl_bessel_i(0.0, kappa) * std::exp(-kappa));
+// Stream family of the per-particle uniform draws (the junction choices and resampling use
+// stream 0, rng_).
+constexpr std::uint64_t kNoiseLanesStream = 1;
+
+CorridorMotionOptions ValidatedMotionOptions(const FilterOptions& options) {
+  ValidateOptions(options);
+  return options.corridor_motion();
+}
+
+// The sums of the update pass, for the normalisation, ESS, estimate, spread and disagreement.
+struct WeightSums {
+  double sum = 0, sum_sq = 0, sx = 0, sy = 0, sxx = 0, syy = 0, disagreement = 0, max_w = 0;
+};
+
+// Pass 2 of a step (eq. 11): w_i <- w_i · scale · factor[2 S_i + (d_i > 0)], and the weighted
+// sums. Four interleaved accumulators (particle i into lane i mod 4, lanes added pairwise at the
+// end) make the AVX2 version below a plain four-wide loop; the order is fixed, so both versions
+// give the same sums to the bit.
+constexpr int kSumLanes = 4;
+
+struct LaneSums {
+  double sum[kSumLanes] = {}, sum_sq[kSumLanes] = {}, sx[kSumLanes] = {}, sy[kSumLanes] = {}, sxx[kSumLanes] = {},
+         syy[kSumLanes] = {}, dis[kSumLanes] = {}, max_w[kSumLanes] = {};
+};
+
+struct WeighInputs {
+  int n;
+  const int* seg;
+  const signed char* dir;
+  const double* along;
+  double* weight;
+  double scale;
+  const double* factor;
+  const double* disagree;  // null: no disagreement sum (recovery off)
+  const double* origin_x;
+  const double* origin_y;
+  const double* unit_x;
+  const double* unit_y;
+  const double* geometry_rows;  // M x 4: origin x, origin y, unit x, unit y
+};
+
+// Particles [begin, n), particle i into lane i mod kSumLanes (portable version).
+void WeighScalar(const WeighInputs& in, int begin, LaneSums* acc) {
+  for (int i = begin; i < in.n; ++i) {
+    const int j = i % kSumLanes;
+    const int si = in.seg[i];
+    const int key = 2 * si + (in.dir[i] > 0);
+    const double w = in.weight[i] * in.scale * in.factor[key];
+    in.weight[i] = w;
+    const double x = in.origin_x[si] + in.along[i] * in.unit_x[si];
+    const double y = in.origin_y[si] + in.along[i] * in.unit_y[si];
+    acc->sum[j] += w;
+    acc->sum_sq[j] += w * w;
+    acc->sx[j] += w * x;
+    acc->sy[j] += w * y;
+    acc->sxx[j] += w * x * x;
+    acc->syy[j] += w * y * y;
+    if (in.disagree != nullptr) acc->dis[j] += w * in.disagree[key];
+    acc->max_w[j] = acc->max_w[j] > w ? acc->max_w[j] : w;
+  }
+}
+
+// Whole groups of four with AVX2 (table entries loaded per particle; the same operations in the same order
+// as WeighScalar, no FMA). Returns the first particle not done.
+// Four table entries t[i0..i3] by scalar loads: faster than vgatherdpd on the machines measured
+// (docs/performance.md), and no uninitialised-source warning from GCC's gather intrinsic.
+#define INDOORLOC_GATHER4(t, i0, i1, i2, i3) _mm256_set_pd((t)[i3], (t)[i2], (t)[i1], (t)[i0])
+
+template <bool kDisagreement>
+__attribute__((target("avx2"))) int WeighAvx2(const WeighInputs& in, LaneSums* acc) {
+  // Locals (restrict) so that the weight stores do not force reloads of the inputs.
+  const int n = in.n;
+  const int* __restrict seg = in.seg;
+  const signed char* __restrict dir = in.dir;
+  const double* __restrict along_m = in.along;
+  double* __restrict weight = in.weight;
+  const double* __restrict factor = in.factor;
+  const double* __restrict disagree = in.disagree;
+  const double* __restrict geometry = in.geometry_rows;
+  __m256d sum = _mm256_setzero_pd(), sum_sq = sum, sx = sum, sy = sum, sxx = sum, syy = sum, dis = sum, max_w = sum;
+  const __m256d scale = _mm256_set1_pd(in.scale);
+  int i = 0;
+  for (; i + kSumLanes <= n; i += kSumLanes) {
+    const int s0 = seg[i], s1 = seg[i + 1], s2 = seg[i + 2], s3 = seg[i + 3];
+    const int k0 = 2 * s0 + (dir[i] > 0), k1 = 2 * s1 + (dir[i + 1] > 0), k2 = 2 * s2 + (dir[i + 2] > 0),
+              k3 = 2 * s3 + (dir[i + 3] > 0);
+    const __m256d w =
+        _mm256_mul_pd(_mm256_mul_pd(_mm256_loadu_pd(weight + i), scale), INDOORLOC_GATHER4(factor, k0, k1, k2, k3));
+    _mm256_storeu_pd(weight + i, w);
+    const __m256d along = _mm256_loadu_pd(along_m + i);
+    // The four particles' geometry rows, transposed: 4 vector loads and 8 shuffles instead of 16
+    // scalar loads.
+    const __m256d r0 = _mm256_loadu_pd(geometry + 4 * s0), r1 = _mm256_loadu_pd(geometry + 4 * s1);
+    const __m256d r2 = _mm256_loadu_pd(geometry + 4 * s2), r3 = _mm256_loadu_pd(geometry + 4 * s3);
+    const __m256d t0 = _mm256_unpacklo_pd(r0, r1), t1 = _mm256_unpackhi_pd(r0, r1);  // ox oy / ux uy of 0, 1
+    const __m256d t2 = _mm256_unpacklo_pd(r2, r3), t3 = _mm256_unpackhi_pd(r2, r3);
+    const __m256d origin_x = _mm256_permute2f128_pd(t0, t2, 0x20), unit_x = _mm256_permute2f128_pd(t0, t2, 0x31);
+    const __m256d origin_y = _mm256_permute2f128_pd(t1, t3, 0x20), unit_y = _mm256_permute2f128_pd(t1, t3, 0x31);
+    const __m256d x = _mm256_add_pd(origin_x, _mm256_mul_pd(along, unit_x));
+    const __m256d y = _mm256_add_pd(origin_y, _mm256_mul_pd(along, unit_y));
+    const __m256d wx = _mm256_mul_pd(w, x), wy = _mm256_mul_pd(w, y);
+    sum = _mm256_add_pd(sum, w);
+    sum_sq = _mm256_add_pd(sum_sq, _mm256_mul_pd(w, w));
+    sx = _mm256_add_pd(sx, wx);
+    sy = _mm256_add_pd(sy, wy);
+    sxx = _mm256_add_pd(sxx, _mm256_mul_pd(wx, x));
+    syy = _mm256_add_pd(syy, _mm256_mul_pd(wy, y));
+    if (kDisagreement) dis = _mm256_add_pd(dis, _mm256_mul_pd(w, INDOORLOC_GATHER4(disagree, k0, k1, k2, k3)));
+    max_w = _mm256_max_pd(max_w, w);  // max_w > w ? max_w : w, as the portable version
+  }
+  _mm256_storeu_pd(acc->sum, sum);
+  _mm256_storeu_pd(acc->sum_sq, sum_sq);
+  _mm256_storeu_pd(acc->sx, sx);
+  _mm256_storeu_pd(acc->sy, sy);
+  _mm256_storeu_pd(acc->sxx, sxx);
+  _mm256_storeu_pd(acc->syy, syy);
+  _mm256_storeu_pd(acc->dis, dis);
+  _mm256_storeu_pd(acc->max_w, max_w);
+  return i;
+}
+#undef INDOORLOC_GATHER4
+
+WeightSums WeighAndSum(const WeighInputs& in) {
+  LaneSums acc;
+  int done = 0;
+  if (UseAvx2()) done = in.disagree != nullptr ? WeighAvx2<true>(in, &acc) : WeighAvx2<false>(in, &acc);
+  WeighScalar(in, done, &acc);
+  auto reduce = [](const double* v) { return (v[0] + v[1]) + (v[2] + v[3]); };
+  WeightSums out;
+  out.sum = reduce(acc.sum);
+  out.sum_sq = reduce(acc.sum_sq);
+  out.sx = reduce(acc.sx);
+  out.sy = reduce(acc.sy);
+  out.sxx = reduce(acc.sxx);
+  out.syy = reduce(acc.syy);
+  out.disagreement = reduce(acc.dis);
+  out.max_w = std::max(std::max(acc.max_w[0], acc.max_w[1]), std::max(acc.max_w[2], acc.max_w[3]));
+  return out;
 }
 
 }  // namespace
 
 bool FilterOptions::IsValid(std::string* error) const {
   Validator v(error);
-  // κ <= 300 keeps every likelihood factor e^{κ (d cos - 1)} >= e^{-600} representable; the
-  // junction weights use the same form (1e300 used to surface as "'heading_rad' gives zero
-  // likelihood").
-  v.AtLeast(num_particles, 1, "num_particles")
-      .IntInRange(num_particles, 1, 100000000, "num_particles")
-      .InRange(kappa, 0.0, 300.0, "kappa")
-      .InRange(noise_halfwidth_m, 0.0, 1e6, "noise_halfwidth_m");
+  v.AtLeast(num_particles, 1, "num_particles").IntInRange(num_particles, 1, 100000000, "num_particles");
+  if (!v) return false;
+  // kappa and junction_kappa: the corridor model's limits (κ <= 300 keeps every likelihood factor
+  // e^{κ (d cos - 1)} >= e^{-600} representable in this filter's linear weights).
+  if (!corridor_motion().IsValid(error)) return false;
+  v.InRange(noise_halfwidth_m, 0.0, 1e6, "noise_halfwidth_m");
   if (!v) return false;
   std::string inner;
   if (!resampling.IsValid(&inner)) {
     if (error) *error = "resampling." + inner;
     return false;
   }
-  return v.InRange(junction_kappa, 0.0, 300.0, "junction_kappa")
-      .InRange(bias_halfwidth_mps, 0.0, 1e6, "bias_halfwidth_mps")
+  return v.InRange(bias_halfwidth_mps, 0.0, 1e6, "bias_halfwidth_mps")
       .InRange(bias_jitter_mps, 0.0, 1e6, "bias_jitter_mps")
       .Scale(tracking_spread_m, "tracking_spread_m")
       .Scale(recovery_window_s, "recovery_window_s")
@@ -56,9 +210,7 @@ std::string FilterSummary::BriefReport() const {
 }
 
 ParticleMapMatcher::ParticleMapMatcher(const RoadNetwork& network, const FilterOptions& options)
-    : network_(network), options_(options) {
-  ValidateOptions(options_);
-  log_normaliser_ = LogVonMisesNormaliser(options_.kappa);
+    : network_(network), options_(options), motion_(network, ValidatedMotionOptions(options)) {
   Reset();
 }
 
@@ -85,6 +237,7 @@ void ParticleMapMatcher::Spread(int first, int count, double offset_fraction) {
 void ParticleMapMatcher::Reset() {
   const int n = options_.num_particles;
   rng_ = RandomStream(options_.seed);
+  lanes_ = RandomLanes(options_.seed, kNoiseLanesStream);
   segment_.assign(static_cast<size_t>(n), 0);
   direction_.assign(static_cast<size_t>(n), 1);
   along_.assign(static_cast<size_t>(n), 0.0);
@@ -94,28 +247,11 @@ void ParticleMapMatcher::Reset() {
   weight_scale_ = 1.0;
   weight_sum_ = n;
   factor_.assign(static_cast<size_t>(2 * network_.num_segments()), 1.0);
-  // Segment geometry as flat arrays: x = origin + along * unit direction.
-  const int m = network_.num_segments();
-  lengths_.resize(static_cast<size_t>(m));
-  origin_x_.resize(static_cast<size_t>(m));
-  origin_y_.resize(static_cast<size_t>(m));
-  unit_x_.resize(static_cast<size_t>(m));
-  unit_y_.resize(static_cast<size_t>(m));
-  for (int k = 0; k < m; ++k) {
-    const double len = network_.lengths_m()[k];
-    lengths_[static_cast<size_t>(k)] = len;
-    origin_x_[static_cast<size_t>(k)] = network_.segments_m()(k, 0);
-    origin_y_[static_cast<size_t>(k)] = network_.segments_m()(k, 1);
-    unit_x_[static_cast<size_t>(k)] = (network_.segments_m()(k, 2) - network_.segments_m()(k, 0)) / len;
-    unit_y_[static_cast<size_t>(k)] = (network_.segments_m()(k, 3) - network_.segments_m()(k, 1)) / len;
-  }
   disagree_.assign(static_cast<size_t>(2 * network_.num_segments()), 0.0);
   disagreement_window_.clear();
   window_pos_ = 0;
   window_filled_ = 0;
-  const int slots = options_.smoothing_lag_steps > 0 ? options_.smoothing_lag_steps + 1 : 0;
-  history_.assign(static_cast<size_t>(n) * static_cast<size_t>(slots) * 2, 0.0);
-  history_steps_ = 0;
+  lag_ring_.Reset(n, options_.smoothing_lag_steps);
   summary_ = FilterSummary();
   was_tracking_ = false;
 }
@@ -140,158 +276,52 @@ void ParticleMapMatcher::SetParticles(const std::vector<int>& segments, const st
   weight_sum_ = static_cast<double>(n);
 }
 
-double ParticleMapMatcher::Move(int i, double distance, double heading_rad, RandomStream& rng) {
-  const Eigen::VectorXd& lengths = network_.lengths_m();
-  int s = segment_[static_cast<size_t>(i)];
-  int d = direction_[static_cast<size_t>(i)];
-  double u = along_[static_cast<size_t>(i)] + d * distance;
-  double importance = 1.0;
-  for (int guard = 0; guard < 100000; ++guard) {
-    int end;
-    double leftover;
-    if (u > lengths[s]) {
-      end = 1;
-      leftover = u - lengths[s];
-    } else if (u < 0.0) {
-      end = 0;
-      leftover = -u;
-    } else {
-      break;
-    }
-    // A negative step (v Δt + η < 0: eq. 8-9 have no floor) moves the particle back, but not
-    // over the end behind it: it stops there. Backing onto a continuation chosen at random would
-    // put it on a branch it never came from (the filter keeps no history), which cost 7 m of
-    // error at κ_P = 5 in the §III experiment (docs/mapmatch.md).
-    if ((end == 1) != (d > 0)) {
-      u = end == 1 ? lengths[s] : 0.0;
-      break;
-    }
-    const std::vector<Continuation>& choices = network_.continuations(s, end);
-    size_t pick = 0;
-    if (choices.size() > 1) {
-      if (options_.junction_policy == JunctionPolicy::kUniform) {
-        pick = static_cast<size_t>(rng.UniformInt(choices.size()));
-      } else {
-        // Proposal q_j ∝ exp(κ_J cos(φ - heading_j)); the weight is multiplied by
-        // prior / proposal = (1 / n_choices) / q_j, so the posterior is unchanged.
-        q_.resize(choices.size());
-        double total = 0.0;
-        for (size_t j = 0; j < choices.size(); ++j) {
-          const double h = TravelHeading(network_, choices[j].segment, choices[j].enter_end == 0 ? 1 : -1);
-          q_[j] = std::exp(options_.junction_kappa * (std::cos(heading_rad - h) - 1.0));
-          total += q_[j];
-        }
-        double r = rng.Uniform01() * total;
-        while (pick + 1 < choices.size() && r >= q_[pick]) r -= q_[pick++];
-        importance *= (total / q_[pick]) / static_cast<double>(choices.size());
-      }
-    }
-    const Continuation& c = choices[pick];
-    s = c.segment;
-    d = c.enter_end == 0 ? 1 : -1;
-    u = c.enter_end == 0 ? leftover : lengths[s] - leftover;
-  }
-  segment_[static_cast<size_t>(i)] = s;
-  direction_[static_cast<size_t>(i)] = static_cast<signed char>(d);
-  along_[static_cast<size_t>(i)] = std::clamp(u, 0.0, lengths[s]);
-  return importance;
-}
-
 StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, double dt_s) {
   CheckArgument(std::isfinite(speed_mps), "speed_mps", "is not finite");
   CheckArgument(std::isfinite(heading_rad), "heading_rad", "is not finite");
   RequireScale(dt_s, "dt_s");  // recovery_window_s / dt_s sizes a buffer: 1e-290 asked for 1e290 slots
   WallTimer timer;
   const int n = options_.num_particles;
-  const int num_segments = network_.num_segments();
   StepEstimate est;
 
   // Per-step tables over the 2M (segment, direction) pairs: the von Mises factor of eq. 11
   // relative to its maximum, exp(κ (d cos(φ - β_s) - 1)) in [e^{-2κ}, 1], and the
   // disagreement 1 - d cos(φ - β_s) used by the recovery rule.
-  const Eigen::VectorXd& beta = network_.headings_rad();
   const double kappa = options_.kappa;
-  for (int s = 0; s < num_segments; ++s) {
-    const double c = std::cos(heading_rad - beta[s]);
-    factor_[static_cast<size_t>(2 * s + 1)] = std::exp(kappa * (c - 1.0));
-    factor_[static_cast<size_t>(2 * s)] = std::exp(kappa * (-c - 1.0));
-    disagree_[static_cast<size_t>(2 * s + 1)] = 1.0 - c;
-    disagree_[static_cast<size_t>(2 * s)] = 1.0 + c;
-  }
+  motion_.HeadingTables(heading_rad, factor_.data(), disagree_.data());
 
-  // Prediction (eq. 8-10) and update (eq. 11) fused in one pass, with the sums needed for the
-  // normalisation (eq. 12), the ESS (eq. 14), the estimate (eq. 13), its spread and the
-  // disagreement. A negative step v Δt + η moves a particle back within its segment (eq. 8-9
-  // have no floor: a floor at 0 biases the move forward by E[max(0, X)] - E[X], 5 % of the speed
-  // at 10 Hz with a = 0.27 m); it stops at the end behind it.
-  // Hoisted into locals so that the compiler keeps them in registers (the loop writes through
-  // several pointers, which would otherwise force reloads of every member).
-  const double a = options_.noise_halfwidth_m;
-  const double two_a = 2.0 * a;
-  const double mean_distance = speed_mps * dt_s;
-  const bool estimate_bias = options_.estimate_speed_bias;
-  const double jitter = options_.bias_jitter_mps * std::sqrt(3.0);  // uniform with that sd
-  const double* length = lengths_.data();
-  const double* origin_x = origin_x_.data();
-  const double* origin_y = origin_y_.data();
-  const double* unit_x = unit_x_.data();
-  const double* unit_y = unit_y_.data();
-  const double* factor = factor_.data();
-  const double* disagree = disagree_.data();
+  // Prediction (eq. 8-10), then the update (eq. 11) with the sums needed for the normalisation
+  // (eq. 12), the ESS (eq. 14), the estimate (eq. 13), its spread and the disagreement. A
+  // negative step v Δt + η moves a particle back within its segment (eq. 8-9 have no floor: a
+  // floor at 0 biases the move forward by E[max(0, X)] - E[X], 5 % of the speed at 10 Hz with
+  // a = 0.27 m); it stops at the end behind it.
+  const double* origin_x = motion_.origin_x_m();
+  const double* origin_y = motion_.origin_y_m();
+  const double* unit_x = motion_.unit_x();
+  const double* unit_y = motion_.unit_y();
   int* seg = segment_.data();
   signed char* dir = direction_.data();
   double* along = along_.data();
-  double* weight = weights_.data();
-  double* bias = bias_.data();
-  double sum = 0, sum_sq = 0, sx = 0, sy = 0, sxx = 0, syy = 0, disagreement = 0, max_w = 0;
-  const int slots = options_.smoothing_lag_steps > 0 ? options_.smoothing_lag_steps + 1 : 0;
-  const int slot = slots > 0 ? history_steps_ % slots : 0;
+  // Pass 1, prediction (eq. 8-10): the distances from the random lanes (vectorised), then the
+  // corridor model's batch move (in-segment moves vectorised, junction choices afterwards, in
+  // particle order).
+  uniform_.resize(static_cast<size_t>(n));
+  distance_.resize(static_cast<size_t>(n));
+  DrawDistances(options_, speed_mps * dt_s, dt_s, n, lanes_, bias_.data(), uniform_.data(), distance_.data());
+  motion_.MoveAll(n, distance_.data(), seg, dir, along, heading_rad, lanes_, rng_, weights_.data(), &move_scratch_);
+  // Pass 2, update (eq. 11) with the sums.
+  const bool recovery = options_.recovery_disagreement > 0.0;  // the only user of the disagreement
+  const WeightSums sums = WeighAndSum({n, seg, dir, along, weights_.data(), weight_scale_, factor_.data(),
+                                       recovery ? disagree_.data() : nullptr, origin_x, origin_y, unit_x, unit_y,
+                                       motion_.geometry_rows()});
+  const double sum = sums.sum, sum_sq = sums.sum_sq, sx = sums.sx, sy = sums.sy, sxx = sums.sxx, syy = sums.syy;
+  double disagreement = sums.disagreement;
+  const double max_w = sums.max_w;
   const double scale = weight_scale_;
-  // A local copy of the stream keeps its state in registers (stores through the particle arrays
-  // could alias a member); it is written back after the pass.
-  RandomStream rng = rng_;
-  // Pass 1, prediction (eq. 8-10): random moves and junction choices. Kept apart from the
-  // weighting pass so that the accumulators there stay in registers (no calls in that loop).
-  for (int i = 0; i < n; ++i) {
-    double distance = mean_distance;
-    if (estimate_bias) {
-      if (jitter > 0) bias[i] += rng.Uniform(-jitter, jitter);
-      distance -= bias[i] * dt_s;
-    }
-    if (a > 0) distance += two_a * rng.Uniform01() - a;
-    const double u = along[i] + dir[i] * distance;
-    if (u >= 0.0 && u <= length[seg[i]]) {
-      along[i] = u;  // fast path: no junction
-    } else {
-      const double importance = Move(i, distance, heading_rad, rng);
-      if (importance != 1.0) weight[i] *= importance;
-    }
-  }
-  rng_ = rng;
-  // Pass 2, update (eq. 11) with the sums for normalisation (eq. 12), ESS (eq. 14), estimate
-  // (eq. 13), spread and disagreement.
-  for (int i = 0; i < n; ++i) {
-    const int si = seg[i];
-    const int key = 2 * si + (dir[i] > 0);
-    const double w = weight[i] * scale * factor[key];
-    weight[i] = w;
-    const double x = origin_x[si] + along[i] * unit_x[si];
-    const double y = origin_y[si] + along[i] * unit_y[si];
-    sum += w;
-    sum_sq += w * w;
-    sx += w * x;
-    sy += w * y;
-    sxx += w * x * x;
-    syy += w * y * y;
-    disagreement += w * disagree[key];
-    max_w = std::max(max_w, w);
-  }
-  if (slots > 0) {
+  if (lag_ring_.enabled()) {
     for (int i = 0; i < n; ++i) {
       const int si = seg[i];
-      const size_t base = (static_cast<size_t>(i) * static_cast<size_t>(slots) + static_cast<size_t>(slot)) * 2;
-      history_[base] = origin_x[si] + along[i] * unit_x[si];
-      history_[base + 1] = origin_y[si] + along[i] * unit_y[si];
+      lag_ring_.Record(i, origin_x[si] + along[i] * unit_x[si], origin_y[si] + along[i] * unit_y[si]);
     }
   }
   // The particle that had weight 1 before the step keeps at least e^{-2κ} >= e^{-600} (κ <= 300),
@@ -300,7 +330,7 @@ StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, doub
   est.ess = sum * sum / sum_sq;
   // log p(φ_k | φ_{1:k-1}) = log(Σ w_new / Σ w_old) + κ - log(2π I0(κ)); the old sum includes the
   // pending rescale.
-  est.log_likelihood = std::log(sum / (weight_sum_ * scale)) + kappa - log_normaliser_;
+  est.log_likelihood = std::log(sum / (weight_sum_ * scale)) + kappa - motion_.log_normaliser();
   const double inv = 1.0 / sum;
   est.weighted_mean_m = Eigen::Vector2d(sx * inv, sy * inv);
   est.spread_m = std::sqrt(std::max(0.0, sxx * inv - sx * sx * inv * inv + syy * inv - sy * sy * inv * inv));
@@ -309,18 +339,9 @@ StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, doub
   est.position_m = p.point_m;
   est.segment = p.segment;
   est.tracking = est.spread_m < options_.tracking_spread_m;
-  if (slots > 0) {
-    ++history_steps_;
-    if (history_steps_ >= slots) {
-      const int oldest = history_steps_ % slots;  // the slot written `lag` steps ago
-      double mx = 0, my = 0;
-      for (int i = 0; i < n; ++i) {
-        const size_t base = (static_cast<size_t>(i) * static_cast<size_t>(slots) + static_cast<size_t>(oldest)) * 2;
-        mx += weights_[static_cast<size_t>(i)] * history_[base];
-        my += weights_[static_cast<size_t>(i)] * history_[base + 1];
-      }
-      est.smoothed_m = network_.Nearest(Eigen::Vector2d(mx * inv, my * inv)).point_m;
-    }
+  if (lag_ring_.enabled()) {
+    lag_ring_.Advance();
+    if (lag_ring_.has_lagged()) est.smoothed_m = network_.Nearest(lag_ring_.WeightedSum(weights_.data()) * inv).point_m;
   }
 
   // Resampling (eq. 14) when N_eff < N_T, from the linear weights (core ResampleLinear).
@@ -337,21 +358,15 @@ StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, doub
       segment_tmp_[static_cast<size_t>(i)] = segment_[anc];
       direction_tmp_[static_cast<size_t>(i)] = direction_[anc];
       along_tmp_[static_cast<size_t>(i)] = along_[anc];
-      bias_tmp_[static_cast<size_t>(i)] = bias_[anc];
     }
     segment_.swap(segment_tmp_);
     direction_.swap(direction_tmp_);
     along_.swap(along_tmp_);
-    bias_.swap(bias_tmp_);
-    if (slots > 0) {
-      std::vector<double> gathered(history_.size());
-      const size_t row = static_cast<size_t>(slots) * 2;
-      for (int i = 0; i < n; ++i) {
-        std::copy_n(history_.begin() + static_cast<std::ptrdiff_t>(static_cast<size_t>(ancestors_[static_cast<size_t>(i)]) * row),
-                    row, gathered.begin() + static_cast<std::ptrdiff_t>(static_cast<size_t>(i) * row));
-      }
-      history_.swap(gathered);
+    if (options_.estimate_speed_bias) {  // otherwise every bias is 0
+      for (int i = 0; i < n; ++i) bias_tmp_[static_cast<size_t>(i)] = bias_[static_cast<size_t>(ancestors_[static_cast<size_t>(i)])];
+      bias_.swap(bias_tmp_);
     }
+    lag_ring_.Gather(ancestors_);
     std::fill(weights_.begin(), weights_.end(), 1.0);
     weight_scale_ = 1.0;
     weight_sum_ = n;

@@ -19,7 +19,7 @@ double Wrap(double a) {
 bool TrajectoryOptions::IsValid(std::string* error) const {
   Validator v(error);
   v.Scale(duration_s, "duration_s").Scale(dt_s, "dt_s");
-  if (v) v.Check(duration_s / dt_s <= 1e8, "duration_s / dt_s", "must be <= 1e8 steps");
+  if (v) v.Check(duration_s / dt_s <= 1e7, "duration_s / dt_s", "must be <= 1e7 steps (58 days at 2 Hz)");
   // Speeds above 1e6 m/s turn positions into inf after a few steps.
   return v.InRange(speed_mps, 0.0, 1e6, "speed_mps")
       .InRange(speed_noise_sd_mps, 0.0, 1e6, "speed_noise_sd_mps")

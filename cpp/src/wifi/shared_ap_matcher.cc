@@ -80,19 +80,21 @@ struct internal::SharedApIndex {
 
 namespace {
 
-// Per-query sums over the references that share an AP with it, and the list of those.
+// Per-query sums over the references that share an AP with it, and the list of those. The three
+// sums of a reference sit side by side (one cache line per reference touched: the posting-list
+// loop below is bound by these scattered updates; live fixes, benchmarks/bench_fusion_live.py).
 struct Accumulator {
-  std::vector<double> sum_w, sum_sq, sum_ref_w;
-  std::vector<char> seen;
+  struct Sums {
+    double w = 0.0;      // sum_{A^B} w_i
+    double sq = 0.0;     // sum_{A^B} w_i (a_i - b_i)^2
+    double ref_w = 0.0;  // sum_{A^B} g_i f(b_i)
+    double seen = 0.0;   // 1 once touched (a double: the entry stays 32 bytes, aligned)
+  };
+  std::vector<Sums> sums;
   std::vector<std::int32_t> touched;
-  explicit Accumulator(Eigen::Index n)
-      : sum_w(static_cast<size_t>(n)), sum_sq(static_cast<size_t>(n)),
-        sum_ref_w(static_cast<size_t>(n)), seen(static_cast<size_t>(n), 0) {}
+  explicit Accumulator(Eigen::Index n) : sums(static_cast<size_t>(n)) {}
   void Clear() {
-    for (std::int32_t j : touched) {
-      sum_w[j] = sum_sq[j] = sum_ref_w[j] = 0.0;
-      seen[j] = 0;
-    }
+    for (std::int32_t j : touched) sums[j] = Sums();
     touched.clear();
   }
 };
@@ -171,14 +173,15 @@ double Accumulate(const internal::SharedApIndex& index, const double* query, dou
     query_weight += w;
     for (std::int64_t e = index.start[i]; e < index.start[i + 1]; ++e) {
       const std::int32_t j = index.ref[e];
-      if (!acc->seen[j]) {
-        acc->seen[j] = 1;
+      Accumulator::Sums& sj = acc->sums[j];
+      if (sj.seen == 0.0) {
+        sj.seen = 1.0;
         acc->touched.push_back(j);
       }
       const double diff = a - index.value_dbm[e];
-      acc->sum_w[j] += w;                        // sum_{A^B} w_i
-      acc->sum_sq[j] += w * diff * diff;         // sum_{A^B} w_i (a_i - b_i)^2
-      acc->sum_ref_w[j] += index.weight[e];      // sum_{A^B} g_i f(b_i)
+      sj.w += w;                        // sum_{A^B} w_i
+      sj.sq += w * diff * diff;         // sum_{A^B} w_i (a_i - b_i)^2
+      sj.ref_w += index.weight[e];      // sum_{A^B} g_i f(b_i)
     }
   }
   return query_weight;
@@ -187,10 +190,11 @@ double Accumulate(const internal::SharedApIndex& index, const double* query, dou
 // rms and u of eq. (1) for reference j after Accumulate; (inf, 1) when nothing is shared.
 std::pair<double, double> RmsAndUnshared(const internal::SharedApIndex& index, const Accumulator& acc,
                                          double query_weight, std::int32_t j) {
-  const double sw = acc.sum_w[j];
+  const Accumulator::Sums& sj = acc.sums[j];
+  const double sw = sj.w;
   if (!(sw > 0.0)) return {kInf, 1.0};
-  const double rms = std::sqrt(std::max(acc.sum_sq[j] / sw, 0.0));
-  const double total = query_weight + index.total_weight[j] - acc.sum_ref_w[j];  // sum_A + sum_{B\A}
+  const double rms = std::sqrt(std::max(sj.sq / sw, 0.0));
+  const double total = query_weight + index.total_weight[j] - sj.ref_w;  // sum_A + sum_{B\A}
   const double u = std::clamp(1.0 - sw / total, 0.0, 1.0);
   return {rms, u};
 }

@@ -25,7 +25,6 @@ import argparse
 import json
 import sys
 import tempfile
-import time
 from pathlib import Path
 from typing import Callable, List, Optional
 
@@ -43,22 +42,9 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
 
 def _cmd_core_resample_bench(args: argparse.Namespace) -> int:
-    import numpy as np
+    from indoorloc.experiments import core_resampling
 
-    from indoorloc import core
-
-    lw = core.RandomStream(args.seed).normal(args.n)
-    stream = core.RandomStream(args.seed)
-    results = {}
-    for scheme in core.RESAMPLING_SCHEMES:
-        core.resample(lw, scheme, stream)
-        times = []
-        for _ in progress.progress(range(args.repeat), desc=scheme):
-            start = time.perf_counter()
-            core.resample(lw, scheme, stream)
-            times.append(time.perf_counter() - start)
-        results[scheme] = {"median_ms": 1e3 * float(np.median(times)), "n": args.n}
-    print(json.dumps(results, indent=2))
+    print(json.dumps(core_resampling.resampling_timings(args.n, args.repeat, args.seed), indent=2))
     return 0
 
 

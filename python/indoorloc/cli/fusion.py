@@ -38,6 +38,17 @@ def cmd_synthetic(args: argparse.Namespace) -> int:
     return 0
 
 
+def _json_grid(text: str) -> dict:
+    """--select-grid: a JSON object of setting -> list of values."""
+    try:
+        grid = json.loads(text)
+    except json.JSONDecodeError as e:
+        raise argparse.ArgumentTypeError(f"not JSON: {e}") from None
+    if not isinstance(grid, dict) or not all(isinstance(v, list) and v for v in grid.values()):
+        raise argparse.ArgumentTypeError("expected a JSON object of setting -> non-empty list of values")
+    return grid
+
+
 def cmd_evaluate(args: argparse.Namespace) -> int:
     from indoorloc import progress
     from indoorloc.experiments import fusion_real as fr
@@ -53,7 +64,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     floors = args.floors or ilc_floor_names(root, with_plan=True, argument="data_root")
     ticker = progress.Ticker(desc="fusion evaluate: walks")
     if args.select:
-        result = fr.select_settings(root, floors, settings, progress=ticker.tick)
+        result = fr.select_settings(root, floors, settings, grid=args.select_grid, progress=ticker.tick)
         ticker.close()
         print(fr.select_markdown(result))
     else:
@@ -118,6 +129,9 @@ def add_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
     e.add_argument("--json", default=None, help="write the JSON (schema: docs/fusion_real.md)")
     e.add_argument("--select", action="store_true",
                    help="leave-one-floor-out choice of the settings over fusion_real.SELECT_GRID instead")
+    e.add_argument("--select-grid", type=_json_grid, default=None, metavar="JSON",
+                   help="with --select: the grid as JSON, e.g. '{\"grid.wall_margin_m\": [0, 1]}' (keys: "
+                        "RealSettings fields, fixes.X, grid.X; default fusion_real.SELECT_GRID)")
     e.add_argument("--plots", default=None, metavar="DIR",
                    help="write error CDFs of all methods and one walk per floor on its floor image here")
     e.add_argument("--plot-walk", type=int, default=0, help="index of the walk drawn per floor (default 0)")

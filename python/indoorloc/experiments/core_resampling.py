@@ -57,6 +57,26 @@ def compare_schemes(n_particles: int = 200, n_runs: int = 4000, seed: int = 0) -
     return out
 
 
+def resampling_timings(n: int, repeat: int, seed: int) -> Dict[str, Dict[str, float]]:
+    """Median time [ms] of one resampling of ``n`` standard-normal log-weights per scheme, over
+    ``repeat`` calls after one warm-up (``indoorloc core resample-bench``): {scheme: {"median_ms",
+    "n"}}."""
+    from indoorloc import progress
+
+    lw = core.RandomStream(seed).normal(n)
+    stream = core.RandomStream(seed)
+    results: Dict[str, Dict[str, float]] = {}
+    for scheme in core.RESAMPLING_SCHEMES:
+        core.resample(lw, scheme, stream)
+        times = []
+        for _ in progress.progress(range(repeat), desc=scheme):
+            start = time.perf_counter()
+            core.resample(lw, scheme, stream)
+            times.append(time.perf_counter() - start)
+        results[scheme] = {"median_ms": 1e3 * float(np.median(times)), "n": n}
+    return results
+
+
 @register_demo("core", "Core: resampling schemes")
 def demo(ctx: DemoContext) -> DemoSection:
     from indoorloc import plots

@@ -36,7 +36,7 @@ import numpy as np
 from indoorloc import fusion
 from indoorloc.pdr import handheld as ph
 from indoorloc.pdr import streaming as ps
-from indoorloc import wifi_fixes as wfx
+from indoorloc.fusion import wifi_fixes
 from indoorloc.fusion import live
 from indoorloc.io import load_floor_plan, read_ilc_floor
 
@@ -69,7 +69,7 @@ def floor_errors(name: str, folds: int = 4) -> Dict[str, List[float]]:
         tw = [walks[i] for i in train]
         cal_b = ph.calibrate_handheld(tw, steps_cache=[batch_steps[i] for i in train])
         cal_c = ph.calibrate_handheld(tw, steps_cache=[causal_steps[i] for i in train])
-        db = wfx.build_database(tw, wfx.FixSettings(), [batch_steps[i] for i in train], floors=[number] * len(tw))
+        db = wifi_fixes.build_database(tw, wifi_fixes.FixSettings(), [batch_steps[i] for i in train], floors=[number] * len(tw))
         trk_b = fusion.GridTracker(plan, fusion.GridTrackerOptions(heading_offset_sd_rad=max(cal_b.yaw_offset_spread_rad, 1e-3)))
         trk_c = fusion.GridTracker(plan, fusion.GridTrackerOptions(heading_offset_sd_rad=max(cal_c.yaw_offset_spread_rad, 1e-3)))
         for i in test:
@@ -78,7 +78,7 @@ def floor_errors(name: str, folds: int = 4) -> Dict[str, List[float]]:
             st = ph.rescale(batch_steps[i], cal_b.options)
             steps = fusion.Steps.from_polar(st.t_s, st.length_m, st.heading_rad + cal_b.yaw_offset_rad,
                                             live.STEP_LENGTH_SD_FRACTION * st.length_m, live.STEP_HEADING_SD_RAD)
-            fixes = wfx.fixes_for_walk(w, db)
+            fixes = wifi_fixes.fixes_for_walk(w, db)
             if len(steps) == 0:
                 continue
             r = fusion.track_grid(trk_b, steps, fixes=fixes)

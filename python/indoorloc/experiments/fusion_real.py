@@ -52,7 +52,8 @@ from typing import Any, Dict, List, Optional, Sequence
 
 import numpy as np
 
-from indoorloc import fusion, wifi_fixes as wfx
+from indoorloc import fusion
+from indoorloc.fusion import wifi_fixes as wfx
 from indoorloc.pdr import handheld as ph
 from indoorloc.io import read_ilc_floor
 from indoorloc.experiments.fusion_real_settings import (  # noqa: F401  (re-exported)

@@ -11,7 +11,8 @@ from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from indoorloc import fusion, wifi, wifi_crowdsource as wc, wifi_fixes as wfx
+from indoorloc import fusion, wifi
+from indoorloc.fusion import crowdsourced_map as wc, wifi_fixes as wfx
 from indoorloc.fusion import site_model
 from indoorloc.pdr import handheld as ph
 from indoorloc.io import ilc_floor_names, load_floor_plan, read_ilc_floor
@@ -79,8 +80,9 @@ def _fold_models(floors: Sequence[FloorData], fold_of: Dict[str, List[np.ndarray
         all_numbers += [fl.number] * len(train)
     if all_plan is not None:
         all_database = wfx.build_database(all_walks, settings.fixes, all_steps, floors=all_numbers)
+        all_rates = site_model.ap_floor_rates(all_database, list(all_plan.floors), settings.track_settings())
         for m in out.values():
-            m.all_plan, m.all_database = all_plan, all_database
+            m.all_plan, m.all_database, m.all_ap_rates = all_plan, all_database, all_rates
     return out
 
 

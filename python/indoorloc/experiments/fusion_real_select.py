@@ -47,6 +47,19 @@ def _with(settings: RealSettings, key: str, value: Any) -> RealSettings:
     return replace(settings, **{key: value})
 
 
+def check_grid(grid: Dict[str, Sequence[Any]], base: RealSettings) -> None:
+    """Raises ValueError naming ``grid`` for a key that is no setting (``fixes.X``, ``grid.X`` or
+    a RealSettings field) or a value list that is empty or invalid for it."""
+    for key, values in grid.items():
+        if isinstance(values, (str, bytes)) or not hasattr(values, "__len__") or len(values) == 0:
+            raise ValueError(f"indoorloc: argument 'grid': {key!r} needs a non-empty list of values, got {values!r}")
+        for value in values:
+            try:
+                _with(base, key, value)
+            except (TypeError, ValueError, AttributeError) as e:
+                raise ValueError(f"indoorloc: argument 'grid': {key!r} = {value!r} is not a valid setting ({e})") from None
+
+
 def lofo_from_stats(points: Sequence[dict], floors: Sequence[str], objective: str) -> dict:
     """Leave-one-floor-out choice for ``objective`` from the points' per-floor stats (pooled
     means weighted by waypoints): ``{"lofo": {floor: {"chosen", "stats"}}, "lofo_pooled_mean_m",
@@ -83,6 +96,7 @@ def select_settings(data_root: Optional[Path] = None, floors: Sequence[str] = FL
     {floor: {"chosen", "stats"}}, "lofo_overall": stats, "best_all", "known_start"}``."""
     base = base or RealSettings()
     grid = grid or SELECT_GRID
+    check_grid(grid, base)
     base = replace(base, floor_identification=False, score_both_point_estimates=True)
     _, data = load_site(data_root, floors)
     keys = list(grid)

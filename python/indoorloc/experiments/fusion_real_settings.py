@@ -12,7 +12,8 @@ from typing import Any, Dict, List, Optional, Tuple
 
 import numpy as np
 
-from indoorloc import fusion, wifi_crowdsource as wc, wifi_fixes as wfx
+from indoorloc import fusion
+from indoorloc.fusion import crowdsourced_map as wc, wifi_fixes as wfx
 from indoorloc.fusion import site_model
 from indoorloc.pdr import handheld as ph
 
@@ -109,6 +110,16 @@ class RealSettings:
     #: Cells [m] and offset bins of the floor-identification pass (all floors, filter only).
     floor_identification_cell_m: float = 2.0
     floor_identification_offset_bins: int = 3
+    #: The AP evidence of floor identification (``fusion.floor_evidence``): weight λ, strongest
+    #: APs m, rate floor α, outlier probability ε; defaults: TrackSettings' (LOFO, docs/fusion_real.md).
+    floor_identification_ap_weight: float = field(
+        default_factory=lambda: site_model.TrackSettings().identification_ap_weight)
+    floor_identification_ap_count: int = field(
+        default_factory=lambda: site_model.TrackSettings().identification_ap_count)
+    floor_identification_ap_rate_floor: float = field(
+        default_factory=lambda: site_model.TrackSettings().identification_ap_rate_floor)
+    floor_identification_ap_outlier_probability: float = field(
+        default_factory=lambda: site_model.TrackSettings().identification_ap_outlier_probability)
 
     def tracker_options(self, **overrides) -> fusion.TrackerOptions:
         settings = dict(num_particles=self.num_particles, wall_log_penalty=self.wall_log_penalty,
@@ -123,7 +134,11 @@ class RealSettings:
             step_length_sd_fraction=self.step_length_sd_fraction, step_heading_sd_rad=self.step_heading_sd_rad,
             fixes=self.fixes, grid_options=self.grid_options, point_estimate=self.point_estimate,
             identification_cell_m=self.floor_identification_cell_m,
-            identification_offset_bins=self.floor_identification_offset_bins)
+            identification_offset_bins=self.floor_identification_offset_bins,
+            identification_ap_weight=self.floor_identification_ap_weight,
+            identification_ap_count=self.floor_identification_ap_count,
+            identification_ap_rate_floor=self.floor_identification_ap_rate_floor,
+            identification_ap_outlier_probability=self.floor_identification_ap_outlier_probability)
 
     def to_dict(self) -> Dict[str, Any]:
         d = asdict(self)
@@ -183,6 +198,7 @@ class FoldModels:
     database: wfx.FingerprintDatabase
     all_plan: Any = None
     all_database: Optional[wfx.FingerprintDatabase] = None
+    all_ap_rates: Any = None  #: per-floor AP detection rates of all_database (fusion.floor_evidence)
     #: ``scipy.spatial.cKDTree`` of the floor's training scan positions (survey coverage), or None.
     coverage_tree: Any = None
     #: ``wifi.GridPosterior`` of ``crowd`` (the wifi_model method), built once per fold, or None.

@@ -12,7 +12,8 @@ from typing import Any, Dict, Sequence, Tuple
 
 import numpy as np
 
-from indoorloc import fusion, wifi, wifi_crowdsource as wc, wifi_fixes as wfx
+from indoorloc import fusion, wifi
+from indoorloc.fusion import crowdsourced_map as wc, wifi_fixes as wfx
 from indoorloc.fusion import site_model
 from indoorloc.pdr import handheld as ph
 from indoorloc.experiments.fusion_real_settings import COVARIANCE_METHODS, FoldModels, RealSettings, WalkScore
@@ -169,31 +170,40 @@ def _score_walk(walk, steps_raw: ph.HandheldSteps, models: FoldModels, settings:
     if not particle:
         _score_walk_grid(score, put, pdr_steps, fixes, known_fixes, known, models, settings, want, residual)
     if settings.floor_identification and models.all_plan is not None and "fusion_smoother" in want:
-        all_fixes = wfx.fixes_for_walk(walk, models.all_database)
-        tic = time.perf_counter()
-        plan_floors = list(models.all_plan.floors)
-        step_idx = np.clip(np.searchsorted(pdr_steps.times_s, wt), 0, len(pdr_steps) - 1)
-        if particle:
-            result = fusion.track(pdr_steps, plan=models.all_plan, options=options, smoother=smoother, fixes=all_fixes)
-            est_floor = np.asarray(plan_floors)[np.asarray(result["smoothed_floor_index"])[step_idx]]
-            track_m = result["smoothed_m"]
-        else:
-            # All floors, filter only, coarse cells: the floor with the most evidence; then the
-            # floor-given smoother on it (a walk stays on one floor in this model).
-            ident = _grid_tracker(models.all_plan, _identification_options(settings, spread), fl.name + "/all")
-            r = fusion.track_grid(ident, pdr_steps, fixes=all_fixes, smooth=False)
-            best = int(np.argmax(r["smoothed_floor_probabilities"]))
-            est_floor = np.full(wt.size, plan_floors[best])
-            if plan_floors[best] == fl.number:
-                track_m = score.smoothed_track_m
-            else:
-                track_m = np.asarray(r["mean_m"])
-        score.seconds["floor_identification"] = time.perf_counter() - tic
-        score.floor_correct = est_floor == fl.number
-        score.floor_free_errors_m = np.where(score.floor_correct,
-                                             np.hypot(*(_interp_track(wt, pdr_steps.times_s, track_m) - wxy).T),
-                                             np.nan)
+        _identify_floor(score, walk, pdr_steps, models, settings, options, smoother, spread)
     return score
+
+
+def _identify_floor(score: WalkScore, walk, pdr_steps, models: FoldModels, settings: RealSettings, options, smoother,
+                    spread: float) -> None:
+    """Floor identification of one walk (``score.floor_correct``, ``score.floor_free_errors_m``):
+    the default with the floor not given, on the all-floor plan and database of the fold."""
+    fl = models.floor
+    wt = score.t_s + score.waypoint_t0
+    wxy = score.waypoint_xy_m
+    all_fixes = wfx.fixes_for_walk(walk, models.all_database)
+    tic = time.perf_counter()
+    plan_floors = list(models.all_plan.floors)
+    step_idx = np.clip(np.searchsorted(pdr_steps.times_s, wt), 0, len(pdr_steps) - 1)
+    if settings.engine == "particle":
+        result = fusion.track(pdr_steps, plan=models.all_plan, options=options, smoother=smoother, fixes=all_fixes)
+        est_floor = np.asarray(plan_floors)[np.asarray(result["smoothed_floor_index"])[step_idx]]
+        track_m = result["smoothed_m"]
+    else:
+        # All floors, filter only, coarse cells, plus the APs' evidence: the floor with the most
+        # evidence (site_model.identify_floor, the code of ``indoorloc track --floor auto``);
+        # then the floor-given smoother on it (a walk stays on one floor in this model).
+        ts = settings.track_settings()
+        ident = _grid_tracker(models.all_plan, _identification_options(settings, spread), fl.name + "/all")
+        ap = (site_model.walk_ap_log_likelihood(walk, models.all_database, models.all_ap_rates, ts)
+              if ts.identification_ap_weight > 0 and models.all_ap_rates is not None else None)
+        found = site_model.identify_floor(ident, plan_floors, pdr_steps, all_fixes, ap, ts.identification_ap_weight)
+        est_floor = np.full(wt.size, found["floor"])
+        track_m = score.smoothed_track_m if found["floor"] == fl.number else np.asarray(found["result"]["mean_m"])
+    score.seconds["floor_identification"] = time.perf_counter() - tic
+    score.floor_correct = est_floor == fl.number
+    score.floor_free_errors_m = np.where(score.floor_correct,
+                                         np.hypot(*(_interp_track(wt, pdr_steps.times_s, track_m) - wxy).T), np.nan)
 
 
 def _wrap(angle_rad: float) -> float:

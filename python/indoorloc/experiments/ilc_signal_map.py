@@ -1,5 +1,5 @@
 """WiFi-only baselines on held-out walks of the Indoor Location Competition 2.0 data, with the
-crowdsourced signal map of :mod:`indoorloc.wifi_crowdsource` (issue 15, item 1 of
+crowdsourced signal map of :mod:`indoorloc.fusion.crowdsourced_map` (issue 15, item 1 of
 ``fusion evaluate``).
 
 Protocol (docs/fusion_real.md, "Crowdsourced signal map"): per floor, ``folds``-fold
@@ -38,7 +38,7 @@ import numpy as np
 
 from indoorloc.pdr import handheld
 from indoorloc import wifi
-from indoorloc import wifi_crowdsource
+from indoorloc.fusion import crowdsourced_map
 from indoorloc.progress import progress
 
 PathLike = Union[str, Path]
@@ -71,7 +71,7 @@ class _Walk:
     walk_id: str
     wt: np.ndarray                         # (W,) waypoint times
     wxy: np.ndarray                        # (W, 2)
-    placed: Dict[str, wifi_crowdsource.PlacedReadings]   # positioning -> placed readings
+    placed: Dict[str, crowdsourced_map.PlacedReadings]   # positioning -> placed readings
     scan_bssids: List[List[str]]           # per waypoint: BSSIDs of the nearest scan (fresh)
     scan_rssi: List[np.ndarray]            # per waypoint: their RSSI
 
@@ -99,15 +99,15 @@ def _nearest_scans(walk: Any, max_age_s: float) -> Tuple[List[List[str]], List[n
     return names, values
 
 
-def load_floor(floor: Any, positionings: Sequence[str] = wifi_crowdsource.POSITIONING, max_age_s: float = MAX_AGE_S,
-               settings: Optional[wifi_crowdsource.CrowdMapSettings] = None) -> List[_Walk]:
+def load_floor(floor: Any, positionings: Sequence[str] = crowdsourced_map.POSITIONING, max_age_s: float = MAX_AGE_S,
+               settings: Optional[crowdsourced_map.CrowdMapSettings] = None) -> List[_Walk]:
     """Reads the walks of a floor, places their readings once per positioning (the placement
     uses only the walk's own waypoints and IMU, no training) and extracts the test scans."""
     out = []
-    base = settings or wifi_crowdsource.CrowdMapSettings()
+    base = settings or crowdsourced_map.CrowdMapSettings()
     for w in floor.walks():
         steps = handheld.handheld_steps(w, handheld.HandheldOptions(heading_source=base.heading_source))
-        placed = {p: wifi_crowdsource.reading_positions(w, replace(base, positioning=p), steps) for p in positionings}
+        placed = {p: crowdsourced_map.reading_positions(w, replace(base, positioning=p), steps) for p in positionings}
         names, values = _nearest_scans(w, max_age_s)
         out.append(_Walk(w.walk_id, np.asarray(w.waypoint_t_s, float), np.asarray(w.waypoint_xy_m, float),
                          placed, names, values))
@@ -129,9 +129,9 @@ def _test_matrix(walks: Sequence[_Walk], bssids: Sequence[str]) -> Tuple[np.ndar
     return np.array(rows).reshape(-1, len(bssids)), np.array(truth).reshape(-1, 2)
 
 
-def _locate(method: str, cm: wifi_crowdsource.CrowdMap, rss: np.ndarray, params: Dict[str, Any]) -> np.ndarray:
+def _locate(method: str, cm: crowdsourced_map.CrowdMap, rss: np.ndarray, params: Dict[str, Any]) -> np.ndarray:
     nh = cm.settings.not_heard_dbm
-    q = wifi_crowdsource.prepare(rss, nh)
+    q = crowdsourced_map.prepare(rss, nh)
     if method == "wifi_knn":
         m = cm.signal_map
         loc = wifi.FingerprintLocator(m.mean_dbm, m.positions_m, m.floors, method="wknn", k=int(params["k"]))
@@ -150,16 +150,16 @@ def _map_key(p: Dict[str, Any]) -> Tuple:
 
 
 def _errors(method: str, train: Sequence[_Walk], test: Sequence[_Walk], positioning: str,
-            params_list: Sequence[Dict[str, Any]], base: wifi_crowdsource.CrowdMapSettings) -> List[np.ndarray]:
+            params_list: Sequence[Dict[str, Any]], base: crowdsourced_map.CrowdMapSettings) -> List[np.ndarray]:
     """Waypoint errors of each parameter set (maps shared between sets that differ only in k)."""
-    maps: Dict[Tuple, Optional[wifi_crowdsource.CrowdMap]] = {}
+    maps: Dict[Tuple, Optional[crowdsourced_map.CrowdMap]] = {}
     out = []
     for p in params_list:
         key = _map_key(p)
         if key not in maps:
             s = replace(base, positioning=positioning, cell_size_m=key[0], min_walks=key[1], not_heard_dbm=key[2])
             try:
-                maps[key] = wifi_crowdsource.build_crowd_map([], s, placed=[w.placed[positioning] for w in train])
+                maps[key] = crowdsourced_map.build_crowd_map([], s, placed=[w.placed[positioning] for w in train])
             except ValueError:
                 maps[key] = None
         cm = maps[key]
@@ -178,7 +178,7 @@ def _folds(n: int, k: int, rng: np.random.Generator) -> List[np.ndarray]:
 
 
 def _select(method: str, train: Sequence[_Walk], positioning: str, inner_folds: int, seed: int,
-            base: wifi_crowdsource.CrowdMapSettings) -> Dict[str, Any]:
+            base: crowdsourced_map.CrowdMapSettings) -> Dict[str, Any]:
     grid = _grid(method)
     rng = np.random.default_rng(seed)
     errs = [[] for _ in grid]
@@ -198,7 +198,7 @@ def _stats(e: np.ndarray) -> Dict[str, float]:
 
 
 def evaluate(data_root: Optional[PathLike] = None, floors: Sequence[str] = FLOORS, folds: int = 4,
-             inner_folds: int = 3, seed: int = 0, positionings: Sequence[str] = wifi_crowdsource.POSITIONING,
+             inner_folds: int = 3, seed: int = 0, positionings: Sequence[str] = crowdsourced_map.POSITIONING,
              methods: Sequence[str] = ("wifi_knn", "wifi_model")) -> Dict[str, Any]:
     """Runs the protocol of the module docstring; returns per (positioning, method, floor) the
     pooled statistics, the per-fold statistics, the chosen settings per fold and the placement
@@ -207,7 +207,7 @@ def evaluate(data_root: Optional[PathLike] = None, floors: Sequence[str] = FLOOR
 
     t_start = time.perf_counter()
     site = read_ilc_site(data_root or default_fusion_root())
-    base = wifi_crowdsource.CrowdMapSettings(max_age_s=MAX_AGE_S)
+    base = crowdsourced_map.CrowdMapSettings(max_age_s=MAX_AGE_S)
     result: Dict[str, Any] = {"settings": {"folds": folds, "inner_folds": inner_folds, "seed": seed,
                                            "max_age_s": MAX_AGE_S, "grid_spacing_m": GRID_SPACING_M,
                                            "knn_grid": {k: list(v) for k, v in KNN_GRID.items()},

@@ -79,7 +79,9 @@ def _before(rec: ImuRecording) -> Dict[str, Any]:
     strides = np.asarray(pdr.count_strides(stance, rec.rate_hz)["stride_indices"])
     pos = np.asarray(out["positions_m"])
     sc = pe.score_pyshoe_trial(rec, (pos, strides), z_up_estimate=rec.sensor != "synthetic")
-    health = dict(out["health"], guard_satisfied=bool(det["guard_satisfied"]))
+    ev = recommended.gait_evidence(rec)
+    health = dict(out["health"], guard_satisfied=bool(det["guard_satisfied"]),
+                  stance_motion_ratio=recommended.stance_motion_ratio(rec, stance, ev["energy_mps2"]))
     return {"name": rec.name, "armse_m": sc["armse_m"], "stride_error": sc["stride_count_error"],
             "strides_truth": sc["strides_truth"], "health": health, "path_m": metrics.path_length(pos[:, :2]),
             "n_strides": int(strides.size)}
@@ -167,9 +169,45 @@ def health_table(recs: Sequence[ImuRecording], n_shared: int) -> List[Dict[str, 
                       "path_per_rhythm_stride_m": row["path_m"] / ev["rhythm_strides"] if ev["rhythm_strides"] else None,
                       "stride_ratio": row["n_strides"] / ev["rhythm_strides"] if ev["rhythm_strides"] else None,
                       "energy_mps2": ev["energy_mps2"], "strength": ev["strength"],
+                      "stance_motion_ratio": h.get("stance_motion_ratio"),
                       "ekf_flag": any(r not in reasons for r in h.get("reasons", [])),
                       "gait_reasons": reasons})
     return table
+
+
+#: Grid of :func:`stance_motion_limit_cv` (HEALTH_LIMITS["max_stance_motion_ratio"]).
+STANCE_MOTION_GRID = [round(0.06 + 0.01 * i, 2) for i in range(35)]
+
+
+def stance_motion_limit_cv(table: List[Dict[str, Any]]) -> Dict[str, Any]:
+    """Leave one recording out: the limit of the stance-motion check is the least value of
+    :data:`STANCE_MOTION_GRID` above every good run (ARMSE < 0.4 m) of the other recordings; the
+    held-out recording's runs are then scored. Only runs no other check flags take part (the
+    check is there for what the others miss); the previous-rule synthetic rows are left out
+    (their failures are flagged by the swing check)."""
+    runs = []
+    for r in table:
+        if r["label"] == "synthetic, before" or r["stance_motion_ratio"] is None:
+            continue
+        others = [x for x in r["gait_reasons"] if not x.startswith("the samples called stance move")]
+        if others or r["ekf_flag"]:
+            continue
+        runs.append(r)
+    chosen, caught, fails, flagged_good, goods = [], 0, 0, 0, 0
+    for name in sorted({r["name"] for r in runs}):
+        train = [r for r in runs if r["name"] != name]
+        top = max((r["stance_motion_ratio"] for r in train if r["good"]), default=0.0)
+        limit = next((g for g in STANCE_MOTION_GRID if g >= top), STANCE_MOTION_GRID[-1])
+        chosen.append(limit)
+        for r in (r for r in runs if r["name"] == name):
+            if r["good"]:
+                goods += 1
+                flagged_good += r["stance_motion_ratio"] > limit
+            else:
+                fails += 1
+                caught += r["stance_motion_ratio"] > limit
+    return {"chosen": Counter(chosen), "failures_caught": caught, "failures": fails,
+            "good_flagged": flagged_good, "good": goods}
 
 
 def _fmt_stats(s: Dict[str, float]) -> str:
@@ -184,7 +222,8 @@ def markdown(cv: Dict[str, Any], table: List[Dict[str, Any]]) -> str:
         lines.append(f"| {group} | {label} | {_fmt_stats(s)} |")
     lines += ["", "Settings chosen by the folds: " + ", ".join(f"{cv['grid'][i]} x{n}" for i, n in cv["chosen"].most_common()),
               f"All-data choice: {cv['all_data_choice']}", ""]
-    keys = ("swing_median_s", "median_stride_m", "path_per_rhythm_stride_m", "stride_ratio", "energy_mps2", "strength")
+    keys = ("swing_median_s", "median_stride_m", "path_per_rhythm_stride_m", "stride_ratio", "energy_mps2", "strength",
+            "stance_motion_ratio")
     lines += ["| runs | n | " + " | ".join(f"{k} (min..max)" for k in keys) + " | flagged |",
               "|---|---:|" + "---|" * len(keys) + "---:|"]
     for label in dict.fromkeys(r["label"] for r in table):
@@ -199,6 +238,11 @@ def markdown(cv: Dict[str, Any], table: List[Dict[str, Any]]) -> str:
             flagged = sum(1 for r in rs if r["gait_reasons"] or r["ekf_flag"])
             lines.append(f"| {label}, {'ARMSE < 0.4 m' if good else 'ARMSE >= 0.4 m'} | {len(rs)} | "
                          + " | ".join(cells) + f" | {flagged} |")
+    cv_limit = stance_motion_limit_cv(table)
+    lines += ["", "Stance-motion limit, leave one recording out (runs no other check flags): chosen "
+              + ", ".join(f"{k} x{n}" for k, n in sorted(cv_limit["chosen"].items()))
+              + f"; held out: {cv_limit['failures_caught']} of {cv_limit['failures']} failures flagged, "
+              f"{cv_limit['good_flagged']} of {cv_limit['good']} good runs flagged"]
     return "\n".join(lines)
 
 

@@ -22,7 +22,7 @@ from typing import Dict, Optional, Sequence
 import numpy as np
 
 from indoorloc import fusion
-from indoorloc import wifi_fixes as wfx
+from indoorloc.fusion import wifi_fixes
 from indoorloc import wifi_matcher as wm
 
 
@@ -34,16 +34,16 @@ def compare_floor(root: Path, name: str, out: Dict[str, float]) -> None:
     test = set(range(0, len(fl.walks), 4))
     train = [w for i, w in enumerate(fl.walks) if i not in test]
     steps = [s for i, s in enumerate(fl.steps) if i not in test]
-    db = wfx.build_database(train, wfx.FixSettings(), steps, floors=[fl.number] * len(train))
+    db = wifi_fixes.build_database(train, wifi_fixes.FixSettings(), steps, floors=[fl.number] * len(train))
     s = db.settings
     for i in sorted(test):
-        t, rss = wfx.walk_queries(fl.walks[i], db)
+        t, rss = wifi_fixes.walk_queries(fl.walks[i], db)
         if t.size == 0:
             continue
         tic = time.perf_counter()
         b0, d0, w0 = wm.knn(wm.shared_dissimilarity_numpy(rss, db.index, s.penalty_db), s.k, s.temperature_db)
         toc = time.perf_counter()
-        b1, d1, w1 = wfx.nearest(rss, db)
+        b1, d1, w1 = wifi_fixes.nearest(rss, db)
         out["numpy_s"] += toc - tic
         out["compiled_s"] += time.perf_counter() - toc
         out["pairs"] += rss.shape[0] * db.n_scans
@@ -51,8 +51,8 @@ def compare_floor(root: Path, name: str, out: Dict[str, float]) -> None:
         if not np.array_equal(fin, np.isfinite(d1)):
             raise RuntimeError(f"indoorloc: {name} walk {i}: the two paths disagree on which d are finite")
         out["max_d_diff_db"] = max(out["max_d_diff_db"], float(np.abs(np.where(fin, d0 - d1, 0.0)).max()))
-        fx = wfx.fixes_for_walk(fl.walks[i], db).as_arrays()
-        ref = fusion.Fixes.from_arrays(t, db.positions_m[b0], wfx.fix_sds(d0[:, 0], s), w0, db.floors[b0]).as_arrays()
+        fx = wifi_fixes.fixes_for_walk(fl.walks[i], db).as_arrays()
+        ref = fusion.Fixes.from_arrays(t, db.positions_m[b0], wifi_fixes.fix_sds(d0[:, 0], s), w0, db.floors[b0]).as_arrays()
         wa, wb = np.asarray(fx[3]), np.asarray(ref[3])
         out["max_weight_diff"] = max(out["max_weight_diff"], float(np.abs(wa - wb).max()))
         out["max_sd_diff_m"] = max(out["max_sd_diff_m"], float(np.abs(np.asarray(fx[2]) - np.asarray(ref[2])).max()))

@@ -66,7 +66,7 @@ class CachedWalk:
 def cache_floor(root: Path, name: str, cache_dir: Path, log=print) -> Tuple[List[CachedWalk], List[str]]:
     """The floor's walks from the cache, parsing and placing the missing ones; also the ids of
     walks the loader refused (skipped)."""
-    from indoorloc import wifi_crowdsource
+    from indoorloc.fusion import crowdsourced_map
     from indoorloc.io import read_ilc_floor
 
     floor = read_ilc_floor(Path(root) / name)
@@ -86,7 +86,7 @@ def cache_floor(root: Path, name: str, cache_dir: Path, log=print) -> Tuple[List
             wt = np.asarray(walk.waypoint_t_s, float)
             if wt.size:
                 grid = np.arange(wt[0] - 3.0, wt[-1] + 3.0 + GRID_STEP_S / 2, GRID_STEP_S)
-                pos = wifi_crowdsource.walk_positions(walk, grid)
+                pos = crowdsourced_map.walk_positions(walk, grid)
                 gxy = np.where(pos.valid[:, None], pos.xy_m, np.nan)
             else:
                 grid, gxy = np.zeros(0), np.zeros((0, 2))
@@ -168,7 +168,7 @@ class FoldQueries:
 
 
 def fold_queries(test: Sequence[CachedWalk], database) -> FoldQueries:
-    from indoorloc import wifi_fixes
+    from indoorloc.fusion import wifi_fixes
 
     ts, rs, ws, wpw, wpt, wpx = [], [], [], [], [], []
     for i, w in enumerate(test):
@@ -211,7 +211,8 @@ def evaluate_grid(walks: Sequence[CachedWalk], grid: Dict[str, Sequence[Any]], f
     """Waypoint errors of every grid point on one floor (4-fold by walk), concatenated in fold order;
     plus per-waypoint facts (fold, coverage distance, bound distance at the default reference
     window) and the old matcher's errors."""
-    from indoorloc import wifi_fixes, wifi_matcher
+    from indoorloc import wifi_matcher
+    from indoorloc.fusion import wifi_fixes
 
     out: Dict[str, List[np.ndarray]] = {}
     extra: Dict[str, List[np.ndarray]] = {"fold": [], "coverage_m": [], "old": []}
@@ -330,7 +331,7 @@ def tracker_view(walks: Sequence[CachedWalk], settings, folds: int = 4, seed: in
     bound/coverage distances of the test waypoints."""
     from scipy.spatial import cKDTree
 
-    from indoorloc import wifi_fixes
+    from indoorloc.fusion import wifi_fixes
 
     from indoorloc import wifi_matcher
 
@@ -373,7 +374,7 @@ def time_queries(walks: Sequence[CachedWalk], settings, repeats: int = 3) -> Dic
     """Milliseconds per query of ``locate_scans``: the first walk's queries against a database of
     all the other walks given (here: every walk of the two largest floors, as in floor
     identification), a walk's queries at once and one query at a time."""
-    from indoorloc import wifi_fixes
+    from indoorloc.fusion import wifi_fixes
 
     test, train = walks[0], list(walks[1:])
     db = wifi_fixes.build_database(train, settings, positions_at=[w.positions_at for w in train])
@@ -401,7 +402,7 @@ def time_queries(walks: Sequence[CachedWalk], settings, repeats: int = 3) -> Dic
 
 def run(data_root: Path, floors: Sequence[str], cache_dir: Path, grid: Optional[Dict[str, Sequence[Any]]] = None,
         log=print) -> Dict[str, Any]:
-    from indoorloc import wifi_fixes
+    from indoorloc.fusion import wifi_fixes
 
     grid = dict(GRID if grid is None else grid)
     tic = time.time()

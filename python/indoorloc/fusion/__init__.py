@@ -32,7 +32,6 @@ The model, its equations and how each default was chosen: docs/fusion.md. Exampl
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import Any, Iterable, List, Optional, Sequence, Tuple
 
 import numpy as np
@@ -51,11 +50,10 @@ from indoorloc._core.fusion import (
     steps_from_polar,
 )
 from indoorloc._core.fusion import track as _core_track
-from indoorloc.validate import integer, real_array, real_scalar
-
-
-def _error(arg: str, msg: str) -> ValueError:
-    return ValueError(f"indoorloc: argument '{arg}': {msg}")
+from indoorloc.fusion.fixes import Fixes
+from indoorloc.fusion.steps import Steps, rotate
+from indoorloc.validate import argument_error as _error
+from indoorloc.validate import integer, real_array
 
 
 def _ring_array(obj: Any, name: str) -> np.ndarray:
@@ -240,139 +238,6 @@ def tracker_options(**settings) -> TrackerOptions:
     return TrackerOptions(**settings)
 
 
-@dataclass
-class Steps:
-    """Detected steps for the tracker: times (M,) [s], displacements (M, 2) [m] in the PDR frame
-    and their covariances (M, 3) = (xx, xy, yy) [m²]."""
-
-    times_s: np.ndarray
-    displacements_m: np.ndarray
-    covariances_m2: np.ndarray
-
-    @classmethod
-    def from_polar(cls, times_s, lengths_m, headings_rad, length_sd_m, heading_sd_rad) -> "Steps":
-        """From step lengths [m] and headings [rad] with their sd (scalars broadcast), by
-        first-order propagation (docs/fusion.md)."""
-        times = real_array(times_s, "times_s", ndim=1)
-        n = times.shape[0]
-
-        def per_step(value: Any, name: str) -> np.ndarray:
-            a = real_array(value, name)
-            if a.ndim > 1 or (a.ndim == 1 and a.shape[0] != n):
-                raise _error(name, f"expected a scalar or shape ({n},) (one entry per step of 'times_s'), "
-                                   f"got {a.shape}")
-            return np.broadcast_to(a, (n,))
-
-        lengths = per_step(lengths_m, "lengths_m")
-        headings = per_step(headings_rad, "headings_rad")
-        length_sd = per_step(length_sd_m, "length_sd_m")
-        heading_sd = per_step(heading_sd_rad, "heading_sd_rad")
-        displacements, covariances = steps_from_polar(lengths, headings, length_sd, heading_sd)
-        return cls(times.copy(), displacements, covariances)
-
-    @classmethod
-    def from_increments(cls, times_s, increments_m, covariances_m2) -> "Steps":
-        """From foot-mounted ZUPT increments ΔP_k (M, 2 or 3; x, y used) [m] (paper 002 eq. 9) and
-        their covariances (M, 2, 2) or (M, 3) [m²]."""
-        inc = real_array(increments_m, "increments_m")
-        if inc.ndim != 2 or inc.shape[1] not in (2, 3):
-            raise ValueError("indoorloc: argument 'increments_m': expected shape (M, 2) or (M, 3), got "
-                             f"{inc.shape}")
-        m = inc.shape[0]
-        times = real_array(times_s, "times_s", shape=(m,))
-        cov = real_array(covariances_m2, "covariances_m2")
-        if cov.ndim == 3 and cov.shape[1:] == (2, 2):
-            cov = np.stack([cov[:, 0, 0], cov[:, 0, 1], cov[:, 1, 1]], axis=1)
-        if cov.shape != (m, 3):
-            raise _error("covariances_m2", f"expected shape ({m}, 2, 2) or ({m}, 3), got {cov.shape}")
-        return cls(times.copy(), inc[:, :2].copy(), cov.copy())
-
-    def __len__(self) -> int:
-        return int(self.times_s.shape[0])
-
-
-def rotate(displacements_m, angle_rad: float) -> np.ndarray:
-    """Displacements (M, 2) rotated by angle_rad (PDR frame -> floor frame for a known yaw)."""
-    d = real_array(displacements_m, "displacements_m", shape=(None, 2))
-    angle = real_scalar(angle_rad, "angle_rad")
-    c, s = np.cos(angle), np.sin(angle)
-    return np.stack([c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1]], axis=1)
-
-
-@dataclass
-class Fixes:
-    """Position fixes for the tracker: per fix a Gaussian mixture over the floor plus an outlier
-    floor (``TrackerOptions.fix_outlier_probability``):
-    p(fix | z) = ε / A + (1 - ε) Σ_k w_k N(z; μ_k, σ_k² I) (docs/fusion.md, position_fix.h).
-
-    times_s (F,) [s] non-decreasing; means_m (F, K, 2) [m]; sds_m (F, K) [m] > 0; weights (F, K)
-    >= 0 (normalised per fix; weight 0 marks padding, whose mean and sd are ignored); floors
-    (F, K) floor number of each component, or ``ANY_FLOOR`` where it holds on every floor
-    (components on several floors let the fixes identify the floor)."""
-
-    times_s: np.ndarray
-    means_m: np.ndarray
-    sds_m: np.ndarray
-    weights: np.ndarray
-    floors: np.ndarray
-
-    @classmethod
-    def from_arrays(cls, times_s, means_m, sds_m, weights=None, floors=None) -> "Fixes":
-        """Checks shapes and copies. means_m (F, K, 2) or (F, 2) (one component each); sds_m
-        (F, K), (F,) or a scalar; weights default equal; floors (F, K), (F,) (one floor per fix)
-        or a scalar, default ``ANY_FLOOR``."""
-        # Means and sds of padding components (weight 0) may be NaN: only complex, strings and
-        # objects are refused here; the C++ side checks the used components by name.
-        t = real_array(times_s, "times_s").reshape(-1)
-        f = t.shape[0]
-        m = real_array(means_m, "means_m", finite=False)
-        if m.ndim == 2 and m.shape == (f, 2):
-            m = m[:, None, :]
-        if m.ndim != 3 or m.shape[0] != f or m.shape[2] != 2:
-            raise _error("means_m", f"expected shape ({f}, K, 2) or ({f}, 2), got {m.shape}")
-        k = m.shape[1]
-        sd = real_array(sds_m, "sds_m", finite=False)
-        if sd.ndim == 1 and sd.shape == (f,):
-            sd = sd[:, None]
-        try:
-            sd = np.array(np.broadcast_to(sd, (f, k)))
-        except ValueError:
-            raise _error("sds_m", f"expected shape ({f}, {k}), ({f},) or a scalar, got {sd.shape}") from None
-        w = np.ones((f, k)) if weights is None else real_array(weights, "weights")
-        if w.shape != (f, k):
-            raise _error("weights", f"expected shape ({f}, {k}), got {w.shape}")
-        fl = real_array(ANY_FLOOR if floors is None else floors, "floors")
-        if np.any(fl != np.round(fl)) or np.any(np.abs(fl) > 2**31):
-            raise _error("floors", "must be whole numbers that fit in 32 bits (floor numbers or ANY_FLOOR)")
-        if fl.ndim == 1 and fl.shape == (f,):
-            fl = fl[:, None]
-        try:
-            fl = np.array(np.broadcast_to(fl, (f, k)), dtype=np.int64)
-        except ValueError:
-            raise _error("floors", f"expected shape ({f}, {k}), ({f},) or a scalar, got {fl.shape}") from None
-        if f > 1 and np.any(np.diff(t) < 0):
-            raise _error("times_s", "must be non-decreasing")
-        # NaN is allowed only in padding (weight 0): a used component must be a number.
-        used = w > 0
-        if not np.all(np.isfinite(m[used])):
-            raise _error("means_m", "must be finite where the weight is > 0 (NaN only in padding)")
-        if not np.all(np.isfinite(sd[used])):
-            raise _error("sds_m", "must be finite where the weight is > 0 (NaN only in padding)")
-        return cls(t, m, sd, w, fl)
-
-    def __len__(self) -> int:
-        return int(self.times_s.shape[0])
-
-    def as_arrays(self) -> Tuple[np.ndarray, ...]:
-        """The tuple the C++ ``track`` takes: means flattened to (F, 2K), padding (weight 0)
-        given placeholder means and sds (the C++ side drops it)."""
-        f, k = self.sds_m.shape
-        pad = self.weights == 0
-        means = np.where(pad[:, :, None], 0.0, self.means_m).reshape(f, 2 * k)
-        sds = np.where(pad, 1.0, self.sds_m)
-        return (self.times_s, means, sds, self.weights, self.floors)
-
-
 def track(steps: Steps, observations: Sequence[WifiObservation] = (), *, plan=None, wifi_model=None,
           corridors=None, start: Optional[dict] = None, options: Optional[TrackerOptions] = None,
           smoother: Optional[SmootherOptions] = None, fixes: Optional[Fixes] = None) -> dict:
@@ -433,6 +298,18 @@ def track(steps: Steps, observations: Sequence[WifiObservation] = (), *, plan=No
 
 from indoorloc.fusion.grid import GridFilterSession, GridTracker, GridTrackerOptions, GridTrackSummary, region95_contains, track_grid  # noqa: E402
 
+
+
+def __getattr__(name: str):  # noqa: ANN202 - module attribute hook
+    # Site (fusion/site.py) reads walk files and site folders through indoorloc.io: imported on
+    # first use, so that `import indoorloc` stays computational (docs/architecture.md, "Layers").
+    if name == "Site":
+        from indoorloc.fusion.site import Site
+
+        return Site
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 __all__ = [
     "ANY_FLOOR",
     "GridFilterSession",
@@ -446,6 +323,7 @@ __all__ = [
     "FloorPlan",
     "FloorPlanOptions",
     "ParticleTracker",
+    "Site",
     "SmootherOptions",
     "Steps",
     "TrackerOptions",

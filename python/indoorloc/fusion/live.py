@@ -40,16 +40,15 @@ event (:func:`walk_events`) gives its track bit for bit (tests/python/test_fusio
 from __future__ import annotations
 
 import math
-from collections import deque
-from typing import Any, Dict, Iterator, List, Optional, Sequence, Tuple
+from typing import Any, Iterator, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from indoorloc._core.fusion import GridFilterSession, GridTracker
+from indoorloc._core.fusion import FingerprintFixOptions, GridFilterSession, GridTracker, LiveSession, LiveSessionOptions
 from indoorloc.io.ilc2020.walk_types import quaternion_from_rotation_vector
 from indoorloc.pdr import handheld as ph
 from indoorloc.pdr import streaming as ps
-from indoorloc import wifi_fixes as wfx
+from indoorloc.fusion import wifi_fixes as wfx
 from indoorloc import wifi_matcher as wm
 
 #: Per-step white noise given to the filter (the defaults of ``indoorloc fusion evaluate``,
@@ -66,22 +65,22 @@ EVENT_KINDS = ("gyroscope", "rotation_vector", "accelerometer", "wifi", "beacon"
 def _step_arrays(steps: ph.HandheldSteps, yaw_offset_rad: float, length_sd_fraction: float,
                  heading_sd_rad: float):
     """fusion.Steps of detected steps (headings rotated by the calibration's yaw offset)."""
-    from indoorloc import fusion
+    from indoorloc.fusion.steps import Steps
 
-    return fusion.Steps.from_polar(steps.t_s, steps.length_m, steps.heading_rad + yaw_offset_rad,
-                                   length_sd_fraction * steps.length_m, heading_sd_rad)
+    return Steps.from_polar(steps.t_s, steps.length_m, steps.heading_rad + yaw_offset_rad,
+                            length_sd_fraction * steps.length_m, heading_sd_rad)
 
 
 def _fixes_of_queries(times_s: np.ndarray, rss_dbm: np.ndarray, database: wfx.FingerprintDatabase,
                       with_floors: bool, shifts_m: Optional[np.ndarray] = None):
     """Fixes (fusion.Fixes) of query fingerprints (Q, K) at the given times (``fixes_for_walk``'s
     rule), every component of fix q moved by ``shifts_m[q]`` (Q, 2) [m] when given."""
-    from indoorloc import fusion
+    from indoorloc.fusion.fixes import Fixes
 
     s = database.settings
     k = min(s.k, database.n_scans)
     if times_s.size == 0:
-        return fusion.Fixes.from_arrays(np.zeros(0), np.zeros((0, k, 2)), np.zeros((0, k)), np.zeros((0, k)))
+        return Fixes.from_arrays(np.zeros(0), np.zeros((0, k, 2)), np.zeros((0, k)), np.zeros((0, k)))
     best, d_best, weights = wfx.nearest(rss_dbm, database)  # fixes_for_walk's matcher
     if database.weights is not None:  # grown fingerprints count less (as fixes_for_walk)
         weights = weights * database.weights[best]
@@ -89,7 +88,7 @@ def _fixes_of_queries(times_s: np.ndarray, rss_dbm: np.ndarray, database: wfx.Fi
     means = database.positions_m[best]
     if shifts_m is not None:
         means = means + shifts_m[:, None, :]
-    return fusion.Fixes.from_arrays(times_s, means, wfx.fix_sds(d_best[:, 0], s), weights, floors)
+    return Fixes.from_arrays(times_s, means, wfx.fix_sds(d_best[:, 0], s), weights, floors)
 
 
 def _delay_shift(step_times_s: np.ndarray, displacements_m: np.ndarray, described_s: float, k: int) -> np.ndarray:
@@ -103,12 +102,12 @@ def _delay_shift(step_times_s: np.ndarray, displacements_m: np.ndarray, describe
 
 def _check_live_settings(database: wfx.FingerprintDatabase) -> None:
     """ValueError unless the database's fixes can be reproduced live ("window" pooling, causal
-    alignment, WiFi columns only)."""
+    alignment, the "shared" metric, WiFi columns only)."""
     s = database.settings
-    if s.pooling != "window" or s.query_align != "end" or getattr(s, "beacons", False):
+    if s.pooling != "window" or s.query_align != "end" or s.metric != "shared" or getattr(s, "beacons", False):
         raise ValueError("indoorloc: argument 'database': live tracking needs settings.pooling == 'window', "
-                         f"query_align == 'end' and beacons off (got {s.pooling!r}, {s.query_align!r}, "
-                         f"beacons={getattr(s, 'beacons', False)!r})")
+                         "query_align == 'end', metric == 'shared' and beacons off (got "
+                         f"{s.pooling!r}, {s.query_align!r}, {s.metric!r}, beacons={getattr(s, 'beacons', False)!r})")
 
 
 def causal_queries(walk: Any, database: wfx.FingerprintDatabase) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -175,59 +174,34 @@ def causal_track(tracker: GridTracker, walk: Any, calibration: Optional[ph.Handh
     return tracker.run(steps.times_s, steps.displacements_m, steps.covariances_m2, arrays, start, False)
 
 
-class _QueryPooler:
-    """The "window" query of each scan, built incrementally (``causal_queries`` one scan at a time):
-    distinct (BSSID, last-seen ms) measurements at their first report, those last seen within the
-    window kept (arrays), max-pooled per database column."""
+def session_options(calibration: Optional[ph.HandheldCalibration] = None, *,
+                    step_length_sd_fraction: float = STEP_LENGTH_SD_FRACTION,
+                    step_heading_sd_rad: float = STEP_HEADING_SD_RAD, delay_compensation: bool = False):
+    """The C++ live session's options (``_core.fusion.LiveSessionOptions``) of a calibration (None:
+    ``HandheldOptions()`` defaults, yaw offset 0) and the per-step noise."""
+    options = calibration.options if calibration is not None else ph.HandheldOptions()
+    return LiveSessionOptions(detector=ps.detector_options(options), step_length_k=options.k,
+                              heading_source=options.heading_source,
+                              yaw_offset_rad=calibration.yaw_offset_rad if calibration is not None else 0.0,
+                              step_length_sd_fraction=float(step_length_sd_fraction),
+                              step_heading_sd_rad=float(step_heading_sd_rad), delay_compensation=bool(delay_compensation))
 
-    def __init__(self, database: wfx.FingerprintDatabase):
-        self.database = database
-        self.column = {b: i for i, b in enumerate(database.bssids)}
-        self.window_s = float(database.settings.query_window_s)
-        self.seen: Dict[Tuple[str, int], float] = {}         # key -> last-seen time
-        self.t = np.zeros(0)                                 # kept measurements of known APs: last seen [s]
-        self.col = np.zeros(0, np.int64)                     # ... their column
-        self.rss = np.zeros(0)                               # ... their RSSI [dBm]
 
-    def query(self, t_s: float, bssids: Sequence[str], rssi_dbm: np.ndarray, last_seen_s: np.ndarray
-              ) -> Optional[Tuple[np.ndarray, float]]:
-        """Adds a scan's readings; returns the query fingerprint (K,) of time t_s and the mean
-        last-seen time of its measurements [s] (summed in pool_windows' order), or None when it
-        has fewer than ``min_aps`` known APs."""
-        lo = t_s - self.window_s
-        ms = np.round(last_seen_s * 1000.0).astype(np.int64).tolist()   # the key of new_measurement_mask
-        new = []
-        for j, (b, key_ms) in enumerate(zip(bssids, ms)):
-            key = (b, key_ms)
-            if key in self.seen:
-                continue
-            self.seen[key] = last_seen_s[j]
-            col = self.column.get(b, -1)
-            if col >= 0:
-                new.append((j, col))
-        if new:
-            j, c = np.array(new, dtype=np.int64).T
-            self.t = np.concatenate([self.t, last_seen_s[j]])
-            self.col = np.concatenate([self.col, c])
-            self.rss = np.concatenate([self.rss, rssi_dbm[j]])
-        # Forget what no later window can hold (windows only move forward).
-        keep = self.t >= lo
-        if not keep.all():
-            self.t, self.col, self.rss = self.t[keep], self.col[keep], self.rss[keep]
-        if len(self.seen) > 4096:
-            self.seen = {k: v for k, v in self.seen.items() if v >= lo}
-        q = np.full(len(self.column), np.nan)
-        now = self.t <= t_s
-        np.fmax.at(q, self.col[now], self.rss[now])   # max-pool (NaN: not heard)
-        if np.count_nonzero(~np.isnan(q)) < self.database.settings.min_aps:
-            return None
-        t_used = np.sort(self.t[now], kind="stable")
-        total = np.bincount(np.zeros(t_used.size, np.int64), weights=t_used, minlength=1)[0]
-        return q, total / max(t_used.size, 1)
+def fingerprint_map(database: wfx.FingerprintDatabase) -> Tuple:
+    """A fingerprint database as the C++ live session's map tuple ``(bssids, rss_dbm, positions_m,
+    floors, weights, ap_weights)`` (the AP weights of its "shared" matcher) and the fix options
+    (``_core.fusion.FingerprintFixOptions``)."""
+    s = database.settings
+    index = database.index
+    m = index.matcher(s.penalty_db, s.k, s.temperature_db)
+    fix = FingerprintFixOptions(matcher=m.options, query_window_s=float(s.query_window_s), min_aps=int(s.min_aps),
+                                sd_m=float(s.sd_m), sd_per_db=float(s.sd_per_db))
+    return (list(database.bssids), database.rss_dbm, database.positions_m, database.floors, database.weights, index.g), fix
 
 
 class LiveTracker:
-    """Raw sensor events in, the grid filter's current estimate out (module docstring).
+    """Raw sensor events in, the grid filter's current estimate out (module docstring): the C++
+    live session (``_core.fusion.LiveSession``, ``cpp/include/indoorloc/fusion/live_session.h``).
 
     Parameters
     ----------
@@ -253,86 +227,45 @@ class LiveTracker:
                  delay_compensation: bool = False):
         if not isinstance(tracker, GridTracker):
             raise TypeError(f"indoorloc: argument 'tracker': expected a fusion.GridTracker, got {type(tracker).__name__}")
-        self._session = GridFilterSession(tracker, start)
-        options = calibration.options if calibration is not None else ph.HandheldOptions()
-        self._yaw = calibration.yaw_offset_rad if calibration is not None else 0.0
-        self._detector = ps.StreamingStepDetector(options)
-        self._length_sd_fraction = float(step_length_sd_fraction)
-        self._heading_sd = float(step_heading_sd_rad)
-        self._with_floors = with_floors
-        self._pooler = None
+        options = session_options(calibration, step_length_sd_fraction=step_length_sd_fraction,
+                                  step_heading_sd_rad=step_heading_sd_rad, delay_compensation=delay_compensation)
+        arrays, fix = None, None
         if database is not None:
             _check_live_settings(database)
-            self._pooler = _QueryPooler(database)
-            database.index  # noqa: B018: build the matcher's index now, not at the first scan
-        self._database = database
-        self._floors = np.asarray(self._session.floors, dtype=np.int64)
-        self._delay = bool(delay_compensation)
-        self._step_t: List[float] = []          # recent steps: times [s] and displacements (2,) [m]
-        self._step_d: List[np.ndarray] = []
-        self._gyro: Optional[np.ndarray] = None
-        self._quat: Optional[np.ndarray] = None
-        self._fixes: deque = deque()   # (time, fix arrays) waiting for a step at or after them
-        self._events = 0
-        self._last = (-math.inf, None)  # (time, kind) of the latest event
+            arrays, fix = fingerprint_map(database)
+            fix = fix.replace(with_floors=bool(with_floors))
+        self._live = LiveSession(tracker, options, arrays, fix, start)
         self._estimate: Optional[dict] = None
+
+    def _keep(self, estimate: Optional[dict]) -> Optional[dict]:
+        self._estimate = estimate
+        return estimate
 
     # ------------------------------------------------------------------ events
     def add_accelerometer(self, t_s: float, acc_mps2: Sequence[float]) -> Optional[dict]:
         """Accelerometer sample: specific force (3,) [m/s²], device frame."""
-        acc = _vector(acc_mps2, "acc_mps2", 3)
-        t = self._check("accelerometer", t_s)
-        if self._gyro is not None and self._quat is not None:
-            for step in self._detector.add_sample(t, acc, self._gyro, self._quat):
-                self._add_step(step)
-        return self._estimate
+        return self._keep(self._live.add_accelerometer(t_s, _vector(acc_mps2, "acc_mps2", 3)))
 
     def add_gyroscope(self, t_s: float, gyro_radps: Sequence[float]) -> Optional[dict]:
         """Gyroscope sample: angular rate (3,) [rad/s], device frame."""
-        gyro = _vector(gyro_radps, "gyro_radps", 3)
-        self._check("gyroscope", t_s)
-        self._gyro = gyro
-        return self._estimate
+        return self._keep(self._live.add_gyroscope(t_s, _vector(gyro_radps, "gyro_radps", 3)))
 
     def add_rotation_vector(self, t_s: float, values: Sequence[float]) -> Optional[dict]:
         """Android rotation vector (x, y, z[, w]) of the device -> east-north-up rotation."""
-        v = np.asarray(values, dtype=np.float64).reshape(1, -1)
-        if v.shape[1] not in (3, 4, 5) or not np.all(np.isfinite(v[:, :3])):
-            raise ValueError(f"indoorloc: argument 'values': expected 3 or 4 finite rotation-vector values, got {v.ravel()}")
-        self._check("rotation_vector", t_s)
-        self._quat = quaternion_from_rotation_vector(v[:, :4])[0]
-        return self._estimate
+        v = np.asarray(values, dtype=np.float64).reshape(-1)
+        if v.size not in (3, 4, 5) or not np.all(np.isfinite(v[:3])):
+            raise ValueError(f"indoorloc: argument 'values': expected 3 or 4 finite rotation-vector values, got {v}")
+        return self._keep(self._live.add_rotation_vector(t_s, v))
 
     def add_wifi_scan(self, t_s: float, bssids: Sequence[str], rssi_dbm: Sequence[float],
                       last_seen_s: Sequence[float]) -> Optional[dict]:
         """One WiFi scan reported at t_s: per reading its BSSID, RSSI [dBm] and last-seen time [s]
         (on the events' clock). The scan's fix waits for the first step at or after t_s."""
-        rssi = np.asarray(rssi_dbm, dtype=np.float64).reshape(-1)
-        seen = np.asarray(last_seen_s, dtype=np.float64).reshape(-1)
-        if not (len(bssids) == rssi.size == seen.size):
-            raise ValueError(f"indoorloc: LiveTracker.add_wifi_scan: bssids, rssi_dbm and last_seen_s must have one "
-                             f"entry per reading, got {len(bssids)}, {rssi.size}, {seen.size}")
-        if not (np.all(np.isfinite(rssi)) and np.all(np.isfinite(seen))):
-            raise ValueError("indoorloc: LiveTracker.add_wifi_scan: rssi_dbm and last_seen_s must be finite")
-        t = self._check("wifi", t_s)
-        if self._pooler is None:
-            return self._estimate
-        got = self._pooler.query(t, list(bssids), rssi, seen)
-        if self._fixes and self._fixes[-1][0] == t:  # a second scan at the same time: its pooled query replaces
-            self._fixes.pop()
-        if got is not None:
-            q, described = got
-            # The fix is matched now; with delay compensation at the step that applies it (its
-            # shift needs the steps up to there).
-            fix = None if self._delay else _fixes_of_queries(np.array([t]), q[None, :], self._database,
-                                                              self._with_floors).as_arrays()
-            self._fixes.append((t, described, q, fix))
-        return self._estimate
+        return self._keep(self._live.add_wifi_scan(t_s, list(bssids), rssi_dbm, last_seen_s))
 
     def add_beacon(self, t_s: float, *values: Any) -> Optional[dict]:
         """An iBeacon reading: accepted (time order checked) and ignored."""
-        self._check("beacon", t_s)
-        return self._estimate
+        return self._keep(self._live.add_beacon(t_s))
 
     def add_event(self, kind: str, t_s: float, *values: Any) -> Optional[dict]:
         """Dispatch by kind (``EVENT_KINDS``): ``("accelerometer", t, xyz)``, ``("gyroscope", t, xyz)``,
@@ -342,7 +275,7 @@ class LiveTracker:
                   "rotation_vector": self.add_rotation_vector, "wifi": self.add_wifi_scan,
                   "beacon": self.add_beacon}.get(kind)
         if method is None:
-            raise ValueError(f"indoorloc: LiveTracker.add_event: event {self._events} has unknown kind {kind!r} "
+            raise ValueError(f"indoorloc: LiveTracker.add_event: event {self.events} has unknown kind {kind!r} "
                              f"(expected one of {EVENT_KINDS})")
         return method(t_s, *values)
 
@@ -353,53 +286,17 @@ class LiveTracker:
     @property
     def events(self) -> int:
         """Events accepted so far."""
-        return self._events
+        return self._live.events
 
     @property
     def session(self) -> GridFilterSession:
         """The C++ filter session (steps, pending fixes, summary)."""
-        return self._session
+        return self._live.filter
 
-    # ------------------------------------------------------------------ internals
-    def _check(self, kind: str, t_s: Any) -> float:
-        try:
-            t = float(t_s)
-        except (TypeError, ValueError):
-            raise ValueError(f"indoorloc: LiveTracker: event {self._events} ({kind}): time must be a number, "
-                             f"got {t_s!r}") from None
-        if not math.isfinite(t):
-            raise ValueError(f"indoorloc: LiveTracker: event {self._events} ({kind}): time must be finite, got {t}")
-        if t < self._last[0]:
-            raise ValueError(f"indoorloc: LiveTracker: event {self._events} ({kind} at t = {t} s) is out of time "
-                             f"order: before event {self._events - 1} ({self._last[1]} at t = {self._last[0]} s)")
-        self._events += 1
-        self._last = (t, kind)
-        return t
-
-    def _add_step(self, step: Tuple) -> None:
-        t = step[0]
-        one = ps._assemble([step], self._detector.options, step[6])
-        st = _step_arrays(one, self._yaw, self._length_sd_fraction, self._heading_sd)
-        self._step_t.append(float(st.times_s[0]))
-        self._step_d.append(st.displacements_m[0])
-        if self._fixes and self._fixes[0][0] <= t:
-            times, disp = np.array(self._step_t), np.array(self._step_d)
-            while self._fixes and self._fixes[0][0] <= t:
-                c, described, q, fix = self._fixes.popleft()
-                if fix is None:
-                    shift = _delay_shift(times, disp, described, times.size - 1)[None, :]
-                    fix = _fixes_of_queries(np.array([c]), q[None, :], self._database, self._with_floors,
-                                            shift).as_arrays()
-                self._session.add_fixes(fix)
-        # Keep the steps a later fix can still reach back to (a scan describes at most its window).
-        cutoff = min([self._last[0] - self._pooler.window_s] + [f[1] for f in self._fixes]) if self._pooler else t
-        while len(self._step_t) > 1 and self._step_t[0] < cutoff - 1.0:
-            self._step_t.pop(0)
-            self._step_d.pop(0)
-        e = self._session.add_step(st.times_s[0], st.displacements_m[0], st.covariances_m2[0])
-        e["floors"] = self._floors
-        e["floor"] = int(self._floors[int(np.argmax(e["floor_probabilities"]))])
-        self._estimate = e
+    @property
+    def live_session(self) -> LiveSession:
+        """The C++ live session (summary: events, IMU samples, steps, scans, fixes)."""
+        return self._live
 
 
 def _vector(values: Any, name: str, n: int) -> np.ndarray:
@@ -436,4 +333,5 @@ def walk_events(walk: Any, beacons: bool = False) -> Iterator[Tuple]:
 
 
 __all__ = ["EVENT_KINDS", "LiveTracker", "STEP_HEADING_SD_RAD", "STEP_LENGTH_SD_FRACTION", "causal_inputs",
-           "causal_queries", "causal_track", "quaternion_from_rotation_vector", "walk_events"]
+           "causal_queries", "causal_track", "fingerprint_map", "quaternion_from_rotation_vector", "session_options",
+           "walk_events"]

@@ -32,8 +32,9 @@ import numpy as np
 
 from indoorloc import _core
 from indoorloc.pdr import handheld as ph
-from indoorloc import wifi_fixes as wfx
-from indoorloc.fusion import FloorPlan, FloorPlanOptions, site_model
+from indoorloc.fusion import wifi_fixes
+from indoorloc._core.fusion import FloorPlan, FloorPlanOptions
+from indoorloc.fusion import site_model
 from indoorloc.fusion import site_store as store
 from indoorloc.fusion import site_tables as tables
 from indoorloc.fusion.grid import GridTracker
@@ -53,7 +54,7 @@ class FloorModels:
     origin_lon_lat: tuple
     plan: FloorPlan
     calibration: ph.HandheldCalibration
-    database: wfx.FingerprintDatabase
+    database: wifi_fixes.FingerprintDatabase
     tracker: GridTracker
 
 
@@ -187,6 +188,7 @@ class Site:
                     if progress:
                         progress(wp.stem)
                 tables.recalibrate(con, fl.name)
+                tables.store_fingerprint_columns(con, fl.name, settings.fixes)
             con.execute("INSERT INTO meta VALUES ('skipped_walks', ?)", (json.dumps(skipped),))
             con.execute("COMMIT")
             con.close()
@@ -217,6 +219,7 @@ class Site:
                     progress(walk.walk_id)
             for name in sorted(touched):
                 tables.recalibrate(con, name)
+                tables.store_fingerprint_columns(con, name, self.settings.fixes)
         return added
 
     @contextlib.contextmanager
@@ -258,7 +261,7 @@ class Site:
         for w in walks:
             walk = _read_walk(w)
             tr = self.track(walk, floor=floor)
-            placed.append((walk, tr, wfx.walk_fingerprints(walk, self.settings.fixes,
+            placed.append((walk, tr, wifi_fixes.walk_fingerprints(walk, self.settings.fixes,
                                                            positions_at=_confident_positions(tr, max_sd_m),
                                                            span_s=(tr.times_s[0], tr.times_s[-1]))))
             if progress:
@@ -274,6 +277,8 @@ class Site:
                              float(walk.duration_s)))
                 seq += 1
                 out[walk.walk_id] = tables.insert_fingerprints(con, tr.floor, walk.walk_id, got, weight)
+            for name in sorted({tr.floor for _, tr, _ in placed}):
+                tables.store_fingerprint_columns(con, name, self.settings.fixes)
         return out
 
     # ---- reading ------------------------------------------------------------------------
@@ -310,7 +315,7 @@ class Site:
         return self._models[name]
 
     def _all_floors(self) -> tuple:
-        """(all-floor identification tracker, floor numbers, database, offset sd) for --floor auto."""
+        """(all-floor identification tracker, floor numbers, database, its per-floor AP rates) for --floor auto."""
         if self._all is None:
             models = [self.floor_models(n) for n in self.floors]
             plan = FloorPlan([m.plan.geometry(0) for m in models], FloorPlanOptions())
@@ -322,7 +327,8 @@ class Site:
                 database = tables.database(con, self.floors, self.settings.fixes)
             finally:
                 con.close()
-            self._all = (tracker, [m.number for m in models], database)
+            numbers = [m.number for m in models]
+            self._all = (tracker, numbers, database, site_model.ap_floor_rates(database, numbers, self.settings))
         return self._all
 
     def track(self, walk: WalkLike, floor: Optional[str] = None, smooth: bool = True) -> WalkTrack:
@@ -342,11 +348,14 @@ class Site:
         steps_raw = ph.handheld_steps(walk)
         probabilities = {}
         if floor == "auto":
-            tracker_all, numbers, database = self._all_floors()
+            tracker_all, numbers, database, rates = self._all_floors()
             # Steps rotated with the first floor's calibration for identification; then the floor's own.
+            # The same code as ``fusion evaluate``'s floor identification (site_model.identify_floor).
             first = self.floor_models(self.floors[0])
+            weight = self.settings.identification_ap_weight
+            ap = site_model.walk_ap_log_likelihood(walk, database, rates, self.settings) if weight > 0 else None
             ident = site_model.identify_floor(tracker_all, numbers, site_model.tracker_steps(
-                steps_raw, first.calibration, self.settings), wfx.fixes_for_walk(walk, database))
+                steps_raw, first.calibration, self.settings), wifi_fixes.fixes_for_walk(walk, database), ap, weight)
             by_number = {n: name for name, (n, _) in self._floors.items()}
             floor = by_number[ident["floor"]]
             probabilities = {by_number[n]: p for n, p in ident["probabilities"].items()}
@@ -354,7 +363,7 @@ class Site:
         steps = site_model.tracker_steps(steps_raw, m.calibration, self.settings)
         if len(steps) == 0:
             raise ValueError(f"indoorloc: walk {src}: no step detected, nothing to track")
-        fixes = wfx.fixes_for_walk(walk, m.database)
+        fixes = wifi_fixes.fixes_for_walk(walk, m.database)
         r = site_model.run_default(m.tracker, steps, fixes, smooth=smooth)
         median = self.settings.point_estimate == "median"
         key = ("smoothed_median_m" if median else "smoothed_m") if smooth else ("median_m" if median else "mean_m")
@@ -369,7 +378,7 @@ class Site:
         return WalkTrack(walk.walk_id, src, floor, m.number, probabilities.get(floor, 1.0), probabilities or {floor: 1.0},
                          bool(smooth), int(walk.t0_unix_ms), np.asarray(steps.times_s, float),
                          np.asarray(r[key], float), cov, m.origin_lon_lat, wt, wxy, errors, header_floor, posterior,
-                         np.asarray(fixes.times_s, float), wfx.fix_centres(fixes) if len(fixes) else np.zeros((0, 2)))
+                         np.asarray(fixes.times_s, float), wifi_fixes.fix_centres(fixes) if len(fixes) else np.zeros((0, 2)))
 
     def live(self, floor: str, start: Optional[dict] = None):
         """A live tracker on one floor of the site (:class:`indoorloc.fusion.live.LiveTracker`):
@@ -428,7 +437,7 @@ class Site:
                 tracker = GridTracker(m.plan, site_model.floor_grid_options(self.settings, cal))
                 steps = site_model.tracker_steps(ph.handheld_steps(walk), cal, self.settings)
                 if len(steps):
-                    r = site_model.run_default(tracker, steps, wfx.fixes_for_walk(walk, database))
+                    r = site_model.run_default(tracker, steps, wifi_fixes.fixes_for_walk(walk, database))
                     key = "smoothed_median_m" if self.settings.point_estimate == "median" else "smoothed_m"
                     e = site_model.walk_errors_m(steps.times_s, r[key], walk.waypoint_t_s, walk.waypoint_xy_m)
                     points.append(np.c_[np.asarray(walk.waypoint_xy_m, float).reshape(-1, 2), e])

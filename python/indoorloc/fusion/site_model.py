@@ -4,7 +4,7 @@ A floor's model is built from survey walks with waypoints (docs/your_building.md
 
 - the handheld-PDR calibration (Weinberg K, the yaw offset between the phone's rotation-vector
   heading and the floor frame, its spread over walks: :func:`indoorloc.pdr.handheld.calibrate_handheld`);
-- the WiFi fingerprint database (:func:`indoorloc.wifi_fixes.build_database`);
+- the WiFi fingerprint database (:func:`indoorloc.fusion.wifi_fixes.build_database`);
 - the walkable plan (:func:`indoorloc.io.load_floor_plan`, origin at the outline's south-west corner).
 
 A walk is then tracked by the default tracker of docs/fusion_real.md: the grid tracker from an
@@ -23,8 +23,8 @@ from typing import Any, Dict, List, Optional, Sequence
 import numpy as np
 
 from indoorloc.pdr import handheld as ph
-from indoorloc import wifi_fixes as wfx
-from indoorloc.fusion import Steps
+from indoorloc.fusion import wifi_fixes, floor_evidence
+from indoorloc.fusion.steps import Steps
 from indoorloc.fusion.grid import GridTracker, GridTrackerOptions, track_grid
 
 
@@ -39,7 +39,7 @@ class TrackSettings:
     step_length_sd_fraction: float = 0.15
     step_heading_sd_rad: float = math.radians(10.0)
     #: The fingerprint fixes (``wifi_fixes.FixSettings``; leave-one-floor-out defaults).
-    fixes: wfx.FixSettings = field(default_factory=wfx.FixSettings)
+    fixes: wifi_fixes.FixSettings = field(default_factory=wifi_fixes.FixSettings)
     #: The grid tracker's options (``fusion.GridTrackerOptions``, defaults read from C++).
     grid_options: Any = field(default_factory=GridTrackerOptions)
     #: "mean" or "median" (spatial median) of the posterior as the point estimate.
@@ -47,6 +47,16 @@ class TrackSettings:
     #: Floor identification (``--floor auto``): cells [m] and offset bins of the all-floor filter.
     identification_cell_m: float = 2.0
     identification_offset_bins: int = 3
+    #: The AP evidence added to the filter's (``fusion.floor_evidence``): weight λ (0: the filter
+    #: alone), m strongest APs per query, rate floor α, outlier probability ε. The point chosen on
+    #: all six floors of the competition site by ``experiments.floor_identification_study`` (m over
+    #: 1-50, α 0.001-0.1, ε 0.05-0.6, λ 0.5-30; a plateau of ties: α 0.01-0.1 give the same
+    #: accuracy); held out by floor it chose this point for four of six (docs/fusion_real.md,
+    #: "Floor identification").
+    identification_ap_weight: float = 2.0
+    identification_ap_count: int = 20
+    identification_ap_rate_floor: float = 0.1
+    identification_ap_outlier_probability: float = 0.1
 
     def validate(self) -> None:
         """Raises ValueError naming the first invalid field."""
@@ -54,6 +64,18 @@ class TrackSettings:
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ValueError(f"indoorloc: TrackSettings.{name} must be finite and > 0, got {v!r}")
+        if not (math.isfinite(self.identification_ap_weight) and self.identification_ap_weight >= 0):
+            raise ValueError(f"indoorloc: TrackSettings.identification_ap_weight must be finite and >= 0, "
+                             f"got {self.identification_ap_weight!r}")
+        if not (isinstance(self.identification_ap_count, int) and self.identification_ap_count >= 1):
+            raise ValueError(f"indoorloc: TrackSettings.identification_ap_count must be an integer >= 1, "
+                             f"got {self.identification_ap_count!r}")
+        if not 0 < self.identification_ap_rate_floor <= 1:
+            raise ValueError(f"indoorloc: TrackSettings.identification_ap_rate_floor must be in (0, 1], "
+                             f"got {self.identification_ap_rate_floor!r}")
+        if not 0 <= self.identification_ap_outlier_probability <= 1:
+            raise ValueError(f"indoorloc: TrackSettings.identification_ap_outlier_probability must be in [0, 1], "
+                             f"got {self.identification_ap_outlier_probability!r}")
         if self.point_estimate not in ("mean", "median"):
             raise ValueError(f"indoorloc: TrackSettings.point_estimate must be 'mean' or 'median', "
                              f"got {self.point_estimate!r}")
@@ -63,7 +85,9 @@ class TrackSettings:
         """JSON-ready (an infinite wall penalty becomes None)."""
         d: Dict[str, Any] = {k: getattr(self, k) for k in ("step_length_sd_fraction", "step_heading_sd_rad",
                                                           "point_estimate", "identification_cell_m",
-                                                          "identification_offset_bins")}
+                                                          "identification_offset_bins", "identification_ap_weight",
+                                                          "identification_ap_count", "identification_ap_rate_floor",
+                                                          "identification_ap_outlier_probability")}
         d["fixes"] = asdict(self.fixes)
         d["grid_options"] = {k: (None if isinstance(v, float) and math.isinf(v) else v)
                              for k, v in self.grid_options.to_dict().items()}
@@ -73,7 +97,7 @@ class TrackSettings:
     def from_dict(cls, d: Dict[str, Any]) -> "TrackSettings":
         """Inverse of :meth:`to_dict`; unknown keys raise ValueError naming them."""
         d = dict(d)
-        fixes = wfx.FixSettings(**d.pop("fixes", {}))
+        fixes = wifi_fixes.FixSettings(**d.pop("fixes", {}))
         g = {k: (-math.inf if k == "wall_log_penalty" and v is None else v) for k, v in d.pop("grid_options", {}).items()}
         known = {f for f in cls.__dataclass_fields__}
         unknown = sorted(set(d) - known)
@@ -89,10 +113,10 @@ def calibrate_floor(walks: Sequence[Any], steps: Sequence[ph.HandheldSteps]) -> 
 
 
 def build_fingerprints(walks: Sequence[Any], steps: Sequence[ph.HandheldSteps], floor_number: int,
-                       settings: wfx.FixSettings) -> wfx.FingerprintDatabase:
+                       settings: wifi_fixes.FixSettings) -> wifi_fixes.FingerprintDatabase:
     """The floor's fingerprint database from its survey walks, each fingerprint placed by PDR
     between the waypoints (``wifi_fixes.build_database``)."""
-    return wfx.build_database(walks, settings, steps, floors=[floor_number] * len(walks))
+    return wifi_fixes.build_database(walks, settings, steps, floors=[floor_number] * len(walks))
 
 
 def tracker_steps(steps_raw: ph.HandheldSteps, cal: ph.HandheldCalibration, settings: TrackSettings) -> Steps:
@@ -134,13 +158,43 @@ def run_default(tracker: GridTracker, steps: Steps, fixes, smooth: bool = True) 
     return dict(track_grid(tracker, steps, fixes=fixes, start=None, smooth=smooth))
 
 
-def identify_floor(tracker_all: GridTracker, floors: Sequence[int], steps: Steps, fixes) -> Dict[str, Any]:
-    """The floor of a walk (a walk stays on one floor): the all-floor filter's floor with the most
-    evidence over the walk. Returns ``{"floor": int, "probabilities": {floor: p}, "result": dict}``."""
+def ap_floor_rates(database: wifi_fixes.FingerprintDatabase, floors: Sequence[int], settings: TrackSettings
+                   ) -> floor_evidence.ApFloorRates:
+    """The per-floor AP detection rates of an all-floor fingerprint database (rows in the order of
+    ``floors``, the identification tracker's), for :func:`identify_floor`."""
+    return floor_evidence.ApFloorRates.from_references(database.rss_dbm, database.floors, floors,
+                                                       settings.identification_ap_rate_floor)
+
+
+def walk_ap_log_likelihood(walk: Any, database: wifi_fixes.FingerprintDatabase, rates: floor_evidence.ApFloorRates,
+                           settings: TrackSettings) -> np.ndarray:
+    """The walk's AP evidence per floor (F,) [nats] (``floor_evidence.walk_floor_log_likelihood``
+    on the walk's query fingerprints in the database's columns)."""
+    _, queries = wifi_fixes.walk_queries(walk, database)
+    return floor_evidence.walk_floor_log_likelihood(rates, queries, settings.identification_ap_count,
+                                                    settings.identification_ap_outlier_probability)
+
+
+def identify_floor(tracker_all: GridTracker, floors: Sequence[int], steps: Steps, fixes,
+                   ap_log_likelihood: Optional[np.ndarray] = None, ap_weight: float = 0.0) -> Dict[str, Any]:
+    """The floor of a walk (a walk stays on one floor): the floor with the most evidence, the
+    all-floor filter's log-evidence per floor plus ``ap_weight`` x the walk's AP evidence
+    ``ap_log_likelihood`` (F,) (:func:`walk_ap_log_likelihood`; None: the filter alone).
+    Returns ``{"floor": int, "probabilities": {floor: p}, "grid_probabilities": {floor: p},
+    "result": dict}`` (``probabilities``: the normalised combined evidence)."""
     r = dict(track_grid(tracker_all, steps, fixes=fixes, smooth=False))
-    p = np.asarray(r["smoothed_floor_probabilities"], float)
-    best = int(np.argmax(p))
-    return {"floor": int(floors[best]), "probabilities": {int(f): float(v) for f, v in zip(floors, p)}, "result": r}
+    p_grid = np.asarray(r["smoothed_floor_probabilities"], float)
+    score = np.log(np.maximum(p_grid, 1e-300))
+    if ap_log_likelihood is not None and ap_weight > 0:
+        ap = np.asarray(ap_log_likelihood, float)
+        if ap.shape != score.shape:
+            raise ValueError(f"indoorloc: argument 'ap_log_likelihood': expected shape {score.shape}, got {ap.shape}")
+        score = score + ap_weight * ap
+    best = int(np.argmax(score))
+    p = np.exp(score - score.max())
+    p /= p.sum()
+    return {"floor": int(floors[best]), "probabilities": {int(f): float(v) for f, v in zip(floors, p)},
+            "grid_probabilities": {int(f): float(v) for f, v in zip(floors, p_grid)}, "result": r}
 
 
 def walk_errors_m(track_t_s: np.ndarray, track_m: np.ndarray, waypoint_t_s: np.ndarray,
@@ -155,5 +209,6 @@ def walk_errors_m(track_t_s: np.ndarray, track_m: np.ndarray, waypoint_t_s: np.n
     return np.hypot(*(est - np.asarray(waypoint_xy_m, float)).T)
 
 
-__all__ = ["TrackSettings", "build_fingerprints", "calibrate_floor", "floor_grid_options", "identification_grid_options",
-           "identify_floor", "offset_spread_rad", "run_default", "tracker_steps", "walk_errors_m"]
+__all__ = ["TrackSettings", "ap_floor_rates", "build_fingerprints", "calibrate_floor", "floor_grid_options",
+           "identification_grid_options", "identify_floor", "offset_spread_rad", "run_default", "tracker_steps",
+           "walk_ap_log_likelihood", "walk_errors_m"]

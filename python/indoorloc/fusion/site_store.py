@@ -55,9 +55,18 @@ CREATE TABLE pdr_calibration (
   yaw_offset_spread_rad REAL NOT NULL, length_sd_fraction REAL NOT NULL, heading_sd_rad REAL NOT NULL,
   k_rms_residual_m REAL NOT NULL, n_intervals INTEGER NOT NULL, options TEXT NOT NULL);
 CREATE TABLE tracker_settings (name TEXT PRIMARY KEY, settings TEXT NOT NULL);
+CREATE TABLE fingerprint_columns (   -- per floor the fingerprint map's columns as the Python side builds them
+  floor TEXT NOT NULL REFERENCES floors(name), col INTEGER NOT NULL, bssid TEXT NOT NULL,
+  ap_ratio REAL NOT NULL,             -- the AP's reliability (wifi_matcher.ap_reliability, power 1)
+  PRIMARY KEY (floor, col));         -- derived from the fingerprints: rewritten whenever a floor's change
 CREATE TABLE grid_options (           -- fusion::GridTrackerOptions by field name (booleans 0/1, fix.* as fix_*)
   name TEXT PRIMARY KEY, value REAL NOT NULL);  -- per floor heading_offset_sd_rad = max(yaw_offset_spread_rad, 1e-3)
 """
+
+#: The derived table added after format version 1 was released (files without it are still read;
+#: the C++ reader needs it for live tracking; the next write of a floor adds it).
+FINGERPRINT_COLUMNS_SCHEMA = SCHEMA[SCHEMA.index("CREATE TABLE fingerprint_columns"):].split(";")[0].replace(
+    "CREATE TABLE", "CREATE TABLE IF NOT EXISTS", 1)
 
 INTERVAL_FIELDS = ("distance_m", "direction_rad", "n_steps", "feature_sum", "path_m", "length_sq_sum",
                    "disp_rv_m", "disp_gyro_m", "disp_comp_m")
@@ -131,5 +140,5 @@ def meta(con: sqlite3.Connection) -> dict:
     return dict(con.execute("SELECT key, value FROM meta").fetchall())
 
 
-__all__ = ["APPLICATION_ID", "FORMAT_VERSION", "INTERVAL_FIELDS", "SCHEMA", "SiteFileError", "connect", "create",
+__all__ = ["APPLICATION_ID", "FINGERPRINT_COLUMNS_SCHEMA", "FORMAT_VERSION", "INTERVAL_FIELDS", "SCHEMA", "SiteFileError", "connect", "create",
            "f8", "from_f8", "meta"]

@@ -15,9 +15,10 @@ from typing import Any, Optional, Sequence
 import numpy as np
 
 from indoorloc.pdr import handheld as ph
-from indoorloc import wifi_crowdsource as wc
-from indoorloc import wifi_fixes as wfx
-from indoorloc.fusion import FloorPlan, site_model
+from indoorloc.fusion import crowdsourced_map
+from indoorloc.fusion import wifi_fixes
+from indoorloc._core.fusion import FloorPlan
+from indoorloc.fusion import site_model
 from indoorloc.fusion import site_store as store
 from indoorloc.io.floor_plan import load_floor_plan, read_geojson_floor
 from indoorloc.io.survey_layout import floor_info_size_m
@@ -68,10 +69,10 @@ def insert_survey_walk(con: sqlite3.Connection, walk: Any, floor: str, seq: int,
     iv = ph.waypoint_intervals(steps, wt, wxy)
     con.execute(f"INSERT INTO calibration_intervals VALUES (?, ?, {', '.join('?' * len(store.INTERVAL_FIELDS))})",
                 (walk.walk_id, floor, *[store.f8(getattr(iv, f)) for f in store.INTERVAL_FIELDS]))
-    insert_fingerprints(con, floor, walk.walk_id, wfx.walk_fingerprints(walk, settings.fixes, steps), 1.0)
+    insert_fingerprints(con, floor, walk.walk_id, wifi_fixes.walk_fingerprints(walk, settings.fixes, steps), 1.0)
     b = walk.beacons
     if b.n_readings:
-        pos = wc.walk_positions(walk, b.t_s, None, steps)
+        pos = crowdsourced_map.walk_positions(walk, b.t_s, None, steps)
         keep = np.flatnonzero(pos.valid & np.isfinite(b.rssi_dbm))
         con.executemany("INSERT INTO beacons VALUES (?, ?, ?, ?, ?, ?, ?)",
                         [(floor, walk.walk_id, float(b.t_s[i]), float(pos.xy_m[i, 0]), float(pos.xy_m[i, 1]),
@@ -116,6 +117,20 @@ def recalibrate(con: sqlite3.Connection, floor: str) -> None:
                  cal.heading_sd_rad, cal.k_rms_residual_m, cal.n_intervals, json.dumps(asdict(cal.options))))
 
 
+def store_fingerprint_columns(con: sqlite3.Connection, floor: str, settings: wfx.FixSettings) -> None:
+    """Store the floor's fingerprint-map columns and AP reliabilities as :func:`database` derives
+    them (the C++ reader, ``SiteFile::Fingerprints``, reads them instead of recomputing the
+    reliabilities: one implementation). Call after every change of the floor's fingerprints."""
+    con.execute(store.FINGERPRINT_COLUMNS_SCHEMA)
+    con.execute("DELETE FROM fingerprint_columns WHERE floor = ?", (floor,))
+    if not con.execute("SELECT 1 FROM fingerprints WHERE floor = ? LIMIT 1", (floor,)).fetchone():
+        return
+    db = database(con, [floor], settings)
+    ratio = db.ap_ratio if db.ap_ratio is not None else np.ones(len(db.bssids))
+    con.executemany("INSERT INTO fingerprint_columns VALUES (?, ?, ?, ?)",
+                    [(floor, j, b, float(r)) for j, (b, r) in enumerate(zip(db.bssids, ratio))])
+
+
 # ---- reading ---------------------------------------------------------------------------------
 def plan(con: sqlite3.Connection, name: str, number: int, origin: tuple) -> FloorPlan:
     """The floor's walkable plan from its stored GeoJSON, in the floor frame of ``origin`` (lon, lat) [deg]."""
@@ -133,8 +148,8 @@ def calibration(con: sqlite3.Connection, name: str) -> ph.HandheldCalibration:
     return ph.HandheldCalibration(ph.HandheldOptions(**json.loads(options)), k, rms, n, yaw, spread, f, s)
 
 
-def database(con: sqlite3.Connection, floors: Sequence[str], settings: wfx.FixSettings,
-              exclude_walk: Optional[str] = None) -> wfx.FingerprintDatabase:
+def database(con: sqlite3.Connection, floors: Sequence[str], settings: wifi_fixes.FixSettings,
+              exclude_walk: Optional[str] = None) -> wifi_fixes.FingerprintDatabase:
     """The fingerprint database of the floors, as ``wifi_fixes.build_database`` of their walks
     (all but ``exclude_walk``)."""
     bssid = dict(con.execute("SELECT id, bssid FROM access_points").fetchall())
@@ -166,8 +181,9 @@ def database(con: sqlite3.Connection, floors: Sequence[str], settings: wfx.FixSe
             current, rows = r[0], []
         rows.append(tuple(r))
     flush()
-    return wfx.assemble_database(per_walk, settings, weights)
+    return wifi_fixes.assemble_database(per_walk, settings, weights)
 
 
 
-__all__ = ["calibrate", "calibration", "database", "insert_fingerprints", "insert_floor", "insert_survey_walk", "now", "plan", "recalibrate"]
+__all__ = ["calibrate", "calibration", "database", "insert_fingerprints", "insert_floor", "insert_survey_walk", "now", "plan", "recalibrate",
+           "store_fingerprint_columns"]

@@ -102,11 +102,17 @@ def _origin(origin_lon_lat: Any) -> Tuple[float, float]:
     return lon, lat
 
 
+def _points2(value: Any, name: str, max_abs: float) -> np.ndarray:
+    """A finite float array of shape (..., 2) with entries within +-max_abs."""
+    a = real_array(value, name, max_abs=max_abs)
+    if a.ndim == 0 or a.shape[-1] != 2:
+        raise ValueError(f"indoorloc: argument '{name}': expected shape (..., 2), got {a.shape}")
+    return a
+
+
 def lonlat_to_local(lon_lat_deg: Any, origin_lon_lat: Tuple[float, float]) -> np.ndarray:
     """(N, 2) longitude/latitude [deg] -> (N, 2) east/north [m] of the origin (local frame)."""
-    ll = real_array(lon_lat_deg, "lon_lat_deg", max_abs=1e3)
-    if ll.ndim == 0 or ll.shape[-1] != 2:
-        raise ValueError(f"indoorloc: argument 'lon_lat_deg': expected shape (..., 2), got {ll.shape}")
+    ll = _points2(lon_lat_deg, "lon_lat_deg", 1e3)
     lon0, lat0 = _origin(origin_lon_lat)
     kx, ky = metres_per_degree(lat0)
     out = np.empty_like(ll)
@@ -117,9 +123,7 @@ def lonlat_to_local(lon_lat_deg: Any, origin_lon_lat: Tuple[float, float]) -> np
 
 def local_to_lonlat(east_north_m: Any, origin_lon_lat: Tuple[float, float]) -> np.ndarray:
     """Inverse of :func:`lonlat_to_local`: (N, 2) east/north [m] -> longitude/latitude [deg]."""
-    en = real_array(east_north_m, "east_north_m", max_abs=1e9)
-    if en.ndim == 0 or en.shape[-1] != 2:
-        raise ValueError(f"indoorloc: argument 'east_north_m': expected shape (..., 2), got {en.shape}")
+    en = _points2(east_north_m, "east_north_m", 1e9)
     lon0, lat0 = _origin(origin_lon_lat)
     kx, ky = metres_per_degree(lat0)
     out = np.empty_like(en)
@@ -400,6 +404,8 @@ def read_geojson_floor(
 
 _RING_REF = re.compile(r"floors\[(\d+)\]\.(outlines|obstacles)\[(\d+)\]")
 _WALL_REF = re.compile(r"floors\[(\d+)\]\.walls': row (\d+)")
+_WALL_ENTRY_REF = re.compile(r"floors\[(\d+)\]\.walls': entry (\d+)")
+_FLOOR_REF = re.compile(r"floors\[(\d+)\]")
 
 
 @reads_file("sources", argument="path")
@@ -456,10 +462,17 @@ def load_floor_plan(
             r = read[int(m.group(1))]
             index = (r.outline_features if m.group(2) == "outlines" else r.obstacle_features)[int(m.group(3))]
             raise ValueError(f"{msg} ({r.label}: feature {index})") from None
-        m = _WALL_REF.search(msg)
+        m = _WALL_REF.search(msg) or _WALL_ENTRY_REF.search(msg)
         if m:
             r = read[int(m.group(1))]
-            raise ValueError(f"{msg} ({r.label}: feature {r.wall_features[int(m.group(2))]})") from None
+            row = int(m.group(2)) if m.re is _WALL_REF else int(m.group(2)) // 4  # (W, 4) row-major
+            if 0 <= row < len(r.wall_features):
+                raise ValueError(f"{msg} ({r.label}: feature {r.wall_features[row]})") from None
+        # Any other floor-level error (no outline, a repeated floor number, the index's memory):
+        # the file of every floor it names.
+        named = sorted({int(k) for k in _FLOOR_REF.findall(msg) if int(k) < len(read)})
+        if named:
+            raise ValueError(f"{msg} ({'; '.join(f'floors[{k}]: {read[k].label}' for k in named)})") from None
         raise
 
 
@@ -490,14 +503,20 @@ def floor_geometry_to_geojson(
         xy = np.asarray(xy, dtype=float)
         return xy if origin_lon_lat is None else local_to_lonlat(xy, origin_lon_lat)
 
+    # The readers' rule for floors (whole numbers within ±1e6): a NaN floor used to be written as
+    # the token NaN and blamed on a coordinate, a numpy integer failed in json.dumps.
+    floor = geometry.floor
+    if isinstance(floor, (float, np.floating)) and math.isfinite(floor) and float(floor).is_integer():
+        floor = int(floor)
+    floor = integer(floor, "geometry.floor", lo=-10**6, hi=10**6)
     features = []
     for role, rings in (("outline", geometry.outlines), ("obstacle", geometry.obstacles)):
         for ring in rings:
-            features.append({"type": "Feature", "properties": {"role": role, "floor": geometry.floor},
+            features.append({"type": "Feature", "properties": {"role": role, "floor": floor},
                              "geometry": {"type": "Polygon", "coordinates": [_closed(conv(ring))]}})
     for row in np.asarray(geometry.walls, dtype=float).reshape(-1, 4):
         xy = conv(row.reshape(2, 2))
-        features.append({"type": "Feature", "properties": {"role": "wall", "floor": geometry.floor},
+        features.append({"type": "Feature", "properties": {"role": "wall", "floor": floor},
                          "geometry": {"type": "LineString",
                                       "coordinates": [[float(x), float(y)] for x, y in xy]}})
     return {"type": "FeatureCollection", "features": features}

@@ -410,19 +410,25 @@ def load_pyshoe_trial(path: PathLike, *, rate_hz: float = 200.0, regular_time: O
                         distance_m=distance, source_units=units, sensor="pyshoe")
 
 
+def _files_in(root: PathLike, pattern: str, none_found: str) -> List[Path]:
+    """Sorted files matching ``pattern`` under the folder ``root``; ValueError naming 'root' when
+    it is not a folder or nothing matches (``none_found`` + the folder)."""
+    r = Path(root)
+    if not r.is_dir():
+        raise _err("root", f"folder not found: {r}")
+    files = sorted(r.glob(pattern))
+    if not files:
+        raise _err("root", f"{none_found} {r}")
+    return files
+
+
 @reads_file("root")
 def list_pyshoe_trials(root: PathLike) -> List[Path]:
     """Sorted paths of the PyShoe trials (``*.mat``) in the folder ``root``.
 
     Raises ValueError when ``root`` is not a folder or holds no ``.mat`` file.
     """
-    r = Path(root)
-    if not r.is_dir():
-        raise _err("root", f"folder not found: {r}")
-    trials = sorted(r.glob("*.mat"))
-    if not trials:
-        raise _err("root", f"no PyShoe trial (*.mat) in {r}")
-    return trials
+    return _files_in(root, "*.mat", "no PyShoe trial (*.mat) in")
 
 
 @dataclass
@@ -566,10 +572,20 @@ def load_mobgap_trials(path: PathLike, *, gravity_mps2: float = STANDARD_GRAVITY
 @reads_file("root")
 def list_mobgap_files(root: PathLike) -> List[Path]:
     """Sorted ``data.mat`` files under the mobgap folder ``root`` (``.../mobgap_lowerback``)."""
-    r = Path(root)
-    if not r.is_dir():
-        raise _err("root", f"folder not found: {r}")
-    files = sorted(r.glob("*/*/data.mat"))
-    if not files:
-        raise _err("root", f"no mobgap <group>/<subject>/data.mat under {r}")
-    return files
+    return _files_in(root, "*/*/data.mat", "no mobgap <group>/<subject>/data.mat under")
+
+
+__all__ = [
+    "STANDARD_GRAVITY_MPS2",
+    "ImuRecording",
+    "IrregularTimestampsWarning",
+    "MobgapTrial",
+    "check_imu_units",
+    "fit_sample_rate",
+    "list_mobgap_files",
+    "list_pyshoe_trials",
+    "load_mobgap_trials",
+    "load_openshoe",
+    "load_pyshoe_trial",
+    "load_xio",
+]

@@ -56,7 +56,9 @@ from indoorloc._core.pdr import (
 )
 from indoorloc.pdr.orientation import (  # noqa: F401  (re-exported: part of this module's API)
     GRAVITY_MPS2,
+    _check_time_base,
     _finite_array,
+    _quaternions,
     _up_row,
     complementary_heading,
     gyro_heading,
@@ -64,11 +66,25 @@ from indoorloc.pdr.orientation import (  # noqa: F401  (re-exported: part of thi
     vertical_acceleration,
     wrap_angle,
 )
+from indoorloc.validate import real_array
 
 HEADING_SOURCES = ("rotation_vector", "gyro", "complementary")
 
 # --------------------------------------------------------------------------------------------
 # Inputs, options, outputs
+
+
+#: Largest sensor sample accepted by :class:`HandheldArrays`: phone accelerometers saturate
+#: below about 2000 m/s^2 (200 g) and gyroscopes below about 70 rad/s, so larger values are unit
+#: or parsing errors; the bounds also keep |a|^2 and the step filters finite (1e160 m/s^2 used to
+#: reach the filter and be reported under its internal argument name 'x').
+MAX_ACC_MPS2 = 1e4
+MAX_GYRO_RADPS = 1e3
+
+
+def _real_array(values: Any, arg: str) -> np.ndarray:
+    """float64 array of ``values``; None, complex, string, object and ragged input refused by name."""
+    return real_array(values, arg, finite=False)
 
 
 @dataclass
@@ -86,19 +102,28 @@ class HandheldArrays:
     quat_xyzw: np.ndarray
 
     def __post_init__(self) -> None:
-        self.t_s = np.asarray(self.t_s, dtype=np.float64)
+        self.t_s = _real_array(self.t_s, "t_s")
+        if self.t_s.ndim != 1:
+            raise ValueError(f"indoorloc: argument 't_s': need a 1-D array of times, got shape {self.t_s.shape}")
         n = self.t_s.shape[0]
         if self.t_s.ndim != 1 or n < 2:
             raise ValueError("indoorloc: argument 't_s': need a 1-D array of at least 2 times")
         if not np.all(np.isfinite(self.t_s)) or np.any(np.diff(self.t_s) <= 0):
             raise ValueError("indoorloc: argument 't_s': times must be finite and increasing")
-        for name, cols in (("acc_mps2", 3), ("gyro_radps", 3), ("quat_xyzw", 4)):
-            a = np.ascontiguousarray(getattr(self, name), dtype=np.float64)
+        _check_time_base(self.t_s, "t_s")
+        for name, cols, bound in (("acc_mps2", 3, MAX_ACC_MPS2), ("gyro_radps", 3, MAX_GYRO_RADPS),
+                                  ("quat_xyzw", 4, None)):
+            a = np.ascontiguousarray(_real_array(getattr(self, name), name))
             if a.shape != (n, cols):
                 raise ValueError(f"indoorloc: argument '{name}': shape {a.shape}, expected ({n}, {cols})")
             if not np.all(np.isfinite(a)):
                 raise ValueError(f"indoorloc: argument '{name}': values must be finite")
+            if bound is not None and np.any(np.abs(a) > bound):
+                r, c = np.argwhere(np.abs(a) > bound)[0]
+                raise ValueError(f"indoorloc: argument '{name}': entry ({r}, {c}) = {a[r, c]:g} is beyond "
+                                 f"±{bound:g} (no phone sensor measures that: a unit or parsing error)")
             setattr(self, name, a)
+        _quaternions(self.quat_xyzw, "quat_xyzw")
 
     @property
     def rate_hz(self) -> float:
@@ -242,6 +267,10 @@ def _zero_phase(sos: np.ndarray, x: np.ndarray) -> np.ndarray:
 def step_signal(arrays: HandheldArrays, options: HandheldOptions) -> np.ndarray:
     """The band-passed signal the peak detector runs on (N,) [m/s^2]."""
     rate = arrays.rate_hz
+    if options.highpass_hz >= 0.45 * rate:
+        raise ValueError(f"indoorloc: argument 'options': HandheldOptions.highpass_hz = {options.highpass_hz:g} Hz "
+                         f"needs a sample rate above {options.highpass_hz / 0.45:g} Hz; the walk's times (t_s) "
+                         f"give {rate:g} Hz")
     if options.signal == "vertical":
         s = vertical_acceleration(arrays.acc_mps2, arrays.quat_xyzw)
     else:
@@ -349,7 +378,10 @@ def cumulative_at(steps: HandheldSteps, values: np.ndarray, t_query: np.ndarray)
     t_query = np.asarray(t_query, dtype=np.float64)
     v = np.asarray(values, dtype=np.float64)
     one_d = v.ndim == 1
-    v = v.reshape(steps.n_steps, -1)
+    if v.ndim not in (1, 2) or v.shape[0] != steps.n_steps:
+        raise ValueError(f"indoorloc: argument 'values': expected shape ({steps.n_steps},) or "
+                         f"({steps.n_steps}, d), one row per step, got {v.shape}")
+    v = v[:, None] if one_d else v  # not reshape(n, -1): a walk without steps has n = 0
     if steps.n_steps == 0:
         out = np.zeros((t_query.shape[0], v.shape[1]))
         return out[:, 0] if one_d else out

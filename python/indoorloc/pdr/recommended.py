@@ -33,7 +33,8 @@ if TYPE_CHECKING:  # `import indoorloc` loads no file-format module (CONVENTIONS
     from indoorloc.io.pdr_datasets import ImuRecording
 
 __all__ = ["DEFAULT_METHOD", "HEALTH_LIMITS", "SHOE_SIGMA_ACC_MPS2", "SHOE_SIGMA_GYRO_RADPS", "SHOE_WINDOW",
-           "ZUPT_DETECTOR", "detect_stance", "gait_evidence", "gait_plausibility", "run_recommended"]
+           "ZUPT_DETECTOR", "detect_stance", "gait_evidence", "gait_plausibility", "run_recommended",
+           "stance_motion_ratio"]
 
 #: SHOE window [samples] and noise settings (the statistic's scale depends on them: T ~ 1/sigma^2).
 SHOE_WINDOW = 5
@@ -63,10 +64,16 @@ DEFAULT_METHOD = "zupt_rts_swing_guard"
 #: - min_stride_m: a median stride shorter than this while the IMU shows walking [m];
 #: - min_path_per_rhythm_stride_m: path length / strides of the gyroscope's rhythm [m];
 #: - min_stride_count_ratio: detected strides / rhythm strides;
+#: - max_stance_motion_ratio: the 90th percentile of ||f| - g| over the samples called stance,
+#:   divided by the walk's (95th percentile over all samples), while walking. A foot at rest
+#:   reads sensor noise; when the threshold lets the slow ends of swings into stance the ratio
+#:   climbs (the path then comes out uniformly short). 0.12: the least grid value above every
+#:   good run of the other recordings, leave one recording out (32 of 33 folds; docs/errors.md);
 #: - walking_energy_mps2: the IMU "shows walking" when the 95th percentile of ||f| - g| exceeds
 #:   this [m/s^2] and the rhythm's autocorrelation exceeds walking_rhythm_strength.
 HEALTH_LIMITS = {"min_swing_s": 0.15, "min_stride_m": 0.1, "min_path_per_rhythm_stride_m": 0.1,
-                 "min_stride_count_ratio": 0.5, "walking_energy_mps2": 0.3, "walking_rhythm_strength": 0.15}
+                 "min_stride_count_ratio": 0.5, "max_stance_motion_ratio": 0.12, "walking_energy_mps2": 0.3,
+                 "walking_rhythm_strength": 0.15}
 
 _GRAVITY_MPS2 = 9.81
 
@@ -123,6 +130,17 @@ def gait_evidence(recording: ImuRecording, active_radps: float = 1.0, lo_s: floa
     return out
 
 
+def stance_motion_ratio(recording: ImuRecording, stance: np.ndarray, energy_mps2: float) -> float:
+    """90th percentile of ||f| - g| [m/s^2] over the samples of ``stance`` (N,) bool, divided by
+    ``energy_mps2`` (the walk's 95th percentile, :func:`gait_evidence`). Near 0 when the stance
+    samples are a foot at rest; NaN without stance or without energy."""
+    stance = np.asarray(stance, dtype=bool)
+    if not stance.any() or not energy_mps2 > 0:
+        return float("nan")
+    a = np.abs(np.linalg.norm(np.asarray(recording.acc_mps2, dtype=float)[stance], axis=1) - _GRAVITY_MPS2)
+    return float(np.percentile(a, 90) / energy_mps2)
+
+
 def gait_plausibility(health: Dict[str, Any], evidence: Dict[str, float], path_m: float, n_strides: int,
                       limits: Dict[str, float] = HEALTH_LIMITS) -> List[str]:
     """Reasons (one sentence each) why a foot-mounted PDR result cannot be the walk the IMU shows;
@@ -151,6 +169,11 @@ def gait_plausibility(health: Dict[str, Any], evidence: Dict[str, float], path_m
                            f"{limits['min_path_per_rhythm_stride_m'] * rhythm:.1f} m)")
         if rhythm > 0 and n_strides < limits["min_stride_count_ratio"] * rhythm:
             reasons.append(f"{n_strides} strides counted where the step rhythm shows about {rhythm:.0f}")
+        ratio = float(health.get("stance_motion_ratio", float("nan")))
+        if ratio > limits.get("max_stance_motion_ratio", math.inf):
+            reasons.append(f"the samples called stance move: their ||f| - g| reaches {ratio:.2f} of the walk's "
+                           f"(limit {limits['max_stance_motion_ratio']}), so the detector let swings into stance "
+                           "and the path comes out short")
     return reasons
 
 
@@ -176,7 +199,8 @@ def run_recommended(recording: ImuRecording, smooth: bool = True, **overrides: A
                    "split_strides": int(count["n_split_strides"])})
     evidence = gait_evidence(recording)
     health.update({"gait_energy_mps2": evidence["energy_mps2"], "rhythm_period_s": evidence["period_s"],
-                   "rhythm_strength": evidence["strength"], "rhythm_strides": evidence["rhythm_strides"]})
+                   "rhythm_strength": evidence["strength"], "rhythm_strides": evidence["rhythm_strides"],
+                   "stance_motion_ratio": stance_motion_ratio(recording, stance, evidence["energy_mps2"])})
     extra = gait_plausibility(health, evidence, path_length(positions[:, :2]), int(strides.size))
     if extra:
         health["reasons"] = list(health.get("reasons", [])) + extra

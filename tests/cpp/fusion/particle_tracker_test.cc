@@ -17,6 +17,7 @@
 #include "indoorloc/fusion/step_motion.h"
 #include "indoorloc/fusion/track.h"
 #include "indoorloc/fusion/wifi_likelihood.h"
+#include "indoorloc/mapmatch/corridor_motion.h"
 #include "indoorloc/mapmatch/road_network.h"
 #include "indoorloc/wifi/rss_model.h"
 
@@ -459,6 +460,36 @@ TEST(ParticleTracker, CorridorModeFollowsTheNetworkAndTheHeading) {
   EXPECT_LT((e.mean_m - truth).norm(), 1.0);
   // Without corridors, SetParticles is available; in corridor mode it is refused.
   EXPECT_THROW(tracker.SetParticles(tracker.ParticleStates(), tracker.ParticleFloorIndices()), std::invalid_argument);
+}
+
+TEST(ParticleTracker, CorridorModeWithoutPlanOrMapStartsUniformlyAlongTheNetwork) {
+  // Corridors only: the unknown start spreads the particles along the network (it used to index
+  // the empty candidate list and crash).
+  RowMatrixXd segments(2, 4);
+  segments << 0, 0, 10, 0, 10, 0, 10, 30;
+  const mapmatch::RoadNetwork corridors(segments, Eigen::VectorXi(), mapmatch::RoadNetworkOptions());
+  TrackerOptions o = SmallOptions(4000);
+  ParticleTracker tracker(nullptr, nullptr, &corridors, o);
+  tracker.InitializeUnknown(WifiObservation());
+  const RowMatrixXd p = tracker.ParticleStates();
+  int on_long_segment = 0;
+  for (Eigen::Index i = 0; i < p.rows(); ++i) {
+    ASSERT_LT(corridors.Nearest(p.row(i).head<2>().transpose()).distance_m, 1e-9);
+    on_long_segment += p(i, 0) == 10.0 && p(i, 1) > 0.0;
+  }
+  EXPECT_NEAR(on_long_segment / 4000.0, 0.75, 0.03);  // 30 m of the 40 m
+  const TrackerEstimate e = tracker.Step(Step(0.5, 0.0, 0.7, 0.01));
+  EXPECT_TRUE(std::isfinite(e.mean_m.x()));
+}
+
+TEST(ParticleTracker, CorridorKappaHasTheSharedCorridorModelsLimit) {
+  TrackerOptions o = SmallOptions(10);
+  std::string error;
+  o.corridor_kappa = mapmatch::kMaxCorridorKappa;
+  EXPECT_TRUE(o.IsValid(&error)) << error;
+  o.corridor_kappa = mapmatch::kMaxCorridorKappa + 1.0;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_NE(error.find("corridor_kappa"), std::string::npos) << error;
 }
 
 TEST(ParticleTracker, FixedLagSmootherReportsThePositionLagStepsBack) {

@@ -122,6 +122,76 @@ TEST(SiteFile, TracksStepsOnTheStoredPlan) {
   EXPECT_NEAR(r.smoothed_mean_m(9, 1), 5.0, 1.5);
 }
 
+// The live tracker's inputs: the fingerprint map (columns and AP reliabilities from the stored
+// table, fingerprints in survey order, unknown APs dropped, weights, AP weights g^power), the fix
+// settings and the live session's options from the JSON the Python side writes.
+TEST(SiteFile, ReadsTheFingerprintMapAndTheLiveOptions) {
+  const std::string path = WriteSmallSite("site_live.db");
+  {
+    const SiteFile site(path);
+    try {
+      site.Fingerprints("F1");
+      FAIL() << "a file without fingerprint_columns gave a map";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("fingerprint_columns"), std::string::npos) << e.what();
+    }
+  }
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  Exec(db,
+       "CREATE TABLE access_points (id INTEGER PRIMARY KEY, bssid TEXT);"
+       "INSERT INTO access_points VALUES (1, 'aa'), (2, 'bb'), (3, 'cc');"
+       "CREATE TABLE fingerprint_columns (floor TEXT, col INTEGER, bssid TEXT, ap_ratio REAL);"
+       "INSERT INTO fingerprint_columns VALUES ('F1', 0, 'aa', 1.0), ('F1', 1, 'bb', 4.0);"
+       // w1 heard aa -60, bb -70; w2 heard cc -60 (not a column) and bb -60, weight 0.5.
+       "UPDATE fingerprints SET ap_ids = x'0100000002000000', rss_dbm = x'000070C200008CC2' WHERE walk = 'w1';"
+       "UPDATE fingerprints SET ap_ids = x'0300000002000000', rss_dbm = x'000070C2000070C2', weight = 0.5 "
+       " WHERE walk = 'w2';"
+       "CREATE TABLE tracker_settings (name TEXT PRIMARY KEY, settings TEXT);"
+       "INSERT INTO tracker_settings VALUES ('default', '{\"step_length_sd_fraction\": 0.2, "
+       "\"step_heading_sd_rad\": 0.3, \"fixes\": {\"pooling\": \"window\", \"query_align\": \"end\", "
+       "\"metric\": \"shared\", \"beacons\": false, \"k\": 7, \"penalty_db\": 100.0, "
+       "\"ap_weight_power\": 0.5, \"sd_m\": 2.5, \"sd_per_db\": 0.1, \"query_window_s\": 12.0, "
+       "\"min_aps\": 2}}');"
+       "UPDATE pdr_calibration SET options = '{\"method\": \"peaks\", \"signal\": \"magnitude\", "
+       "\"lowpass_hz\": 2.5, \"k\": 0.45, \"heading_source\": \"gyro\"}';");
+  sqlite3_close(db);
+  const SiteFile site(path);
+  const FingerprintMap map = site.Fingerprints("F1");
+  EXPECT_EQ(map.bssids, (std::vector<std::string>{"aa", "bb"}));
+  ASSERT_EQ(map.rss_dbm.rows(), 2);
+  EXPECT_EQ(map.rss_dbm(0, 0), -60.0);
+  EXPECT_EQ(map.rss_dbm(0, 1), -70.0);
+  EXPECT_TRUE(std::isnan(map.rss_dbm(1, 0)));
+  EXPECT_EQ(map.rss_dbm(1, 1), -60.0);
+  EXPECT_EQ(map.positions_m(1, 0), 40.0);
+  EXPECT_EQ(map.floors, Eigen::Vector2i(1, 1));
+  EXPECT_EQ(map.weights, Eigen::Vector2d(1.0, 0.5));
+  EXPECT_EQ(map.ap_weights, Eigen::Vector2d(1.0, 2.0));
+  const FingerprintFixOptions fo = site.FixOptions();
+  EXPECT_EQ(fo.matcher.k, 7);
+  EXPECT_EQ(fo.matcher.penalty_db, 100.0);
+  EXPECT_EQ(fo.matcher.temperature_db, wifi::SharedApMatcherOptions().temperature_db);  // absent: default
+  EXPECT_EQ(fo.sd_m, 2.5);
+  EXPECT_EQ(fo.sd_per_db, 0.1);
+  EXPECT_EQ(fo.query_window_s, 12.0);
+  EXPECT_EQ(fo.min_aps, 2);
+  const LiveSessionOptions lo = site.LiveOptions("F1");
+  EXPECT_EQ(lo.detector.lowpass_hz, 2.5);
+  EXPECT_EQ(lo.detector.highpass_hz, pdr::StreamingStepOptions().highpass_hz);
+  EXPECT_EQ(lo.step_length_k, 0.45);
+  EXPECT_EQ(lo.heading_source, StepHeadingSource::kGyro);
+  EXPECT_EQ(lo.yaw_offset_rad, 0.1);
+  EXPECT_EQ(lo.step_length_sd_fraction, 0.2);
+  EXPECT_EQ(lo.step_heading_sd_rad, 0.3);
+  // A live session runs on them.
+  const FloorPlan plan({site.Floor("F1").geometry});
+  const GridTracker tracker(&plan, site.TrackerOptions("F1"));
+  LiveSession live(&tracker, &map, lo, fo);
+  EXPECT_FALSE(live.AddWifiScan(1.0, {"aa", "bb"}, Eigen::Vector2d(-60, -70), Eigen::Vector2d(0.5, 0.5)));
+  EXPECT_EQ(live.Summary().pending_fixes, 1);
+}
+
 TEST(SiteFile, ClearErrors) {
   const std::string text = TempPath("site_text.db");
   std::ofstream(text) << "not a database\n";

@@ -73,6 +73,11 @@ struct GridTrackerOptions {
   double position_noise_m = 0.1;
   /// λ: log-weight per step of a cell outside walkable space; -inf: hard walls.
   double wall_log_penalty = -1.0;
+  /// Obstacles eroded by this margin [m]: a point inside an obstacle (or outside the outline)
+  /// closer than this to its boundary counts as walkable. Why: surveyors and shoppers walk
+  /// within a metre of shop fronts, and a path that grazes a front would otherwise pay λ at
+  /// every step, which a fix bounded by ε cannot outweigh. 0: the plan as drawn.
+  double wall_margin_m = 0.0;
   /// ε and τ of the position fixes (position_fix.h).
   FixLikelihoodOptions fix{/*outlier_probability=*/0.1, /*tempering=*/1.0};
   /// How τ weakens a fix: false, the whole likelihood to the power τ (position_fix.h, as the

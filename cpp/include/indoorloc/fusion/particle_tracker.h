@@ -82,7 +82,8 @@ struct TrackerOptions {
   /// Probability per step that a particle changes floor (to a uniformly chosen other floor of
   /// the plan; stairs and lifts are not modelled). 0: floors only from the start.
   double floor_change_probability = 0.0;
-  /// Corridor mode: κ of the von Mises heading likelihood (paper 000 eq. 11).
+  /// Corridor mode: κ of the von Mises heading likelihood (paper 000 eq. 11), in
+  /// [0, mapmatch::kMaxCorridorKappa = 300] (the shared corridor model's limit).
   double corridor_kappa = 2.0;
   /// Fixed-lag smoother: also report the position `smoothing_lag_steps` steps back (0: off).
   int smoothing_lag_steps = 0;

@@ -2,9 +2,9 @@
 // python/indoorloc/fusion/site_store.py; docs/your_building.md, "The site file") read without
 // Python. The file is one SQLite database per site, a table per concept; this reader gives a
 // floor's walkable plan (FloorGeometry in the floor frame, metres east/north of the floor's
-// origin), its handheld-PDR calibration, the fingerprint positions, and the default tracker's
-// GridTrackerOptions for the floor, so that an application can build a FloorPlan and a
-// GridTracker and track steps (and position fixes from its own locator) on a surveyed building.
+// origin), its handheld-PDR calibration, the WiFi fingerprint map, and the default tracker's
+// GridTrackerOptions for the floor, so that an application can build a FloorPlan, a GridTracker
+// and a LiveSession (fusion/live_session.h) and track raw sensor events on a surveyed building.
 //
 // SQLite stays behind the implementation (site_file.cc): this header exposes Eigen and std only.
 #pragma once
@@ -16,6 +16,7 @@
 
 #include "indoorloc/fusion/floor_plan.h"
 #include "indoorloc/fusion/grid_tracker.h"
+#include "indoorloc/fusion/live_session.h"
 
 namespace indoorloc::fusion {
 
@@ -69,6 +70,19 @@ class SiteFile {
   GridTrackerOptions TrackerOptions(const std::string& floor) const;
   /// Positions (N x 2) [m] of the floor's WiFi fingerprints (where the survey is).
   RowMatrixXd FingerprintPositions(const std::string& floor) const;
+  /// The floor's WiFi fingerprint map as the Python side uses it (Site.floor_models(floor).database):
+  /// columns and AP reliabilities from the fingerprint_columns table, fingerprints in survey order.
+  /// AP weights are the reliabilities to the power of the settings' ap_weight_power. Throws
+  /// std::runtime_error naming the file for a file written before that table existed (rebuild it, or
+  /// add a walk) or when the floor has no fingerprint.
+  FingerprintMap Fingerprints(const std::string& floor) const;
+  /// The fix options of the site's tracker settings (python TrackSettings.fixes). Throws
+  /// std::runtime_error when they are not reproducible live ("window" pooling, "end" alignment,
+  /// the "shared" metric, no beacon columns).
+  FingerprintFixOptions FixOptions() const;
+  /// The live session's options on a floor: the calibration's detector options, K, heading source
+  /// and yaw offset, and the settings' per-step noise (python Site.live(floor)).
+  LiveSessionOptions LiveOptions(const std::string& floor) const;
   /// Number of survey walks of a floor ("" = all floors).
   int WalkCount(const std::string& floor = "") const;
 

@@ -30,17 +30,18 @@
 
 #include <Eigen/Core>
 
+#include "indoorloc/core/fixed_lag_ring.h"
 #include "indoorloc/core/random.h"
+#include "indoorloc/core/random_lanes.h"
 #include "indoorloc/core/resampling.h"
+#include "indoorloc/mapmatch/corridor_motion.h"
 #include "indoorloc/mapmatch/road_network.h"
 
 namespace indoorloc::mapmatch {
 
-enum class JunctionPolicy { kUniform, kHeadingAware };
-
 struct FilterOptions {
   int num_particles = 10000;
-  /// κ_P, concentration of the von Mises heading likelihood (eq. 11).
+  /// κ_P, concentration of the von Mises heading likelihood (eq. 11), at most kMaxCorridorKappa.
   double kappa = 1.0;
   /// Half-width a of the uniform propagation noise η ~ U(-a, a) per step [m] (eq. 8-9).
   double noise_halfwidth_m = 0.6;
@@ -68,6 +69,8 @@ struct FilterOptions {
   std::uint64_t seed = 0;
 
   bool IsValid(std::string* error) const;
+  /// The corridor motion model's part of these options (kappa, junction policy and kappa).
+  CorridorMotionOptions corridor_motion() const { return {kappa, junction_policy, junction_kappa}; }
 };
 
 /// One filter step's output.
@@ -123,13 +126,14 @@ class ParticleMapMatcher {
 
  private:
   void Spread(int first, int count, double offset_fraction);
-  // Moves particle i by `distance` along the network, choosing continuations at segment ends;
-  // returns the importance-weight factor of the junction proposal (1 for the uniform policy).
-  double Move(int i, double distance, double heading_rad, RandomStream& rng);
 
   const RoadNetwork& network_;
   FilterOptions options_;
-  RandomStream rng_;
+  // The network move, the von Mises heading weight and the junction policy (shared with the
+  // fusion tracker's corridor mode).
+  CorridorMotion motion_;
+  RandomStream rng_;     // junction choices, resampling, recovery
+  RandomLanes lanes_;    // the per-particle uniform draws of the prediction
   std::vector<int> segment_;
   std::vector<signed char> direction_;
   std::vector<double> along_;
@@ -147,17 +151,15 @@ class ParticleMapMatcher {
   std::vector<double> along_tmp_, bias_tmp_;
   std::vector<double> factor_;        // 2M: exp(κ (d cos(φ - β_s) - 1)), index 2 s + (d > 0)
   std::vector<double> disagree_;      // 2M: 1 - d cos(φ - β_s)
-  std::vector<double> q_;             // heading-aware proposal scratch
-  std::vector<double> lengths_, origin_x_, origin_y_, unit_x_, unit_y_;  // per segment
+  std::vector<double> uniform_, distance_;  // N: a step's draws and distances
+  CorridorMotion::MoveScratch move_scratch_;
   // Recovery window of per-step disagreements.
   std::vector<double> disagreement_window_;
   size_t window_pos_ = 0;
   size_t window_filled_ = 0;
   bool was_tracking_ = false;
-  // Fixed-lag smoothing: per particle the last L positions (ring buffer, N x L x 2).
-  std::vector<double> history_;
-  int history_steps_ = 0;
-  double log_normaliser_ = 0.0;  // log(2π I0(κ))
+  // Fixed-lag smoothing: per particle the last L + 1 positions.
+  FixedLagRing lag_ring_;
   FilterSummary summary_;
 };
 

@@ -55,6 +55,9 @@ def describe_ilc_floor(floor: IlcFloor, min_scan_fraction: float = 0.10,
       because they cannot be read, with the reason; optional fields dropped, per field).
       ``n_walks`` counts the walks read.
     """
+    if not (hasattr(floor, "walks") and hasattr(floor, "bssid_vocabulary")):  # was an AttributeError
+        raise TypeError(f"indoorloc: argument 'floor': expected an IlcFloor (read_ilc_floor(folder)), "
+                        f"got {type(floor).__name__}")
     walks = list(floor.walks())
     voc = floor.bssid_vocabulary()
     ages: List[np.ndarray] = []

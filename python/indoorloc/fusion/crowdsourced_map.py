@@ -95,10 +95,14 @@ class CrowdMapSettings:
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
                 bad(name, f"must be finite and >= 0, got {v}")
-        if not (math.isfinite(self.variance_floor_db2) and self.variance_floor_db2 > 0):
-            bad("variance_floor_db2", "must be finite and > 0")
-        if not math.isfinite(self.not_heard_dbm):
-            bad("not_heard_dbm", "must be finite")
+        # The ranges of the options they feed (RssModelOptions, TrackerOptions): outside them the
+        # map's variances overflowed and were refused under the internal name 'variance_db2'.
+        if not (math.isfinite(self.variance_floor_db2) and 1e-12 <= self.variance_floor_db2 <= 1e12):
+            bad("variance_floor_db2", f"must be finite and in [1e-12, 1e12] dB^2, got {self.variance_floor_db2}")
+        if not (math.isfinite(self.not_heard_dbm) and -300 < self.not_heard_dbm < 50):
+            bad("not_heard_dbm", f"must be in (-300, 50) dBm, got {self.not_heard_dbm}")
+        if not 1e-3 <= self.cell_size_m <= 1e6:
+            bad("cell_size_m", f"must be in [0.001, 1e6] m, got {self.cell_size_m}")
         if self.max_scale_ratio < 1:
             bad("max_scale_ratio", "must be >= 1")
         if int(self.min_walks) < 1 or int(self.min_cells) < 1:
@@ -163,7 +167,10 @@ def walk_positions(walk: Any, t_query_s: np.ndarray, settings: Optional[CrowdMap
     s.validate()
     t = np.asarray(t_query_s, dtype=np.float64).reshape(-1)
     wt = np.asarray(walk.waypoint_t_s, dtype=np.float64)
-    wxy = np.asarray(walk.waypoint_xy_m, dtype=np.float64).reshape(-1, 2)
+    wxy = np.asarray(walk.waypoint_xy_m, dtype=np.float64)
+    if wt.ndim != 1 or wxy.shape != (wt.shape[0], 2):  # a (2, 3) array was reshaped to (3, 2)
+        raise ValueError(f"indoorloc: argument 'walk': waypoint_xy_m has shape {wxy.shape}, expected "
+                         f"({wt.size}, 2) for its {wt.size} waypoint_t_s")
     q = t.shape[0]
     xy = np.full((q, 2), np.nan)
     source = np.zeros(q, dtype=np.int8)
@@ -533,8 +540,8 @@ def prepare(rss_dbm: np.ndarray, not_heard_dbm: float) -> np.ndarray:
     """NaN (not heard) -> the floor value ``not_heard_dbm`` (finite) [dBm]: the prepared scans of
     the locators. An infinite RSS is refused (NaN is the only 'not heard')."""
     v = float(not_heard_dbm)
-    if not math.isfinite(v):
-        raise ValueError(f"indoorloc: argument 'not_heard_dbm': must be finite, got {not_heard_dbm!r}")
+    if not (math.isfinite(v) and -300 < v < 50):
+        raise ValueError(f"indoorloc: argument 'not_heard_dbm': must be in (-300, 50) dBm, got {not_heard_dbm!r}")
     r = np.asarray(rss_dbm, dtype=np.float64)
     if np.isinf(r).any():
         raise ValueError("indoorloc: argument 'rss_dbm': holds an infinite value (NaN marks 'not heard')")

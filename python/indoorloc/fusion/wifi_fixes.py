@@ -1,18 +1,18 @@
 """WiFi fingerprint fixes for the fusion tracker: each query fingerprint of a walk matched against the
 fingerprints of a crowdsourced training set, its best matches turned into a Gaussian-mixture
-position fix (``fusion.Fixes``) with an outlier floor (docs/fusion_real.md, "WiFi as fixes").
+position fix (``indoorloc.fusion.Fixes``) with an outlier floor (docs/fusion_real.md, "WiFi as fixes").
 
 Fingerprints (``FixSettings.pooling``):
 
 - ``"window"`` (default; :mod:`indoorloc.wifi_matcher`): every distinct measurement at its own
   last-seen time, whatever its age when reported. References every ``ref_spacing_s`` along each
   training walk, max-pooled over ``ref_window_s`` centred on that time and placed where the walker
-  was then (``wifi_crowdsource.walk_positions``, PDR between the waypoints). A query per scan of
+  was then (``crowdsourced_map.walk_positions``, PDR between the waypoints). A query per scan of
   the walk, max-pooled over the ``query_window_s`` before the scan (causal), timed at the mean
   last-seen time of its measurements.
 - ``"fresh"`` (the previous matcher): one fingerprint per scan from its readings at most
   ``fresh_age_s`` old, at the scan's measurement epoch (median last-seen time of those readings,
-  ``wifi_crowdsource.scan_epochs``).
+  ``crowdsourced_map.scan_epochs``).
 
 Dissimilarities of a query a against a fingerprint b (``FixSettings.metric``):
 
@@ -40,9 +40,9 @@ from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from indoorloc import fusion
 from indoorloc.pdr import handheld
-from indoorloc import wifi_crowdsource
+from indoorloc.fusion import crowdsourced_map
+from indoorloc.fusion.fixes import Fixes
 from indoorloc import wifi_matcher
 from indoorloc._core.wifi import SharedApMatcherOptions
 from indoorloc.validate import integer, real_array, real_scalar
@@ -154,7 +154,7 @@ def fresh_scans(walk: Any, fresh_age_s: float, bssids: Optional[Sequence[str]] =
     wf = walk.wifi
     names = list(wf.bssids) if bssids is None else list(bssids)
     index = {b: i for i, b in enumerate(names)}
-    epochs = wifi_crowdsource.scan_epochs(wf, fresh_age_s)
+    epochs = crowdsourced_map.scan_epochs(wf, fresh_age_s)
     keep = np.flatnonzero(np.isfinite(epochs))
     rss = np.full((keep.size, len(names)), np.nan)
     if wf.n_readings and keep.size:
@@ -250,12 +250,12 @@ def _walk_fingerprints(walk: Any, s: FixSettings, positions_at: Callable[[np.nda
 
 def build_database(train_walks: Sequence[Any], settings: Optional[FixSettings] = None,
                    steps: Optional[Sequence[handheld.HandheldSteps]] = None,
-                   map_settings: Optional[wifi_crowdsource.CrowdMapSettings] = None,
+                   map_settings: Optional[crowdsourced_map.CrowdMapSettings] = None,
                    floors: Optional[Sequence[int]] = None,
                    positions_at: Optional[Sequence[Callable[[np.ndarray], Tuple[np.ndarray, np.ndarray]]]] = None
                    ) -> FingerprintDatabase:
     """The training fingerprints of the walks, placed by PDR between waypoints
-    (``wifi_crowdsource.walk_positions``); BSSIDs heard in fewer than ``min_scans`` fingerprints
+    (``crowdsourced_map.walk_positions``); BSSIDs heard in fewer than ``min_scans`` fingerprints
     dropped.
 
     ``settings.pooling == "window"``: one fingerprint every ``ref_spacing_s`` between the first
@@ -279,7 +279,7 @@ def build_database(train_walks: Sequence[Any], settings: Optional[FixSettings] =
             where = positions_at[i]
         else:
             def where(t, walk=walk, i=i):
-                pos = wifi_crowdsource.walk_positions(walk, t, map_settings, None if steps is None else steps[i])
+                pos = crowdsourced_map.walk_positions(walk, t, map_settings, None if steps is None else steps[i])
                 return pos.xy_m, pos.valid
         got = _walk_fingerprints(walk, s, where)
         if got is not None:
@@ -305,7 +305,7 @@ def walk_fingerprints(walk: Any, settings: FixSettings, steps: Optional[handheld
     settings.validate()
 
     def where(t):
-        pos = wifi_crowdsource.walk_positions(walk, t, None, steps)
+        pos = crowdsourced_map.walk_positions(walk, t, None, steps)
         return pos.xy_m, pos.valid
     return _walk_fingerprints(walk, settings, positions_at or where, span_s)
 
@@ -457,7 +457,7 @@ def nearest(queries_dbm: np.ndarray, database: "FingerprintDatabase", num_thread
     return wifi_matcher.knn(dissimilarity(queries_dbm, database), s.k, s.temperature_db)
 
 
-def fixes_for_walk(walk: Any, database: FingerprintDatabase, with_floors: bool = True) -> fusion.Fixes:
+def fixes_for_walk(walk: Any, database: FingerprintDatabase, with_floors: bool = True) -> Fixes:
     """One fix per query fingerprint of the walk (``walk_queries``): the ``k`` most similar
     training fingerprints as components (module docstring), each on the floor of its training
     walk (``with_floors``; else on any floor)."""
@@ -465,12 +465,12 @@ def fixes_for_walk(walk: Any, database: FingerprintDatabase, with_floors: bool =
     t, rss = walk_queries(walk, database)
     k = min(s.k, database.n_scans)
     if t.size == 0:
-        return fusion.Fixes.from_arrays(np.zeros(0), np.zeros((0, k, 2)), np.zeros((0, k)), np.zeros((0, k)))
+        return Fixes.from_arrays(np.zeros(0), np.zeros((0, k, 2)), np.zeros((0, k)), np.zeros((0, k)))
     best, d_best, weights = nearest(rss, database)
     if database.weights is not None:  # grown fingerprints count less
         weights = weights * database.weights[best]
     floors = database.floors[best] if with_floors else None
-    return fusion.Fixes.from_arrays(t, database.positions_m[best], fix_sds(d_best[:, 0], s), weights, floors)
+    return Fixes.from_arrays(t, database.positions_m[best], fix_sds(d_best[:, 0], s), weights, floors)
 
 
 def fix_sds(d_min: np.ndarray, settings: FixSettings) -> np.ndarray:
@@ -481,7 +481,7 @@ def fix_sds(d_min: np.ndarray, settings: FixSettings) -> np.ndarray:
                     settings.sd_m)
 
 
-def fix_centres(fixes: fusion.Fixes) -> np.ndarray:
+def fix_centres(fixes: Fixes) -> np.ndarray:
     """The weighted mean position (F, 2) [m] of each fix's components: the kNN estimate of the
     scan (the WiFi-only baseline on this metric)."""
     w = fixes.weights / np.maximum(fixes.weights.sum(axis=1, keepdims=True), 1e-300)

@@ -1,0 +1,36 @@
+// Several independent xoshiro256++ streams advanced in lock-step ("lanes"), for particle loops
+// that need one uniform number per particle.
+//
+// One RandomStream's draws form a serial chain (each state update needs the previous one), which
+// bounds a particle loop at a few cycles per draw whatever the vector width. Eight lanes updated
+// side by side are independent: with AVX2 (chosen at run time, simd_dispatch.h) each state word
+// of the eight lanes is two 4 x 64-bit registers; elsewhere a portable loop gives the same numbers. Output k of FillUniform01 comes from lane k mod kLanes, round
+// k / kLanes: the numbers depend only on the seed and the sequence of calls, never on the vector
+// width, the machine or the thread count. Lane j is seeded like RandomStream(DeriveSeed(seed,
+// stream), j), so the lanes are independent streams of the same family.
+//
+// Uniforms are built from the top 52 bits by the exponent trick (bits | 1.0's exponent, minus
+// 1.0): exact, in [0, 1), on a grid of 2^-52; no integer-to-double conversion (which SSE2 and
+// AVX2 lack for 64-bit integers).
+#pragma once
+
+#include <cstdint>
+
+namespace indoorloc {
+
+class RandomLanes {
+ public:
+  static constexpr int kLanes = 8;
+
+  /// Lanes of the family identified by (seed, stream).
+  explicit RandomLanes(std::uint64_t seed = 0, std::uint64_t stream = 0);
+
+  /// Fills out[0, count) with uniforms on [0, 1). Every call advances all lanes by
+  /// ceil(count / kLanes) rounds (the unused outputs of a last partial round are discarded).
+  void FillUniform01(double* out, int count);
+
+ private:
+  alignas(64) std::uint64_t state_[4][kLanes];
+};
+
+}  // namespace indoorloc

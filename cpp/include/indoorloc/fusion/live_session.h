@@ -1,0 +1,110 @@
+// Live session: raw phone sensor events in time order (accelerometer, gyroscope, rotation vector,
+// WiFi scans with last-seen times, beacons) in, the grid filter's current estimate out after each.
+//
+// When to use: a phone app, or the replay of a recorded walk, on a surveyed floor (a site file:
+// fusion/site_file.h gives the plan, the PDR calibration, the fingerprint map and the tracker's
+// options). Python's indoorloc.fusion.live.LiveTracker is this class (docs/fusion.md, "Live tracking").
+//
+// What happens to each event:
+//  - gyroscope, rotation vector: held at their latest sample (send them first at equal times);
+//  - accelerometer: with the held gyroscope and rotation quaternion, one sample of the causal step
+//    detector (pdr/streaming_step_detector.h); a confirmed step (min_step_interval_s after its
+//    peak) becomes a polar step: length K x feature, heading (of heading_source) + yaw offset, sds
+//    step_length_sd_fraction x length and step_heading_sd_rad (StepFromPolar), and goes to the
+//    grid filter session (fusion/grid_filter_session.h) after the fixes it must see first;
+//  - WiFi scan: pooled and matched into a fix timed at the scan (fusion/fingerprint_fixes.h),
+//    applied at the first step at or after its time; a second scan at the same time replaces the
+//    first's fix. delay_compensation (off: it did not help on the shared floors) moves each fix by
+//    the PDR displacement of the steps after the time its measurements describe;
+//  - beacon: accepted (time order checked) and ignored (no beacon map yet).
+// Every event returns whether an estimate exists (after the first step); Estimate() gives it.
+//
+// Time order: events must come in non-decreasing time (accelerometer samples strictly
+// increasing); otherwise std::invalid_argument naming the event's index, kind and time and the
+// previous event's, and the session is unchanged. Malformed values: std::invalid_argument naming
+// the argument, session unchanged.
+//
+// Exactness: a recorded walk replayed event by event equals, bit for bit, the grid filter run in
+// one batch on the walk's causal steps (pdr::CausalSteps) and its scans' fixes at their scan
+// times (python indoorloc.fusion.live.causal_track; tests/python/test_fusion_live.py).
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "indoorloc/fusion/fingerprint_fixes.h"
+#include "indoorloc/fusion/grid_filter_session.h"
+#include "indoorloc/fusion/grid_tracker.h"
+#include "indoorloc/pdr/streaming_step_detector.h"
+
+namespace indoorloc::fusion {
+
+/// Which of the detector's headings a step takes.
+enum class StepHeadingSource { kRotationVector, kGyro, kComplementary };
+
+/// Options of LiveSession: the PDR calibration and per-step noise. The defaults of the noise are
+/// `indoorloc fusion evaluate`'s (python fusion.site_model.TrackSettings; a test keeps them equal).
+struct LiveSessionOptions {
+  pdr::StreamingStepOptions detector;  ///< the step detector's settings (calibration's options)
+  double step_length_k = 0.41;         ///< Weinberg K of the calibration [m / (m/s²)^(1/4)], > 0
+  StepHeadingSource heading_source = StepHeadingSource::kRotationVector;
+  double yaw_offset_rad = 0.0;         ///< floor-frame minus phone heading (calibration) [rad]
+  double step_length_sd_fraction = 0.15;             ///< length sd / length, > 0
+  double step_heading_sd_rad = 0.17453292519943295;  ///< per-step heading sd (10 deg) [rad], > 0
+  bool delay_compensation = false;     ///< move fixes by the PDR since the time they describe
+
+  bool IsValid(std::string* error) const;
+};
+
+/// What a LiveSession has done so far.
+struct LiveSessionSummary {
+  long long events = 0;       ///< events accepted
+  long long imu_samples = 0;  ///< accelerometer samples given to the detector
+  int steps = 0;              ///< steps detected (= the filter's steps)
+  int scans = 0;              ///< WiFi scans accepted
+  int fixes = 0;              ///< fixes given to the filter
+  int pending_fixes = 0;      ///< fixes waiting for a step at or after their time
+};
+
+class LiveSession {
+ public:
+  /// `tracker` (and `map` when given) must outlive the session; `map` null: WiFi scans are
+  /// accepted and ignored. Throws std::invalid_argument naming the argument for a null tracker,
+  /// invalid options or a malformed map (as GridFilterSession for the start).
+  LiveSession(const GridTracker* tracker, const FingerprintMap* map, const LiveSessionOptions& options,
+              const FingerprintFixOptions& fix_options = FingerprintFixOptions(),
+              const TrackStart& start = TrackStart());
+  ~LiveSession();
+  LiveSession(LiveSession&&) noexcept;
+  LiveSession& operator=(LiveSession&&) noexcept;
+
+  /// Accelerometer sample: specific force (3) [m/s²], device frame. Returns HasEstimate().
+  bool AddAccelerometer(double time_s, const Eigen::Vector3d& acc_mps2);
+  /// Gyroscope sample: angular rate (3) [rad/s], device frame.
+  bool AddGyroscope(double time_s, const Eigen::Vector3d& gyro_radps);
+  /// Android rotation vector (x, y, z[, w]) (3 or more values; a 5th, the accuracy, is ignored).
+  bool AddRotationVector(double time_s, const Eigen::Ref<const Eigen::VectorXd>& values);
+  /// One WiFi scan reported at time_s: per reading its BSSID, RSSI [dBm], last-seen time [s].
+  bool AddWifiScan(double time_s, const std::vector<std::string>& bssids,
+                   const Eigen::Ref<const Eigen::VectorXd>& rssi_dbm, const Eigen::Ref<const Eigen::VectorXd>& last_seen_s);
+  /// An iBeacon reading: accepted and ignored.
+  bool AddBeacon(double time_s);
+
+  bool HasEstimate() const;
+  /// The estimate after the latest step; std::logic_error before the first step.
+  const GridFilterEstimate& Estimate() const;
+  LiveSessionSummary Summary() const;
+  const GridFilterSession& filter() const;
+  const LiveSessionOptions& options() const;
+  /// Floor numbers of the plan (the order of Estimate().floor_probabilities).
+  std::vector<int> floors() const;
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
+
+}  // namespace indoorloc::fusion

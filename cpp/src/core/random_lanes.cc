@@ -1,0 +1,121 @@
+#include "indoorloc/core/random_lanes.h"
+
+#include <cstring>
+
+#include <immintrin.h>
+
+#include "indoorloc/core/random.h"
+#include "indoorloc/core/simd_dispatch.h"
+
+namespace indoorloc {
+namespace {
+
+inline std::uint64_t RotateLeft(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
+
+// Rounds of the eight lanes into out[0, rounds * kLanes), portable version.
+void FillRoundsScalar(std::uint64_t (&state)[4][RandomLanes::kLanes], double* out, int rounds) {
+  constexpr int kLanes = RandomLanes::kLanes;
+  std::uint64_t s0[kLanes], s1[kLanes], s2[kLanes], s3[kLanes];
+  std::memcpy(s0, state[0], sizeof(s0));
+  std::memcpy(s1, state[1], sizeof(s1));
+  std::memcpy(s2, state[2], sizeof(s2));
+  std::memcpy(s3, state[3], sizeof(s3));
+  for (int r = 0; r < rounds; ++r) {
+    std::uint64_t bits[kLanes];
+    for (int j = 0; j < kLanes; ++j) {
+      // xoshiro256++ (Blackman & Vigna 2019), as RandomStream::operator().
+      const std::uint64_t result = RotateLeft(s0[j] + s3[j], 23) + s0[j];
+      const std::uint64_t t = s1[j] << 17;
+      s2[j] ^= s0[j];
+      s3[j] ^= s1[j];
+      s1[j] ^= s2[j];
+      s0[j] ^= s3[j];
+      s2[j] ^= t;
+      s3[j] = RotateLeft(s3[j], 45);
+      bits[j] = (result >> 12) | 0x3FF0000000000000ULL;  // a double in [1, 2)
+    }
+    double unit[kLanes];
+    std::memcpy(unit, bits, sizeof(unit));
+    for (int j = 0; j < kLanes; ++j) out[r * kLanes + j] = unit[j] - 1.0;
+  }
+  std::memcpy(state[0], s0, sizeof(s0));
+  std::memcpy(state[1], s1, sizeof(s1));
+  std::memcpy(state[2], s2, sizeof(s2));
+  std::memcpy(state[3], s3, sizeof(s3));
+}
+
+// The same rounds with AVX2: each state word of the eight lanes is two 4 x 64-bit registers.
+// Integer operations and one exact subtraction: bit-identical to FillRoundsScalar.
+__attribute__((target("avx2"))) void FillRoundsAvx2(std::uint64_t (&state)[4][RandomLanes::kLanes], double* out,
+                                                     int rounds) {
+  static_assert(RandomLanes::kLanes == 8, "two registers of four lanes");
+// (Macros, not lambdas: a lambda does not inherit the function's target attribute.)
+#define INDOORLOC_LOAD(p) _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p))
+#define INDOORLOC_STORE(p, v) _mm256_storeu_si256(reinterpret_cast<__m256i*>(p), v)
+#define INDOORLOC_ROTL(x, k) _mm256_or_si256(_mm256_slli_epi64(x, k), _mm256_srli_epi64(x, 64 - (k)))
+  __m256i s0[2] = {INDOORLOC_LOAD(state[0]), INDOORLOC_LOAD(state[0] + 4)};
+  __m256i s1[2] = {INDOORLOC_LOAD(state[1]), INDOORLOC_LOAD(state[1] + 4)};
+  __m256i s2[2] = {INDOORLOC_LOAD(state[2]), INDOORLOC_LOAD(state[2] + 4)};
+  __m256i s3[2] = {INDOORLOC_LOAD(state[3]), INDOORLOC_LOAD(state[3] + 4)};
+  const __m256i one_exponent = _mm256_set1_epi64x(0x3FF0000000000000LL);
+  const __m256d one = _mm256_set1_pd(1.0);
+  for (int r = 0; r < rounds; ++r) {
+    for (int h = 0; h < 2; ++h) {
+      const __m256i result = _mm256_add_epi64(INDOORLOC_ROTL(_mm256_add_epi64(s0[h], s3[h]), 23), s0[h]);
+      const __m256i t = _mm256_slli_epi64(s1[h], 17);
+      s2[h] = _mm256_xor_si256(s2[h], s0[h]);
+      s3[h] = _mm256_xor_si256(s3[h], s1[h]);
+      s1[h] = _mm256_xor_si256(s1[h], s2[h]);
+      s0[h] = _mm256_xor_si256(s0[h], s3[h]);
+      s2[h] = _mm256_xor_si256(s2[h], t);
+      s3[h] = INDOORLOC_ROTL(s3[h], 45);
+      const __m256i bits = _mm256_or_si256(_mm256_srli_epi64(result, 12), one_exponent);
+      _mm256_storeu_pd(out + r * 8 + 4 * h, _mm256_sub_pd(_mm256_castsi256_pd(bits), one));
+    }
+  }
+  for (int h = 0; h < 2; ++h) {
+    INDOORLOC_STORE(state[0] + 4 * h, s0[h]);
+    INDOORLOC_STORE(state[1] + 4 * h, s1[h]);
+    INDOORLOC_STORE(state[2] + 4 * h, s2[h]);
+    INDOORLOC_STORE(state[3] + 4 * h, s3[h]);
+  }
+}
+#undef INDOORLOC_LOAD
+#undef INDOORLOC_STORE
+#undef INDOORLOC_ROTL
+
+void FillRounds(std::uint64_t (&state)[4][RandomLanes::kLanes], double* out, int rounds) {
+  if (UseAvx2()) {
+    FillRoundsAvx2(state, out, rounds);
+  } else {
+    FillRoundsScalar(state, out, rounds);
+  }
+}
+
+}  // namespace
+
+RandomLanes::RandomLanes(std::uint64_t seed, std::uint64_t stream) {
+  const std::uint64_t family = DeriveSeed(seed, stream);
+  for (int j = 0; j < kLanes; ++j) {
+    // The same SplitMix64 fill as RandomStream's constructor.
+    std::uint64_t x = DeriveSeed(family, static_cast<std::uint64_t>(j));
+    for (int w = 0; w < 4; ++w) {
+      x += 0x9E3779B97F4A7C15ULL;
+      state_[w][j] = SplitMix64(x);
+    }
+  }
+}
+
+void RandomLanes::FillUniform01(double* out, int count) {
+  if (count <= 0) return;
+  const int full = count / kLanes;
+  FillRounds(state_, out, full);
+  const int rest = count - full * kLanes;
+  if (rest > 0) {
+    double tail[kLanes];
+    FillRounds(state_, tail, 1);
+    std::memcpy(out + full * kLanes, tail, static_cast<size_t>(rest) * sizeof(double));
+  }
+}
+
+}  // namespace indoorloc

@@ -1,0 +1,202 @@
+// Fingerprint fixes, live (fingerprint_fixes.h): the incremental "window" query pooler and the
+// fix of a query. The pooling keeps the order of python wifi_matcher.pool_windows' sums, so a
+// live query equals the batch one bit for bit.
+#include "indoorloc/fusion/fingerprint_fixes.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "indoorloc/core/check.h"
+
+namespace indoorloc::fusion {
+
+bool FingerprintFixOptions::IsValid(std::string* error) const {
+  auto fail = [error](const std::string& m) {
+    if (error) *error = m;
+    return false;
+  };
+  std::string why;
+  if (!matcher.IsValid(&why)) return fail("matcher: " + why);
+  if (!(std::isfinite(query_window_s) && query_window_s > 0)) return fail("query_window_s must be finite and > 0");
+  if (min_aps < 1) return fail("min_aps must be >= 1");
+  if (!(std::isfinite(sd_m) && sd_m > 0)) return fail("sd_m must be finite and > 0");
+  if (!(std::isfinite(sd_per_db) && sd_per_db >= 0)) return fail("sd_per_db must be finite and >= 0");
+  return true;
+}
+
+struct FingerprintFixer::State {
+  FingerprintFixOptions options;
+  RowMatrixXd positions_m;
+  Eigen::VectorXi floors;
+  Eigen::VectorXd weights;
+  Eigen::Index columns = 0;
+  std::unique_ptr<wifi::SharedApMatcher> matcher;
+  // Every BSSID met gets a small id (the map's columns first: id = column; unknown BSSIDs after,
+  // so that a measurement key is two integers, no string built per reading).
+  std::unordered_map<std::string, int> id_of;
+  struct Key {
+    int id;
+    long long ms;  // last-seen time [ms]
+    bool operator==(const Key& o) const { return id == o.id && ms == o.ms; }
+  };
+  struct KeyHash {
+    std::size_t operator()(const Key& k) const {
+      return std::hash<std::uint64_t>()(static_cast<std::uint64_t>(k.ms) * 1000003u + static_cast<std::uint32_t>(k.id));
+    }
+  };
+  std::unordered_map<Key, double, KeyHash> seen;  // measurement -> its last-seen time [s]
+  // Kept measurements of known APs, sorted by last-seen time (stably: equal times keep their
+  // arrival order, the order of pool_windows' stable sort, so the mean time sums alike).
+  struct Measurement {
+    double t;    // last seen [s]
+    int col;
+    double rss;  // [dBm]
+  };
+  std::vector<Measurement> kept;
+  std::vector<Measurement> fresh;  // reused buffer
+  double latest_s = -std::numeric_limits<double>::infinity();
+};
+
+FingerprintFixer::FingerprintFixer(const FingerprintMap& map, const FingerprintFixOptions& options)
+    : state_(std::make_unique<State>()) {
+  std::string error;
+  if (!options.IsValid(&error)) ThrowInvalidArgument("options", error);
+  const Eigen::Index n = map.rss_dbm.rows(), k = map.rss_dbm.cols();
+  CheckArgument(static_cast<Eigen::Index>(map.bssids.size()) == k, "map.bssids",
+                "expected one BSSID per column of map.rss_dbm (" + std::to_string(k) + "), got " +
+                    std::to_string(map.bssids.size()));
+  CheckShape(map.positions_m, n, 2, "map.positions_m");
+  CheckFinite(map.positions_m, "map.positions_m");
+  CheckArgument(map.floors.size() == n, "map.floors", "expected one floor per fingerprint (" + std::to_string(n) + ")");
+  CheckArgument(map.weights.size() == 0 || map.weights.size() == n, "map.weights",
+                "expected one weight per fingerprint or none");
+  for (Eigen::Index i = 0; i < map.weights.size(); ++i) {
+    CheckArgument(map.weights[i] > 0.0 && map.weights[i] <= 1.0, "map.weights", "entries must be in (0, 1]");
+  }
+  CheckArgument(n > 0, "map.rss_dbm", "the map has no fingerprint");
+  State& s = *state_;
+  s.options = options;
+  s.positions_m = map.positions_m;
+  s.floors = map.floors;
+  s.weights = map.weights;
+  s.columns = k;
+  for (Eigen::Index j = 0; j < k; ++j) {
+    if (!s.id_of.emplace(map.bssids[static_cast<std::size_t>(j)], static_cast<int>(j)).second) {
+      ThrowInvalidArgument("map.bssids", "'" + map.bssids[static_cast<std::size_t>(j)] + "' appears twice");
+    }
+  }
+  s.matcher = std::make_unique<wifi::SharedApMatcher>(map.rss_dbm, map.ap_weights, options.matcher);
+}
+
+FingerprintFixer::~FingerprintFixer() = default;
+FingerprintFixer::FingerprintFixer(FingerprintFixer&&) noexcept = default;
+FingerprintFixer& FingerprintFixer::operator=(FingerprintFixer&&) noexcept = default;
+
+const FingerprintFixOptions& FingerprintFixer::options() const { return state_->options; }
+int FingerprintFixer::num_fingerprints() const { return static_cast<int>(state_->positions_m.rows()); }
+int FingerprintFixer::num_access_points() const { return static_cast<int>(state_->columns); }
+
+bool FingerprintFixer::AddScan(double time_s, const std::vector<std::string>& bssids,
+                               const Eigen::Ref<const Eigen::VectorXd>& rssi_dbm,
+                               const Eigen::Ref<const Eigen::VectorXd>& last_seen_s, ScanQuery* query) {
+  State& s = *state_;
+  const std::size_t m = bssids.size();
+  if (static_cast<std::size_t>(rssi_dbm.size()) != m || static_cast<std::size_t>(last_seen_s.size()) != m) {
+    ThrowInvalidArgument("bssids", "bssids, rssi_dbm and last_seen_s must have one entry per reading, got " +
+                                       std::to_string(m) + ", " + std::to_string(rssi_dbm.size()) + ", " +
+                                       std::to_string(last_seen_s.size()));
+  }
+  CheckArgument(std::isfinite(time_s), "time_s", "must be finite");
+  CheckFinite(rssi_dbm, "rssi_dbm");
+  CheckFinite(last_seen_s, "last_seen_s");
+  CheckArgument(last_seen_s.size() == 0 || last_seen_s.cwiseAbs().maxCoeff() < 1e12, "last_seen_s",
+                "must be within +-1e12 s");
+  CheckArgument(time_s >= s.latest_s, "time_s", "scans must come in non-decreasing time");
+  s.latest_s = time_s;
+  const double lo = time_s - s.options.query_window_s;
+  s.fresh.clear();
+  for (std::size_t j = 0; j < m; ++j) {
+    // The measurement key of python IlcWifi.new_measurement_mask: last-seen time in whole ms
+    // (rounded half to even, as numpy's round).
+    const double seen = last_seen_s[static_cast<Eigen::Index>(j)];
+    const long long ms = static_cast<long long>(std::nearbyint(seen * 1000.0));
+    const int id = s.id_of.emplace(bssids[j], static_cast<int>(s.id_of.size())).first->second;
+    if (!s.seen.emplace(State::Key{id, ms}, seen).second) continue;
+    if (id >= s.columns) continue;  // not in the map
+    s.fresh.push_back({seen, id, rssi_dbm[static_cast<Eigen::Index>(j)]});
+  }
+  auto by_time = [](const State::Measurement& a, const State::Measurement& b) { return a.t < b.t; };
+  std::stable_sort(s.fresh.begin(), s.fresh.end(), by_time);
+  const std::size_t old = s.kept.size();
+  s.kept.insert(s.kept.end(), s.fresh.begin(), s.fresh.end());
+  std::inplace_merge(s.kept.begin(), s.kept.begin() + static_cast<std::ptrdiff_t>(old), s.kept.end(), by_time);
+  // Forget what no later window can hold (windows only move forward).
+  const auto first = std::find_if(s.kept.begin(), s.kept.end(), [lo](const State::Measurement& x) { return x.t >= lo; });
+  s.kept.erase(s.kept.begin(), first);
+  if (s.seen.size() > 4096) {
+    for (auto it = s.seen.begin(); it != s.seen.end();) it = it->second >= lo ? std::next(it) : s.seen.erase(it);
+  }
+  // Max-pool the measurements last seen by now (a prefix), summing their times in time order.
+  Eigen::VectorXd q = Eigen::VectorXd::Constant(s.columns, std::numeric_limits<double>::quiet_NaN());
+  int heard = 0;
+  std::size_t used = 0;
+  double total = 0.0;
+  for (; used < s.kept.size() && s.kept[used].t <= time_s; ++used) {
+    const State::Measurement& x = s.kept[used];
+    double& v = q[x.col];
+    if (std::isnan(v)) {
+      v = x.rss;
+      ++heard;
+    } else if (x.rss > v) {
+      v = x.rss;
+    }
+    total += x.t;
+  }
+  if (heard < s.options.min_aps) return false;
+  if (query) {
+    query->rss_dbm = std::move(q);
+    query->described_time_s = total / static_cast<double>(std::max<std::size_t>(used, 1));
+  }
+  return true;
+}
+
+PositionFix FingerprintFixer::Fix(const ScanQuery& query, double time_s, const Eigen::Vector2d& shift_m) const {
+  const State& s = *state_;
+  CheckArgument(query.rss_dbm.size() == s.columns, "query", "expected one RSS per column of the map");
+  const wifi::SharedApNeighbours nb = s.matcher->Nearest(query.rss_dbm.transpose());
+  const Eigen::Index k = nb.index.cols();
+  const double d_min = k > 0 ? nb.distance_db(0, 0) : std::numeric_limits<double>::infinity();
+  const double sd = std::isfinite(d_min) ? s.options.sd_m + s.options.sd_per_db * d_min : s.options.sd_m;
+  PositionFix fix;
+  fix.time_s = time_s;
+  int used = 0;
+  std::vector<double> w(static_cast<std::size_t>(k));
+  for (Eigen::Index j = 0; j < k; ++j) {
+    const Eigen::Index r = nb.index(0, j);
+    w[static_cast<std::size_t>(j)] = s.weights.size() ? nb.weight(0, j) * s.weights[r] : nb.weight(0, j);
+    used += w[static_cast<std::size_t>(j)] != 0.0 ? 1 : 0;
+  }
+  fix.means_m.resize(used, 2);
+  fix.sds_m.resize(used);
+  fix.weights.resize(used);
+  fix.floors.resize(used);
+  int c = 0;
+  for (Eigen::Index j = 0; j < k; ++j) {
+    if (w[static_cast<std::size_t>(j)] == 0.0) continue;
+    const Eigen::Index r = nb.index(0, j);
+    fix.means_m(c, 0) = s.positions_m(r, 0) + shift_m[0];
+    fix.means_m(c, 1) = s.positions_m(r, 1) + shift_m[1];
+    fix.sds_m[c] = sd;
+    fix.weights[c] = w[static_cast<std::size_t>(j)];
+    fix.floors[c] = s.options.with_floors ? s.floors[r] : PositionFix::kAnyFloor;
+    ++c;
+  }
+  return fix;
+}
+
+}  // namespace indoorloc::fusion

@@ -1,0 +1,200 @@
+"""Floor identification by leave-one-floor-out (docs/fusion_real.md, "Floor identification").
+
+``python -m indoorloc.experiments.floor_identification_study [--data-root DIR] [--floors ...]
+[--json FILE] [--markdown FILE]``
+
+Protocol: the folds of ``indoorloc fusion evaluate`` (per floor 4-fold by walk, seed 0; fold j of
+every floor shares one all-floor fingerprint database built from the training walks of fold j).
+For each test walk it computes, once:
+
+- the all-floor grid filter's per-floor evidence (``site_model.identify_floor`` without the APs:
+  the identification tracker of ``fusion evaluate``, steps rotated by the walk's floor
+  calibration as there);
+- the per-floor AP evidence L_f (``fusion.floor_evidence``) for every (m, α, ε) of :data:`GRID`;
+- for reference, a WiFi-only vote (each query's best reference's floor, most votes).
+
+Each decider is a score per floor, log p_grid + λ L_f; a walk's floor is its argmax and every
+waypoint of the walk counts. For each held-out floor the grid point with the most waypoints right
+on the other five floors (ties: the highest mean log-probability of the true floor, the
+normalised combined score) is scored on it; ``chosen_all`` is the same choice on all floors,
+the default of ``site_model.TrackSettings``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import json
+import math
+import time
+from pathlib import Path
+from typing import Any, Dict, List, Optional, Sequence
+
+import numpy as np
+
+from indoorloc.fusion import wifi_fixes as wfx
+from indoorloc.fusion import floor_evidence, site_model
+from indoorloc.experiments import fusion_real as fr
+
+#: (m strongest APs, α rate floor, ε outlier probability) of the AP evidence, and λ its weight
+#: (0: the grid filter alone). Edges moved out once (m 20 -> 50, α 0.03 -> 0.1, ε 0.4 -> 0.6).
+GRID: Dict[str, Sequence[Any]] = {
+    "ap_count": (1, 2, 3, 5, 10, 20, 30, 50),
+    "rate_floor": (1e-3, 3e-3, 1e-2, 3e-2, 0.1),
+    "outlier_probability": (0.05, 0.1, 0.2, 0.4, 0.6),
+    "weight": (0.5, 1.0, 2.0, 3.0, 5.0, 10.0, 30.0),
+}
+
+
+def walk_evidence(data_root: Optional[Path] = None, floors: Sequence[str] = (),
+                  grid: Optional[Dict[str, Sequence[Any]]] = None, progress=None) -> dict:
+    """Per test walk: floor index, waypoints, the grid filter's log-evidence (F,), the WiFi vote
+    (F,) and the AP evidence (F,) per (m, α, ε) of ``grid``."""
+    grid = grid or GRID
+    settings = fr.RealSettings()
+    _, data = fr.load_site(data_root, floors)
+    all_plan = fr._all_floor_plan(data)
+    plan_floors = [int(f) for f in all_plan.floors]
+    fold_of = {fl.name: fr._folds(len(fl.walks), settings.folds, settings.seed) for fl in data}
+    ap_points = list(itertools.product(grid["ap_count"], grid["rate_floor"], grid["outlier_probability"]))
+    walks: List[Dict[str, Any]] = []
+    for j in range(settings.folds):
+        models = fr._fold_models(data, fold_of, j, settings, all_plan, with_crowd_map=False)
+        db = next(iter(models.values())).all_database
+        rates = {a: floor_evidence.ApFloorRates.from_references(db.rss_dbm, db.floors, plan_floors, a)
+                 for a in grid["rate_floor"]}
+        for fl in data:
+            m = models[fl.name]
+            for i in fold_of[fl.name][j]:
+                walk = fl.walks[i]
+                rec: Dict[str, Any] = {"floor": fl.name, "floor_index": plan_floors.index(fl.number),
+                                       "walk": walk.walk_id, "fold": j, "n_waypoints": len(walk.waypoint_t_s)}
+                _, q = wfx.walk_queries(walk, db)
+                rec["vote"] = np.zeros(len(plan_floors))
+                if q.shape[0]:
+                    best = wfx.nearest(q, db)[0][:, 0]
+                    votes = [plan_floors.index(int(f)) for f in db.floors[best]]
+                    rec["vote"] = np.bincount(votes, minlength=len(plan_floors)).astype(float)
+                rec["ap"] = {p: floor_evidence.walk_floor_log_likelihood(rates[p[1]], q, p[0], p[2]) for p in ap_points}
+                steps = site_model.tracker_steps(fl.steps[i], m.cal, settings.track_settings())
+                rec["grid"] = np.zeros(len(plan_floors))
+                if len(steps):
+                    spread = max(m.cal.yaw_offset_spread_rad, 1e-3)
+                    tracker = fr._grid_tracker(all_plan, fr._identification_options(settings, spread), fl.name + "/all")
+                    found = site_model.identify_floor(tracker, plan_floors, steps, wfx.fixes_for_walk(walk, db))
+                    p = np.array([found["grid_probabilities"][f] for f in plan_floors])
+                    rec["grid"] = np.log(np.maximum(p, 1e-300))
+                walks.append(rec)
+                if progress:
+                    progress()
+    return {"floors": [next(fl.name for fl in data if fl.number == f) for f in plan_floors],
+            "walks": walks, "grid": grid}
+
+
+def _accuracy(scores: np.ndarray, label: np.ndarray, n_wp: np.ndarray, mask: np.ndarray) -> int:
+    return int((n_wp * (np.argmax(scores, axis=1) == label))[mask].sum())
+
+
+def _log_loss(scores: np.ndarray, label: np.ndarray, mask: np.ndarray) -> float:
+    z = scores[mask] - scores[mask].max(axis=1, keepdims=True)
+    lp = z - np.log(np.exp(z).sum(axis=1, keepdims=True))
+    return float(lp[np.arange(int(mask.sum())), label[mask]].mean())
+
+
+def _per_floor(ok: np.ndarray, label: np.ndarray, n_wp: np.ndarray, names: Sequence[str]) -> Dict[str, float]:
+    return {n: float((n_wp * ok)[label == f].sum() / n_wp[label == f].sum()) for f, n in enumerate(names)
+            if (label == f).any()}
+
+
+def select(evidence: dict) -> dict:
+    """Leave-one-floor-out choice over the grid (module docstring). Returns the grid filter alone,
+    the WiFi vote, the held-out figures (pooled and per floor, with each floor's choice) and the
+    all-floor choice with its figures."""
+    names, walks, grid = evidence["floors"], evidence["walks"], evidence["grid"]
+    label = np.array([w["floor_index"] for w in walks])
+    n_wp = np.array([w["n_waypoints"] for w in walks])
+    g = np.stack([w["grid"] for w in walks])
+    points = [({"weight": 0.0}, g)]
+    for (m, a, e) in walks[0]["ap"]:
+        ap = np.stack([w["ap"][(m, a, e)] for w in walks])
+        for lam in grid["weight"]:
+            points.append(({"ap_count": m, "rate_floor": a, "outlier_probability": e, "weight": lam}, g + lam * ap))
+
+    def figures(scores: np.ndarray) -> dict:
+        ok = np.argmax(scores, axis=1) == label
+        return {"accuracy": float((n_wp * ok).sum() / n_wp.sum()), "walks_right": int(ok.sum()),
+                "per_floor": _per_floor(ok, label, n_wp, names)}
+
+    held_ok = np.zeros(len(walks), bool)
+    chosen = {}
+    for f, name in enumerate(names):
+        train = label != f
+        if not (label == f).any():
+            continue
+        values, scores = max(points, key=lambda p: (_accuracy(p[1], label, n_wp, train), _log_loss(p[1], label, train)))
+        chosen[name] = values
+        held_ok[label == f] = (np.argmax(scores, axis=1) == label)[label == f]
+    everything = np.ones(len(walks), bool)
+    values_all, scores_all = max(points, key=lambda p: (_accuracy(p[1], label, n_wp, everything),
+                                                        _log_loss(p[1], label, everything)))
+    wrong = [{"floor": w["floor"], "walk": w["walk"], "n_waypoints": int(w["n_waypoints"]),
+              "identified": names[int(np.argmax(scores_all[i]))]}
+             for i, w in enumerate(walks) if np.argmax(scores_all[i]) != label[i]]
+    return {"grid_only": figures(g), "wifi_vote": figures(np.stack([w["vote"] for w in walks])),
+            "lofo": {"accuracy": float((n_wp * held_ok).sum() / n_wp.sum()), "walks_right": int(held_ok.sum()),
+                     "per_floor": _per_floor(held_ok, label, n_wp, names), "chosen": chosen},
+            "chosen_all": values_all, "chosen_all_figures": figures(scores_all), "wrong_walks_chosen_all": wrong,
+            "n_walks": len(walks), "n_waypoints": int(n_wp.sum()), "grid": {k: list(v) for k, v in grid.items()}}
+
+
+def markdown(result: dict) -> str:
+    """The study's table (per floor % of waypoints on the right floor)."""
+    floors = list(result["grid_only"]["per_floor"])
+    head = "| decider | " + " | ".join(floors) + " | pooled | walks right |"
+    lines = [head, "|---|" + "---|" * (len(floors) + 2)]
+    rows = [("grid filter alone (before)", result["grid_only"]), ("WiFi-only vote", result["wifi_vote"]),
+            ("grid + AP evidence, held out (LOFO)", result["lofo"]),
+            ("grid + AP evidence, chosen on all six", result["chosen_all_figures"])]
+    for name, r in rows:
+        lines.append(f"| {name} | " + " | ".join(f"{100 * r['per_floor'][f]:.1f}" for f in floors)
+                     + f" | {100 * r['accuracy']:.1f} | {r['walks_right']} of {result['n_walks']} |")
+    lines += ["", "Chosen per held-out floor: " + "; ".join(f"{f}: {v}" for f, v in result["lofo"]["chosen"].items()),
+              f"Chosen on all floors: {result['chosen_all']}.",
+              "Walks still wrong with it: " + (", ".join(f"{w['floor']} {w['walk']} ({w['n_waypoints']} waypoints, "
+                                                         f"taken for {w['identified']})"
+                                                         for w in result["wrong_walks_chosen_all"]) or "none") + "."]
+    return "\n".join(lines)
+
+
+def _jsonable(x):
+    if isinstance(x, dict):
+        return {str(k): _jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_jsonable(v) for v in x]
+    if isinstance(x, float) and not math.isfinite(x):
+        return None
+    return x
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--data-root", default=None)
+    ap.add_argument("--floors", nargs="*", default=[])
+    ap.add_argument("--json", default=None)
+    ap.add_argument("--markdown", default=None)
+    args = ap.parse_args(argv)
+    tic = time.perf_counter()
+    result = select(walk_evidence(args.data_root, args.floors))
+    result["seconds"] = round(time.perf_counter() - tic, 1)
+    text = markdown(result)
+    print(text)
+    for path, content in ((args.json, lambda: json.dumps(_jsonable(result), indent=1)), (args.markdown, lambda: text)):
+        if path:
+            tmp = Path(str(path) + ".tmp")
+            tmp.write_text(content() + "\n")
+            tmp.replace(path)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

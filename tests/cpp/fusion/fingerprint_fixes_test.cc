@@ -1,0 +1,94 @@
+// Tests of the fingerprint fixer (the live session's WiFi): a scan that reads exactly one stored
+// fingerprint gives a fix whose heaviest component sits on that fingerprint; readings are pooled
+// over the query window by their last-seen times (older ones leave the query); a scan with too few
+// known APs gives no query; malformed maps and scans are refused naming the field.
+#include "indoorloc/fusion/fingerprint_fixes.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace indoorloc::fusion {
+namespace {
+
+// Fingerprints every 4 m over a 40 x 20 m floor; four APs in the corners, log-distance RSS.
+FingerprintMap MakeMap() {
+  FingerprintMap map;
+  const double ap[4][2] = {{0, 0}, {40, 0}, {0, 20}, {40, 20}};
+  for (int j = 0; j < 4; ++j) map.bssids.push_back("ap" + std::to_string(j));
+  std::vector<Eigen::Vector2d> pts;
+  for (double x = 2; x < 40; x += 4)
+    for (double y = 2; y < 20; y += 4) pts.emplace_back(x, y);
+  const Eigen::Index n = static_cast<Eigen::Index>(pts.size());
+  map.rss_dbm.resize(n, 4);
+  map.positions_m.resize(n, 2);
+  map.floors = Eigen::VectorXi::Zero(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Eigen::Vector2d p = pts[static_cast<std::size_t>(i)];
+    map.positions_m.row(i) = p.transpose();
+    for (int j = 0; j < 4; ++j) {
+      map.rss_dbm(i, j) = -40.0 - 25.0 * std::log10(std::max(1.0, std::hypot(p.x() - ap[j][0], p.y() - ap[j][1])));
+    }
+  }
+  return map;
+}
+
+TEST(FingerprintFixer, AScanReadingAFingerprintIsFixedOnIt) {
+  const FingerprintMap map = MakeMap();
+  FingerprintFixer fixer(map);
+  EXPECT_EQ(fixer.num_fingerprints(), map.rss_dbm.rows());
+  EXPECT_EQ(fixer.num_access_points(), 4);
+  const Eigen::Index target = 17;
+  ScanQuery q;
+  ASSERT_TRUE(fixer.AddScan(10.0, map.bssids, map.rss_dbm.row(target).transpose(), Eigen::VectorXd::Constant(4, 9.5), &q));
+  EXPECT_DOUBLE_EQ(q.described_time_s, 9.5);
+  const PositionFix fix = fixer.Fix(q, q.described_time_s);
+  ASSERT_FALSE(fix.empty());
+  Eigen::Index best = 0;
+  fix.weights.maxCoeff(&best);
+  EXPECT_NEAR((fix.means_m.row(best) - map.positions_m.row(target)).norm(), 0.0, 1e-9);
+  // An exact match has d_min = 0: every component's sd is sd_m.
+  EXPECT_NEAR(fix.sds_m.maxCoeff(), fixer.options().sd_m, 1e-9);
+  // The shift moves every component.
+  const PositionFix moved = fixer.Fix(q, q.described_time_s, Eigen::Vector2d(1.0, -2.0));
+  EXPECT_NEAR(moved.means_m(best, 0) - fix.means_m(best, 0), 1.0, 1e-12);
+  EXPECT_NEAR(moved.means_m(best, 1) - fix.means_m(best, 1), -2.0, 1e-12);
+}
+
+TEST(FingerprintFixer, PoolsOverTheWindowAndNeedsEnoughAps) {
+  const FingerprintMap map = MakeMap();
+  FingerprintFixOptions o;
+  o.query_window_s = 16.0;
+  FingerprintFixer fixer(map, o);
+  ScanQuery q;
+  // Two known APs only (and one unknown): no query.
+  EXPECT_FALSE(fixer.AddScan(1.0, {"ap0", "ap1", "other"}, Eigen::Vector3d(-60, -70, -50), Eigen::Vector3d(1, 1, 1), &q));
+  // A later scan hears the other two: pooled with the first, four known APs.
+  ASSERT_TRUE(fixer.AddScan(3.0, {"ap2", "ap3"}, Eigen::Vector2d(-65, -75), Eigen::Vector2d(3, 3), &q));
+  EXPECT_EQ((q.rss_dbm.array().isNaN() == false).count(), 4);
+  // 20 s later the first readings have left the window: two APs, no query.
+  EXPECT_FALSE(fixer.AddScan(21.0, {"ap2"}, Eigen::VectorXd::Constant(1, -66), Eigen::VectorXd::Constant(1, 21), &q));
+}
+
+TEST(FingerprintFixer, RefusesMalformedInputNamingIt) {
+  FingerprintMap map = MakeMap();
+  FingerprintFixer fixer(map);
+  ScanQuery q;
+  EXPECT_THROW(fixer.AddScan(5.0, {"ap0"}, Eigen::Vector2d(-60, -61), Eigen::VectorXd::Constant(1, 5), &q),
+               std::invalid_argument);
+  EXPECT_THROW(fixer.AddScan(5.0, {"ap0"}, Eigen::VectorXd::Constant(1, std::nan("")), Eigen::VectorXd::Constant(1, 5), &q),
+               std::invalid_argument);
+  map.positions_m.conservativeResize(map.positions_m.rows() - 1, 2);
+  try {
+    FingerprintFixer bad(map);
+    FAIL() << "a map whose positions and fingerprints disagree was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("positions_m"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace indoorloc::fusion
