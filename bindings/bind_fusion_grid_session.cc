@@ -17,19 +17,6 @@ using namespace indoorloc::fusion;  // NOLINT: binding file
 
 namespace {
 
-py::dict EstimateToDict(const GridFilterEstimate& e) {
-  py::dict d;
-  d["time_s"] = e.time_s;
-  d["steps"] = e.steps;
-  d["mean_m"] = Eigen::VectorXd(e.mean_m);
-  d["covariance_m2"] = Eigen::VectorXd(e.covariance_m2);
-  d["posterior_covariance_m2"] = Eigen::VectorXd(e.posterior_covariance_m2);
-  d["fix_distance_m"] = e.fix_distance_m;
-  d["floor_probabilities"] = e.floor_probabilities;
-  d["heading_offset_rad"] = e.heading_offset_rad;
-  d["log_evidence"] = e.log_evidence;
-  return d;
-}
 
 // One fix as the one-row tuple FixesFromArrays takes (the batch's own conversion and checks).
 PositionFix OneFix(const py::object& time_s, const py::object& means_m, const py::object& sds_m,
@@ -108,7 +95,7 @@ not after the latest step.)doc")
               py::gil_scoped_release release;
               e = s.AddStep(st.front());
             }
-            return EstimateToDict(e);
+            return GridEstimateToDict(e);
           },
           py::arg("time_s"), py::arg("displacement_m"), py::arg("covariance_m2"), R"doc(
 Add a step: time_s [s], displacement_m (2,) [m] in the PDR frame, covariance_m2 (3,) = (xx, xy, yy)
@@ -152,7 +139,7 @@ RuntimeError when every hypothesis is ruled out (hard walls).)doc")
           "estimate",
           [](const GridFilterSession& s) -> py::object {
             if (s.steps() == 0) return py::none();
-            return EstimateToDict(s.Estimate());
+            return GridEstimateToDict(s.Estimate());
           },
           "The estimate after the latest step (dict as add_step returns), None before the first step.")
       .def_property_readonly("steps", &GridFilterSession::steps, "Steps added.")

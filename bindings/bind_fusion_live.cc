@@ -68,16 +68,7 @@ FingerprintMap MapFromTuple(const py::tuple& t) {
 py::object EstimateOrNone(const LiveSession& s) {
   if (!s.HasEstimate()) return py::none();
   const GridFilterEstimate& e = s.Estimate();
-  py::dict d;
-  d["time_s"] = e.time_s;
-  d["steps"] = e.steps;
-  d["mean_m"] = Eigen::VectorXd(e.mean_m);
-  d["covariance_m2"] = Eigen::VectorXd(e.covariance_m2);
-  d["posterior_covariance_m2"] = Eigen::VectorXd(e.posterior_covariance_m2);
-  d["fix_distance_m"] = e.fix_distance_m;
-  d["floor_probabilities"] = e.floor_probabilities;
-  d["heading_offset_rad"] = e.heading_offset_rad;
-  d["log_evidence"] = e.log_evidence;
+  py::dict d = GridEstimateToDict(e);
   const std::vector<int> floors = s.floors();
   py::array_t<long long> fl(static_cast<py::ssize_t>(floors.size()));
   for (std::size_t i = 0; i < floors.size(); ++i) fl.mutable_at(static_cast<py::ssize_t>(i)) = floors[i];

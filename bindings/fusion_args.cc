@@ -4,6 +4,8 @@
 #include <cmath>
 #include <string>
 
+#include <pybind11/eigen.h>
+
 #include "indoorloc/core/validate.h"
 #include "numpy_args.h"
 
@@ -132,6 +134,20 @@ TrackStart StartFromDict(const py::object& start, double first_step_time_s) {
   st.heading_offset_rad =
       s.contains("heading_offset_rad") ? ToFiniteDouble(s["heading_offset_rad"], "start['heading_offset_rad']") : 0.0;
   return st;
+}
+
+py::dict GridEstimateToDict(const fusion::GridFilterEstimate& e) {
+  py::dict d;
+  d["time_s"] = e.time_s;
+  d["steps"] = e.steps;
+  d["mean_m"] = Eigen::VectorXd(e.mean_m);
+  d["covariance_m2"] = Eigen::VectorXd(e.covariance_m2);
+  d["posterior_covariance_m2"] = Eigen::VectorXd(e.posterior_covariance_m2);
+  d["fix_distance_m"] = e.fix_distance_m;
+  d["floor_probabilities"] = e.floor_probabilities;
+  d["heading_offset_rad"] = e.heading_offset_rad;
+  d["log_evidence"] = e.log_evidence;
+  return d;
 }
 
 }  // namespace indoorloc::bindings
