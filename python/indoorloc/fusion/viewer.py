@@ -21,13 +21,13 @@ from __future__ import annotations
 
 import math
 import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Sequence
 
 import numpy as np
 
+from indoorloc.io.atomic_file import write_text_atomic
 from indoorloc.validate import integer, real_array
 
 #: Squared Mahalanobis radius of the 95 % region of a 2-D Gaussian (chi-square, 2 dof): the same
@@ -494,23 +494,8 @@ def write_viewer_html(path: Any, floors: Sequence[ViewerFloor], tracks: Sequence
                        div_id="indoorloc-viewer", default_width="100%", default_height="99vh", validate=True)
     html = html.replace("<head>", f"<head><title>{_html_escape(title)}</title>"
                               "<style>html, body {margin: 0; padding: 0;}</style>", 1)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(html)
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp's file is 0600: give the page ordinary permissions
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    write_text_atomic(path, html)
     return path
-
-
-def _umask() -> int:
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return mask
 
 
 def _html_escape(text: str) -> str:

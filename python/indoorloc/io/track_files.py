@@ -23,12 +23,12 @@ import io
 import json
 import math
 import os
-import tempfile
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Sequence
 
 import numpy as np
 
+from indoorloc.io.atomic_file import write_text_atomic
 from indoorloc.io.floor_plan import local_to_lonlat
 
 TRACK_FORMAT_VERSION = 1
@@ -102,19 +102,6 @@ def csv_text(tracks: Sequence[Any]) -> str:
     return out.getvalue()
 
 
-def _atomic_write(path: Path, text: str) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-
-
 def write_tracks(path: os.PathLike, tracks: Sequence[Any], site_path: str = "") -> Path:
     """Write tracks (``fusion.WalkTrack``) to ``path`` in the format of its extension (module
     docstring). ValueError naming the argument for another extension."""
@@ -128,7 +115,7 @@ def write_tracks(path: os.PathLike, tracks: Sequence[Any], site_path: str = "") 
         text = csv_text(tracks)
     else:
         raise ValueError(f"indoorloc: argument 'output': {path}: unknown extension {ext!r} (one of {EXTENSIONS})")
-    _atomic_write(path, text)
+    write_text_atomic(path, text)
     return path
 
 
