@@ -102,15 +102,15 @@ def test_simulate_trajectory_with_huge_heading_kappa_returns():
     """, timeout=30)
 
 
-def test_find_crossovers_without_separation_is_fast():
+def test_find_crossovers_without_separation_finishes():
+    # One line flown back and forth: every sample near every other (this took 29 s once, now well
+    # under a second). No timing threshold (house rule): a return of that shows as a slow suite.
     n = 800
     t = np.arange(n) * 0.5
     s = np.mod(np.arange(n) * 1.3, 120.0)
     x = np.where(s < 60, s, 120 - s)
-    pos = np.c_[x, np.zeros(n), np.zeros(n)]  # one line flown back and forth
-    start = time.perf_counter()
+    pos = np.c_[x, np.zeros(n), np.zeros(n)]
     pairs = network.find_crossovers(t, pos, radius_m=5.0, min_separation_s=0.0)
-    assert time.perf_counter() - start < 5.0  # was 29 s
     assert pairs.shape[1] == 2 and len(pairs) > 0
     with pytest.raises(ValueError, match="radius_m"):
         network.find_crossovers(np.arange(4600.0), np.c_[np.arange(4600.0), np.zeros((4600, 2))],
