@@ -168,6 +168,10 @@ def test_select_grid_is_checked_before_any_walk_is_tracked(two_floor_site, capsy
     with pytest.raises(SystemExit):
         cli.main(["fusion", "evaluate", "--data-root", str(two_floor_site), "--select", "--select-grid", "{not json"])
     assert "--select-grid" in capsys.readouterr().err
+    # Without --select the grid would be ignored: refused, no walk tracked.
+    assert cli.main(["fusion", "evaluate", "--data-root", str(two_floor_site), "--select-grid",
+                     '{"grid.wall_margin_m": [1]}']) != 0
+    assert "only with --select" in capsys.readouterr().err
 
 
 def test_survey_coverage_with_the_fold_tree_equals_the_brute_force_minimum():

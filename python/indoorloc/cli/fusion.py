@@ -62,6 +62,9 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if not root.is_dir():
         raise FileNotFoundError(f"indoorloc: argument 'data_root': {root} is not a folder of ILC floors")
     floors = args.floors or ilc_floor_names(root, with_plan=True, argument="data_root")
+    if args.select_grid is not None and not args.select:
+        raise ValueError("indoorloc: argument '--select-grid': only with --select (the grid of the "
+                         "leave-one-floor-out choice); without it nothing would be selected")
     ticker = progress.Ticker(desc="fusion evaluate: walks")
     if args.select:
         result = fr.select_settings(root, floors, settings, grid=args.select_grid, progress=ticker.tick)
