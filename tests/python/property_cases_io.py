@@ -238,9 +238,9 @@ def group_io() -> None:
     iio.write_geojson_floor(tmp / "plan.geojson", geometry)
     fuzz_file("read_geojson_floor", lambda: iio.read_geojson_floor(tmp / "plan.geojson"), tmp, "plan.geojson")
 
-    from test_io_ilc2020 import _write_walk  # the ILC walk fixture
+    from ilc2020_files import write_walk  # the ILC walk fixture
 
-    _write_walk(tmp / "walk.txt", seed=1, n_epochs=10)
+    write_walk(tmp / "walk.txt", seed=1, n_epochs=10)
     fuzz_file("read_ilc_walk", lambda: iio.read_ilc_walk(tmp / "walk.txt"), tmp, "walk.txt")
 
     month = tmp / "uji" / "db" / "01"
@@ -287,10 +287,10 @@ def group_io() -> None:
               surimi, "LIB1.mat", arg_name="root")
 
     # The competition's floor folder: its JSON files (the walks are fuzzed above).
-    from test_io_ilc2020 import T0, _write_floor
+    from ilc2020_files import T0, write_floor
 
     floor_dir = tmp / "site" / "F1"
-    _write_floor(floor_dir, [1], [T0])
+    write_floor(floor_dir, [1], [T0])
     for damaged in ("floor_info.json", "geojson_map.json"):
         fuzz_file(f"read_ilc_floor[{damaged}]", lambda: _ilc_floor_summary(iio.read_ilc_floor(floor_dir, cache=False)),
                   floor_dir, damaged, arg_name="floor_dir")
