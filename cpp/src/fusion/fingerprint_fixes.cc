@@ -36,9 +36,10 @@ struct FingerprintFixer::State {
   Eigen::VectorXd weights;
   Eigen::Index columns = 0;
   std::unique_ptr<wifi::SharedApMatcher> matcher;
-  // Every BSSID met gets a small id (the map's columns first: id = column; unknown BSSIDs after,
-  // so that a measurement key is two integers, no string built per reading).
+  // The map's BSSIDs and their columns, the only ids kept: a BSSID the map does not know is
+  // counted and dropped (a long live run meets ever more of them; memory stays the map's).
   std::unordered_map<std::string, int> id_of;
+  long long unknown_readings = 0;
   struct Key {
     int id;
     long long ms;  // last-seen time [ms]
@@ -100,6 +101,9 @@ FingerprintFixer& FingerprintFixer::operator=(FingerprintFixer&&) noexcept = def
 const FingerprintFixOptions& FingerprintFixer::options() const { return state_->options; }
 int FingerprintFixer::num_fingerprints() const { return static_cast<int>(state_->positions_m.rows()); }
 int FingerprintFixer::num_access_points() const { return static_cast<int>(state_->columns); }
+long long FingerprintFixer::unknown_readings() const { return state_->unknown_readings; }
+std::size_t FingerprintFixer::num_known_ids() const { return state_->id_of.size(); }
+std::size_t FingerprintFixer::num_remembered_measurements() const { return state_->seen.size(); }
 
 bool FingerprintFixer::AddScan(double time_s, const std::vector<std::string>& bssids,
                                const Eigen::Ref<const Eigen::VectorXd>& rssi_dbm,
@@ -123,11 +127,15 @@ bool FingerprintFixer::AddScan(double time_s, const std::vector<std::string>& bs
   for (std::size_t j = 0; j < m; ++j) {
     // The measurement key of python IlcWifi.new_measurement_mask: last-seen time in whole ms
     // (rounded half to even, as numpy's round).
+    const auto known = s.id_of.find(bssids[j]);  // a look-up: no string built per reading
+    if (known == s.id_of.end()) {
+      ++s.unknown_readings;
+      continue;
+    }
+    const int id = known->second;
     const double seen = last_seen_s[static_cast<Eigen::Index>(j)];
     const long long ms = static_cast<long long>(std::nearbyint(seen * 1000.0));
-    const int id = s.id_of.emplace(bssids[j], static_cast<int>(s.id_of.size())).first->second;
     if (!s.seen.emplace(State::Key{id, ms}, seen).second) continue;
-    if (id >= s.columns) continue;  // not in the map
     s.fresh.push_back({seen, id, rssi_dbm[static_cast<Eigen::Index>(j)]});
   }
   auto by_time = [](const State::Measurement& a, const State::Measurement& b) { return a.t < b.t; };
