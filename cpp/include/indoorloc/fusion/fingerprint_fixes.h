@@ -86,7 +86,7 @@ class FingerprintFixer {
   long long unknown_readings() const;
   /// BSSIDs with an id: the map's, whatever the scans brought (memory bound of a long run).
   std::size_t num_known_ids() const;
-  /// Measurements remembered to drop repeats (those of the last window, pruned past 4096).
+  /// Measurements remembered to drop repeats: per map AP those of the last window (+1), or up to 16.
   std::size_t num_remembered_measurements() const;
 
  private:
