@@ -207,6 +207,33 @@ def test_cli_writes_the_json(tmp_path, capsys):
     assert "Recommended method" in capsys.readouterr().out
 
 
+def test_cli_json_is_written_atomically(tmp_path, monkeypatch):
+    """--json goes through a temporary file and one rename: when the rename fails, the previous
+    file is kept whole and no temporary file is left (a plain write_text would have truncated it)."""
+    import os
+
+    from indoorloc.cli import main
+    from indoorloc.io import atomic_file
+
+    folder = tmp_path / "pyshoe_vicon"
+    folder.mkdir()
+    _write_trial(folder / "a_LLIO.mat", foot_gait(5, seed=10))
+    out = tmp_path / "res.json"
+    out.write_text("previous\n")
+    renames = []
+
+    def failing_replace(src, dst):
+        renames.append((os.path.basename(src), os.path.basename(dst)))
+        raise OSError("disk full")
+
+    monkeypatch.setattr(atomic_file.os, "replace", failing_replace)
+    with pytest.raises(OSError, match="disk full"):
+        main(["pdr", "evaluate", "--data-root", str(tmp_path), "--json", str(out), "--only", "pyshoe", "--quiet"])
+    assert renames and renames[0][1] == "res.json" and renames[0][0].startswith(".res.json.")
+    assert out.read_text() == "previous\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["pyshoe_vicon", "res.json"]
+
+
 # ------------------------------------------------------------------ real data (skips without it)
 def test_recommended_method_on_two_real_trials(shared_data):
     root = shared_data / "pdr" / "pyshoe_vicon"
