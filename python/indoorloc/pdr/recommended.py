@@ -49,7 +49,9 @@ SHOE_SIGMA_GYRO_RADPS = 0.1 * math.pi / 180.0
 #: 1.3-2; 1.5-2 tie). The ladder step (0.25 decade), the cap (1e7) and the stance floor (15 %)
 #: were fixed beforehand. min_plausible_swing_s (0.2 s) and low_motion_min_stance_s (0.08 s):
 #: leave-one-recording-out CV over the 21 trials and 12 synthetic slow low-motion gaits
-#: (``python -m indoorloc.experiments.pdr_low_motion``; docs/pdr.md "Low-motion walks").
+#: (``python -m indoorloc.experiments.pdr_low_motion``; docs/pdr.md "Low-motion walks"). With the
+#: rhythm floor of :data:`MIN_SWING_SHARE` on, min_plausible_swing_s 0.15-0.35 s tie in that CV
+#: (the folds take the first, 0.15); 0.2 s is kept: it is the floor when the IMU shows no rhythm.
 ZUPT_DETECTOR = {"rule": "swing_guard", "threshold": 1e4, "max_swing_s": 2.0, "max_swing_ratio": 1.5,
                  "ladder_step_decades": 0.25, "min_stance_share": 0.15, "max_threshold": 1e7,
                  "min_plausible_swing_s": 0.2, "low_motion_min_stance_s": 0.08}
