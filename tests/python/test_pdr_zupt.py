@@ -399,3 +399,28 @@ def test_the_ladder_refuses_swings_that_are_a_sliver_of_the_step_rhythm():
     assert new["stride_indices"].size == 20 and old["stride_indices"].size > 40
     assert _final_error(rec, new["positions_m"]) < 0.5 < _final_error(rec, old["positions_m"])
     assert old["health"]["implausible"]  # the old result was flagged, at least
+
+
+@pytest.mark.parametrize("stride_m, swing_s, stance_s, tremor_radps, pitch_deg", [
+    (0.3, 0.9, 0.4, 1.0, 5.0),   # stances that turn faster than the flat swings: read as 87 % stance, 0.2 m of 6 m
+    (0.7, 0.9, 1.0, 1.0, 5.0),   # the same with long stances: 0.4 m of 14 m
+    (0.7, 0.6, 1.0, 1.0, 5.0),   # no rung at all: the base threshold, stances missing
+    (0.3, 0.9, 0.15, 1.0, 5.0),  # sliver swings at the base threshold: 59 strides too many
+    (0.7, 0.6, 0.4, 0.3, 30.0),  # an ordinary walk: read whole, not flagged
+])
+def test_a_walk_read_as_a_standstill_is_never_silent(stride_m, swing_s, stance_s, tremor_radps, pitch_deg):
+    """Gaits of the synthetic sweep (experiments.pdr_gait_sweep) on which SHOE cannot separate
+    stance from swing: whatever the detector makes of them, a result with fewer than half the
+    strides, a path under half the walk or twice the strides is flagged implausible."""
+    rec = foot_gait(20, stride_m=stride_m, swing_s=swing_s, stance_s=stance_s, stance_rate_radps=tremor_radps,
+                    pitch_deg=pitch_deg, lift_m=0.02 if pitch_deg < 10 else 0.1, timing_jitter=0.1, tremor_spread=0.5,
+                    seed=7)
+    out = recommended.run_recommended(rec)
+    n = out["stride_indices"].size
+    path = metrics.path_length(out["positions_m"][:, :2])
+    broken = n < 10 or n > 40 or path < 0.5 * rec.distance_m
+    if pitch_deg == 30.0:
+        assert not broken and not out["health"]["implausible"], out["health"]["report"]
+    else:
+        assert broken  # SHOE cannot read these gaits: the test exercises the flag
+        assert out["health"]["implausible"], out["health"]["report"]
