@@ -151,9 +151,13 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     cv = share_cv(groups)
     print(markdown(cv))
     if args.pickle:
+        import os
         import pickle
 
-        Path(args.pickle).write_bytes(pickle.dumps({k: v for k, v in cv.items()}))
+        target = Path(args.pickle)
+        tmp = target.with_name(f".{target.name}.tmp")
+        tmp.write_bytes(pickle.dumps(dict(cv)))
+        os.replace(tmp, target)  # never a half-written file
     return 0
 
 
