@@ -2,8 +2,8 @@
 
 A concept ``foo`` of subsystem ``bar`` is the public header ``cpp/include/indoorloc/bar/foo.h``,
 its source ``cpp/src/bar/foo.cc``, its C++ test ``tests/cpp/bar/foo_test.cc`` and a Python test
-``tests/python/test_bar*.py``; the subsystem's Python facade is ``python/indoorloc/bar.py`` or
-the package ``python/indoorloc/bar/``. A concept whose C++ test lives in a sibling's test file is
+``tests/python/test_bar*.py``; the subsystem's Python side is the package ``python/indoorloc/bar/``
+(its facade in ``__init__.py``), mirroring ``cpp/include/indoorloc/bar/``. A concept whose C++ test lives in a sibling's test file is
 listed in ``TESTED_WITH`` (the test checks that file includes the header), so that a new header
 without a test fails here.
 """
@@ -61,11 +61,23 @@ def test_concept_has_its_source_and_cpp_test(header):
 
 
 @pytest.mark.parametrize("subsystem", SUBSYSTEMS)
-def test_subsystem_has_a_facade_and_python_tests(subsystem):
+def test_subsystem_has_a_package_and_python_tests(subsystem):
     package = ROOT / "python" / "indoorloc"
-    assert (package / f"{subsystem}.py").exists() or (package / subsystem / "__init__.py").exists(), (
-        f"no Python facade for {subsystem}")
+    assert (package / subsystem / "__init__.py").exists(), (
+        f"no Python package python/indoorloc/{subsystem}/ mirroring cpp/include/indoorloc/{subsystem}/")
+    assert not (package / f"{subsystem}.py").exists(), (
+        f"python/indoorloc/{subsystem}.py beside the package: the facade is {subsystem}/__init__.py")
     assert list((ROOT / "tests" / "python").glob(f"test_{subsystem}*.py")), f"no tests/python/test_{subsystem}*.py"
+
+
+def test_every_python_subsystem_package_has_its_cpp_folder():
+    """The mirror the other way: a Python package named like a subsystem has a C++ folder
+    (io, simulate, experiments, cli and data are the Python-only packages of docs/architecture.md)."""
+    python_only = {"io", "simulate", "experiments", "cli", "data", "_core"}
+    # Deprecated aliases of moved modules (docs/api_changes.md), removed after one release.
+    aliases = {"wifi_crowdsource", "wifi_fixes"}
+    packages = {p.parent.name for p in (ROOT / "python" / "indoorloc").glob("*/__init__.py")}
+    assert packages - python_only - aliases == set(SUBSYSTEMS)
 
 
 def test_tested_with_lists_only_existing_headers():

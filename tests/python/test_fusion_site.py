@@ -79,7 +79,7 @@ def test_round_trip_equals_in_memory_models(built, floor_dir):
     cal = site_model.calibrate_floor(walks, steps)
     db = site_model.build_fingerprints(walks, steps, 8, settings.fixes)
     plan = load_floor_plan(floor_dir / "geojson_map.json", floors=[8], origin_lon_lat="outline_sw")
-    tracker = GridTracker(plan, site_model.floor_grid_options(settings, cal))
+    tracker = site_model.survey_anchored(GridTracker(plan, site_model.floor_grid_options(settings, cal)), plan, db)
     test = read_ilc_walk(paths[N_SURVEY + 2])
     r = site_model.run_default(tracker, site_model.tracker_steps(ph.handheld_steps(test), cal, settings),
                                wifi_fixes.fixes_for_walk(test, db))

@@ -47,7 +47,8 @@ LAYERS: Tuple[Tuple[str, str, Tuple[str, ...]], ...] = (
      ("indoorloc.io", "indoorloc.io.**", "indoorloc.simulate", "indoorloc.simulate.**")),
     ("facades", "one per subsystem (core, analog, mapmatch, network, pdr, wifi, fusion, ...) and "
                 "metrics: every other top-level module",
-     ("indoorloc.*", "indoorloc.fusion.**", "indoorloc.pdr.**")),
+     ("indoorloc.*", "indoorloc.core.**", "indoorloc.analog.**", "indoorloc.mapmatch.**", "indoorloc.network.**",
+      "indoorloc.pdr.**", "indoorloc.wifi.**", "indoorloc.fusion.**")),
     ("package", "indoorloc/__init__.py: re-exports the facades",
      ("indoorloc",)),
     ("plots", "matplotlib figures",

@@ -320,6 +320,42 @@ class _Problem:
 # --------------------------------------------------------------------------- public API
 
 
+def _checked_fixes(fix_times_s, fixes_m, fix_weights) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The fixes' times (J,), positions (J, 2) [m] and weights (J,) (all 1 when None), checked:
+    ValueError naming the argument."""
+    fix_times = _array("fix_times_s", fix_times_s, 1)
+    if fix_times.size == 0:
+        raise ValueError("fix_times_s / fixes_m: no fixes (at least one WiFi fix is needed)")
+    fixes = _array("fixes_m", fixes_m, 2, 2)
+    if fixes.shape[0] != fix_times.size:
+        raise ValueError(
+            f"fixes_m must have shape ({fix_times.size}, 2) to match fix_times_s, got {fixes.shape}"
+        )
+    if fix_weights is None:
+        return fix_times, fixes, np.ones(fix_times.size)
+    w_fix = _array("fix_weights", fix_weights, 1)
+    if w_fix.size != fix_times.size:
+        raise ValueError(f"fix_weights must have shape ({fix_times.size},), got {w_fix.shape}")
+    if np.any(w_fix < 0) or not np.any(w_fix > 0):
+        raise ValueError("fix_weights must be non-negative and not all zero")
+    return fix_times, fixes, w_fix
+
+
+def _best_rotation(disp: np.ndarray, increments: np.ndarray, w: np.ndarray, sigma_rot: Optional[float]) -> float:
+    """The rotation [rad] that best maps the PDR displacements (M - 1, 2) onto the solved
+    increments (M - 1, 2) under step weights w (M - 1,): the alternation's rotation update; with a
+    prior σ_θ it maximises dot cos θ + cross sin θ - θ² / (2 σ²) by a few Newton steps."""
+    cross = np.sum(w * (disp[:, 0] * increments[:, 1] - disp[:, 1] * increments[:, 0]))
+    dot = np.sum(w * np.sum(disp * increments, axis=1))
+    theta = float(np.arctan2(cross, dot))
+    if sigma_rot is not None:
+        for _ in range(10):
+            g1 = -dot * np.sin(theta) + cross * np.cos(theta) - theta / sigma_rot**2
+            g2 = -dot * np.cos(theta) - cross * np.sin(theta) - 1.0 / sigma_rot**2
+            theta -= g1 / g2
+    return theta
+
+
 def costmin_track(
     step_times_s,
     displacements_m,
@@ -377,22 +413,7 @@ def costmin_track(
             f"displacements_m must have shape ({m - 1}, 2) (one per pair of consecutive "
             f"step_times_s), got {disp.shape}"
         )
-    fix_times = _array("fix_times_s", fix_times_s, 1)
-    if fix_times.size == 0:
-        raise ValueError("fix_times_s / fixes_m: no fixes (at least one WiFi fix is needed)")
-    fixes = _array("fixes_m", fixes_m, 2, 2)
-    if fixes.shape[0] != fix_times.size:
-        raise ValueError(
-            f"fixes_m must have shape ({fix_times.size}, 2) to match fix_times_s, got {fixes.shape}"
-        )
-    if fix_weights is None:
-        w_fix = np.ones(fix_times.size)
-    else:
-        w_fix = _array("fix_weights", fix_weights, 1)
-        if w_fix.size != fix_times.size:
-            raise ValueError(f"fix_weights must have shape ({fix_times.size},), got {w_fix.shape}")
-        if np.any(w_fix < 0) or not np.any(w_fix > 0):
-            raise ValueError("fix_weights must be non-negative and not all zero")
+    fix_times, fixes, w_fix = _checked_fixes(fix_times_s, fixes_m, fix_weights)
     sigma_steps = _sigma_steps(sigma_step_m, m)
     sigma_fix = _positive("sigma_fix_m", sigma_fix_m)
     scale = _positive("loss_scale", loss_scale)
@@ -446,18 +467,7 @@ def costmin_track(
             new_p, _ = problem.solve(theta, robust, False, sigma_rot)
             new_theta = theta
             if rotate:  # alternation: best rotation of Δ onto the solved increments
-                d = np.diff(new_p, axis=0)
-                w = problem.info_step
-                cross = np.sum(w * (disp[:, 0] * d[:, 1] - disp[:, 1] * d[:, 0]))
-                dot = np.sum(w * np.sum(disp * d, axis=1))
-                if sigma_rot is None:
-                    new_theta = float(np.arctan2(cross, dot))
-                else:  # maximise dot cos + cross sin - θ² / (2 σ²): a few Newton steps
-                    new_theta = float(np.arctan2(cross, dot))
-                    for _ in range(10):
-                        g1 = -dot * np.sin(new_theta) + cross * np.cos(new_theta) - new_theta / sigma_rot**2
-                        g2 = -dot * np.cos(new_theta) - cross * np.sin(new_theta) - 1.0 / sigma_rot**2
-                        new_theta -= g1 / g2
+                new_theta = _best_rotation(disp, np.diff(new_p, axis=0), problem.info_step, sigma_rot)
         moved = np.max(np.abs(new_p - p))
         turned = abs(new_theta - theta)
         p, theta = new_p, new_theta
