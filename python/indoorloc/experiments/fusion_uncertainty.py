@@ -2,8 +2,8 @@
 leave-one-floor-out on the shared mall (docs/fusion_real.md, "Honest uncertainty").
 
 The posterior's own spread is that of the model, which knows nothing of its misfits: on the six
-shared floors (4-fold by walk) its 95 % ellipse holds the truth at 49 % of the smoother's waypoints
-and 57 % of the causal filter's. The tracker returns instead (``GridTrackerOptions``)
+shared floors (4-fold by walk) its 95 % ellipse holds the truth at 50 % of the smoother's waypoints
+and 58 % of the causal filter's. The tracker returns instead (``GridTrackerOptions``)
 
     Σ' = a Σ + (b² + (g d)² + (h max(0, s - s0))²) I,
 
@@ -19,7 +19,8 @@ reports the held-out floor's coverage with it; the all-floor choice is what the 
 The same study restricted to h = 0 (the distance-only calibration of before) is reported beside.
 
 Run: ``python -m indoorloc.experiments.fusion_uncertainty [--data-root DIR] [--floors ...]
-[--out benchmarks/results/fusion_uncertainty]`` (about 2 minutes on 2 cores for the six floors).
+[--out benchmarks/results/fusion_uncertainty]`` (701 s for the six floors on 2 cores shared with
+other jobs; the grid search dominates).
 """
 
 from __future__ import annotations
