@@ -80,6 +80,9 @@ equality and pickling as for every Options class. The fix likelihood's ε and τ
       .def_readwrite("fix_tempering_by_variance", &GridTrackerOptions::fix_tempering_by_variance,
                      "True: τ divides the fix components' variances (outlier floor kept); false: the "
                      "likelihood to the power τ.")
+      .def_readwrite("fix_survey_distance_factor", &GridTrackerOptions::fix_survey_distance_factor,
+                     "β: fixes evaluated at s + β (c - s), s the survey position nearest to cell c "
+                     "(GridTracker.with_survey_positions); 1: the cell centres.")
       .def_readwrite("start_position_sd_m", &GridTrackerOptions::start_position_sd_m, "Known start: sd [m].")
       .def_readwrite("filtered_covariance_scale", &GridTrackerOptions::filtered_covariance_scale,
                      "a of the filter's returned covariance a Σ + (b² + (g d)²) I.")
@@ -132,6 +135,16 @@ Build once per plan and options (keeps a reference to the plan); ``run`` is thre
            "(x0, y0, columns, rows): corner of the first cell [m] and the grid's size on a floor.")
       .def("walkable_fraction", &GridTracker::WalkableFraction, py::arg("floor_index"),
            "Walkable fraction of every cell (rows, columns), row 0 at the lowest y.")
+      .def(
+          "with_survey_positions",
+          [](const GridTracker& t, const RowMatrixXd& positions_m, const Eigen::VectorXi& floor_numbers) {
+            py::gil_scoped_release release;
+            return t.WithSurveyPositions(positions_m, floor_numbers);
+          },
+          py::arg("positions_m"), py::arg("floor_numbers"), py::keep_alive<0, 1>(), R"doc(
+A tracker on the same grids whose fixes are evaluated at survey-anchored positions
+(options.fix_survey_distance_factor β): positions_m (N, 2) [m] the survey (fingerprint reference)
+positions, floor_numbers (N,) their floors. β = 1 or a floor without positions: the cell centres.)doc")
       .def("run",
            [](const GridTracker& t, const py::object& step_times_s, const py::object& displacements_m,
               const py::object& covariances_m2, const py::object& fixes, const py::object& start, bool smooth) {

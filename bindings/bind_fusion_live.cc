@@ -293,9 +293,11 @@ naming the event's index, kind and time and the previous event's; the session is
             d["scans"] = u.scans;
             d["fixes"] = u.fixes;
             d["pending_fixes"] = u.pending_fixes;
+            d["unknown_wifi_readings"] = u.unknown_wifi_readings;
             return d;
           },
-          "Events, IMU samples, steps, scans, fixes applied and pending.")
+          "Events, IMU samples, steps, scans, fixes applied and pending, WiFi readings of BSSIDs "
+          "not in the map (dropped).")
       .def_property_readonly(
           "filter", [](const PyLiveSession& s) -> const GridFilterSession& { return s.session->filter(); },
           py::return_value_policy::reference_internal, "The GridFilterSession inside (steps, summary).")

@@ -83,7 +83,7 @@ int main(int argc, char** argv) {
                 floor.c_str(), f.geometry.outlines.size(), f.geometry.obstacles.size(),
                 static_cast<long>(map.rss_dbm.rows()), map.bssids.size());
     const fusion::FloorPlan plan({f.geometry});
-    const fusion::GridTracker tracker(&plan, site.TrackerOptions(floor));
+    const fusion::GridTracker tracker = site.Tracker(&plan, floor);
     fusion::LiveSession session(&tracker, &map, site.LiveOptions(floor), site.FixOptions());
 
     long events = 0;

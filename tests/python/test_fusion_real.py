@@ -202,3 +202,39 @@ def test_evaluate_scores_do_not_depend_on_the_worker_count(two_floor_site):
         for k in a.errors_m:
             assert np.array_equal(a.errors_m[k], b.errors_m[k])
         assert np.array_equal(a.coverage_m, b.coverage_m)
+
+
+def test_fold_models_from_the_walk_cache_equal_the_direct_construction(two_floor_site):
+    """WalkTrainingCache: each training walk's fingerprints and placed readings computed once for
+    every fold; the databases and crowdsourced maps equal build_database / build_crowd_map's."""
+    from indoorloc.experiments import fusion_real_folds as ff
+    from indoorloc.fusion import crowdsourced_map as wc, site_model, wifi_fixes as wfx
+
+    data = fr.load_site(two_floor_site, ["F1", "F2"])[1]
+    settings = fr.RealSettings(**FAST)
+    all_plan = fr._all_floor_plan(data)
+    fold_of = {fl.name: fr._folds(len(fl.walks), 2, 0) for fl in data}
+    cache = ff.WalkTrainingCache()
+    for j in range(2):
+        models = fr._fold_models(data, fold_of, j, settings, all_plan, True, cache)
+        all_walks, all_steps, all_numbers = [], [], []
+        for fl in data:
+            test = set(fold_of[fl.name][j].tolist())
+            train = [w for i, w in enumerate(fl.walks) if i not in test]
+            steps = [s for i, s in enumerate(fl.steps) if i not in test]
+            direct = site_model.build_fingerprints(train, steps, fl.number, settings.fixes)
+            crowd = wc.build_crowd_map(train, wc.CrowdMapSettings(), fl.number)
+            got = models[fl.name]
+            assert got.database.bssids == direct.bssids and got.crowd.bssids == crowd.bssids
+            for name in ("rss_dbm", "positions_m", "floors", "walk_index", "ap_ratio"):
+                assert np.array_equal(getattr(got.database, name), getattr(direct, name), equal_nan=True), name
+            for name in ("positions_m", "mean_dbm", "variance_db2"):
+                assert np.array_equal(np.asarray(getattr(got.crowd.signal_map, name)),
+                                      np.asarray(getattr(crowd.signal_map, name)), equal_nan=True), name
+            all_walks += train
+            all_steps += steps
+            all_numbers += [fl.number] * len(train)
+        direct_all = wfx.build_database(all_walks, settings.fixes, all_steps, floors=all_numbers)
+        for name in ("rss_dbm", "positions_m", "floors", "walk_index", "ap_ratio"):
+            assert np.array_equal(getattr(models["F1"].all_database, name), getattr(direct_all, name),
+                                  equal_nan=True), name

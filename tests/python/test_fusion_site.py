@@ -79,7 +79,7 @@ def test_round_trip_equals_in_memory_models(built, floor_dir):
     cal = site_model.calibrate_floor(walks, steps)
     db = site_model.build_fingerprints(walks, steps, 8, settings.fixes)
     plan = load_floor_plan(floor_dir / "geojson_map.json", floors=[8], origin_lon_lat="outline_sw")
-    tracker = GridTracker(plan, site_model.floor_grid_options(settings, cal))
+    tracker = site_model.survey_anchored(GridTracker(plan, site_model.floor_grid_options(settings, cal)), plan, db)
     test = read_ilc_walk(paths[N_SURVEY + 2])
     r = site_model.run_default(tracker, site_model.tracker_steps(ph.handheld_steps(test), cal, settings),
                                wifi_fixes.fixes_for_walk(test, db))
@@ -335,6 +335,36 @@ def test_cli_build_info_track(tmp_path, floor_dir, capsys):
     assert head[0].startswith("walk,t_s,unix_ms,x_m,y_m,floor,sd_x_m,sd_y_m,floor_probability")
     assert main(["--quiet", "track", str(paths[5]), "--site", str(db), "-o", str(tmp_path / "t.txt")]) == 2
     assert "extension" in capsys.readouterr().err
+
+
+def test_cli_track_says_when_no_wifi_fix_was_available(tmp_path, floor_dir, capsys):
+    """A walk without a WiFi fix (its first 20 s, cut before any scan was reported) is tracked but
+    not located: the summary line and the JSON say that no fix was available, and the sds written
+    are the floor-wide prior's (large), not a located track's."""
+    from indoorloc.cli import main
+
+    paths = _walk_paths(floor_dir)
+    survey = _survey(tmp_path, floor_dir, paths[:3])
+    db = tmp_path / "s.db"
+    assert main(["--quiet", "site", "build", str(survey), "-o", str(db)]) == 0
+    lines = paths[5].read_text().splitlines(keepends=True)
+    t0 = next(int(ln.split("\t")[0]) for ln in lines if ln[:1].isdigit())
+    cut = [ln for ln in lines if not ln[:1].isdigit()
+           or (int(ln.split("\t")[0]) < t0 + 20_000 and "TYPE_WIFI" not in ln)]
+    walk = tmp_path / "no_wifi.txt"
+    walk.write_text("".join(cut))
+    out = tmp_path / "t.json"
+    capsys.readouterr()
+    assert main(["--quiet", "track", str(walk), "--site", str(db), "--floor", FLOOR, "-o", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "no WiFi fix available" in printed and "not located" in printed
+    w = json.loads(out.read_text())["walks"][0]
+    assert w["wifi_fixes"] == 0 and len(w["t_s"]) > 0
+    assert np.median(w["sd_x_m"]) > 20.0
+    # A walk with WiFi: its fixes counted, and no such note.
+    assert main(["--quiet", "track", str(paths[5]), "--site", str(db), "--floor", FLOOR, "-o", str(out)]) == 0
+    assert "no WiFi fix" not in capsys.readouterr().out
+    assert json.loads(out.read_text())["walks"][0]["wifi_fixes"] > 0
 
 
 def test_site_live_replays_the_causal_track(built):

@@ -207,6 +207,33 @@ def test_cli_writes_the_json(tmp_path, capsys):
     assert "Recommended method" in capsys.readouterr().out
 
 
+def test_cli_json_is_written_atomically(tmp_path, monkeypatch):
+    """--json goes through a temporary file and one rename: when the rename fails, the previous
+    file is kept whole and no temporary file is left (a plain write_text would have truncated it)."""
+    import os
+
+    from indoorloc.cli import main
+    from indoorloc.io import atomic_file
+
+    folder = tmp_path / "pyshoe_vicon"
+    folder.mkdir()
+    _write_trial(folder / "a_LLIO.mat", foot_gait(5, seed=10))
+    out = tmp_path / "res.json"
+    out.write_text("previous\n")
+    renames = []
+
+    def failing_replace(src, dst):
+        renames.append((os.path.basename(src), os.path.basename(dst)))
+        raise OSError("disk full")
+
+    monkeypatch.setattr(atomic_file.os, "replace", failing_replace)
+    with pytest.raises(OSError, match="disk full"):
+        main(["pdr", "evaluate", "--data-root", str(tmp_path), "--json", str(out), "--only", "pyshoe", "--quiet"])
+    assert renames and renames[0][1] == "res.json" and renames[0][0].startswith(".res.json.")
+    assert out.read_text() == "previous\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["pyshoe_vicon", "res.json"]
+
+
 # ------------------------------------------------------------------ real data (skips without it)
 def test_recommended_method_on_two_real_trials(shared_data):
     root = shared_data / "pdr" / "pyshoe_vicon"
@@ -267,7 +294,8 @@ def test_leave_one_out_never_scores_a_trial_with_a_setting_chosen_on_it():
 
 def _old_rule(rec):
     """The swing guard before issue 28: no swing floor, raw stance (flicker kept)."""
-    det = recommended.detect_stance(rec, min_plausible_swing_s=0.0, low_motion_min_stance_s=0.02)
+    det = recommended.detect_stance(rec, min_plausible_swing_s=0.0, low_motion_min_stance_s=0.02,
+                                     min_swing_share=0.0)
     stance = np.asarray(det["statistic"]) < det["threshold"]
     out = pdr.zupt_ekf(rec.time_s, rec.acc_mps2, rec.gyro_radps, stance, smooth=True)
     strides = np.asarray(pdr.count_strides(stance, rec.rate_hz)["stride_indices"])
@@ -336,3 +364,63 @@ def test_gait_evidence_reads_the_rhythm_of_a_walk():
     assert ev["period_s"] == pytest.approx(1.1, abs=0.03)
     assert ev["rhythm_strides"] == pytest.approx(20, abs=1.5)
     assert ev["energy_mps2"] > 1.0 and ev["strength"] > 0.5
+
+
+def test_the_swing_floor_follows_the_step_rhythm_only_while_walking():
+    walk = {"energy_mps2": 5.0, "strength": 0.6, "period_s": 1.5, "rhythm_strides": 20}
+    assert recommended.swing_floor(walk, 0.2, 0.2, 2.0) == pytest.approx(0.3)    # 0.2 x 1.5 s
+    assert recommended.swing_floor(walk, 0.2, 0.0, 2.0) == pytest.approx(0.2)    # share off: the absolute floor
+    assert recommended.swing_floor(dict(walk, period_s=0.8), 0.2, 0.2, 2.0) == pytest.approx(0.2)  # 0.16 < 0.2
+    assert recommended.swing_floor(dict(walk, period_s=2.5), 0.2, 0.9, 2.0) == pytest.approx(1.0)  # < max_swing_s
+    for still in (dict(walk, energy_mps2=0.05), dict(walk, strength=0.05), dict(walk, period_s=float("nan"))):
+        assert recommended.swing_floor(still, 0.2, 0.2, 2.0) == pytest.approx(0.2)  # no rhythm: no rhythm floor
+    for bad in (-0.1, 1.0, float("nan")):
+        with pytest.raises(ValueError, match="min_swing_share"):
+            recommended.swing_floor(walk, 0.2, bad, 2.0)
+        with pytest.raises(ValueError, match="min_swing_share"):
+            recommended.detect_stance(foot_gait(3, seed=1), min_swing_share=bad)
+
+
+def test_the_ladder_refuses_swings_that_are_a_sliver_of_the_step_rhythm():
+    """A slow walk with long, trembling stances (swing 0.9 s, stance 1.0 s, tremor 0.3 rad/s; the
+    gait sweep's walk of seed 1209): without the rhythm floor the ladder climbs to a rung whose
+    swings last 0.23 s, an eighth of the 1.8 s stride period, counts 40 strides too many and loses
+    metres; with it that rung is refused and the walk is read whole."""
+    rec = foot_gait(20, stride_m=0.7, swing_s=0.9, stance_s=1.0, stance_rate_radps=0.3, noise_acc_mps2=0.03,
+                    noise_gyro_radps=0.003, pitch_deg=30.0, lift_m=0.1, timing_jitter=0.1, tremor_spread=0.5,
+                    seed=1209)
+    ev = recommended.gait_evidence(rec)
+    assert ev["period_s"] == pytest.approx(1.8, abs=0.1)
+    old = recommended.run_recommended(rec, min_swing_share=0.0)
+    new = recommended.run_recommended(rec)
+    assert new["health"]["swing_floor_s"] == pytest.approx(recommended.MIN_SWING_SHARE * ev["period_s"])
+    assert old["detector"]["median_swing_s"] < 0.15 * ev["period_s"]
+    assert new["detector"]["median_swing_s"] >= new["health"]["swing_floor_s"]
+    assert new["stride_indices"].size == 20 and old["stride_indices"].size > 40
+    assert _final_error(rec, new["positions_m"]) < 0.5 < _final_error(rec, old["positions_m"])
+    assert old["health"]["implausible"]  # the old result was flagged, at least
+
+
+@pytest.mark.parametrize("stride_m, swing_s, stance_s, tremor_radps, pitch_deg", [
+    (0.3, 0.9, 0.4, 1.0, 5.0),   # stances that turn faster than the flat swings: read as 87 % stance, 0.2 m of 6 m
+    (0.7, 0.9, 1.0, 1.0, 5.0),   # the same with long stances: 0.4 m of 14 m
+    (0.7, 0.6, 1.0, 1.0, 5.0),   # no rung at all: the base threshold, stances missing
+    (0.3, 0.9, 0.15, 1.0, 5.0),  # sliver swings at the base threshold: 59 strides too many
+    (0.7, 0.6, 0.4, 0.3, 30.0),  # an ordinary walk: read whole, not flagged
+])
+def test_a_walk_read_as_a_standstill_is_never_silent(stride_m, swing_s, stance_s, tremor_radps, pitch_deg):
+    """Gaits of the synthetic sweep (experiments.pdr_gait_sweep) on which SHOE cannot separate
+    stance from swing: whatever the detector makes of them, a result with fewer than half the
+    strides, a path under half the walk or twice the strides is flagged implausible."""
+    rec = foot_gait(20, stride_m=stride_m, swing_s=swing_s, stance_s=stance_s, stance_rate_radps=tremor_radps,
+                    pitch_deg=pitch_deg, lift_m=0.02 if pitch_deg < 10 else 0.1, timing_jitter=0.1, tremor_spread=0.5,
+                    seed=7)
+    out = recommended.run_recommended(rec)
+    n = out["stride_indices"].size
+    path = metrics.path_length(out["positions_m"][:, :2])
+    broken = n < 10 or n > 40 or path < 0.5 * rec.distance_m
+    if pitch_deg == 30.0:
+        assert not broken and not out["health"]["implausible"], out["health"]["report"]
+    else:
+        assert broken  # SHOE cannot read these gaits: the test exercises the flag
+        assert out["health"]["implausible"], out["health"]["report"]

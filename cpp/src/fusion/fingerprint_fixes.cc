@@ -34,20 +34,15 @@ struct FingerprintFixer::State {
   Eigen::VectorXd weights;
   Eigen::Index columns = 0;
   std::unique_ptr<wifi::SharedApMatcher> matcher;
-  // Every BSSID met gets a small id (the map's columns first: id = column; unknown BSSIDs after,
-  // so that a measurement key is two integers, no string built per reading).
+  // The map's BSSIDs and their columns, the only ids kept: a BSSID the map does not know is
+  // counted and dropped (a long live run meets ever more of them; memory stays the map's).
   std::unordered_map<std::string, int> id_of;
-  struct Key {
-    int id;
-    long long ms;  // last-seen time [ms]
-    bool operator==(const Key& o) const { return id == o.id && ms == o.ms; }
-  };
-  struct KeyHash {
-    std::size_t operator()(const Key& k) const {
-      return std::hash<std::uint64_t>()(static_cast<std::uint64_t>(k.ms) * 1000003u + static_cast<std::uint32_t>(k.id));
-    }
-  };
-  std::unordered_map<Key, double, KeyHash> seen;  // measurement -> its last-seen time [s]
+  long long unknown_readings = 0;
+  // Measurements met, to drop repeats: per map column, (last-seen ms, last-seen s) of its recent
+  // measurements (a short list scanned per reading: no allocation, no hashing per reading);
+  // entries older than the window are dropped whenever a list reaches kSeenPerAp.
+  static constexpr std::size_t kSeenPerAp = 16;
+  std::vector<std::vector<std::pair<long long, double>>> seen;
   // Kept measurements of known APs, sorted by last-seen time (stably: equal times keep their
   // arrival order, the order of pool_windows' stable sort, so the mean time sums alike).
   struct Measurement {
@@ -83,6 +78,7 @@ FingerprintFixer::FingerprintFixer(const FingerprintMap& map, const FingerprintF
   s.floors = map.floors;
   s.weights = map.weights;
   s.columns = k;
+  s.seen.resize(static_cast<std::size_t>(k));
   for (Eigen::Index j = 0; j < k; ++j) {
     if (!s.id_of.emplace(map.bssids[static_cast<std::size_t>(j)], static_cast<int>(j)).second) {
       ThrowInvalidArgument("map.bssids", "'" + map.bssids[static_cast<std::size_t>(j)] + "' appears twice");
@@ -98,6 +94,13 @@ FingerprintFixer& FingerprintFixer::operator=(FingerprintFixer&&) noexcept = def
 const FingerprintFixOptions& FingerprintFixer::options() const { return state_->options; }
 int FingerprintFixer::num_fingerprints() const { return static_cast<int>(state_->positions_m.rows()); }
 int FingerprintFixer::num_access_points() const { return static_cast<int>(state_->columns); }
+long long FingerprintFixer::unknown_readings() const { return state_->unknown_readings; }
+std::size_t FingerprintFixer::num_known_ids() const { return state_->id_of.size(); }
+std::size_t FingerprintFixer::num_remembered_measurements() const {
+  std::size_t n = 0;
+  for (const auto& met : state_->seen) n += met.size();
+  return n;
+}
 
 bool FingerprintFixer::AddScan(double time_s, const std::vector<std::string>& bssids,
                                const Eigen::Ref<const Eigen::VectorXd>& rssi_dbm,
@@ -121,11 +124,20 @@ bool FingerprintFixer::AddScan(double time_s, const std::vector<std::string>& bs
   for (std::size_t j = 0; j < m; ++j) {
     // The measurement key of python IlcWifi.new_measurement_mask: last-seen time in whole ms
     // (rounded half to even, as numpy's round).
+    const auto known = s.id_of.find(bssids[j]);  // a look-up: no string built per reading
+    if (known == s.id_of.end()) {
+      ++s.unknown_readings;
+      continue;
+    }
+    const int id = known->second;
     const double seen = last_seen_s[static_cast<Eigen::Index>(j)];
     const long long ms = static_cast<long long>(std::nearbyint(seen * 1000.0));
-    const int id = s.id_of.emplace(bssids[j], static_cast<int>(s.id_of.size())).first->second;
-    if (!s.seen.emplace(State::Key{id, ms}, seen).second) continue;
-    if (id >= s.columns) continue;  // not in the map
+    auto& met = s.seen[static_cast<std::size_t>(id)];
+    if (std::any_of(met.begin(), met.end(), [ms](const auto& x) { return x.first == ms; })) continue;
+    if (met.size() >= State::kSeenPerAp) {  // forget what no later window can hold
+      met.erase(std::remove_if(met.begin(), met.end(), [lo](const auto& x) { return x.second < lo; }), met.end());
+    }
+    met.emplace_back(ms, seen);
     s.fresh.push_back({seen, id, rssi_dbm[static_cast<Eigen::Index>(j)]});
   }
   auto by_time = [](const State::Measurement& a, const State::Measurement& b) { return a.t < b.t; };
@@ -136,9 +148,6 @@ bool FingerprintFixer::AddScan(double time_s, const std::vector<std::string>& bs
   // Forget what no later window can hold (windows only move forward).
   const auto first = std::find_if(s.kept.begin(), s.kept.end(), [lo](const State::Measurement& x) { return x.t >= lo; });
   s.kept.erase(s.kept.begin(), first);
-  if (s.seen.size() > 4096) {
-    for (auto it = s.seen.begin(); it != s.seen.end();) it = it->second >= lo ? std::next(it) : s.seen.erase(it);
-  }
   // Max-pool the measurements last seen by now (a prefix), summing their times in time order.
   Eigen::VectorXd q = Eigen::VectorXd::Constant(s.columns, std::numeric_limits<double>::quiet_NaN());
   int heard = 0;

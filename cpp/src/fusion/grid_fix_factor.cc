@@ -5,7 +5,9 @@
 //
 // Cost: a fix's components are Gaussians with isotropic covariance, so each is separable:
 // N(x_c) ∝ exp(-dx²/2σ²) exp(-dy²/2σ²), two short vectors of exponentials per component instead
-// of one exponential per cell. With one fix at the step (the common case) the normalised factor
+// of one exponential per cell. Survey-anchored positions (GridTracker::WithSurveyPositions) read
+// that density at each cell's own point q(c) by bilinear interpolation between the cell centres
+// (the components' sd, >= 1 m, is well above the 1 m cells). With one fix at the step (the common case) the normalised factor
 // is (L / max L)^p, without a logarithm and an exponential per cell.
 #include <algorithm>
 #include <cmath>
@@ -18,7 +20,7 @@ namespace {
 
 // acc(c) = Σ_k (1 - ε) w_k N(x_c; μ_k, σ_k² I) over the components of `fix` on this floor.
 void AddFixDensity(const PositionFix& fix, const FloorGrid& fg, const GridTrackerOptions& options,
-                   std::vector<double>* acc, std::vector<double>* ex) {
+                   std::vector<double>* acc, std::vector<double>* ex, std::vector<double>* anchored) {
   const double c = options.cell_size_m;
   const double eps = options.fix.outlier_probability, tau = options.fix.tempering;
   std::fill(acc->begin(), acc->end(), 0.0);
@@ -52,6 +54,19 @@ void AddFixDensity(const PositionFix& fix, const FloorGrid& fg, const GridTracke
       for (int x = 0; x <= x_hi - x_lo; ++x) row[x] += sy * e[x];
     }
   }
+  if (fg.fix_cell.empty()) return;
+  // The density at the survey-anchored points: bilinear between the four cell centres around each.
+  anchored->resize(acc->size());
+  const std::vector<double>& a = *acc;
+  for (std::size_t i = 0; i < fg.size(); ++i) {
+    const std::size_t j = static_cast<std::size_t>(fg.fix_cell[i]);
+    const std::size_t dx = fg.fix_step_x[i], dy = fg.fix_step_y[i];
+    const double wx = fg.fix_wx[i], wy = fg.fix_wy[i];
+    const double lo = a[j] + wx * (a[j + dx] - a[j]);
+    const double hi = a[j + dy] + wx * (a[j + dy + dx] - a[j + dy]);
+    (*anchored)[i] = lo + wy * (hi - lo);
+  }
+  acc->swap(*anchored);
 }
 
 }  // namespace
@@ -61,11 +76,11 @@ TrackerGrids::FixFactor TrackerGrids::ComputeFixFactor(const std::vector<const P
   const double floor_density = options.fix.outlier_probability / total_area_m2;
   const double power = options.fix_tempering_by_variance ? 1.0 : options.fix.tempering;
   const std::size_t n = fg.size();
-  std::vector<double> acc(n), ex;
+  std::vector<double> acc(n), ex, anchored;
   FixFactor out;
   out.factor.resize(n);
   if (fixes.size() == 1) {  // F = (L / max L)^p
-    AddFixDensity(*fixes[0], fg, options, &acc, &ex);
+    AddFixDensity(*fixes[0], fg, options, &acc, &ex, &anchored);
     const double l_max = floor_density + *std::max_element(acc.begin(), acc.end());
     out.log_scale = power * std::log(l_max);
     const double inv = 1.0 / l_max;
@@ -78,7 +93,7 @@ TrackerGrids::FixFactor TrackerGrids::ComputeFixFactor(const std::vector<const P
   }
   std::vector<double> log_l(n, 0.0);
   for (const PositionFix* fix : fixes) {
-    AddFixDensity(*fix, fg, options, &acc, &ex);
+    AddFixDensity(*fix, fg, options, &acc, &ex, &anchored);
     for (std::size_t i = 0; i < n; ++i) log_l[i] += power * std::log(floor_density + acc[i]);
   }
   out.log_scale = *std::max_element(log_l.begin(), log_l.end());

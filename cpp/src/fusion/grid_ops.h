@@ -29,6 +29,13 @@ struct FloorGrid {
   int floor_number = 0;
   std::vector<float> walkable_fraction;  // a(c)
   std::vector<float> wall_factor;        // m(c) = a + (1 - a) e^λ
+  // Where the fixes are evaluated (GridTracker::WithSurveyPositions; empty: the cell centres):
+  // per cell the bilinear interpolation between the centres of cells j, j + sx, j + sy, j + sx + sy
+  // (sx 0 or 1, sy 0 or nx: 0 on a grid one cell wide) with weights wx, wy in [0, 1].
+  std::vector<int> fix_cell;
+  std::vector<unsigned char> fix_step_x;
+  std::vector<int> fix_step_y;
+  std::vector<float> fix_wx, fix_wy;
   std::size_t size() const { return static_cast<std::size_t>(nx) * ny; }
 };
 

@@ -36,6 +36,7 @@ bool GridTrackerOptions::IsValid(std::string* error) const {
              "must be <= 0 or -inf, got " + FormatValue(wall_log_penalty))
       .InRange(wall_margin_m, 0.0, 100.0, "wall_margin_m")
       .Check(fix_ok, "fix", fix_error)
+      .InRange(fix_survey_distance_factor, 0.0, 1.0, "fix_survey_distance_factor")
       .InRange(median_block_m, 0.1, 100.0, "median_block_m")
       .InRange(start_position_sd_m, 0.01, 1e4, "start_position_sd_m")
       .InRange(filtered_covariance_scale, 1e-6, 1e6, "filtered_covariance_scale")

@@ -246,6 +246,7 @@ const GridFilterEstimate& LiveSession::Estimate() const {
 LiveSessionSummary LiveSession::Summary() const {
   LiveSessionSummary out = state_->summary;
   out.pending_fixes = static_cast<int>(state_->fixes.size());
+  out.unknown_wifi_readings = state_->fixer ? state_->fixer->unknown_readings() : 0;
   return out;
 }
 

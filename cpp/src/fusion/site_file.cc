@@ -14,6 +14,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include "indoorloc/core/check.h"
+
 namespace indoorloc::fusion {
 namespace {
 
@@ -240,6 +242,7 @@ GridTrackerOptions SiteFile::TrackerOptions(const std::string& floor) const {
   o.position_noise_m = get("position_noise_m", o.position_noise_m);
   o.wall_log_penalty = get("wall_log_penalty", o.wall_log_penalty);
   o.wall_margin_m = get("wall_margin_m", o.wall_margin_m);
+  o.fix_survey_distance_factor = get("fix_survey_distance_factor", o.fix_survey_distance_factor);
   o.fix.outlier_probability = get("fix_outlier_probability", o.fix.outlier_probability);
   o.fix.tempering = get("fix_tempering", o.fix.tempering);
   o.fix_tempering_by_variance = get("fix_tempering_by_variance", o.fix_tempering_by_variance) != 0.0;
@@ -257,6 +260,14 @@ GridTrackerOptions SiteFile::TrackerOptions(const std::string& floor) const {
   const double spread = std::isfinite(cal.yaw_offset_spread_rad) ? cal.yaw_offset_spread_rad : 0.0;
   o.heading_offset_sd_rad = std::max(spread, 1e-3);
   return o;
+}
+
+GridTracker SiteFile::Tracker(const FloorPlan* plan, const std::string& floor) const {
+  CheckArgument(plan != nullptr && plan->num_floors() == 1, "plan", "must be the floor's one-floor plan");
+  GridTracker tracker(plan, TrackerOptions(floor));
+  const RowMatrixXd positions = FingerprintPositions(floor);
+  if (positions.rows() == 0) return tracker;
+  return tracker.WithSurveyPositions(positions, Eigen::VectorXi::Constant(positions.rows(), plan->floors()[0]));
 }
 
 RowMatrixXd SiteFile::FingerprintPositions(const std::string& floor) const {

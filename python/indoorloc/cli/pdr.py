@@ -13,6 +13,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
     from indoorloc.experiments import pdr_json
     from indoorloc.experiments import pdr_report
+    from indoorloc.io.atomic_file import write_text_atomic
 
     root = Path(args.data_root) if args.data_root else default_pdr_root()
     if not root.is_dir():
@@ -20,7 +21,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     doc = (pdr_json.evaluate_json_on_dask(root, args.only, args.scheduler) if args.scheduler
            else pdr_json.evaluate_json(root, only=args.only))
     if args.json:
-        Path(args.json).write_text(json.dumps(doc, indent=1) + "\n")
+        # temporary file + rename: an interrupted run never leaves a half-written JSON behind
+        write_text_atomic(args.json, json.dumps(doc, indent=1) + "\n")
     print("\n".join(pdr_report.recommended_summary_lines(doc)))
     if args.compare:
         for text in pdr_report.comparison_report(root):

@@ -112,9 +112,11 @@ def cmd_info(args: argparse.Namespace) -> int:
 
 
 def cmd_track(args: argparse.Namespace) -> int:
+    import numpy as np
+
     from indoorloc import progress
     from indoorloc.fusion.site import Site
-    from indoorloc.io.track_files import EXTENSIONS, error_stats, write_tracks
+    from indoorloc.io.track_files import EXTENSIONS, error_stats, wifi_fix_count, write_tracks
 
     if Path(args.output).suffix.lower() not in EXTENSIONS:
         raise ValueError(f"indoorloc: argument '-o/--output': {args.output}: the extension must be one of {EXTENSIONS}")
@@ -132,6 +134,12 @@ def cmd_track(args: argparse.Namespace) -> int:
                      "those only)")
         elif tr.header_floor and tr.header_floor != tr.floor:
             line += f" (its header says floor {tr.header_floor}: waypoint errors not comparable)"
+        if wifi_fix_count(tr) == 0:
+            # Without a fix nothing places the walk on the floor: the steps' shape is tracked, not
+            # their position, and the sd written for each step is the floor-wide prior's.
+            sd = float(np.median(np.sqrt(np.maximum(tr.covariance_m2[:, [0, 2]], 0.0)).max(axis=1)))
+            line += (f", no WiFi fix available (no scan matched the site's fingerprints): the position is "
+                     f"not located on the floor (median sd {sd:.0f} m), only the relative motion is tracked")
         if st:
             line += (f", error at {st['n_waypoints']} waypoints: mean {st['mean_m']:.2f} m, median "
                      f"{st['median_m']:.2f} m, p90 {st['p90_m']:.2f} m")

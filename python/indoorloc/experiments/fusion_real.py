@@ -139,8 +139,8 @@ def walk_snapshot(data_root: Optional[Path], floor: str, walk_index: int = 0,
                                         settings.step_length_sd_fraction * steps.length_m, settings.step_heading_sd_rad)
     spread = max(models.cal.yaw_offset_spread_rad, 1e-3)
     if settings.engine == "grid":  # the default's engine; a grid has no trajectories to draw
-        result = dict(fusion.track_grid(_grid_tracker(fl.plan, _grid_options(settings, spread), fl.name), pdr_steps,
-                                        fixes=fixes))
+        result = dict(fusion.track_grid(_grid_tracker(fl.plan, _grid_options(settings, spread), fl.name, models.database),
+                                        pdr_steps, fixes=fixes))
         if settings.point_estimate == "median":
             result["smoothed_m"], result["mean_m"] = result["smoothed_median_m"], result["median_m"]
         result["smoothed_trajectories_m"] = np.zeros((0, 2))

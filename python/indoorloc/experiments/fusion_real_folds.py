@@ -57,29 +57,74 @@ def _coverage_tree(database: wfx.FingerprintDatabase, floor: int):
     return cKDTree(xy) if xy.size else None
 
 
+class WalkTrainingCache:
+    """What a training walk gives every fold it trains (its fingerprints placed by PDR, its WiFi
+    readings placed for the crowdsourced map), computed once per walk instead of once per fold
+    and database: a walk trains k - 1 folds of its floor's database, of the crowdsourced map and
+    of the all-floor database. Values are those of ``wifi_fixes.build_database`` and
+    ``crowdsourced_map.build_crowd_map`` (same functions, same arguments), so the models are the
+    same bit for bit. Used from one thread (the one building the folds' models)."""
+
+    def __init__(self) -> None:
+        self._fingerprints: Dict[Tuple, object] = {}
+        self._placed: Dict[Tuple, object] = {}
+
+    def fingerprints(self, fl: FloorData, i: int, settings: wfx.FixSettings):
+        """``wifi_fixes.walk_fingerprints`` of walk i of the floor (None when none can be placed)."""
+        key = (fl.name, i, repr(settings))
+        if key not in self._fingerprints:
+            self._fingerprints[key] = wfx.walk_fingerprints(fl.walks[i], settings, fl.steps[i])
+        return self._fingerprints[key]
+
+    def placed(self, fl: FloorData, i: int, settings: wc.CrowdMapSettings):
+        """``crowdsourced_map.reading_positions`` of walk i of the floor."""
+        key = (fl.name, i, repr(settings))
+        if key not in self._placed:
+            self._placed[key] = wc.reading_positions(fl.walks[i], settings)
+        return self._placed[key]
+
+    def database(self, walks: Sequence[Tuple[FloorData, int]], settings: wfx.FixSettings) -> wfx.FingerprintDatabase:
+        """``wifi_fixes.build_database`` of the walks (floor, index), each on its floor's number."""
+        settings.validate()
+        per_walk = []
+        for j, (fl, i) in enumerate(walks):
+            got = self.fingerprints(fl, i, settings)
+            if got is not None:
+                rss, xy, names, _ = got
+                per_walk.append((rss, xy, names, np.full(xy.shape[0], fl.number), np.full(xy.shape[0], j)))
+        return wfx.assemble_database(per_walk, settings)
+
+
 def _fold_models(floors: Sequence[FloorData], fold_of: Dict[str, List[np.ndarray]], j: int,
-                 settings: RealSettings, all_plan, with_crowd_map: bool = True) -> Dict[str, FoldModels]:
+                 settings: RealSettings, all_plan, with_crowd_map: bool = True,
+                 cache: Optional[WalkTrainingCache] = None) -> Dict[str, FoldModels]:
     """Fold j's training models of every floor (and the all-floor database when identifying
-    floors); the crowdsourced cell map only ``with_crowd_map`` (the ``wifi_model`` method)."""
+    floors); the crowdsourced cell map only ``with_crowd_map`` (the ``wifi_model`` method).
+    ``cache``: the per-walk parts kept across folds (same models, computed once per walk)."""
+    cache = cache or WalkTrainingCache()
     out: Dict[str, FoldModels] = {}
-    all_walks, all_steps, all_numbers = [], [], []
+    all_walks: List[Tuple[FloorData, int]] = []
     for fl in floors:
         test = set(fold_of[fl.name][j].tolist())
         if not test and all_plan is None:  # nothing to score on this floor in this fold
             continue
-        train = [w for i, w in enumerate(fl.walks) if i not in test]
-        train_steps = [s for i, s in enumerate(fl.steps) if i not in test]
+        train_idx = [i for i in range(len(fl.walks)) if i not in test]
+        train = [fl.walks[i] for i in train_idx]
+        train_steps = [fl.steps[i] for i in train_idx]
         cal = site_model.calibrate_floor(train, train_steps)
-        crowd = wc.build_crowd_map(train, wc.CrowdMapSettings(), fl.number) if with_crowd_map else None
-        database = site_model.build_fingerprints(train, train_steps, fl.number, settings.fixes)
+        crowd = None
+        if with_crowd_map:
+            crowd_settings = wc.CrowdMapSettings()
+            crowd = wc.build_crowd_map(train, crowd_settings, fl.number,
+                                       placed=[cache.placed(fl, i, crowd_settings) for i in train_idx])
+        # site_model.build_fingerprints of the training walks, from the cached per-walk fingerprints.
+        database = cache.database([(fl, i) for i in train_idx], settings.fixes)
         crowd_grid = wifi.GridPosterior(crowd.model, settings.grid_spacing_m) if crowd is not None else None
         out[fl.name] = FoldModels(fl, cal, crowd, database, coverage_tree=_coverage_tree(database, fl.number),
                                   crowd_grid=crowd_grid)
-        all_walks += train
-        all_steps += train_steps
-        all_numbers += [fl.number] * len(train)
+        all_walks += [(fl, i) for i in train_idx]
     if all_plan is not None:
-        all_database = wfx.build_database(all_walks, settings.fixes, all_steps, floors=all_numbers)
+        all_database = cache.database(all_walks, settings.fixes)
         all_rates = site_model.ap_floor_rates(all_database, list(all_plan.floors), settings.track_settings())
         for m in out.values():
             m.all_plan, m.all_database, m.all_ap_rates = all_plan, all_database, all_rates
@@ -99,6 +144,7 @@ def evaluate_floors(floors: Sequence[FloorData], settings: RealSettings, peer=No
     fold_of = {fl.name: (_folds(len(fl.walks), n_folds, settings.seed) + [np.zeros(0, int)] * n_folds)[:n_folds]
                for fl in floors}
     scores: List[WalkScore] = []
+    cache = WalkTrainingCache()
     # Fold j's training models are built in this thread while fold j - 1's walks are scored by the
     # pool (the models do not depend on the scheduling: the results are those of a serial run).
     with ThreadPoolExecutor(max_workers=max(1, settings.threads)) as pool:
@@ -112,7 +158,7 @@ def evaluate_floors(floors: Sequence[FloorData], settings: RealSettings, peer=No
             key = (j, repr(settings.fixes), all_plan is None, "wifi_model" in methods)
             models = None if models_cache is None else models_cache.get(key)
             if models is None:
-                models = _fold_models(floors, fold_of, j, settings, all_plan, "wifi_model" in methods)
+                models = _fold_models(floors, fold_of, j, settings, all_plan, "wifi_model" in methods, cache)
                 if models_cache is not None:
                     models_cache[key] = models
             _collect(running, scores, progress)

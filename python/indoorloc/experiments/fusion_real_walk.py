@@ -225,16 +225,24 @@ _TRACKERS: Dict[Tuple[str, Tuple], Any] = {}
 _TRACKERS_LOCK = threading.Lock()
 
 
-def _grid_tracker(plan, options, key: str):
+def _grid_tracker(plan, options, key: str, database=None):
     """The GridTracker of a plan and options, built once (its walkable fractions cost a batch of
-    point queries) and shared by the threads (its runs are thread-safe)."""
+    point queries) and shared by the threads (its runs are thread-safe). With a fingerprint
+    ``database``: that tracker anchored to the database's survey positions
+    (``site_model.survey_anchored``; one per fold)."""
     k = (key, tuple(sorted(options.to_dict().items())))
     with _TRACKERS_LOCK:
         tracker = _TRACKERS.get(k)
         if tracker is None or tracker[0] is not plan:
             tracker = (plan, fusion.GridTracker(plan, options))
             _TRACKERS[k] = tracker
-        return tracker[1]
+        if database is None or options.fix_survey_distance_factor >= 1.0:
+            return tracker[1]
+        anchored = _TRACKERS.get(k + (id(database),))
+        if anchored is None or anchored[0] is not database:
+            anchored = (database, site_model.survey_anchored(tracker[1], plan, database))
+            _TRACKERS[k + (id(database),)] = anchored
+        return anchored[1]
 
 
 def _grid_options(settings: RealSettings, spread_rad: float, **changes):
@@ -257,7 +265,7 @@ def _score_walk_grid(score: WalkScore, put, pdr_steps, fixes, known_fixes, known
     idx = np.clip(np.searchsorted(pdr_steps.times_s, wt), 0, len(pdr_steps) - 1)
     spread = max(models.cal.yaw_offset_spread_rad, 1e-3)
     base = _grid_options(settings, spread)
-    tracker = _grid_tracker(fl.plan, base, fl.name)
+    tracker = _grid_tracker(fl.plan, base, fl.name, models.database)
 
     median = settings.point_estimate == "median"
 
@@ -302,13 +310,14 @@ def _score_walk_grid(score: WalkScore, put, pdr_steps, fixes, known_fixes, known
         fix_tempering_by_variance=settings.known_start_fix_tempering_by_variance,
         filtered_covariance_scale=settings.known_start_covariance_scale,
         filtered_covariance_floor_m=settings.known_start_covariance_floor_m,
-        filtered_covariance_fix_gain=settings.known_start_covariance_fix_gain), fl.name)
+        filtered_covariance_fix_gain=settings.known_start_covariance_fix_gain), fl.name, models.database)
     if "fusion_known_start" in want:
         run("fusion_known_start", None, known_tracker, known, known_fixes, smooth=False)
     if "fusion_no_walls" in want:
-        run(None, "fusion_no_walls", _grid_tracker(fl.outline_plan, base, fl.name + "/outline"), None, fixes)
+        run(None, "fusion_no_walls", _grid_tracker(fl.outline_plan, base, fl.name + "/outline", models.database),
+            None, fixes)
     if "fusion_no_wifi" in want:
         run(None, "fusion_no_wifi", known_tracker, known, None)
     if "fusion_no_heading_offset" in want:
-        run(None, "fusion_no_heading_offset", _grid_tracker(fl.plan, base.replace(heading_offset_sd_rad=0.0), fl.name),
-            None, fixes)
+        run(None, "fusion_no_heading_offset",
+            _grid_tracker(fl.plan, base.replace(heading_offset_sd_rad=0.0), fl.name, models.database), None, fixes)

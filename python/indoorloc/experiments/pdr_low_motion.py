@@ -49,7 +49,7 @@ GRID: List[Dict[str, float]] = [
 #: flicker kept (:func:`_before` takes the raw stance). It differs from the old code only when no
 #: rung is accepted at all (the old code kept the cap, this the most regular rung), which happens
 #: on none of the recordings here.
-BEFORE = {"min_plausible_swing_s": 0.0, "min_stance_s": 0.02, "low_motion_min_stance_s": 0.02}
+BEFORE = {"min_plausible_swing_s": 0.0, "min_stance_s": 0.02, "low_motion_min_stance_s": 0.02, "min_swing_share": 0.0}
 
 
 def synthetic_gaits() -> List[ImuRecording]:

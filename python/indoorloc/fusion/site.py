@@ -310,7 +310,8 @@ class Site:
                 database = tables.database(con, [name], self.settings.fixes)
             finally:
                 con.close()
-            tracker = GridTracker(plan, site_model.floor_grid_options(self.settings, cal))
+            tracker = site_model.survey_anchored(GridTracker(plan, site_model.floor_grid_options(self.settings, cal)),
+                                                 plan, database)
             self._models[name] = FloorModels(name, number, origin, plan, cal, database, tracker)
         return self._models[name]
 
@@ -434,7 +435,8 @@ class Site:
                 walk = read_ilc_walk(source)
                 cal = tables.calibrate(con, name, exclude_walk=walk_id)
                 database = tables.database(con, [name], self.settings.fixes, exclude_walk=walk_id)
-                tracker = GridTracker(m.plan, site_model.floor_grid_options(self.settings, cal))
+                tracker = site_model.survey_anchored(
+                    GridTracker(m.plan, site_model.floor_grid_options(self.settings, cal)), m.plan, database)
                 steps = site_model.tracker_steps(ph.handheld_steps(walk), cal, self.settings)
                 if len(steps):
                     r = site_model.run_default(tracker, steps, wifi_fixes.fixes_for_walk(walk, database))

@@ -167,6 +167,20 @@ def identification_grid_options(settings: TrackSettings, spread_rad: float, spat
                                          fix_outlier_probability=settings.identification_fix_outlier_probability)
 
 
+def survey_anchored(tracker: GridTracker, plan: Any, database: wifi_fixes.FingerprintDatabase) -> GridTracker:
+    """The tracker (on ``plan``) whose fixes are evaluated at survey-anchored positions: the
+    fingerprint positions of ``database`` (``GridTrackerOptions.fix_survey_distance_factor``,
+    ``GridTracker.with_survey_positions``); the tracker itself when that factor is 1. A floor's own
+    database may leave its floor numbers at 0: on a one-floor plan every position is on its floor."""
+    if tracker.options.fix_survey_distance_factor >= 1.0:
+        return tracker
+    positions = np.asarray(database.positions_m, dtype=float).reshape(-1, 2)
+    floors = np.asarray(database.floors, dtype=np.int64)
+    if len(plan.floors) == 1:
+        floors = np.full(positions.shape[0], plan.floors[0], dtype=np.int64)
+    return tracker.with_survey_positions(positions, floors)
+
+
 def run_default(tracker: GridTracker, steps: Steps, fixes, smooth: bool = True) -> dict:
     """The default tracker on one walk: unknown start, filter and (``smooth``) smoother
     (:func:`indoorloc.fusion.track_grid`'s dict)."""

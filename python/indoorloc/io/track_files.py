@@ -4,14 +4,15 @@ the output's extension:
 - ``.geojson``: a FeatureCollection, one LineString feature per walk in WGS84 (lon, lat, RFC 7946)
   with properties ``walk``, ``source``, ``floor``, ``floor_number``, ``floor_probability``,
   ``t0_unix_ms``, ``times_s`` (per vertex, since the walk's first record), ``xy_m`` (the same
-  vertices in the floor frame [m]), ``sd_m`` (per vertex sd_x, sd_y [m]) and ``smoothed``;
+  vertices in the floor frame [m]), ``sd_m`` (per vertex sd_x, sd_y [m]), ``smoothed`` and
+  ``wifi_fixes`` (the number of WiFi fixes used; 0: the walk is not located on the floor);
 - ``.csv``: one row per step: ``walk, t_s, unix_ms, x_m, y_m, floor, sd_x_m, sd_y_m,
   floor_probability, lon, lat``;
 - ``.json``: ``{"format": "indoorloc.track", "version": 1, "site": path, "walks": [{"walk",
   "source", "floor", "floor_number", "floor_probability", "floor_probabilities", "smoothed",
   "t0_unix_ms", "origin_lon_lat", "t_s", "x_m", "y_m", "sd_x_m", "sd_y_m", "cov_xy_m2",
-  "header_floor", "waypoints": {"t_s", "x_m", "y_m", "error_m" (null when the tracked floor is
-  not the header's)} or null, "errors": {"mean_m", "median_m", "p90_m", "n_waypoints"} or null}]}``.
+  "header_floor", "wifi_fixes" (as in the GeoJSON), "waypoints": {"t_s", "x_m", "y_m", "error_m"
+  (null when the tracked floor is not the header's)} or null, "errors": {"mean_m", "median_m", "p90_m", "n_waypoints"} or null}]}``.
 
 Every file is written to a temporary name and renamed (never half-written).
 """
@@ -44,6 +45,12 @@ def error_stats(errors_m: Optional[np.ndarray]) -> Optional[Dict[str, float]]:
             "n_waypoints": int(e.size)}
 
 
+def wifi_fix_count(track) -> int:
+    """Number of WiFi fixes the track used (0: no scan matched the site's fingerprints, so the
+    walk is not located on its floor and its sds are the floor-wide prior's)."""
+    return 0 if getattr(track, "fix_t_s", None) is None else int(np.size(track.fix_t_s))
+
+
 def _sd(track) -> np.ndarray:
     c = np.asarray(track.covariance_m2, float)
     return np.sqrt(np.maximum(c[:, [0, 2]], 0.0))
@@ -66,7 +73,7 @@ def geojson_document(tracks: Sequence[Any]) -> Dict[str, Any]:
                                      "floor_number": tr.floor_number, "floor_probability": tr.floor_probability,
                                      "t0_unix_ms": tr.t0_unix_ms, "times_s": _round(tr.times_s, 3),
                                      "xy_m": _round(tr.xy_m, 3), "sd_m": _round(_sd(tr), 3),
-                                     "smoothed": tr.smoothed}})
+                                     "smoothed": tr.smoothed, "wifi_fixes": wifi_fix_count(tr)}})
     return {"type": "FeatureCollection", "indoorloc_track_version": TRACK_FORMAT_VERSION, "features": feats}
 
 
@@ -85,7 +92,8 @@ def json_document(tracks: Sequence[Any], site_path: str = "") -> Dict[str, Any]:
                       "t_s": _round(tr.times_s, 3), "x_m": _round(tr.xy_m[:, 0], 3), "y_m": _round(tr.xy_m[:, 1], 3),
                       "sd_x_m": _round(sd[:, 0], 3), "sd_y_m": _round(sd[:, 1], 3),
                       "cov_xy_m2": _round(np.asarray(tr.covariance_m2)[:, 1], 4),
-                      "header_floor": tr.header_floor, "waypoints": wp, "errors": error_stats(tr.errors_m)})
+                      "header_floor": tr.header_floor, "wifi_fixes": wifi_fix_count(tr), "waypoints": wp,
+                      "errors": error_stats(tr.errors_m)})
     return {"format": "indoorloc.track", "version": TRACK_FORMAT_VERSION, "site": site_path, "walks": walks}
 
 

@@ -22,7 +22,7 @@ Every constant was chosen by cross-validation over the PyShoe Vicon trials and s
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any, Dict, List
+from typing import TYPE_CHECKING, Any, Dict, List, Optional
 
 import numpy as np
 
@@ -33,8 +33,8 @@ if TYPE_CHECKING:  # `import indoorloc` loads no file-format module (CONVENTIONS
     from indoorloc.io.pdr_datasets import ImuRecording
 
 __all__ = ["DEFAULT_METHOD", "HEALTH_LIMITS", "SHOE_SIGMA_ACC_MPS2", "SHOE_SIGMA_GYRO_RADPS", "SHOE_WINDOW",
-           "ZUPT_DETECTOR", "detect_stance", "gait_evidence", "gait_plausibility", "run_recommended",
-           "stance_motion_ratio"]
+           "MIN_SWING_SHARE", "ZUPT_DETECTOR", "detect_stance", "gait_evidence", "gait_plausibility", "run_recommended",
+           "stance_motion_ratio", "swing_floor"]
 
 #: SHOE window [samples] and noise settings (the statistic's scale depends on them: T ~ 1/sigma^2).
 SHOE_WINDOW = 5
@@ -49,7 +49,9 @@ SHOE_SIGMA_GYRO_RADPS = 0.1 * math.pi / 180.0
 #: 1.3-2; 1.5-2 tie). The ladder step (0.25 decade), the cap (1e7) and the stance floor (15 %)
 #: were fixed beforehand. min_plausible_swing_s (0.2 s) and low_motion_min_stance_s (0.08 s):
 #: leave-one-recording-out CV over the 21 trials and 12 synthetic slow low-motion gaits
-#: (``python -m indoorloc.experiments.pdr_low_motion``; docs/pdr.md "Low-motion walks").
+#: (``python -m indoorloc.experiments.pdr_low_motion``; docs/pdr.md "Low-motion walks"). With the
+#: rhythm floor of :data:`MIN_SWING_SHARE` on, min_plausible_swing_s 0.15-0.35 s tie in that CV
+#: (the folds take the first, 0.15); 0.2 s is kept: it is the floor when the IMU shows no rhythm.
 ZUPT_DETECTOR = {"rule": "swing_guard", "threshold": 1e4, "max_swing_s": 2.0, "max_swing_ratio": 1.5,
                  "ladder_step_decades": 0.25, "min_stance_share": 0.15, "max_threshold": 1e7,
                  "min_plausible_swing_s": 0.2, "low_motion_min_stance_s": 0.08}
@@ -78,12 +80,52 @@ HEALTH_LIMITS = {"min_swing_s": 0.15, "min_stride_m": 0.1, "min_path_per_rhythm_
 _GRAVITY_MPS2 = 9.81
 
 
-def detect_stance(recording: ImuRecording, **overrides: Any) -> Dict[str, Any]:
+#: The least share of the gyroscope's stride period a swing may take (:func:`detect_stance`): a
+#: rung of the swing guard's ladder whose median swing is shorter than this times the period is
+#: refused, as are rungs shorter than ``min_plausible_swing_s``. A human swing is about 40 % of
+#: the gait cycle (more when running); SHOE's swings on the PyShoe trials are 50-92 % of the
+#: rhythm's period. Chosen by leave-one-recording-out cross-validation over the PyShoe trials,
+#: the synthetic slow shuffles and a sweep of synthetic gaits (speed, cadence, stance stillness,
+#: sensor noise): ``python -m indoorloc.experiments.pdr_gait_sweep`` (docs/pdr.md, "Swings
+#: against the step rhythm").
+MIN_SWING_SHARE = 0.25
+
+
+def swing_floor(evidence: Dict[str, float], min_plausible_swing_s: float = ZUPT_DETECTOR["min_plausible_swing_s"],
+                min_swing_share: float = MIN_SWING_SHARE, max_swing_s: float = ZUPT_DETECTOR["max_swing_s"]) -> float:
+    """The least median swing [s] a rung of the swing guard's ladder may have: ``min_plausible_swing_s``
+    or, when the IMU shows walking (``evidence``: :func:`gait_evidence`; :data:`HEALTH_LIMITS`
+    ``walking_*``), ``min_swing_share`` times the gyroscope's stride period if that is longer (at
+    most half of ``max_swing_s``, which the detector's options require above it). A rung whose
+    swings are a small fraction of the step rhythm has traded the walk for a standstill."""
+    if not (math.isfinite(min_swing_share) and 0.0 <= min_swing_share < 1.0):
+        raise ValueError(f"indoorloc: argument 'min_swing_share': must be in [0, 1), got {min_swing_share!r}")
+    walking = (evidence["energy_mps2"] >= HEALTH_LIMITS["walking_energy_mps2"]
+               and evidence["strength"] >= HEALTH_LIMITS["walking_rhythm_strength"]
+               and math.isfinite(evidence["period_s"]))
+    floor = float(min_plausible_swing_s)
+    if walking and min_swing_share > 0.0:
+        floor = max(floor, min(min_swing_share * float(evidence["period_s"]), 0.5 * float(max_swing_s)))
+    return floor
+
+
+def detect_stance(recording: ImuRecording, evidence: Optional[Dict[str, float]] = None,
+                  min_swing_share: float = MIN_SWING_SHARE, **overrides: Any):
     """:func:`indoorloc.pdr.zero_velocity` on a recording with :data:`ZUPT_DETECTOR` (keywords
-    override it) and the SHOE window and noise sds of this module. Returns its dict (stance,
-    threshold, guard_raised, guard_satisfied, low_motion_rule, stance fractions, report)."""
+    override it) and the SHOE window and noise sds of this module. Returns its result (a mapping:
+    stance, threshold, guard_raised, guard_satisfied, low_motion_rule, stance fractions, report).
+
+    With the swing guard, the ladder's swing floor is :func:`swing_floor` (``evidence``:
+    :func:`gait_evidence` of the recording, computed when None): ``min_swing_share`` of the
+    gyroscope's stride period when that is longer than ``min_plausible_swing_s``; 0 turns it off."""
     opts = dict(ZUPT_DETECTOR)
     opts.update(overrides)
+    if opts.get("rule", "swing_guard") == "swing_guard":
+        ev = gait_evidence(recording) if evidence is None else evidence
+        opts["min_plausible_swing_s"] = swing_floor(ev, float(opts.get("min_plausible_swing_s", 0.0)), min_swing_share,
+                                                    float(opts["max_swing_s"]))
+    elif not (math.isfinite(min_swing_share) and 0.0 <= min_swing_share < 1.0):
+        raise ValueError(f"indoorloc: argument 'min_swing_share': must be in [0, 1), got {min_swing_share!r}")
     return _pdr.zero_velocity(recording.acc_mps2, recording.gyro_radps, recording.rate_hz, window=SHOE_WINDOW,
                               sigma_acc_mps2=SHOE_SIGMA_ACC_MPS2, sigma_gyro_radps=SHOE_SIGMA_GYRO_RADPS, **opts)
 
@@ -184,7 +226,11 @@ def run_recommended(recording: ImuRecording, smooth: bool = True, **overrides: A
     arrays), "health" (the EKF's health check, the detector threshold and stride counts, the gait
     evidence, and ``implausible`` / ``reasons`` including :func:`gait_plausibility`)}``.
     ``overrides`` go to :func:`detect_stance`."""
-    det = detect_stance(recording, **overrides)
+    evidence = gait_evidence(recording)
+    det = detect_stance(recording, evidence=evidence, **overrides)
+    opts = dict(ZUPT_DETECTOR, **{k: v for k, v in overrides.items() if k != "min_swing_share"})
+    floor = (swing_floor(evidence, float(opts["min_plausible_swing_s"]), overrides.get("min_swing_share", MIN_SWING_SHARE),
+                         float(opts["max_swing_s"])) if opts["rule"] == "swing_guard" else float("nan"))
     stance = np.asarray(det["stance"], dtype=bool)
     out = _pdr.zupt_ekf(recording.time_s, recording.acc_mps2, recording.gyro_radps, stance, smooth=smooth)
     count = _pdr.count_strides(stance, recording.rate_hz)
@@ -196,8 +242,7 @@ def run_recommended(recording: ImuRecording, smooth: bool = True, **overrides: A
                    "low_motion_rule": bool(det.get("low_motion_rule", False)),
                    "stride_median_swing_s": float(count["median_swing_s"]),
                    "stride_median_stance_s": float(count["median_stance_s"]),
-                   "split_strides": int(count["n_split_strides"])})
-    evidence = gait_evidence(recording)
+                   "split_strides": int(count["n_split_strides"]), "swing_floor_s": floor})
     health.update({"gait_energy_mps2": evidence["energy_mps2"], "rhythm_period_s": evidence["period_s"],
                    "rhythm_strength": evidence["strength"], "rhythm_strides": evidence["rhythm_strides"],
                    "stance_motion_ratio": stance_motion_ratio(recording, stance, evidence["energy_mps2"])})

@@ -73,6 +73,44 @@ TEST(FingerprintFixer, PoolsOverTheWindowAndNeedsEnoughAps) {
   EXPECT_FALSE(fixer.AddScan(21.0, {"ap2"}, Eigen::VectorXd::Constant(1, -66), Eigen::VectorXd::Constant(1, 21), &q));
 }
 
+// A long live run meets ever new BSSIDs (phones, hotspots): only the map's get an id; the rest are
+// counted and dropped, so memory stays bounded, and the queries are those of the known readings.
+TEST(FingerprintFixer, UnknownBssidsAreCountedAndDroppedWithBoundedMemory) {
+  const FingerprintMap map = MakeMap();
+  FingerprintFixer mixed(map), known_only(map);
+  long long unknown = 0;
+  for (int scan = 0; scan < 2000; ++scan) {
+    const double t = 1.0 * scan;
+    const Eigen::Index row = scan % map.rss_dbm.rows();
+    std::vector<std::string> names;
+    std::vector<double> rssi, seen;
+    for (int m = 0; m < 50; ++m) {  // 50 BSSIDs never met before in every scan: 100,000 in all
+      names.push_back("stranger-" + std::to_string(scan) + "-" + std::to_string(m));
+      rssi.push_back(-60.0);
+      seen.push_back(t - 0.5);
+    }
+    for (int j = 0; j < 4; ++j) {
+      names.push_back(map.bssids[static_cast<std::size_t>(j)]);
+      rssi.push_back(map.rss_dbm(row, j));
+      seen.push_back(t - 0.25 * j);
+    }
+    unknown += 50;
+    ScanQuery a, b;
+    const bool got_a = mixed.AddScan(t, names, Eigen::Map<Eigen::VectorXd>(rssi.data(), 54),
+                                     Eigen::Map<Eigen::VectorXd>(seen.data(), 54), &a);
+    const bool got_b = known_only.AddScan(t, map.bssids, Eigen::Map<Eigen::VectorXd>(rssi.data() + 50, 4),
+                                          Eigen::Map<Eigen::VectorXd>(seen.data() + 50, 4), &b);
+    ASSERT_EQ(got_a, got_b);
+    ASSERT_TRUE(got_a);
+    for (Eigen::Index j = 0; j < 4; ++j) ASSERT_EQ(a.rss_dbm[j], b.rss_dbm[j]) << "scan " << scan;
+    ASSERT_EQ(a.described_time_s, b.described_time_s);
+  }
+  EXPECT_EQ(mixed.unknown_readings(), unknown);
+  EXPECT_EQ(known_only.unknown_readings(), 0);
+  EXPECT_EQ(mixed.num_known_ids(), map.bssids.size());  // not 100,004
+  EXPECT_LE(mixed.num_remembered_measurements(), 4u * 17u);  // 16 s window, a scan a second
+}
+
 TEST(FingerprintFixer, RefusesMalformedInputNamingIt) {
   FingerprintMap map = MakeMap();
   FingerprintFixer fixer(map);

@@ -114,6 +114,10 @@ TEST(LiveSession, TracksRawEventsWithStepsAndFixes) {
   EXPECT_EQ(u.events, 30 * 50 * 3 + 15);
   const Eigen::Vector2d truth(5.0 + 1.4 * s.Estimate().time_s - 1.4 * 1000.0, 10.0);
   EXPECT_LT((s.Estimate().mean_m - truth).norm(), 3.0) << s.Estimate().mean_m.transpose();
+  // BSSIDs the map does not know are counted and dropped.
+  const long long unknown = u.unknown_wifi_readings;
+  s.AddWifiScan(1031.0, {"not-in-the-map", "nor-this"}, Eigen::Vector2d(-50, -60), Eigen::Vector2d::Constant(1030.5));
+  EXPECT_EQ(s.Summary().unknown_wifi_readings, unknown + 2);
 }
 
 TEST(LiveSession, RefusesEventsOutOfOrderNamingThemAndStaysUnchanged) {

@@ -131,6 +131,61 @@ TEST(SharedApMatcher, NearestMatchesSortedBruteForce) {
   }
 }
 
+// Nearest prunes (a first pass over the query's strongest APs bounds every reference's d, exact d
+// only where the bound can beat the k-th best): it must equal, bit for bit, the k smallest
+// (d, reference) of the full Dissimilarity matrix, which adds every term in the same order.
+TEST(SharedApMatcher, NearestIsTheFullComputationBitForBit) {
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  SharedApRowMatrixXd refs = RandomFingerprints(400, 60, 0.3, 22);
+  for (Eigen::Index j = 0; j < 40; ++j) refs.row(300 + j) = refs.row(j);  // ties: equal d, order by index
+  Eigen::VectorXd g = RandomWeights(60, 23);
+  g[3] = g[17] = 0.0;  // unreliable APs: shared, yet no weight
+  SharedApRowMatrixXd queries(120, 60);
+  for (Eigen::Index q = 0; q < 120; ++q) {
+    if (q < 40) {  // a reference with noise, some readings lost
+      for (Eigen::Index i = 0; i < 60; ++i) {
+        const double b = refs(q * 7 % 400, i);
+        queries(q, i) = std::isnan(b) || unit(rng) < 0.2 ? kNaN : b + 8.0 * (unit(rng) - 0.5);
+      }
+    } else if (q < 80) {  // random, many APs
+      for (Eigen::Index i = 0; i < 60; ++i) queries(q, i) = unit(rng) < 0.6 ? -95.0 + 65.0 * unit(rng) : kNaN;
+    } else {  // a few APs, one far stronger than the rest (a first pass of one AP)
+      queries.row(q).setConstant(kNaN);
+      for (int m = 0; m < 4; ++m) queries(q, static_cast<Eigen::Index>(unit(rng) * 60)) = -90.0 + 10.0 * unit(rng);
+      queries(q, q % 60) = -35.0;
+    }
+  }
+  int compared = 0;
+  for (double beta : {0.0, 5.0}) {
+    for (double penalty : {0.0, 160.0}) {
+      for (int k : {1, 7, 20}) {
+        SharedApMatcherOptions options;
+        options.strength_scale_db = beta;
+        options.penalty_db = penalty;
+        options.k = k;
+        const SharedApMatcher matcher(refs, g, options);
+        const SharedApNeighbours nn = matcher.Nearest(queries);
+        const SharedApRowMatrixXd d = matcher.Dissimilarity(queries);
+        for (Eigen::Index q = 0; q < queries.rows(); ++q) {
+          std::vector<std::pair<double, Eigen::Index>> all;
+          for (Eigen::Index j = 0; j < refs.rows(); ++j) {
+            if (std::isfinite(d(q, j))) all.emplace_back(d(q, j), j);
+          }
+          std::sort(all.begin(), all.end());
+          for (Eigen::Index m = 0; m < k && m < static_cast<Eigen::Index>(all.size()); ++m) {
+            ASSERT_EQ(nn.index(q, m), all[m].second) << "beta " << beta << " c " << penalty << " k " << k
+                                                     << " query " << q << " rank " << m;
+            ASSERT_EQ(nn.distance_db(q, m), all[m].first);  // the same bits
+            ++compared;
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(compared, 10000);
+}
+
 TEST(SharedApMatcher, QueryHearingNothingKnownGetsInfiniteDistancesAndDistinctFillers) {
   SharedApRowMatrixXd refs(3, 2);
   refs << -50, kNaN, -60, kNaN, -70, kNaN;

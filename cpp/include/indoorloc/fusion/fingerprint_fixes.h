@@ -5,7 +5,8 @@
 // When to use: inside LiveSession (fusion/live_session.h), or an app that wants WiFi fixes one
 // scan at a time. It is python indoorloc.wifi_fixes' "window" pooling with causal alignment
 // (walk_queries, fixes_for_walk), made incremental (docs/fusion.md, "Live tracking"):
-//   - each distinct (BSSID, last-seen ms) is one measurement, at its first report;
+//   - each distinct (BSSID, last-seen ms) is one measurement, at its first report; a BSSID the
+//     map does not know is counted (unknown_readings) and dropped, so memory stays bounded;
 //   - the query of the scan at time t max-pools the measurements of known APs last seen in
 //     [t - query_window_s, t] (NaN: not heard); fewer than min_aps APs: no query;
 //   - its k best fingerprints under the shared-AP dissimilarity (wifi/shared_ap_matcher.h) are the
@@ -15,6 +16,7 @@
 // The fix is timed at the scan: a live filter cannot apply a fix before it is made.
 #pragma once
 
+#include <cstddef>
 #include <memory>
 #include <string>
 #include <unordered_map>
@@ -80,6 +82,12 @@ class FingerprintFixer {
   const FingerprintFixOptions& options() const;
   int num_fingerprints() const;
   int num_access_points() const;
+  /// Readings of BSSIDs the map does not know, dropped so far (nothing of them is kept).
+  long long unknown_readings() const;
+  /// BSSIDs with an id: the map's, whatever the scans brought (memory bound of a long run).
+  std::size_t num_known_ids() const;
+  /// Measurements remembered to drop repeats: per map AP those of the last window (+1), or up to 16.
+  std::size_t num_remembered_measurements() const;
 
  private:
   struct State;

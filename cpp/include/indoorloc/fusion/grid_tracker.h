@@ -89,6 +89,18 @@ struct GridTrackerOptions {
   /// at ε / A (a tempered Gaussian is the Gaussian with variance σ² / τ), so that one fix still
   /// outweighs the uniform prior of an unknown start.
   bool fix_tempering_by_variance = false;
+  /// β: where the site's survey positions are known (GridTracker::WithSurveyPositions), a fix is
+  /// evaluated at q(c) = s(c) + β (c - s(c)) rather than at the cell centre c, s(c) the survey
+  /// position nearest to c. Why: a fingerprint fix can only point at surveyed places, so a walker
+  /// d metres from the survey is seen at its nearest surveyed neighbour; β = 1 (the plan as is)
+  /// pulls every walk onto the survey, β = 0 reads the fingerprint field as constant over each
+  /// survey position's Voronoi cell (nearest-neighbour extrapolation) and leaves the steps and
+  /// walls to place the walker there. Cells at the survey are unchanged whatever β. Default:
+  /// leave-one-floor-out over {1, 0.75, 0.5, 0.25, 0} on the six floors of the competition mall
+  /// chose 0.75 for three held-out floors and 0.5 for the other three (within 0.06 m of each
+  /// other on every floor); 0.75 is the all-floor choice (docs/fusion_real.md, "Survey-anchored
+  /// fixes").
+  double fix_survey_distance_factor = 0.75;
   /// Also return the spatial median of the filtered and smoothed posteriors (the point that
   /// minimises the expected distance to the walker; robust where the posterior has a far minor
   /// mode), computed from blocks of about `median_block_m` [m] (each at its mass centroid).
@@ -181,6 +193,13 @@ class GridTracker {
                       const TrackStart& start, bool smooth) const;
 
   const GridTrackerOptions& options() const;
+  /// A tracker on the same grids (shared plan, options) whose fixes are evaluated at survey-
+  /// anchored positions (options.fix_survey_distance_factor): `positions_m` (N x 2) [m] the
+  /// survey (fingerprint reference) positions, `floor_numbers` (N) their floors (floor numbers of
+  /// the plan; positions on other floors are ignored). A floor with no survey position, or β = 1,
+  /// keeps the cell centres. Throws std::invalid_argument for non-finite positions or sizes that
+  /// differ.
+  GridTracker WithSurveyPositions(const RowMatrixXd& positions_m, const Eigen::VectorXi& floor_numbers) const;
   /// Grid of a floor: origin (x, y of the first cell's corner) [m], columns, rows.
   Eigen::Vector4d GridGeometry(int floor_index) const;
   /// Walkable fraction of every cell of a floor, rows x columns (row 0 at the lowest y).
@@ -188,6 +207,7 @@ class GridTracker {
 
  private:
   friend class GridFilterSession;  // the streaming forward filter (grid_filter_session.h) runs on these grids
+  GridTracker() = default;
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -70,6 +70,7 @@ struct LiveSessionSummary {
   int scans = 0;              ///< WiFi scans accepted
   int fixes = 0;              ///< fixes given to the filter
   int pending_fixes = 0;      ///< fixes waiting for a step at or after their time
+  long long unknown_wifi_readings = 0;  ///< WiFi readings of BSSIDs not in the map (dropped)
 };
 
 class LiveSession {

@@ -68,6 +68,10 @@ class SiteFile {
   /// The default tracker's options on this floor: the stored options with the heading-offset
   /// prior sd set to the floor's calibrated spread (at least 1e-3 rad), as the Python side runs it.
   GridTrackerOptions TrackerOptions(const std::string& floor) const;
+  /// The default tracker of a floor on `plan` (the floor's one-floor plan, which must outlive the
+  /// tracker): TrackerOptions(floor), its fixes anchored to the floor's fingerprint positions
+  /// (GridTracker::WithSurveyPositions), as the Python side's Site.floor_models(floor).tracker.
+  GridTracker Tracker(const FloorPlan* plan, const std::string& floor) const;
   /// Positions (N x 2) [m] of the floor's WiFi fingerprints (where the survey is).
   RowMatrixXd FingerprintPositions(const std::string& floor) const;
   /// The floor's WiFi fingerprint map as the Python side uses it (Site.floor_models(floor).database):

@@ -98,7 +98,10 @@ struct ZeroVelocityOptions {
   /// Swing guard: a rung whose median swing is shorter than this [s] is refused (no human swing
   /// lasts less; PyShoe walks and runs: 0.66-1.21 s). Leave-one-recording-out CV over the 21
   /// PyShoe trials and 12 synthetic slow low-motion gaits chose 0.2 from {0.15, 0.2, 0.25, 0.3,
-  /// 0.35} (0.2-0.35 tie; 0.15 lets the failure through on 3 of the 12 gaits).
+  /// 0.35} (0.2-0.35 tie; 0.15 lets the failure through on 3 of the 12 gaits). The Python
+  /// pipeline (indoorloc.pdr.recommended.detect_stance) raises it per recording to 0.25 x the
+  /// stride period of the gyroscope's rhythm while the IMU shows walking (docs/pdr.md, "Swings
+  /// against the step rhythm"); a C++ caller with a stride period can do the same.
   double min_plausible_swing_s = 0.2;
   /// Low-motion rule: stance runs shorter than this [s] inside a swing are flicker on the second
   /// climb. CV chose 0.08 from {0.05, 0.08, 0.1, 0.12} (docs/pdr.md, "Low-motion walks").
