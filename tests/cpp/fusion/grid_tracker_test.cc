@@ -10,27 +10,10 @@
 
 #include <gtest/gtest.h>
 
+#include "hall_plan.h"
+
 namespace indoorloc::fusion {
 namespace {
-
-RowMatrixXd Box(double x0, double y0, double x1, double y1) {
-  RowMatrixXd r(4, 2);
-  r << x0, y0, x1, y0, x1, y1, x0, y1;
-  return r;
-}
-
-// A 60 x 40 m hall; optionally a 10 x 10 m shop at x 20..30, y 20..30.
-FloorPlan Hall(bool shop = false, int floors = 1) {
-  std::vector<FloorGeometry> g;
-  for (int f = 0; f < floors; ++f) {
-    FloorGeometry fg;
-    fg.floor = f;
-    fg.outlines.push_back(Box(0, 0, 60, 40));
-    if (shop) fg.obstacles.push_back(Box(20, 20, 30, 30));
-    g.push_back(fg);
-  }
-  return FloorPlan(g);
-}
 
 // Steps of length L every 0.5 s along heading h [rad] in the PDR frame.
 std::vector<StepInput> Straight(int n, double length_m, double heading_rad, double t0 = 0.0) {
