@@ -44,6 +44,15 @@ struct CompactEntries {
   double Weight(std::int64_t e, double g) const { return g * strength[value[e] + 128]; }
 };
 
+// The references a pass touched (seen = 1), in index order: one sequential sweep of the sums
+// after the pass costs less than a branch and a push per entry inside it.
+void ListTouched(const SharedApIndex& index, SharedApScratch* acc) {
+  acc->touched.clear();
+  for (Eigen::Index j = 0; j < index.num_references; ++j) {
+    if (acc->sums[static_cast<size_t>(j)].seen != 0.0) acc->touched.push_back(static_cast<std::int32_t>(j));
+  }
+}
+
 // Sums of eq. (1) for one query over its APs' posting lists; returns sum_A g f(a).
 template <typename Entries>
 double Accumulate(const SharedApIndex& index, const Entries& entries, const double* query, double scale_db,
@@ -58,16 +67,14 @@ double Accumulate(const SharedApIndex& index, const Entries& entries, const doub
     for (std::int64_t e = index.start[i]; e < index.start[i + 1]; ++e) {
       const std::int32_t j = index.ref[e];
       SharedApScratch::Sums& sj = acc->sums[j];
-      if (sj.seen == 0.0) {
-        sj.seen = 1.0;
-        acc->touched.push_back(j);
-      }
+      sj.seen = 1.0;  // no branch here: the touched are listed after the pass (ListTouched)
       const double diff = a - entries.Value(e);
       sj.w += w;                        // sum_{A^B} w_i
       sj.sq += w * diff * diff;         // sum_{A^B} w_i (a_i - b_i)^2
       sj.ref_w += entries.Weight(e, g);  // sum_{A^B} g_i f(b_i)
     }
   }
+  ListTouched(index, acc);
   return query_weight;
 }
 
@@ -161,13 +168,15 @@ void SelectPruned(const SharedApIndex& index, const Entries& postings, const Ent
     const double w = index.ap_weight[static_cast<size_t>(i)] * Strength(a, o.strength_scale_db);
     acc->dense[static_cast<size_t>(i)] = {a, w, 1.0};
     query_weight += w;
-    acc->by_weight.emplace_back(-w, static_cast<std::int32_t>(i));
+    // Most weight per posting-list entry first: the cheapest first pass for a given rest.
+    const double entries = static_cast<double>(std::max<std::int64_t>(1, index.start[i + 1] - index.start[i]));
+    acc->by_weight.emplace_back(-w / entries, static_cast<std::int32_t>(i));
   }
   if (!(query_weight > 0.0) || !std::isfinite(query_weight)) return SelectFull(index, postings, query, o, k, acc);
-  std::sort(acc->by_weight.begin(), acc->by_weight.end());  // strongest first
+  std::sort(acc->by_weight.begin(), acc->by_weight.end());
   size_t s = 0;
   for (double left = query_weight; s < acc->by_weight.size() && left > kRestFraction * query_weight; ++s) {
-    left += acc->by_weight[s].first;
+    left -= acc->dense[static_cast<size_t>(acc->by_weight[s].second)].w;
   }
   double rest_w = 0.0, rest_max = 0.0;
   std::int64_t entries_all = 0, entries_first = 0;
@@ -177,7 +186,7 @@ void SelectPruned(const SharedApIndex& index, const Entries& postings, const Ent
     if (m < s) {
       entries_first += index.start[i + 1] - index.start[i];
     } else {
-      rest_w -= acc->by_weight[m].first;
+      rest_w += acc->dense[static_cast<size_t>(i)].w;
       rest_max += index.ap_max_weight[static_cast<size_t>(i)];
     }
   }
@@ -194,16 +203,14 @@ void SelectPruned(const SharedApIndex& index, const Entries& postings, const Ent
     for (std::int64_t e = index.start[i]; e < index.start[i + 1]; ++e) {
       const std::int32_t j = index.ref[e];
       SharedApScratch::Sums& sj = acc->sums[j];
-      if (sj.seen == 0.0) {
-        sj.seen = 1.0;
-        acc->touched.push_back(j);
-      }
+      sj.seen = 1.0;  // no branch here: the touched are listed after the pass (ListTouched)
       const double diff = a - postings.Value(e);
       sj.w += w;
       sj.sq += w * diff * diff;
       sj.ref_w += postings.Weight(e, g);
     }
   }
+  ListTouched(index, acc);
   acc->best.clear();
   const auto kk = static_cast<size_t>(k);
   auto consider = [&](std::int32_t j, const SharedApScratch::Sums& sums) {
