@@ -69,7 +69,8 @@ struct SharedApIndex {
   bool compact = false;
   std::vector<double> strength;       // compact: f(v - 128) for v in [0, 256)
   std::vector<std::int64_t> start;    // K + 1
-  std::vector<std::int32_t> ref;      // reference row of each entry
+  std::vector<std::uint16_t> ref16;   // reference row of each entry when N <= 65,536 (two bytes) ...
+  std::vector<std::int32_t> ref;      // ... else here
   std::vector<std::int8_t> value_i8;  // compact: b_i
   std::vector<double> value_dbm;      // otherwise: b_i ...
   std::vector<double> weight;         // ... and g_i f(b_i)

@@ -110,7 +110,8 @@ SharedApMatcher::SharedApMatcher(const Eigen::Ref<const SharedApRowMatrixXd>& re
     index->strength.resize(256);
     for (int v = 0; v < 256; ++v) index->strength[static_cast<size_t>(v)] = Strength(v - 128.0, scale);
   }
-  index->ref.resize(nnz);
+  const bool narrow = n <= 65536;  // reference rows in two bytes
+  (narrow ? index->ref16.resize(nnz) : index->ref.resize(nnz));
   (compact ? index->value_i8.resize(nnz) : index->value_dbm.resize(nnz));
   if (!compact) index->weight.resize(nnz);
   index->total_weight.assign(static_cast<size_t>(n), 0.0);
@@ -133,7 +134,11 @@ SharedApMatcher::SharedApMatcher(const Eigen::Ref<const SharedApRowMatrixXd>& re
       // g_i f(b): in the compact storage the search recomputes it as g_i x strength[b + 128],
       // the same product of the same numbers.
       const double w = index->ap_weight[i] * Strength(b, scale);
-      index->ref[e] = static_cast<std::int32_t>(r);
+      if (narrow) {
+        index->ref16[e] = static_cast<std::uint16_t>(r);
+      } else {
+        index->ref[e] = static_cast<std::int32_t>(r);
+      }
       index->ref_ap[by_ref] = static_cast<std::int32_t>(i);
       if (compact) {
         index->value_i8[e] = index->ref_value_i8[by_ref] = static_cast<std::int8_t>(b);
@@ -163,7 +168,7 @@ SharedApMatcher& SharedApMatcher::operator=(SharedApMatcher&&) noexcept = defaul
 
 Eigen::Index SharedApMatcher::num_references() const { return index_->num_references; }
 Eigen::Index SharedApMatcher::num_access_points() const { return index_->num_aps; }
-Eigen::Index SharedApMatcher::num_heard() const { return static_cast<Eigen::Index>(index_->ref.size()); }
+Eigen::Index SharedApMatcher::num_heard() const { return static_cast<Eigen::Index>(index_->start.back()); }
 
 namespace {
 

@@ -54,9 +54,9 @@ void ListTouched(const SharedApIndex& index, SharedApScratch* acc) {
 }
 
 // Sums of eq. (1) for one query over its APs' posting lists; returns sum_A g f(a).
-template <typename Entries>
-double Accumulate(const SharedApIndex& index, const Entries& entries, const double* query, double scale_db,
-                  SharedApScratch* acc) {
+template <typename RefT, typename Entries>
+double Accumulate(const SharedApIndex& index, const RefT* entry_ref, const Entries& entries, const double* query,
+                  double scale_db, SharedApScratch* acc) {
   double query_weight = 0.0;
   for (Eigen::Index i = 0; i < index.num_aps; ++i) {
     const double a = query[i];
@@ -65,7 +65,7 @@ double Accumulate(const SharedApIndex& index, const Entries& entries, const doub
     const double w = g * Strength(a, scale_db);  // w_i = g_i f(a_i)
     query_weight += w;
     for (std::int64_t e = index.start[i]; e < index.start[i + 1]; ++e) {
-      const std::int32_t j = index.ref[e];
+      const std::int32_t j = entry_ref[e];
       SharedApScratch::Sums& sj = acc->sums[j];
       sj.seen = 1.0;  // no branch here: the touched are listed after the pass (ListTouched)
       const double diff = a - entries.Value(e);
@@ -80,10 +80,10 @@ double Accumulate(const SharedApIndex& index, const Entries& entries, const doub
 
 // The k best (d, reference) of a query by the full pass over all its APs' posting lists, best
 // first, in acc->best (d finite only; ties by reference index).
-template <typename Entries>
-void SelectFull(const SharedApIndex& index, const Entries& postings, const double* query,
+template <typename RefT, typename Entries>
+void SelectFull(const SharedApIndex& index, const RefT* entry_ref, const Entries& postings, const double* query,
                 const SharedApMatcherOptions& o, Eigen::Index k, SharedApScratch* acc) {
-  const double query_weight = Accumulate(index, postings, query, o.strength_scale_db, acc);
+  const double query_weight = Accumulate(index, entry_ref, postings, query, o.strength_scale_db, acc);
   acc->best.clear();
   for (std::int32_t j : acc->touched) {
     const auto [rms, u] = RmsAndUnshared(index, acc->sums[j], query_weight, j);
@@ -154,9 +154,9 @@ double LowerBound(double sw_s, double sq_s, double ref_w_s, double total_b, doub
 // reference's d from below (LowerBound); references are then computed exactly (ExactSums) in the
 // order of their bounds until the next bound exceeds the k-th best d found. References that share
 // no AP of S are bounded as a group; when that bound cannot exclude them, the full pass runs.
-template <typename Entries>
-void SelectPruned(const SharedApIndex& index, const Entries& postings, const Entries& by_ref, const double* query,
-                  const SharedApMatcherOptions& o, Eigen::Index k, SharedApScratch* acc) {
+template <typename RefT, typename Entries>
+void SelectPruned(const SharedApIndex& index, const RefT* entry_ref, const Entries& postings, const Entries& by_ref,
+                  const double* query, const SharedApMatcherOptions& o, Eigen::Index k, SharedApScratch* acc) {
   acc->by_weight.clear();
   double query_weight = 0.0;  // in AP order, as Accumulate sums it
   for (Eigen::Index i = 0; i < index.num_aps; ++i) {
@@ -172,7 +172,7 @@ void SelectPruned(const SharedApIndex& index, const Entries& postings, const Ent
     const double entries = static_cast<double>(std::max<std::int64_t>(1, index.start[i + 1] - index.start[i]));
     acc->by_weight.emplace_back(-w / entries, static_cast<std::int32_t>(i));
   }
-  if (!(query_weight > 0.0) || !std::isfinite(query_weight)) return SelectFull(index, postings, query, o, k, acc);
+  if (!(query_weight > 0.0) || !std::isfinite(query_weight)) return SelectFull(index, entry_ref, postings, query, o, k, acc);
   std::sort(acc->by_weight.begin(), acc->by_weight.end());
   size_t s = 0;
   for (double left = query_weight; s < acc->by_weight.size() && left > kRestFraction * query_weight; ++s) {
@@ -191,7 +191,7 @@ void SelectPruned(const SharedApIndex& index, const Entries& postings, const Ent
     }
   }
   // Weights even (a long pooled query of equally strong APs): the first pass would be the full one.
-  if (static_cast<double>(entries_first) > kFullPassFraction * static_cast<double>(entries_all)) return SelectFull(index, postings, query, o, k, acc);
+  if (static_cast<double>(entries_first) > kFullPassFraction * static_cast<double>(entries_all)) return SelectFull(index, entry_ref, postings, query, o, k, acc);
   acc->first_pass.clear();
   for (size_t m = 0; m < s; ++m) acc->first_pass.push_back(acc->by_weight[m].second);
   std::sort(acc->first_pass.begin(), acc->first_pass.end());
@@ -201,7 +201,7 @@ void SelectPruned(const SharedApIndex& index, const Entries& postings, const Ent
     const double g = index.ap_weight[static_cast<size_t>(i)];
     const double w = acc->dense[static_cast<size_t>(i)].w;
     for (std::int64_t e = index.start[i]; e < index.start[i + 1]; ++e) {
-      const std::int32_t j = index.ref[e];
+      const std::int32_t j = entry_ref[e];
       SharedApScratch::Sums& sj = acc->sums[j];
       sj.seen = 1.0;  // no branch here: the touched are listed after the pass (ListTouched)
       const double diff = a - postings.Value(e);
@@ -303,7 +303,7 @@ void SelectPruned(const SharedApIndex& index, const Entries& postings, const Ent
     if (count > 0) evaluate(refs, count);
   }
   if (acc->best.size() < kk ? std::isfinite(untouched) : untouched <= acc->best.front().first) {
-    return SelectFull(index, postings, query, o, k, acc);
+    return SelectFull(index, entry_ref, postings, query, o, k, acc);
   }
   std::sort_heap(acc->best.begin(), acc->best.end());
 }
@@ -321,20 +321,39 @@ std::pair<double, double> RmsAndUnshared(const SharedApIndex& index, const Share
   return {rms, u};
 }
 
+// Calls fn(refs, postings, by_ref) with the index's storage: reference rows in two or four
+// bytes, RSS in one byte or a double.
+template <typename Fn>
+void WithStorage(const SharedApIndex& index, Fn fn) {
+  auto values = [&](const auto* entry_ref) {
+    if (index.compact) {
+      fn(entry_ref, CompactEntries{index.value_i8.data(), index.strength.data()},
+         CompactEntries{index.ref_value_i8.data(), index.strength.data()});
+    } else {
+      fn(entry_ref, WideEntries{index.value_dbm.data(), index.weight.data()},
+         WideEntries{index.ref_value_dbm.data(), index.ref_entry_weight.data()});
+    }
+  };
+  if (index.ref.empty()) {
+    values(index.ref16.data());
+  } else {
+    values(index.ref.data());
+  }
+}
+
 double AccumulateAll(const SharedApIndex& index, const double* query, double scale_db, SharedApScratch* acc) {
-  if (index.compact) return Accumulate(index, CompactEntries{index.value_i8.data(), index.strength.data()}, query, scale_db, acc);
-  return Accumulate(index, WideEntries{index.value_dbm.data(), index.weight.data()}, query, scale_db, acc);
+  double query_weight = 0.0;
+  WithStorage(index, [&](const auto* entry_ref, const auto& postings, const auto&) {
+    query_weight = Accumulate(index, entry_ref, postings, query, scale_db, acc);
+  });
+  return query_weight;
 }
 
 void SelectNearest(const SharedApIndex& index, const double* query, const SharedApMatcherOptions& options,
                    Eigen::Index k, SharedApScratch* acc) {
-  if (index.compact) {
-    SelectPruned(index, CompactEntries{index.value_i8.data(), index.strength.data()},
-                 CompactEntries{index.ref_value_i8.data(), index.strength.data()}, query, options, k, acc);
-  } else {
-    SelectPruned(index, WideEntries{index.value_dbm.data(), index.weight.data()},
-                 WideEntries{index.ref_value_dbm.data(), index.ref_entry_weight.data()}, query, options, k, acc);
-  }
+  WithStorage(index, [&](const auto* entry_ref, const auto& postings, const auto& by_ref) {
+    SelectPruned(index, entry_ref, postings, by_ref, query, options, k, acc);
+  });
 }
 
 }  // namespace indoorloc::wifi::internal

@@ -198,6 +198,29 @@ TEST(SharedApMatcher, NearestIsTheFullComputationBitForBit) {
   EXPECT_TRUE((d_compact.array() == d_double.leftCols(whole.rows()).array()).all());
 }
 
+// More than 65,536 references: reference rows take four bytes in the index instead of two.
+TEST(SharedApMatcher, NearestIsTheFullComputationWithManyReferences) {
+  const SharedApRowMatrixXd refs = RandomFingerprints(70000, 12, 0.3, 31).array().round();
+  const SharedApRowMatrixXd queries = RandomFingerprints(12, 12, 0.6, 32);
+  SharedApMatcherOptions options;
+  options.k = 9;
+  const SharedApMatcher matcher(refs, RandomWeights(12, 33), options);
+  const SharedApNeighbours nn = matcher.Nearest(queries);
+  const SharedApRowMatrixXd d = matcher.Dissimilarity(queries);
+  for (Eigen::Index q = 0; q < queries.rows(); ++q) {
+    std::vector<std::pair<double, Eigen::Index>> all;
+    for (Eigen::Index j = 0; j < refs.rows(); ++j) {
+      if (std::isfinite(d(q, j))) all.emplace_back(d(q, j), j);
+    }
+    std::sort(all.begin(), all.end());
+    ASSERT_GE(all.size(), 9u);
+    for (Eigen::Index m = 0; m < 9; ++m) {
+      ASSERT_EQ(nn.index(q, m), all[m].second) << "query " << q << " rank " << m;
+      ASSERT_EQ(nn.distance_db(q, m), all[m].first);
+    }
+  }
+}
+
 TEST(SharedApMatcher, QueryHearingNothingKnownGetsInfiniteDistancesAndDistinctFillers) {
   SharedApRowMatrixXd refs(3, 2);
   refs << -50, kNaN, -60, kNaN, -70, kNaN;
