@@ -195,9 +195,11 @@ def _identify_floor(score: WalkScore, walk, pdr_steps, models: FoldModels, setti
         # then the floor-given smoother on it (a walk stays on one floor in this model).
         ts = settings.track_settings()
         ident = _grid_tracker(models.all_plan, _identification_options(settings, spread), fl.name + "/all")
-        ap = (site_model.walk_ap_log_likelihood(walk, models.all_database, models.all_ap_rates, ts)
-              if ts.identification_ap_weight > 0 and models.all_ap_rates is not None else None)
-        found = site_model.identify_floor(ident, plan_floors, pdr_steps, all_fixes, ap, ts.identification_ap_weight)
+        evidence = (site_model.walk_floor_evidence(walk, models.all_database, models.all_ap_rates, ts)
+                    if models.all_ap_rates is not None else {"ap_log_likelihood": None, "match_distance_db": None})
+        found = site_model.identify_floor(ident, plan_floors, pdr_steps, all_fixes, evidence["ap_log_likelihood"],
+                                          ts.identification_ap_weight, ts.floor_calibration(),
+                                          evidence["match_distance_db"])
         est_floor = np.full(wt.size, found["floor"])
         track_m = score.smoothed_track_m if found["floor"] == fl.number else np.asarray(found["result"]["mean_m"])
     score.seconds["floor_identification"] = time.perf_counter() - tic

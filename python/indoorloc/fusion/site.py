@@ -353,9 +353,10 @@ class Site:
             # The same code as ``fusion evaluate``'s floor identification (site_model.identify_floor).
             first = self.floor_models(self.floors[0])
             weight = self.settings.identification_ap_weight
-            ap = site_model.walk_ap_log_likelihood(walk, database, rates, self.settings) if weight > 0 else None
+            evidence = site_model.walk_floor_evidence(walk, database, rates, self.settings)
             ident = site_model.identify_floor(tracker_all, numbers, site_model.tracker_steps(
-                steps_raw, first.calibration, self.settings), wifi_fixes.fixes_for_walk(walk, database), ap, weight)
+                steps_raw, first.calibration, self.settings), wifi_fixes.fixes_for_walk(walk, database),
+                evidence["ap_log_likelihood"], weight, self.settings.floor_calibration(), evidence["match_distance_db"])
             by_number = {n: name for name, (n, _) in self._floors.items()}
             floor = by_number[ident["floor"]]
             probabilities = {by_number[n]: p for n, p in ident["probabilities"].items()}
