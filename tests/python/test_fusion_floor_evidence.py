@@ -230,3 +230,31 @@ def test_study_calibration_recovers_an_overconfidence_factor_and_bins_every_walk
     assert cal["log_loss"] < raw["log_loss"] and cal["brier"] < raw["brier"]
     assert abs(cal["mean_reported"] - cal["fraction_right"]) < 0.02
     assert raw["mean_reported"] - raw["fraction_right"] > 0.05
+
+
+def test_identification_calibration_is_the_first_floors_with_the_widest_spread():
+    """Floor identification (track --floor auto and fusion evaluate) rotates the steps of a walk
+    of unknown floor with one calibration for every walk: never the walk's own floor's."""
+    from indoorloc.pdr.handheld import HandheldCalibration, HandheldOptions
+
+    def cal(offset, spread):
+        return HandheldCalibration(HandheldOptions(), 0.5, 0.1, 10, offset, spread, 0.1, 0.2)
+
+    cals = [cal(0.05, 0.1), cal(-0.04, 0.3), cal(0.1, math.nan)]
+    first, spread = site_model.identification_calibration(cals)
+    assert first is cals[0] and spread == pytest.approx(0.3)
+    assert site_model.identification_calibration(cals[2:])[1] == pytest.approx(1e-3)  # no spread: the floor of 1e-3
+    with pytest.raises(ValueError, match="calibrations"):
+        site_model.identification_calibration([])
+
+
+def test_reliability_table_bins_every_walk_once():
+    reported = np.array([0.3, 0.85, 0.97, 0.995, 0.995, 1.0, 0.9999])
+    right = np.array([False, True, True, True, False, True, True])
+    rows = fe.reliability_table(reported, right)
+    assert [r["walks"] for r in rows] == [1, 1, 1, 2, 2]
+    assert rows[3]["fraction_right"] == 0.5 and rows[-1]["from"] == 0.999 and rows[-1]["mean_reported"] == pytest.approx(0.99995)
+    with pytest.raises(ValueError, match="right"):
+        fe.reliability_table(reported, right[:3])
+    with pytest.raises(ValueError, match="reported"):
+        fe.reliability_table(np.array([np.nan]), np.array([True]))

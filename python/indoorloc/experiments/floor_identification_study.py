@@ -8,8 +8,8 @@ every floor shares one all-floor fingerprint database built from the training wa
 For each test walk it computes, once:
 
 - the all-floor grid filter's per-floor evidence (``site_model.identify_floor`` without the APs:
-  the identification tracker of ``fusion evaluate``, steps rotated by the walk's floor
-  calibration as there);
+  the identification tracker of ``fusion evaluate``, steps rotated by
+  ``site_model.identification_calibration`` as there and in ``track --floor auto``);
 - the per-floor AP evidence L_f (``fusion.floor_evidence``) for every (m, α, ε) of :data:`GRID`;
 - for reference, a WiFi-only vote (each query's best reference's floor, most votes).
 
@@ -60,7 +60,7 @@ CALIBRATION_GRID: Dict[str, Sequence[float]] = {
     "error_slope": (0.0, 1.0, 2.0, 3.0, 4.0, 6.0),
 }
 #: Bins of the reported probability of the chosen floor in the reliability table.
-RELIABILITY_BINS = (0.0, 0.5, 0.8, 0.9, 0.95, 0.98, 0.99, 0.999, 1.0)
+RELIABILITY_BINS = floor_evidence.RELIABILITY_BINS
 
 
 def walk_evidence(data_root: Optional[Path] = None, floors: Sequence[str] = (),
@@ -96,11 +96,12 @@ def walk_evidence(data_root: Optional[Path] = None, floors: Sequence[str] = (),
                 rec["ap"] = {p: floor_evidence.walk_floor_log_likelihood(rates[p[1]], q, p[0], p[2]) for p in ap_points}
                 rec["match_distance_db"] = np.array([floor_evidence.walk_match_distance_db(db.rss_dbm, db.floors, f, q)
                                                      for f in plan_floors])
-                steps = site_model.tracker_steps(fl.steps[i], m.cal, settings.track_settings())
+                # As fusion evaluate and track --floor auto: not the walk's own floor's calibration.
+                id_cal, id_spread = site_model.identification_calibration(m.all_calibrations)
+                steps = site_model.tracker_steps(fl.steps[i], id_cal, settings.track_settings())
                 rec["grid"] = np.zeros(len(plan_floors))
                 if len(steps):
-                    spread = max(m.cal.yaw_offset_spread_rad, 1e-3)
-                    tracker = fr._grid_tracker(all_plan, fr._identification_options(settings, spread), fl.name + "/all")
+                    tracker = fr._grid_tracker(all_plan, fr._identification_options(settings, id_spread), "all")
                     found = site_model.identify_floor(tracker, plan_floors, steps, wfx.fixes_for_walk(walk, db))
                     p = np.array([found["grid_probabilities"][f] for f in plan_floors])
                     rec["grid"] = np.log(np.maximum(p, 1e-300))
@@ -151,12 +152,7 @@ def reliability(p: np.ndarray, label: np.ndarray) -> dict:
     chosen floor (:data:`RELIABILITY_BINS`), walks, mean reported and fraction right; the mean
     log loss of the true floor [nats] and the Brier score."""
     conf, ok = p.max(axis=1), np.argmax(p, axis=1) == label
-    rows = []
-    for lo, hi in zip(RELIABILITY_BINS[:-1], RELIABILITY_BINS[1:]):
-        sel = (conf >= lo) & ((conf < hi) if hi < 1.0 else (conf <= hi))
-        if sel.any():
-            rows.append({"from": lo, "to": hi, "walks": int(sel.sum()), "mean_reported": float(conf[sel].mean()),
-                         "fraction_right": float(ok[sel].mean())})
+    rows = floor_evidence.reliability_table(conf, ok)
     onehot = np.eye(p.shape[1])[label]
     return {"bins": rows, "log_loss": _calibration_loss(p, label),
             "brier": float(((p - onehot) ** 2).sum(axis=1).mean()),

@@ -201,5 +201,28 @@ def calibrated_floor_probabilities(score: np.ndarray, temperature: float, error_
     return (1.0 - d) * p / p.sum(axis=-1, keepdims=True) + d / s.shape[-1]
 
 
-__all__ = ["ApFloorRates", "FloorCalibration", "MATCH_AP_COUNT", "MATCH_UNHEARD_DB", "calibrated_floor_probabilities",
+#: Bins of the reported probability of the chosen floor in a reliability table.
+RELIABILITY_BINS = (0.0, 0.5, 0.8, 0.9, 0.95, 0.98, 0.99, 0.999, 1.0)
+
+
+def reliability_table(reported: np.ndarray, right: np.ndarray, bins: Sequence[float] = RELIABILITY_BINS) -> list:
+    """How often a reported floor probability comes true: per bin [lo, hi) of ``reported`` (W,)
+    (the probability each walk's chosen floor was given; the last bin includes 1), the walks,
+    their mean reported probability and the fraction whose chosen floor was right (``right``
+    (W,) bool). Empty bins are left out."""
+    p = real_array(reported, "reported", ndim=1)
+    ok = np.asarray(right, bool)
+    if ok.shape != p.shape:
+        raise ValueError(f"indoorloc: argument 'right': expected shape {p.shape}, got {ok.shape}")
+    rows = []
+    for lo, hi in zip(bins[:-1], bins[1:]):
+        sel = (p >= lo) & ((p < hi) if hi < bins[-1] else (p <= hi))
+        if sel.any():
+            rows.append({"from": float(lo), "to": float(hi), "walks": int(sel.sum()),
+                         "mean_reported": float(p[sel].mean()), "fraction_right": float(ok[sel].mean())})
+    return rows
+
+
+__all__ = ["ApFloorRates", "FloorCalibration", "MATCH_AP_COUNT", "MATCH_UNHEARD_DB", "RELIABILITY_BINS",
+           "calibrated_floor_probabilities", "reliability_table",
            "walk_floor_log_likelihood", "walk_match_distance_db"]

@@ -176,6 +176,18 @@ def offset_spread_rad(cal: ph.HandheldCalibration) -> float:
     return max(spread if math.isfinite(spread) else 0.0, 1e-3)
 
 
+def identification_calibration(calibrations: Sequence[ph.HandheldCalibration]) -> tuple:
+    """What floor identification rotates a walk's steps with, the walk's floor being unknown:
+    ``(calibration, offset_spread_rad)``, the first floor's calibration (floors in building
+    order, as ``Site.floors``) and the widest offset spread of the floors (:func:`offset_spread_rad`).
+    ``indoorloc track --floor auto`` and ``fusion evaluate`` both use it, so that neither uses the
+    calibration of the walk's true floor."""
+    cals = list(calibrations)
+    if not cals:
+        raise ValueError("indoorloc: argument 'calibrations': expected the calibration of at least one floor")
+    return cals[0], max(offset_spread_rad(c) for c in cals)
+
+
 def floor_grid_options(settings: TrackSettings, cal: ph.HandheldCalibration, spatial_median: Optional[bool] = None,
                        **changes) -> Any:
     """The grid options of a floor: the settings' options with the floor's offset spread
@@ -280,5 +292,5 @@ def walk_errors_m(track_t_s: np.ndarray, track_m: np.ndarray, waypoint_t_s: np.n
 
 
 __all__ = ["TrackSettings", "ap_floor_rates", "build_fingerprints", "calibrate_floor", "floor_grid_options",
-           "identification_grid_options", "identify_floor", "offset_spread_rad", "run_default", "tracker_steps",
+           "identification_calibration", "identification_grid_options", "identify_floor", "offset_spread_rad", "run_default", "tracker_steps",
            "walk_ap_log_likelihood", "walk_errors_m", "walk_floor_evidence"]
