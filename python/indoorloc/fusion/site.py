@@ -62,7 +62,8 @@ class FloorModels:
 class WalkTrack:
     """A walk tracked on a site: per step (M) times [s since the walk's first record], position
     (M, 2) [m, floor frame] and covariance (M, 3) = (xx, xy, yy) [m²]; the floor and its
-    probability; the waypoints and the errors at them [m] when the walk has waypoints."""
+    probability (calibrated when the floor was identified: ``fusion.floor_evidence.FloorCalibration``;
+    1 when it was given); the waypoints and the errors at them [m] when the walk has waypoints."""
 
     walk_id: str
     source: str
