@@ -109,8 +109,152 @@ def test_auto_floor_of_a_site_uses_the_ap_evidence(two_floor_site, tmp_path):
         t = site.track(path, floor="auto")
         assert t.floor == floor and t.floor_probability > 0.5
         assert sum(t.floor_probabilities.values()) == pytest.approx(1.0)
+        # Calibrated (floor_evidence.calibrated_floor_probabilities): never above 1 - δ/2 on two floors.
+        assert t.floor_probability < 1.0
     # Weight 0: the grid filter alone decides (the identification before the AP evidence).
     site.settings = replace(site.settings, identification_ap_weight=0.0)
     site._all = None
     t0 = site.track(held_out[0][1], floor="auto")
     assert t0.floor == held_out[0][0]
+
+
+def test_calibrated_probabilities_against_the_formula():
+    score = np.array([0.0, -3.0, -40.0, -np.inf])
+    for t, d in ((1.0, 0.0), (5.0, 0.02), (0.5, 0.3)):
+        p = fe.calibrated_floor_probabilities(score, t, d)
+        soft = np.exp(np.where(np.isfinite(score), score / t, -np.inf))
+        np.testing.assert_allclose(p, (1 - d) * soft / soft.sum() + d / 4)
+        assert p.sum() == pytest.approx(1.0) and int(np.argmax(p)) == 0
+        assert p.max() <= 1 - d * 3 / 4 + 1e-12 and p[3] == pytest.approx(d / 4)
+    # An overconfident margin of 400 nats is still capped by δ; a constant shift changes nothing.
+    p = fe.calibrated_floor_probabilities(np.array([400.0, 0.0]), 1.0, 0.02)
+    np.testing.assert_allclose(p, [0.99, 0.01])
+    np.testing.assert_allclose(fe.calibrated_floor_probabilities(score + 1e3, 2.0, 0.1),
+                               fe.calibrated_floor_probabilities(score, 2.0, 0.1))
+
+
+def test_calibrated_probabilities_of_many_walks_are_those_of_each():
+    rng = np.random.default_rng(0)
+    scores = rng.normal(0, 20, (7, 4))
+    delta = rng.uniform(0, 0.3, 7)
+    many = fe.calibrated_floor_probabilities(scores, 2.0, delta)
+    for i in range(7):
+        np.testing.assert_allclose(many[i], fe.calibrated_floor_probabilities(scores[i], 2.0, delta[i]))
+    with pytest.raises(ValueError, match="error_probability"):
+        fe.calibrated_floor_probabilities(scores, 2.0, delta[:3])
+
+
+def test_error_probability_grows_with_the_match_distance():
+    c = fe.FloorCalibration(temperature=1.0, error_probability_at_10db=0.03, error_slope=2.0)
+    d = c.error_probability(np.array([2.5, 10.0, 40.0]))
+    # logit δ = logit 0.03 + 2 ln(D / 10): odds x 1/16 at 2.5 dB, x 16 at 40 dB.
+    odds = 0.03 / 0.97
+    np.testing.assert_allclose(d, [odds / 16 / (1 + odds / 16), 0.03, odds * 16 / (1 + odds * 16)])
+    assert c.error_probability(None) == pytest.approx(0.03) and c.error_probability(np.nan) == pytest.approx(0.03)
+    assert fe.FloorCalibration(1.0, 0.03, 0.0).error_probability(40.0) == pytest.approx(0.03)
+    p = c.probabilities(np.array([0.0, -100.0]), 40.0)
+    assert p[0] == pytest.approx(1 - d[2] / 2)
+    for kwargs, name in ((dict(temperature=-1.0), "temperature"), (dict(error_probability_at_10db=1.0), "error_prob"),
+                         (dict(error_slope=-0.5), "error_slope")):
+        with pytest.raises(ValueError, match=name):
+            fe.FloorCalibration(**kwargs)
+
+
+def test_match_distance_against_brute_force():
+    rss, floors = _refs()
+    q = np.array([[-52, -72, NAN, NAN],     # close to floor 3's first reference
+                  [NAN, -62, -47, -90],     # close to floor 4's
+                  [NAN, NAN, NAN, NAN]])    # hears nothing: skipped
+    for floor in (3, 4):
+        for m, cost in ((2, 30.0), (3, 10.0)):
+            per_query = []
+            for row in q[:2]:
+                heard = [a for a in np.argsort(-np.nan_to_num(row, nan=-1e9)) if np.isfinite(row[a])][:m]
+                per_query.append(min(np.mean([abs(ref[a] - row[a]) if np.isfinite(ref[a]) else cost for a in heard])
+                                     for ref, f in zip(rss, floors) if f == floor))
+            got = fe.walk_match_distance_db(rss, floors, floor, q, m, cost)
+            assert got == pytest.approx(np.median(per_query))
+    assert fe.walk_match_distance_db(rss, floors, 3, q, 2) < fe.walk_match_distance_db(rss, floors, 4, q[:1], 2)
+    # Nothing to compare: the unheard cost.
+    assert fe.walk_match_distance_db(rss, floors, 9, q) == fe.MATCH_UNHEARD_DB
+    assert fe.walk_match_distance_db(rss, floors, 3, q[2:]) == fe.MATCH_UNHEARD_DB
+    with pytest.raises(ValueError, match="queries_dbm"):
+        fe.walk_match_distance_db(rss, floors, 3, np.zeros((1, 3)))
+    with pytest.raises(ValueError, match="reference_floors"):
+        fe.walk_match_distance_db(rss, floors[:2], 3, q)
+
+
+def test_calibration_bad_arguments_name_themselves():
+    for kwargs, name in ((dict(temperature=0.0), "temperature"), (dict(error_probability=1.0), "error_probability"),
+                         (dict(error_probability=-0.1), "error_probability"), (dict(temperature=np.nan), "temperature")):
+        args = dict(score=np.zeros(3), temperature=1.0, error_probability=0.01) | kwargs
+        with pytest.raises(ValueError, match=name):
+            fe.calibrated_floor_probabilities(**args)
+    for bad in (np.zeros(0), np.array([0.0, np.nan]), np.array([-np.inf, -np.inf]), np.array([np.inf, 0.0])):
+        with pytest.raises(ValueError, match="score"):
+            fe.calibrated_floor_probabilities(bad, 1.0, 0.0)
+
+
+def test_track_settings_carry_the_calibration():
+    s = site_model.TrackSettings(identification_temperature=3.0, identification_error_probability=0.05,
+                                 identification_error_slope=1.5)
+    back = site_model.TrackSettings.from_dict(s.to_dict())
+    assert back.floor_calibration() == fe.FloorCalibration(3.0, 0.05, 1.5)
+    d = s.to_dict()
+    for k in ("identification_temperature", "identification_error_probability", "identification_error_slope"):
+        d.pop(k)
+    assert site_model.TrackSettings.from_dict(d).floor_calibration() == site_model.TrackSettings().floor_calibration()
+    for bad in (dict(identification_temperature=0.0), dict(identification_temperature=math.inf),
+                dict(identification_error_probability=1.0), dict(identification_error_probability=-0.5),
+                dict(identification_error_slope=-1.0)):
+        with pytest.raises(ValueError, match=next(iter(bad))):
+            site_model.TrackSettings(**bad).validate()
+
+
+def test_study_calibration_recovers_an_overconfidence_factor_and_bins_every_walk():
+    """Walks whose true floor is drawn from softmax(z) but whose score is 5 z (five times too
+    confident; 5 is on the grid): the study's log-loss choice finds T = 5, and its reliability
+    table then matches reported and realised frequencies; the uncalibrated one does not."""
+    from indoorloc.experiments import floor_identification_study as study
+
+    rng = np.random.default_rng(1)
+    z = rng.normal(0.0, 2.0, (3000, 3))
+    p_true = np.exp(z) / np.exp(z).sum(axis=1, keepdims=True)
+    label = np.array([rng.choice(3, p=row) for row in p_true])
+    dist = np.full(z.shape, 10.0)
+    chosen = study.choose_calibration(5.0 * z, dist, label)
+    assert chosen["temperature"] == 5.0 and chosen["error_probability_at_10db"] <= 0.01
+    cal = study.reliability(study._calibrated(5.0 * z, dist, chosen), label)
+    raw = study.reliability(study._calibrated(5.0 * z, dist, {}), label)
+    assert sum(b["walks"] for b in cal["bins"]) == 3000 == sum(b["walks"] for b in raw["bins"])
+    assert cal["log_loss"] < raw["log_loss"] and cal["brier"] < raw["brier"]
+    assert abs(cal["mean_reported"] - cal["fraction_right"]) < 0.02
+    assert raw["mean_reported"] - raw["fraction_right"] > 0.05
+
+
+def test_identification_calibration_is_the_first_floors_with_the_widest_spread():
+    """Floor identification (track --floor auto and fusion evaluate) rotates the steps of a walk
+    of unknown floor with one calibration for every walk: never the walk's own floor's."""
+    from indoorloc.pdr.handheld import HandheldCalibration, HandheldOptions
+
+    def cal(offset, spread):
+        return HandheldCalibration(HandheldOptions(), 0.5, 0.1, 10, offset, spread, 0.1, 0.2)
+
+    cals = [cal(0.05, 0.1), cal(-0.04, 0.3), cal(0.1, math.nan)]
+    first, spread = site_model.identification_calibration(cals)
+    assert first is cals[0] and spread == pytest.approx(0.3)
+    assert site_model.identification_calibration(cals[2:])[1] == pytest.approx(1e-3)  # no spread: the floor of 1e-3
+    with pytest.raises(ValueError, match="calibrations"):
+        site_model.identification_calibration([])
+
+
+def test_reliability_table_bins_every_walk_once():
+    reported = np.array([0.3, 0.85, 0.97, 0.995, 0.995, 1.0, 0.9999])
+    right = np.array([False, True, True, True, False, True, True])
+    rows = fe.reliability_table(reported, right)
+    assert [r["walks"] for r in rows] == [1, 1, 1, 2, 2]
+    assert rows[3]["fraction_right"] == 0.5 and rows[-1]["from"] == 0.999 and rows[-1]["mean_reported"] == pytest.approx(0.99995)
+    with pytest.raises(ValueError, match="right"):
+        fe.reliability_table(reported, right[:3])
+    with pytest.raises(ValueError, match="reported"):
+        fe.reliability_table(np.array([np.nan]), np.array([True]))

@@ -126,8 +126,10 @@ def _fold_models(floors: Sequence[FloorData], fold_of: Dict[str, List[np.ndarray
     if all_plan is not None:
         all_database = cache.database(all_walks, settings.fixes)
         all_rates = site_model.ap_floor_rates(all_database, list(all_plan.floors), settings.track_settings())
+        all_cals = [out[fl.name].cal for fl in floors]
         for m in out.values():
             m.all_plan, m.all_database, m.all_ap_rates = all_plan, all_database, all_rates
+            m.all_calibrations = all_cals
     return out
 
 

@@ -62,7 +62,8 @@ class FloorModels:
 class WalkTrack:
     """A walk tracked on a site: per step (M) times [s since the walk's first record], position
     (M, 2) [m, floor frame] and covariance (M, 3) = (xx, xy, yy) [m²]; the floor and its
-    probability; the waypoints and the errors at them [m] when the walk has waypoints."""
+    probability (calibrated when the floor was identified: ``fusion.floor_evidence.FloorCalibration``;
+    1 when it was given); the waypoints and the errors at them [m] when the walk has waypoints."""
 
     walk_id: str
     source: str
@@ -321,7 +322,7 @@ class Site:
             models = [self.floor_models(n) for n in self.floors]
             plan = FloorPlan([m.plan.geometry(0) for m in models], FloorPlanOptions())
             # The walk's floor is unknown: the widest calibrated offset spread of the floors.
-            spread = max(site_model.offset_spread_rad(m.calibration) for m in models)
+            _, spread = site_model.identification_calibration([m.calibration for m in models])
             tracker = GridTracker(plan, site_model.identification_grid_options(self.settings, spread))
             con = store.connect(self.path)
             try:
@@ -352,11 +353,13 @@ class Site:
             tracker_all, numbers, database, rates = self._all_floors()
             # Steps rotated with the first floor's calibration for identification; then the floor's own.
             # The same code as ``fusion evaluate``'s floor identification (site_model.identify_floor).
-            first = self.floor_models(self.floors[0])
+            first_cal, _ = site_model.identification_calibration([self.floor_models(n).calibration
+                                                                  for n in self.floors])
             weight = self.settings.identification_ap_weight
-            ap = site_model.walk_ap_log_likelihood(walk, database, rates, self.settings) if weight > 0 else None
+            evidence = site_model.walk_floor_evidence(walk, database, rates, self.settings)
             ident = site_model.identify_floor(tracker_all, numbers, site_model.tracker_steps(
-                steps_raw, first.calibration, self.settings), wifi_fixes.fixes_for_walk(walk, database), ap, weight)
+                steps_raw, first_cal, self.settings), wifi_fixes.fixes_for_walk(walk, database),
+                evidence["ap_log_likelihood"], weight, self.settings.floor_calibration(), evidence["match_distance_db"])
             by_number = {n: name for name, (n, _) in self._floors.items()}
             floor = by_number[ident["floor"]]
             probabilities = {by_number[n]: p for n, p in ident["probabilities"].items()}
