@@ -23,6 +23,7 @@ py::dict ResultToDict(const GridTrackResult& r) {
   d["covariance_m2"] = r.filtered_covariance_m2;
   d["posterior_covariance_m2"] = r.filtered_posterior_covariance_m2;
   d["fix_distance_m"] = r.filtered_fix_distance_m;
+  d["fix_sd_m"] = r.filtered_fix_sd_m;
   d["floor_probabilities"] = r.filtered_floor_probabilities;
   d["heading_offset_rad"] = r.filtered_heading_offset_rad;
   if (r.filtered_median_m.rows() > 0) d["median_m"] = r.filtered_median_m;
@@ -32,6 +33,7 @@ py::dict ResultToDict(const GridTrackResult& r) {
     d["smoothed_covariance_m2"] = r.smoothed_covariance_m2;
     d["smoothed_posterior_covariance_m2"] = r.smoothed_posterior_covariance_m2;
     d["smoothed_fix_distance_m"] = r.smoothed_fix_distance_m;
+    d["smoothed_fix_sd_m"] = r.smoothed_fix_sd_m;
   }
   d["smoothed_floor_probabilities"] = r.smoothed_floor_probabilities;
   d["heading_offset_bins_rad"] = r.heading_offset_bins_rad;
@@ -85,7 +87,7 @@ equality and pickling as for every Options class. The fix likelihood's ε and τ
                      "(GridTracker.with_survey_positions); 1: the cell centres.")
       .def_readwrite("start_position_sd_m", &GridTrackerOptions::start_position_sd_m, "Known start: sd [m].")
       .def_readwrite("filtered_covariance_scale", &GridTrackerOptions::filtered_covariance_scale,
-                     "a of the filter's returned covariance a Σ + (b² + (g d)²) I.")
+                     "a of the filter's returned covariance a Σ + (b² + (g d)² + (h max(0, s - s0))²) I.")
       .def_readwrite("filtered_covariance_floor_m", &GridTrackerOptions::filtered_covariance_floor_m,
                      "b [m] of the filter's returned covariance.")
       .def_readwrite("filtered_covariance_fix_gain", &GridTrackerOptions::filtered_covariance_fix_gain,
@@ -96,6 +98,12 @@ equality and pickling as for every Options class. The fix likelihood's ε and τ
                      "b [m] of the smoother's returned covariance.")
       .def_readwrite("smoothed_covariance_fix_gain", &GridTrackerOptions::smoothed_covariance_fix_gain,
                      "g of the smoother's returned covariance (d: distance to the nearest fix's centre [m]).")
+      .def_readwrite("filtered_covariance_fix_sd_gain", &GridTrackerOptions::filtered_covariance_fix_sd_gain,
+                     "h of the filter's returned covariance: (h max(0, s - s0))² added (s: the last fix's own sd [m]).")
+      .def_readwrite("smoothed_covariance_fix_sd_gain", &GridTrackerOptions::smoothed_covariance_fix_sd_gain,
+                     "h of the smoother's returned covariance (s: the nearest fix's own sd [m]).")
+      .def_readwrite("covariance_fix_sd_knee_m", &GridTrackerOptions::covariance_fix_sd_knee_m,
+                     "s0 [m] of the returned covariances: fix sds up to it add nothing.")
       .def_readwrite("max_memory_bytes", &GridTrackerOptions::max_memory_bytes, "Memory limit of a run [bytes].")
       .def_readwrite("num_threads", &GridTrackerOptions::num_threads, "Layers in parallel (<= 0: all cores).");
   BindOptionsProtocol(options, "GridTrackerOptions");
@@ -174,8 +182,8 @@ indoorloc.fusion.Fixes.as_arrays(); start: None (unknown) or {"position_m", "flo
 "heading_offset_rad", "time_s"} (its heading offset is also the centre of the offset prior).
 Returns a dict: per step times_s (M,), mean_m (M, 2), covariance_m2 (M, 3) (causal filter),
 floor_probabilities (M, F), heading_offset_rad (M,), posterior_covariance_m2 (M, 3) and
-fix_distance_m (M,) (covariance_m2 is the calibrated one, options); with smooth, smoothed_m (M, 2),
-smoothed_covariance_m2 (M, 3), smoothed_posterior_covariance_m2 and smoothed_fix_distance_m; given the whole walk smoothed_floor_probabilities (F,),
+fix_distance_m (M,) and fix_sd_m (M,) (covariance_m2 is the calibrated one, options); with smooth, smoothed_m (M, 2),
+smoothed_covariance_m2 (M, 3), smoothed_posterior_covariance_m2, smoothed_fix_distance_m and smoothed_fix_sd_m; given the whole walk smoothed_floor_probabilities (F,),
 heading_offset_bins_rad / heading_offset_probabilities (H,), scale_bins / scale_probabilities
 (S,), walk_heading_offset_rad, walk_heading_offset_sd_rad, walk_scale; summary.)doc");
 }

@@ -101,7 +101,7 @@ not after the latest step.)doc")
 Add a step: time_s [s], displacement_m (2,) [m] in the PDR frame, covariance_m2 (3,) = (xx, xy, yy)
 [m²]; applies the pending fixes with time <= time_s. Returns the estimate after it: a dict with
 time_s, steps, mean_m (2,) [m], covariance_m2 (3,) [m²] (calibrated as GridTracker.run's),
-posterior_covariance_m2 (3,), fix_distance_m, floor_probabilities (F,), heading_offset_rad,
+posterior_covariance_m2 (3,), fix_distance_m, fix_sd_m, floor_probabilities (F,), heading_offset_rad,
 log_evidence. ValueError for a step before the previous step or fix;
 RuntimeError when every hypothesis is ruled out (hard walls).)doc")
       .def(

@@ -144,6 +144,7 @@ py::dict GridEstimateToDict(const fusion::GridFilterEstimate& e) {
   d["covariance_m2"] = Eigen::VectorXd(e.covariance_m2);
   d["posterior_covariance_m2"] = Eigen::VectorXd(e.posterior_covariance_m2);
   d["fix_distance_m"] = e.fix_distance_m;
+  d["fix_sd_m"] = e.fix_sd_m;
   d["floor_probabilities"] = e.floor_probabilities;
   d["heading_offset_rad"] = e.heading_offset_rad;
   d["log_evidence"] = e.log_evidence;

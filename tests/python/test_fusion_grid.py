@@ -165,3 +165,61 @@ def test_survey_anchored_fixes_reach_beyond_the_survey():
         anchored.with_survey_positions(np.full((2, 2), np.nan), np.zeros(2, dtype=np.int64))
     with pytest.raises(ValueError, match="fix_survey_distance_factor"):
         fusion.GridTrackerOptions(fix_survey_distance_factor=1.5)
+
+
+def test_returned_covariance_is_the_calibration_formula_of_the_study():
+    """The tracker's returned covariances are Σ' = a Σ + (b² + (g d)² + (h max(0, s - s0))²) I of
+    its own Σ, d and s (GridTrackerOptions), the formula the study chooses (a, b, g, h, s0) with
+    (experiments.fusion_uncertainty.calibrated); s is the fix's weighted component sd."""
+    from indoorloc.experiments import fusion_uncertainty as fu
+
+    plan = _hall()
+    options = fusion.GridTrackerOptions(heading_offset_bins=3, heading_offset_sd_rad=0.1, filtered_covariance_scale=2.0,
+                                        filtered_covariance_floor_m=1.0, filtered_covariance_fix_gain=0.5,
+                                        filtered_covariance_fix_sd_gain=3.0, smoothed_covariance_scale=1.5,
+                                        smoothed_covariance_floor_m=0.5, smoothed_covariance_fix_gain=0.25,
+                                        smoothed_covariance_fix_sd_gain=2.0, covariance_fix_sd_knee_m=5.0)
+    steps, fixes, _ = _walk(2)
+    # Half the fixes poor (component sds 9 and 13 m): above the knee.
+    sds = np.where(np.arange(len(fixes.times_s))[:, None] % 2 == 0, [[4.0, 4.0]], [[9.0, 13.0]])
+    fixes = fusion.Fixes.from_arrays(fixes.times_s, fixes.means_m, sds, fixes.weights)
+    r = fusion.track_grid(fusion.GridTracker(plan, options), steps, fixes=fixes)
+    s = np.asarray(r["fix_sd_m"])
+    assert set(np.round(s[s > 0], 9)) == {4.0, 10.2}  # 0.7 * 9 + 0.3 * 13
+    for prefix, a, b, g, h in (("", 2.0, 1.0, 0.5, 3.0), ("smoothed_", 1.5, 0.5, 0.25, 2.0)):
+        expect = fu.calibrated(np.asarray(r[prefix + "posterior_covariance_m2"]), np.asarray(r[prefix + "fix_distance_m"]),
+                               np.asarray(r[prefix + "fix_sd_m"]), a, b, g, h, 5.0)
+        np.testing.assert_allclose(r[prefix + "covariance_m2"], expect, rtol=1e-12, atol=1e-9)
+    poor = s > 5.0
+    assert poor.any() and (~poor).any()
+    extra = np.asarray(r["covariance_m2"])[:, 0] - fu.calibrated(np.asarray(r["posterior_covariance_m2"]),
+                                                                  np.asarray(r["fix_distance_m"]), s, 2.0, 1.0, 0.5)[:, 0]
+    np.testing.assert_allclose(extra[poor], (3.0 * (s[poor] - 5.0)) ** 2, rtol=1e-9)
+    assert np.all(np.abs(extra[~poor]) < 1e-9)
+
+
+def test_study_chooses_the_fix_sd_term_where_poor_matches_are_lost():
+    """experiments.fusion_uncertainty.choose on synthetic errors: where the fix sd s is above 8 m
+    the error grows (sd 1 + 3 (s - 8) m), elsewhere the posterior (sd 1 m) is right; floor C has
+    most of the poor matches. The choice takes the fix-sd term with its knee at 8 m, covers
+    >= 95 % pooled and >= 90 % on every floor, and its median region is smaller than the best
+    choice without the term."""
+    from indoorloc.experiments import fusion_uncertainty as fu
+
+    rng = np.random.default_rng(3)
+    n = 3000
+    floor = np.repeat(np.array(["A", "B", "C"]), n // 3)
+    s = np.where(floor == "C", rng.uniform(2.0, 16.0, n), rng.uniform(2.0, 10.0, n))
+    err = rng.normal(size=(n, 2)) * (1.0 + 3.0 * np.maximum(0.0, s - 8.0))[:, None]
+    cov = np.tile([1.0, 0.0, 1.0], (n, 1))
+    d = np.abs(rng.normal(0, 3, n))
+    grid = {"scale": (1.0, 2.0, 4.0), "floor_m": (0.0, 1.0, 2.0), "fix_gain": (0.0, 0.5),
+            "fix_sd_gain": (0.0, 1.0, 3.0, 4.0, 8.0), "fix_sd_knee_m": (4.0, 8.0, 12.0)}
+    c = fu.choose(err, cov, d, s, floor, grid)
+    assert c["fix_sd_gain"] > 0 and c["fix_sd_knee_m"] == 8.0
+    inside, area = fu.coverage_and_area(err, fu.calibrated(cov, d, s, **c))
+    assert inside.mean() >= 0.95
+    assert all(inside[floor == f].mean() >= 0.90 for f in "ABC")
+    c0 = fu.choose(err, cov, d, s, floor, {**grid, "fix_sd_gain": (0.0,), "fix_sd_knee_m": (0.0,)})
+    _, area0 = fu.coverage_and_area(err, fu.calibrated(cov, d, s, **c0))
+    assert np.median(area) < np.median(area0)

@@ -45,32 +45,42 @@ Eigen::Vector2d SpatialMedian(const std::vector<Eigen::Vector3d>& points, double
   return x;
 }
 
-// Σ' = a Σ + (b² + (g d)²) I per step k >= k0 (GridTrackerOptions, "Calibration of the returned
-// covariances"); the posterior's own Σ is kept beside it.
-void CalibrateRows(const RowMatrixXd& mean, double a, double b, double g,
+// The calibration of one estimator's rows.
+struct Calibration {
+  double a, b, g, h, s0;
+};
+
+// Σ' = a Σ + (b² + (g d)² + (h max(0, s - s0))²) I per step k >= k0 (GridTrackerOptions,
+// "Calibration of the returned covariances"; grid_ops.h CalibratedCovariance); the posterior's own
+// Σ, the fix distance d and the fix sd s are kept beside it.
+void CalibrateRows(const RowMatrixXd& mean, const Calibration& cal,
                    const std::function<int(int, const Eigen::Vector2d&)>& fix_of, const std::vector<Eigen::Vector2d>& centres,
-                   int k0, RowMatrixXd* cov, RowMatrixXd* posterior, Eigen::VectorXd* distance) {
+                   const std::vector<double>& sds, int k0, RowMatrixXd* cov, RowMatrixXd* posterior,
+                   Eigen::VectorXd* distance, Eigen::VectorXd* fix_sd) {
   *posterior = *cov;
   distance->setZero(cov->rows());
+  fix_sd->setZero(cov->rows());
   for (Eigen::Index k = k0; k < cov->rows(); ++k) {
     const Eigen::Vector2d m = mean.row(k).transpose();
     const int j = fix_of(static_cast<int>(k), m);
     const double d = j >= 0 ? (m - centres[j]).norm() : 0.0;
+    const double s = j >= 0 ? sds[j] : 0.0;
     (*distance)[k] = d;
-    const double iso = b * b + (g * d) * (g * d);
-    (*cov)(k, 0) = a * (*cov)(k, 0) + iso;
-    (*cov)(k, 1) = a * (*cov)(k, 1);
-    (*cov)(k, 2) = a * (*cov)(k, 2) + iso;
+    (*fix_sd)[k] = s;
+    cov->row(k) = CalibratedCovariance(Eigen::Vector3d(cov->row(k).transpose()), d, s, cal.a, cal.b, cal.g, cal.h,
+                                       cal.s0)
+                      .transpose();
   }
 }
 
 void CalibrateCovariances(const std::vector<StepInput>& steps, const std::vector<PositionFix>& fixes, int k0,
                           const GridTrackerOptions& o, GridTrackResult* r) {
   std::vector<Eigen::Vector2d> centres;
-  std::vector<double> times;
+  std::vector<double> times, sds;
   centres.reserve(fixes.size());
   for (const PositionFix& f : fixes) {
     centres.push_back(FixCentre(f));
+    sds.push_back(FixSd(f));
     times.push_back(f.time_s);
   }
   // Filtered: the last fix applied by step k (a fix applies at the first step at or after it).
@@ -86,13 +96,16 @@ void CalibrateCovariances(const std::vector<StepInput>& steps, const std::vector
     if (j == static_cast<int>(times.size()) || (j > 0 && t - times[j - 1] <= times[j] - t)) --j;
     return j;
   };
-  CalibrateRows(r->filtered_mean_m, o.filtered_covariance_scale, o.filtered_covariance_floor_m,
-                o.filtered_covariance_fix_gain, last_applied, centres, k0, &r->filtered_covariance_m2,
-                &r->filtered_posterior_covariance_m2, &r->filtered_fix_distance_m);
+  const Calibration filtered{o.filtered_covariance_scale, o.filtered_covariance_floor_m, o.filtered_covariance_fix_gain,
+                             o.filtered_covariance_fix_sd_gain, o.covariance_fix_sd_knee_m};
+  CalibrateRows(r->filtered_mean_m, filtered, last_applied, centres, sds, k0, &r->filtered_covariance_m2,
+                &r->filtered_posterior_covariance_m2, &r->filtered_fix_distance_m, &r->filtered_fix_sd_m);
   if (r->smoothed_mean_m.rows() > 0) {
-    CalibrateRows(r->smoothed_mean_m, o.smoothed_covariance_scale, o.smoothed_covariance_floor_m,
-                  o.smoothed_covariance_fix_gain, nearest, centres, k0, &r->smoothed_covariance_m2,
-                  &r->smoothed_posterior_covariance_m2, &r->smoothed_fix_distance_m);
+    const Calibration smoothed{o.smoothed_covariance_scale, o.smoothed_covariance_floor_m,
+                               o.smoothed_covariance_fix_gain, o.smoothed_covariance_fix_sd_gain,
+                               o.covariance_fix_sd_knee_m};
+    CalibrateRows(r->smoothed_mean_m, smoothed, nearest, centres, sds, k0, &r->smoothed_covariance_m2,
+                  &r->smoothed_posterior_covariance_m2, &r->smoothed_fix_distance_m, &r->smoothed_fix_sd_m);
   }
 }
 

@@ -43,6 +43,7 @@ struct GridFilterSession::State {
   double last_fix_time = -std::numeric_limits<double>::infinity();
   bool has_fix_centre = false;              // a fix was added (the calibration's d measures from it)
   Eigen::Vector2d fix_centre = Eigen::Vector2d::Zero();
+  double fix_sd = 0.0;                       // the same fix's own sd [m] (grid_ops.h FixSd)
   GridFilterEstimate current;
   GridTrackSummary summary;
 };
@@ -126,6 +127,7 @@ void GridFilterSession::AddFix(const PositionFix& fix) {
   // The batch's calibration measures from the last fix at or before a step, whatever it is.
   s.has_fix_centre = true;
   s.fix_centre = FixCentre(fix);
+  s.fix_sd = FixSd(fix);
   if (fix.empty()) return;
   if (s.start.known && fix.time_s < s.start.time_s) return;  // the batch ignores fixes before a known start
   s.pending_fixes.push_back(fix);
@@ -161,6 +163,7 @@ GridFilterEstimate GridFilterSession::AddStep(const StepInput& step) {
     e.covariance_m2 << var, 0.0, var;
     e.posterior_covariance_m2 = e.covariance_m2;
     e.fix_distance_m = 0.0;
+    e.fix_sd_m = 0.0;
     e.floor_probabilities = Eigen::VectorXd::Zero(n_floors);
     e.floor_probabilities[s.start_floor_index] = 1.0;
     e.heading_offset_rad = s.start.heading_offset_rad;
@@ -256,14 +259,15 @@ GridFilterEstimate GridFilterSession::AddStep(const StepInput& step) {
   }
   e.mean_m << m_x, m_y;
   e.posterior_covariance_m2 << sxx - m_x * m_x, sxy - m_x * m_y, syy - m_y * m_y;
-  // The batch's calibration Σ' = a Σ + (b² + (g d)²) I (grid_tracker.cc, CalibrateRows).
+  // The batch's calibration (grid_ops.h CalibratedCovariance, from the latest fix as the batch's
+  // filter measures it).
   const Eigen::Vector2d m = e.mean_m;
-  const double d = s.has_fix_centre ? (m - s.fix_centre).norm() : 0.0;
-  const double a = o.filtered_covariance_scale, b = o.filtered_covariance_floor_m, g = o.filtered_covariance_fix_gain;
-  const double iso = b * b + (g * d) * (g * d);
-  e.fix_distance_m = d;
-  e.covariance_m2 << a * e.posterior_covariance_m2[0] + iso, a * e.posterior_covariance_m2[1],
-      a * e.posterior_covariance_m2[2] + iso;
+  e.fix_distance_m = s.has_fix_centre ? (m - s.fix_centre).norm() : 0.0;
+  e.fix_sd_m = s.has_fix_centre ? s.fix_sd : 0.0;
+  e.covariance_m2 = CalibratedCovariance(e.posterior_covariance_m2, e.fix_distance_m, e.fix_sd_m,
+                                         o.filtered_covariance_scale, o.filtered_covariance_floor_m,
+                                         o.filtered_covariance_fix_gain, o.filtered_covariance_fix_sd_gain,
+                                         o.covariance_fix_sd_knee_m);
   e.floor_probabilities = Eigen::VectorXd::Zero(n_floors);
   double cs = 0, sn = 0;
   for (int l = 0; l < n_layers; ++l) {

@@ -424,6 +424,31 @@ inline LayerStep FilteredLayerEstimate(const Moments& mo, const StepOps& op, dou
   return e;
 }
 
+// Weighted mean sd of a fix's components [m]: the fix's own statement of its uncertainty (for WiFi
+// fingerprint fixes it grows with the best match's dissimilarity, so it is large where the scan
+// resembles no surveyed fingerprint). Components of weight 0 (padding) are skipped; 0 for an
+// empty fix.
+inline double FixSd(const PositionFix& f) {
+  double sum = 0, total = 0;
+  for (Eigen::Index i = 0; i < f.means_m.rows(); ++i) {
+    if (!(f.weights[i] > 0)) continue;
+    sum += f.weights[i] * f.sds_m[i];
+    total += f.weights[i];
+  }
+  return total > 0 ? sum / total : 0.0;
+}
+
+// The returned covariance (GridTrackerOptions, "Calibration of the returned covariances"):
+//   Σ' = a Σ + (b² + (g d)² + (h max(0, s - s0))²) I
+// Σ = posterior (xx, xy, yy) [m²], d the distance to the fix's centre [m], s the fix's sd [m].
+// One definition for the batch run and the streaming session.
+inline Eigen::Vector3d CalibratedCovariance(const Eigen::Vector3d& posterior, double d, double s, double a, double b,
+                                            double g, double h, double s0) {
+  const double excess = h * std::max(0.0, s - s0);
+  const double iso = b * b + (g * d) * (g * d) + excess * excess;
+  return Eigen::Vector3d(a * posterior[0] + iso, a * posterior[1], a * posterior[2] + iso);
+}
+
 // Weighted mean of a fix's components [m] (the centre the covariance calibration measures from).
 inline Eigen::Vector2d FixCentre(const PositionFix& f) {
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();

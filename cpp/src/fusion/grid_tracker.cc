@@ -45,6 +45,9 @@ bool GridTrackerOptions::IsValid(std::string* error) const {
       .InRange(smoothed_covariance_scale, 1e-6, 1e6, "smoothed_covariance_scale")
       .InRange(smoothed_covariance_floor_m, 0.0, 1e4, "smoothed_covariance_floor_m")
       .InRange(smoothed_covariance_fix_gain, 0.0, 1e3, "smoothed_covariance_fix_gain")
+      .InRange(filtered_covariance_fix_sd_gain, 0.0, 1e3, "filtered_covariance_fix_sd_gain")
+      .InRange(smoothed_covariance_fix_sd_gain, 0.0, 1e3, "smoothed_covariance_fix_sd_gain")
+      .InRange(covariance_fix_sd_knee_m, 0.0, 1e4, "covariance_fix_sd_knee_m")
       .InRange(max_memory_bytes, 1e6, 1e13, "max_memory_bytes")
       .IntInRange(num_threads, -1, 4096, "num_threads");
 }

@@ -255,6 +255,9 @@ GridTrackerOptions SiteFile::TrackerOptions(const std::string& floor) const {
   o.smoothed_covariance_scale = get("smoothed_covariance_scale", o.smoothed_covariance_scale);
   o.smoothed_covariance_floor_m = get("smoothed_covariance_floor_m", o.smoothed_covariance_floor_m);
   o.smoothed_covariance_fix_gain = get("smoothed_covariance_fix_gain", o.smoothed_covariance_fix_gain);
+  o.filtered_covariance_fix_sd_gain = get("filtered_covariance_fix_sd_gain", o.filtered_covariance_fix_sd_gain);
+  o.smoothed_covariance_fix_sd_gain = get("smoothed_covariance_fix_sd_gain", o.smoothed_covariance_fix_sd_gain);
+  o.covariance_fix_sd_knee_m = get("covariance_fix_sd_knee_m", o.covariance_fix_sd_knee_m);
   o.max_memory_bytes = get("max_memory_bytes", o.max_memory_bytes);
   o.num_threads = static_cast<int>(get("num_threads", o.num_threads));
   const double spread = std::isfinite(cal.yaw_offset_spread_rad) ? cal.yaw_offset_spread_rad : 0.0;

@@ -200,7 +200,9 @@ class GridTrackerOptions:
     """Fields and defaults: read them from the compiled struct (``GridTrackerOptions().to_dict()``);
     they are not restated here."""
     cell_size_m: float
+    covariance_fix_sd_knee_m: float
     filtered_covariance_fix_gain: float
+    filtered_covariance_fix_sd_gain: float
     filtered_covariance_floor_m: float
     filtered_covariance_scale: float
     fix_outlier_probability: float
@@ -216,6 +218,7 @@ class GridTrackerOptions:
     scale_bins: int
     scale_sd: float
     smoothed_covariance_fix_gain: float
+    smoothed_covariance_fix_sd_gain: float
     smoothed_covariance_floor_m: float
     smoothed_covariance_scale: float
     spatial_median: bool

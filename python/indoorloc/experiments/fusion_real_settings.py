@@ -96,6 +96,8 @@ class RealSettings:
     known_start_covariance_scale: float = 3.0
     known_start_covariance_floor_m: float = 0.5
     known_start_covariance_fix_gain: float = 0.0
+    known_start_covariance_fix_sd_gain: float = 0.0   #: h (GridTrackerOptions.filtered_covariance_fix_sd_gain)
+    known_start_covariance_fix_sd_knee_m: float = 0.0  #: s0 [m] (GridTrackerOptions.covariance_fix_sd_knee_m)
     floor_identification: bool = True   #: also run the default with the floor not given
     threads: int = 2                    #: walks tracked in parallel (results do not depend on it)
     #: Engine of the fusion_* methods: "grid" (exact filter and smoother on floor cells,
@@ -172,7 +174,8 @@ class WalkScore:
     waypoint_xy_m: Optional[np.ndarray] = None        #: surveyed waypoints (W, 2) [m]
     smoothed_track_m: Optional[np.ndarray] = None     #: the default's smoothed track (per step)
     #: Per grid method: what the covariance calibration is fitted on (``fusion_uncertainty``):
-    #: ``error_m`` (W, 2) estimate minus truth, ``posterior_covariance_m2`` (W, 3), ``fix_distance_m`` (W,).
+    #: ``error_m`` (W, 2) estimate minus truth, ``posterior_covariance_m2`` (W, 3), ``fix_distance_m`` (W,),
+    #: ``fix_sd_m`` (W,).
     calibration_inputs: Dict[str, Dict[str, np.ndarray]] = field(default_factory=dict)
 
 

@@ -300,7 +300,8 @@ def _score_walk_grid(score: WalkScore, put, pdr_steps, fixes, known_fixes, known
                 score.calibration_inputs[name] = {
                     "error_m": est - wxy,
                     "posterior_covariance_m2": np.asarray(r[prefix + "posterior_covariance_m2"])[idx],
-                    "fix_distance_m": np.asarray(r[prefix + "fix_distance_m"])[idx]}
+                    "fix_distance_m": np.asarray(r[prefix + "fix_distance_m"])[idx],
+                    "fix_sd_m": np.asarray(r[prefix + "fix_sd_m"])[idx]}
         return r
 
     if want & {"fusion_unknown_start", "fusion_smoother"} or settings.floor_identification:
@@ -317,7 +318,9 @@ def _score_walk_grid(score: WalkScore, put, pdr_steps, fixes, known_fixes, known
         fix_tempering_by_variance=settings.known_start_fix_tempering_by_variance,
         filtered_covariance_scale=settings.known_start_covariance_scale,
         filtered_covariance_floor_m=settings.known_start_covariance_floor_m,
-        filtered_covariance_fix_gain=settings.known_start_covariance_fix_gain), fl.name, models.database)
+        filtered_covariance_fix_gain=settings.known_start_covariance_fix_gain,
+        filtered_covariance_fix_sd_gain=settings.known_start_covariance_fix_sd_gain,
+        covariance_fix_sd_knee_m=settings.known_start_covariance_fix_sd_knee_m), fl.name, models.database)
     if "fusion_known_start" in want:
         run("fusion_known_start", None, known_tracker, known, known_fixes, smooth=False)
     if "fusion_no_walls" in want:

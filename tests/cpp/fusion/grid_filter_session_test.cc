@@ -76,6 +76,7 @@ void ExpectSessionEqualsBatch(const GridTracker& tracker, const std::vector<Step
       EXPECT_EQ(e.posterior_covariance_m2[i], batch.filtered_posterior_covariance_m2(k, i)) << "step " << k;
     }
     EXPECT_EQ(e.fix_distance_m, batch.filtered_fix_distance_m[k]) << "step " << k;
+    EXPECT_EQ(e.fix_sd_m, batch.filtered_fix_sd_m[k]) << "step " << k;
     ASSERT_EQ(e.floor_probabilities.size(), batch.filtered_floor_probabilities.cols());
     for (int f = 0; f < e.floor_probabilities.size(); ++f)
       EXPECT_EQ(e.floor_probabilities[f], batch.filtered_floor_probabilities(k, f)) << "step " << k;
@@ -109,6 +110,8 @@ TEST(GridFilterSessionTest, KnownStartScaleBinsAndMediansEqualBatch) {
   o.filtered_covariance_scale = 1.7;  // the returned covariance calibrated as the batch's
   o.filtered_covariance_floor_m = 2.0;
   o.filtered_covariance_fix_gain = 0.3;
+  o.filtered_covariance_fix_sd_gain = 0.8;  // the fixes' sd is 3.4 m: above the knee
+  o.covariance_fix_sd_knee_m = 2.0;
   const GridTracker tracker(&plan, o);
   const auto steps = Walk(40, 11);
   TrackStart start;

@@ -98,6 +98,7 @@ TEST(GridTrackerTest, ReturnedCovarianceIsCalibratedByTheFixDistance) {
   o.filtered_covariance_scale = o.smoothed_covariance_scale = 1.0;  // the posterior's own
   o.filtered_covariance_floor_m = o.smoothed_covariance_floor_m = 0.0;
   o.filtered_covariance_fix_gain = o.smoothed_covariance_fix_gain = 0.0;
+  o.filtered_covariance_fix_sd_gain = o.smoothed_covariance_fix_sd_gain = 0.0;
   const GridTracker raw_tracker(&plan, o);
   o.filtered_covariance_scale = 2.0;
   o.filtered_covariance_floor_m = 1.5;
@@ -142,6 +143,60 @@ TEST(GridTrackerTest, ReturnedCovarianceIsCalibratedByTheFixDistance) {
   std::string error;
   EXPECT_FALSE(bad.IsValid(&error));
   EXPECT_NE(error.find("smoothed_covariance_scale"), std::string::npos) << error;
+}
+
+TEST(GridTrackerTest, ReturnedCovarianceGrowsWithTheFixSdAboveTheKnee) {
+  const FloorPlan plan = Hall();
+  GridTrackerOptions o;
+  o.heading_offset_sd_rad = 0.0;
+  o.filtered_covariance_scale = o.smoothed_covariance_scale = 1.0;  // only the fix-sd term
+  o.filtered_covariance_floor_m = o.smoothed_covariance_floor_m = 0.0;
+  o.filtered_covariance_fix_gain = o.smoothed_covariance_fix_gain = 0.0;
+  o.filtered_covariance_fix_sd_gain = o.smoothed_covariance_fix_sd_gain = 0.0;
+  const GridTracker raw_tracker(&plan, o);
+  o.filtered_covariance_fix_sd_gain = 0.5;
+  o.smoothed_covariance_fix_sd_gain = 2.0;
+  o.covariance_fix_sd_knee_m = 4.0;
+  const GridTracker tracker(&plan, o);
+  const auto steps = Straight(30, 0.7, M_PI / 2);
+  // A sharp fix (sd 2 m, below the knee: adds nothing) at 3 s; at 12 s a poor one whose
+  // components have sds 6 and 12 m (weights 3 and 1: s = 7.5 m) and a padding component
+  // (weight 0, sd 100 m) that must not count.
+  PositionFix poor = Fix(12.0, 25, 25, 6.0);
+  poor.means_m.resize(3, 2);
+  poor.means_m << 25, 25, 27, 25, 0, 0;
+  poor.sds_m = Eigen::Vector3d(6.0, 12.0, 100.0);
+  poor.weights = Eigen::Vector3d(3.0, 1.0, 0.0);
+  poor.floors = Eigen::VectorXi::Constant(3, PositionFix::kAnyFloor);
+  const std::vector<PositionFix> fixes = {Fix(3.0, 20, 10, 2.0), poor};
+  const GridTrackResult a = raw_tracker.Run(steps, fixes, TrackStart(), true);
+  const GridTrackResult b = tracker.Run(steps, fixes, TrackStart(), true);
+  EXPECT_EQ(a.filtered_mean_m, b.filtered_mean_m);
+  EXPECT_EQ(a.smoothed_mean_m, b.smoothed_mean_m);
+  int poor_steps = 0;
+  for (int k = 0; k < 30; ++k) {
+    const double t = steps[k].time_s;
+    const double sf = t < 3.0 ? 0.0 : (t < 12.0 ? 2.0 : 7.5);  // the last fix applied
+    const double ss = std::abs(t - 3.0) <= std::abs(t - 12.0) ? 2.0 : 7.5;  // the nearest in time
+    EXPECT_NEAR(b.filtered_fix_sd_m[k], sf, 1e-12) << k;
+    EXPECT_NEAR(b.smoothed_fix_sd_m[k], ss, 1e-12) << k;
+    const double ef = 0.5 * std::max(0.0, sf - 4.0), es = 2.0 * std::max(0.0, ss - 4.0);
+    EXPECT_NEAR(b.filtered_covariance_m2(k, 0), a.filtered_covariance_m2(k, 0) + ef * ef, 1e-9) << k;
+    EXPECT_NEAR(b.filtered_covariance_m2(k, 1), a.filtered_covariance_m2(k, 1), 1e-9) << k;
+    EXPECT_NEAR(b.smoothed_covariance_m2(k, 2), a.smoothed_covariance_m2(k, 2) + es * es, 1e-9) << k;
+    if (sf > 4.0) {
+      ++poor_steps;
+      EXPECT_GT(b.filtered_covariance_m2(k, 0), a.filtered_covariance_m2(k, 0) + 3.0) << k;
+    } else {
+      EXPECT_EQ(b.filtered_covariance_m2(k, 0), a.filtered_covariance_m2(k, 0)) << k;
+    }
+  }
+  EXPECT_GT(poor_steps, 0);
+  GridTrackerOptions bad;
+  bad.covariance_fix_sd_knee_m = -1.0;
+  std::string error;
+  EXPECT_FALSE(bad.IsValid(&error));
+  EXPECT_NE(error.find("covariance_fix_sd_knee_m"), std::string::npos) << error;
 }
 
 TEST(GridTrackerTest, HeadingOffsetLearntFromFixes) {

@@ -49,6 +49,7 @@ struct GridFilterEstimate {
   Eigen::Vector3d covariance_m2 = Eigen::Vector3d::Zero();
   Eigen::Vector3d posterior_covariance_m2 = Eigen::Vector3d::Zero();  ///< the posterior's own [m²]
   double fix_distance_m = 0;               ///< d of the calibration: to the latest fix's centre [m]
+  double fix_sd_m = 0;                     ///< s of the calibration: the latest fix's own sd [m]
   Eigen::VectorXd floor_probabilities;     ///< per floor of the plan (F)
   double heading_offset_rad = 0;           ///< posterior circular mean of the heading offset
   double log_evidence = 0;                 ///< log p(fixes so far | steps so far), over all layers

@@ -111,22 +111,30 @@ struct GridTrackerOptions {
   /// Calibration of the returned covariances. The posterior's own spread is that of the model,
   /// which knows nothing of its own misfits (a wrong mode held with confidence, a fingerprint map
   /// that is absent where the walker is); returned is
-  ///   Σ' = a Σ + (b² + (g d)²) I,
+  ///   Σ' = a Σ + (b² + (g d)² + (h max(0, s - s0))²) I,
   /// Σ the posterior covariance (also returned as is), d [m] the distance from the estimate to
-  /// the centre of the fix nearest in time (filtered: the last fix applied; 0 before any fix).
-  /// a, b [m], g for the causal filter and for the smoother; a = 1, b = g = 0: the posterior's.
+  /// the centre of the fix nearest in time (filtered: the last fix applied; 0 before any fix) and
+  /// s [m] that fix's own sd (the weighted mean of its components' sds; a WiFi fingerprint fix's
+  /// sd grows with its best match's dissimilarity, so s is large where the scan resembles no
+  /// surveyed fingerprint: there the tracker is lost more often than its posterior says, e.g. on
+  /// a sparsely surveyed floor). a, b [m], g, h for the causal filter and for the smoother, the
+  /// knee s0 [m] shared; a = 1, b = g = h = 0: the posterior's.
   /// Defaults: the choice on all six floors of the competition mall with its WiFi fingerprint
-  /// fixes (unknown start), the smallest median 95 % region covering >= 95 % of the waypoints;
-  /// chosen per held-out floor the same way, coverage was 0.945 (filter) and 0.937 (smoother)
-  /// pooled, 0.72-1.00 per floor (experiments/fusion_uncertainty.py, docs/fusion_real.md,
-  /// "Honest uncertainty"; re-chosen after the second settings round). Other fixes (BLE, UWB)
-  /// or a known start want their own.
-  double filtered_covariance_scale = 6.0;
-  double filtered_covariance_floor_m = 3.0;
-  double filtered_covariance_fix_gain = 0.75;
-  double smoothed_covariance_scale = 12.0;
-  double smoothed_covariance_floor_m = 0.0;
-  double smoothed_covariance_fix_gain = 0.75;
+  /// fixes (unknown start), the smallest median 95 % region covering >= 95 % of the waypoints
+  /// pooled and >= 90 % on each floor. Chosen per held-out floor the same way, coverage was 0.945
+  /// (filter) and 0.942 (smoother) pooled, 0.91-0.97 (filter) and 0.86-0.99 (smoother) per floor;
+  /// with h = 0 (d only) it was 0.81-1.00 per floor (experiments/fusion_uncertainty.py,
+  /// docs/fusion_real.md, "Honest uncertainty"). g = 0 was chosen for both: with the fix-sd
+  /// term the distance adds nothing. Other fixes (BLE, UWB) or a known start want their own.
+  double filtered_covariance_scale = 1.0;
+  double filtered_covariance_floor_m = 6.0;
+  double filtered_covariance_fix_gain = 0.0;
+  double filtered_covariance_fix_sd_gain = 12.0;
+  double smoothed_covariance_scale = 1.5;
+  double smoothed_covariance_floor_m = 4.0;
+  double smoothed_covariance_fix_gain = 0.0;
+  double smoothed_covariance_fix_sd_gain = 12.0;
+  double covariance_fix_sd_knee_m = 8.0;
   /// Refuse (std::invalid_argument quoting the bytes) a run whose grids would exceed this.
   double max_memory_bytes = 4e9;
   /// Layers run in parallel; results do not depend on the thread count.
@@ -153,6 +161,7 @@ struct GridTrackResult {
   RowMatrixXd filtered_covariance_m2;             ///< M x 3 (xx, xy, yy), calibrated (options)
   RowMatrixXd filtered_posterior_covariance_m2;   ///< M x 3, the posterior's own
   Eigen::VectorXd filtered_fix_distance_m;        ///< M, d of the calibration
+  Eigen::VectorXd filtered_fix_sd_m;              ///< M, s of the calibration
   RowMatrixXd filtered_floor_probabilities;       ///< M x F
   Eigen::VectorXd filtered_heading_offset_rad;    ///< M, posterior circular mean after step k
   RowMatrixXd filtered_median_m;                  ///< M x 2 spatial median (empty unless asked)
@@ -161,6 +170,7 @@ struct GridTrackResult {
   RowMatrixXd smoothed_covariance_m2;             ///< M x 3, calibrated (options)
   RowMatrixXd smoothed_posterior_covariance_m2;   ///< M x 3, the posterior's own
   Eigen::VectorXd smoothed_fix_distance_m;        ///< M, d of the calibration
+  Eigen::VectorXd smoothed_fix_sd_m;              ///< M, s of the calibration
   Eigen::VectorXd smoothed_floor_probabilities;   ///< F (constant over the walk)
   Eigen::VectorXd heading_offset_bins_rad;        ///< H
   Eigen::VectorXd heading_offset_probabilities;   ///< H, given the whole walk
