@@ -369,6 +369,11 @@ class Site:
             raise ValueError(f"indoorloc: walk {src}: no step detected, nothing to track")
         fixes = wifi_fixes.fixes_for_walk(walk, m.database)
         r = site_model.run_default(m.tracker, steps, fixes, smooth=smooth)
+        gaps = int(getattr(r.get("summary"), "smoother_gap_steps", 0) or 0) if smooth else 0
+        if gaps:
+            warnings.warn(f"indoorloc: walk {src}: at {gaps} of {len(steps)} steps the walk before and after cannot "
+                          "be joined by the motion model (steps lost, or fixes far off); the smoothed track uses the "
+                          "causal filter's estimate there and is less reliable", RuntimeWarning, stacklevel=2)
         median = self.settings.point_estimate == "median"
         key = ("smoothed_median_m" if median else "smoothed_m") if smooth else ("median_m" if median else "mean_m")
         cov = np.asarray(r["smoothed_covariance_m2" if smooth else "covariance_m2"], float)

@@ -264,6 +264,37 @@ TEST(GridTrackerTest, WallsKeepTheTrackOutOfTheShop) {
   EXPECT_THROW(GridTracker(&plan, narrow).Run(Straight(2, 0.7, 0.0), {}, start, false), std::runtime_error);
 }
 
+TEST(GridTrackerTest, SmootherGapsFallBackToTheFilterAndAreCounted) {
+  // A walker standing still, seen by ten tight fixes at x = 10 and then ten at x = 50: the
+  // fixes' outlier floors multiply, so the forward message keeps nothing near x = 50 before the
+  // switch and the backward message nothing near x = 10 after it. Where they share no cell the
+  // smoother has no estimate: the filtered one stands in (finite, not the grid's origin), and the
+  // summary counts those steps.
+  const FloorPlan plan = Hall();
+  GridTrackerOptions o;
+  o.heading_offset_sd_rad = 0.0;
+  o.fix.outlier_probability = 1e-3;
+  const GridTracker tracker(&plan, o);
+  std::vector<StepInput> steps;
+  std::vector<PositionFix> fixes;
+  for (int k = 0; k < 20; ++k) {
+    const double t = 0.5 * (k + 1);
+    fixes.push_back(Fix(t - 0.1, k < 10 ? 10.0 : 50.0, 20.0, 1.0));
+    steps.push_back(StepFromPolar(t, 0.0, 0.0, 0.01, 0.01));
+  }
+  const GridTrackResult r = tracker.Run(steps, fixes, TrackStart(), true);
+  EXPECT_GT(r.summary.smoother_gap_steps, 0);
+  EXPECT_NE(r.summary.BriefReport().find("smoother gap steps"), std::string::npos);
+  for (int k = 0; k < 20; ++k) {
+    ASSERT_TRUE(std::isfinite(r.smoothed_mean_m(k, 0))) << k;
+    EXPECT_GT(r.smoothed_mean_m(k, 0), 5.0) << k;  // never the grid's origin
+  }
+  // A consistent walk has none.
+  std::vector<PositionFix> same;
+  for (const PositionFix& f : fixes) same.push_back(Fix(f.time_s, 30.0, 20.0, 1.0));
+  EXPECT_EQ(tracker.Run(steps, same, TrackStart(), true).summary.smoother_gap_steps, 0);
+}
+
 TEST(GridTrackerTest, ErrorsNameTheArgument) {
   const FloorPlan plan = Hall();
   GridTrackerOptions o;
