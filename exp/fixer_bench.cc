@@ -24,11 +24,15 @@ int main(int argc, char** argv) {
   fusion::FingerprintFixer fixer(map);
   std::mt19937 rng(0); std::uniform_real_distribution<double> u(0, 1);
   std::vector<double> ta, tf;
+  const bool cold = argc > 2;  // evict the caches between scans (as the benchmark's harness and a live app's steps do)
+  std::vector<double> evict(cold ? 4 << 20 : 0, 1.0);  // 32 MB
+  double sink = 0;
   for (int k = 0; k < 600; ++k) {
     const double t = 1000.0 + k;
     std::vector<std::string> names; Eigen::VectorXd rssi(200), seen(200);
     for (int m = 0; m < 200; ++m) { names.push_back(map.bssids[order[m]]); rssi[m] = -95 + 55 * u(rng); seen[m] = t - 3 * u(rng); }
     fusion::ScanQuery q;
+    for (std::size_t e = 0; e < evict.size(); e += 8) sink += evict[e]++;
     double c0 = cpu();
     fixer.AddScan(t, names, rssi, seen, &q);
     double c1 = cpu();
@@ -36,5 +40,6 @@ int main(int argc, char** argv) {
     double c2 = cpu();
     if (k >= 20) { ta.push_back(c1 - c0); tf.push_back(c2 - c1); }
   }
+  if (sink == 42) printf(" ");
   for (auto* v : {&ta, &tf}) { std::sort(v->begin(), v->end()); printf("%s p50 %.0f p99 %.0f us\n", v == &ta ? "AddScan" : "Fix", 1e6 * (*v)[v->size() / 2], 1e6 * (*v)[v->size() * 99 / 100]); }
 }

@@ -22,7 +22,7 @@
 // The k nearest references get weights exp(-(d_j - d_min) / T) (0 where d_j = inf), eq. (2).
 //
 // Cost: Nearest reads the posting lists (per AP, the references that heard it) of the query's
-// strongest APs only (the fewest, by weight per list entry, that leave at most a tenth of its
+// strongest APs only (the fewest, by weight per list entry, that leave at most a fifth of its
 // weight sum_A g f(a) to the rest),
 // bounds every reference's d from below with them, and computes d exactly, from the reference's
 // own entries, only for references whose bound is below the k-th best d found so far (a
