@@ -17,9 +17,10 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 // Nearest's first pass reads the posting lists of the query's strongest APs only: the fewest that
 // leave at most this fraction of its weight sum_A g f(a) to the rest (a speed setting only: the
-// result is exact whatever it is; 0.1 was the fastest of {0.05, 0.1, 0.2, 0.3} on the live
-// benchmark's 200-AP scans and on noisy training fingerprints, floors B1 F1 F7 of the shared site).
-constexpr double kRestFraction = 0.1;
+// result is exact whatever it is). Of {0.1, 0.2, 0.3, 0.5}, 0.2 was fastest on F1's pooled 200-AP
+// scans (the slowest floor of the live benchmark: 375 -> 326 us cold, exp/fixer_bench.cc) and
+// within 10 % of 0.1 on single 200-AP scans and noisy fingerprints of B1 and F1.
+constexpr double kRestFraction = 0.2;
 // When the first pass would read more than this fraction of the query's posting-list entries,
 // the full pass runs instead (of 0.7 and 0.95, 0.95 was faster on F1's pooled 200-AP scans: with
 // even weights the first pass is most of the full one, but its bounds still spare most of the
