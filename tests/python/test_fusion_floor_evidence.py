@@ -3,9 +3,12 @@ floor identification: ``site_model.identify_floor`` and ``Site.track(floor="auto
 synthetic two-floor site (simulate.ilc_site)."""
 
 import math
+import warnings
 
 import numpy as np
 import pytest
+
+from indoorloc.io.errors import RecordingWarning
 
 from indoorloc.fusion import floor_evidence as fe
 from indoorloc.fusion import site_model
@@ -105,8 +108,14 @@ def test_auto_floor_of_a_site_uses_the_ap_evidence(two_floor_site, tmp_path):
         held_out.append((floor, tmp_path / f"{floor}_{walks[-1].name}"))
         walks[-1].rename(held_out[-1][1])
     site = Site.build(survey, tmp_path / "site.db")
+    # The synthetic walks' first queries lean to the other floor: with the default change rate the
+    # floor sequence flags F1's walk (below); r = 0 keeps every walk on one floor, no warning.
+    default_rate = site.settings.identification_floor_change_rate_per_s
+    site.settings = replace(site.settings, identification_floor_change_rate_per_s=0.0)
     for floor, path in held_out:
-        t = site.track(path, floor="auto")
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", RecordingWarning)
+            t = site.track(path, floor="auto")
         assert t.floor == floor and t.floor_probability > 0.5
         assert sum(t.floor_probabilities.values()) == pytest.approx(1.0)
         # Calibrated (floor_evidence.calibrated_floor_probabilities): never above 1 - δ/2 on two floors.
@@ -116,6 +125,12 @@ def test_auto_floor_of_a_site_uses_the_ap_evidence(two_floor_site, tmp_path):
     site._all = None
     t0 = site.track(held_out[0][1], floor="auto")
     assert t0.floor == held_out[0][0]
+    # A walk whose AP evidence changes floor is tracked on one floor, with a warning naming it.
+    site.settings = replace(site.settings, identification_ap_weight=2.0, identification_floor_change_rate_per_s=default_rate)
+    with pytest.warns(RecordingWarning, match=r"its WiFi suggests it changes floor \(F2 -> F1 at \d+ s\); it is tracked "
+                                              r"on one floor, F1"):
+        t1 = site.track(held_out[0][1], floor="auto")
+    assert t1.floor == "F1"
 
 
 def test_calibrated_probabilities_against_the_formula():
@@ -206,7 +221,7 @@ def test_track_settings_carry_the_calibration():
     assert site_model.TrackSettings.from_dict(d).floor_calibration() == site_model.TrackSettings().floor_calibration()
     for bad in (dict(identification_temperature=0.0), dict(identification_temperature=math.inf),
                 dict(identification_error_probability=1.0), dict(identification_error_probability=-0.5),
-                dict(identification_error_slope=-1.0)):
+                dict(identification_error_slope=-1.0), dict(identification_floor_change_rate_per_s=-1.0)):
         with pytest.raises(ValueError, match=next(iter(bad))):
             site_model.TrackSettings(**bad).validate()
 
@@ -258,3 +273,89 @@ def test_reliability_table_bins_every_walk_once():
         fe.reliability_table(reported, right[:3])
     with pytest.raises(ValueError, match="reported"):
         fe.reliability_table(np.array([np.nan]), np.array([True]))
+
+
+def _brute_force_sequence(e, t, rate):
+    """Every floor sequence enumerated: posterior marginals, the best sequence and the evidence."""
+    import itertools
+
+    q, f = e.shape
+    best, best_lp, marg, total = None, -np.inf, np.zeros((q, f)), 0.0
+    for seq in itertools.product(range(f), repeat=q):
+        lp = -math.log(f) + e[0, seq[0]]
+        for k in range(1, q):
+            keep = math.exp(-rate * (t[k] - t[k - 1]))
+            step = keep * (seq[k] == seq[k - 1]) + (1 - keep) / f
+            lp += (math.log(step) if step > 0 else -math.inf) + e[k, seq[k]]
+        w = math.exp(lp)
+        total += w
+        marg[np.arange(q), list(seq)] += w
+        if lp > best_lp + 1e-12:
+            best, best_lp = seq, lp
+    return marg / total, np.array(best), math.log(total)
+
+
+def test_floor_sequence_against_brute_force_enumeration():
+    from indoorloc.fusion.floor_sequence import floor_sequence
+
+    rng = np.random.default_rng(4)
+    for rate in (0.0, 0.01, 0.3):
+        e = np.log(rng.uniform(0.05, 1.0, (5, 3)))
+        t = np.cumsum(rng.uniform(0.5, 4.0, 5))
+        got = floor_sequence(e, t, rate)
+        marg, best, log_z = _brute_force_sequence(e, t, rate)
+        np.testing.assert_allclose(got["posterior"], marg, atol=1e-12)
+        np.testing.assert_array_equal(got["path"], best)
+        assert got["log_evidence"] == pytest.approx(log_z)
+        assert got["changes"] == int(np.count_nonzero(np.diff(best)))
+
+
+def test_floor_sequence_without_changes_is_the_walks_posterior_and_finds_a_change():
+    from indoorloc.fusion.floor_sequence import floor_sequence
+
+    rng = np.random.default_rng(5)
+    e = np.log(rng.uniform(0.05, 1.0, (12, 4)))
+    t = np.arange(12.0) * 3
+    walk = e.sum(axis=0)
+    walk = np.exp(walk - walk.max())
+    got = floor_sequence(e, t, 0.0)
+    np.testing.assert_allclose(got["posterior"], np.tile(walk / walk.sum(), (12, 1)), atol=1e-12)
+    assert got["changes"] == 0
+    # Ten queries that say floor 0, then ten that say floor 2: one change, where it happened.
+    strong = np.log(np.array([[0.9, 0.05, 0.05], [0.05, 0.05, 0.9]]))
+    e2 = np.vstack([np.tile(strong[0], (10, 1)), np.tile(strong[1], (10, 1))])
+    got = floor_sequence(e2, np.arange(20.0) * 3, 1.0 / 600)
+    np.testing.assert_array_equal(got["path"], [0] * 10 + [2] * 10)
+    assert got["changes"] == 1 and got["posterior"][0, 0] > 0.9 and got["posterior"][-1, 2] > 0.9
+    assert floor_sequence(np.zeros((0, 3)), np.zeros(0), 0.1)["changes"] == 0
+    for kwargs, name in ((dict(t_s=np.arange(20.0)[::-1]), "t_s"), (dict(t_s=np.arange(3.0)), "t_s"),
+                         (dict(change_rate_per_s=-1.0), "change_rate_per_s"),
+                         (dict(log_likelihoods=np.full((20, 3), np.nan)), "log_likelihoods")):
+        args = dict(log_likelihoods=e2, t_s=np.arange(20.0), change_rate_per_s=0.01) | kwargs
+        with pytest.raises(ValueError, match=name):
+            floor_sequence(**args)
+
+
+def test_floor_change_study_detects_spliced_walks_and_keeps_real_ones():
+    """Synthetic evidence: every query says its floor (with an occasional wrong one); spliced
+    walks change floor, real ones do not. A rate > 0 finds the changes, r = 0 none."""
+    from indoorloc.experiments import floor_change_study as study
+
+    rng = np.random.default_rng(2)
+    walks = []
+    for i in range(24):
+        f = i % 3
+        e = np.log(np.full((15, 3), 0.1))
+        e[:, f] = np.log(0.9)
+        odd = rng.integers(15)
+        e[odd] = np.log([0.9 if g == (f + 1) % 3 else 0.1 for g in range(3)])
+        walks.append({"floor": "ABC"[f], "floor_index": f, "fold": i % 2, "walk": f"w{i}",
+                      "t_s": np.arange(15.0) * 3, "log_likelihoods": e})
+    r = study.select_rate({"floors": ["A", "B", "C"], "walks": walks})
+    rows = {row["rate_per_s"]: row for row in r["rows"]}
+    assert r["n_real"] == 24 and r["n_spliced"] == 24
+    assert rows[0.0]["spliced_with_a_change"] == 0 and rows[0.0]["real_walks_with_a_change"] == 0
+    assert rows[1 / 1200]["spliced_with_a_change"] == 24 and rows[1 / 1200]["real_walks_with_a_change"] == 0
+    assert rows[1 / 1200]["queries_right"] == 1.0 and r["chosen_all"] > 0
+    assert set(r["lofo"]["chosen"]) == {"A", "B", "C"} and r["lofo"]["queries_right"] > 0.9
+    assert "| 0 | 0 of 24 |" in study.markdown(r)

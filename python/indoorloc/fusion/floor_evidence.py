@@ -81,30 +81,44 @@ class ApFloorRates:
         return cls(np.asarray(list(floors)), np.log(rate + alpha))
 
 
-def walk_floor_log_likelihood(rates: ApFloorRates, queries_dbm: np.ndarray, ap_count: int,
-                              outlier_probability: float) -> np.ndarray:
-    """L_f of the module docstring (F,) [nats] for a walk's query fingerprints ``queries_dbm``
-    (Q, K in the rates' columns, NaN = not heard): the ``ap_count`` strongest APs of each query
-    (m), ε = ``outlier_probability``. Zeros for a walk without queries (no information)."""
+def query_floor_log_posteriors(rates: ApFloorRates, queries_dbm: np.ndarray, ap_count: int) -> tuple:
+    """log p(f | q) of the module docstring for each query fingerprint that hears an AP:
+    ``(log_posterior (Q', F), used (Q,) bool)``, ``used`` marking the rows of ``queries_dbm``
+    (Q, K in the rates' columns, NaN = not heard) that hear at least one AP (the others carry no
+    evidence); the ``ap_count`` strongest APs of each query (m)."""
     q = real_array(queries_dbm, "queries_dbm", ndim=2, finite=False)
     if q.shape[0] and q.shape[1] != rates.log_rate.shape[1]:
         raise ValueError(f"indoorloc: argument 'queries_dbm': expected {rates.log_rate.shape[1]} columns "
                          f"(the rates'), got {q.shape[1]}")
     m = integer(ap_count, "ap_count", lo=1, hi=100_000)
-    eps = real_scalar(outlier_probability, "outlier_probability", lo=0.0, hi=1.0)
-    total = np.zeros(rates.log_rate.shape[0])
-    with np.errstate(divide="ignore"):  # ε = 0 or 1: log 0 = -inf, handled by logaddexp
-        log_eps, log_keep = np.log(eps), np.log1p(-eps)
-    for row in q:
+    used = np.isfinite(q).any(axis=1)
+    out = np.zeros((int(used.sum()), rates.log_rate.shape[0]))
+    for i, row in enumerate(q[used]):
         heard = np.flatnonzero(np.isfinite(row))
-        if heard.size == 0:
-            continue
         top = heard[np.argsort(-row[heard], kind="stable")[:m]]
         ll = rates.log_rate[:, top].sum(axis=1)
         log_p = ll - ll.max()
-        log_p -= np.log(np.exp(log_p).sum())
-        total += np.logaddexp(log_eps, log_keep + log_p)
-    return total
+        out[i] = log_p - np.log(np.exp(log_p).sum())
+    return out, used
+
+
+def robust_query_log_likelihoods(log_posteriors: np.ndarray, outlier_probability: float) -> np.ndarray:
+    """log(ε + (1 − ε) p(f | q)) (Q, F) of per-query log posteriors (Q, F): what one query says
+    about the floor, bounded by ε = ``outlier_probability`` (module docstring)."""
+    lp = real_array(log_posteriors, "log_posteriors", ndim=2, finite=False)
+    eps = real_scalar(outlier_probability, "outlier_probability", lo=0.0, hi=1.0)
+    with np.errstate(divide="ignore"):  # ε = 0 or 1: log 0 = -inf, handled by logaddexp
+        return np.logaddexp(np.log(eps), np.log1p(-eps) + lp)
+
+
+def walk_floor_log_likelihood(rates: ApFloorRates, queries_dbm: np.ndarray, ap_count: int,
+                              outlier_probability: float) -> np.ndarray:
+    """L_f of the module docstring (F,) [nats] for a walk's query fingerprints ``queries_dbm``
+    (Q, K in the rates' columns, NaN = not heard): the ``ap_count`` strongest APs of each query
+    (m), ε = ``outlier_probability``. Zeros for a walk without queries (no information)."""
+    real_scalar(outlier_probability, "outlier_probability", lo=0.0, hi=1.0)
+    log_p, _ = query_floor_log_posteriors(rates, queries_dbm, ap_count)
+    return robust_query_log_likelihoods(log_p, outlier_probability).sum(axis=0)
 
 
 #: The match distance's fixed constants (set in advance, not tuned): the query's strongest APs
@@ -224,5 +238,6 @@ def reliability_table(reported: np.ndarray, right: np.ndarray, bins: Sequence[fl
 
 
 __all__ = ["ApFloorRates", "FloorCalibration", "MATCH_AP_COUNT", "MATCH_UNHEARD_DB", "RELIABILITY_BINS",
-           "calibrated_floor_probabilities", "reliability_table",
+           "calibrated_floor_probabilities", "query_floor_log_posteriors", "reliability_table",
+           "robust_query_log_likelihoods",
            "walk_floor_log_likelihood", "walk_match_distance_db"]

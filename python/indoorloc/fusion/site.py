@@ -362,6 +362,13 @@ class Site:
                 evidence["ap_log_likelihood"], weight, self.settings.floor_calibration(), evidence["match_distance_db"])
             by_number = {n: name for name, (n, _) in self._floors.items()}
             floor = by_number[ident["floor"]]
+            if evidence["floor_changes"]:
+                # The trackers keep a walk on one floor; say so when its WiFi suggests otherwise.
+                seq = [by_number[int(n)] for n in evidence["query_floors"]]
+                at = [f"{seq[k]} -> {seq[k + 1]} at {evidence['query_t_s'][k + 1]:.0f} s"
+                      for k in range(len(seq) - 1) if seq[k] != seq[k + 1]]
+                warnings.warn(f"indoorloc: walk {src}: its WiFi suggests it changes floor ({', '.join(at)}); "
+                              f"it is tracked on one floor, {floor}", RecordingWarning, stacklevel=2)
             probabilities = {by_number[n]: p for n, p in ident["probabilities"].items()}
         m = self.floor_models(floor) if floor in self._floors else self._walk_floor(walk, floor)
         steps = site_model.tracker_steps(steps_raw, m.calibration, self.settings)

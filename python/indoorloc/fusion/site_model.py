@@ -24,6 +24,7 @@ import numpy as np
 
 from indoorloc.pdr import handheld as ph
 from indoorloc.fusion import wifi_fixes, floor_evidence
+from indoorloc.fusion.floor_sequence import floor_sequence
 from indoorloc.fusion.steps import Steps
 from indoorloc.fusion.grid import GridTracker, GridTrackerOptions, track_grid
 from indoorloc._core.fusion import LiveSessionOptions
@@ -75,6 +76,10 @@ class TrackSettings:
     identification_temperature: float = 1.0
     identification_error_probability: float = 0.03
     identification_error_slope: float = 2.0
+    #: Rate r [1/s] of floor changes of the AP evidence's floor sequence (``fusion.floor_sequence``),
+    #: which tells a walk that seems to change floor (the tracker keeps it on one). Chosen by
+    #: leave-one-floor-out with ``experiments.floor_change_study`` (real and spliced walks).
+    identification_floor_change_rate_per_s: float = 1.0 / 1200.0
 
     def validate(self) -> None:
         """Raises ValueError naming the first invalid field."""
@@ -106,6 +111,10 @@ class TrackSettings:
         if not (math.isfinite(self.identification_error_slope) and self.identification_error_slope >= 0):
             raise ValueError(f"indoorloc: TrackSettings.identification_error_slope must be finite and >= 0, "
                              f"got {self.identification_error_slope!r}")
+        if not (math.isfinite(self.identification_floor_change_rate_per_s)
+                and self.identification_floor_change_rate_per_s >= 0):
+            raise ValueError(f"indoorloc: TrackSettings.identification_floor_change_rate_per_s must be finite and >= 0, "
+                             f"got {self.identification_floor_change_rate_per_s!r}")
         if self.point_estimate not in ("mean", "median"):
             raise ValueError(f"indoorloc: TrackSettings.point_estimate must be 'mean' or 'median', "
                              f"got {self.point_estimate!r}")
@@ -121,7 +130,8 @@ class TrackSettings:
                                                           "identification_fix_outlier_probability",
                                                           "identification_temperature",
                                                           "identification_error_probability",
-                                                          "identification_error_slope")}
+                                                          "identification_error_slope",
+                                                          "identification_floor_change_rate_per_s")}
         d["fixes"] = asdict(self.fixes)
         d["grid_options"] = {k: (None if isinstance(v, float) and math.isinf(v) else v)
                              for k, v in self.grid_options.to_dict().items()}
@@ -241,17 +251,21 @@ def walk_ap_log_likelihood(walk: Any, database: wifi_fixes.FingerprintDatabase, 
 
 
 def walk_floor_evidence(walk: Any, database: wifi_fixes.FingerprintDatabase, rates: floor_evidence.ApFloorRates,
-                        settings: TrackSettings) -> Dict[str, np.ndarray]:
+                        settings: TrackSettings) -> Dict[str, Any]:
     """What :func:`identify_floor` takes from the walk's WiFi, per floor of ``rates`` (F,):
     ``ap_log_likelihood`` [nats] (``floor_evidence.walk_floor_log_likelihood``) and
     ``match_distance_db`` [dB] (``floor_evidence.walk_match_distance_db``), both on the walk's
-    query fingerprints in the database's columns."""
-    _, queries = wifi_fixes.walk_queries(walk, database)
-    ap = floor_evidence.walk_floor_log_likelihood(rates, queries, settings.identification_ap_count,
-                                                  settings.identification_ap_outlier_probability)
+    query fingerprints in the database's columns; and the AP evidence's floor sequence
+    (``fusion.floor_sequence`` at ``identification_floor_change_rate_per_s``): ``query_t_s``
+    (Q,) [s], ``query_floors`` (Q,) floor numbers, ``floor_changes`` the changes along it."""
+    t, queries = wifi_fixes.walk_queries(walk, database)
+    log_p, used = floor_evidence.query_floor_log_posteriors(rates, queries, settings.identification_ap_count)
+    per_query = floor_evidence.robust_query_log_likelihoods(log_p, settings.identification_ap_outlier_probability)
+    seq = floor_sequence(per_query, t[used], settings.identification_floor_change_rate_per_s)
     dist = np.array([floor_evidence.walk_match_distance_db(database.rss_dbm, database.floors, int(f), queries)
                      for f in rates.floors])
-    return {"ap_log_likelihood": ap, "match_distance_db": dist}
+    return {"ap_log_likelihood": per_query.sum(axis=0), "match_distance_db": dist, "query_t_s": t[used],
+            "query_floors": np.asarray(rates.floors)[seq["path"]], "floor_changes": seq["changes"]}
 
 
 def identify_floor(tracker_all: GridTracker, floors: Sequence[int], steps: Steps, fixes,
