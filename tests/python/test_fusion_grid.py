@@ -136,37 +136,6 @@ def test_wall_margin_erodes_obstacles_by_the_margin_only():
         fusion.GridTracker(plan, fusion.GridTrackerOptions(wall_margin_m=-1.0))
 
 
-def test_survey_anchored_fixes_reach_beyond_the_survey():
-    """Fixes anchored to a survey of the western half (fix_survey_distance_factor < 1) let a walk
-    seen at the survey's edge lie beyond it; the factor 1 is the plain tracker; bad positions are
-    refused naming the argument (docs/fusion.md, "Survey-anchored fixes")."""
-    from indoorloc.fusion import site_model
-
-    plan = _hall()
-    xs, ys = np.meshgrid(np.arange(0.5, 12.0, 1.0), np.arange(0.5, 30.0, 1.0))
-    survey = np.c_[xs.ravel(), ys.ravel()]
-    floors = np.zeros(len(survey), dtype=np.int64)
-    steps = fusion.Steps.from_polar([0.5], [0.0], [0.0], 0.01, 0.01)
-    fix = fusion.Fixes.from_arrays([0.5], np.array([[[11.5, 25.0]]]), 2.0, np.ones((1, 1)))
-    plain = fusion.GridTracker(plan, fusion.GridTrackerOptions(heading_offset_sd_rad=0.0, fix_survey_distance_factor=1.0))
-    anchored = fusion.GridTracker(plan, fusion.GridTrackerOptions(heading_offset_sd_rad=0.0, fix_survey_distance_factor=0.0)
-                                  ).with_survey_positions(survey, floors)
-    x_plain = fusion.track_grid(plain, steps, fixes=fix, smooth=False)["mean_m"][0, 0]
-    x_anchored = fusion.track_grid(anchored, steps, fixes=fix, smooth=False)["mean_m"][0, 0]
-    assert abs(x_plain - 11.5) < 0.5
-    assert x_anchored > x_plain + 5.0
-    # The factor 1: the same tracker back (no anchoring to do).
-    assert site_model.survey_anchored(plain, plan, type("Db", (), {"positions_m": survey, "floors": floors})) is plain
-    with pytest.raises(ValueError, match="positions_m"):
-        anchored.with_survey_positions(np.zeros((3, 3)), np.zeros(3, dtype=np.int64))
-    with pytest.raises(ValueError, match="floor_numbers"):
-        anchored.with_survey_positions(survey, floors[:-1])
-    with pytest.raises(ValueError, match="finite"):
-        anchored.with_survey_positions(np.full((2, 2), np.nan), np.zeros(2, dtype=np.int64))
-    with pytest.raises(ValueError, match="fix_survey_distance_factor"):
-        fusion.GridTrackerOptions(fix_survey_distance_factor=1.5)
-
-
 def test_returned_covariance_is_the_calibration_formula_of_the_study():
     """The tracker's returned covariances are Σ' = a Σ + (b² + (g d)² + (h max(0, s - s0))²) I of
     its own Σ, d and s (GridTrackerOptions), the formula the study chooses (a, b, g, h, s0) with
@@ -223,3 +192,34 @@ def test_study_chooses_the_fix_sd_term_where_poor_matches_are_lost():
     c0 = fu.choose(err, cov, d, s, floor, {**grid, "fix_sd_gain": (0.0,), "fix_sd_knee_m": (0.0,)})
     _, area0 = fu.coverage_and_area(err, fu.calibrated(cov, d, s, **c0))
     assert np.median(area) < np.median(area0)
+
+
+def test_survey_anchored_fixes_reach_beyond_the_survey():
+    """Fixes anchored to a survey of the western half (fix_survey_distance_factor < 1) let a walk
+    seen at the survey's edge lie beyond it; the factor 1 is the plain tracker; bad positions are
+    refused naming the argument (docs/fusion.md, "Survey-anchored fixes")."""
+    from indoorloc.fusion import site_model
+
+    plan = _hall()
+    xs, ys = np.meshgrid(np.arange(0.5, 12.0, 1.0), np.arange(0.5, 30.0, 1.0))
+    survey = np.c_[xs.ravel(), ys.ravel()]
+    floors = np.zeros(len(survey), dtype=np.int64)
+    steps = fusion.Steps.from_polar([0.5], [0.0], [0.0], 0.01, 0.01)
+    fix = fusion.Fixes.from_arrays([0.5], np.array([[[11.5, 25.0]]]), 2.0, np.ones((1, 1)))
+    plain = fusion.GridTracker(plan, fusion.GridTrackerOptions(heading_offset_sd_rad=0.0, fix_survey_distance_factor=1.0))
+    anchored = fusion.GridTracker(plan, fusion.GridTrackerOptions(heading_offset_sd_rad=0.0, fix_survey_distance_factor=0.0)
+                                  ).with_survey_positions(survey, floors)
+    x_plain = fusion.track_grid(plain, steps, fixes=fix, smooth=False)["mean_m"][0, 0]
+    x_anchored = fusion.track_grid(anchored, steps, fixes=fix, smooth=False)["mean_m"][0, 0]
+    assert abs(x_plain - 11.5) < 0.5
+    assert x_anchored > x_plain + 5.0
+    # The factor 1: the same tracker back (no anchoring to do).
+    assert site_model.survey_anchored(plain, plan, type("Db", (), {"positions_m": survey, "floors": floors})) is plain
+    with pytest.raises(ValueError, match="positions_m"):
+        anchored.with_survey_positions(np.zeros((3, 3)), np.zeros(3, dtype=np.int64))
+    with pytest.raises(ValueError, match="floor_numbers"):
+        anchored.with_survey_positions(survey, floors[:-1])
+    with pytest.raises(ValueError, match="finite"):
+        anchored.with_survey_positions(np.full((2, 2), np.nan), np.zeros(2, dtype=np.int64))
+    with pytest.raises(ValueError, match="fix_survey_distance_factor"):
+        fusion.GridTrackerOptions(fix_survey_distance_factor=1.5)

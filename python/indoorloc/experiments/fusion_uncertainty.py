@@ -112,6 +112,21 @@ def choose(error_m: np.ndarray, cov: np.ndarray, d: np.ndarray, s: np.ndarray, f
     return dict(zip(KEYS, (best or fallback)[1]))
 
 
+#: Edges [m] of the fix-sd bins of :func:`error_by_fix_sd`.
+FIX_SD_BINS_M = (0.0, 5.0, 7.0, 9.0, 11.0, 14.0, math.inf)
+
+
+def error_by_fix_sd(error_m: np.ndarray, s: np.ndarray) -> List[Optional[float]]:
+    """Median error [m] per bin of the fix sd ``s`` (N,) [m] (:data:`FIX_SD_BINS_M`; None when
+    empty): why the calibration has a knee (docs/fusion_real.md, "Honest uncertainty")."""
+    err = np.hypot(error_m[:, 0], error_m[:, 1])
+    out: List[Optional[float]] = []
+    for lo, hi in zip(FIX_SD_BINS_M[:-1], FIX_SD_BINS_M[1:]):
+        m = (s >= lo) & (s < hi)
+        out.append(float(np.median(err[m])) if m.any() else None)
+    return out
+
+
 def _summary(error_m: np.ndarray, cov: np.ndarray) -> Dict[str, float]:
     inside, area = coverage_and_area(error_m, cov)
     return {"coverage": float(inside.mean()), "median_radius_m": float(np.sqrt(np.median(area) / math.pi)),
@@ -156,7 +171,12 @@ def study(scores: Sequence[fusion_real.WalkScore], methods: Sequence[str] = METH
         cal = calibrated(cov, d, s, **chosen)
         all_floors = {"chosen": chosen, **_summary(e, cal),
                       "floors": {f: _summary(e[floor == f], cal[floor == f]) for f in sorted(set(floor.tolist()))}}
+        labels = sorted(set(floor.tolist()))
         out[name] = {
+            "error_by_fix_sd": {f: {"median_error_m": error_by_fix_sd(e[floor == f], s[floor == f]),
+                                    "waypoints": [int(((s[floor == f] >= lo) & (s[floor == f] < hi)).sum())
+                                                  for lo, hi in zip(FIX_SD_BINS_M[:-1], FIX_SD_BINS_M[1:])]}
+                                for f in labels},
             "posterior": {**_summary(e, cov),
                           "floors": {f: _summary(e[floor == f], cov[floor == f]) for f in sorted(set(floor.tolist()))}},
             "lofo": _lofo(e, cov, d, s, floor, GRID),
@@ -214,6 +234,14 @@ def markdown(result: dict) -> str:
             cells = [f"{part[f]['coverage']:.2f} ({part[f]['median_radius_m']:.1f})" if f in part else "-"
                      for f in floors]
             lines.append(f"| {name} | {label} | " + " | ".join(cells) + " |")
+    edges = FIX_SD_BINS_M
+    heads = [f"{lo:g}-{hi:g}" if math.isfinite(hi) else f">= {lo:g}" for lo, hi in zip(edges[:-1], edges[1:])]
+    for name, m in result["methods"].items():
+        lines += ["", f"{name}: median error [m] (waypoints) by the sd s [m] of the fix nearest in time", "",
+                  "| floor | " + " | ".join(heads) + " |", "|---|" + "---|" * len(heads)]
+        for f, v in m["error_by_fix_sd"].items():
+            cells = ["-" if e is None else f"{e:.1f} ({n})" for e, n in zip(v["median_error_m"], v["waypoints"])]
+            lines.append(f"| {f} | " + " | ".join(cells) + " |")
     lines += ["", "Chosen per held-out floor (a, b, g, h, s0):", ""]
     for name, m in result["methods"].items():
         cells = [f"{f} {_choice(v['chosen'])}" for f, v in m["lofo"]["floors"].items()]
