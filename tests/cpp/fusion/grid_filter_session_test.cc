@@ -15,7 +15,7 @@
 #include <gtest/gtest.h>
 
 #include "indoorloc/core/validate.h"
-#include "hall_plan.h"
+#include "grid_fixtures.h"
 
 namespace indoorloc::fusion {
 namespace {

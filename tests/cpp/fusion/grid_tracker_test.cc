@@ -10,7 +10,7 @@
 
 #include <gtest/gtest.h>
 
-#include "hall_plan.h"
+#include "grid_fixtures.h"
 
 namespace indoorloc::fusion {
 namespace {
@@ -20,17 +20,6 @@ std::vector<StepInput> Straight(int n, double length_m, double heading_rad, doub
   std::vector<StepInput> s;
   for (int k = 0; k < n; ++k) s.push_back(StepFromPolar(t0 + 0.5 * (k + 1), length_m, heading_rad, 0.05, 0.05));
   return s;
-}
-
-PositionFix Fix(double t, double x, double y, double sd, int floor = PositionFix::kAnyFloor) {
-  PositionFix f;
-  f.time_s = t;
-  f.means_m.resize(1, 2);
-  f.means_m << x, y;
-  f.sds_m = Eigen::VectorXd::Constant(1, sd);
-  f.weights = Eigen::VectorXd::Ones(1);
-  f.floors = Eigen::VectorXi::Constant(1, floor);
-  return f;
 }
 
 TEST(GridTrackerTest, KnownStartFollowsTheSteps) {

@@ -1,10 +1,11 @@
-// Test helper of the fusion tests: the 60 x 40 m hall the grid tracker and grid session tests
-// walk in, and the axis-aligned boxes its rings are made of.
+// Test helpers of the grid tracker tests (grid tracker, grid session, survey anchors): the 60 x 40 m
+// hall they walk in, the axis-aligned boxes rings are made of, and a one-component position fix.
 #pragma once
 
 #include <vector>
 
 #include "indoorloc/fusion/floor_plan.h"
+#include "indoorloc/fusion/position_fix.h"
 
 namespace indoorloc::fusion {
 
@@ -27,6 +28,19 @@ inline FloorPlan Hall(bool shop = false, int floors = 1) {
     g.push_back(fg);
   }
   return FloorPlan(g);
+}
+
+/// A fix at (x, y) [m] with sd [m] at time t [s]: one component of weight 1, on `floor` (any by
+/// default).
+inline PositionFix Fix(double t, double x, double y, double sd, int floor = PositionFix::kAnyFloor) {
+  PositionFix f;
+  f.time_s = t;
+  f.means_m.resize(1, 2);
+  f.means_m << x, y;
+  f.sds_m = Eigen::VectorXd::Constant(1, sd);
+  f.weights = Eigen::VectorXd::Ones(1);
+  f.floors = Eigen::VectorXi::Constant(1, floor);
+  return f;
 }
 
 }  // namespace indoorloc::fusion
