@@ -114,6 +114,34 @@ def _steps(count: int, seed: int):
     return disp, [fusion.covariance_matrix(c) for c in cov3]
 
 
+def _motion_agreement(a: dict, b: dict) -> dict:
+    """The motion models agree: after the run's steps without walls, the mean displacement of the
+    particles of indoorloc (a) and the peer (b) (difference in standard errors) and the spread of
+    displacement [m], offset [deg] and scale."""
+    da, db = a["displacement_m"], b["displacement_m"]
+    se = np.sqrt(da.var(axis=0) / N + db.var(axis=0) / N)
+    return {
+        "mean_displacement_m": {"cpp": da.mean(axis=0).tolist(), "peer": db.mean(axis=0).tolist()},
+        "mean_displacement_difference_in_se": (np.abs(da.mean(axis=0) - db.mean(axis=0)) / se).tolist(),
+        "sd_displacement_m": {"cpp": da.std(axis=0).tolist(), "peer": db.std(axis=0).tolist()},
+        "sd_offset_deg": {"cpp": float(np.degrees(a["offset_rad"].std())),
+                          "peer": float(np.degrees(b["offset_rad"].std()))},
+        "sd_scale": {"cpp": float(a["scale"].std()), "peer": float(b["scale"].std())},
+    }
+
+
+def _per_call_seconds(one, states0, floors0, disp, covs, calls: int = 2000) -> float:
+    """Per-call overhead [s] of tracker.step with one particle (checks, the StepMotion, the dict):
+    `one` is a one-particle tracker, set to the first particle of the common start."""
+    steps = len(disp)
+    one.set_particles(states0[:1], floors0[:1])
+    overhead = {}
+    for r in range(3):
+        _best(lambda r=r: [one.step(r * calls + k, disp[k % steps], covs[k % steps]) for k in range(calls)],
+              overhead, "n1")
+    return overhead["n1"] / calls
+
+
 def _motion(quick: bool) -> dict:
     steps = 30 if quick else 100
     repeat = 1 if quick else 3
@@ -210,29 +238,10 @@ def _motion(quick: bool) -> dict:
                     [f.x, f.y, f.offset, f.scale])
                 motion_check[name] = {"displacement_m": st[:, :2] - states0[:, :2], "offset_rad": st[:, 2],
                                       "scale": st[:, 3]}
-    # The motion models agree: after `steps` steps without walls, the mean displacement of the
-    # particles (difference in standard errors) and the spread of displacement, offset and scale.
-    a, b = motion_check[f"{CPP}, no plan"], motion_check[f"{PEER_WALLS}, no plan"]
-    da, db = a["displacement_m"], b["displacement_m"]
-    se = np.sqrt(da.var(axis=0) / N + db.var(axis=0) / N)
-    motion_agreement = {
-        "mean_displacement_m": {"cpp": da.mean(axis=0).tolist(), "peer": db.mean(axis=0).tolist()},
-        "mean_displacement_difference_in_se": (np.abs(da.mean(axis=0) - db.mean(axis=0)) / se).tolist(),
-        "sd_displacement_m": {"cpp": da.std(axis=0).tolist(), "peer": db.std(axis=0).tolist()},
-        "sd_offset_deg": {"cpp": float(np.degrees(a["offset_rad"].std())),
-                          "peer": float(np.degrees(b["offset_rad"].std()))},
-        "sd_scale": {"cpp": float(a["scale"].std()), "peer": float(b["scale"].std())},
-    }
+    motion_agreement = _motion_agreement(motion_check[f"{CPP}, no plan"], motion_check[f"{PEER_WALLS}, no plan"])
 
-    # Per-call overhead: the same step with one particle (checks, the StepMotion, the dict).
-    one = fusion.ParticleTracker(plans["pillars"], None, None, options(1, 1))
-    one.set_particles(states0[:1], floors0[:1])
-    calls = 2000
-    overhead = {}
-    for r in range(3):
-        _best(lambda r=r: [one.step(r * calls + k, disp[k % steps], covs[k % steps]) for k in range(calls)],
-              overhead, "n1")
-    per_call_s = overhead["n1"] / calls
+    per_call_s = _per_call_seconds(fusion.ParticleTracker(plans["pillars"], None, None, options(1, 1)),
+                                   states0, floors0, disp, covs)
 
     rates = {name: N * steps / sec for name, sec in seconds.items()}
     us_per_step = {name: 1e6 * sec / steps for name, sec in seconds.items()}

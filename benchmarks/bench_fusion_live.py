@@ -38,6 +38,7 @@ from indoorloc.pdr import handheld as ph
 from indoorloc.pdr import streaming as ps
 from indoorloc.fusion import wifi_fixes as wfx
 from indoorloc.fusion import live
+from indoorloc.fusion import site_model
 from indoorloc.io import load_floor_plan, read_ilc_floor, read_ilc_site
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "data" / "fusion" / "ilc2020_site2"
@@ -91,6 +92,7 @@ def run_floor(name, number, floor, rng):
     db = wfx.build_database(train, wfx.FixSettings(), [ph.handheld_steps(w) for w in train], floors=[number] * len(train))
     plan = load_floor_plan(floor.geojson_path, floors=[number], origin_lon_lat="outline_sw")
     tracker = fusion.GridTracker(plan, fusion.GridTrackerOptions(heading_offset_sd_rad=max(cal.yaw_offset_spread_rad, 1e-3)))
+    tracker = site_model.survey_anchored(tracker, plan, db)  # as the site's live tracker (survey-anchored fixes)
     models_s = time.perf_counter() - tic
     walk = walks[test_i]
     lt = live.LiveTracker(tracker, cal, db)

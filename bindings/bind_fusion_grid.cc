@@ -114,6 +114,8 @@ equality and pickling as for every Options class. The fix likelihood's ε and τ
       .def_readonly("layers", &GridTrackSummary::layers)
       .def_readonly("cells", &GridTrackSummary::cells)
       .def_readonly("dead_layers", &GridTrackSummary::dead_layers)
+      .def_readonly("smoother_gap_steps", &GridTrackSummary::smoother_gap_steps,
+                    "Steps where the smoother had no estimate (the filtered one stands in).")
       .def_readonly("log_evidence", &GridTrackSummary::log_evidence)
       .def_readonly("memory_bytes", &GridTrackSummary::memory_bytes)
       .def_readonly("seconds", &GridTrackSummary::seconds)

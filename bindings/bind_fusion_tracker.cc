@@ -51,6 +51,17 @@ py::dict EstimateToDict(const TrackerEstimate& e) {
   return d;
 }
 
+// One tracker update run with the GIL released, its estimate returned as a dict.
+template <typename Update>
+py::dict UpdateWithoutGil(const Update& update) {
+  TrackerEstimate e;
+  {
+    py::gil_scoped_release release;
+    e = update();
+  }
+  return EstimateToDict(e);
+}
+
 template <typename T>
 const T* OptionalPointer(const py::object& obj, const char* argument, const char* type) {
   if (obj.is_none()) return nullptr;
@@ -310,22 +321,12 @@ options : TrackerOptions)doc")
              s.time_s = time_s;
              s.displacement_m = d.map;
              s.covariance_m2 = c.map;
-             TrackerEstimate e;
-             {
-               py::gil_scoped_release release;
-               e = t.Step(s);
-             }
-             return EstimateToDict(e);
+             return UpdateWithoutGil([&] { return t.Step(s); });
            },
            py::arg("time_s"), py::arg("displacement_m"), py::arg("covariance_m2"),
            "One step: displacement (2,) [m] in the PDR frame and its covariance (2, 2) [m²]. Returns the estimate dict.")
       .def("wifi", [](ParticleTracker& t, const WifiObservation& o) {
-             TrackerEstimate e;
-             {
-               py::gil_scoped_release release;
-               e = t.Wifi(o);
-             }
-             return EstimateToDict(e);
+             return UpdateWithoutGil([&] { return t.Wifi(o); });
            },
            py::arg("observation"), "One WiFi observation. Returns the estimate dict.")
       .def("fix", [](ParticleTracker& t, double time_s, const py::object& means_m, const py::object& sds_m,
@@ -339,12 +340,7 @@ options : TrackerOptions)doc")
              fix.means_m = m.map;
              fix.sds_m = sd.map;
              fix.weights = w.map;
-             TrackerEstimate e;
-             {
-               py::gil_scoped_release release;
-               e = t.Fix(fix);
-             }
-             return EstimateToDict(e);
+             return UpdateWithoutGil([&] { return t.Fix(fix); });
            },
            py::arg("time_s"), py::arg("means_m"), py::arg("sds_m"), py::arg("weights"), py::arg("floors") = py::none(),
            "One position fix: a Gaussian mixture with component means (K, 2) [m], isotropic sds (K,) [m], "

@@ -89,6 +89,7 @@ py::dict EstimatesToDict(const std::vector<StepEstimate>& e) {
 
 /// The road network.
 static void BindRoadNetwork(py::module_& m) {
+  const RoadNetworkOptions road_network;  // the keyword defaults
   py::class_<RoadNetwork, std::shared_ptr<RoadNetwork>>(m, "RoadNetwork", R"doc(
 Straight segments with connectivity at their ends (paper 000 §II.B) and a spatial index.
 
@@ -112,8 +113,8 @@ split_at_intersections : bool
              o.split_at_intersections = split_at_intersections;
              return std::make_shared<RoadNetwork>(seg.map, id, o);
            }),
-           py::arg("segments_m"), py::arg("ids") = py::none(), py::arg("snap_tolerance_m") = 1e-6,
-           py::arg("split_at_intersections") = false)
+           py::arg("segments_m"), py::arg("ids") = py::none(), py::arg("snap_tolerance_m") = road_network.snap_tolerance_m,
+           py::arg("split_at_intersections") = road_network.split_at_intersections)
       .def_property_readonly("num_segments", &RoadNetwork::num_segments)
       .def_property_readonly("segments_m", &RoadNetwork::segments_m)
       .def_property_readonly("ids", &RoadNetwork::ids)

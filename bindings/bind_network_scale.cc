@@ -94,7 +94,7 @@ static void BindFoldedNetwork(py::module_& m) {
       },
       py::arg("imu_rate_hz") = 50.0, py::arg("duration_s") = 60.0, py::arg("gps_rate_hz") = 2.0,
       py::arg("rule") = RuleName(linear.rule), py::arg("num_ties") = 1000, py::arg("num_gupts") = 10,
-      py::arg("sigma_xover_mps2") = 1e-5, py::arg("sigma_gupt_mps2") = 1e-5, py::arg("checkpoint_interval") = folded.checkpoint_interval,
+      py::arg("sigma_xover_mps2") = 1e-5, py::arg("sigma_gupt_mps2") = linear.sigma_gupt_mps2, py::arg("checkpoint_interval") = folded.checkpoint_interval,
       py::arg("gravity_covariance") = folded.gravity_covariance, py::arg("keep_gravity_estimate") = folded.keep_gravity_estimate, py::arg("num_threads") = folded.num_threads, R"doc(
 The linearised INS/GPS network of a survey re-flown in reverse over its own track, with
 cross-over ties between the two passes and GUPTs, solved exactly (no iteration) by the
@@ -133,6 +133,7 @@ min_relative_pivot, max_abs_error (every unknown, against the noise-free truth),
 /// The survey network with cross-over ties, solved by PCG.
 static void BindCrossoverNetwork(py::module_& m) {
   const network::LinearInsNetworkOptions linear;
+  const network::TiedSolveOptions tied_solve;
   m.def(
       "solve_linear_ins_network_with_crossovers",
       [](double imu_rate_hz, double duration_s, double gps_rate_hz, const std::string& rule, int lines, int cross_lines,
@@ -177,7 +178,7 @@ static void BindCrossoverNetwork(py::module_& m) {
       },
       py::arg("imu_rate_hz") = 50.0, py::arg("duration_s") = 600.0, py::arg("gps_rate_hz") = 2.0,
       py::arg("rule") = RuleName(linear.rule), py::arg("lines") = 10, py::arg("cross_lines") = 10,
-      py::arg("sigma_xover_mps2") = 1e-5, py::arg("max_iterations") = 1000, py::arg("relative_tolerance") = 1e-8, R"doc(
+      py::arg("sigma_xover_mps2") = 1e-5, py::arg("max_iterations") = tied_solve.max_iterations, py::arg("relative_tolerance") = tied_solve.relative_tolerance, R"doc(
 The linearised INS/GPS network with cross-over ties of a grid survey (`lines` East-West lines,
 then `cross_lines` North-South lines; each crossing ties the three δg unknowns), solved by
 conjugate gradients preconditioned with the stored banded factor. Paper Table 2 case 4:

@@ -335,6 +335,7 @@ Streaming tracker of paper 004 (Algorithm 1, Fisher-scoring steps, no motion mod
 
 /// Grid posteriors and maximum-likelihood location.
 static void BindGridPosterior(py::module_& m) {
+  const wifi::GridPosteriorOptions grid_posterior;  // the keyword defaults
   py::class_<wifi::GridPosterior>(m, "GridPosterior", R"doc(
 Posterior mean and covariance of the position under the interpolated likelihood, on a grid
 over each floor's hull (uniform prior). ``spacing_m <= 0``: a third of the median reference spacing.)doc")
@@ -346,7 +347,8 @@ over each floor's hull (uniform prior). ``spacing_m <= 0``: a third of the media
              py::gil_scoped_release release;
              return std::make_unique<wifi::GridPosterior>(model, o);
            }),
-           py::arg("model"), py::arg("spacing_m") = 0.0, py::arg("max_points_per_floor") = 20000)
+           py::arg("model"), py::arg("spacing_m") = grid_posterior.spacing_m,
+           py::arg("max_points_per_floor") = grid_posterior.max_points_per_floor)
       .def_property_readonly("spacing_m", &wifi::GridPosterior::spacing_m)
       .def("grid", &wifi::GridPosterior::grid, py::arg("floor_index"), "Grid points (G, 2) [m] of a floor.")
       .def("locate", [](const wifi::GridPosterior& gp, const py::object& rss_dbm, int group_size, int num_threads) {

@@ -27,6 +27,10 @@ def test_floor_identification_and_error_against_time(two_floor_site):
     assert fi["n_waypoints"] == n_wp and fi["n_walks"] == 12
     assert set(fi["per_floor"]) == {"F1", "F2"}
     assert 0.0 <= fi["accuracy"] <= 1.0 and fi["accuracy"] >= 0.9  # the two floors' radios differ
+    # Calibrated floor probabilities: each walk's, binned; never 1 on two floors (δ > 0).
+    rel = fi["reliability"]
+    assert sum(b["walks"] for b in rel["bins"]) == 12 and 0.5 < rel["mean_reported"] < 1.0
+    assert "Calibrated floor probability reported" in fr.markdown(result)
     assert set(result["per_floor"]) == {"F1", "F2"}
     bins = result["error_vs_time"]["pdr_only"]
     assert sum(b["n_waypoints"] for b in bins) == result["methods"]["pdr_only"]["n_waypoints"]

@@ -12,21 +12,19 @@
 #include <utility>
 
 #include "indoorloc/core/check.h"
+#include "indoorloc/core/validate.h"
 
 namespace indoorloc::fusion {
 
 bool FingerprintFixOptions::IsValid(std::string* error) const {
-  auto fail = [error](const std::string& m) {
-    if (error) *error = m;
-    return false;
-  };
-  std::string why;
-  if (!matcher.IsValid(&why)) return fail("matcher: " + why);
-  if (!(std::isfinite(query_window_s) && query_window_s > 0)) return fail("query_window_s must be finite and > 0");
-  if (min_aps < 1) return fail("min_aps must be >= 1");
-  if (!(std::isfinite(sd_m) && sd_m > 0)) return fail("sd_m must be finite and > 0");
-  if (!(std::isfinite(sd_per_db) && sd_per_db >= 0)) return fail("sd_per_db must be finite and >= 0");
-  return true;
+  std::string matcher_error;
+  const bool matcher_ok = matcher.IsValid(&matcher_error);
+  return Validator(error)
+      .Check(matcher_ok, "matcher", matcher_error)
+      .Positive(query_window_s, "query_window_s")
+      .AtLeast(min_aps, 1, "min_aps")
+      .Positive(sd_m, "sd_m")
+      .NonNegative(sd_per_db, "sd_per_db");
 }
 
 struct FingerprintFixer::State {

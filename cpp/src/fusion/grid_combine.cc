@@ -298,6 +298,11 @@ GridTrackResult CombineLayers(const RunPlan& plan, const std::vector<LayerRun>& 
   combine.Filtered(&r);
   const std::vector<double> w_all = combine.LayerWeights(plan.m_steps - 1).first;
   combine.WalkPosterior(w_all, &r);
+  std::vector<char> gap(static_cast<std::size_t>(plan.m_steps), 0);
+  for (int l = 0; l < n_layers; ++l)
+    if (w_all[l] > 0)
+      for (int k : runs[l].smoother_gaps) gap[static_cast<std::size_t>(k)] = 1;
+  for (char g : gap) sum.smoother_gap_steps += g;
   if (plan.smooth) combine.Smoothed(w_all, &r);
   CalibrateCovariances(*plan.steps, *plan.fixes, plan.k0, plan.impl->options, &r);
   if (plan.impl->options.spatial_median) combine.Medians(w_all, &r);

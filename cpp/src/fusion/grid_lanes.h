@@ -49,6 +49,21 @@ inline Lanes MaxLanes(Lanes a, Lanes b) {
 }
 #endif
 inline Lanes& operator+=(Lanes& a, Lanes b) { return a = a + b; }
+
+// Two double lanes, one per grid row: the double sums of rows run side by side, each lane doing
+// exactly the additions of its own row (no sum crosses lanes), so results do not depend on the
+// vector width either. (One SSE2 register: 32-byte vectors without AVX are kept in memory by GCC.)
+#if defined(__GNUC__)
+typedef double RowPair __attribute__((vector_size(16)));  // NOLINT
+#else
+struct RowPair {
+  double v[2];
+  double operator[](int i) const { return v[i]; }
+};
+inline RowPair operator+(RowPair a, RowPair b) { return RowPair{{a.v[0] + b.v[0], a.v[1] + b.v[1]}}; }
+inline RowPair operator*(RowPair a, RowPair b) { return RowPair{{a.v[0] * b.v[0], a.v[1] * b.v[1]}}; }
+inline RowPair& operator+=(RowPair& a, RowPair b) { return a = a + b; }
+#endif
 constexpr int kLanes = 8;
 
 inline Lanes LoadLanes(const float* p) {

@@ -118,6 +118,20 @@ class LayerPass {
   // block summaries.
   LayerStep SmoothedEstimate(const float* alpha, const std::vector<float>& beta, int k) {
     const Moments mo = GridMoments(alpha, beta.data(), fg_, c_, p_.q, BlockSums());
+    if (!(mo.mass > 0)) {
+      // alpha and beta share no cell (each is flushed below 1e-30 of its scale): what the walk
+      // says before step k and after it cannot be joined by the motion model (steps lost, a fix
+      // far off). The product has no estimate; the filtered one stands in, and the run says so
+      // (GridTrackSummary::smoother_gap_steps) rather than returning the grid's origin.
+      out_->smoother_gaps.push_back(k);
+      if (o_.spatial_median) {
+        const std::size_t off = static_cast<std::size_t>(k) * nb_ * 3;
+        std::copy(out_->filtered_blocks.begin() + static_cast<std::ptrdiff_t>(off),
+                  out_->filtered_blocks.begin() + static_cast<std::ptrdiff_t>(off + nb_ * 3),
+                  out_->smoothed_blocks.begin() + static_cast<std::ptrdiff_t>(off));
+      }
+      return out_->filtered[k];
+    }
     if (o_.spatial_median) StoreBlocks(&out_->smoothed_blocks, mo.mass, k);
     // Positions of the layer are cell centres + the remainder; within-cell spread c²/12.
     return FilteredLayerEstimate(mo, ops_[k], c_);

@@ -14,6 +14,9 @@
 
 #include "indoorloc/fusion/grid_tracker.h"
 #include "grid_lanes.h"
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace indoorloc::fusion {
 namespace grid_ops {
@@ -278,6 +281,100 @@ inline void RowMomentsInFloat(const float* row, const float* weight, int nx, dou
   *sxx = LaneTotal(s2);
 }
 
+// Sums in double of up to kDoubleRows consecutive rows y0, y0 + 1, ... of g (or g * weight), and
+// with `coarse` their block sums: each row's sums (mass, Σ v x, Σ v x², and per block of q cells
+// Σ v, Σ v x) are the additions of a plain loop along the row, in the same order, so the results
+// equal that loop's bit for bit; the rows only run side by side, one per lane (the serial
+// additions of one row cannot vectorise, those of different rows can). Block sums are added to
+// `coarse` row after row, as the plain loop does.
+constexpr int kDoubleRows = 4;  // two RowPairs (grid_lanes.h)
+
+// out[x] = (a[x], b[x]) in double, or (a[x] wa[x], b[x] wb[x]) with weights (products in double:
+// exact). SSE2: four cells per iteration (two loads, unpack, convert) instead of a scalar load
+// and convert per value; the same values either way.
+inline void InterleaveRowPair(const float* a, const float* b, const float* wa, const float* wb, int nx, RowPair* out) {
+  int x = 0;
+#if defined(__SSE2__) && defined(__GNUC__)
+  auto pairs = [](const float* p, const float* q, int at, __m128d d[4]) {
+    const __m128 u = _mm_loadu_ps(p + at), v = _mm_loadu_ps(q + at);
+    const __m128 lo = _mm_unpacklo_ps(u, v), hi = _mm_unpackhi_ps(u, v);  // (p0 q0 p1 q1), (p2 q2 p3 q3)
+    d[0] = _mm_cvtps_pd(lo);
+    d[1] = _mm_cvtps_pd(_mm_movehl_ps(lo, lo));
+    d[2] = _mm_cvtps_pd(hi);
+    d[3] = _mm_cvtps_pd(_mm_movehl_ps(hi, hi));
+  };
+  for (; x + 4 <= nx; x += 4) {
+    __m128d d[4], e[4];
+    pairs(a, b, x, d);
+    if (wa) {
+      pairs(wa, wb, x, e);
+      for (int j = 0; j < 4; ++j) d[j] = _mm_mul_pd(d[j], e[j]);
+    }
+    for (int j = 0; j < 4; ++j) std::memcpy(&out[x + j], &d[j], sizeof(RowPair));
+  }
+#endif
+  for (; x < nx; ++x) {
+    out[x] = wa ? RowPair{static_cast<double>(a[x]) * wa[x], static_cast<double>(b[x]) * wb[x]}
+                : RowPair{static_cast<double>(a[x]), static_cast<double>(b[x])};
+  }
+}
+
+inline void RowGroupMomentsInDouble(const float* g, const float* weight, const FloorGrid& fg, int y0, int rows, int q,
+                                    double* coarse, Moments* m) {
+  const int nx = fg.nx, nqx = (nx + q - 1) / q;
+  // The rows' values (the product alpha * beta in double: exact), interleaved: lo = rows 0, 1;
+  // hi = rows 2, 3 (missing rows repeat row 0 and are never read back).
+  thread_local std::vector<RowPair> lo, hi;
+  lo.resize(static_cast<std::size_t>(nx));
+  hi.resize(static_cast<std::size_t>(nx));
+  const float* rp[kDoubleRows];
+  const float* wp[kDoubleRows];
+  for (int r = 0; r < kDoubleRows; ++r) {
+    const std::size_t off = static_cast<std::size_t>(y0 + (r < rows ? r : 0)) * nx;
+    rp[r] = g + off;
+    wp[r] = weight ? weight + off : nullptr;
+  }
+  InterleaveRowPair(rp[0], rp[1], wp[0], wp[1], nx, lo.data());
+  InterleaveRowPair(rp[2], rp[3], wp[2], wp[3], nx, hi.data());
+  const RowPair zero = {0.0, 0.0};
+  RowPair mass0 = zero, sx0 = zero, sxx0 = zero, mass1 = zero, sx1 = zero, sxx1 = zero;
+  for (int bx = 0; bx < nqx; ++bx) {
+    RowPair bm0 = zero, bsx0 = zero, bm1 = zero, bsx1 = zero;
+    const int x_end = std::min(nx, bx * q + q);
+    for (int x = bx * q; x < x_end; ++x) {
+      const double xd = x;
+      const RowPair xx = {xd, xd};
+      // v x, shared by Σ v x, Σ v x² = Σ (v x) x and the block's Σ v x (the plain loop's products)
+      const RowPair v0 = lo[x], v1 = hi[x], vx0 = v0 * xx, vx1 = v1 * xx;
+      mass0 += v0;
+      mass1 += v1;
+      sx0 += vx0;
+      sx1 += vx1;
+      sxx0 += vx0 * xx;
+      sxx1 += vx1 * xx;
+      bm0 += v0;
+      bm1 += v1;
+      bsx0 += vx0;
+      bsx1 += vx1;
+    }
+    if (coarse) {
+      const double bm[kDoubleRows] = {bm0[0], bm0[1], bm1[0], bm1[1]};
+      const double bsx[kDoubleRows] = {bsx0[0], bsx0[1], bsx1[0], bsx1[1]};
+      for (int r = 0; r < rows; ++r) {
+        const int y = y0 + r;
+        double* blk = coarse + (static_cast<std::size_t>(y / q) * nqx + bx) * 3;
+        blk[0] += bm[r];
+        blk[1] += bsx[r];
+        blk[2] += bm[r] * y;
+      }
+    }
+  }
+  const double mass[kDoubleRows] = {mass0[0], mass0[1], mass1[0], mass1[1]};
+  const double sx[kDoubleRows] = {sx0[0], sx0[1], sx1[0], sx1[1]};
+  const double sxx[kDoubleRows] = {sxx0[0], sxx0[1], sxx1[0], sxx1[1]};
+  for (int r = 0; r < rows; ++r) AddRowMoments(mass[r], sx[r], sxx[r], y0 + r, m);
+}
+
 // Of g, or of the product g * weight (the smoother's alpha * beta, formed in double: both are
 // flushed at 1e-30, so the product stays far above double's underflow).
 // With `coarse` (nqx * nqy * 3 doubles, zeroed by the caller), also the mass and the mass-weighted
@@ -285,48 +382,23 @@ inline void RowMomentsInFloat(const float* row, const float* weight, int nx, dou
 inline Moments GridMoments(const float* g, const float* weight, const FloorGrid& fg, double cell, int q = 1,
                     double* coarse = nullptr, bool force_double = false) {
   Moments m;
-  const int nqx = (fg.nx + q - 1) / q;
-  for (int y = 0; y < fg.ny; ++y) {
-    const float* row = g + static_cast<std::size_t>(y) * fg.nx;
-    const float* wrow = weight ? weight + static_cast<std::size_t>(y) * fg.nx : nullptr;
-    double r_mass = 0, r_sx = 0, r_sxx = 0;
-    double* crow = coarse ? coarse + static_cast<std::size_t>(y / q) * nqx * 3 : nullptr;
-    const bool in_float = !crow && (!wrow || !force_double);
-    if (in_float) {  // the common case: float lane accumulators along the row (vectorises)
-      if (wrow) {
-        RowMomentsInFloat<true>(row, wrow, fg.nx, &r_mass, &r_sx, &r_sxx);
+  const bool in_float = !coarse && (!weight || !force_double);
+  if (in_float) {  // the common case: float lane accumulators along the row (vectorises)
+    for (int y = 0; y < fg.ny; ++y) {
+      const float* row = g + static_cast<std::size_t>(y) * fg.nx;
+      double r_mass = 0, r_sx = 0, r_sxx = 0;
+      if (weight) {
+        RowMomentsInFloat<true>(row, weight + static_cast<std::size_t>(y) * fg.nx, fg.nx, &r_mass, &r_sx, &r_sxx);
       } else {
         RowMomentsInFloat<false>(row, nullptr, fg.nx, &r_mass, &r_sx, &r_sxx);
       }
-    } else {
-      // The row's values (the product alpha * beta in double), then its sums and block sums.
-      thread_local std::vector<double> v;
-      v.resize(static_cast<std::size_t>(fg.nx));
-      if (wrow) {
-        for (int x = 0; x < fg.nx; ++x) v[x] = static_cast<double>(row[x]) * wrow[x];
-      } else {
-        for (int x = 0; x < fg.nx; ++x) v[x] = row[x];
-      }
-      for (int x = 0; x < fg.nx; ++x) {
-        r_mass += v[x];
-        r_sx += v[x] * x;
-        r_sxx += v[x] * x * static_cast<double>(x);
-      }
-      if (crow) {
-        for (int bx = 0; bx < nqx; ++bx) {
-          double bm = 0, bsx = 0;
-          for (int x = bx * q; x < std::min(fg.nx, bx * q + q); ++x) {
-            bm += v[x];
-            bsx += v[x] * x;
-          }
-          double* b = crow + static_cast<std::size_t>(bx) * 3;
-          b[0] += bm;
-          b[1] += bsx;
-          b[2] += bm * y;
-        }
-      }
+      AddRowMoments(r_mass, r_sx, r_sxx, y, &m);
     }
-    AddRowMoments(r_mass, r_sx, r_sxx, y, &m);
+  } else {
+    // Double sums (and block sums): kDoubleRows rows side by side.
+    for (int y = 0; y < fg.ny; y += kDoubleRows)
+      RowGroupMomentsInDouble(g, weight, fg, y, std::min(kDoubleRows, fg.ny - y), coarse ? q : std::max(1, fg.nx),
+                              coarse, &m);
   }
   // The smoother's product alpha * beta in float can underflow where both are small: when its
   // total is that small, redo the sums in double.

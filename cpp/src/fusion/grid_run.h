@@ -51,6 +51,9 @@ struct LayerRun {
   // Spatial medians: per step the block summaries (mass fraction, x [m], y [m]), step-major.
   std::vector<float> filtered_blocks, smoothed_blocks;
   bool dead = false;  // every cell ruled out (hard walls)
+  // Steps at which alpha ⊙ beta vanished (grid_layer_pass.cc, SmoothedEstimate): the filtered
+  // estimate stands in for the smoothed one there.
+  std::vector<int> smoother_gaps;
 };
 
 // Filters (and with plan.smooth smooths) layer `layer_index` into *out. `store` holds the

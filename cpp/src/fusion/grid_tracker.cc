@@ -55,6 +55,7 @@ bool GridTrackerOptions::IsValid(std::string* error) const {
 std::string GridTrackSummary::BriefReport() const {
   std::ostringstream out;
   out << steps << " steps, " << fixes << " fixes, " << layers << " layers (" << dead_layers << " ruled out), "
+      << (smoother_gap_steps ? std::to_string(smoother_gap_steps) + " smoother gap steps, " : std::string())
       << cells << " cells, log-evidence " << log_evidence << ", " << FormatBytes(memory_bytes) << ", " << seconds
       << " s";
   return out.str();

@@ -14,6 +14,7 @@
 #include <utility>
 
 #include "indoorloc/core/check.h"
+#include "indoorloc/core/validate.h"
 #include "indoorloc/fusion/step_motion.h"
 
 namespace indoorloc::fusion {
@@ -46,23 +47,17 @@ struct PendingFix {
 }  // namespace
 
 bool LiveSessionOptions::IsValid(std::string* error) const {
-  auto fail = [error](const std::string& m) {
-    if (error) *error = m;
-    return false;
-  };
-  std::string why;
-  if (!detector.IsValid(&why)) return fail("detector." + why);
-  if (!(std::isfinite(step_length_k) && step_length_k > 0 && step_length_k < 100)) {
-    return fail("step_length_k must be finite and in (0, 100)");
-  }
-  if (!std::isfinite(yaw_offset_rad)) return fail("yaw_offset_rad must be finite");
-  if (!(std::isfinite(step_length_sd_fraction) && step_length_sd_fraction > 0 && step_length_sd_fraction <= 10)) {
-    return fail("step_length_sd_fraction must be finite and in (0, 10]");
-  }
-  if (!(std::isfinite(step_heading_sd_rad) && step_heading_sd_rad > 0 && step_heading_sd_rad <= 1e3)) {
-    return fail("step_heading_sd_rad must be finite and in (0, 1000]");
-  }
-  return true;
+  std::string detector_error;
+  const bool detector_ok = detector.IsValid(&detector_error);
+  return Validator(error)
+      .Check(detector_ok, "detector", detector_error)
+      .Check(step_length_k > 0 && step_length_k < 100, "step_length_k",
+             "must be finite and in (0, 100), got " + FormatValue(step_length_k))
+      .Finite(yaw_offset_rad, "yaw_offset_rad")
+      .Check(step_length_sd_fraction > 0 && step_length_sd_fraction <= 10, "step_length_sd_fraction",
+             "must be finite and in (0, 10], got " + FormatValue(step_length_sd_fraction))
+      .Check(step_heading_sd_rad > 0 && step_heading_sd_rad <= 1e3, "step_heading_sd_rad",
+             "must be finite and in (0, 1000], got " + FormatValue(step_heading_sd_rad));
 }
 
 struct LiveSession::State {

@@ -17,11 +17,7 @@ void ParticleTracker::Impl::MoveAlongCorridors(const StepMotion& motion) {
   const mapmatch::CorridorMotion& network_model = *corridor_motion;
   ForBlocks(n, [&](int, int begin, int end, RandomStream& block_rng) {
     for (int i = begin; i < end; ++i) {
-      double o, sc;
-      Eigen::Vector2d delta;
-      motion.Sample(offset[i], &cos_offset[i], &sin_offset[i], scale[i], block_rng, &o, &sc, &delta);
-      offset[i] = o;
-      scale[i] = sc;
+      const Eigen::Vector2d delta = SampleStep(motion, i, block_rng);
       // Paper 000 eq. 8-10 with the step's length, eq. 11 with the step's heading.
       const double length = delta.norm();
       const double heading = std::atan2(delta.y(), delta.x());

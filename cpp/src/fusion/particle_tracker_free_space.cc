@@ -67,11 +67,7 @@ void ParticleTracker::Impl::MoveFreeSpaceChangingFloors(const StepMotion& motion
   ForBlocks(n, [&](int b, int begin, int end, RandomStream& block_rng) {
     double blocked = 0.0;
     for (int i = begin; i < end; ++i) {
-      double o, sc;
-      Eigen::Vector2d delta;
-      motion.Sample(offset[i], &cos_offset[i], &sin_offset[i], scale[i], block_rng, &o, &sc, &delta);
-      offset[i] = o;
-      scale[i] = sc;
+      const Eigen::Vector2d delta = SampleStep(motion, i, block_rng);
       const double qx = x[i] + delta.x(), qy = y[i] + delta.y();
       int f = floor[i];
       bool is_blocked;

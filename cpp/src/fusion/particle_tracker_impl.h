@@ -112,6 +112,17 @@ struct ParticleTracker::Impl {
     });
   }
 
+  // Particle i's step drawn from the motion model (StepMotion::Sample): its heading offset and
+  // scale move on; returns its displacement in the map frame [m]. Both modes move one particle so.
+  Eigen::Vector2d SampleStep(const StepMotion& motion, int i, RandomStream& stream) {
+    double o, sc;
+    Eigen::Vector2d delta;
+    motion.Sample(offset[i], &cos_offset[i], &sin_offset[i], scale[i], stream, &o, &sc, &delta);
+    offset[i] = o;
+    scale[i] = sc;
+    return delta;
+  }
+
   bool Walkable(double px, double py, int f) const {
     if (!plan) return true;
     return plan->IsWalkable(px, py, plan_floor[f]);

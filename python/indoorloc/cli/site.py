@@ -127,7 +127,7 @@ def cmd_track(args: argparse.Namespace) -> int:
         tr = site.track(Path(w), floor=floor, smooth=args.smooth)
         tracks.append(tr)
         st = error_stats(tr.errors_m)
-        line = f"{tr.walk_id}: floor {tr.floor} (p {tr.floor_probability:.2f}), {tr.times_s.size} steps"
+        line = f"{tr.walk_id}: floor {tr.floor} (p {tr.floor_probability:.3f}), {tr.times_s.size} steps"
         if tr.header_floor and tr.header_floor not in site.floors:
             line += (f" (its header says floor {tr.header_floor}, which this site does not have: the track assumes "
                      f"the walk is on one of the site's floors {site.floors}, and the floor probability is among "

@@ -8,8 +8,8 @@ every floor shares one all-floor fingerprint database built from the training wa
 For each test walk it computes, once:
 
 - the all-floor grid filter's per-floor evidence (``site_model.identify_floor`` without the APs:
-  the identification tracker of ``fusion evaluate``, steps rotated by the walk's floor
-  calibration as there);
+  the identification tracker of ``fusion evaluate``, steps rotated by
+  ``site_model.identification_calibration`` as there and in ``track --floor auto``);
 - the per-floor AP evidence L_f (``fusion.floor_evidence``) for every (m, α, ε) of :data:`GRID`;
 - for reference, a WiFi-only vote (each query's best reference's floor, most votes).
 
@@ -18,6 +18,12 @@ waypoint of the walk counts. For each held-out floor the grid point with the mos
 on the other five floors (ties: the highest mean log-probability of the true floor, the
 normalised combined score) is scored on it; ``chosen_all`` is the same choice on all floors,
 the default of ``site_model.TrackSettings``.
+
+Calibration of the reported probabilities (``floor_evidence.FloorCalibration``): with each
+held-out floor's chosen score, the temperature T, error probability δ_10 and slope b of
+:data:`CALIBRATION_GRID` with the lowest log loss over the other five floors' walks calibrate the
+held-out floor's walks (δ from each walk's match distance on its chosen floor); the pooled held-out probabilities give the reliability table (per bin of
+the probability reported for the chosen floor: walks, mean reported, fraction right).
 """
 
 from __future__ import annotations
@@ -46,10 +52,22 @@ GRID: Dict[str, Sequence[Any]] = {
 }
 
 
+#: Temperature T, error probability δ_10 at a match distance of 10 dB and slope b of logit δ in
+#: the log of the distance (``floor_evidence.FloorCalibration``; b = 0: one δ for every walk).
+CALIBRATION_GRID: Dict[str, Sequence[float]] = {
+    "temperature": (0.5, 1.0, 2.0, 3.0, 5.0, 10.0, 20.0, 50.0),
+    "error_probability_at_10db": (0.0, 1e-3, 3e-3, 0.01, 0.02, 0.03, 0.05, 0.1, 0.2, 0.3, 0.5),
+    "error_slope": (0.0, 1.0, 2.0, 3.0, 4.0, 6.0),
+}
+#: Bins of the reported probability of the chosen floor in the reliability table.
+RELIABILITY_BINS = floor_evidence.RELIABILITY_BINS
+
+
 def walk_evidence(data_root: Optional[Path] = None, floors: Sequence[str] = (),
                   grid: Optional[Dict[str, Sequence[Any]]] = None, progress=None) -> dict:
     """Per test walk: floor index, waypoints, the grid filter's log-evidence (F,), the WiFi vote
-    (F,) and the AP evidence (F,) per (m, α, ε) of ``grid``."""
+    (F,), the AP evidence (F,) per (m, α, ε) of ``grid`` and the match distance per floor (F,)
+    [dB]."""
     grid = grid or GRID
     settings = fr.RealSettings()
     _, data = fr.load_site(data_root, floors)
@@ -76,11 +94,14 @@ def walk_evidence(data_root: Optional[Path] = None, floors: Sequence[str] = (),
                     votes = [plan_floors.index(int(f)) for f in db.floors[best]]
                     rec["vote"] = np.bincount(votes, minlength=len(plan_floors)).astype(float)
                 rec["ap"] = {p: floor_evidence.walk_floor_log_likelihood(rates[p[1]], q, p[0], p[2]) for p in ap_points}
-                steps = site_model.tracker_steps(fl.steps[i], m.cal, settings.track_settings())
+                rec["match_distance_db"] = np.array([floor_evidence.walk_match_distance_db(db.rss_dbm, db.floors, f, q)
+                                                     for f in plan_floors])
+                # As fusion evaluate and track --floor auto: not the walk's own floor's calibration.
+                id_cal, id_spread = site_model.identification_calibration(m.all_calibrations)
+                steps = site_model.tracker_steps(fl.steps[i], id_cal, settings.track_settings())
                 rec["grid"] = np.zeros(len(plan_floors))
                 if len(steps):
-                    spread = max(m.cal.yaw_offset_spread_rad, 1e-3)
-                    tracker = fr._grid_tracker(all_plan, fr._identification_options(settings, spread), fl.name + "/all")
+                    tracker = fr._grid_tracker(all_plan, fr._identification_options(settings, id_spread), "all")
                     found = site_model.identify_floor(tracker, plan_floors, steps, wfx.fixes_for_walk(walk, db))
                     p = np.array([found["grid_probabilities"][f] for f in plan_floors])
                     rec["grid"] = np.log(np.maximum(p, 1e-300))
@@ -106,6 +127,38 @@ def _per_floor(ok: np.ndarray, label: np.ndarray, n_wp: np.ndarray, names: Seque
             if (label == f).any()}
 
 
+def _calibrated(scores: np.ndarray, distances_db: np.ndarray, calibration: Dict[str, float]) -> np.ndarray:
+    """Calibrated probabilities (W, F) of scores (W, F), δ from each walk's match distance on its
+    chosen floor (``distances_db`` (W, F))."""
+    chosen = distances_db[np.arange(len(scores)), np.argmax(scores, axis=1)]
+    return floor_evidence.FloorCalibration(**calibration).probabilities(scores, chosen)
+
+
+def _calibration_loss(p: np.ndarray, label: np.ndarray) -> float:
+    return float(-np.log(p[np.arange(len(label)), label]).mean())
+
+
+def choose_calibration(scores: np.ndarray, distances_db: np.ndarray, label: np.ndarray) -> Dict[str, float]:
+    """The point of :data:`CALIBRATION_GRID` with the lowest mean log loss of the true floor over
+    the walks (rows of ``scores`` (W, F) and ``distances_db`` (W, F), true floor indices
+    ``label`` (W,)); ties: the first in grid order (the simpler: b = 0 first)."""
+    keys = list(CALIBRATION_GRID)
+    points = [dict(zip(keys, v)) for v in itertools.product(*(CALIBRATION_GRID[k] for k in keys))]
+    return min(points, key=lambda c: _calibration_loss(_calibrated(scores, distances_db, c), label))
+
+
+def reliability(p: np.ndarray, label: np.ndarray) -> dict:
+    """Reliability over walks of probabilities ``p`` (W, F): per bin of the probability of the
+    chosen floor (:data:`RELIABILITY_BINS`), walks, mean reported and fraction right; the mean
+    log loss of the true floor [nats] and the Brier score."""
+    conf, ok = p.max(axis=1), np.argmax(p, axis=1) == label
+    rows = floor_evidence.reliability_table(conf, ok)
+    onehot = np.eye(p.shape[1])[label]
+    return {"bins": rows, "log_loss": _calibration_loss(p, label),
+            "brier": float(((p - onehot) ** 2).sum(axis=1).mean()),
+            "mean_reported": float(conf.mean()), "fraction_right": float(ok.mean())}
+
+
 def select(evidence: dict) -> dict:
     """Leave-one-floor-out choice over the grid (module docstring). Returns the grid filter alone,
     the WiFi vote, the held-out figures (pooled and per floor, with each floor's choice) and the
@@ -114,6 +167,7 @@ def select(evidence: dict) -> dict:
     label = np.array([w["floor_index"] for w in walks])
     n_wp = np.array([w["n_waypoints"] for w in walks])
     g = np.stack([w["grid"] for w in walks])
+    dist = np.stack([w["match_distance_db"] for w in walks])
     points = [({"weight": 0.0}, g)]
     for (m, a, e) in walks[0]["ap"]:
         ap = np.stack([w["ap"][(m, a, e)] for w in walks])
@@ -126,7 +180,8 @@ def select(evidence: dict) -> dict:
                 "per_floor": _per_floor(ok, label, n_wp, names)}
 
     held_ok = np.zeros(len(walks), bool)
-    chosen = {}
+    held_p = np.full(g.shape, np.nan)
+    chosen, chosen_calibration = {}, {}
     for f, name in enumerate(names):
         train = label != f
         if not (label == f).any():
@@ -134,9 +189,13 @@ def select(evidence: dict) -> dict:
         values, scores = max(points, key=lambda p: (_accuracy(p[1], label, n_wp, train), _log_loss(p[1], label, train)))
         chosen[name] = values
         held_ok[label == f] = (np.argmax(scores, axis=1) == label)[label == f]
+        chosen_calibration[name] = choose_calibration(scores[train], dist[train], label[train])
+        held_p[label == f] = _calibrated(scores[label == f], dist[label == f], chosen_calibration[name])
     everything = np.ones(len(walks), bool)
     values_all, scores_all = max(points, key=lambda p: (_accuracy(p[1], label, n_wp, everything),
                                                         _log_loss(p[1], label, everything)))
+    calibration_all = choose_calibration(scores_all, dist, label)
+    have = ~np.isnan(held_p).any(axis=1)
     wrong = [{"floor": w["floor"], "walk": w["walk"], "n_waypoints": int(w["n_waypoints"]),
               "identified": names[int(np.argmax(scores_all[i]))]}
              for i, w in enumerate(walks) if np.argmax(scores_all[i]) != label[i]]
@@ -144,6 +203,14 @@ def select(evidence: dict) -> dict:
             "lofo": {"accuracy": float((n_wp * held_ok).sum() / n_wp.sum()), "walks_right": int(held_ok.sum()),
                      "per_floor": _per_floor(held_ok, label, n_wp, names), "chosen": chosen},
             "chosen_all": values_all, "chosen_all_figures": figures(scores_all), "wrong_walks_chosen_all": wrong,
+            "calibration": {"grid": {k: list(v) for k, v in CALIBRATION_GRID.items()},
+                            "lofo": {"chosen": chosen_calibration,
+                                     "reliability": reliability(held_p[have], label[have])},
+                            "chosen_all": calibration_all,
+                            "chosen_all_reliability": reliability(_calibrated(scores_all, dist, calibration_all), label),
+                            "constant_reliability": reliability(_calibrated(scores_all, dist, dict(
+                                calibration_all, error_slope=0.0)), label),
+                            "uncalibrated_reliability": reliability(_calibrated(scores_all, dist, {}), label)},
             "n_walks": len(walks), "n_waypoints": int(n_wp.sum()), "grid": {k: list(v) for k, v in grid.items()}}
 
 
@@ -163,7 +230,34 @@ def markdown(result: dict) -> str:
               "Walks still wrong with it: " + (", ".join(f"{w['floor']} {w['walk']} ({w['n_waypoints']} waypoints, "
                                                          f"taken for {w['identified']})"
                                                          for w in result["wrong_walks_chosen_all"]) or "none") + "."]
+    cal = result.get("calibration")
+    if cal:
+        lines += ["", "Reliability over walks of the probability reported for the chosen floor "
+                  "(held out: T, δ_10, b chosen on the other floors; " + "; ".join(
+                      f"{f}: {_brief(v)}" for f, v in cal["lofo"]["chosen"].items())
+                  + f"; on all floors: {_brief(cal['chosen_all'])}):",
+                  "", "| reported p | held out: walks | mean reported | fraction right | all floors: walks | mean reported "
+                  "| fraction right | uncalibrated (T 1, δ 0): walks | mean reported | fraction right |",
+                  "|---|---|---|---|---|---|---|---|---|---|"]
+        tables = [cal["lofo"]["reliability"], cal["chosen_all_reliability"], cal["uncalibrated_reliability"]]
+        for lo, hi in zip(RELIABILITY_BINS[:-1], RELIABILITY_BINS[1:]):
+            cells = []
+            for t in tables:
+                row = next((b for b in t["bins"] if b["from"] == lo), None)
+                cells += (["0", "", ""] if row is None else
+                          [str(row["walks"]), f"{row['mean_reported']:.4f}", f"{row['fraction_right']:.4f}"])
+            lines.append(f"| {lo:g}-{hi:g} | " + " | ".join(cells) + " |")
+        const = cal["constant_reliability"]
+        lines_after = [f"With b = 0 (one δ for every walk, the rest as on all floors): log loss {const['log_loss']:.3f}, "
+                       f"Brier {const['brier']:.4f}."]
+        lines.append("| log loss / Brier | " + " | ".join(f"{t['log_loss']:.3f} / {t['brier']:.4f} |  | " for t in tables)
+                     .rstrip() + "")
+        lines += [""] + lines_after
     return "\n".join(lines)
+
+
+def _brief(c: Dict[str, float]) -> str:
+    return f"T {c['temperature']:g}, δ_10 {c['error_probability_at_10db']:g}, b {c['error_slope']:g}"
 
 
 def _jsonable(x):

@@ -126,8 +126,10 @@ def _fold_models(floors: Sequence[FloorData], fold_of: Dict[str, List[np.ndarray
     if all_plan is not None:
         all_database = cache.database(all_walks, settings.fixes)
         all_rates = site_model.ap_floor_rates(all_database, list(all_plan.floors), settings.track_settings())
+        all_cals = [out[fl.name].cal for fl in floors]
         for m in out.values():
             m.all_plan, m.all_database, m.all_ap_rates = all_plan, all_database, all_rates
+            m.all_calibrations = all_cals
     return out
 
 
@@ -145,7 +147,7 @@ def evaluate_floors(floors: Sequence[FloorData], settings: RealSettings, peer=No
                for fl in floors}
     scores: List[WalkScore] = []
     cache = WalkTrainingCache()
-    # Fold j's training models are built in this thread while fold j - 1's walks are scored by the
+    # Fold j's training models are built in this thread while earlier folds' walks are scored by the
     # pool (the models do not depend on the scheduling: the results are those of a serial run).
     with ThreadPoolExecutor(max_workers=max(1, settings.threads)) as pool:
         running: List = []
@@ -161,9 +163,12 @@ def evaluate_floors(floors: Sequence[FloorData], settings: RealSettings, peer=No
                 models = _fold_models(floors, fold_of, j, settings, all_plan, "wifi_model" in methods, cache)
                 if models_cache is not None:
                     models_cache[key] = models
+            # Fold j's walks queue behind fold j - 1's (the pool runs them in submission order), so
+            # the workers never wait at a fold boundary; the scores are collected in that order.
+            submitted = [pool.submit(_score_walk, fl.walks[i], fl.steps[i], models[fl.name], settings, peer, methods)
+                         for fl, i in jobs_idx]
             _collect(running, scores, progress)
-            running = [pool.submit(_score_walk, fl.walks[i], fl.steps[i], models[fl.name], settings, peer, methods)
-                       for fl, i in jobs_idx]
+            running = submitted
         _collect(running, scores, progress)
     return scores
 

@@ -161,6 +161,7 @@ class WalkScore:
     seconds: Dict[str, float] = field(default_factory=dict)
     floor_correct: Optional[np.ndarray] = None       #: floor identification at the waypoints
     floor_free_errors_m: Optional[np.ndarray] = None  #: position error of that run
+    floor_probability: Optional[float] = None  #: the calibrated probability reported for the floor chosen
     #: Distance [m] from each waypoint to the nearest training scan of its floor (survey coverage).
     coverage_m: Optional[np.ndarray] = None
     #: Per method with a covariance: whether each waypoint lies in the estimate's 95 % ellipse.
@@ -204,6 +205,8 @@ class FoldModels:
     all_plan: Any = None
     all_database: Optional[wfx.FingerprintDatabase] = None
     all_ap_rates: Any = None  #: per-floor AP detection rates of all_database (fusion.floor_evidence)
+    #: Every floor's calibration in building order (floor identification: site_model.identification_calibration).
+    all_calibrations: Optional[List[ph.HandheldCalibration]] = None
     #: ``scipy.spatial.cKDTree`` of the floor's training scan positions (survey coverage), or None.
     coverage_tree: Any = None
     #: ``wifi.GridPosterior`` of ``crowd`` (the wifi_model method), built once per fold, or None.

@@ -11,6 +11,7 @@ import numpy as np
 
 from indoorloc.experiments.fusion_real_settings import METHODS, SELECT_OBJECTIVE, RealSettings, WalkScore
 from indoorloc.experiments.fusion_real_walk import _wrap
+from indoorloc.fusion import floor_evidence
 
 
 def _stats(errors: np.ndarray) -> Dict[str, float]:
@@ -111,6 +112,15 @@ def summarize(scores: Sequence[WalkScore], settings: RealSettings, seconds: floa
             # Position error of that run where the floor was right (the floor-given default is fusion_smoother).
             "mean_m_where_floor_correct": float(np.nanmean(free)) if np.isfinite(free).any() else None,
         }
+        # The calibrated floor probability each walk was given against how often it was right
+        # (fusion.floor_evidence.FloorCalibration; grid engine only).
+        rated = [s for s in ident if s.floor_probability is not None]
+        if rated:
+            p = np.array([s.floor_probability for s in rated])
+            right = np.array([bool(s.floor_correct.all()) for s in rated])
+            out["floor_identification"]["reliability"] = {
+                "mean_reported": float(p.mean()), "fraction_right": float(right.mean()),
+                "bins": floor_evidence.reliability_table(p, right)}
     return out
 
 def markdown(result: dict) -> str:
@@ -138,6 +148,10 @@ def markdown(result: dict) -> str:
                   f"{100 * fi['accuracy']:.1f} % of {fi['n_waypoints']} waypoints, {fi['walks_all_correct']} of "
                   f"{fi['n_walks']} walks right throughout; per floor "
                   + ", ".join(f"{k} {100 * v:.1f} %" for k, v in fi["per_floor"].items()) + "."]
+        rel = fi.get("reliability")
+        if rel:
+            lines[-1] += (f" Calibrated floor probability reported: {rel['mean_reported']:.3f} on average over walks, "
+                          f"right {100 * rel['fraction_right']:.1f} % of the time.")
     lines.append("")
     lines.append(f"{len({(w['floor'], w['walk']) for w in result['waypoints']})} walks in {result['seconds']:.0f} s.")
     return "\n".join(lines)

@@ -170,14 +170,16 @@ def _score_walk(walk, steps_raw: ph.HandheldSteps, models: FoldModels, settings:
     if not particle:
         _score_walk_grid(score, put, pdr_steps, fixes, known_fixes, known, models, settings, want, residual)
     if settings.floor_identification and models.all_plan is not None and "fusion_smoother" in want:
-        _identify_floor(score, walk, pdr_steps, models, settings, options, smoother, spread)
+        _identify_floor(score, walk, steps_raw, pdr_steps, models, settings, options, smoother)
     return score
 
 
-def _identify_floor(score: WalkScore, walk, pdr_steps, models: FoldModels, settings: RealSettings, options, smoother,
-                    spread: float) -> None:
+def _identify_floor(score: WalkScore, walk, steps_raw, pdr_steps, models: FoldModels, settings: RealSettings, options,
+                    smoother) -> None:
     """Floor identification of one walk (``score.floor_correct``, ``score.floor_free_errors_m``):
-    the default with the floor not given, on the all-floor plan and database of the fold."""
+    the default with the floor not given, on the all-floor plan and database of the fold; the
+    steps rotated by ``site_model.identification_calibration`` (not by the walk's own floor's
+    calibration, which a walk of unknown floor does not have), as ``track --floor auto``."""
     fl = models.floor
     wt = score.t_s + score.waypoint_t0
     wxy = score.waypoint_xy_m
@@ -194,11 +196,16 @@ def _identify_floor(score: WalkScore, walk, pdr_steps, models: FoldModels, setti
         # evidence (site_model.identify_floor, the code of ``indoorloc track --floor auto``);
         # then the floor-given smoother on it (a walk stays on one floor in this model).
         ts = settings.track_settings()
-        ident = _grid_tracker(models.all_plan, _identification_options(settings, spread), fl.name + "/all")
-        ap = (site_model.walk_ap_log_likelihood(walk, models.all_database, models.all_ap_rates, ts)
-              if ts.identification_ap_weight > 0 and models.all_ap_rates is not None else None)
-        found = site_model.identify_floor(ident, plan_floors, pdr_steps, all_fixes, ap, ts.identification_ap_weight)
+        id_cal, id_spread = site_model.identification_calibration(models.all_calibrations)
+        id_steps = site_model.tracker_steps(steps_raw, id_cal, ts)
+        ident = _grid_tracker(models.all_plan, _identification_options(settings, id_spread), "all")
+        evidence = (site_model.walk_floor_evidence(walk, models.all_database, models.all_ap_rates, ts)
+                    if models.all_ap_rates is not None else {"ap_log_likelihood": None, "match_distance_db": None})
+        found = site_model.identify_floor(ident, plan_floors, id_steps, all_fixes, evidence["ap_log_likelihood"],
+                                          ts.identification_ap_weight, ts.floor_calibration(),
+                                          evidence["match_distance_db"])
         est_floor = np.full(wt.size, found["floor"])
+        score.floor_probability = found["probabilities"][found["floor"]]
         track_m = score.smoothed_track_m if found["floor"] == fl.number else np.asarray(found["result"]["mean_m"])
     score.seconds["floor_identification"] = time.perf_counter() - tic
     score.floor_correct = est_floor == fl.number

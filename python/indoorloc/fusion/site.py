@@ -62,7 +62,8 @@ class FloorModels:
 class WalkTrack:
     """A walk tracked on a site: per step (M) times [s since the walk's first record], position
     (M, 2) [m, floor frame] and covariance (M, 3) = (xx, xy, yy) [m²]; the floor and its
-    probability; the waypoints and the errors at them [m] when the walk has waypoints."""
+    probability (calibrated when the floor was identified: ``fusion.floor_evidence.FloorCalibration``;
+    1 when it was given); the waypoints and the errors at them [m] when the walk has waypoints."""
 
     walk_id: str
     source: str
@@ -321,7 +322,7 @@ class Site:
             models = [self.floor_models(n) for n in self.floors]
             plan = FloorPlan([m.plan.geometry(0) for m in models], FloorPlanOptions())
             # The walk's floor is unknown: the widest calibrated offset spread of the floors.
-            spread = max(site_model.offset_spread_rad(m.calibration) for m in models)
+            _, spread = site_model.identification_calibration([m.calibration for m in models])
             tracker = GridTracker(plan, site_model.identification_grid_options(self.settings, spread))
             con = store.connect(self.path)
             try:
@@ -352,13 +353,22 @@ class Site:
             tracker_all, numbers, database, rates = self._all_floors()
             # Steps rotated with the first floor's calibration for identification; then the floor's own.
             # The same code as ``fusion evaluate``'s floor identification (site_model.identify_floor).
-            first = self.floor_models(self.floors[0])
+            first_cal, _ = site_model.identification_calibration([self.floor_models(n).calibration
+                                                                  for n in self.floors])
             weight = self.settings.identification_ap_weight
-            ap = site_model.walk_ap_log_likelihood(walk, database, rates, self.settings) if weight > 0 else None
+            evidence = site_model.walk_floor_evidence(walk, database, rates, self.settings)
             ident = site_model.identify_floor(tracker_all, numbers, site_model.tracker_steps(
-                steps_raw, first.calibration, self.settings), wifi_fixes.fixes_for_walk(walk, database), ap, weight)
+                steps_raw, first_cal, self.settings), wifi_fixes.fixes_for_walk(walk, database),
+                evidence["ap_log_likelihood"], weight, self.settings.floor_calibration(), evidence["match_distance_db"])
             by_number = {n: name for name, (n, _) in self._floors.items()}
             floor = by_number[ident["floor"]]
+            if evidence["floor_changes"]:
+                # The trackers keep a walk on one floor; say so when its WiFi suggests otherwise.
+                seq = [by_number[int(n)] for n in evidence["query_floors"]]
+                at = [f"{seq[k]} -> {seq[k + 1]} at {evidence['query_t_s'][k + 1]:.0f} s"
+                      for k in range(len(seq) - 1) if seq[k] != seq[k + 1]]
+                warnings.warn(f"indoorloc: walk {src}: its WiFi suggests it changes floor ({', '.join(at)}); "
+                              f"it is tracked on one floor, {floor}", RecordingWarning, stacklevel=2)
             probabilities = {by_number[n]: p for n, p in ident["probabilities"].items()}
         m = self.floor_models(floor) if floor in self._floors else self._walk_floor(walk, floor)
         steps = site_model.tracker_steps(steps_raw, m.calibration, self.settings)
@@ -366,6 +376,11 @@ class Site:
             raise ValueError(f"indoorloc: walk {src}: no step detected, nothing to track")
         fixes = wifi_fixes.fixes_for_walk(walk, m.database)
         r = site_model.run_default(m.tracker, steps, fixes, smooth=smooth)
+        gaps = int(getattr(r.get("summary"), "smoother_gap_steps", 0) or 0) if smooth else 0
+        if gaps:
+            warnings.warn(f"indoorloc: walk {src}: at {gaps} of {len(steps)} steps the walk before and after cannot "
+                          "be joined by the motion model (steps lost, or fixes far off); the smoothed track uses the "
+                          "causal filter's estimate there and is less reliable", RuntimeWarning, stacklevel=2)
         median = self.settings.point_estimate == "median"
         key = ("smoothed_median_m" if median else "smoothed_m") if smooth else ("median_m" if median else "mean_m")
         cov = np.asarray(r["smoothed_covariance_m2" if smooth else "covariance_m2"], float)

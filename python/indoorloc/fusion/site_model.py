@@ -24,6 +24,7 @@ import numpy as np
 
 from indoorloc.pdr import handheld as ph
 from indoorloc.fusion import wifi_fixes, floor_evidence
+from indoorloc.fusion.floor_sequence import floor_sequence
 from indoorloc.fusion.steps import Steps
 from indoorloc.fusion.grid import GridTracker, GridTrackerOptions, track_grid
 from indoorloc._core.fusion import LiveSessionOptions
@@ -67,6 +68,18 @@ class TrackSettings:
     identification_ap_count: int = 20
     identification_ap_rate_floor: float = 0.1
     identification_ap_outlier_probability: float = 0.1
+    #: Calibration of the reported floor probabilities (``floor_evidence.FloorCalibration``):
+    #: temperature T of the combined score, δ_10 the probability that the evidence misleads at a
+    #: match distance of 10 dB on the chosen floor, and b the slope of logit δ in the log of that
+    #: distance. Chosen by leave-one-floor-out log loss over walks with
+    #: ``experiments.floor_identification_study``; they change the probabilities, never the floor.
+    identification_temperature: float = 1.0
+    identification_error_probability: float = 0.03
+    identification_error_slope: float = 2.0
+    #: Rate r [1/s] of floor changes of the AP evidence's floor sequence (``fusion.floor_sequence``),
+    #: which tells a walk that seems to change floor (the tracker keeps it on one). Chosen by
+    #: leave-one-floor-out with ``experiments.floor_change_study`` (real and spliced walks).
+    identification_floor_change_rate_per_s: float = 1.0 / 1200.0
 
     def validate(self) -> None:
         """Raises ValueError naming the first invalid field."""
@@ -89,6 +102,19 @@ class TrackSettings:
         if not 0 <= self.identification_ap_outlier_probability <= 1:
             raise ValueError(f"indoorloc: TrackSettings.identification_ap_outlier_probability must be in [0, 1], "
                              f"got {self.identification_ap_outlier_probability!r}")
+        if not (math.isfinite(self.identification_temperature) and self.identification_temperature > 0):
+            raise ValueError(f"indoorloc: TrackSettings.identification_temperature must be finite and > 0, "
+                             f"got {self.identification_temperature!r}")
+        if not 0 <= self.identification_error_probability < 1:
+            raise ValueError(f"indoorloc: TrackSettings.identification_error_probability must be in [0, 1), "
+                             f"got {self.identification_error_probability!r}")
+        if not (math.isfinite(self.identification_error_slope) and self.identification_error_slope >= 0):
+            raise ValueError(f"indoorloc: TrackSettings.identification_error_slope must be finite and >= 0, "
+                             f"got {self.identification_error_slope!r}")
+        if not (math.isfinite(self.identification_floor_change_rate_per_s)
+                and self.identification_floor_change_rate_per_s >= 0):
+            raise ValueError(f"indoorloc: TrackSettings.identification_floor_change_rate_per_s must be finite and >= 0, "
+                             f"got {self.identification_floor_change_rate_per_s!r}")
         if self.point_estimate not in ("mean", "median"):
             raise ValueError(f"indoorloc: TrackSettings.point_estimate must be 'mean' or 'median', "
                              f"got {self.point_estimate!r}")
@@ -101,11 +127,21 @@ class TrackSettings:
                                                           "identification_offset_bins", "identification_ap_weight",
                                                           "identification_ap_count", "identification_ap_rate_floor",
                                                           "identification_ap_outlier_probability",
-                                                          "identification_fix_outlier_probability")}
+                                                          "identification_fix_outlier_probability",
+                                                          "identification_temperature",
+                                                          "identification_error_probability",
+                                                          "identification_error_slope",
+                                                          "identification_floor_change_rate_per_s")}
         d["fixes"] = asdict(self.fixes)
         d["grid_options"] = {k: (None if isinstance(v, float) and math.isinf(v) else v)
                              for k, v in self.grid_options.to_dict().items()}
         return d
+
+    def floor_calibration(self) -> floor_evidence.FloorCalibration:
+        """The calibration of the reported floor probabilities (``identification_temperature``,
+        ``identification_error_probability``, ``identification_error_slope``)."""
+        return floor_evidence.FloorCalibration(self.identification_temperature, self.identification_error_probability,
+                                               self.identification_error_slope)
 
     @classmethod
     def from_dict(cls, d: Dict[str, Any]) -> "TrackSettings":
@@ -148,6 +184,18 @@ def offset_spread_rad(cal: ph.HandheldCalibration) -> float:
     walks, at least 1e-3 (a single walk has no spread)."""
     spread = cal.yaw_offset_spread_rad
     return max(spread if math.isfinite(spread) else 0.0, 1e-3)
+
+
+def identification_calibration(calibrations: Sequence[ph.HandheldCalibration]) -> tuple:
+    """What floor identification rotates a walk's steps with, the walk's floor being unknown:
+    ``(calibration, offset_spread_rad)``, the first floor's calibration (floors in building
+    order, as ``Site.floors``) and the widest offset spread of the floors (:func:`offset_spread_rad`).
+    ``indoorloc track --floor auto`` and ``fusion evaluate`` both use it, so that neither uses the
+    calibration of the walk's true floor."""
+    cals = list(calibrations)
+    if not cals:
+        raise ValueError("indoorloc: argument 'calibrations': expected the calibration of at least one floor")
+    return cals[0], max(offset_spread_rad(c) for c in cals)
 
 
 def floor_grid_options(settings: TrackSettings, cal: ph.HandheldCalibration, spatial_median: Optional[bool] = None,
@@ -199,18 +247,42 @@ def walk_ap_log_likelihood(walk: Any, database: wifi_fixes.FingerprintDatabase, 
                            settings: TrackSettings) -> np.ndarray:
     """The walk's AP evidence per floor (F,) [nats] (``floor_evidence.walk_floor_log_likelihood``
     on the walk's query fingerprints in the database's columns)."""
-    _, queries = wifi_fixes.walk_queries(walk, database)
-    return floor_evidence.walk_floor_log_likelihood(rates, queries, settings.identification_ap_count,
-                                                    settings.identification_ap_outlier_probability)
+    return walk_floor_evidence(walk, database, rates, settings)["ap_log_likelihood"]
+
+
+def walk_floor_evidence(walk: Any, database: wifi_fixes.FingerprintDatabase, rates: floor_evidence.ApFloorRates,
+                        settings: TrackSettings) -> Dict[str, Any]:
+    """What :func:`identify_floor` takes from the walk's WiFi, per floor of ``rates`` (F,):
+    ``ap_log_likelihood`` [nats] (``floor_evidence.walk_floor_log_likelihood``) and
+    ``match_distance_db`` [dB] (``floor_evidence.walk_match_distance_db``), both on the walk's
+    query fingerprints in the database's columns; and the AP evidence's floor sequence
+    (``fusion.floor_sequence`` at ``identification_floor_change_rate_per_s``): ``query_t_s``
+    (Q,) [s], ``query_floors`` (Q,) floor numbers, ``floor_changes`` the changes along it."""
+    t, queries = wifi_fixes.walk_queries(walk, database)
+    log_p, used = floor_evidence.query_floor_log_posteriors(rates, queries, settings.identification_ap_count)
+    per_query = floor_evidence.robust_query_log_likelihoods(log_p, settings.identification_ap_outlier_probability)
+    seq = floor_sequence(per_query, t[used], settings.identification_floor_change_rate_per_s)
+    dist = np.array([floor_evidence.walk_match_distance_db(database.rss_dbm, database.floors, int(f), queries)
+                     for f in rates.floors])
+    return {"ap_log_likelihood": per_query.sum(axis=0), "match_distance_db": dist, "query_t_s": t[used],
+            "query_floors": np.asarray(rates.floors)[seq["path"]], "floor_changes": seq["changes"]}
 
 
 def identify_floor(tracker_all: GridTracker, floors: Sequence[int], steps: Steps, fixes,
-                   ap_log_likelihood: Optional[np.ndarray] = None, ap_weight: float = 0.0) -> Dict[str, Any]:
+                   ap_log_likelihood: Optional[np.ndarray] = None, ap_weight: float = 0.0,
+                   calibration: Optional[floor_evidence.FloorCalibration] = None,
+                   match_distance_db: Optional[np.ndarray] = None) -> Dict[str, Any]:
     """The floor of a walk (a walk stays on one floor): the floor with the most evidence, the
     all-floor filter's log-evidence per floor plus ``ap_weight`` x the walk's AP evidence
-    ``ap_log_likelihood`` (F,) (:func:`walk_ap_log_likelihood`; None: the filter alone).
-    Returns ``{"floor": int, "probabilities": {floor: p}, "grid_probabilities": {floor: p},
-    "result": dict}`` (``probabilities``: the normalised combined evidence)."""
+    ``ap_log_likelihood`` (F,) (:func:`walk_floor_evidence`; None: the filter alone).
+
+    Returns ``{"floor": int, "probabilities": {floor: p}, "score": {floor: nats},
+    "match_distance_db": float or None, "error_probability": δ, "grid_probabilities": {floor: p},
+    "result": dict}``: ``score`` the combined log-evidence (0 for the best floor),
+    ``probabilities`` its calibrated version (``calibration``, a ``floor_evidence.FloorCalibration``,
+    with δ from the walk's match distance on the chosen floor, ``match_distance_db`` (F,) from
+    :func:`walk_floor_evidence`; None: T = 1, δ = 0, the plain normalised evidence, which is
+    overconfident; ``TrackSettings.floor_calibration()`` holds the calibrated values)."""
     r = dict(track_grid(tracker_all, steps, fixes=fixes, smooth=False))
     p_grid = np.asarray(r["smoothed_floor_probabilities"], float)
     score = np.log(np.maximum(p_grid, 1e-300))
@@ -220,9 +292,18 @@ def identify_floor(tracker_all: GridTracker, floors: Sequence[int], steps: Steps
             raise ValueError(f"indoorloc: argument 'ap_log_likelihood': expected shape {score.shape}, got {ap.shape}")
         score = score + ap_weight * ap
     best = int(np.argmax(score))
-    p = np.exp(score - score.max())
-    p /= p.sum()
+    dist = None
+    if match_distance_db is not None:
+        d = np.asarray(match_distance_db, float)
+        if d.shape != score.shape:
+            raise ValueError(f"indoorloc: argument 'match_distance_db': expected shape {score.shape}, got {d.shape}")
+        dist = float(d[best])
+    cal = calibration or floor_evidence.FloorCalibration()
+    delta = float(cal.error_probability(dist))
+    p = floor_evidence.calibrated_floor_probabilities(score, cal.temperature, delta)
     return {"floor": int(floors[best]), "probabilities": {int(f): float(v) for f, v in zip(floors, p)},
+            "score": {int(f): float(v) for f, v in zip(floors, score - score.max())},
+            "match_distance_db": dist, "error_probability": delta,
             "grid_probabilities": {int(f): float(v) for f, v in zip(floors, p_grid)}, "result": r}
 
 
@@ -239,5 +320,5 @@ def walk_errors_m(track_t_s: np.ndarray, track_m: np.ndarray, waypoint_t_s: np.n
 
 
 __all__ = ["TrackSettings", "ap_floor_rates", "build_fingerprints", "calibrate_floor", "floor_grid_options",
-           "identification_grid_options", "identify_floor", "offset_spread_rad", "run_default", "tracker_steps",
-           "walk_ap_log_likelihood", "walk_errors_m"]
+           "identification_calibration", "identification_grid_options", "identify_floor", "offset_spread_rad", "run_default", "tracker_steps",
+           "walk_ap_log_likelihood", "walk_errors_m", "walk_floor_evidence"]

@@ -14,6 +14,9 @@ the output's extension:
   "header_floor", "wifi_fixes" (as in the GeoJSON), "waypoints": {"t_s", "x_m", "y_m", "error_m"
   (null when the tracked floor is not the header's)} or null, "errors": {"mean_m", "median_m", "p90_m", "n_waypoints"} or null}]}``.
 
+``floor_probability`` is the calibrated probability of the walk's floor (1 when the floor was
+given; with ``--floor auto`` at most 1 − δ (F − 1) / F, ``fusion.floor_evidence.FloorCalibration``).
+
 Every file is written to a temporary name and renamed (never half-written).
 """
 

@@ -15,28 +15,10 @@
 #include <gtest/gtest.h>
 
 #include "indoorloc/core/validate.h"
+#include "grid_fixtures.h"
 
 namespace indoorloc::fusion {
 namespace {
-
-RowMatrixXd Box(double x0, double y0, double x1, double y1) {
-  RowMatrixXd r(4, 2);
-  r << x0, y0, x1, y0, x1, y1, x0, y1;
-  return r;
-}
-
-// A 60 x 40 m hall with a 10 x 10 m shop, on `floors` floors.
-FloorPlan Hall(int floors) {
-  std::vector<FloorGeometry> g;
-  for (int f = 0; f < floors; ++f) {
-    FloorGeometry fg;
-    fg.floor = f;
-    fg.outlines.push_back(Box(0, 0, 60, 40));
-    fg.obstacles.push_back(Box(20, 20, 30, 30));
-    g.push_back(fg);
-  }
-  return FloorPlan(g);
-}
 
 // A wandering walk: steps every ~0.5 s with slowly turning headings.
 std::vector<StepInput> Walk(int n, unsigned seed) {
@@ -106,7 +88,7 @@ void ExpectSessionEqualsBatch(const GridTracker& tracker, const std::vector<Step
 }
 
 TEST(GridFilterSessionTest, UnknownStartEqualsBatchFilterOnTwoFloors) {
-  const FloorPlan plan = Hall(2);
+  const FloorPlan plan = Hall(/*shop=*/true, 2);
   GridTrackerOptions o;
   o.heading_offset_bins = 5;
   o.heading_offset_sd_rad = 0.2;
@@ -119,7 +101,7 @@ TEST(GridFilterSessionTest, UnknownStartEqualsBatchFilterOnTwoFloors) {
 }
 
 TEST(GridFilterSessionTest, KnownStartScaleBinsAndMediansEqualBatch) {
-  const FloorPlan plan = Hall(2);
+  const FloorPlan plan = Hall(/*shop=*/true, 2);
   GridTrackerOptions o;
   o.heading_offset_bins = 3;
   o.scale_bins = 3;
@@ -142,7 +124,7 @@ TEST(GridFilterSessionTest, KnownStartScaleBinsAndMediansEqualBatch) {
 }
 
 TEST(GridFilterSessionTest, TrailingFixWaitsForTheNextStep) {
-  const FloorPlan plan = Hall(1);
+  const FloorPlan plan = Hall(/*shop=*/true, 1);
   const GridTracker tracker(&plan, GridTrackerOptions());
   const auto steps = Walk(10, 3);
   GridFilterSession session(&tracker);
@@ -156,7 +138,7 @@ TEST(GridFilterSessionTest, TrailingFixWaitsForTheNextStep) {
 }
 
 TEST(GridFilterSessionTest, RefusesEventsOutOfTimeOrder) {
-  const FloorPlan plan = Hall(1);
+  const FloorPlan plan = Hall(/*shop=*/true, 1);
   const GridTracker tracker(&plan, GridTrackerOptions());
   GridFilterSession session(&tracker);
   EXPECT_THROW(session.Estimate(), std::logic_error);

@@ -9,31 +9,16 @@
 
 #include "indoorloc/fusion/grid_tracker.h"
 
+#include "grid_fixtures.h"
+
 namespace indoorloc::fusion {
 namespace {
 
-RowMatrixXd Box(double x0, double y0, double x1, double y1) {
-  RowMatrixXd r(4, 2);
-  r << x0, y0, x1, y0, x1, y1, x0, y1;
-  return r;
-}
-
-FloorPlan Hall() {  // 60 x 20 m, floor 0
+FloorPlan NarrowHall() {  // 60 x 20 m, floor 0
   FloorGeometry g;
   g.floor = 0;
   g.outlines.push_back(Box(0, 0, 60, 20));
   return FloorPlan({g});
-}
-
-PositionFix Fix(double t, double x, double y, double sd) {
-  PositionFix f;
-  f.time_s = t;
-  f.means_m.resize(1, 2);
-  f.means_m << x, y;
-  f.sds_m = Eigen::VectorXd::Constant(1, sd);
-  f.weights = Eigen::VectorXd::Ones(1);
-  f.floors = Eigen::VectorXi::Constant(1, PositionFix::kAnyFloor);
-  return f;
 }
 
 // Survey positions on a regular lattice over x in [x0, x1] (every `step` metres, y 0.5..19.5).
@@ -57,7 +42,7 @@ GridTrackerOptions Options(double beta) {
 const std::vector<StepInput> kStill = {StepFromPolar(0.5, 0.0, 0.0, 0.01, 0.01)};
 
 TEST(GridSurveyAnchorsTest, ASurveyAtEveryCellCentreChangesNothing) {
-  const FloorPlan plan = Hall();
+  const FloorPlan plan = NarrowHall();
   const GridTracker plain(&plan, Options(0.5));
   const RowMatrixXd survey = Survey(0.5, 59.5, 1.0);  // the 1 m cells' centres
   const GridTracker anchored = plain.WithSurveyPositions(survey, Eigen::VectorXi::Zero(survey.rows()));
@@ -73,7 +58,7 @@ TEST(GridSurveyAnchorsTest, AFixAtTheSurveyEdgeReachesBeyondIt) {
   // Surveyed only at x <= 20; a fix at the survey's edge (x = 20). Plain, the walker is at the
   // fix; anchored with β = 0, every cell beyond the edge reads as its nearest surveyed place,
   // so the posterior spreads over x > 20 (where a walker seen at the edge may well be).
-  const FloorPlan plan = Hall();
+  const FloorPlan plan = NarrowHall();
   const RowMatrixXd survey = Survey(0.5, 20.0, 1.0);
   const Eigen::VectorXi floors = Eigen::VectorXi::Zero(survey.rows());
   const std::vector<PositionFix> fixes = {Fix(0.5, 20.0, 10.0, 2.0)};
@@ -96,7 +81,7 @@ TEST(GridSurveyAnchorsTest, AFixAtTheSurveyEdgeReachesBeyondIt) {
 }
 
 TEST(GridSurveyAnchorsTest, SameResultForAnyThreadCount) {
-  const FloorPlan plan = Hall();
+  const FloorPlan plan = NarrowHall();
   const RowMatrixXd survey = Survey(0.5, 25.0, 2.0);
   std::vector<StepInput> steps;
   for (int k = 0; k < 30; ++k) steps.push_back(StepFromPolar(0.5 * (k + 1), 0.7, 0.0, 0.05, 0.05));
@@ -120,7 +105,7 @@ TEST(GridSurveyAnchorsTest, SameResultForAnyThreadCount) {
 }
 
 TEST(GridSurveyAnchorsTest, ErrorsNameTheArgument) {
-  const FloorPlan plan = Hall();
+  const FloorPlan plan = NarrowHall();
   const GridTracker t(&plan, Options(0.5));
   auto message = [&](const RowMatrixXd& p, const Eigen::VectorXi& f) {
     try {

@@ -10,44 +10,16 @@
 
 #include <gtest/gtest.h>
 
+#include "grid_fixtures.h"
+
 namespace indoorloc::fusion {
 namespace {
-
-RowMatrixXd Box(double x0, double y0, double x1, double y1) {
-  RowMatrixXd r(4, 2);
-  r << x0, y0, x1, y0, x1, y1, x0, y1;
-  return r;
-}
-
-// A 60 x 40 m hall; optionally a 10 x 10 m shop at x 20..30, y 20..30.
-FloorPlan Hall(bool shop = false, int floors = 1) {
-  std::vector<FloorGeometry> g;
-  for (int f = 0; f < floors; ++f) {
-    FloorGeometry fg;
-    fg.floor = f;
-    fg.outlines.push_back(Box(0, 0, 60, 40));
-    if (shop) fg.obstacles.push_back(Box(20, 20, 30, 30));
-    g.push_back(fg);
-  }
-  return FloorPlan(g);
-}
 
 // Steps of length L every 0.5 s along heading h [rad] in the PDR frame.
 std::vector<StepInput> Straight(int n, double length_m, double heading_rad, double t0 = 0.0) {
   std::vector<StepInput> s;
   for (int k = 0; k < n; ++k) s.push_back(StepFromPolar(t0 + 0.5 * (k + 1), length_m, heading_rad, 0.05, 0.05));
   return s;
-}
-
-PositionFix Fix(double t, double x, double y, double sd, int floor = PositionFix::kAnyFloor) {
-  PositionFix f;
-  f.time_s = t;
-  f.means_m.resize(1, 2);
-  f.means_m << x, y;
-  f.sds_m = Eigen::VectorXd::Constant(1, sd);
-  f.weights = Eigen::VectorXd::Ones(1);
-  f.floors = Eigen::VectorXi::Constant(1, floor);
-  return f;
 }
 
 TEST(GridTrackerTest, KnownStartFollowsTheSteps) {
@@ -279,6 +251,37 @@ TEST(GridTrackerTest, WallsKeepTheTrackOutOfTheShop) {
   GridTrackerOptions narrow = o;
   narrow.start_position_sd_m = 0.1;  // e^-1250 at the shop's edge: nothing walkable
   EXPECT_THROW(GridTracker(&plan, narrow).Run(Straight(2, 0.7, 0.0), {}, start, false), std::runtime_error);
+}
+
+TEST(GridTrackerTest, SmootherGapsFallBackToTheFilterAndAreCounted) {
+  // A walker standing still, seen by ten tight fixes at x = 10 and then ten at x = 50: the
+  // fixes' outlier floors multiply, so the forward message keeps nothing near x = 50 before the
+  // switch and the backward message nothing near x = 10 after it. Where they share no cell the
+  // smoother has no estimate: the filtered one stands in (finite, not the grid's origin), and the
+  // summary counts those steps.
+  const FloorPlan plan = Hall();
+  GridTrackerOptions o;
+  o.heading_offset_sd_rad = 0.0;
+  o.fix.outlier_probability = 1e-3;
+  const GridTracker tracker(&plan, o);
+  std::vector<StepInput> steps;
+  std::vector<PositionFix> fixes;
+  for (int k = 0; k < 20; ++k) {
+    const double t = 0.5 * (k + 1);
+    fixes.push_back(Fix(t - 0.1, k < 10 ? 10.0 : 50.0, 20.0, 1.0));
+    steps.push_back(StepFromPolar(t, 0.0, 0.0, 0.01, 0.01));
+  }
+  const GridTrackResult r = tracker.Run(steps, fixes, TrackStart(), true);
+  EXPECT_GT(r.summary.smoother_gap_steps, 0);
+  EXPECT_NE(r.summary.BriefReport().find("smoother gap steps"), std::string::npos);
+  for (int k = 0; k < 20; ++k) {
+    ASSERT_TRUE(std::isfinite(r.smoothed_mean_m(k, 0))) << k;
+    EXPECT_GT(r.smoothed_mean_m(k, 0), 5.0) << k;  // never the grid's origin
+  }
+  // A consistent walk has none.
+  std::vector<PositionFix> same;
+  for (const PositionFix& f : fixes) same.push_back(Fix(f.time_s, 30.0, 20.0, 1.0));
+  EXPECT_EQ(tracker.Run(steps, same, TrackStart(), true).summary.smoother_gap_steps, 0);
 }
 
 TEST(GridTrackerTest, ErrorsNameTheArgument) {

@@ -1,5 +1,6 @@
-// Tests of the fusion tracker: motion model, WiFi observations, walls, degenerate weights,
-// determinism, recovery of a path with perfect inputs, and the backward smoother.
+// Tests of the fusion tracker: walls, degenerate weights, determinism, recovery of a path with
+// perfect inputs, corridor mode, the fixed-lag and backward smoothers. The motion model and the
+// WiFi likelihood have their own tests (step_motion_test.cc, wifi_likelihood_test.cc).
 #include "indoorloc/fusion/particle_tracker.h"
 
 #include <cmath>
@@ -11,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "expect_invalid.h"
+#include "room_fixture.h"
 
 #include "indoorloc/fusion/backward_smoother.h"
 #include "indoorloc/fusion/floor_plan.h"
@@ -24,73 +26,6 @@
 namespace indoorloc::fusion {
 namespace {
 
-RowMatrixXd Ring(std::initializer_list<std::pair<double, double>> pts) {
-  RowMatrixXd r(static_cast<Eigen::Index>(pts.size()), 2);
-  Eigen::Index i = 0;
-  for (const auto& p : pts) {
-    r(i, 0) = p.first;
-    r(i, 1) = p.second;
-    ++i;
-  }
-  return r;
-}
-
-// A 20 x 10 m room with a 4 x 4 m block in the middle (x 8..12, y 3..7) and a thin wall at
-// x = 16 from y = 0 to y = 7 (a door above it).
-FloorPlan RoomPlan(int floors = 1) {
-  std::vector<FloorGeometry> geometry;
-  for (int f = 0; f < floors; ++f) {
-    FloorGeometry g;
-    g.floor = f;
-    g.outlines.push_back(Ring({{0, 0}, {20, 0}, {20, 10}, {0, 10}}));
-    g.obstacles.push_back(Ring({{8, 3}, {12, 3}, {12, 7}, {8, 7}}));
-    g.walls = RowMatrixXd(1, 4);
-    g.walls << 16, 0, 16, 7;
-    geometry.push_back(g);
-  }
-  return FloorPlan(geometry);
-}
-
-// Four APs at the room's corners, log-distance means on a 1 m lattice.
-wifi::SignalMap RoomMap() {
-  const double aps[4][2] = {{0, 0}, {20, 0}, {0, 10}, {20, 10}};
-  const int nx = 21, ny = 11;
-  RowMatrixXd pos(nx * ny, 2), mean(nx * ny, 4), var(nx * ny, 4);
-  for (int i = 0; i < nx; ++i) {
-    for (int j = 0; j < ny; ++j) {
-      const int r = i * ny + j;
-      pos.row(r) << i, j;
-      for (int a = 0; a < 4; ++a) {
-        mean(r, a) = -40.0 - 25.0 * std::log10(std::hypot(i - aps[a][0], j - aps[a][1]) + 1.0);
-        var(r, a) = 4.0;
-      }
-    }
-  }
-  return wifi::SignalMap(pos, Eigen::VectorXi::Zero(nx * ny), mean, var);
-}
-
-WifiObservation ScanAt(const wifi::RssModel& model, double t, double x, double y) {
-  Eigen::VectorXd mean, var;
-  int hint = -1;
-  model.MeanAndVariance(Eigen::Vector2d(x, y), 0, &mean, &var, &hint);
-  WifiObservation o;
-  o.time_s = t;
-  for (int a = 0; a < mean.size(); ++a) {
-    o.access_points.push_back(a);
-    o.rss_dbm.push_back(mean[a]);
-  }
-  o.num_heard = static_cast<int>(mean.size());
-  return o;
-}
-
-StepInput Step(double t, double dx, double dy, double sd = 0.02) {
-  StepInput s;
-  s.time_s = t;
-  s.displacement_m = Eigen::Vector2d(dx, dy);
-  s.covariance_m2 = sd * sd * Eigen::Matrix2d::Identity();
-  return s;
-}
-
 TrackerOptions SmallOptions(int n = 2000) {
   TrackerOptions o;
   o.num_particles = n;
@@ -99,146 +34,6 @@ TrackerOptions SmallOptions(int n = 2000) {
   o.start_heading_offset_sd_rad = 0.01;
   o.start_scale_sd = 0.01;
   return o;
-}
-
-TEST(StepMotion, PolarStepMatchesJacobianPropagation) {
-  const StepInput s = StepFromPolar(1.0, 0.7, 0.5, 0.05, 0.1);
-  EXPECT_NEAR(s.displacement_m.x(), 0.7 * std::cos(0.5), 1e-12);
-  EXPECT_NEAR(s.displacement_m.y(), 0.7 * std::sin(0.5), 1e-12);
-  // Variance along the heading is σ_L², across it (L σ_h)².
-  const Eigen::Vector2d along(std::cos(0.5), std::sin(0.5)), across(-std::sin(0.5), std::cos(0.5));
-  EXPECT_NEAR(along.dot(s.covariance_m2 * along), 0.05 * 0.05, 1e-12);
-  EXPECT_NEAR(across.dot(s.covariance_m2 * across), 0.07 * 0.07, 1e-12);
-}
-
-TEST(StepMotion, SamplesHaveTheModelMeanAndCovariance) {
-  StepMotionOptions o;
-  o.heading_offset_walk_rad = 1e-9;
-  o.scale_walk = 1e-9;
-  o.position_noise_m = 0.05;
-  const StepInput s = Step(0.0, 0.7, 0.0, 0.1);
-  const StepMotion motion(s, o);
-  RandomStream rng(3);
-  const int n = 200000;
-  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
-  std::vector<Eigen::Vector2d> draws(n);
-  for (int i = 0; i < n; ++i) {
-    double no, ns;
-    motion.Sample(M_PI / 2, 1.2, rng, &no, &ns, &draws[i]);
-    mean += draws[i] / n;
-  }
-  for (const auto& d : draws) cov += (d - mean) * (d - mean).transpose() / n;
-  // Rotated by 90 degrees and scaled by 1.2: mean (0, 0.84), covariance 1.44 (0.1² + 0.05²) I.
-  EXPECT_NEAR(mean.x(), 0.0, 2e-3);
-  EXPECT_NEAR(mean.y(), 0.84, 2e-3);
-  const double v = 1.44 * (0.01 + 0.0025);
-  EXPECT_NEAR(cov(0, 0), v, 0.03 * v);
-  EXPECT_NEAR(cov(1, 1), v, 0.03 * v);
-}
-
-TEST(StepMotion, TransitionDensityIsTheGaussianOfTheModel) {
-  StepMotionOptions o;
-  const StepInput s = Step(0.0, 0.6, 0.2, 0.1);
-  const StepMotion motion(s, o);
-  const Eigen::Vector2d from(1.0, 2.0);
-  const double off = 0.3, sc = 1.1;
-  // The mean successor has the highest density among successors with the same (o', s').
-  const Eigen::Matrix2d r = Eigen::Rotation2Dd(off).toRotationMatrix();
-  const Eigen::Vector2d to = from + sc * r * s.displacement_m;
-  const double at_mean = motion.TransitionLogDensity(from, off, sc, to, off, sc);
-  EXPECT_NEAR(at_mean, 0.0, 1e-12);
-  // Off by one standard deviation along x of the step frame: -1/2.
-  const double sd = std::sqrt(0.01 + o.position_noise_m * o.position_noise_m);
-  const Eigen::Vector2d to1 = from + sc * r * (s.displacement_m + Eigen::Vector2d(sd, 0.0));
-  EXPECT_NEAR(motion.TransitionLogDensity(from, off, sc, to1, off, sc), -0.5, 1e-9);
-  // The offset walk: one σ_o of offset change costs -1/2 (position term evaluated at o').
-  const Eigen::Matrix2d r2 = Eigen::Rotation2Dd(off + o.heading_offset_walk_rad).toRotationMatrix();
-  const Eigen::Vector2d to2 = from + sc * r2 * s.displacement_m;
-  EXPECT_NEAR(motion.TransitionLogDensity(from, off, sc, to2, off + o.heading_offset_walk_rad, sc), -0.5, 1e-9);
-}
-
-TEST(StepMotion, RejectsBadSteps) {
-  StepInput s = Step(0.0, std::nan(""), 0.0);
-  EXPECT_THROW(CheckStepInput(s, "step"), std::invalid_argument);
-  s = Step(0.0, 0.5, 0.0);
-  s.covariance_m2(0, 1) = 1.0;
-  EXPECT_THROW(CheckStepInput(s, "step"), std::invalid_argument);  // not symmetric
-  s.covariance_m2 << 1.0, 2.0, 2.0, 1.0;
-  EXPECT_THROW(CheckStepInput(s, "step"), std::invalid_argument);  // indefinite
-}
-
-TEST(WifiLikelihood, EqualsTheRssModelsInterpolatedGaussianInsideAndOutsideTheHull) {
-  const wifi::RssModel model(RoomMap());
-  WifiLikelihoodOptions o;
-  o.tempering = 0.3;
-  o.max_term = 5.0;
-  const WifiLikelihood likelihood(model, o);
-  WifiObservation obs;
-  obs.access_points = {0, 2, 3};
-  obs.rss_dbm = {-55.0, -70.0, -62.0};
-  RandomStream rng(9);
-  for (int q = 0; q < 200; ++q) {
-    const double x = rng.Uniform(-5.0, 25.0), y = rng.Uniform(-5.0, 15.0);
-    Eigen::VectorXd mean, var;
-    int hint = -1;
-    model.MeanAndVariance(Eigen::Vector2d(x, y), 0, &mean, &var, &hint);
-    double expected = 0.0;
-    for (size_t i = 0; i < obs.access_points.size(); ++i) {
-      const int a = obs.access_points[i];
-      const double r = obs.rss_dbm[i] - mean[a];
-      expected -= 0.5 * std::log(2.0 * M_PI * var[a]) + std::min(0.5 * r * r / var[a], 5.0);
-    }
-    EXPECT_NEAR(likelihood.LogLikelihood(x, y, 0, obs), 0.3 * expected, 1e-9) << x << ", " << y;
-  }
-  EXPECT_EQ(likelihood.LogLikelihood(1.0, 1.0, 0, WifiObservation()), 0.0);
-}
-
-TEST(WifiObservations, ScanTimeModeDropsStaleReadings) {
-  Eigen::VectorXd t(2);
-  t << 1.0, 3.0;
-  RowMatrixXd rss(2, 3), ages(2, 3);
-  rss << -50, std::nan(""), -60, -55, -65, std::nan("");
-  ages << 0.5, std::nan(""), 9.0, 0.0, 1.0, std::nan("");
-  WifiLikelihoodOptions o;
-  o.max_age_s = 4.0;
-  WifiReadingCounts c;
-  const auto obs = MakeWifiObservations(t, rss, ages, o, /*at_own_time=*/false, &c);
-  ASSERT_EQ(obs.size(), 2u);
-  EXPECT_EQ(c.dropped_stale, 1);
-  EXPECT_EQ(c.heard, 3);
-  EXPECT_EQ(c.not_heard, 2);
-  EXPECT_EQ(obs[0].num_heard, 1);  // -60 (9 s old) dropped; AP 1 not heard
-  EXPECT_EQ(obs[0].access_points.size(), 2u);
-}
-
-TEST(WifiObservations, OwnTimeModeRetimesReadings) {
-  Eigen::VectorXd t(1);
-  t << 10.0;
-  RowMatrixXd rss(1, 3), ages(1, 3);
-  rss << -50, -60, std::nan("");
-  ages << 0.0, 6.0, std::nan("");
-  WifiLikelihoodOptions o;
-  o.use_not_heard = false;
-  const auto obs = MakeWifiObservations(t, rss, ages, o, /*at_own_time=*/true);
-  ASSERT_EQ(obs.size(), 2u);
-  EXPECT_DOUBLE_EQ(obs[0].time_s, 4.0);
-  EXPECT_EQ(obs[0].access_points, std::vector<int>({1}));
-  EXPECT_DOUBLE_EQ(obs[1].time_s, 10.0);
-  EXPECT_EQ(obs[1].access_points, std::vector<int>({0}));
-}
-
-TEST(WifiObservations, RejectsBadInput) {
-  Eigen::VectorXd t(2);
-  t << 2.0, 1.0;
-  RowMatrixXd rss = RowMatrixXd::Constant(2, 2, -50.0);
-  WifiLikelihoodOptions o;
-  EXPECT_THROW(MakeWifiObservations(t, rss, RowMatrixXd(0, 0), o, false), std::invalid_argument);  // time goes back
-  t << 1.0, 2.0;
-  RowMatrixXd ages = RowMatrixXd::Constant(2, 2, -1.0);
-  EXPECT_THROW(MakeWifiObservations(t, rss, ages, o, false), std::invalid_argument);  // negative age
-  rss(0, 0) = std::numeric_limits<double>::infinity();
-  EXPECT_THROW(MakeWifiObservations(t, rss, RowMatrixXd(0, 0), o, false), std::invalid_argument);
 }
 
 TEST(ParticleTracker, PerfectStepsRecoverThePath) {

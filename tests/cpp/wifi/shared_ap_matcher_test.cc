@@ -157,6 +157,9 @@ TEST(SharedApMatcher, NearestIsTheFullComputationBitForBit) {
     }
   }
   int compared = 0;
+  // Whole dBm (as phones report) take the index's one-byte storage; fractions the double one.
+  SharedApRowMatrixXd whole = refs.array().round();
+  for (const SharedApRowMatrixXd* references : {&refs, &whole})
   for (double beta : {0.0, 5.0}) {
     for (double penalty : {0.0, 160.0}) {
       for (int k : {1, 7, 20}) {
@@ -164,7 +167,7 @@ TEST(SharedApMatcher, NearestIsTheFullComputationBitForBit) {
         options.strength_scale_db = beta;
         options.penalty_db = penalty;
         options.k = k;
-        const SharedApMatcher matcher(refs, g, options);
+        const SharedApMatcher matcher(*references, g, options);
         const SharedApNeighbours nn = matcher.Nearest(queries);
         const SharedApRowMatrixXd d = matcher.Dissimilarity(queries);
         for (Eigen::Index q = 0; q < queries.rows(); ++q) {
@@ -183,7 +186,39 @@ TEST(SharedApMatcher, NearestIsTheFullComputationBitForBit) {
       }
     }
   }
-  EXPECT_GT(compared, 10000);
+  EXPECT_GT(compared, 20000);
+  // The one-byte storage gives the doubles' bits: the same whole-dBm references with one more
+  // reference at a fraction of a dB (which forces the double storage) give the same d.
+  SharedApRowMatrixXd mixed(whole.rows() + 1, whole.cols());
+  mixed.topRows(whole.rows()) = whole;
+  mixed.bottomRows(1).setConstant(kNaN);
+  mixed(whole.rows(), 5) = -50.5;
+  const SharedApRowMatrixXd d_compact = SharedApMatcher(whole, g).Dissimilarity(queries);
+  const SharedApRowMatrixXd d_double = SharedApMatcher(mixed, g).Dissimilarity(queries);
+  EXPECT_TRUE((d_compact.array() == d_double.leftCols(whole.rows()).array()).all());
+}
+
+// More than 65,536 references: reference rows take four bytes in the index instead of two.
+TEST(SharedApMatcher, NearestIsTheFullComputationWithManyReferences) {
+  const SharedApRowMatrixXd refs = RandomFingerprints(70000, 12, 0.3, 31).array().round();
+  const SharedApRowMatrixXd queries = RandomFingerprints(12, 12, 0.6, 32);
+  SharedApMatcherOptions options;
+  options.k = 9;
+  const SharedApMatcher matcher(refs, RandomWeights(12, 33), options);
+  const SharedApNeighbours nn = matcher.Nearest(queries);
+  const SharedApRowMatrixXd d = matcher.Dissimilarity(queries);
+  for (Eigen::Index q = 0; q < queries.rows(); ++q) {
+    std::vector<std::pair<double, Eigen::Index>> all;
+    for (Eigen::Index j = 0; j < refs.rows(); ++j) {
+      if (std::isfinite(d(q, j))) all.emplace_back(d(q, j), j);
+    }
+    std::sort(all.begin(), all.end());
+    ASSERT_GE(all.size(), 9u);
+    for (Eigen::Index m = 0; m < 9; ++m) {
+      ASSERT_EQ(nn.index(q, m), all[m].second) << "query " << q << " rank " << m;
+      ASSERT_EQ(nn.distance_db(q, m), all[m].first);
+    }
+  }
 }
 
 TEST(SharedApMatcher, QueryHearingNothingKnownGetsInfiniteDistancesAndDistinctFillers) {

@@ -149,6 +149,11 @@ struct GridTrackSummary {
   int layers = 0;           ///< floors x offset bins x scale bins actually run
   long long cells = 0;      ///< grid cells summed over floors
   int dead_layers = 0;      ///< layers whose every cell was ruled out (hard walls)
+  /// Steps at which the smoother had no estimate in some layer of the walk's posterior: the
+  /// forward and backward messages shared no cell (each flushed below 1e-30 of its scale), i.e.
+  /// the walk before and after the step cannot be joined by the motion model (steps lost, a fix
+  /// far off). The filtered estimate stands in there; > 0 says the smoothed track is unreliable.
+  int smoother_gap_steps = 0;
   double log_evidence = 0;  ///< log p(fixes | steps), tempered fixes, over all layers
   double memory_bytes = 0;  ///< grids kept at the peak
   double seconds = 0;
