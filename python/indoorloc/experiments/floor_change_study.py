@@ -18,15 +18,13 @@ floor, the r best on the walks and pairs without that floor is scored on those w
 
 from __future__ import annotations
 
-import argparse
-import json
-import time
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Sequence
 
 import numpy as np
 
 from indoorloc.experiments import fusion_real as fr
+from indoorloc.experiments import study_cli
 from indoorloc.fusion import floor_evidence, site_model
 from indoorloc.fusion import wifi_fixes as wfx
 from indoorloc.fusion.floor_sequence import floor_sequence
@@ -130,23 +128,8 @@ def markdown(result: dict) -> str:
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--data-root", default=None)
-    ap.add_argument("--floors", nargs="*", default=[])
-    ap.add_argument("--json", default=None)
-    ap.add_argument("--markdown", default=None)
-    args = ap.parse_args(argv)
-    tic = time.perf_counter()
-    result = select_rate(query_evidence(args.data_root, args.floors))
-    result["seconds"] = round(time.perf_counter() - tic, 1)
-    text = markdown(result)
-    print(text)
-    for path, content in ((args.json, lambda: json.dumps(result, indent=1)), (args.markdown, lambda: text)):
-        if path:
-            tmp = Path(str(path) + ".tmp")
-            tmp.write_text(content() + "\n")
-            tmp.replace(path)
-    return 0
+    return study_cli.run_study(argv, __doc__.split("\n")[0],
+                               lambda root, floors: select_rate(query_evidence(root, floors)), markdown)
 
 
 if __name__ == "__main__":

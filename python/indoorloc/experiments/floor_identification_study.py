@@ -28,11 +28,8 @@ the probability reported for the chosen floor: walks, mean reported, fraction ri
 
 from __future__ import annotations
 
-import argparse
 import itertools
-import json
 import math
-import time
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Sequence
 
@@ -41,6 +38,7 @@ import numpy as np
 from indoorloc.fusion import wifi_fixes as wfx
 from indoorloc.fusion import floor_evidence, site_model
 from indoorloc.experiments import fusion_real as fr
+from indoorloc.experiments import study_cli
 
 #: (m strongest APs, α rate floor, ε outlier probability) of the AP evidence, and λ its weight
 #: (0: the grid filter alone). Edges moved out once (m 20 -> 50, α 0.03 -> 0.1, ε 0.4 -> 0.6).
@@ -271,23 +269,8 @@ def _jsonable(x):
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--data-root", default=None)
-    ap.add_argument("--floors", nargs="*", default=[])
-    ap.add_argument("--json", default=None)
-    ap.add_argument("--markdown", default=None)
-    args = ap.parse_args(argv)
-    tic = time.perf_counter()
-    result = select(walk_evidence(args.data_root, args.floors))
-    result["seconds"] = round(time.perf_counter() - tic, 1)
-    text = markdown(result)
-    print(text)
-    for path, content in ((args.json, lambda: json.dumps(_jsonable(result), indent=1)), (args.markdown, lambda: text)):
-        if path:
-            tmp = Path(str(path) + ".tmp")
-            tmp.write_text(content() + "\n")
-            tmp.replace(path)
-    return 0
+    return study_cli.run_study(argv, __doc__.split("\n")[0],
+                               lambda root, floors: select(walk_evidence(root, floors)), markdown, _jsonable)
 
 
 if __name__ == "__main__":

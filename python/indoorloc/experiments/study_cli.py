@@ -1,0 +1,37 @@
+"""The command line the floor studies share (``floor_identification_study``, ``floor_change_study``):
+``--data-root``, ``--floors``, ``--json``, ``--markdown``; the study computed, timed, its Markdown
+printed, and the JSON and Markdown written atomically (``io.atomic_file.write_text_atomic``)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from typing import Any, Callable, Dict, Optional, Sequence
+
+from indoorloc.io.atomic_file import write_text_atomic
+
+
+def run_study(argv: Optional[Sequence[str]], description: str,
+              compute: Callable[[Optional[str], Sequence[str]], Dict[str, Any]],
+              markdown: Callable[[Dict[str, Any]], str],
+              jsonable: Callable[[Dict[str, Any]], Any] = lambda result: result) -> int:
+    """Parses ``argv``, runs ``compute(data_root, floors)`` (its result gains ``seconds``, the wall
+    time [s]), prints ``markdown(result)`` and writes ``--json`` (``jsonable(result)``) and
+    ``--markdown`` if given. Returns the exit status 0."""
+    ap = argparse.ArgumentParser(description=description)
+    ap.add_argument("--data-root", default=None)
+    ap.add_argument("--floors", nargs="*", default=[])
+    ap.add_argument("--json", default=None)
+    ap.add_argument("--markdown", default=None)
+    args = ap.parse_args(argv)
+    tic = time.perf_counter()
+    result = compute(args.data_root, args.floors)
+    result["seconds"] = round(time.perf_counter() - tic, 1)
+    text = markdown(result)
+    print(text)
+    if args.json:
+        write_text_atomic(args.json, json.dumps(jsonable(result), indent=1) + "\n")
+    if args.markdown:
+        write_text_atomic(args.markdown, text + "\n")
+    return 0
