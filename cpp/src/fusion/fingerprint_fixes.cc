@@ -102,10 +102,9 @@ std::size_t FingerprintFixer::num_remembered_measurements() const {
   return n;
 }
 
-bool FingerprintFixer::AddScan(double time_s, const std::vector<std::string>& bssids,
-                               const Eigen::Ref<const Eigen::VectorXd>& rssi_dbm,
-                               const Eigen::Ref<const Eigen::VectorXd>& last_seen_s, ScanQuery* query) {
-  State& s = *state_;
+void FingerprintFixer::CheckScan(double time_s, const std::vector<std::string>& bssids,
+                                 const Eigen::Ref<const Eigen::VectorXd>& rssi_dbm,
+                                 const Eigen::Ref<const Eigen::VectorXd>& last_seen_s) {
   const std::size_t m = bssids.size();
   if (static_cast<std::size_t>(rssi_dbm.size()) != m || static_cast<std::size_t>(last_seen_s.size()) != m) {
     ThrowInvalidArgument("bssids", "bssids, rssi_dbm and last_seen_s must have one entry per reading, got " +
@@ -117,6 +116,14 @@ bool FingerprintFixer::AddScan(double time_s, const std::vector<std::string>& bs
   CheckFinite(last_seen_s, "last_seen_s");
   CheckArgument(last_seen_s.size() == 0 || last_seen_s.cwiseAbs().maxCoeff() < 1e12, "last_seen_s",
                 "must be within +-1e12 s");
+}
+
+bool FingerprintFixer::AddScan(double time_s, const std::vector<std::string>& bssids,
+                               const Eigen::Ref<const Eigen::VectorXd>& rssi_dbm,
+                               const Eigen::Ref<const Eigen::VectorXd>& last_seen_s, ScanQuery* query) {
+  State& s = *state_;
+  const std::size_t m = bssids.size();
+  CheckScan(time_s, bssids, rssi_dbm, last_seen_s);
   CheckArgument(time_s >= s.latest_s, "time_s", "scans must come in non-decreasing time");
   s.latest_s = time_s;
   const double lo = time_s - s.options.query_window_s;

@@ -202,15 +202,8 @@ bool LiveSession::AddWifiScan(double time_s, const std::vector<std::string>& bss
                               const Eigen::Ref<const Eigen::VectorXd>& rssi_dbm,
                               const Eigen::Ref<const Eigen::VectorXd>& last_seen_s) {
   State& s = *state_;
-  const std::size_t m = bssids.size();
-  if (static_cast<std::size_t>(rssi_dbm.size()) != m || static_cast<std::size_t>(last_seen_s.size()) != m) {
-    ThrowInvalidArgument("bssids", "bssids, rssi_dbm and last_seen_s must have one entry per reading, got " +
-                                       std::to_string(m) + ", " + std::to_string(rssi_dbm.size()) + ", " +
-                                       std::to_string(last_seen_s.size()));
-  }
-  CheckArgument(rssi_dbm.allFinite() && last_seen_s.allFinite(), "rssi_dbm",
-                "rssi_dbm and last_seen_s must be finite");
   s.CheckTime(kWifi, time_s);
+  FingerprintFixer::CheckScan(time_s, bssids, rssi_dbm, last_seen_s);  // before the scan is accepted
   s.Accept(kWifi, time_s);
   ++s.summary.scans;
   if (!s.fixer) return s.has_estimate;

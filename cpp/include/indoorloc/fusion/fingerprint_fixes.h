@@ -68,6 +68,12 @@ class FingerprintFixer {
   FingerprintFixer(FingerprintFixer&&) noexcept;
   FingerprintFixer& operator=(FingerprintFixer&&) noexcept;
 
+  /// Checks a scan's readings as AddScan does (one entry per reading, finite values, time_s finite,
+  /// last-seen times within ±1e12 s) without adding them: std::invalid_argument naming the argument.
+  static void CheckScan(double time_s, const std::vector<std::string>& bssids,
+                        const Eigen::Ref<const Eigen::VectorXd>& rssi_dbm,
+                        const Eigen::Ref<const Eigen::VectorXd>& last_seen_s);
+
   /// Adds a scan's readings (bssids, rssi_dbm, last_seen_s: one entry per reading, finite) reported
   /// at time_s (non-decreasing over calls) and returns its query; false when it has fewer than
   /// min_aps known APs. Throws std::invalid_argument naming the argument on bad input (state unchanged).
