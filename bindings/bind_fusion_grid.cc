@@ -147,9 +147,14 @@ Build once per plan and options (keeps a reference to the plan); ``run`` is thre
            "Walkable fraction of every cell (rows, columns), row 0 at the lowest y.")
       .def(
           "with_survey_positions",
-          [](const GridTracker& t, const RowMatrixXd& positions_m, const Eigen::VectorXi& floor_numbers) {
+          [](const GridTracker& t, const py::object& positions_m, const py::object& floor_numbers) {
+            // The project's checked conversions (a ValueError naming the argument for anything that
+            // is not a finite (N, 2) array / N integers), not pybind11's Eigen caster.
+            const MatrixArg positions = ToMatrix(positions_m, "positions_m", -1, 2);
+            const Eigen::VectorXi floors = ToIntVector(floor_numbers, "floor_numbers");
+            const RowMatrixXd p = positions.map;
             py::gil_scoped_release release;
-            return t.WithSurveyPositions(positions_m, floor_numbers);
+            return t.WithSurveyPositions(p, floors);
           },
           py::arg("positions_m"), py::arg("floor_numbers"), py::keep_alive<0, 1>(), R"doc(
 A tracker on the same grids whose fixes are evaluated at survey-anchored positions

@@ -219,7 +219,13 @@ def test_survey_anchored_fixes_reach_beyond_the_survey():
         anchored.with_survey_positions(np.zeros((3, 3)), np.zeros(3, dtype=np.int64))
     with pytest.raises(ValueError, match="floor_numbers"):
         anchored.with_survey_positions(survey, floors[:-1])
-    with pytest.raises(ValueError, match="finite"):
+    with pytest.raises(ValueError, match="positions_m.*NaN"):
         anchored.with_survey_positions(np.full((2, 2), np.nan), np.zeros(2, dtype=np.int64))
+    # Not arrays of numbers: a ValueError naming the argument (pybind11's own Eigen caster crashed
+    # on a string).
+    with pytest.raises(ValueError, match="positions_m"):
+        anchored.with_survey_positions("abc", [0])
+    with pytest.raises(ValueError, match="floor_numbers"):
+        anchored.with_survey_positions(survey[:1], [0.5])
     with pytest.raises(ValueError, match="fix_survey_distance_factor"):
         fusion.GridTrackerOptions(fix_survey_distance_factor=1.5)
