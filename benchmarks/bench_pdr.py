@@ -57,7 +57,7 @@ def run(quick: bool = False) -> dict:
     mag = np.ascontiguousarray(30.0 * np.tanh(gyro) + np.array([20.0, 0.0, -40.0]))
     steps, _ = pdr.steps_acceleration(acc, rate)
     steps = np.asarray(steps)
-    stance = pdr.shoe_detector(acc, gyro, threshold=3e5)
+    stance = pdr.shoe_detector(acc, gyro, options=pdr.ShoeOptions(threshold=3e5))
     quats = pdr.attitude_mahony(time_s, acc, gyro)["quaternions_wxyz"]
     stance_steps = np.flatnonzero(stance[1:] & ~stance[:-1]) + 1
     cases = {
@@ -67,10 +67,10 @@ def run(quick: bool = False) -> dict:
         "Weinberg stride length (eq. 4, 3 Hz Butterworth)": lambda: pdr.weinberg_stride_lengths(acc, rate, steps),
         "acceleration detector + Weinberg": lambda: pdr.weinberg_stride_lengths(
             acc, rate, pdr.steps_acceleration(acc, rate)[0]),
-        "SHOE zero-velocity detector": lambda: pdr.shoe_detector(acc, gyro, threshold=3e5),
+        "SHOE zero-velocity detector": lambda: pdr.shoe_detector(acc, gyro, options=pdr.ShoeOptions(threshold=3e5)),
         "ZUPT EKF": lambda: pdr.zupt_ekf(time_s, acc, gyro, stance),
-        "ZUPT EKF + RTS smoother": lambda: pdr.zupt_ekf(time_s, acc, gyro, stance, smooth=True),
-        "SHOE + ZUPT EKF": lambda: pdr.zupt_ekf(time_s, acc, gyro, pdr.shoe_detector(acc, gyro, threshold=3e5)),
+        "ZUPT EKF + RTS smoother": lambda: pdr.zupt_ekf(time_s, acc, gyro, stance, options=pdr.ZuptEkfOptions(smooth=True)),
+        "SHOE + ZUPT EKF": lambda: pdr.zupt_ekf(time_s, acc, gyro, pdr.shoe_detector(acc, gyro, options=pdr.ShoeOptions(threshold=3e5))),
         "Mahony attitude filter": lambda: pdr.attitude_mahony(time_s, acc, gyro),
         "INS-ZUPT increments (eq. 5)": lambda: pdr.ins_zupt_increments(time_s, acc, quats, stance_steps),
     }

@@ -15,7 +15,7 @@ import numpy as np
 
 from timing import best_seconds
 
-from indoorloc import wifi_matcher as wm
+from indoorloc.wifi import matcher as wifi_matcher
 
 N_REFS = 3958
 N_APS = 2491
@@ -35,14 +35,15 @@ def run(quick: bool = False) -> dict:
     aps = rng.uniform([0, 0], [200, 120], (N_APS, 2))
     refs = synthetic_fingerprints(N_REFS, aps, rng)
     queries = synthetic_fingerprints(N_QUERIES, aps, rng)
-    index = wm.ReferenceIndex.build(refs, rng.uniform(0.5, 2.0, N_APS), 5.0)
+    index = wifi_matcher.ReferenceIndex.build(refs, rng.uniform(0.5, 2.0, N_APS), 5.0)
     repeat = 1 if quick else 3
     pairs = N_REFS * N_QUERIES
-    t_numpy = best_seconds(lambda: wm.knn(wm.shared_dissimilarity_numpy(queries, index, 160.0), 20, 3.0), repeat)
+    t_numpy = best_seconds(
+        lambda: wifi_matcher.knn(wifi_matcher.shared_dissimilarity_numpy(queries, index, 160.0), 20, 3.0), repeat)
     index.matcher(160.0, 20, 3.0)  # built once per database, outside the timing (as the numpy CSR is not)
-    t_one = best_seconds(lambda: wm.shared_knn(queries, index, 160.0, 20, 3.0, num_threads=1), repeat)
-    t_two = best_seconds(lambda: wm.shared_knn(queries, index, 160.0, 20, 3.0, num_threads=2), repeat)
-    t_full = best_seconds(lambda: wm.shared_dissimilarity(queries, index, 160.0, num_threads=1), repeat)
+    t_one = best_seconds(lambda: wifi_matcher.shared_knn(queries, index, 160.0, 20, 3.0, num_threads=1), repeat)
+    t_two = best_seconds(lambda: wifi_matcher.shared_knn(queries, index, 160.0, 20, 3.0, num_threads=2), repeat)
+    t_full = best_seconds(lambda: wifi_matcher.shared_dissimilarity(queries, index, 160.0, num_threads=1), repeat)
     return {
         "title": "Shared-AP matcher: compiled kNN vs numpy/scipy (pairs per second)",
         "references": N_REFS, "aps": N_APS, "queries": N_QUERIES,

@@ -56,4 +56,12 @@ int ToInt(const py::handle& obj, const char* name, long long lo, long long hi);
 /// Copies an Eigen vector into a new numpy array.
 py::array_t<double> ToNumpy(const Eigen::Ref<const Eigen::VectorXd>& v);
 
+/// `work()` with the GIL released (it must touch no Python object); its C++ result is returned
+/// after the GIL is taken back.
+template <typename Work>
+auto WithoutGil(Work&& work) {
+  py::gil_scoped_release release;
+  return work();
+}
+
 }  // namespace indoorloc::bindings

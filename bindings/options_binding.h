@@ -97,6 +97,39 @@ inline py::dict FieldsFromCall(const py::args& args, const py::kwargs& kwargs, c
   return fields;
 }
 
+/// The `options=` argument of a bound function: None gives the C++ defaults, else an instance of the
+/// bound Options class (TypeError naming the argument otherwise). `fields` are the option fields the
+/// function once took as separate keywords (`zupt_ekf(..., smooth=True)`): they still work for one
+/// release, with a DeprecationWarning, and change a copy of `options` (validated, errors naming the
+/// field). An unknown keyword is a TypeError, as for any Python function. The algorithm validates
+/// the options it is given itself.
+template <typename T>
+T OptionsArgument(const py::object& options, const py::kwargs& fields, const char* function) {
+  const std::string type_name = py::str(py::type::of<T>().attr("__name__"));
+  T base;
+  if (!options.is_none()) {
+    if (!py::isinstance<T>(options)) {
+      throw py::type_error(std::string("indoorloc: argument 'options': ") + function + " needs a " + type_name +
+                           " (or None for the defaults), got " + Py_TYPE(options.ptr())->tp_name);
+    }
+    base = options.cast<T>();
+  }
+  if (fields.empty()) return base;
+  const py::list names = OptionFieldNames(py::type::of<T>());
+  std::string given;
+  for (const auto& item : fields) {
+    if (!names.contains(item.first)) {
+      throw py::type_error(std::string(function) + "() got an unexpected keyword argument '" +
+                           std::string(py::str(item.first)) + "'");
+    }
+    given += (given.empty() ? "" : ", ") + std::string(py::str(item.first)) + "=...";
+  }
+  const std::string message = std::string(function) + "(..., " + given + ") is deprecated; pass options=" + type_name +
+                              "(" + given + ") (docs/api_changes.md)";
+  if (PyErr_WarnEx(PyExc_DeprecationWarning, message.c_str(), 1) != 0) throw py::error_already_set();
+  return OptionsWithFields(base, fields, type_name.c_str());
+}
+
 /// Adds the kwargs constructor, replace, to_dict, validate, __repr__, __eq__ and pickling to a
 /// bound Options class whose fields are already bound. `legacy_order`: the field order of a former
 /// positional constructor, kept working with a DeprecationWarning (empty: keywords only).

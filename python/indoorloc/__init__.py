@@ -28,10 +28,11 @@ __all__ = ["__version__", "analog", "core", "fusion", "mapmatch", "metrics", "ne
 
 
 def __getattr__(name: str):  # noqa: ANN202 - module attribute hook
-    # indoorloc.pdr_handheld moved to indoorloc.pdr.handheld (docs/api_changes.md): the old
-    # attribute still works for one release, importing the deprecated alias (which warns).
-    if name == "pdr_handheld":
+    # indoorloc.pdr_handheld moved to indoorloc.pdr.handheld and indoorloc.wifi_matcher to
+    # indoorloc.wifi.matcher (docs/api_changes.md): the old attributes still work for one release,
+    # importing the deprecated alias (which warns).
+    if name in ("pdr_handheld", "wifi_matcher"):
         import importlib
 
-        return importlib.import_module("indoorloc.pdr_handheld")
+        return importlib.import_module(f"indoorloc.{name}")
     raise AttributeError(f"module 'indoorloc' has no attribute {name!r}")

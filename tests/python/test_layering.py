@@ -64,8 +64,8 @@ LAYERS: Tuple[Tuple[str, str, Tuple[str, ...]], ...] = (
 SUBSYSTEMS: Tuple[str, ...] = ("core", "analog", "mapmatch", "network", "pdr", "wifi", "fusion")
 #: Which other subsystems a subsystem may import (core: every subsystem may).
 SUBSYSTEM_NEIGHBOURS: Dict[str, Set[str]] = {"fusion": {"wifi", "pdr", "mapmatch"}}
-#: Top-level modules that belong to a subsystem: ``wifi_matcher`` until it moves into its package,
-#: and the deprecated aliases of moved modules (docs/api_changes.md lists the moves).
+#: Top-level modules that belong to a subsystem: the deprecated aliases of moved modules
+#: (docs/api_changes.md lists the moves).
 SUBSYSTEM_MODULES: Dict[str, str] = {
     "indoorloc.pdr_handheld": "pdr",
     "indoorloc.wifi_matcher": "wifi",

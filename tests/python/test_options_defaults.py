@@ -4,7 +4,9 @@
   constructor from the C++ defaults, replace, to_dict, validate, repr, ==, pickling).
 - Its stub lists exactly its fields and restates no default.
 - Every literal default a stub gives a function or method keyword equals the binding's, which is
-  read from a default-constructed C++ struct where the keyword is an option field (bind_pdr.cc).
+  read from a default-constructed C++ struct where the keyword is an option field.
+- Every bound Options default equals the one written in its C++ header (read from the header's
+  text, so that a binding that set a field of its own would be caught).
 """
 
 import ast
@@ -94,7 +96,11 @@ def test_options_stub_lists_the_fields_and_restates_no_default(modname, name, cl
     node = next(n for n in _stub_tree(modname).body if isinstance(n, ast.ClassDef) and n.name == name)
     annotated = {s.target.id for s in node.body if isinstance(s, ast.AnnAssign) and isinstance(s.target, ast.Name)}
     assert annotated == set(cls().to_dict()), f"stub of {name}: fields differ from the binding's"
-    init = next(f for f in node.body if isinstance(f, ast.FunctionDef) and f.name == "__init__")
+    # __init__ in the class or in a stub-only base (``class ZuptEkfOptions(_Options)``).
+    classes = {n.name: n for n in _stub_tree(modname).body if isinstance(n, ast.ClassDef)}
+    bodies = [node.body] + [classes[b.id].body for b in node.bases
+                            if isinstance(b, ast.Name) and b.id.startswith("_") and b.id in classes]
+    init = next(f for body in bodies for f in body if isinstance(f, ast.FunctionDef) and f.name == "__init__")
     assert not init.args.defaults and not any(init.args.kw_defaults), f"stub of {name} restates defaults"
 
 
@@ -189,3 +195,88 @@ def test_stub_default_equals_the_binding(modname, qual, arg, value):
         assert runtime == pytest.approx(value, rel=1e-12, abs=0.0), f"{modname}.{qual}({arg}=...)"
     else:
         assert runtime == value, f"{modname}.{qual}({arg}=...)"
+
+
+# ------------------------------------------------------------------ defaults against the headers
+
+HEADERS = Path(__file__).resolve().parents[2] / "cpp" / "include" / "indoorloc"
+
+
+def _struct_statements(name):
+    """The member statements (``type field = value``) at the top level of ``struct name``."""
+    for header in sorted(HEADERS.glob("*/*.h")):
+        text = re.sub(r"//[^\n]*|/\*.*?\*/", "", header.read_text(), flags=re.S)
+        m = re.search(rf"\bstruct {name}\s*\{{", text)
+        if not m:
+            continue
+        out, depth, start = [], 1, m.end()
+        for i in range(m.end(), len(text)):
+            c = text[i]
+            if c in "{([":
+                depth += 1
+            elif c in "})]":
+                depth -= 1
+                if depth == 0:
+                    return out
+            elif c == ";" and depth == 1:
+                out.append(" ".join(text[start:i].split()))
+                start = i + 1
+            if c in "})]" and depth == 1:
+                start = start  # a nested initializer ended inside the statement; keep collecting
+        return out
+    return None
+
+
+def _cpp_value(expr):
+    """A C++ literal or arithmetic of literals as a Python value; None for anything else."""
+    expr = expr.replace("'", "")
+    expr = re.sub(r"std::numeric_limits<double>::infinity\(\)", "inf", expr)
+    if expr in ("true", "false"):
+        return expr == "true"
+    if not re.fullmatch(r"[-+*/(). 0-9eEinf]+", expr) or re.search(r"[a-df-hj-z]", expr.replace("inf", "")):
+        return None
+    try:
+        return eval(expr.replace("inf", "float('inf')"), {"__builtins__": {"float": float}})
+    except Exception:  # noqa: BLE001 - not an expression of literals
+        return None
+
+
+def _header_defaults(name):
+    statements = _struct_statements(name)
+    if statements is None:
+        return None
+    out = {}
+    for st in statements:
+        m = re.fullmatch(r"(?:[\w:<>,]+\s+)+(\w+)\s*=\s*(.+)", st)
+        if m and "(" not in m.group(1):
+            value = _cpp_value(m.group(2))
+            if value is not None:
+                out[m.group(1)] = value
+    return out
+
+
+@pytest.mark.parametrize("modname,name,cls", OPTIONS, ids=[n for _, n, _ in OPTIONS])
+def test_bound_defaults_equal_the_cpp_header(modname, name, cls):
+    header = _header_defaults(name)
+    if header is None:
+        pytest.skip(f"{name} is not a struct of cpp/include/indoorloc (a binding-side class)")
+    bound = cls().to_dict()
+    checked = {k: v for k, v in header.items() if k in bound}
+    assert checked, f"{name}: no field of the binding has a literal default in its header"
+    for key, value in checked.items():
+        if isinstance(value, bool) or isinstance(bound[key], bool):
+            assert bound[key] is value, f"{name}.{key}: binding {bound[key]!r}, header {value!r}"
+        else:
+            assert bound[key] == pytest.approx(value, rel=1e-12, abs=0.0), (
+                f"{name}.{key}: binding {bound[key]!r}, header {value!r}")
+
+
+def test_most_bound_defaults_are_checked_against_a_header():
+    """The header check above reads literal defaults only; it must still reach most fields."""
+    total = checked = 0
+    for _, name, cls in OPTIONS:
+        header = _header_defaults(name) or {}
+        bound = cls().to_dict()
+        total += len(bound)
+        checked += len(set(header) & set(bound))
+    assert checked >= 0.8 * total, f"only {checked} of {total} bound option defaults found in the headers"

@@ -30,7 +30,7 @@ def test_weinberg_lengths_follow_eq_4_and_k_calibrates():
     acc = np.zeros((t.size, 3))
     acc[:, 2] = 9.81 + 1.5 * np.sin(2 * np.pi * 1.0 * t)
     steps = np.arange(150, 1400, 100)
-    lengths = pdr.weinberg_stride_lengths(acc, rate, steps, k=0.5, window_s=0.5)
+    lengths = pdr.weinberg_stride_lengths(acc, rate, steps, options=pdr.WeinbergOptions(k=0.5, window_s=0.5))
     np.testing.assert_allclose(lengths, 0.5 * 3.0 ** 0.25, rtol=0.01)
     iv = np.column_stack([steps - 50, steps + 50])
     f = pdr.weinberg_features(acc, rate, iv)

@@ -34,16 +34,17 @@ def _final_error(rec, positions):
 
 
 def _fixed_stance(rec, threshold):
-    return np.asarray(pdr.shoe_detector(rec.acc_mps2, rec.gyro_radps, window=recommended.SHOE_WINDOW, threshold=threshold,
-                                        sigma_acc_mps2=recommended.SHOE_SIGMA_ACC_MPS2,
-                                        sigma_gyro_radps=recommended.SHOE_SIGMA_GYRO_RADPS), dtype=bool)
+    options = pdr.ShoeOptions(window=recommended.SHOE_WINDOW, threshold=threshold,
+                              sigma_acc_mps2=recommended.SHOE_SIGMA_ACC_MPS2,
+                              sigma_gyro_radps=recommended.SHOE_SIGMA_GYRO_RADPS)
+    return np.asarray(pdr.shoe_detector(rec.acc_mps2, rec.gyro_radps, options=options), dtype=bool)
 
 
 # ------------------------------------------------------------------ the three failure modes
 def test_low_motion_walk_keeps_its_stance_and_a_lost_stance_is_flagged():
     rec = foot_gait(20, stance_rate_radps=0.3, seed=1)
     stance = _fixed_stance(rec, 1e4)  # what the old rule picked for a low-motion walk
-    bad = pdr.zupt_ekf(rec.time_s, rec.acc_mps2, rec.gyro_radps, stance, smooth=True)
+    bad = pdr.zupt_ekf(rec.time_s, rec.acc_mps2, rec.gyro_radps, stance, options=pdr.ZuptEkfOptions(smooth=True))
     assert bad["health"]["walking_stance_fraction"] < 0.15
     assert bad["health"]["implausible"] and bad["health"]["reasons"]
     assert _final_error(rec, bad["positions_m"]) > 0.3  # drifting
@@ -94,10 +95,11 @@ def test_guard_mirror_in_the_cv_harness_equals_the_cpp_rule():
     rec = foot_gait(10, stance_rate_radps=0.4, seed=4)
     st = cv.detector_statistics(rec)
     for base, frac in ((3e4, 0.3), (1e4, 0.4), (1e6, 0.2)):
-        det = pdr.zero_velocity(rec.acc_mps2, rec.gyro_radps, rec.rate_hz, rule="stance_guard",
-                                threshold=base, min_stance_fraction=frac,
-                                window=recommended.SHOE_WINDOW, sigma_acc_mps2=recommended.SHOE_SIGMA_ACC_MPS2,
-                                sigma_gyro_radps=recommended.SHOE_SIGMA_GYRO_RADPS)
+        options = pdr.ZeroVelocityOptions(rule="stance_guard", threshold=base, min_stance_fraction=frac,
+                                          window=recommended.SHOE_WINDOW,
+                                          sigma_acc_mps2=recommended.SHOE_SIGMA_ACC_MPS2,
+                                          sigma_gyro_radps=recommended.SHOE_SIGMA_GYRO_RADPS)
+        det = pdr.zero_velocity(rec.acc_mps2, rec.gyro_radps, rec.rate_hz, options=options)
         mine = cv._stance_guard(rec, st, {"log_gamma": math.log10(base), "min_fraction": frac})
         assert np.mean(mine != np.asarray(det["stance"])) < 1e-3
 
@@ -106,19 +108,20 @@ def test_zero_velocity_options_are_checked_by_name():
     rec = foot_gait(3, seed=5)
     acc, gyro, rate = rec.acc_mps2, rec.gyro_radps, rec.rate_hz
     with pytest.raises(ValueError, match="min_stance_fraction"):
-        pdr.zero_velocity(acc, gyro, rate, min_stance_fraction=1.5)
+        pdr.zero_velocity(acc, gyro, rate, options=pdr.ZeroVelocityOptions(min_stance_fraction=1.5))
     with pytest.raises(ValueError, match="max_threshold"):
-        pdr.zero_velocity(acc, gyro, rate, threshold=1e5, max_threshold=1e4)
+        pdr.ZeroVelocityOptions(threshold=1e5, max_threshold=1e4)
     with pytest.raises(ValueError, match="max_swing_ratio"):
-        pdr.zero_velocity(acc, gyro, rate, max_swing_ratio=0.9)
+        pdr.ZeroVelocityOptions(max_swing_ratio=0.9)
     with pytest.raises(ValueError, match="rate_hz"):
         pdr.zero_velocity(acc, gyro, -1.0)
     with pytest.raises(ValueError, match="rule"):
-        pdr.zero_velocity(acc, gyro, rate, rule="magic")
+        pdr.ZeroVelocityOptions(rule="magic")
     with pytest.raises(ValueError, match="long_swing_factor"):
-        pdr.count_strides(np.ones(10, bool), 100.0, long_swing_factor=0.5)
-    fixed = pdr.zero_velocity(acc, gyro, rate, rule="fixed", threshold=3e4)
-    np.testing.assert_array_equal(fixed["stance"], pdr.shoe_detector(rec.acc_mps2, rec.gyro_radps, threshold=3e4))
+        pdr.count_strides(np.ones(10, bool), 100.0, options=pdr.StrideCountOptions(long_swing_factor=0.5))
+    fixed = pdr.zero_velocity(acc, gyro, rate, options=pdr.ZeroVelocityOptions(rule="fixed", threshold=3e4))
+    np.testing.assert_array_equal(fixed["stance"],
+                                  pdr.shoe_detector(rec.acc_mps2, rec.gyro_radps, pdr.ShoeOptions(threshold=3e4)))
     assert not fixed["guard_raised"] and "threshold" in fixed["report"]
 
 
@@ -297,7 +300,7 @@ def _old_rule(rec):
     det = recommended.detect_stance(rec, min_plausible_swing_s=0.0, low_motion_min_stance_s=0.02,
                                      min_swing_share=0.0)
     stance = np.asarray(det["statistic"]) < det["threshold"]
-    out = pdr.zupt_ekf(rec.time_s, rec.acc_mps2, rec.gyro_radps, stance, smooth=True)
+    out = pdr.zupt_ekf(rec.time_s, rec.acc_mps2, rec.gyro_radps, stance, options=pdr.ZuptEkfOptions(smooth=True))
     strides = np.asarray(pdr.count_strides(stance, rec.rate_hz)["stride_indices"])
     return det, stance, np.asarray(out["positions_m"]), strides, dict(out["health"], guard_satisfied=True)
 

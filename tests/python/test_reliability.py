@@ -175,7 +175,7 @@ def test_zupt_ekf_refuses_non_finite_or_absurd_sigmas(field, value):
     acc = np.tile([0.0, 0.0, 9.81], (100, 1)) + 0.01 * rng.normal(size=(100, 3))
     gyro = 0.001 * rng.normal(size=(100, 3))
     with pytest.raises(ValueError, match=f"'options': {field} must be"):
-        pdr.zupt_ekf(np.arange(100) / 100.0, acc, gyro, np.ones(100, bool), **{field: value})
+        pdr.zupt_ekf(np.arange(100) / 100.0, acc, gyro, np.ones(100, bool), options=pdr.ZuptEkfOptions(**{field: value}))
 
 
 @pytest.mark.parametrize("field", ["kp", "ki", "kp_mag", "gravity_mps2"])
@@ -183,7 +183,8 @@ def test_attitude_mahony_refuses_infinite_gains(field):
     rng = np.random.default_rng(0)
     acc = np.tile([0.0, 0.0, 9.81], (100, 1)) + 0.01 * rng.normal(size=(100, 3))
     with pytest.raises(ValueError, match=f"{field} must be in"):
-        pdr.attitude_mahony(np.arange(100) / 100.0, acc, 0.001 * rng.normal(size=(100, 3)), **{field: np.inf})
+        pdr.attitude_mahony(np.arange(100) / 100.0, acc, 0.001 * rng.normal(size=(100, 3)),
+                            options=pdr.MahonyOptions(**{field: np.inf}))
 
 
 def test_scalar_arguments_must_be_finite():
@@ -311,12 +312,14 @@ def test_messages_name_the_field_or_argument():
     rng = np.random.default_rng(0)
     acc = np.tile([0.0, 0.0, 9.81], (100, 1)) + 0.01 * rng.normal(size=(100, 3))
     with pytest.raises(ValueError, match=r"sigma_acc_mps2 must be finite and in \[1e-12, 1e\+12\], got inf"):
-        pdr.zupt_ekf(np.arange(100) / 100.0, acc, np.zeros((100, 3)), np.ones(100, bool), sigma_acc_mps2=np.inf)
+        pdr.zupt_ekf(np.arange(100) / 100.0, acc, np.zeros((100, 3)), np.ones(100, bool),
+                     options=pdr.ZuptEkfOptions(sigma_acc_mps2=np.inf))
     net = mapmatch.RoadNetwork(*io.grid_with_diagonals_segments(3, 2, 10.0))
     with pytest.raises(ValueError, match="junction_kappa must be in"):
         mapmatch.ParticleMapMatcher(net, mapmatch.FilterOptions(num_particles=10, junction_kappa=1e300))
     with pytest.raises(ValueError, match="gravity_mps2 must be in"):
-        pdr.zupt_ekf(np.arange(100) / 100.0, acc, np.zeros((100, 3)), np.ones(100, bool), gravity_mps2=np.inf)
+        pdr.zupt_ekf(np.arange(100) / 100.0, acc, np.zeros((100, 3)), np.ones(100, bool),
+                     options=pdr.ZuptEkfOptions(gravity_mps2=np.inf))
     with pytest.raises(ValueError, match="'rng'.*2\\*\\*64"):
         core.resample(np.zeros(3), rng=-1)
     with pytest.raises(ValueError, match="'size'.*would need"):

@@ -1,15 +1,17 @@
-"""WiFi fingerprints pooled along the walks and the shared-AP dissimilarity (indoorloc.wifi_matcher,
+"""WiFi fingerprints pooled along the walks and the shared-AP dissimilarity (indoorloc.wifi.matcher,
 indoorloc.fusion.wifi_fixes with pooling="window"): small synthetic fixtures, checked by hand or against
 a brute-force reference."""
 
+import subprocess
+import sys
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from indoorloc.fusion import wifi_fixes
-from indoorloc import wifi_matcher as wm
 from indoorloc.io.ilc2020 import IlcWifi
+from indoorloc.wifi import matcher as wifi_matcher
 
 nan = np.nan
 
@@ -56,11 +58,11 @@ def test_shared_dissimilarity_matches_brute_force(beta):
     x[rng.random(x.shape) < 0.4] = nan
     x[0] = nan          # a reference that heard nothing: d = inf
     g = rng.uniform(0.5, 2.0, 7)
-    index = wm.ReferenceIndex.build(x, g, beta)
-    d = wm.shared_dissimilarity(q, index, 30.0)
+    index = wifi_matcher.ReferenceIndex.build(x, g, beta)
+    d = wifi_matcher.shared_dissimilarity(q, index, 30.0)
     np.testing.assert_allclose(d, _brute_force(q, x, g, beta, 30.0), rtol=1e-4, atol=1e-3)
     assert np.isinf(d[:, 0]).all()
-    rms, u = wm.shared_dissimilarity(q, index, 30.0, parts=True)
+    rms, u = wifi_matcher.shared_dissimilarity(q, index, 30.0, parts=True)
     np.testing.assert_allclose(rms + 30.0 * u, d, rtol=1e-6)
 
 
@@ -76,7 +78,7 @@ def test_a_query_identical_to_a_reference_matches_it_first():
         d = wifi_fixes.dissimilarity(x[[7, 21]], db)
         assert np.argmin(d[0]) == 7 and np.argmin(d[1]) == 21
         np.testing.assert_allclose(d[[0, 1], [7, 21]], 0.0, atol=1e-3)
-        best, dist, w = wm.knn(d, 3, s.temperature_db)
+        best, dist, w = wifi_matcher.knn(d, 3, s.temperature_db)
         assert best[:, 0].tolist() == [7, 21] and np.all(w[:, 0] == 1.0) and np.all(np.diff(dist, axis=1) >= 0)
         np.testing.assert_allclose(wifi_fixes.locate_scans(x[[7]], db.with_settings(wifi_fixes.FixSettings(k=1))), positions[[7]])
 
@@ -86,7 +88,7 @@ def test_a_reading_last_seen_10_s_ago_is_used_at_its_own_time():
     # at t = 22 s repeats both measurements (the same last-seen times): each counts once.
     wf = _wifi([(20.0, [("a", -50.0, 19.5), ("b", -60.0, 10.0)]),
                 (22.0, [("a", -50.0, 19.5), ("b", -60.0, 10.0), ("a", -55.0, 21.6)])])
-    meas = wm.walk_measurements(SimpleNamespace(wifi=wf))
+    meas = wifi_matcher.walk_measurements(SimpleNamespace(wifi=wf))
     assert meas.n == 3
     b = meas.bssids.index("b")
     i = int(np.flatnonzero(meas.bssid_index == b)[0])
@@ -95,14 +97,15 @@ def test_a_reading_last_seen_10_s_ago_is_used_at_its_own_time():
     _, fresh, names = wifi_fixes.fresh_scans(SimpleNamespace(wifi=wf), 2.5)
     assert np.isnan(fresh[:, names.index("b")]).all()
     # ... a window around its own last-seen time holds it, a window around the scan time does not.
-    rss, mean_t, n = wm.pool_windows(meas.t_s, meas.bssid_index, meas.rssi_dbm, 2, [10.0, 20.0], 1.0, 1.0)
+    rss, mean_t, n = wifi_matcher.pool_windows(meas.t_s, meas.bssid_index, meas.rssi_dbm, 2, [10.0, 20.0], 1.0, 1.0)
     assert rss[0, b] == -60.0 and np.isnan(rss[1, b]) and mean_t[0] == 10.0
     # Max-pooling keeps the strongest of "a"'s two measurements in [19, 22].
     a = meas.bssids.index("a")
-    rss, _, n = wm.pool_windows(meas.t_s, meas.bssid_index, meas.rssi_dbm, 2, [22.0], 3.0, 0.0)
+    rss, _, n = wifi_matcher.pool_windows(meas.t_s, meas.bssid_index, meas.rssi_dbm, 2, [22.0], 3.0, 0.0)
     assert rss[0, a] == -50.0 and n[0] == 2
     # Causal queries: the measurement at 21.6 s was first reported at 22 s, not by the scan at 21.7 s.
-    rss, _, n = wm.pool_windows(meas.t_s, meas.bssid_index, meas.rssi_dbm, 2, [21.7], 5.0, 0.0, meas.reported_s)
+    rss, _, n = wifi_matcher.pool_windows(meas.t_s, meas.bssid_index, meas.rssi_dbm, 2, [21.7], 5.0, 0.0,
+                                          meas.reported_s)
     assert n[0] == 1 and rss[0, a] == -50.0
 
 
@@ -140,9 +143,10 @@ def test_ap_reliability_down_weights_a_noisy_ap():
     walk = rng.integers(0, 8, n)
     stable = -60.0 - xy[:, 0] + rng.normal(0, 1.0, n)
     noisy = -60.0 - xy[:, 0] + rng.normal(0, 8.0, n)
-    g = wm.ap_reliability(np.column_stack([stable, noisy, np.full(n, nan)]), xy, walk, power=1.0)
+    g = wifi_matcher.ap_reliability(np.column_stack([stable, noisy, np.full(n, nan)]), xy, walk, power=1.0)
     assert g[0] > 3 * g[1] and g[2] == pytest.approx(1.0)
-    np.testing.assert_array_equal(wm.ap_reliability(np.column_stack([stable, noisy]), xy, walk, power=0.0), 1.0)
+    g = wifi_matcher.ap_reliability(np.column_stack([stable, noisy]), xy, walk, power=0.0)
+    np.testing.assert_array_equal(g, 1.0)
 
 
 @pytest.mark.parametrize("field, value", [
@@ -156,9 +160,9 @@ def test_settings_validation_names_the_field(field, value):
 
 
 def test_shared_dissimilarity_refuses_wrong_columns():
-    index = wm.ReferenceIndex.build(np.full((3, 4), -60.0))
+    index = wifi_matcher.ReferenceIndex.build(np.full((3, 4), -60.0))
     with pytest.raises(ValueError, match="queries_dbm"):
-        wm.shared_dissimilarity(np.full((1, 5), -60.0), index, 10.0)
+        wifi_matcher.shared_dissimilarity(np.full((1, 5), -60.0), index, 10.0)
 
 
 def test_fix_sd_grows_with_the_best_dissimilarity():
@@ -178,11 +182,11 @@ def test_ibeacon_readings_become_fingerprint_columns_at_their_own_time():
                          major=np.array([1, 1, -1, 1]), minor=np.array([7, 7, 3, 7]),
                          rssi_dbm=np.array([-70.0, -65.0, -80.0, nan]), mac=["m1", "m1", "m2", "m1"])
     walk = SimpleNamespace(wifi=wf, beacons=bc)
-    assert wm.walk_measurements(walk).n == 1
-    meas = wm.walk_measurements(walk, beacons=True)
+    assert wifi_matcher.walk_measurements(walk).n == 1
+    meas = wifi_matcher.walk_measurements(walk, beacons=True)
     assert meas.n == 4
-    assert meas.bssids[1:] == [wm.beacon_id("U1", 1, 7), "ibeacon:m2"] == ["ibeacon:u1:1:7", "ibeacon:m2"]
-    rss, _, n = wm.pool_windows(meas.t_s, meas.bssid_index, meas.rssi_dbm, len(meas.bssids), [20.0], 2.5, 0.0,
+    assert meas.bssids[1:] == [wifi_matcher.beacon_id("U1", 1, 7), "ibeacon:m2"] == ["ibeacon:u1:1:7", "ibeacon:m2"]
+    rss, _, n = wifi_matcher.pool_windows(meas.t_s, meas.bssid_index, meas.rssi_dbm, len(meas.bssids), [20.0], 2.5, 0.0,
                                 meas.reported_s)
     assert rss[0, 1] == -65.0 and rss[0, 2] == -80.0 and n[0] == 4
 
@@ -202,15 +206,15 @@ def test_compiled_dissimilarity_equals_the_numpy_reference(beta):
     x = _sparse_fingerprints(rng, 400, 60, 0.12)
     q = _sparse_fingerprints(rng, 50, 60, 0.15)
     q[3] = nan                                   # a query that heard nothing: d = inf everywhere
-    index = wm.ReferenceIndex.build(x, rng.uniform(0.3, 2.0, 60), beta)
-    rms_c, u_c = wm.shared_dissimilarity(q, index, 0.0, parts=True)
-    rms_n, u_n = wm.shared_dissimilarity_numpy(q, index, 0.0, parts=True)
+    index = wifi_matcher.ReferenceIndex.build(x, rng.uniform(0.3, 2.0, 60), beta)
+    rms_c, u_c = wifi_matcher.shared_dissimilarity(q, index, 0.0, parts=True)
+    rms_n, u_n = wifi_matcher.shared_dissimilarity_numpy(q, index, 0.0, parts=True)
     assert np.array_equal(np.isinf(rms_c), np.isinf(rms_n)) and np.isinf(rms_c[3]).all()
     fin = np.isfinite(rms_n)
     assert fin.mean() > 0.3                      # the comparison is not vacuous
     np.testing.assert_allclose(rms_c[fin], rms_n[fin], rtol=1e-9, atol=1e-9)
     np.testing.assert_allclose(u_c, u_n, rtol=0, atol=1e-12)
-    d = wm.shared_dissimilarity(q, index, 160.0)
+    d = wifi_matcher.shared_dissimilarity(q, index, 160.0)
     np.testing.assert_allclose(d[fin], (rms_n + 160.0 * u_n)[fin], rtol=1e-9, atol=1e-9)
 
 
@@ -218,9 +222,9 @@ def test_compiled_knn_equals_numpy_knn_and_does_not_depend_on_threads():
     rng = np.random.default_rng(12)
     x = _sparse_fingerprints(rng, 600, 80, 0.1)
     q = _sparse_fingerprints(rng, 70, 80, 0.12)
-    index = wm.ReferenceIndex.build(x, rng.uniform(0.3, 2.0, 80), 5.0)
-    best_n, d_n, w_n = wm.knn(wm.shared_dissimilarity_numpy(q, index, 160.0), 20, 3.0)
-    best_c, d_c, w_c = wm.shared_knn(q, index, 160.0, 20, 3.0)
+    index = wifi_matcher.ReferenceIndex.build(x, rng.uniform(0.3, 2.0, 80), 5.0)
+    best_n, d_n, w_n = wifi_matcher.knn(wifi_matcher.shared_dissimilarity_numpy(q, index, 160.0), 20, 3.0)
+    best_c, d_c, w_c = wifi_matcher.shared_knn(q, index, 160.0, 20, 3.0)
     assert best_c.shape == (70, 20) and best_c.dtype == np.int64
     fin = np.isfinite(d_n)
     assert np.array_equal(fin, np.isfinite(d_c)) and fin.mean() > 0.5
@@ -229,10 +233,10 @@ def test_compiled_knn_equals_numpy_knn_and_does_not_depend_on_threads():
     assert np.array_equal(best_c[fin], best_n[fin])  # random RSS: no exact ties
     assert np.all(w_c[~fin] == 0) and np.all((best_c >= 0) & (best_c < 600))
     for threads in (2, 3, 0):
-        b, d, w = wm.shared_knn(q, index, 160.0, 20, 3.0, num_threads=threads)
+        b, d, w = wifi_matcher.shared_knn(q, index, 160.0, 20, 3.0, num_threads=threads)
         assert np.array_equal(b, best_c) and np.array_equal(d, d_c) and np.array_equal(w, w_c)
-        assert np.array_equal(wm.shared_dissimilarity(q, index, 160.0, num_threads=threads),
-                              wm.shared_dissimilarity(q, index, 160.0))
+        assert np.array_equal(wifi_matcher.shared_dissimilarity(q, index, 160.0, num_threads=threads),
+                              wifi_matcher.shared_dissimilarity(q, index, 160.0))
 
 
 def test_fixes_for_walk_components_equal_the_numpy_knn():
@@ -244,7 +248,8 @@ def test_fixes_for_walk_components_equal_the_numpy_knn():
                                  ap_ratio=rng.uniform(0.5, 2.0, 40))
     q = _sparse_fingerprints(rng, 25, 40, 0.25)
     s = db.settings
-    best_n, d_n, w_n = wm.knn(wm.shared_dissimilarity_numpy(q, db.index, s.penalty_db), s.k, s.temperature_db)
+    d_numpy = wifi_matcher.shared_dissimilarity_numpy(q, db.index, s.penalty_db)
+    best_n, d_n, w_n = wifi_matcher.knn(d_numpy, s.k, s.temperature_db)
     best_c, d_c, w_c = wifi_fixes.nearest(q, db)
     np.testing.assert_allclose(w_c, w_n, atol=1e-9)
     np.testing.assert_allclose(wifi_fixes.fix_sds(d_c[:, 0], s), wifi_fixes.fix_sds(d_n[:, 0], s), atol=1e-9)
@@ -306,7 +311,7 @@ def test_knn_positions_votes_the_floor_then_averages_on_it():
     w = np.array([[1.0, 0.4, 0.4, 0.1],        # floor 1: 1.1, floor 2: 0.8 -> floor 1, mean of refs 0 and 3
                   [0.0, 0.0, 0.0, 0.0],        # nothing shared: mean position, the commonest floor (tie: lowest)
                   [1.0, 1.0, 0.5, 0.5]])       # floor 2: 2.0
-    pos, fl = wm.knn_positions(best, w, positions, floors)
+    pos, fl = wifi_matcher.knn_positions(best, w, positions, floors)
     np.testing.assert_allclose(pos[0], (1.0 * positions[0] + 0.1 * positions[3]) / 1.1)
     np.testing.assert_allclose(pos[1], positions.mean(axis=0))
     np.testing.assert_allclose(pos[2], (positions[1] + positions[2]) / 2)
@@ -394,3 +399,15 @@ def test_a_database_with_its_compiled_matcher_pickles_and_copies():
     before = wifi_fixes.locate_scans(q, db)  # builds the compiled matcher
     for other in (pickle.loads(pickle.dumps(db)), copy.deepcopy(db)):
         np.testing.assert_array_equal(wifi_fixes.locate_scans(q, other), before)
+
+
+def test_old_wifi_matcher_module_warns_and_is_the_new_module():
+    # a fresh interpreter: the alias warns once, when first imported (docs/api_changes.md)
+    code = ("import warnings, sys; warnings.simplefilter('error', DeprecationWarning)\n"
+            "try:\n    import indoorloc.wifi_matcher\nexcept DeprecationWarning as e:\n    print('warned', e)\n"
+            "warnings.simplefilter('ignore')\n"
+            "import indoorloc, indoorloc.wifi_matcher as old, indoorloc.wifi.matcher as new\n"
+            "print(old is new, indoorloc.wifi_matcher is new, indoorloc.wifi.matcher is new)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert "warned" in out and "indoorloc.wifi.matcher" in out
+    assert out.strip().endswith("True True True")

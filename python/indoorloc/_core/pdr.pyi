@@ -1,5 +1,5 @@
 # Stubs of indoorloc._core.pdr: zero-velocity detection and the ZUPT-aided EKF.
-from typing import Any, Dict, Iterator, List, Optional, Tuple
+from typing import Any, Dict, Iterator, List, Optional, Tuple, TypeVar
 
 import numpy as np
 import numpy.typing as npt
@@ -106,161 +106,153 @@ class ZuptEkfOutput(_Result):
     seconds: float
     health: ZuptEkfSummary
 
-def shoe_statistic(
-    acc_mps2: _ArrayLike,
-    gyro_radps: _ArrayLike,
-    window: int = 5,
-    sigma_acc_mps2: float = 0.01,
-    sigma_gyro_radps: float = ...,
-    gravity_mps2: float = 9.81,
-) -> _F64: ...
-def shoe_detector(
-    acc_mps2: _ArrayLike,
-    gyro_radps: _ArrayLike,
-    window: int = 5,
-    threshold: float = 3e4,
-    sigma_acc_mps2: float = 0.01,
-    sigma_gyro_radps: float = ...,
-    gravity_mps2: float = 9.81,
-) -> npt.NDArray[np.bool_]: ...
-def zupt_ekf(
-    time_s: _ArrayLike,
-    acc_mps2: _ArrayLike,
-    gyro_radps: _ArrayLike,
-    stance: _ArrayLike,
-    sigma_acc_mps2: float = 0.5,
-    sigma_gyro_radps: float = ...,
-    sigma_zupt_mps: float = 0.01,
-    gravity_mps2: float = 9.81,
-    init_samples: int = 20,
-    smooth: bool = False,
-    sigma_stance_heading_rad: float = 0.0,
-    min_stance_fraction: float = 0.02,
-    max_plausible_swing_s: float = 5.0,
-    max_plausible_stride_m: float = 4.0,
-    max_median_stride_m: float = 2.5,
-    max_stance_speed_mps: float = 4.0,
-    speed_rise_factor: float = 3.0,
-    min_rising_speed_mps: float = 1.0,
-) -> ZuptEkfOutput: ...
-def zero_velocity(
-    acc_mps2: _ArrayLike,
-    gyro_radps: _ArrayLike,
-    rate_hz: float,
-    rule: str = "swing_guard",
-    threshold: float = 1e4,
-    max_swing_s: float = 2.0,
-    max_swing_ratio: float = 1.5,
-    ladder_step_decades: float = 0.25,
-    min_stance_s: float = 0.02,
-    min_stance_share: float = 0.15,
-    min_stance_fraction: float = 0.3,
-    max_threshold: float = 1e7,
-    min_plausible_swing_s: float = 0.2,
-    low_motion_min_stance_s: float = 0.08,
-    window: int = 5,
-    sigma_acc_mps2: float = 0.01,
-    sigma_gyro_radps: float = ...,
-    gravity_mps2: float = 9.81,
-) -> ZeroVelocityOutput: ...
-def count_strides(
-    stance: _ArrayLike,
-    rate_hz: float,
-    min_stance_s: float = 0.02,
-    min_swing_s: float = 0.1,
-    min_swing_fraction: float = 0.5,
-    long_swing_factor: float = 1.7,
-) -> StrideCountOutput: ...
-def steps_acceleration(
-    acc_mps2: _ArrayLike,
-    rate_hz: float,
-    window_s: float = 0.1,
-    adaptive: bool = True,
-    swing_threshold_mps2: float = 2.0,
-    stance_threshold_mps2: float = 1.0,
-    swing_fraction: float = 0.35,
-    stance_fraction: float = 0.15,
-    min_step_interval_s: float = 0.4,
-) -> Tuple[List[int], _F64]: ...
-def steps_gyro(
-    gyro_radps: _ArrayLike,
-    rate_hz: float,
-    threshold_radps: float = 1.0,
-    median_window_s: float = 0.1,
-    min_swing_s: float = 0.2,
-) -> List[int]: ...
+# Options: fields listed as annotations, defaults not restated (read them from the compiled struct,
+# ``ZuptEkfOptions().to_dict()``). Every function below takes one as ``options=`` (None: the
+# defaults); the fields as separate keywords (``zupt_ekf(..., smooth=True)``) still work, with a
+# DeprecationWarning, for one release (docs/api_changes.md).
+
+_O = TypeVar("_O", bound="_Options")
+
+class _Options:
+    """The protocol every bound Options class has (bindings/options_binding.h)."""
+    def __init__(self, **fields: Any) -> None: ...
+    def replace(self: _O, **fields: Any) -> _O: ...
+    def to_dict(self) -> Dict[str, Any]: ...
+    def validate(self) -> None: ...
+
+
+class ShoeOptions(_Options):
+    window: int
+    threshold: float
+    sigma_acc_mps2: float
+    sigma_gyro_radps: float
+    gravity_mps2: float
+
+class ZeroVelocityOptions(_Options):
+    rule: str
+    threshold: float
+    window: int
+    sigma_acc_mps2: float
+    sigma_gyro_radps: float
+    gravity_mps2: float
+    max_swing_s: float
+    max_swing_ratio: float
+    ladder_step_decades: float
+    min_stance_s: float
+    min_stance_share: float
+    min_plausible_swing_s: float
+    low_motion_min_stance_s: float
+    min_stance_fraction: float
+    max_threshold: float
+
+class StrideCountOptions(_Options):
+    min_stance_s: float
+    min_swing_s: float
+    min_swing_fraction: float
+    long_swing_factor: float
+
+class AccelerationStepOptions(_Options):
+    window_s: float
+    adaptive: bool
+    swing_threshold_mps2: float
+    stance_threshold_mps2: float
+    swing_fraction: float
+    stance_fraction: float
+    min_step_interval_s: float
+
+class GyroStepOptions(_Options):
+    threshold_radps: float
+    median_window_s: float
+    min_swing_s: float
+
+class MagneticStepOptions(_Options):
+    highpass_order: int
+    highpass_hz: float
+    threshold_fraction: float
+    median_window_s: float
+    min_swing_s: float
+    min_rest_s: float
+
+class WeinbergOptions(_Options):
+    k: float
+    filter_order: int
+    cutoff_hz: float
+    window_s: float
+    steady_state_start: bool
+
+class MahonyOptions(_Options):
+    kp: float
+    ki: float
+    kp_mag: float
+    gravity_mps2: float
+    acc_gate_mps2: float
+    mag_norm_tolerance: float
+    mag_dip_tolerance_rad: float
+    init_samples: int
+
+class StepCovarianceOptions(_Options):
+    sigma_stride_length_m: float
+    stride_length_sd_fraction: float
+    sigma_heading_step_rad: float
+    sigma_heading_initial_rad: float
+
+class InsZuptOptions(_Options):
+    window_s: float
+    gravity_mps2: float
+
+class ZuptEkfOptions(_Options):
+    sigma_acc_mps2: float
+    sigma_gyro_radps: float
+    sigma_zupt_mps: float
+    gravity_mps2: float
+    init_samples: int
+    sigma_stance_heading_rad: float
+    smooth: bool
+    min_stance_fraction: float
+    max_plausible_swing_s: float
+    max_plausible_stride_m: float
+    max_median_stride_m: float
+    max_stance_speed_mps: float
+    speed_rise_factor: float
+    min_rising_speed_mps: float
+
+
+def shoe_statistic(acc_mps2: _ArrayLike, gyro_radps: _ArrayLike, options: Optional[ShoeOptions] = None,
+                   **deprecated_fields: Any) -> _F64: ...
+def shoe_detector(acc_mps2: _ArrayLike, gyro_radps: _ArrayLike, options: Optional[ShoeOptions] = None,
+                  **deprecated_fields: Any) -> npt.NDArray[np.bool_]: ...
+def zupt_ekf(time_s: _ArrayLike, acc_mps2: _ArrayLike, gyro_radps: _ArrayLike, stance: _ArrayLike,
+             options: Optional[ZuptEkfOptions] = None, **deprecated_fields: Any) -> ZuptEkfOutput: ...
+def zero_velocity(acc_mps2: _ArrayLike, gyro_radps: _ArrayLike, rate_hz: float,
+                  options: Optional[ZeroVelocityOptions] = None, **deprecated_fields: Any) -> ZeroVelocityOutput: ...
+def count_strides(stance: _ArrayLike, rate_hz: float, options: Optional[StrideCountOptions] = None,
+                  **deprecated_fields: Any) -> StrideCountOutput: ...
+def steps_acceleration(acc_mps2: _ArrayLike, rate_hz: float, options: Optional[AccelerationStepOptions] = None,
+                       **deprecated_fields: Any) -> Tuple[List[int], _F64]: ...
+def steps_gyro(gyro_radps: _ArrayLike, rate_hz: float, options: Optional[GyroStepOptions] = None,
+               **deprecated_fields: Any) -> List[int]: ...
 def butterworth_sos(order: int, cutoff_hz: float, rate_hz: float, highpass: bool = False) -> _F64: ...
 def sos_filter(sos: _ArrayLike, x: _ArrayLike, steady_state_start: bool = False) -> _F64: ...
-def weinberg_features(
-    acc_mps2: _ArrayLike,
-    rate_hz: float,
-    intervals: _ArrayLike,
-    filter_order: int = 4,
-    cutoff_hz: float = 3.0,
-    steady_state_start: bool = True,
-) -> _F64: ...
-def weinberg_stride_lengths(
-    acc_mps2: _ArrayLike,
-    rate_hz: float,
-    step_indices: _ArrayLike,
-    k: float = 0.364,
-    window_s: float = 0.15,
-    filter_order: int = 4,
-    cutoff_hz: float = 3.0,
-    steady_state_start: bool = True,
-) -> _F64: ...
+def weinberg_features(acc_mps2: _ArrayLike, rate_hz: float, intervals: _ArrayLike,
+                      options: Optional[WeinbergOptions] = None, **deprecated_fields: Any) -> _F64: ...
+def weinberg_stride_lengths(acc_mps2: _ArrayLike, rate_hz: float, step_indices: _ArrayLike,
+                            options: Optional[WeinbergOptions] = None, **deprecated_fields: Any) -> _F64: ...
 def calibrate_weinberg_k(features: _ArrayLike, lengths_m: _ArrayLike) -> WeinbergCalibration: ...
 def calibrate_weinberg_k_from_distance(features: _ArrayLike, distance_m: float) -> WeinbergCalibration: ...
-def steps_magnetometer(
-    mag: _ArrayLike,
-    rate_hz: float,
-    highpass_order: int = 2,
-    highpass_hz: float = 0.5,
-    threshold_fraction: float = 0.3,
-    median_window_s: float = 0.1,
-    min_swing_s: float = 0.2,
-    min_rest_s: float = 0.15,
-) -> Tuple[List[int], _F64]: ...
-def attitude_mahony(
-    time_s: _ArrayLike,
-    acc_mps2: _ArrayLike,
-    gyro_radps: _ArrayLike,
-    mag: Optional[_ArrayLike] = None,
-    kp: float = 1.0,
-    ki: float = 0.05,
-    kp_mag: float = 0.5,
-    gravity_mps2: float = 9.81,
-    acc_gate_mps2: float = 2.0,
-    mag_norm_tolerance: float = 0.1,
-    mag_dip_tolerance_rad: float = ...,
-    init_samples: int = 20,
-) -> AttitudeOutput: ...
+def steps_magnetometer(mag: _ArrayLike, rate_hz: float, options: Optional[MagneticStepOptions] = None,
+                       **deprecated_fields: Any) -> Tuple[List[int], _F64]: ...
+def attitude_mahony(time_s: _ArrayLike, acc_mps2: _ArrayLike, gyro_radps: _ArrayLike,
+                    mag: Optional[_ArrayLike] = None, options: Optional[MahonyOptions] = None,
+                    **deprecated_fields: Any) -> AttitudeOutput: ...
 def stance_headings(quaternions_wxyz: _ArrayLike, step_indices: _ArrayLike) -> _F64: ...
-def positions_from_strides(
-    stride_lengths_m: _ArrayLike,
-    headings_rad: _ArrayLike,
-    start_xy: _ArrayLike = ...,
-    sigma_stride_length_m: float = 0.1,
-    stride_length_sd_fraction: float = 0.1,
-    sigma_heading_step_rad: float = ...,
-    sigma_heading_initial_rad: float = 0.0,
-) -> StepTrack: ...
-def positions_from_increments(
-    increments_m: _ArrayLike,
-    start_xy: _ArrayLike = ...,
-    sigma_stride_length_m: float = 0.1,
-    stride_length_sd_fraction: float = 0.1,
-    sigma_heading_step_rad: float = ...,
-    sigma_heading_initial_rad: float = 0.0,
-) -> StepTrack: ...
-def ins_zupt_increments(
-    time_s: _ArrayLike,
-    acc_mps2: _ArrayLike,
-    quaternions_wxyz: _ArrayLike,
-    step_indices: _ArrayLike,
-    window_s: float = 0.05,
-    gravity_mps2: float = 9.81,
-) -> InsZuptIncrements: ...
+def positions_from_strides(stride_lengths_m: _ArrayLike, headings_rad: _ArrayLike, start_xy: _ArrayLike = ...,
+                           options: Optional[StepCovarianceOptions] = None, **deprecated_fields: Any) -> StepTrack: ...
+def positions_from_increments(increments_m: _ArrayLike, start_xy: _ArrayLike = ...,
+                              options: Optional[StepCovarianceOptions] = None,
+                              **deprecated_fields: Any) -> StepTrack: ...
+def ins_zupt_increments(time_s: _ArrayLike, acc_mps2: _ArrayLike, quaternions_wxyz: _ArrayLike,
+                        step_indices: _ArrayLike, options: Optional[InsZuptOptions] = None,
+                        **deprecated_fields: Any) -> InsZuptIncrements: ...
 
 class StreamingStepOptions:
     """Options of the streaming (causal) hand-held step detector. Fields and defaults: read them

@@ -49,7 +49,7 @@ def _path_at(rec: ImuRecording, threshold: float) -> float:
     """2-D path length [m] of the EKF + RTS with a fixed SHOE threshold."""
     det = recommended.detect_stance(rec, rule="fixed", threshold=threshold, max_threshold=10.0 * threshold)
     stance = np.asarray(det["stance"], dtype=bool)
-    out = pdr.zupt_ekf(rec.time_s, rec.acc_mps2, rec.gyro_radps, stance, smooth=True)
+    out = pdr.zupt_ekf(rec.time_s, rec.acc_mps2, rec.gyro_radps, stance, options=pdr.ZuptEkfOptions(smooth=True))
     return metrics.path_length(np.asarray(out["positions_m"])[:, :2])
 
 

@@ -153,7 +153,7 @@ def _mobgap_rows(folder: Path) -> List[Dict[str, Any]]:
             rec = t.recording
             if t.bout_bounds_s.shape[0] == 0:
                 continue
-            steps = np.asarray(pdr.steps_gyro(rec.gyro_radps, rec.rate_hz, threshold_radps=0.5))
+            steps = np.asarray(pdr.steps_gyro(rec.gyro_radps, rec.rate_hz, options=pdr.GyroStepOptions(threshold_radps=0.5)))
             ref = det = 0
             for (a, b), contacts in zip(t.bout_bounds_s, t.bout_initial_contacts):
                 lo, hi = a * rec.rate_hz, b * rec.rate_hz

@@ -75,7 +75,7 @@ def _before(rec: ImuRecording) -> Dict[str, Any]:
     from indoorloc import pdr
 
     stance = np.asarray(det["statistic"]) < float(det["threshold"])
-    out = pdr.zupt_ekf(rec.time_s, rec.acc_mps2, rec.gyro_radps, stance, smooth=True)
+    out = pdr.zupt_ekf(rec.time_s, rec.acc_mps2, rec.gyro_radps, stance, options=pdr.ZuptEkfOptions(smooth=True))
     strides = np.asarray(pdr.count_strides(stance, rec.rate_hz)["stride_indices"])
     pos = np.asarray(out["positions_m"])
     sc = pe.score_pyshoe_trial(rec, (pos, strides), z_up_estimate=rec.sensor != "synthetic")

@@ -110,9 +110,9 @@ def shoe_stance(recording: ImuRecording, threshold: float) -> np.ndarray:
     noise sds of the recommended pipeline (``SHOE_WINDOW``, ``SHOE_SIGMA_*``)."""
     from indoorloc import pdr  # lazily: the bindings may not be built
 
-    return np.asarray(pdr.shoe_detector(recording.acc_mps2, recording.gyro_radps, window=_SHOE_WINDOW,
-                                        threshold=threshold, sigma_acc_mps2=_SHOE_SIGMA_ACC_MPS2,
-                                        sigma_gyro_radps=_SHOE_SIGMA_GYRO_RADPS), dtype=bool)
+    options = pdr.ShoeOptions(window=_SHOE_WINDOW, threshold=threshold, sigma_acc_mps2=_SHOE_SIGMA_ACC_MPS2,
+                              sigma_gyro_radps=_SHOE_SIGMA_GYRO_RADPS)
+    return np.asarray(pdr.shoe_detector(recording.acc_mps2, recording.gyro_radps, options=options), dtype=bool)
 
 
 def default_threshold(recording: ImuRecording) -> float:
@@ -133,7 +133,8 @@ def zupt_ekf_method(recording: ImuRecording, threshold: Optional[float] = None, 
 
     gamma = default_threshold(recording) if threshold is None else float(threshold)
     stance = shoe_stance(recording, gamma)
-    out = pdr.zupt_ekf(recording.time_s, recording.acc_mps2, recording.gyro_radps, stance, smooth=smooth)
+    out = pdr.zupt_ekf(recording.time_s, recording.acc_mps2, recording.gyro_radps, stance,
+                       options=pdr.ZuptEkfOptions(smooth=smooth))
     positions = np.asarray(out["positions_m"], dtype=float)
     return positions, strides_from_stance(stance, recording.rate_hz)
 
@@ -168,9 +169,9 @@ def adaptive_threshold(recording: ImuRecording) -> float:
         return default_threshold(recording)
     from indoorloc import pdr
 
-    t = np.asarray(pdr.shoe_statistic(recording.acc_mps2, recording.gyro_radps, window=_SHOE_WINDOW,
-                                      sigma_acc_mps2=_SHOE_SIGMA_ACC_MPS2,
-                                      sigma_gyro_radps=_SHOE_SIGMA_GYRO_RADPS))
+    options = pdr.ShoeOptions(window=_SHOE_WINDOW, sigma_acc_mps2=_SHOE_SIGMA_ACC_MPS2,
+                              sigma_gyro_radps=_SHOE_SIGMA_GYRO_RADPS)
+    t = np.asarray(pdr.shoe_statistic(recording.acc_mps2, recording.gyro_radps, options=options))
     p99 = float(np.percentile(np.log10(np.maximum(t, 1e-300)), 99))
     return float(rule["low"] if p99 < rule["p99_cut"] else rule["high"])
 

@@ -53,8 +53,9 @@ def _count_errors_pct(recording) -> Dict[str, float]:
     from indoorloc.pdr import recommended
 
     truth = max(1, int(recording.stride_indices.size) - 1)
-    acc_paper = len(pdr.steps_acceleration(recording.acc_mps2, recording.rate_hz, window_s=0.15, adaptive=False,
-                                           swing_threshold_mps2=2.0, stance_threshold_mps2=1.0)[0])
+    paper = pdr.AccelerationStepOptions(window_s=0.15, adaptive=False, swing_threshold_mps2=2.0,
+                                        stance_threshold_mps2=1.0)
+    acc_paper = len(pdr.steps_acceleration(recording.acc_mps2, recording.rate_hz, options=paper)[0])
     acc_adaptive = len(pdr.steps_acceleration(recording.acc_mps2, recording.rate_hz)[0])
     gyro = len(pdr.steps_gyro(recording.gyro_radps, recording.rate_hz))
     stance = np.asarray(recommended.detect_stance(recording)["stance"], dtype=bool)

@@ -247,7 +247,7 @@ def step_covariance_coverage(recording: ImuRecording, threshold: Optional[float]
     2 x 2 position covariance of each step rotated the same way, and the squared Mahalanobis
     distance d² = eᵀ Σ⁻¹ e of the error at each step sample computed (steps after the alignment
     window only). A consistent covariance has d² ~ chi²(2): 95 % of the steps inside d² < 5.99,
-    mean d² = 2. ``covariance`` keywords go to ``positions_from_increments``. Returns ``{"trial",
+    mean d² = 2. ``covariance`` keywords are fields of ``pdr.StepCovarianceOptions``. Returns ``{"trial",
     "n_steps", "inside_95_pct", "mean_d2", "final_error_m", "final_sd_m"}`` (final_sd_m =
     sqrt(trace) of the last 2 x 2 covariance).
     """
@@ -260,7 +260,7 @@ def step_covariance_coverage(recording: ImuRecording, threshold: Optional[float]
     steps = stance_step_samples(stance, recording.rate_hz)
     quats = pdr.attitude_mahony(recording.time_s, recording.acc_mps2, recording.gyro_radps)["quaternions_wxyz"]
     inc = pdr.ins_zupt_increments(recording.time_s, recording.acc_mps2, quats, steps)
-    track = pdr.positions_from_increments(inc["increments_m"], **covariance)
+    track = pdr.positions_from_increments(inc["increments_m"], options=pdr.StepCovarianceOptions(**covariance))
     xy = np.vstack([[0.0, 0.0], track["positions_m"]])
     pos = _per_sample(steps, xy, recording.n_samples)[:, :2] * PYSHOE_TRUTH_FROM_Z_UP
     n_align = pyshoe_alignment_samples(recording, n_align_strides)

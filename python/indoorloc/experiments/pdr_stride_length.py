@@ -146,7 +146,8 @@ def evaluate_step_detectors_mobgap(root: PathLike, gyro_threshold_radps: float =
             if t.bout_bounds_s.shape[0] == 0 or rec.mag_uT is None:
                 continue
             mag_steps = np.asarray(pdr.steps_magnetometer(rec.mag_uT, rec.rate_hz)[0])
-            gyro_steps = np.asarray(pdr.steps_gyro(rec.gyro_radps, rec.rate_hz, threshold_radps=gyro_threshold_radps))
+            gyro_steps = np.asarray(pdr.steps_gyro(rec.gyro_radps, rec.rate_hz,
+                                                    options=pdr.GyroStepOptions(threshold_radps=gyro_threshold_radps)))
             for (a, b), contacts in zip(t.bout_bounds_s, t.bout_initial_contacts):
                 lo, hi = a * rec.rate_hz, b * rec.rate_hz
                 n_ref = int(len(contacts))

@@ -68,8 +68,8 @@ def detector_statistics(recording: ImuRecording, window: int = recommended.SHOE_
     from indoorloc import pdr
 
     sa, sg = recommended.SHOE_SIGMA_ACC_MPS2, recommended.SHOE_SIGMA_GYRO_RADPS
-    shoe = np.asarray(pdr.shoe_statistic(recording.acc_mps2, recording.gyro_radps, window=window,
-                                         sigma_acc_mps2=sa, sigma_gyro_radps=sg))
+    options = pdr.ShoeOptions(window=window, sigma_acc_mps2=sa, sigma_gyro_radps=sg)
+    shoe = np.asarray(pdr.shoe_statistic(recording.acc_mps2, recording.gyro_radps, options=options))
     are = _sliding_mean(np.sum(recording.gyro_radps ** 2, axis=1), window) / sg ** 2
     a = recording.acc_mps2
     amv = (_sliding_mean(np.sum(a ** 2, axis=1), window) - np.sum(_sliding_mean(a, window) ** 2, axis=1)) / sa ** 2
@@ -137,10 +137,11 @@ def _quantile(rec: ImuRecording, st: Stats, p: Dict[str, float]) -> np.ndarray:
 def _swing_guard(rec: ImuRecording, st: Stats, p: Dict[str, float]) -> np.ndarray:
     from indoorloc import pdr
 
-    det = pdr.zero_velocity(rec.acc_mps2, rec.gyro_radps, rec.rate_hz, rule="swing_guard",
-                            threshold=10.0 ** p["log_gamma"], max_swing_s=p["max_swing_s"],
-                            max_swing_ratio=p["max_swing_ratio"], window=recommended.SHOE_WINDOW,
-                            sigma_acc_mps2=recommended.SHOE_SIGMA_ACC_MPS2, sigma_gyro_radps=recommended.SHOE_SIGMA_GYRO_RADPS)
+    options = pdr.ZeroVelocityOptions(
+        rule="swing_guard", threshold=10.0 ** p["log_gamma"], max_swing_s=p["max_swing_s"],
+        max_swing_ratio=p["max_swing_ratio"], window=recommended.SHOE_WINDOW,
+        sigma_acc_mps2=recommended.SHOE_SIGMA_ACC_MPS2, sigma_gyro_radps=recommended.SHOE_SIGMA_GYRO_RADPS)
+    det = pdr.zero_velocity(rec.acc_mps2, rec.gyro_radps, rec.rate_hz, options=options)
     return np.asarray(det["stance"], dtype=bool)
 
 
@@ -194,7 +195,7 @@ def score_setting(recs: Sequence[ImuRecording], stats: Sequence[Stats], rule: St
     rows = []
     for rec, st in zip(recs, stats):
         stance = np.asarray(rule(rec, st, params), dtype=bool)
-        out = pdr.zupt_ekf(rec.time_s, rec.acc_mps2, rec.gyro_radps, stance, smooth=smooth)
+        out = pdr.zupt_ekf(rec.time_s, rec.acc_mps2, rec.gyro_radps, stance, options=pdr.ZuptEkfOptions(smooth=smooth))
         strides = np.asarray(pdr.count_strides(stance, rec.rate_hz)["stride_indices"])
         r = pe.score_pyshoe_trial(rec, (np.asarray(out["positions_m"]), strides))
         rows.append({"trial": rec.name, "armse_m": r["armse_m"], "stride_error": r["stride_count_error"],

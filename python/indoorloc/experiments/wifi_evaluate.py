@@ -33,7 +33,7 @@ from typing import Dict, Iterable, List, Optional, Sequence
 import numpy as np
 
 from indoorloc import metrics, wifi
-from indoorloc import wifi_matcher as wm
+from indoorloc.wifi import matcher as wifi_matcher
 from indoorloc.io.wifi_datasets import FingerprintDataset, FingerprintSplit
 from indoorloc.progress import progress
 
@@ -163,7 +163,7 @@ class MethodSet:
             ),
         }
         self.options = wifi.tracker_options(num_starts=5, start_iterations=25)
-        self.shared_index = wm.ReferenceIndex.build(not_heard_as_nan(train.rss_dbm[rows], sentinel), None,
+        self.shared_index = wifi_matcher.ReferenceIndex.build(not_heard_as_nan(train.rss_dbm[rows], sentinel), None,
                                                     hyper.shared["strength_scale_db"])
         self.shared_positions = train.positions_m[rows]
         self.shared_floors = train.floors[rows]
@@ -174,9 +174,9 @@ class MethodSet:
         (the dataset's sentinel for "not heard"), each block's readings averaged per AP heard."""
         h = self.hyper.shared
         q = block_mean(not_heard_as_nan(raw_rss_dbm, self.sentinel), k)
-        best, _, w = wm.shared_knn(q, self.shared_index, h["penalty_db"], int(h["k"]), h["temperature_db"],
+        best, _, w = wifi_matcher.shared_knn(q, self.shared_index, h["penalty_db"], int(h["k"]), h["temperature_db"],
                                    self.num_threads)
-        return wm.knn_positions(best, w, self.shared_positions, self.shared_floors)
+        return wifi_matcher.knn_positions(best, w, self.shared_positions, self.shared_floors)
 
     def prepare(self, rss_dbm: np.ndarray) -> np.ndarray:
         return self.map.prepare_scans(rss_dbm, self.sentinel, NOT_HEARD_DBM)
@@ -279,15 +279,15 @@ def _shared_cv_point(train: FingerprintSplit, rows: np.ndarray, test_rows: np.nd
     pos, floors = train.positions_m[rows], train.floors[rows]
     k_max = max(SHARED_GRID["k"])
     for beta in SHARED_GRID["strength_scale_db"]:
-        index = wm.ReferenceIndex.build(ref, None, beta)
-        rms, u = wm.shared_dissimilarity(queries, index, 0.0, parts=True, num_threads=num_threads)
+        index = wifi_matcher.ReferenceIndex.build(ref, None, beta)
+        rms, u = wifi_matcher.shared_dissimilarity(queries, index, 0.0, parts=True, num_threads=num_threads)
         for c in SHARED_GRID["penalty_db"]:
-            best, d, _ = wm.knn(rms + c * u, k_max, 1.0)
+            best, d, _ = wifi_matcher.knn(rms + c * u, k_max, 1.0)
             for temp in SHARED_GRID["temperature_db"]:
                 with np.errstate(invalid="ignore"):
                     w = np.where(np.isfinite(d), np.exp(-(d - d[:, :1]) / temp), 0.0)
                 for kk in SHARED_GRID["k"]:
-                    p, _ = wm.knn_positions(best[:, :kk], w[:, :kk], pos, floors)
+                    p, _ = wifi_matcher.knn_positions(best[:, :kk], w[:, :kk], pos, floors)
                     err.setdefault((c, beta, kk, temp), []).append(float(np.linalg.norm(p - truth, axis=1).mean()))
 
 

@@ -23,7 +23,7 @@ import numpy as np
 
 from indoorloc import fusion
 from indoorloc.fusion import wifi_fixes
-from indoorloc import wifi_matcher as wm
+from indoorloc.wifi import matcher as wifi_matcher
 
 
 def compare_floor(root: Path, name: str, out: Dict[str, float]) -> None:
@@ -41,7 +41,8 @@ def compare_floor(root: Path, name: str, out: Dict[str, float]) -> None:
         if t.size == 0:
             continue
         tic = time.perf_counter()
-        b0, d0, w0 = wm.knn(wm.shared_dissimilarity_numpy(rss, db.index, s.penalty_db), s.k, s.temperature_db)
+        d_numpy = wifi_matcher.shared_dissimilarity_numpy(rss, db.index, s.penalty_db)
+        b0, d0, w0 = wifi_matcher.knn(d_numpy, s.k, s.temperature_db)
         toc = time.perf_counter()
         b1, d1, w1 = wifi_fixes.nearest(rss, db)
         out["numpy_s"] += toc - tic

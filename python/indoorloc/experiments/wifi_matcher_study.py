@@ -211,7 +211,7 @@ def evaluate_grid(walks: Sequence[CachedWalk], grid: Dict[str, Sequence[Any]], f
     """Waypoint errors of every grid point on one floor (4-fold by walk), concatenated in fold order;
     plus per-waypoint facts (fold, coverage distance, bound distance at the default reference
     window) and the old matcher's errors."""
-    from indoorloc import wifi_matcher
+    from indoorloc.wifi import matcher as wifi_matcher
     from indoorloc.fusion import wifi_fixes
 
     out: Dict[str, List[np.ndarray]] = {}
@@ -333,7 +333,7 @@ def tracker_view(walks: Sequence[CachedWalk], settings, folds: int = 4, seed: in
 
     from indoorloc.fusion import wifi_fixes
 
-    from indoorloc import wifi_matcher
+    from indoorloc.wifi import matcher as wifi_matcher
 
     truth, means, weights, fold_of, d_min = [], [], [], [], []
     bound = []

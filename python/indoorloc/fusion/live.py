@@ -49,7 +49,7 @@ from indoorloc.io.ilc2020.walk_types import quaternion_from_rotation_vector
 from indoorloc.pdr import handheld as ph
 from indoorloc.pdr import streaming as ps
 from indoorloc.fusion import wifi_fixes as wfx
-from indoorloc import wifi_matcher as wm
+from indoorloc.wifi import matcher as wifi_matcher
 
 #: Per-step white noise given to the filter (the defaults of ``indoorloc fusion evaluate``,
 #: RealSettings.step_length_sd_fraction and step_heading_sd_rad): length sd as a fraction of the
@@ -118,11 +118,11 @@ def causal_queries(walk: Any, database: wfx.FingerprintDatabase) -> Tuple[np.nda
     pooling settings."""
     _check_live_settings(database)
     s = database.settings
-    meas = wm.walk_measurements(walk)
+    meas = wifi_matcher.walk_measurements(walk)
     cols = meas.columns({b: i for i, b in enumerate(database.bssids)})
     scan_t = np.unique(np.asarray(walk.wifi.scan_times_s, float))
-    rss, mean_t, _ = wm.pool_windows(meas.t_s, cols, meas.rssi_dbm, len(database.bssids), scan_t, s.query_window_s,
-                                     0.0, meas.reported_s)
+    rss, mean_t, _ = wifi_matcher.pool_windows(meas.t_s, cols, meas.rssi_dbm, len(database.bssids), scan_t,
+                                               s.query_window_s, 0.0, meas.reported_s)
     ok = np.isfinite(rss).sum(axis=1) >= s.min_aps
     return scan_t[ok], mean_t[ok], rss[ok]
 

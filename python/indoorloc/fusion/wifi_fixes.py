@@ -43,7 +43,7 @@ import numpy as np
 from indoorloc.pdr import handheld
 from indoorloc.fusion import crowdsourced_map
 from indoorloc.fusion.fixes import Fixes
-from indoorloc import wifi_matcher
+from indoorloc.wifi import matcher as wifi_matcher
 from indoorloc._core.wifi import SharedApMatcherOptions
 from indoorloc.validate import integer, real_array, real_scalar
 

@@ -19,6 +19,11 @@
   (:func:`positions_from_strides`) and increments (:func:`positions_from_increments`), each step
   with a 3 x 3 covariance of (x, y, heading error) for fusion with maps and WiFi.
 
+Each function takes its settings as one ``options=`` argument, the Options class of its concept
+(``zupt_ekf(t, acc, gyro, stance, options=ZuptEkfOptions(smooth=True))``; None: the defaults of
+the C++ struct, the one place they are written). The fields as separate keywords still work for
+one release, with a DeprecationWarning (docs/api_changes.md).
+
 Beside the compiled functions, the package holds the Python side of the subsystem:
 
 - :mod:`indoorloc.pdr.recommended`: the recommended foot-mounted pipeline
@@ -35,6 +40,17 @@ paths are listed in docs/api_changes.md.
 from __future__ import annotations
 
 from indoorloc._core.pdr import (
+    AccelerationStepOptions,
+    GyroStepOptions,
+    InsZuptOptions,
+    MagneticStepOptions,
+    MahonyOptions,
+    ShoeOptions,
+    StepCovarianceOptions,
+    StrideCountOptions,
+    WeinbergOptions,
+    ZeroVelocityOptions,
+    ZuptEkfOptions,
     attitude_mahony,
     butterworth_sos,
     calibrate_weinberg_k,
@@ -60,6 +76,17 @@ from indoorloc.pdr.metrics import align_2d, armse, path_length
 from indoorloc.pdr.recommended import ZUPT_DETECTOR, detect_stance, gait_plausibility, run_recommended
 
 __all__ = [
+    "AccelerationStepOptions",
+    "GyroStepOptions",
+    "InsZuptOptions",
+    "MagneticStepOptions",
+    "MahonyOptions",
+    "ShoeOptions",
+    "StepCovarianceOptions",
+    "StrideCountOptions",
+    "WeinbergOptions",
+    "ZeroVelocityOptions",
+    "ZuptEkfOptions",
     "ZUPT_DETECTOR",
     "align_2d",
     "armse",

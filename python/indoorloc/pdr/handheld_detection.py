@@ -9,7 +9,13 @@ from typing import Any, Optional
 import numpy as np
 from scipy.signal import find_peaks
 
-from indoorloc._core.pdr import butterworth_sos, sos_filter, steps_acceleration, weinberg_features
+from indoorloc._core.pdr import (
+    AccelerationStepOptions,
+    butterworth_sos,
+    sos_filter,
+    steps_acceleration,
+    weinberg_features,
+)
 from indoorloc.pdr.handheld_types import HandheldArrays, HandheldOptions, HandheldSteps, as_arrays
 from indoorloc.pdr.orientation import (
     GRAVITY_MPS2,
@@ -55,7 +61,8 @@ def detect_steps_handheld(arrays: HandheldArrays, options: HandheldOptions) -> n
     """Sample indices of the steps (increasing)."""
     rate = arrays.rate_hz
     if options.method == "variance":
-        idx, _ = steps_acceleration(arrays.acc_mps2, rate, min_step_interval_s=options.min_step_interval_s)
+        idx, _ = steps_acceleration(arrays.acc_mps2, rate,
+                                    AccelerationStepOptions(min_step_interval_s=options.min_step_interval_s))
         return np.asarray(idx, dtype=np.int64)
     s = step_signal(arrays, options)
     n = s.shape[0]

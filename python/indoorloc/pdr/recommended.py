@@ -126,8 +126,9 @@ def detect_stance(recording: ImuRecording, evidence: Optional[Dict[str, float]] 
                                                     float(opts["max_swing_s"]))
     elif not (math.isfinite(min_swing_share) and 0.0 <= min_swing_share < 1.0):
         raise ValueError(f"indoorloc: argument 'min_swing_share': must be in [0, 1), got {min_swing_share!r}")
-    return _pdr.zero_velocity(recording.acc_mps2, recording.gyro_radps, recording.rate_hz, window=SHOE_WINDOW,
-                              sigma_acc_mps2=SHOE_SIGMA_ACC_MPS2, sigma_gyro_radps=SHOE_SIGMA_GYRO_RADPS, **opts)
+    options = _pdr.ZeroVelocityOptions(window=SHOE_WINDOW, sigma_acc_mps2=SHOE_SIGMA_ACC_MPS2,
+                                       sigma_gyro_radps=SHOE_SIGMA_GYRO_RADPS, **opts)
+    return _pdr.zero_velocity(recording.acc_mps2, recording.gyro_radps, recording.rate_hz, options=options)
 
 
 def gait_evidence(recording: ImuRecording, active_radps: float = 1.0, lo_s: float = 0.4,
@@ -232,7 +233,8 @@ def run_recommended(recording: ImuRecording, smooth: bool = True, **overrides: A
     floor = (swing_floor(evidence, float(opts["min_plausible_swing_s"]), overrides.get("min_swing_share", MIN_SWING_SHARE),
                          float(opts["max_swing_s"])) if opts["rule"] == "swing_guard" else float("nan"))
     stance = np.asarray(det["stance"], dtype=bool)
-    out = _pdr.zupt_ekf(recording.time_s, recording.acc_mps2, recording.gyro_radps, stance, smooth=smooth)
+    out = _pdr.zupt_ekf(recording.time_s, recording.acc_mps2, recording.gyro_radps, stance,
+                        options=_pdr.ZuptEkfOptions(smooth=smooth))
     count = _pdr.count_strides(stance, recording.rate_hz)
     positions = np.asarray(out["positions_m"], dtype=float)
     strides = np.asarray(count["stride_indices"], dtype=np.int64)

@@ -14,10 +14,14 @@
 - :class:`GradientTracker` (Algorithm 1 with step control) and :func:`locate_ml` (global
   maximum-likelihood fixes, also from k scans at a static point).
 
+Beside the compiled classes, :mod:`indoorloc.wifi.matcher` (formerly ``indoorloc.wifi_matcher``)
+pools a walk's WiFi measurements in time into fingerprints and matches them with
+:class:`SharedApMatcher` (the fusion tracker's fingerprint fixes build on it).
+
 Derivations: docs/wifi_derivations.md. Example::
 
     from indoorloc import wifi
-    m = wifi.SignalMap.from_scans(train_xy, train_floor, train_rss, wifi.SignalMapOptions(100.0))
+    m = wifi.SignalMap.from_scans(train_xy, train_floor, train_rss, wifi.SignalMapOptions(not_heard_sentinel=100.0))
     model = wifi.RssModel(m)
     fixes = wifi.locate_ml(model, m.prepare_scans(test_rss, 100.0))
 """
@@ -38,6 +42,7 @@ from indoorloc._core.wifi import (
     SignalMapOptions,
     locate_ml,
 )
+from indoorloc.wifi import matcher
 
 
 def tracker_options(**settings) -> GradientTrackerOptions:
@@ -64,5 +69,6 @@ __all__ = [
     "SignalMap",
     "SignalMapOptions",
     "locate_ml",
+    "matcher",
     "tracker_options",
 ]
