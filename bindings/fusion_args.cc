@@ -63,30 +63,20 @@ std::vector<PositionFix> FixesFromArrays(const py::tuple& arrays) {
   MatrixArg weights = ToMatrix(arrays[3], "fixes.weights", f, k);
   MatrixArg floors = ToMatrix(arrays[4], "fixes.floors", f, k);
   std::vector<PositionFix> out(static_cast<size_t>(f));
+  Eigen::VectorXi component_floors(k);
   for (Eigen::Index i = 0; i < f; ++i) {
-    PositionFix& fix = out[static_cast<size_t>(i)];
-    fix.time_s = t.map[i];
-    int used = 0;
-    for (Eigen::Index j = 0; j < k; ++j) used += weights.map(i, j) != 0.0 ? 1 : 0;
-    fix.means_m.resize(used, 2);
-    fix.sds_m.resize(used);
-    fix.weights.resize(used);
-    fix.floors.resize(used);
-    int c = 0;
     for (Eigen::Index j = 0; j < k; ++j) {
-      if (weights.map(i, j) == 0.0) continue;
-      fix.means_m(c, 0) = means.map(i, 2 * j);
-      fix.means_m(c, 1) = means.map(i, 2 * j + 1);
-      fix.sds_m[c] = sds.map(i, j);
-      fix.weights[c] = weights.map(i, j);
       const double fl = floors.map(i, j);
-      if (fl != std::floor(fl) || std::abs(fl) > 2e9) {
+      if (weights.map(i, j) != 0.0 && (fl != std::floor(fl) || std::abs(fl) > 2e9)) {
         ThrowInvalidArgument("fixes.floors", "entry (" + std::to_string(i) + ", " + std::to_string(j) + ") is not an integer");
       }
-      fix.floors[c] = static_cast<int>(fl);
-      ++c;
+      component_floors[j] = weights.map(i, j) != 0.0 ? static_cast<int>(fl) : PositionFix::kAnyFloor;
     }
-    CheckPositionFix(fix, ("fixes[" + std::to_string(i) + "]").c_str());
+    // Row i holds K (x, y) pairs: a K x 2 row-major block.
+    const Eigen::Map<const PositionFix::Means> candidates(means.map.data() + i * 2 * k, k, 2);
+    out[static_cast<size_t>(i)] = FixFromCandidates(t.map[i], candidates, sds.map.row(i).transpose(),
+                                                    weights.map.row(i).transpose(), component_floors);
+    CheckPositionFix(out[static_cast<size_t>(i)], ("fixes[" + std::to_string(i) + "]").c_str());
   }
   return out;
 }

@@ -1,5 +1,5 @@
 """Modules moved into the indoorloc.fusion package (docs/api_changes.md): the new paths hold them,
-the old paths still work for one release and warn; ``indoorloc.fusion`` offers ``Site`` without
+the old paths still work for one release and warn (test_moved_modules.py); ``indoorloc.fusion`` offers ``Site`` without
 loading file formats on ``import indoorloc``."""
 
 from __future__ import annotations
@@ -12,25 +12,8 @@ import pytest
 from indoorloc import fusion
 from indoorloc.fusion import crowdsourced_map, fixes, steps, wifi_fixes
 
-MOVED_MODULES = {"indoorloc.wifi_fixes": "indoorloc.fusion.wifi_fixes",
-                 "indoorloc.wifi_crowdsource": "indoorloc.fusion.crowdsourced_map"}
-
-
 def _run(code: str) -> str:
     return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
-
-
-@pytest.mark.parametrize("old", sorted(MOVED_MODULES))
-def test_old_module_warns_and_is_the_new_module(old):
-    # a fresh interpreter: the alias warns once, when first imported
-    new = MOVED_MODULES[old]
-    code = (f"import warnings, sys; warnings.simplefilter('error', DeprecationWarning)\n"
-            f"try:\n    import {old}\nexcept DeprecationWarning as e:\n    print('warned', e)\n"
-            f"warnings.simplefilter('ignore')\nimport importlib\n"
-            f"print(importlib.import_module('{old}') is importlib.import_module('{new}'))")
-    out = _run(code)
-    assert "warned" in out and new in out
-    assert out.strip().endswith("True")
 
 
 def test_site_is_importable_from_the_facade():

@@ -33,17 +33,6 @@ def test_the_facade_re_exports_the_pipeline_and_metrics():
     assert pdr.handheld is handheld
 
 
-def test_old_pdr_handheld_module_warns_and_is_the_new_module():
-    # a fresh interpreter: the alias warns once, when first imported
-    code = ("import warnings, sys; warnings.simplefilter('error', DeprecationWarning)\n"
-            "try:\n    import indoorloc.pdr_handheld\nexcept DeprecationWarning as e:\n    print('warned', e)\n"
-            "warnings.simplefilter('ignore')\nimport indoorloc, indoorloc.pdr_handheld as old, indoorloc.pdr.handheld as new\n"
-            "print(old is new, indoorloc.pdr_handheld is new)")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
-    assert "warned" in out and "indoorloc.pdr.handheld" in out
-    assert out.strip().endswith("True True")
-
-
 def test_import_indoorloc_does_not_warn():
     code = "import warnings; warnings.simplefilter('error'); import indoorloc, indoorloc.pdr; print('ok')"
     assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,

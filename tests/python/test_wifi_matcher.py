@@ -2,8 +2,6 @@
 indoorloc.fusion.wifi_fixes with pooling="window"): small synthetic fixtures, checked by hand or against
 a brute-force reference."""
 
-import subprocess
-import sys
 from types import SimpleNamespace
 
 import numpy as np
@@ -400,14 +398,3 @@ def test_a_database_with_its_compiled_matcher_pickles_and_copies():
     for other in (pickle.loads(pickle.dumps(db)), copy.deepcopy(db)):
         np.testing.assert_array_equal(wifi_fixes.locate_scans(q, other), before)
 
-
-def test_old_wifi_matcher_module_warns_and_is_the_new_module():
-    # a fresh interpreter: the alias warns once, when first imported (docs/api_changes.md)
-    code = ("import warnings, sys; warnings.simplefilter('error', DeprecationWarning)\n"
-            "try:\n    import indoorloc.wifi_matcher\nexcept DeprecationWarning as e:\n    print('warned', e)\n"
-            "warnings.simplefilter('ignore')\n"
-            "import indoorloc, indoorloc.wifi_matcher as old, indoorloc.wifi.matcher as new\n"
-            "print(old is new, indoorloc.wifi_matcher is new, indoorloc.wifi.matcher is new)")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
-    assert "warned" in out and "indoorloc.wifi.matcher" in out
-    assert out.strip().endswith("True True True")

@@ -186,31 +186,17 @@ PositionFix FingerprintFixer::Fix(const ScanQuery& query, double time_s, const E
   const Eigen::Index k = nb.index.cols();
   const double d_min = k > 0 ? nb.distance_db(0, 0) : std::numeric_limits<double>::infinity();
   const double sd = std::isfinite(d_min) ? s.options.sd_m + s.options.sd_per_db * d_min : s.options.sd_m;
-  PositionFix fix;
-  fix.time_s = time_s;
-  int used = 0;
-  std::vector<double> w(static_cast<std::size_t>(k));
+  PositionFix::Means candidates(k, 2);
+  Eigen::VectorXd weights(k);
+  Eigen::VectorXi floors(k);
   for (Eigen::Index j = 0; j < k; ++j) {
     const Eigen::Index r = nb.index(0, j);
-    w[static_cast<std::size_t>(j)] = s.weights.size() ? nb.weight(0, j) * s.weights[r] : nb.weight(0, j);
-    used += w[static_cast<std::size_t>(j)] != 0.0 ? 1 : 0;
+    candidates(j, 0) = s.positions_m(r, 0) + shift_m[0];
+    candidates(j, 1) = s.positions_m(r, 1) + shift_m[1];
+    weights[j] = s.weights.size() ? nb.weight(0, j) * s.weights[r] : nb.weight(0, j);
+    floors[j] = s.options.with_floors ? s.floors[r] : PositionFix::kAnyFloor;
   }
-  fix.means_m.resize(used, 2);
-  fix.sds_m.resize(used);
-  fix.weights.resize(used);
-  fix.floors.resize(used);
-  int c = 0;
-  for (Eigen::Index j = 0; j < k; ++j) {
-    if (w[static_cast<std::size_t>(j)] == 0.0) continue;
-    const Eigen::Index r = nb.index(0, j);
-    fix.means_m(c, 0) = s.positions_m(r, 0) + shift_m[0];
-    fix.means_m(c, 1) = s.positions_m(r, 1) + shift_m[1];
-    fix.sds_m[c] = sd;
-    fix.weights[c] = w[static_cast<std::size_t>(j)];
-    fix.floors[c] = s.options.with_floors ? s.floors[r] : PositionFix::kAnyFloor;
-    ++c;
-  }
-  return fix;
+  return FixFromCandidates(time_s, candidates, Eigen::VectorXd::Constant(k, sd), weights, floors);
 }
 
 }  // namespace indoorloc::fusion

@@ -17,6 +17,32 @@ bool FixLikelihoodOptions::IsValid(std::string* error) const {
       .Check(tempering > 0.0 && tempering <= 1.0, "tempering", "must be in (0, 1], got " + FormatValue(tempering));
 }
 
+PositionFix FixFromCandidates(double time_s, const Eigen::Ref<const PositionFix::Means>& means_m,
+                              const Eigen::Ref<const Eigen::VectorXd>& sds_m,
+                              const Eigen::Ref<const Eigen::VectorXd>& weights,
+                              const Eigen::Ref<const Eigen::VectorXi>& floors) {
+  const Eigen::Index k = weights.size();
+  CheckArgument(means_m.rows() == k && sds_m.size() == k && floors.size() == k, "candidates",
+                "means_m, sds_m, weights and floors must have one entry per candidate");
+  PositionFix fix;
+  fix.time_s = time_s;
+  const Eigen::Index used = (weights.array() != 0.0).count();
+  fix.means_m.resize(used, 2);
+  fix.sds_m.resize(used);
+  fix.weights.resize(used);
+  fix.floors.resize(used);
+  Eigen::Index c = 0;
+  for (Eigen::Index j = 0; j < k; ++j) {
+    if (weights[j] == 0.0) continue;
+    fix.means_m.row(c) = means_m.row(j);
+    fix.sds_m[c] = sds_m[j];
+    fix.weights[c] = weights[j];
+    fix.floors[c] = floors[j];
+    ++c;
+  }
+  return fix;
+}
+
 void CheckPositionFix(const PositionFix& fix, const char* argument) {
   const std::string arg(argument);
   CheckArgument(std::isfinite(fix.time_s), arg + ".time_s", "must be finite");

@@ -85,6 +85,24 @@ TEST(FixLikelihood, FarFromEveryComponentItIsTheOutlierFloorNotMinusInfinity) {
   EXPECT_NEAR(far, o.tempering * std::log(o.outlier_probability / 1000.0), 1e-12);
 }
 
+TEST(PositionFix, FromCandidatesDropsThePaddingOfWeightZeroWithoutReadingIt) {
+  PositionFix::Means means(3, 2);
+  means << 1, 2, std::nan(""), std::nan(""), 5, 6;
+  const Eigen::Vector3d sds(1.5, std::nan(""), 2.5);
+  const Eigen::Vector3d weights(0.25, 0.0, 0.75);
+  const Eigen::Vector3i floors(2, 9, PositionFix::kAnyFloor);
+  const PositionFix fix = FixFromCandidates(4.0, means, sds, weights, floors);
+  EXPECT_EQ(fix.time_s, 4.0);
+  ASSERT_EQ(fix.means_m.rows(), 2);
+  EXPECT_EQ(fix.means_m(0, 0), 1.0);
+  EXPECT_EQ(fix.means_m(1, 1), 6.0);
+  EXPECT_EQ(fix.sds_m, Eigen::Vector2d(1.5, 2.5));
+  EXPECT_EQ(fix.weights, Eigen::Vector2d(0.25, 0.75));
+  EXPECT_EQ(fix.floors, Eigen::Vector2i(2, PositionFix::kAnyFloor));
+  CheckPositionFix(fix, "fix");  // a valid fix: the NaN padding is gone
+  EXPECT_THROW(FixFromCandidates(0.0, means, sds, Eigen::Vector2d(1.0, 1.0), floors), std::invalid_argument);
+}
+
 TEST(PositionFix, RejectsMalformedFixesNamingTheField) {
   auto message = [](const PositionFix& f) {
     try {

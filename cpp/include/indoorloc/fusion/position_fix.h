@@ -27,8 +27,9 @@ namespace indoorloc::fusion {
 struct PositionFix {
   /// "Any floor" marker (outside every real floor number and exact as a double).
   static constexpr int kAnyFloor = -(1 << 20);
+  using Means = Eigen::Matrix<double, Eigen::Dynamic, 2, Eigen::RowMajor>;
   double time_s = 0.0;
-  Eigen::Matrix<double, Eigen::Dynamic, 2, Eigen::RowMajor> means_m;  ///< K x 2 component means [m]
+  Means means_m;  ///< K x 2 component means [m]
   /// K floor numbers of the components; kAnyFloor: the component applies on every floor. Empty:
   /// every component on any floor.
   Eigen::VectorXi floors;
@@ -51,6 +52,16 @@ struct FixLikelihoodOptions {
 /// Throws std::invalid_argument naming `argument` (and the field) on a malformed fix: shapes
 /// that disagree, NaN/inf, sd <= 0, negative weights or weights summing to 0.
 void CheckPositionFix(const PositionFix& fix, const char* argument);
+
+/// The fix at `time_s` made of the candidates of nonzero weight among K: row j of `means_m`
+/// (K x 2) [m], sds_m[j] [m], weights[j] and floors[j] (kAnyFloor: any floor) for candidate j, in
+/// order. Candidates of weight 0 are padding and are dropped without being read (their mean and
+/// sd may be NaN), so fixes built from K candidates may have fewer components. The result is not
+/// checked: call CheckPositionFix on it where the candidates come from outside.
+PositionFix FixFromCandidates(double time_s, const Eigen::Ref<const PositionFix::Means>& means_m,
+                              const Eigen::Ref<const Eigen::VectorXd>& sds_m,
+                              const Eigen::Ref<const Eigen::VectorXd>& weights,
+                              const Eigen::Ref<const Eigen::VectorXi>& floors);
 
 /// Evaluates τ_fix log p(fix | z) for one fix.
 class FixLikelihood {
