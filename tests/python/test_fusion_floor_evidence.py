@@ -359,3 +359,27 @@ def test_floor_change_study_detects_spliced_walks_and_keeps_real_ones():
     assert rows[1 / 1200]["queries_right"] == 1.0 and r["chosen_all"] > 0
     assert set(r["lofo"]["chosen"]) == {"A", "B", "C"} and r["lofo"]["queries_right"] > 0.9
     assert "| 0 | 0 of 24 |" in study.markdown(r)
+
+
+def test_study_cli_passes_the_fold_seed_and_refuses_a_negative_one(tmp_path, capsys):
+    """The floor studies' command line: ``--seed`` reaches the study (the fold assignment, as
+    ``fusion evaluate --seed``) and is recorded in the JSON; a negative seed is refused."""
+    import json
+    from indoorloc.experiments import study_cli
+
+    seen = []
+
+    def compute(root, floors, seed):
+        seen.append((root, list(floors), seed))
+        return {"value": 1}
+
+    out = tmp_path / "r.json"
+    assert study_cli.run_study(["--floors", "F3", "--seed", "2", "--json", str(out)], "t", compute,
+                               lambda r: f"seed {r['seed']}") == 0
+    assert seen == [(None, ["F3"], 2)]
+    assert json.loads(out.read_text())["seed"] == 2 and "seed 2" in capsys.readouterr().out
+    study_cli.run_study([], "t", compute, lambda r: "")
+    assert seen[-1][2] == 0
+    with pytest.raises(SystemExit):
+        study_cli.run_study(["--seed", "-1"], "t", compute, lambda r: "")
+    assert "--seed" in capsys.readouterr().err

@@ -62,12 +62,12 @@ RELIABILITY_BINS = floor_evidence.RELIABILITY_BINS
 
 
 def walk_evidence(data_root: Optional[Path] = None, floors: Sequence[str] = (),
-                  grid: Optional[Dict[str, Sequence[Any]]] = None, progress=None) -> dict:
+                  grid: Optional[Dict[str, Sequence[Any]]] = None, progress=None, seed: int = 0) -> dict:
     """Per test walk: floor index, waypoints, the grid filter's log-evidence (F,), the WiFi vote
     (F,), the AP evidence (F,) per (m, α, ε) of ``grid`` and the match distance per floor (F,)
-    [dB]."""
+    [dB]. ``seed``: the fold assignment and tracker seed (``fusion evaluate --seed``)."""
     grid = grid or GRID
-    settings = fr.RealSettings()
+    settings = fr.RealSettings(seed=seed)
     _, data = fr.load_site(data_root, floors)
     all_plan = fr._all_floor_plan(data)
     plan_floors = [int(f) for f in all_plan.floors]
@@ -224,7 +224,7 @@ def markdown(result: dict) -> str:
         lines.append(f"| {name} | " + " | ".join(f"{100 * r['per_floor'][f]:.1f}" for f in floors)
                      + f" | {100 * r['accuracy']:.1f} | {r['walks_right']} of {result['n_walks']} |")
     lines += ["", "Chosen per held-out floor: " + "; ".join(f"{f}: {v}" for f, v in result["lofo"]["chosen"].items()),
-              f"Chosen on all floors: {result['chosen_all']}.",
+              f"Chosen on all floors: {result['chosen_all']}. Folds: 4-fold by walk, seed {result.get('seed', 0)}.",
               "Walks still wrong with it: " + (", ".join(f"{w['floor']} {w['walk']} ({w['n_waypoints']} waypoints, "
                                                          f"taken for {w['identified']})"
                                                          for w in result["wrong_walks_chosen_all"]) or "none") + "."]
@@ -270,7 +270,8 @@ def _jsonable(x):
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
     return study_cli.run_study(argv, __doc__.split("\n")[0],
-                               lambda root, floors: select(walk_evidence(root, floors)), markdown, _jsonable)
+                               lambda root, floors, seed: select(walk_evidence(root, floors, seed=seed)), markdown,
+                               _jsonable)
 
 
 if __name__ == "__main__":
