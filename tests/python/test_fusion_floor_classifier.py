@@ -123,3 +123,32 @@ def test_identify_floor_adds_the_weighted_classifier_evidence_and_settings_carry
         identification_classifier_weight=0.0)).classifier is None
     rates = site_model.ap_floor_rates(db, [1, 2, 3], s)
     assert isinstance(rates.classifier, FloorClassifier) and rates.classifier.floors.tolist() == [1, 2, 3]
+
+
+def test_study_chooses_the_classifier_when_it_alone_tells_the_floors_and_reports_both_deciders():
+    """Synthetic study evidence: the grid and the rates are wrong on a third of the walks, the
+    classifier's evidence right on all; the study's leave-one-floor-out choice takes the
+    classifier (weight > 0) and reports the rates-only decider apart."""
+    from indoorloc.experiments import floor_identification_study as study
+
+    rng = np.random.default_rng(6)
+    walks = []
+    for i in range(60):
+        f = i % 3
+        wrong = (f + 1) % 3 if i % 3 == 0 and i % 2 == 0 else f
+        grid = np.full(3, -5.0)
+        grid[wrong] = 0.0
+        ap = {p: grid.copy() for p in [(20, 0.1, 0.1)]}
+        clf = np.full(3, -20.0)
+        clf[f] = 0.0
+        walks.append({"floor": "ABC"[f], "floor_index": f, "walk": f"w{i}", "fold": i % 4, "n_waypoints": 5,
+                      "grid": grid + rng.normal(0, 0.1, 3), "vote": np.eye(3)[wrong], "ap": ap,
+                      "classifier": {(c, e): clf for c in study.CLASSIFIER_GRID["l2_scale"]
+                                     for e in study.CLASSIFIER_GRID["outlier_probability"]},
+                      "match_distance_db": np.full(3, 5.0)})
+    grid = {"ap_count": (20,), "rate_floor": (0.1,), "outlier_probability": (0.1,), "weight": (1.0, 2.0)}
+    r = study.select({"floors": ["A", "B", "C"], "walks": walks, "grid": grid})
+    assert r["chosen_all_figures"]["accuracy"] == 1.0 and r["chosen_all"]["classifier_weight"] > 0
+    assert r["lofo"]["accuracy"] == 1.0 and r["classifier_alone"]["accuracy"] == 1.0
+    assert r["rates_only"]["chosen_all_figures"]["accuracy"] < 0.9
+    assert "grid + AP rates + classifier, held out (LOFO)" in study.markdown(r)
