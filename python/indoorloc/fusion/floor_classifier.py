@@ -40,7 +40,9 @@ from indoorloc.validate import integer, real_array, real_scalar
 
 
 def _presence(rss_dbm: np.ndarray) -> sp.csr_matrix:
-    return sp.csr_matrix(np.isfinite(rss_dbm).astype(np.float64))
+    """The 0/1 heard matrix, sparse (built from the heard mask: no dense float copy)."""
+    rows, cols = np.nonzero(np.isfinite(rss_dbm))
+    return sp.csr_matrix((np.ones(rows.size), (rows, cols)), shape=rss_dbm.shape)
 
 
 @dataclass
