@@ -128,6 +128,16 @@ def walk_evidence(data_root: Optional[Path] = None, floors: Sequence[str] = (),
             "walks": walks, "grid": grid}
 
 
+def pooled_evidence(data_root: Optional[Path], floors: Sequence[str], seeds: Sequence[int]) -> dict:
+    """:func:`walk_evidence` of each fold seed, the walks pooled (each walk once per seed, with its
+    ``seed``): the leave-one-floor-out choice then holds out a floor's walks of every seed."""
+    parts = [walk_evidence(data_root, floors, seed=int(sd)) for sd in seeds]
+    for sd, part in zip(seeds, parts):
+        for w in part["walks"]:
+            w["seed"] = int(sd)
+    return dict(parts[0], walks=[w for part in parts for w in part["walks"]])
+
+
 def _best(points, label: np.ndarray, n_wp: np.ndarray, mask: np.ndarray) -> tuple:
     """The (values, scores) of ``points`` (an iterable) with the most waypoints right on ``mask``
     (ties: the highest mean log-probability of the true floor; then the first)."""
@@ -241,7 +251,7 @@ def select(evidence: dict) -> dict:
                   label, n_wp, everything) if classifier else None
     calibration_all = choose_calibration(scores_all, dist, label)
     have = ~np.isnan(held_p).any(axis=1)
-    wrong = [{"floor": w["floor"], "walk": w["walk"], "n_waypoints": int(w["n_waypoints"]),
+    wrong = [{"floor": w["floor"], "walk": w["walk"], "n_waypoints": int(w["n_waypoints"]), "seed": w.get("seed", 0),
               "identified": names[int(np.argmax(scores_all[i]))]}
              for i, w in enumerate(walks) if np.argmax(scores_all[i]) != label[i]]
     return {"grid_only": figures(g), "wifi_vote": figures(np.stack([w["vote"] for w in walks])),
@@ -280,9 +290,10 @@ def markdown(result: dict) -> str:
         lines.append(f"| {name} | " + " | ".join(f"{100 * r['per_floor'][f]:.1f}" for f in floors)
                      + f" | {100 * r['accuracy']:.1f} | {r['walks_right']} of {result['n_walks']} |")
     lines += ["", "Chosen per held-out floor: " + "; ".join(f"{f}: {v}" for f, v in result["lofo"]["chosen"].items()),
-              f"Chosen on all floors: {result['chosen_all']}. Folds: 4-fold by walk, seed {result.get('seed', 0)}.",
+              f"Chosen on all floors: {result['chosen_all']}. Folds: 4-fold by walk, seed(s) "
+              f"{' '.join(str(v) for v in result.get('seeds', [0]))} (several: each walk counted once per seed).",
               "Walks still wrong with it: " + (", ".join(f"{w['floor']} {w['walk']} ({w['n_waypoints']} waypoints, "
-                                                         f"taken for {w['identified']})"
+                                                         f"taken for {w['identified']}, seed {w.get('seed', 0)})"
                                                          for w in result["wrong_walks_chosen_all"]) or "none") + "."]
     cal = result.get("calibration")
     if cal:
@@ -326,7 +337,7 @@ def _jsonable(x):
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
     return study_cli.run_study(argv, __doc__.split("\n")[0],
-                               lambda root, floors, seed: select(walk_evidence(root, floors, seed=seed)), markdown,
+                               lambda root, floors, seeds: select(pooled_evidence(root, floors, seeds)), markdown,
                                _jsonable)
 
 
