@@ -359,3 +359,34 @@ def test_floor_change_study_detects_spliced_walks_and_keeps_real_ones():
     assert rows[1 / 1200]["queries_right"] == 1.0 and r["chosen_all"] > 0
     assert set(r["lofo"]["chosen"]) == {"A", "B", "C"} and r["lofo"]["queries_right"] > 0.9
     assert "| 0 | 0 of 24 |" in study.markdown(r)
+
+
+def test_study_cli_passes_the_fold_seeds_and_refuses_bad_ones(tmp_path, capsys):
+    """The floor studies' command line: ``--seed`` (one or several) reaches the study (the fold
+    assignment, as ``fusion evaluate --seed``) and is recorded in the JSON; a negative or repeated
+    seed is refused; the floor-change study takes one seed."""
+    import json
+    from indoorloc.experiments import floor_change_study, study_cli
+
+    seen = []
+
+    def compute(root, floors, seeds):
+        seen.append((root, list(floors), seeds))
+        return {"value": 1}
+
+    out = tmp_path / "r.json"
+    assert study_cli.run_study(["--floors", "F3", "--seed", "2", "--json", str(out)], "t", compute,
+                               lambda r: f"seeds {r['seeds']}") == 0
+    assert seen == [(None, ["F3"], [2])]
+    assert json.loads(out.read_text())["seeds"] == [2] and "seeds [2]" in capsys.readouterr().out
+    study_cli.run_study([], "t", compute, lambda r: "")
+    assert seen[-1][2] == [0]
+    study_cli.run_study(["--seed", "0", "3"], "t", compute, lambda r: "")
+    assert seen[-1][2] == [0, 3]
+    for bad in (["--seed", "-1"], ["--seed", "1", "1"]):
+        with pytest.raises(SystemExit):
+            study_cli.run_study(bad, "t", compute, lambda r: "")
+        assert "--seed" in capsys.readouterr().err
+    with pytest.raises(ValueError, match="--seed"):
+        floor_change_study._one_seed([0, 1])
+    assert floor_change_study._one_seed([3]) == 3

@@ -35,9 +35,10 @@ RATES = (0.0, 1 / 36000, 1 / 3600, 1 / 1200, 1 / 600, 1 / 300, 1 / 60)
 SPLICE_GAP_S = 30.0
 
 
-def query_evidence(data_root: Optional[Path] = None, floors: Sequence[str] = ()) -> dict:
-    """Per test walk: floor index, fold, query times (Q,) [s] and robust AP log-likelihoods (Q, F)."""
-    settings = fr.RealSettings()
+def query_evidence(data_root: Optional[Path] = None, floors: Sequence[str] = (), seed: int = 0) -> dict:
+    """Per test walk: floor index, fold, query times (Q,) [s] and robust AP log-likelihoods (Q, F);
+    ``seed``: the fold assignment (``fusion evaluate --seed``)."""
+    settings = fr.RealSettings(seed=seed)
     ts = site_model.TrackSettings()
     _, data = fr.load_site(data_root, floors)
     all_plan = fr._all_floor_plan(data)
@@ -127,9 +128,16 @@ def markdown(result: dict) -> str:
     return "\n".join(lines)
 
 
+def _one_seed(seeds: Sequence[int]) -> int:
+    # The spliced walks pair walks of one fold: one fold assignment at a time.
+    if len(seeds) != 1:
+        raise ValueError(f"indoorloc: argument '--seed': this study takes one seed, got {list(seeds)}")
+    return int(seeds[0])
+
+
 def main(argv: Optional[Sequence[str]] = None) -> int:
     return study_cli.run_study(argv, __doc__.split("\n")[0],
-                               lambda root, floors: select_rate(query_evidence(root, floors)), markdown)
+                               lambda root, floors, seeds: select_rate(query_evidence(root, floors, _one_seed(seeds))), markdown)
 
 
 if __name__ == "__main__":

@@ -203,7 +203,8 @@ def _identify_floor(score: WalkScore, walk, steps_raw, pdr_steps, models: FoldMo
                     if models.all_ap_rates is not None else {"ap_log_likelihood": None, "match_distance_db": None})
         found = site_model.identify_floor(ident, plan_floors, id_steps, all_fixes, evidence["ap_log_likelihood"],
                                           ts.identification_ap_weight, ts.floor_calibration(),
-                                          evidence["match_distance_db"])
+                                          evidence["match_distance_db"], evidence.get("classifier_log_likelihood"),
+                                          ts.identification_classifier_weight)
         est_floor = np.full(wt.size, found["floor"])
         score.floor_probability = found["probabilities"][found["floor"]]
         track_m = score.smoothed_track_m if found["floor"] == fl.number else np.asarray(found["result"]["mean_m"])

@@ -1,5 +1,7 @@
 """The command line the floor studies share (``floor_identification_study``, ``floor_change_study``):
-``--data-root``, ``--floors``, ``--json``, ``--markdown``; the study computed, timed, its Markdown
+``--data-root``, ``--floors``, ``--seed`` (the fold assignment, as ``fusion evaluate --seed``; one or
+several: a study may pool the walks of several fold assignments), ``--json``, ``--markdown``; the
+study computed, timed, its Markdown
 printed, and the JSON and Markdown written atomically (``io.atomic_file.write_text_atomic``)."""
 
 from __future__ import annotations
@@ -7,26 +9,31 @@ from __future__ import annotations
 import argparse
 import json
 import time
-from typing import Any, Callable, Dict, Optional, Sequence
+from typing import Any, Callable, Dict, List, Optional, Sequence
 
 from indoorloc.io.atomic_file import write_text_atomic
 
 
 def run_study(argv: Optional[Sequence[str]], description: str,
-              compute: Callable[[Optional[str], Sequence[str]], Dict[str, Any]],
+              compute: Callable[[Optional[str], Sequence[str], List[int]], Dict[str, Any]],
               markdown: Callable[[Dict[str, Any]], str],
               jsonable: Callable[[Dict[str, Any]], Any] = lambda result: result) -> int:
-    """Parses ``argv``, runs ``compute(data_root, floors)`` (its result gains ``seconds``, the wall
-    time [s]), prints ``markdown(result)`` and writes ``--json`` (``jsonable(result)``) and
+    """Parses ``argv``, runs ``compute(data_root, floors, seeds)`` (``seeds`` the list of ``--seed``
+    values; its result gains ``seconds``, the wall time [s], and ``seeds``), prints ``markdown(result)`` and writes ``--json`` (``jsonable(result)``) and
     ``--markdown`` if given. Returns the exit status 0."""
     ap = argparse.ArgumentParser(description=description)
     ap.add_argument("--data-root", default=None)
     ap.add_argument("--floors", nargs="*", default=[])
     ap.add_argument("--json", default=None)
     ap.add_argument("--markdown", default=None)
+    ap.add_argument("--seed", type=int, nargs="+", default=[0],
+                    help="fold assignment seed(s) (default 0, as fusion evaluate); several: their walks pooled")
     args = ap.parse_args(argv)
+    if any(v < 0 for v in args.seed) or len(set(args.seed)) != len(args.seed):
+        ap.error(f"argument --seed: expected distinct seeds >= 0, got {args.seed}")
     tic = time.perf_counter()
-    result = compute(args.data_root, args.floors)
+    result = compute(args.data_root, args.floors, list(args.seed))
+    result["seeds"] = list(args.seed)
     result["seconds"] = round(time.perf_counter() - tic, 1)
     text = markdown(result)
     print(text)

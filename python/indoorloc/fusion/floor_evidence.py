@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Optional, Sequence
+from typing import Any, Optional, Sequence
 
 import numpy as np
 
@@ -56,6 +56,10 @@ class ApFloorRates:
 
     floors: np.ndarray
     log_rate: np.ndarray
+    #: The floor classifier fitted on the same database (``fusion.floor_classifier.FloorClassifier``,
+    #: same floors and columns), or None: ``site_model.ap_floor_rates`` attaches it when its
+    #: weight is > 0, so that what a site or a fold keeps for floor identification is one object.
+    classifier: Optional[Any] = None
 
     @classmethod
     def from_references(cls, rss_dbm: np.ndarray, reference_floors: np.ndarray, floors: Sequence[int],

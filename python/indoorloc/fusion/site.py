@@ -359,7 +359,8 @@ class Site:
             evidence = site_model.walk_floor_evidence(walk, database, rates, self.settings)
             ident = site_model.identify_floor(tracker_all, numbers, site_model.tracker_steps(
                 steps_raw, first_cal, self.settings), wifi_fixes.fixes_for_walk(walk, database),
-                evidence["ap_log_likelihood"], weight, self.settings.floor_calibration(), evidence["match_distance_db"])
+                evidence["ap_log_likelihood"], weight, self.settings.floor_calibration(), evidence["match_distance_db"],
+                evidence["classifier_log_likelihood"], self.settings.identification_classifier_weight)
             by_number = {n: name for name, (n, _) in self._floors.items()}
             floor = by_number[ident["floor"]]
             if evidence["floor_changes"]:

@@ -24,6 +24,7 @@ import numpy as np
 
 from indoorloc.pdr import handheld as ph
 from indoorloc.fusion import wifi_fixes, floor_evidence
+from indoorloc.fusion.floor_classifier import FloorClassifier
 from indoorloc.fusion.floor_sequence import floor_sequence
 from indoorloc.fusion.steps import Steps
 from indoorloc.fusion.grid import GridTracker, GridTrackerOptions, track_grid
@@ -31,6 +32,12 @@ from indoorloc._core.fusion import LiveSessionOptions
 
 #: The C++ live session's defaults: the one definition of the per-step PDR noise.
 _LIVE_DEFAULTS = LiveSessionOptions()
+
+
+#: The floor classifier's defaults (TrackSettings.identification_classifier_*).
+CLASSIFIER_WEIGHT = 2.0
+CLASSIFIER_L2_SCALE = 0.1
+CLASSIFIER_OUTLIER_PROBABILITY = 0.01
 
 
 @dataclass
@@ -58,23 +65,32 @@ class TrackSettings:
     #: chosen with (the tracker's own ε went to 0.01 later; with it the pass fell from 98.6 to
     #: 97.4 % of waypoints, because the weight balances the two evidences).
     identification_fix_outlier_probability: float = 0.1
-    #: The AP evidence added to the filter's (``fusion.floor_evidence``): weight λ (0: the filter
-    #: alone), m strongest APs per query, rate floor α, outlier probability ε. The point chosen on
-    #: all six floors of the competition site by ``experiments.floor_identification_study`` (m over
-    #: 1-50, α 0.001-0.1, ε 0.05-0.6, λ 0.5-30; a plateau of ties: α 0.01-0.1 give the same
-    #: accuracy); held out by floor it chose this point for four of six (docs/fusion_real.md,
+    #: The AP detection rates' evidence added to the filter's (``fusion.floor_evidence``): weight λ
+    #: (0: not added), m strongest APs per query, rate floor α, outlier probability ε. Chosen with
+    #: the classifier below by ``experiments.floor_identification_study`` (m over 1-50, α 0.001-0.1,
+    #: ε 0.05-0.6, λ 0 and 0.5-30): with the classifier, λ = 0 on all six floors and for every
+    #: held-out floor (the classifier carries what the rates said). m, α and ε stay for the floor
+    #: sequence (``identification_floor_change_rate_per_s``) and for λ > 0 (docs/fusion_real.md,
     #: "Floor identification").
-    identification_ap_weight: float = 2.0
+    identification_ap_weight: float = 0.0
     identification_ap_count: int = 20
     identification_ap_rate_floor: float = 0.1
     identification_ap_outlier_probability: float = 0.1
+    #: The floor classifier's evidence added to the filter's (``fusion.floor_classifier``): weight
+    #: μ (0: no classifier), its L2 scale C and outlier probability ε. The point chosen on all six
+    #: floors of the competition site by ``experiments.floor_identification_study`` (C 0.1-1, ε
+    #: 0.01-0.2, μ 0-10, jointly with the rates' settings); held out by floor, the same C and ε
+    #: every time, μ 2 for four floors (docs/fusion_real.md, "Floor identification").
+    identification_classifier_weight: float = CLASSIFIER_WEIGHT
+    identification_classifier_l2_scale: float = CLASSIFIER_L2_SCALE
+    identification_classifier_outlier_probability: float = CLASSIFIER_OUTLIER_PROBABILITY
     #: Calibration of the reported floor probabilities (``floor_evidence.FloorCalibration``):
     #: temperature T of the combined score, δ_10 the probability that the evidence misleads at a
     #: match distance of 10 dB on the chosen floor, and b the slope of logit δ in the log of that
     #: distance. Chosen by leave-one-floor-out log loss over walks with
     #: ``experiments.floor_identification_study``; they change the probabilities, never the floor.
-    identification_temperature: float = 1.0
-    identification_error_probability: float = 0.03
+    identification_temperature: float = 0.5
+    identification_error_probability: float = 0.01
     identification_error_slope: float = 2.0
     #: Rate r [1/s] of floor changes of the AP evidence's floor sequence (``fusion.floor_sequence``),
     #: which tells a walk that seems to change floor (the tracker keeps it on one). Chosen by
@@ -99,6 +115,15 @@ class TrackSettings:
         if not 0 < self.identification_fix_outlier_probability < 1:
             raise ValueError(f"indoorloc: TrackSettings.identification_fix_outlier_probability must be in (0, 1), "
                              f"got {self.identification_fix_outlier_probability!r}")
+        if not (math.isfinite(self.identification_classifier_weight) and self.identification_classifier_weight >= 0):
+            raise ValueError(f"indoorloc: TrackSettings.identification_classifier_weight must be finite and >= 0, "
+                             f"got {self.identification_classifier_weight!r}")
+        if not (math.isfinite(self.identification_classifier_l2_scale) and self.identification_classifier_l2_scale > 0):
+            raise ValueError(f"indoorloc: TrackSettings.identification_classifier_l2_scale must be finite and > 0, "
+                             f"got {self.identification_classifier_l2_scale!r}")
+        if not 0 <= self.identification_classifier_outlier_probability <= 1:
+            raise ValueError(f"indoorloc: TrackSettings.identification_classifier_outlier_probability must be in "
+                             f"[0, 1], got {self.identification_classifier_outlier_probability!r}")
         if not 0 <= self.identification_ap_outlier_probability <= 1:
             raise ValueError(f"indoorloc: TrackSettings.identification_ap_outlier_probability must be in [0, 1], "
                              f"got {self.identification_ap_outlier_probability!r}")
@@ -127,6 +152,9 @@ class TrackSettings:
                                                           "identification_offset_bins", "identification_ap_weight",
                                                           "identification_ap_count", "identification_ap_rate_floor",
                                                           "identification_ap_outlier_probability",
+                                                          "identification_classifier_weight",
+                                                          "identification_classifier_l2_scale",
+                                                          "identification_classifier_outlier_probability",
                                                           "identification_fix_outlier_probability",
                                                           "identification_temperature",
                                                           "identification_error_probability",
@@ -238,9 +266,15 @@ def run_default(tracker: GridTracker, steps: Steps, fixes, smooth: bool = True) 
 def ap_floor_rates(database: wifi_fixes.FingerprintDatabase, floors: Sequence[int], settings: TrackSettings
                    ) -> floor_evidence.ApFloorRates:
     """The per-floor AP detection rates of an all-floor fingerprint database (rows in the order of
-    ``floors``, the identification tracker's), for :func:`identify_floor`."""
-    return floor_evidence.ApFloorRates.from_references(database.rss_dbm, database.floors, floors,
-                                                       settings.identification_ap_rate_floor)
+    ``floors``, the identification tracker's), for :func:`identify_floor`; with the floor
+    classifier fitted on the same database attached (``classifier``) when its weight
+    (``identification_classifier_weight``) is > 0."""
+    rates = floor_evidence.ApFloorRates.from_references(database.rss_dbm, database.floors, floors,
+                                                        settings.identification_ap_rate_floor)
+    if settings.identification_classifier_weight > 0:
+        rates.classifier = FloorClassifier.fit(database.rss_dbm, database.floors, floors,
+                                               settings.identification_classifier_l2_scale)
+    return rates
 
 
 def walk_ap_log_likelihood(walk: Any, database: wifi_fixes.FingerprintDatabase, rates: floor_evidence.ApFloorRates,
@@ -255,7 +289,9 @@ def walk_floor_evidence(walk: Any, database: wifi_fixes.FingerprintDatabase, rat
     """What :func:`identify_floor` takes from the walk's WiFi, per floor of ``rates`` (F,):
     ``ap_log_likelihood`` [nats] (``floor_evidence.walk_floor_log_likelihood``) and
     ``match_distance_db`` [dB] (``floor_evidence.walk_match_distance_db``), both on the walk's
-    query fingerprints in the database's columns; and the AP evidence's floor sequence
+    query fingerprints in the database's columns; ``classifier_log_likelihood`` [nats] (F,), the
+    floor classifier's evidence (``fusion.floor_classifier``; None when ``rates`` has no
+    classifier); and the AP evidence's floor sequence
     (``fusion.floor_sequence`` at ``identification_floor_change_rate_per_s``): ``query_t_s``
     (Q,) [s], ``query_floors`` (Q,) floor numbers, ``floor_changes`` the changes along it."""
     t, queries = wifi_fixes.walk_queries(walk, database)
@@ -264,17 +300,25 @@ def walk_floor_evidence(walk: Any, database: wifi_fixes.FingerprintDatabase, rat
     seq = floor_sequence(per_query, t[used], settings.identification_floor_change_rate_per_s)
     dist = np.array([floor_evidence.walk_match_distance_db(database.rss_dbm, database.floors, int(f), queries)
                      for f in rates.floors])
-    return {"ap_log_likelihood": per_query.sum(axis=0), "match_distance_db": dist, "query_t_s": t[used],
+    classifier = None
+    if rates.classifier is not None:
+        classifier = rates.classifier.walk_log_likelihood(queries, settings.identification_classifier_outlier_probability)
+    return {"ap_log_likelihood": per_query.sum(axis=0), "match_distance_db": dist,
+            "classifier_log_likelihood": classifier, "query_t_s": t[used],
             "query_floors": np.asarray(rates.floors)[seq["path"]], "floor_changes": seq["changes"]}
 
 
 def identify_floor(tracker_all: GridTracker, floors: Sequence[int], steps: Steps, fixes,
                    ap_log_likelihood: Optional[np.ndarray] = None, ap_weight: float = 0.0,
                    calibration: Optional[floor_evidence.FloorCalibration] = None,
-                   match_distance_db: Optional[np.ndarray] = None) -> Dict[str, Any]:
+                   match_distance_db: Optional[np.ndarray] = None,
+                  classifier_log_likelihood: Optional[np.ndarray] = None,
+                  classifier_weight: float = 0.0) -> Dict[str, Any]:
     """The floor of a walk (a walk stays on one floor): the floor with the most evidence, the
     all-floor filter's log-evidence per floor plus ``ap_weight`` x the walk's AP evidence
-    ``ap_log_likelihood`` (F,) (:func:`walk_floor_evidence`; None: the filter alone).
+    ``ap_log_likelihood`` (F,) (:func:`walk_floor_evidence`; None: the filter alone) plus
+    ``classifier_weight`` x the floor classifier's evidence ``classifier_log_likelihood`` (F,)
+    (:func:`walk_floor_evidence`; None: none).
 
     Returns ``{"floor": int, "probabilities": {floor: p}, "score": {floor: nats},
     "match_distance_db": float or None, "error_probability": δ, "grid_probabilities": {floor: p},
@@ -291,6 +335,12 @@ def identify_floor(tracker_all: GridTracker, floors: Sequence[int], steps: Steps
         if ap.shape != score.shape:
             raise ValueError(f"indoorloc: argument 'ap_log_likelihood': expected shape {score.shape}, got {ap.shape}")
         score = score + ap_weight * ap
+    if classifier_log_likelihood is not None and classifier_weight > 0:
+        k = np.asarray(classifier_log_likelihood, float)
+        if k.shape != score.shape:
+            raise ValueError(f"indoorloc: argument 'classifier_log_likelihood': expected shape {score.shape}, "
+                             f"got {k.shape}")
+        score = score + classifier_weight * k
     best = int(np.argmax(score))
     dist = None
     if match_distance_db is not None:
