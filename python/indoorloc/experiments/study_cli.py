@@ -10,6 +10,7 @@ import time
 from typing import Any, Callable, Dict, Optional, Sequence
 
 from indoorloc.io.atomic_file import write_text_atomic
+from indoorloc import progress as _progress
 
 
 def run_study(argv: Optional[Sequence[str]], description: str,
@@ -24,7 +25,9 @@ def run_study(argv: Optional[Sequence[str]], description: str,
     ap.add_argument("--floors", nargs="*", default=[])
     ap.add_argument("--json", default=None)
     ap.add_argument("--markdown", default=None)
+    ap.add_argument("--quiet", action="store_true", help="no progress bars or lines")
     args = ap.parse_args(argv)
+    _progress.set_quiet(args.quiet)
     tic = time.perf_counter()
     result = compute(args.data_root, args.floors)
     result["seconds"] = round(time.perf_counter() - tic, 1)
