@@ -7,6 +7,7 @@ import pytest
 
 from indoorloc.experiments import pdr_gait_sweep as gs
 from indoorloc.experiments import pdr_health_signals as hs
+from indoorloc.experiments import pdr_low_motion as lm
 
 
 def _row(armse, err=0, truth=10):
@@ -63,3 +64,39 @@ def test_the_gait_sweep_spans_its_axes():
     assert len(recs) == int(np.prod([len(v) for v in gs.SWEEP_AXES.values()]))
     assert len({r.name for r in recs}) == len(recs)  # names are unique (the studies key on them)
     assert recs[0].distance_m == pytest.approx(2 * 0.3) and recs[-1].distance_m == pytest.approx(2 * 1.4)
+
+
+def test_a_health_limit_is_chosen_without_the_recording_it_scores():
+    def run(name, good, value, reasons=()):
+        return {"label": "PyShoe", "name": name, "good": good, "onset_speed_share": value, "gait_reasons": list(reasons),
+                "ekf_flag": False}
+
+    table = [run("a", True, 0.30), run("a", False, 0.90), run("b", True, 0.50), run("b", False, 0.40),
+             run("c", True, 0.20), run("c", False, 3.0, ["the median swing lasts 0.05 s"])]  # c's failure: another check
+    out = lm.onset_share_limit_cv(table)
+    # without a: top good 0.50 -> 0.5; without b: 0.30 -> 0.3; without c: 0.50 -> 0.5
+    assert out["chosen"] == {0.5: 2, 0.3: 1}
+    assert (out["failures"], out["failures_caught"]) == (2, 2)      # a's 0.9 > 0.5, b's 0.4 > 0.3
+    assert (out["good"], out["good_flagged"]) == (3, 1)             # b's 0.5 > 0.3: flagged held out
+
+
+def test_setting_cv_labels_and_holds_out_every_recording(monkeypatch):
+    class Rec:
+        def __init__(self, i):
+            self.i, self.name = i, f"r{i}"
+            self.truth_xy_m = np.array([[0.0, 0.0], [1.0, 0.0]])
+
+    armse = {(0.0, 0.0): [0.3, 0.3, 0.3], (1.5, 1.0): [0.1, 0.1, 0.9]}
+
+    def fake_score(rec, split_swing_share, stance_core_decades):
+        return {"armse_m": armse[(split_swing_share, stance_core_decades)][rec.i], "stride_error": 0,
+                "strides_truth": 10, "health": {"implausible": False}, "path_m": 1.0}
+
+    monkeypatch.setattr(gs.lm, "score", fake_score)
+    settings = [{"split_swing_share": 0.0, "stance_core_decades": 0.0}, {"split_swing_share": 1.5, "stance_core_decades": 1.0}]
+    out = gs.setting_cv({"g": [Rec(0), Rec(1), Rec(2)]}, settings)
+    # without r2 the second setting wins (0.1 < 0.3); without r0 or r1 it averages 0.5 > 0.3
+    assert [h["armse_m"] for h in out["held"]] == [0.3, 0.3, 0.9]
+    assert out["chosen"] == {"split_swing_share 0, stance_core_decades 0": 2,
+                             "split_swing_share 1.5, stance_core_decades 1": 1}
+    assert "| g | after (CV, held out) |" in gs.markdown(out)

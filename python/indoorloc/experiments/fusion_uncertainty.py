@@ -36,6 +36,7 @@ from typing import Dict, List, Optional, Sequence
 import numpy as np
 
 from indoorloc.experiments import fusion_real
+from indoorloc import progress as _progress
 
 #: The methods whose returned covariance is calibrated (the grid engine's).
 METHODS = ("fusion_unknown_start", "fusion_smoother", "fusion_known_start")
@@ -257,7 +258,9 @@ def main(argv: Optional[List[str]] = None) -> int:
     ap.add_argument("--data-root", type=Path, default=None, help="ILC site folder (default: the shared one)")
     ap.add_argument("--floors", nargs="*", default=[], help="floor folders (default: every one)")
     ap.add_argument("--out", type=Path, default=None, help="write OUT.json and OUT.md")
+    ap.add_argument("--quiet", action="store_true", help="no progress bars or lines")
     args = ap.parse_args(argv)
+    _progress.set_quiet(args.quiet)
     result = run(args.data_root, args.floors)
     text = markdown(result)
     print(text)

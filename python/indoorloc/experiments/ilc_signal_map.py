@@ -40,6 +40,7 @@ from indoorloc.pdr import handheld
 from indoorloc import wifi
 from indoorloc.fusion import crowdsourced_map
 from indoorloc.progress import progress
+from indoorloc import progress as _progress
 
 PathLike = Union[str, Path]
 
@@ -301,7 +302,9 @@ def main(argv: Optional[Sequence[str]] = None) -> None:
     ap.add_argument("--folds", type=int, default=4)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--json", default=None)
+    ap.add_argument("--quiet", action="store_true", help="no progress bars or lines")
     a = ap.parse_args(argv)
+    _progress.set_quiet(a.quiet)
     r = evaluate(a.data_root, a.floors, a.folds, seed=a.seed)
     print(markdown(r))
     if a.json:

@@ -28,6 +28,7 @@ import numpy as np
 
 from indoorloc import mapmatch
 from indoorloc.experiments import mapmatch_reproduce as mr
+from indoorloc import progress as _progress
 
 HALFWIDTHS_M = (0.1, 0.15, 0.2, 0.27, 0.35, 0.45, 0.6, 0.8, 1.0, 1.3)
 VALIDATION_SEEDS = (1000, 2000)
@@ -74,7 +75,9 @@ def main(argv=None) -> None:
     p.add_argument("--halfwidths", type=float, nargs="+", default=list(HALFWIDTHS_M), help="a values [m] to try")
     p.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
     p.add_argument("--out", default=None, help="JSON file for every validation error and the choice")
+    p.add_argument("--quiet", action="store_true", help="no progress bars or lines")
     args = p.parse_args(argv)
+    _progress.set_quiet(args.quiet)
     errors = validation_errors(args.halfwidths, runs=args.runs, variants=args.variants)
     result = {"runs": args.runs, "seeds": list(VALIDATION_SEEDS), "halfwidths_m": args.halfwidths,
               "errors": {v: {str(s): {str(a): row for a, row in rows.items()} for s, rows in f.items()}

@@ -19,7 +19,9 @@ fewer metres lost, far more strides.) :func:`sweep_health`: failures (ARMSE >= 0
 runs of the sweep, flagged or not, and walks traded for a standstill.
 
 ``nice -n 10 python -m indoorloc.experiments.pdr_gait_sweep --data-root ../shared/data/pdr``
-(about 5 minutes on one core) prints both as Markdown.
+(about 5 minutes on one core) prints both as Markdown; ``--study stance_rules`` cross-validates
+the mid-swing blip rule and the stance core of :mod:`indoorloc.pdr.recommended` instead, over
+:data:`STANCE_RULE_GRID` (about 15 minutes).
 """
 
 from __future__ import annotations
@@ -36,11 +38,17 @@ import numpy as np
 from indoorloc.experiments import pdr_low_motion as lm
 from indoorloc.io.pdr_datasets import ImuRecording, list_pyshoe_trials, load_pyshoe_trial
 from indoorloc.pdr import metrics
-from indoorloc.progress import progress
+from indoorloc.progress import progress, set_quiet
 from indoorloc.simulate.foot_gait import foot_gait
 
 #: Values of ``min_swing_share`` cross-validated (grid order = tie order; 0 = the rule before).
 SHARE_GRID = [0.0, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4]
+
+#: Settings of the two stance rules cross-validated together (``--study stance_rules``; the first
+#: is the rule before, both off): ``split_swing_share`` (:data:`~indoorloc.pdr.recommended.SPLIT_SWING_SHARE`)
+#: and ``stance_core_decades`` (:data:`~indoorloc.pdr.recommended.STANCE_CORE_DECADES`).
+STANCE_RULE_GRID = [{"split_swing_share": k, "stance_core_decades": c}
+                    for k in (0.0, 1.0, 1.5, 2.0) for c in (0.0, 0.25, 0.5, 0.75, 1.0, 1.25, 1.5)]
 
 #: The sweep's axes: stride [m], swing [s], stance [s], stance tremor [rad/s], accelerometer
 #: noise sd [m/s^2] (gyro: a tenth, in rad/s), pitch [deg] (5: a flat swing with 2 cm of lift;
@@ -91,33 +99,53 @@ def _stats(rows: Sequence[Dict[str, Any]]) -> Dict[str, float]:
             "standstill_unflagged": standstill_trades([r for r in rows if not r["health"]["implausible"]])}
 
 
-def share_cv(groups: Dict[str, Sequence[ImuRecording]], grid: Sequence[float] = SHARE_GRID) -> Dict[str, Any]:
-    """Leave-one-recording-out choice of ``min_swing_share`` (module docstring). Returns the
-    per-setting rows, the held-out rows, the choices and per-group statistics."""
+def _label(setting: Dict[str, float]) -> str:
+    return ", ".join(f"{k} {v:g}" for k, v in setting.items())
+
+
+def setting_cv(groups: Dict[str, Sequence[ImuRecording]], settings: Sequence[Dict[str, float]]) -> Dict[str, Any]:
+    """Leave-one-recording-out choice among ``settings`` (keyword overrides of
+    :func:`indoorloc.pdr.recommended.run_recommended`; list order = tie order, the first is the
+    rule "before"): every setting runs on every recording, each held-out recording is scored with
+    the setting of least :func:`_objective` over the others. Returns the per-setting rows
+    (``table``, keyed by label), the held-out rows, the labels chosen and per-group statistics."""
     names = list(groups)
     recs = [r for g in names for r in groups[g]]
     label = np.array([g for g in names for _ in groups[g]])
     truth = [metrics.path_length(r.truth_xy_m) for r in recs]
+    labels = [_label(st) for st in settings]
     table = {}
-    for share in progress(grid, total=len(grid), desc="min_swing_share"):
-        table[share] = [dict(lm.score(r, min_swing_share=share), truth_path_m=truth[i]) for i, r in enumerate(recs)]
+    for lab, st in progress(list(zip(labels, settings)), total=len(settings), desc="settings"):
+        table[lab] = [dict(lm.score(r, **st), truth_path_m=truth[i]) for i, r in enumerate(recs)]
     chosen, held = [], []
     all_keep = np.ones(len(recs), dtype=bool)
     for j in range(len(recs)):
         keep = all_keep.copy()
         keep[j] = False
-        scores = [_objective(table[s], label, keep) for s in grid]
-        best = grid[int(np.argmin(scores))]
+        scores = [_objective(table[lab], label, keep) for lab in labels]
+        best = labels[int(np.argmin(scores))]
         chosen.append(best)
         held.append(table[best][j])
-    out: Dict[str, Any] = {"grid": list(grid), "chosen": Counter(chosen), "table": table, "held": held,
-                           "objective_all": {s: _objective(table[s], label, all_keep) for s in grid}, "groups": {}}
+    out: Dict[str, Any] = {"settings": list(settings), "chosen": Counter(chosen), "table": table, "held": held,
+                           "objective_all": {lab: _objective(table[lab], label, all_keep) for lab in labels},
+                           "groups": {}, "names": [getattr(r, "name", str(i)) for i, r in enumerate(recs)],
+                           "group_of": list(label)}
     for g in names:
         idx = np.flatnonzero(label == g)
-        out["groups"][(g, "before (share 0)")] = _stats([table[grid[0]][i] for i in idx])
+        out["groups"][(g, f"before ({labels[0]})")] = _stats([table[labels[0]][i] for i in idx])
         out["groups"][(g, "after (CV, held out)")] = _stats([held[i] for i in idx])
-        for s in grid[1:]:
-            out["groups"][(g, f"share {s:g} (all folds)")] = _stats([table[s][i] for i in idx])
+        for lab in labels[1:]:
+            out["groups"][(g, f"{lab} (all folds)")] = _stats([table[lab][i] for i in idx])
+    return out
+
+
+def share_cv(groups: Dict[str, Sequence[ImuRecording]], grid: Sequence[float] = SHARE_GRID) -> Dict[str, Any]:
+    """:func:`setting_cv` over ``min_swing_share`` (module docstring); ``chosen`` and ``grid`` in
+    share values."""
+    out = setting_cv(groups, [{"min_swing_share": sh} for sh in grid])
+    by_label = {_label({"min_swing_share": sh}): sh for sh in grid}
+    out["chosen"] = Counter({by_label[k]: n for k, n in out["chosen"].items()})
+    out["grid"] = list(grid)
     return out
 
 
@@ -136,19 +164,24 @@ def markdown(cv: Dict[str, Any]) -> str:
         lines.append(f"| {g} | {rule} | {s['n']} | {s['median']:.3f} | {s['mean']:.3f} | {s['worst']:.3f} | "
                      f"{s['sd']:.3f} | {s['strides_off']} of {s['strides_truth']} | {s['failures']} "
                      f"({s['failures_unflagged']}) | {s['good_flagged']} | {s['standstill']} ({s['standstill_unflagged']}) |")
-    lines += ["", "Shares chosen by the folds: " + ", ".join(f"{k:g} x{n}" for k, n in sorted(cv["chosen"].items())),
-              "Objective on all recordings: " + ", ".join(f"{k:g}: {v:.2f}" for k, v in cv["objective_all"].items())]
+    lines += ["", "Chosen by the folds: " + "; ".join(f"{k} x{n}" for k, n in sorted(cv["chosen"].items(), key=str)),
+              "Objective on all recordings: " + "; ".join(f"{k}: {v:.2f}" for k, v in cv["objective_all"].items())]
     return "\n".join(lines)
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data-root", required=True, help="the shared pdr data folder")
+    ap.add_argument("--study", choices=("min_swing_share", "stance_rules"), default="min_swing_share",
+                    help="the constants cross-validated: the rhythm floor's share (MIN_SWING_SHARE) or the two "
+                         "stance rules (SPLIT_SWING_SHARE, STANCE_CORE_DECADES)")
     ap.add_argument("--pickle", default=None, help="also save the per-setting rows here (pickle, for analysis)")
+    ap.add_argument("--quiet", action="store_true", help="no progress bars or lines")
     args = ap.parse_args(argv)
+    set_quiet(args.quiet)
     shared = [load_pyshoe_trial(p) for p in list_pyshoe_trials(Path(args.data_root) / "pyshoe_vicon")]
     groups = {"PyShoe trials": shared, "synthetic slow shuffles": lm.synthetic_gaits(), "synthetic gait sweep": gait_sweep()}
-    cv = share_cv(groups)
+    cv = share_cv(groups) if args.study == "min_swing_share" else setting_cv(groups, STANCE_RULE_GRID)
     print(markdown(cv))
     if args.pickle:
         import os

@@ -36,6 +36,7 @@ from indoorloc import pdr
 from indoorloc.experiments import pdr_evaluate as pe
 from indoorloc.io.pdr_datasets import ImuRecording, list_pyshoe_trials, load_pyshoe_trial
 from indoorloc.pdr import metrics, recommended
+from indoorloc.progress import progress, set_quiet
 
 #: Fixed thresholds of the runs (log10), as in the calibration table.
 LOG_THRESHOLDS = (4.0, 4.5, 5.0, 5.5, 6.0, 6.5, 7.0)
@@ -48,7 +49,7 @@ SIGNALS = {"longest_over_median_swing": True, "onset_speed_mps": True, "onset_sp
 def _path_at(rec: ImuRecording, threshold: float) -> float:
     """2-D path length [m] of the EKF + RTS with a fixed SHOE threshold."""
     det = recommended.detect_stance(rec, rule="fixed", threshold=threshold, max_threshold=10.0 * threshold)
-    stance = np.asarray(det["stance"], dtype=bool)
+    stance = np.asarray(det["zupt_stance"], dtype=bool)
     out = pdr.zupt_ekf(rec.time_s, rec.acc_mps2, rec.gyro_radps, stance, options=pdr.ZuptEkfOptions(smooth=True))
     return metrics.path_length(np.asarray(out["positions_m"])[:, :2])
 
@@ -102,9 +103,11 @@ def markdown(rows: Sequence[Dict[str, Any]]) -> str:
 def main(argv: Optional[Sequence[str]] = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data-root", required=True, help="the shared pdr data folder")
+    ap.add_argument("--quiet", action="store_true", help="no progress bars or lines")
     args = ap.parse_args(argv)
+    set_quiet(args.quiet)
     runs = []
-    for p in list_pyshoe_trials(Path(args.data_root) / "pyshoe_vicon"):
+    for p in progress(list_pyshoe_trials(Path(args.data_root) / "pyshoe_vicon"), desc="trials"):
         rec = load_pyshoe_trial(p)
         runs.append(signals(rec, "recommended"))
         for lg in LOG_THRESHOLDS:

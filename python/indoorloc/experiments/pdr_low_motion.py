@@ -37,7 +37,7 @@ import numpy as np
 from indoorloc.experiments import pdr_evaluate as pe
 from indoorloc.io.pdr_datasets import ImuRecording, list_pyshoe_trials, load_pyshoe_trial
 from indoorloc.pdr import metrics, recommended
-from indoorloc.progress import progress
+from indoorloc.progress import progress, set_quiet
 from indoorloc.simulate.foot_gait import slow_low_motion_gait
 
 #: The constants cross-validated (grid order = tie order).
@@ -49,7 +49,8 @@ GRID: List[Dict[str, float]] = [
 #: flicker kept (:func:`_before` takes the raw stance). It differs from the old code only when no
 #: rung is accepted at all (the old code kept the cap, this the most regular rung), which happens
 #: on none of the recordings here.
-BEFORE = {"min_plausible_swing_s": 0.0, "min_stance_s": 0.02, "low_motion_min_stance_s": 0.02, "min_swing_share": 0.0}
+BEFORE = {"min_plausible_swing_s": 0.0, "min_stance_s": 0.02, "low_motion_min_stance_s": 0.02, "min_swing_share": 0.0,
+          "split_swing_share": 0.0, "stance_core_decades": 0.0}
 
 
 def synthetic_gaits() -> List[ImuRecording]:
@@ -170,6 +171,7 @@ def health_table(recs: Sequence[ImuRecording], n_shared: int) -> List[Dict[str, 
                       "stride_ratio": row["n_strides"] / ev["rhythm_strides"] if ev["rhythm_strides"] else None,
                       "energy_mps2": ev["energy_mps2"], "strength": ev["strength"],
                       "stance_motion_ratio": h.get("stance_motion_ratio"),
+                      "onset_speed_share": recommended.onset_speed_share(h),
                       "ekf_flag": any(r not in reasons for r in h.get("reasons", [])),
                       "gait_reasons": reasons})
     return table
@@ -178,36 +180,53 @@ def health_table(recs: Sequence[ImuRecording], n_shared: int) -> List[Dict[str, 
 #: Grid of :func:`stance_motion_limit_cv` (HEALTH_LIMITS["max_stance_motion_ratio"]).
 STANCE_MOTION_GRID = [round(0.06 + 0.01 * i, 2) for i in range(35)]
 
+#: Grid of :func:`onset_share_limit_cv` (HEALTH_LIMITS["max_onset_speed_share"]).
+ONSET_SHARE_GRID = [round(0.3 + 0.05 * i, 2) for i in range(35)]
 
-def stance_motion_limit_cv(table: List[Dict[str, Any]]) -> Dict[str, Any]:
-    """Leave one recording out: the limit of the stance-motion check is the least value of
-    :data:`STANCE_MOTION_GRID` above every good run (ARMSE < 0.4 m) of the other recordings; the
-    held-out recording's runs are then scored. Only runs no other check flags take part (the
-    check is there for what the others miss); the previous-rule synthetic rows are left out
-    (their failures are flagged by the swing check)."""
+#: The first words of each gait check's reason (:func:`indoorloc.pdr.recommended.gait_plausibility`).
+_REASON_START = {"stance_motion_ratio": "the samples called stance move", "onset_speed_share": "the foot still moved"}
+
+
+def limit_cv(table: List[Dict[str, Any]], key: str, grid: Sequence[float]) -> Dict[str, Any]:
+    """Leave one recording out: the limit of the check on ``key`` (a statistic of the
+    :func:`health_table` rows, flagged above the limit) is the least value of ``grid`` above every
+    good run (ARMSE < 0.4 m) of the other recordings; the held-out recording's runs are then
+    scored. Only runs no other check flags take part (the check is there for what the others
+    miss); the previous-rule synthetic rows are left out (their failures are flagged by the
+    swing check)."""
     runs = []
     for r in table:
-        if r["label"] == "synthetic, before" or r["stance_motion_ratio"] is None:
+        if r["label"] == "synthetic, before" or r[key] is None or not np.isfinite(r[key]):
             continue
-        others = [x for x in r["gait_reasons"] if not x.startswith("the samples called stance move")]
+        others = [x for x in r["gait_reasons"] if not x.startswith(_REASON_START[key])]
         if others or r["ekf_flag"]:
             continue
         runs.append(r)
     chosen, caught, fails, flagged_good, goods = [], 0, 0, 0, 0
     for name in sorted({r["name"] for r in runs}):
         train = [r for r in runs if r["name"] != name]
-        top = max((r["stance_motion_ratio"] for r in train if r["good"]), default=0.0)
-        limit = next((g for g in STANCE_MOTION_GRID if g >= top), STANCE_MOTION_GRID[-1])
+        top = max((r[key] for r in train if r["good"]), default=0.0)
+        limit = next((g for g in grid if g >= top), grid[-1])
         chosen.append(limit)
         for r in (r for r in runs if r["name"] == name):
             if r["good"]:
                 goods += 1
-                flagged_good += r["stance_motion_ratio"] > limit
+                flagged_good += r[key] > limit
             else:
                 fails += 1
-                caught += r["stance_motion_ratio"] > limit
+                caught += r[key] > limit
     return {"chosen": Counter(chosen), "failures_caught": caught, "failures": fails,
             "good_flagged": flagged_good, "good": goods}
+
+
+def stance_motion_limit_cv(table: List[Dict[str, Any]]) -> Dict[str, Any]:
+    """:func:`limit_cv` of the stance-motion check over :data:`STANCE_MOTION_GRID`."""
+    return limit_cv(table, "stance_motion_ratio", STANCE_MOTION_GRID)
+
+
+def onset_share_limit_cv(table: List[Dict[str, Any]]) -> Dict[str, Any]:
+    """:func:`limit_cv` of the stance-onset speed check over :data:`ONSET_SHARE_GRID`."""
+    return limit_cv(table, "onset_speed_share", ONSET_SHARE_GRID)
 
 
 def _fmt_stats(s: Dict[str, float]) -> str:
@@ -223,7 +242,7 @@ def markdown(cv: Dict[str, Any], table: List[Dict[str, Any]]) -> str:
     lines += ["", "Settings chosen by the folds: " + ", ".join(f"{cv['grid'][i]} x{n}" for i, n in cv["chosen"].most_common()),
               f"All-data choice: {cv['all_data_choice']}", ""]
     keys = ("swing_median_s", "median_stride_m", "path_per_rhythm_stride_m", "stride_ratio", "energy_mps2", "strength",
-            "stance_motion_ratio")
+            "stance_motion_ratio", "onset_speed_share")
     lines += ["| runs | n | " + " | ".join(f"{k} (min..max)" for k in keys) + " | flagged |",
               "|---|---:|" + "---|" * len(keys) + "---:|"]
     for label in dict.fromkeys(r["label"] for r in table):
@@ -238,11 +257,12 @@ def markdown(cv: Dict[str, Any], table: List[Dict[str, Any]]) -> str:
             flagged = sum(1 for r in rs if r["gait_reasons"] or r["ekf_flag"])
             lines.append(f"| {label}, {'ARMSE < 0.4 m' if good else 'ARMSE >= 0.4 m'} | {len(rs)} | "
                          + " | ".join(cells) + f" | {flagged} |")
-    cv_limit = stance_motion_limit_cv(table)
-    lines += ["", "Stance-motion limit, leave one recording out (runs no other check flags): chosen "
-              + ", ".join(f"{k} x{n}" for k, n in sorted(cv_limit["chosen"].items()))
-              + f"; held out: {cv_limit['failures_caught']} of {cv_limit['failures']} failures flagged, "
-              f"{cv_limit['good_flagged']} of {cv_limit['good']} good runs flagged"]
+    for title, cv_limit in (("Stance-motion limit", stance_motion_limit_cv(table)),
+                            ("Stance-onset speed share limit", onset_share_limit_cv(table))):
+        lines += ["", f"{title}, leave one recording out (runs no other check flags): chosen "
+                  + ", ".join(f"{k} x{n}" for k, n in sorted(cv_limit["chosen"].items()))
+                  + f"; held out: {cv_limit['failures_caught']} of {cv_limit['failures']} failures flagged, "
+                  f"{cv_limit['good_flagged']} of {cv_limit['good']} good runs flagged"]
     return "\n".join(lines)
 
 
@@ -253,7 +273,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     ap.add_argument("--cache", default=None, help="JSON cache of the per-setting ARMSE table")
     ap.add_argument("--min-stance-s", type=float, default=None,
                     help="keep min_stance_s at this value (the shipped family: 0.02, issue 16's flicker length)")
+    ap.add_argument("--quiet", action="store_true", help="no progress bars or lines")
     args = ap.parse_args(argv)
+    set_quiet(args.quiet)
     shared = [load_pyshoe_trial(p) for p in list_pyshoe_trials(Path(args.data_root) / "pyshoe_vicon")]
     recs = shared + synthetic_gaits()
     grid = GRID if args.min_stance_s is None else [g for g in GRID if g["min_stance_s"] == args.min_stance_s]

@@ -28,6 +28,7 @@ import numpy as np
 
 from indoorloc.fusion.site import GROW_WEIGHT, Site
 from indoorloc.io.survey_layout import survey_floors
+from indoorloc import progress as _progress
 
 THRESHOLDS_M = (2.0, 4.0, 8.0, 16.0, 32.0)
 
@@ -116,7 +117,9 @@ def main(argv: Optional[List[str]] = None) -> int:
     ap.add_argument("--floors", nargs="+", default=None)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--json", default=None)
+    ap.add_argument("--quiet", action="store_true", help="no progress bars or lines")
     args = ap.parse_args(argv)
+    _progress.set_quiet(args.quiet)
     root = Path(args.survey_dir) if args.survey_dir else default_site_root()
     result = run(root, args.floors, args.seed, progress=lambda n: print(f"floor {n} done", flush=True))
     print(markdown(result))

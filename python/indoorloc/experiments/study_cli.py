@@ -12,6 +12,7 @@ import time
 from typing import Any, Callable, Dict, List, Optional, Sequence
 
 from indoorloc.io.atomic_file import write_text_atomic
+from indoorloc import progress as _progress
 
 
 def run_study(argv: Optional[Sequence[str]], description: str,
@@ -28,7 +29,9 @@ def run_study(argv: Optional[Sequence[str]], description: str,
     ap.add_argument("--markdown", default=None)
     ap.add_argument("--seed", type=int, nargs="+", default=[0],
                     help="fold assignment seed(s) (default 0, as fusion evaluate); several: their walks pooled")
+    ap.add_argument("--quiet", action="store_true", help="no progress bars or lines")
     args = ap.parse_args(argv)
+    _progress.set_quiet(args.quiet)
     if any(v < 0 for v in args.seed) or len(set(args.seed)) != len(args.seed):
         ap.error(f"argument --seed: expected distinct seeds >= 0, got {args.seed}")
     tic = time.perf_counter()

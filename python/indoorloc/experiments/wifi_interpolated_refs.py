@@ -29,6 +29,8 @@ import sys
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Sequence
 
+from indoorloc import progress as _progress
+
 import numpy as np
 
 GRID = {
@@ -196,7 +198,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     p.add_argument("--cache-dir", type=Path, default=Path("/tmp/indoorloc_wifi_study_cache"))
     p.add_argument("--json", type=Path)
     p.add_argument("--markdown", type=Path)
+    p.add_argument("--quiet", action="store_true", help="no progress bars or lines")
     a = p.parse_args(argv)
+    _progress.set_quiet(a.quiet)
     r = run(a.data_root, a.floors, a.cache_dir, log=lambda m: print(m, file=sys.stderr, flush=True))
     md = markdown(r)
     print(md)

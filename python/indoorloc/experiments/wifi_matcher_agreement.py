@@ -24,6 +24,7 @@ import numpy as np
 from indoorloc import fusion
 from indoorloc.fusion import wifi_fixes
 from indoorloc.wifi import matcher as wifi_matcher
+from indoorloc import progress as _progress
 
 
 def compare_floor(root: Path, name: str, out: Dict[str, float]) -> None:
@@ -88,7 +89,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--data-root", default=None)
     p.add_argument("--floors", nargs="+", default=["B1", "F1", "F3", "F4", "F7", "F8"])
+    p.add_argument("--quiet", action="store_true", help="no progress bars or lines")
     args = p.parse_args(argv)
+    _progress.set_quiet(args.quiet)
     print(json.dumps(run(args.data_root, args.floors), indent=2))
     return 0
 

@@ -17,6 +17,7 @@ import numpy as np
 from indoorloc.fusion import wifi_fixes as wfx
 from indoorloc.experiments import fusion_real as fr
 from indoorloc.experiments.wifi_matcher_study import OLD
+from indoorloc import progress as _progress
 
 
 def floor_errors(fl: fr.FloorData, folds: int = 4, seed: int = 0) -> np.ndarray:
@@ -41,7 +42,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--data-root", default=None)
     ap.add_argument("floors", nargs="*")
+    ap.add_argument("--quiet", action="store_true", help="no progress bars or lines")
     args = ap.parse_args(argv)
+    _progress.set_quiet(args.quiet)
     _, data = fr.load_site(args.data_root, args.floors)
     print("| floor | walks | waypoints | mean [m] | median [m] | p90 [m] |\n|---|---|---|---|---|---|")
     for fl in data:

@@ -19,6 +19,7 @@ import numpy as np
 
 from indoorloc import wifi
 from indoorloc.experiments import wifi_evaluate as we
+from indoorloc import progress as _progress
 
 
 def wide_k_wknn(ds, cv_points: int = 24, seed: int = 0) -> dict:
@@ -52,7 +53,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("datasets", nargs="+")
     p.add_argument("--data-root", default=None)
+    p.add_argument("--quiet", action="store_true", help="no progress bars or lines")
     args = p.parse_args(argv)
+    _progress.set_quiet(args.quiet)
     root = args.data_root or default_data_root()
     for name in args.datasets:
         print(json.dumps({"dataset": name, **wide_k_wknn(load_wifi_dataset(name, root))}), flush=True)

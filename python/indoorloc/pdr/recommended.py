@@ -33,8 +33,9 @@ if TYPE_CHECKING:  # `import indoorloc` loads no file-format module (CONVENTIONS
     from indoorloc.io.pdr_datasets import ImuRecording
 
 __all__ = ["DEFAULT_METHOD", "HEALTH_LIMITS", "SHOE_SIGMA_ACC_MPS2", "SHOE_SIGMA_GYRO_RADPS", "SHOE_WINDOW",
-           "MIN_SWING_SHARE", "ZUPT_DETECTOR", "detect_stance", "gait_evidence", "gait_plausibility", "run_recommended",
-           "stance_motion_ratio", "swing_floor"]
+           "MIN_SWING_SHARE", "SPLIT_SWING_SHARE", "STANCE_CORE_DECADES", "ZUPT_DETECTOR", "detect_stance",
+           "drop_mid_swing_stances", "onset_speed_share", "stance_cores",
+           "gait_evidence", "gait_plausibility", "run_recommended", "stance_motion_ratio", "swing_floor"]
 
 #: SHOE window [samples] and noise settings (the statistic's scale depends on them: T ~ 1/sigma^2).
 SHOE_WINDOW = 5
@@ -66,18 +67,29 @@ DEFAULT_METHOD = "zupt_rts_swing_guard"
 #: - min_stride_m: a median stride shorter than this while the IMU shows walking [m];
 #: - min_path_per_rhythm_stride_m: path length / strides of the gyroscope's rhythm [m];
 #: - min_stride_count_ratio: detected strides / rhythm strides;
-#: - max_stance_motion_ratio: the 90th percentile of ||f| - g| over the samples called stance,
-#:   divided by the walk's (95th percentile over all samples), while walking. A foot at rest
-#:   reads sensor noise; when the threshold lets the slow ends of swings into stance the ratio
-#:   climbs (the path then comes out uniformly short). 0.12: the least grid value above every
-#:   good run of the other recordings, leave one recording out (32 of 33 folds; docs/errors.md);
+#: - max_stance_motion_ratio: the 90th percentile of ||f| - g| over the samples the EKF holds
+#:   still (``zupt_stance``), divided by the walk's (95th percentile over all samples), while
+#:   walking. A foot at rest reads sensor noise; when the threshold lets the slow ends of swings
+#:   into stance the ratio climbs (the path then comes out uniformly short). 0.12: the least grid
+#:   value above every good run of the other recordings, leave one recording out (32 of 33
+#:   folds, on the stance before the stance core; with the core the same rule gives 0.09, kept
+#:   at 0.12: docs/errors.md);
 #: - walking_energy_mps2: the IMU "shows walking" when the 95th percentile of ||f| - g| exceeds
 #:   this [m/s^2] and the rhythm's autocorrelation exceeds walking_rhythm_strength.
+#: - max_onset_speed_share: the speed the filter had integrated when stance began (median over
+#:   the stances, ``speed_at_stance_median_mps``) over the mean swing speed (median stride /
+#:   median swing), while walking: a foot at rest does not move; a large share means "stance"
+#:   was declared while the foot still moved (a blip in a swing, a threshold far too high) and
+#:   that stride was cut short. 0.65: the least grid value (0.05 steps) above every good run of
+#:   the other recordings, leave one recording out (27 of 28 folds; docs/errors.md);
 HEALTH_LIMITS = {"min_swing_s": 0.15, "min_stride_m": 0.1, "min_path_per_rhythm_stride_m": 0.1,
-                 "min_stride_count_ratio": 0.5, "max_stance_motion_ratio": 0.12, "walking_energy_mps2": 0.3,
-                 "walking_rhythm_strength": 0.15}
+                 "min_stride_count_ratio": 0.5, "max_stance_motion_ratio": 0.12, "max_onset_speed_share": 0.65,
+                 "walking_energy_mps2": 0.3, "walking_rhythm_strength": 0.15}
 
 _GRAVITY_MPS2 = 9.81
+
+#: Keywords of :func:`detect_stance` that are not options of :func:`indoorloc.pdr.zero_velocity`.
+_PIPELINE_KEYWORDS = ("min_swing_share", "split_swing_share", "stance_core_decades")
 
 
 #: The least share of the gyroscope's stride period a swing may take (:func:`detect_stance`): a
@@ -89,6 +101,21 @@ _GRAVITY_MPS2 = 9.81
 #: sensor noise): ``python -m indoorloc.experiments.pdr_gait_sweep`` (docs/pdr.md, "Swings
 #: against the step rhythm").
 MIN_SWING_SHARE = 0.25
+
+#: A stance run with less motion than this times the swing floor (:func:`swing_floor`) on both
+#: sides, and shorter than that motion, is a mid-swing blip of SHOE and is removed
+#: (:func:`drop_mid_swing_stances`). Chosen by leave-one-recording-out cross-validation over the
+#: PyShoe trials, the synthetic slow shuffles and the gait sweep (``python -m
+#: indoorloc.experiments.pdr_gait_sweep --parameter split_swing_share``; docs/pdr.md).
+SPLIT_SWING_SHARE = 1.5
+
+#: The ZUPT is applied only over the core of each stance phase: from its first to its last
+#: sample whose SHOE statistic is below the threshold used / 10^STANCE_CORE_DECADES
+#: (:func:`stance_cores`). A threshold raised for a trembling stance also admits the slow ends of
+#: the swings; zeroing a foot that still moves makes the filter and the RTS smoother take that
+#: speed for integration error and shorten the whole stride. Chosen with
+#: :data:`SPLIT_SWING_SHARE` by the same cross-validation.
+STANCE_CORE_DECADES = 1.0
 
 
 def swing_floor(evidence: Dict[str, float], min_plausible_swing_s: float = ZUPT_DETECTOR["min_plausible_swing_s"],
@@ -109,26 +136,94 @@ def swing_floor(evidence: Dict[str, float], min_plausible_swing_s: float = ZUPT_
     return floor
 
 
+def drop_mid_swing_stances(stance: np.ndarray, rate_hz: float, max_piece_s: float):
+    """Stance runs that split a swing, removed: SHOE's mid-swing blind spot (the angular rate
+    crosses zero while ||f|| is near g) can call a few samples in the middle of a swing stance,
+    and the EKF then zeroes a foot moving at up to 1-2 m/s and loses most of that stride. A run
+    is such a blip when the motion on both sides is shorter than ``max_piece_s`` [s] (neither
+    side is a whole swing) and the run is shorter than the motion on either side (a stance
+    fragment between two tremor flicks, or a stance longer than the motion around it, is kept).
+    The first and last runs (the rests) are always kept. ``stance`` (N,) bool is not modified.
+    Returns ``(stance without the blips (N,) bool, number of runs removed)``."""
+    if not (math.isfinite(rate_hz) and rate_hz > 0):
+        raise ValueError(f"indoorloc: argument 'rate_hz': must be a positive finite rate in Hz, got {rate_hz!r}")
+    if not (math.isfinite(max_piece_s) and max_piece_s >= 0):
+        raise ValueError(f"indoorloc: argument 'max_piece_s': must be a finite duration >= 0 s, got {max_piece_s!r}")
+    flags = np.asarray(stance, dtype=bool)
+    edges = np.diff(np.concatenate(([0], flags.astype(np.int8), [0])))
+    begin, end = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    out = flags.copy()
+    if begin.size < 3:
+        return out, 0
+    limit = max_piece_s * rate_hz
+    before = begin[1:-1] - end[:-2]           # motion samples before each inner run
+    after = begin[2:] - end[1:-1]             # ... and after it
+    length = end[1:-1] - begin[1:-1]
+    blip = (before < limit) & (after < limit) & (length < np.minimum(before, after))
+    for b, e in zip(begin[1:-1][blip], end[1:-1][blip]):
+        out[b:e] = False
+    return out, int(blip.sum())
+
+
+def stance_cores(stance: np.ndarray, statistic: np.ndarray, core_threshold: float) -> np.ndarray:
+    """Each run of ``stance`` (N,) bool shrunk to the span from its first to its last sample whose
+    ``statistic`` (N,) is below ``core_threshold`` (runs with no such sample are kept whole).
+    Tremor inside the span stays stance; only the run's ends, where the foot was still moving
+    slowly, are given up. Returns the core stance (N,) bool; the inputs are not modified."""
+    flags = np.asarray(stance, dtype=bool)
+    stat = np.asarray(statistic, dtype=float)
+    if stat.shape != flags.shape:
+        raise ValueError(f"indoorloc: argument 'statistic': shape {stat.shape} differs from the stance's {flags.shape}")
+    if not core_threshold > 0:
+        raise ValueError(f"indoorloc: argument 'core_threshold': must be > 0, got {core_threshold!r}")
+    edges = np.diff(np.concatenate(([0], flags.astype(np.int8), [0])))
+    out = flags.copy()
+    for b, e in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
+        below = np.flatnonzero(stat[b:e] < core_threshold)
+        if below.size:
+            out[b:b + below[0]] = False
+            out[b + below[-1] + 1:e] = False
+    return out
+
+
 def detect_stance(recording: ImuRecording, evidence: Optional[Dict[str, float]] = None,
-                  min_swing_share: float = MIN_SWING_SHARE, **overrides: Any):
+                  min_swing_share: float = MIN_SWING_SHARE, split_swing_share: float = SPLIT_SWING_SHARE,
+                  stance_core_decades: float = STANCE_CORE_DECADES, **overrides: Any) -> Dict[str, Any]:
     """:func:`indoorloc.pdr.zero_velocity` on a recording with :data:`ZUPT_DETECTOR` (keywords
-    override it) and the SHOE window and noise sds of this module. Returns its result (a mapping:
-    stance, threshold, guard_raised, guard_satisfied, low_motion_rule, stance fractions, report).
+    override it) and the SHOE window and noise sds of this module, then
+    :func:`drop_mid_swing_stances` and :func:`stance_cores`. Returns its result as a dict (stance,
+    statistic, threshold, guard_raised, guard_satisfied, low_motion_rule, stance fractions,
+    report), with ``mid_swing_stances_dropped`` and ``zupt_stance`` (N,) bool: the samples the
+    EKF should hold still (the core of each stance phase; ``stance`` itself delimits the strides).
 
     With the swing guard, the ladder's swing floor is :func:`swing_floor` (``evidence``:
     :func:`gait_evidence` of the recording, computed when None): ``min_swing_share`` of the
-    gyroscope's stride period when that is longer than ``min_plausible_swing_s``; 0 turns it off."""
+    gyroscope's stride period when that is longer than ``min_plausible_swing_s``; 0 turns it off.
+    A stance run is a mid-swing blip when the motion on both sides is shorter than
+    ``split_swing_share`` times the swing floor (with any rule); 0 turns that off. The stance
+    core's threshold is the threshold used / 10^``stance_core_decades``; 0 turns it off."""
     opts = dict(ZUPT_DETECTOR)
     opts.update(overrides)
+    if not (math.isfinite(split_swing_share) and split_swing_share >= 0.0):
+        raise ValueError(f"indoorloc: argument 'split_swing_share': must be finite and >= 0, got {split_swing_share!r}")
+    if not (math.isfinite(stance_core_decades) and stance_core_decades >= 0.0):
+        raise ValueError(f"indoorloc: argument 'stance_core_decades': must be finite and >= 0, got {stance_core_decades!r}")
+    ev = gait_evidence(recording) if evidence is None else evidence
+    floor = swing_floor(ev, float(opts.get("min_plausible_swing_s", ZUPT_DETECTOR["min_plausible_swing_s"])),
+                        min_swing_share, float(opts.get("max_swing_s", ZUPT_DETECTOR["max_swing_s"])))
     if opts.get("rule", "swing_guard") == "swing_guard":
-        ev = gait_evidence(recording) if evidence is None else evidence
-        opts["min_plausible_swing_s"] = swing_floor(ev, float(opts.get("min_plausible_swing_s", 0.0)), min_swing_share,
-                                                    float(opts["max_swing_s"]))
-    elif not (math.isfinite(min_swing_share) and 0.0 <= min_swing_share < 1.0):
-        raise ValueError(f"indoorloc: argument 'min_swing_share': must be in [0, 1), got {min_swing_share!r}")
+        opts["min_plausible_swing_s"] = floor
     options = _pdr.ZeroVelocityOptions(window=SHOE_WINDOW, sigma_acc_mps2=SHOE_SIGMA_ACC_MPS2,
                                        sigma_gyro_radps=SHOE_SIGMA_GYRO_RADPS, **opts)
-    return _pdr.zero_velocity(recording.acc_mps2, recording.gyro_radps, recording.rate_hz, options=options)
+    det = _pdr.zero_velocity(recording.acc_mps2, recording.gyro_radps, recording.rate_hz, options=options)
+    out = {k: det[k] for k in det.keys()}
+    out["mid_swing_stances_dropped"] = 0
+    if split_swing_share > 0.0:
+        out["stance"], out["mid_swing_stances_dropped"] = drop_mid_swing_stances(
+            np.asarray(out["stance"], dtype=bool), float(recording.rate_hz), split_swing_share * floor)
+    out["zupt_stance"] = (stance_cores(out["stance"], out["statistic"], float(out["threshold"]) / 10.0 ** stance_core_decades)
+                          if stance_core_decades > 0.0 else np.asarray(out["stance"], dtype=bool).copy())
+    return out
 
 
 def gait_evidence(recording: ImuRecording, active_radps: float = 1.0, lo_s: float = 0.4,
@@ -184,6 +279,18 @@ def stance_motion_ratio(recording: ImuRecording, stance: np.ndarray, energy_mps2
     return float(np.percentile(a, 90) / energy_mps2)
 
 
+def onset_speed_share(health: Dict[str, Any]) -> float:
+    """The speed the EKF had integrated when stance began (median over the stances) over the mean
+    swing speed (median stride / median swing), from a health dict; NaN when either is missing or
+    zero. Near 0 when stance starts with the foot at rest."""
+    speed = float(health.get("speed_at_stance_median_mps", float("nan")))
+    stride = float(health.get("median_stride_m", float("nan")))
+    swing = float(health.get("swing_median_s", float("nan")))
+    if not (stride > 0 and swing > 0 and math.isfinite(speed)):
+        return float("nan")
+    return speed / (stride / swing)
+
+
 def gait_plausibility(health: Dict[str, Any], evidence: Dict[str, float], path_m: float, n_strides: int,
                       limits: Dict[str, float] = HEALTH_LIMITS) -> List[str]:
     """Reasons (one sentence each) why a foot-mounted PDR result cannot be the walk the IMU shows;
@@ -212,6 +319,11 @@ def gait_plausibility(health: Dict[str, Any], evidence: Dict[str, float], path_m
                            f"{limits['min_path_per_rhythm_stride_m'] * rhythm:.1f} m)")
         if rhythm > 0 and n_strides < limits["min_stride_count_ratio"] * rhythm:
             reasons.append(f"{n_strides} strides counted where the step rhythm shows about {rhythm:.0f}")
+        share = onset_speed_share(health)
+        if share > limits.get("max_onset_speed_share", math.inf):
+            reasons.append(f"the foot still moved at {float(health['speed_at_stance_median_mps']):.2f} m/s when stance "
+                           f"began ({share:.2f} of the swing speed, limit {limits['max_onset_speed_share']}): stance is "
+                           "declared inside swings and the strides come out short")
         ratio = float(health.get("stance_motion_ratio", float("nan")))
         if ratio > limits.get("max_stance_motion_ratio", math.inf):
             reasons.append(f"the samples called stance move: their ||f| - g| reaches {ratio:.2f} of the walk's "
@@ -222,18 +334,19 @@ def gait_plausibility(health: Dict[str, Any], evidence: Dict[str, float], path_m
 
 def run_recommended(recording: ImuRecording, smooth: bool = True, **overrides: Any) -> Dict[str, Any]:
     """The recommended pipeline on one recording: :func:`detect_stance`, the ZUPT EKF (+ RTS
-    smoother when ``smooth``) and :func:`indoorloc.pdr.count_strides`. Returns ``{"positions_m"
-    (N, 3) [m], "stride_indices" (S,), "stance" (N,), "detector" (the detector's dict without the
-    arrays), "health" (the EKF's health check, the detector threshold and stride counts, the gait
+    smoother when ``smooth``, zero velocity over ``zupt_stance``) and
+    :func:`indoorloc.pdr.count_strides` (over ``stance``). Returns ``{"positions_m" (N, 3) [m],
+    "stride_indices" (S,), "stance" (N,), "zupt_stance" (N,), "detector" (the detector's dict
+    without the arrays), "health" (the EKF's health check, the detector threshold and stride counts, the gait
     evidence, and ``implausible`` / ``reasons`` including :func:`gait_plausibility`)}``.
     ``overrides`` go to :func:`detect_stance`."""
     evidence = gait_evidence(recording)
     det = detect_stance(recording, evidence=evidence, **overrides)
-    opts = dict(ZUPT_DETECTOR, **{k: v for k, v in overrides.items() if k != "min_swing_share"})
+    opts = dict(ZUPT_DETECTOR, **{k: v for k, v in overrides.items() if k not in _PIPELINE_KEYWORDS})
     floor = (swing_floor(evidence, float(opts["min_plausible_swing_s"]), overrides.get("min_swing_share", MIN_SWING_SHARE),
                          float(opts["max_swing_s"])) if opts["rule"] == "swing_guard" else float("nan"))
     stance = np.asarray(det["stance"], dtype=bool)
-    out = _pdr.zupt_ekf(recording.time_s, recording.acc_mps2, recording.gyro_radps, stance,
+    out = _pdr.zupt_ekf(recording.time_s, recording.acc_mps2, recording.gyro_radps, det["zupt_stance"],
                         options=_pdr.ZuptEkfOptions(smooth=smooth))
     count = _pdr.count_strides(stance, recording.rate_hz)
     positions = np.asarray(out["positions_m"], dtype=float)
@@ -244,10 +357,12 @@ def run_recommended(recording: ImuRecording, smooth: bool = True, **overrides: A
                    "low_motion_rule": bool(det.get("low_motion_rule", False)),
                    "stride_median_swing_s": float(count["median_swing_s"]),
                    "stride_median_stance_s": float(count["median_stance_s"]),
-                   "split_strides": int(count["n_split_strides"]), "swing_floor_s": floor})
+                   "split_strides": int(count["n_split_strides"]), "swing_floor_s": floor,
+                   "mid_swing_stances_dropped": int(det["mid_swing_stances_dropped"])})
     health.update({"gait_energy_mps2": evidence["energy_mps2"], "rhythm_period_s": evidence["period_s"],
                    "rhythm_strength": evidence["strength"], "rhythm_strides": evidence["rhythm_strides"],
-                   "stance_motion_ratio": stance_motion_ratio(recording, stance, evidence["energy_mps2"])})
+                   "stance_motion_ratio": stance_motion_ratio(recording, det["zupt_stance"], evidence["energy_mps2"])})
+    health["onset_speed_share"] = onset_speed_share(health)
     extra = gait_plausibility(health, evidence, path_length(positions[:, :2]), int(strides.size))
     if extra:
         health["reasons"] = list(health.get("reasons", [])) + extra
@@ -255,4 +370,6 @@ def run_recommended(recording: ImuRecording, smooth: bool = True, **overrides: A
         health["report"] = str(health.get("report", "")).replace(": plausible", ": IMPLAUSIBLE") + "".join(
             "; " + r for r in extra)
     return {"positions_m": positions, "stride_indices": strides, "stance": stance,
-            "detector": {k: v for k, v in det.items() if k not in ("stance", "statistic")}, "health": health}
+            "zupt_stance": np.asarray(det["zupt_stance"], dtype=bool),
+            "detector": {k: v for k, v in det.items() if k not in ("stance", "statistic", "zupt_stance")},
+            "health": health}

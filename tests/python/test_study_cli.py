@@ -1,0 +1,45 @@
+"""Every study's command line (``python -m indoorloc.experiments.<study>``) takes ``--quiet``
+(CONVENTIONS rule 12: progress stays quiet under CI or ``--quiet``), and ``--quiet`` turns the
+process's progress output off."""
+
+import importlib
+
+import pytest
+
+from indoorloc import progress
+
+#: Studies whose ``main(argv)`` parses a command line with argparse (the floor studies through
+#: ``study_cli.run_study``). Not listed: ``fusion_live_accuracy`` (its argv is the floor list) and
+#: ``pdr_handheld`` (``main`` takes Python arguments).
+STUDIES = ["floor_change_study", "floor_identification_study", "fusion_uncertainty", "ilc_signal_map",
+           "mapmatch_noise_tuning", "pdr_gait_sweep", "pdr_health_signals", "pdr_low_motion", "pdr_zupt_cv",
+           "site_growth", "wifi_interpolated_refs", "wifi_matcher_agreement", "wifi_matcher_study",
+           "wifi_previous_matcher", "wifi_wknn_wide_k"]
+
+
+@pytest.mark.parametrize("study", STUDIES)
+def test_every_study_cli_accepts_quiet(study, capsys):
+    module = importlib.import_module(f"indoorloc.experiments.{study}")
+    with pytest.raises(SystemExit) as ended:
+        module.main(["--help"])
+    assert ended.value.code == 0
+    assert "--quiet" in capsys.readouterr().out
+
+
+def test_quiet_silences_the_progress_of_a_study(monkeypatch, capsys):
+    from indoorloc.experiments import pdr_low_motion as lm
+
+    seen = {}
+
+    def stop(*args, **kwargs):  # stand-in for the loading: record the switch and end the run
+        seen["quiet"] = progress._quiet
+        raise RuntimeError("stop here")
+
+    monkeypatch.setattr(lm, "list_pyshoe_trials", stop)
+    try:
+        with pytest.raises(RuntimeError, match="stop here"):
+            lm.main(["--data-root", "nowhere", "--quiet"])
+        assert seen["quiet"] is True
+        assert not progress.enabled() and not progress.lines_enabled()
+    finally:
+        progress.set_quiet(False)
