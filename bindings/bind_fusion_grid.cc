@@ -162,7 +162,8 @@ A tracker on the same grids whose fixes are evaluated at survey-anchored positio
 positions, floor_numbers (N,) their floors. β = 1 or a floor without positions: the cell centres.)doc")
       .def("run",
            [](const GridTracker& t, const py::object& step_times_s, const py::object& displacements_m,
-              const py::object& covariances_m2, const py::object& fixes, const py::object& start, bool smooth) {
+              const py::object& covariances_m2, const py::object& fixes, const py::object& start, bool smooth,
+              bool filtered) {
              const std::vector<StepInput> steps = StepsFromArrays(step_times_s, displacements_m, covariances_m2);
              std::vector<PositionFix> fx;
              if (!fixes.is_none()) {
@@ -177,12 +178,12 @@ positions, floor_numbers (N,) their floors. β = 1 or a floor without positions:
              GridTrackResult r;
              {
                py::gil_scoped_release release;
-               r = t.Run(steps, fx, st, smooth);
+               r = t.Run(steps, fx, st, smooth, filtered);
              }
              return ResultToDict(r);
            },
            py::arg("step_times_s"), py::arg("displacements_m"), py::arg("covariances_m2"), py::arg("fixes") = py::none(),
-           py::arg("start") = py::none(), py::arg("smooth") = true, R"doc(
+           py::arg("start") = py::none(), py::arg("smooth") = true, py::arg("filtered") = true, R"doc(
 Track one walk (GIL released). Steps as arrays: step_times_s (M,) [s], displacements_m (M, 2) [m]
 in the PDR frame, covariances_m2 (M, 3) = (xx, xy, yy) [m²]; fixes: None or
 indoorloc.fusion.Fixes.as_arrays(); start: None (unknown) or {"position_m", "floor",
@@ -192,7 +193,9 @@ floor_probabilities (M, F), heading_offset_rad (M,), posterior_covariance_m2 (M,
 fix_distance_m (M,) and fix_sd_m (M,) (covariance_m2 is the calibrated one, options); with smooth, smoothed_m (M, 2),
 smoothed_covariance_m2 (M, 3), smoothed_posterior_covariance_m2, smoothed_fix_distance_m and smoothed_fix_sd_m; given the whole walk smoothed_floor_probabilities (F,),
 heading_offset_bins_rad / heading_offset_probabilities (H,), scale_bins / scale_probabilities
-(S,), walk_heading_offset_rad, walk_heading_offset_sd_rad, walk_scale; summary.)doc");
+(S,), walk_heading_offset_rad, walk_heading_offset_sd_rad, walk_scale; summary. filtered=False
+with smooth: the causal filter's position estimates are not computed (mean_m, the covariances
+and fix_distance_m NaN after a known start, no median_m), everything else unchanged bit for bit.)doc");
 }
 
 }  // namespace indoorloc::bindings

@@ -229,3 +229,66 @@ def test_survey_anchored_fixes_reach_beyond_the_survey():
         anchored.with_survey_positions(survey[:1], [0.5])
     with pytest.raises(ValueError, match="fix_survey_distance_factor"):
         fusion.GridTrackerOptions(fix_survey_distance_factor=1.5)
+
+
+_SIMD_SCRIPT = """
+import sys
+import numpy as np
+sys.path.insert(0, sys.argv[2])
+import test_fusion_grid as t
+from indoorloc import fusion
+plan = t._hall()
+steps, fixes, _ = t._walk()
+out = []
+# Cells of 0.9 m: 45 x 34 cells, rows not a multiple of the AVX2 path's eight, columns not of four.
+for median in (True, False):
+    tracker = fusion.GridTracker(plan, fusion.GridTrackerOptions(cell_size_m=0.9, heading_offset_bins=3,
+                                                                  heading_offset_sd_rad=0.1, spatial_median=median))
+    for start in (None, {"position_m": (18.0, 5.0), "floor": 0, "heading_offset_rad": 0.0, "time_s": 0.0}):
+        r = fusion.track_grid(tracker, steps, fixes=fixes, start=start, smooth=True)
+        out += [np.asarray(r[k], dtype=float).ravel() for k in sorted(r) if k != "summary"]
+np.save(sys.argv[1], np.concatenate(out))
+"""
+
+
+def test_grid_tracker_gives_the_same_numbers_with_and_without_avx2(tmp_path):
+    """The AVX2 versions of the grid's passes (the double moments and block sums of the spatial
+    median, core/simd_dispatch.h) do the same operations in the same order as the portable ones:
+    bit-identical results, medians on and off, known and unknown start."""
+    import os
+    import subprocess
+
+    src = str(Path(fusion.__file__).resolve().parent.parent)
+    results = []
+    for disable in ("0", "1"):
+        path = tmp_path / f"avx2_off_{disable}.npy"
+        env = dict(os.environ, INDOORLOC_DISABLE_AVX2=disable, PYTHONPATH=src)
+        subprocess.run([sys.executable, "-c", _SIMD_SCRIPT, str(path), str(Path(__file__).resolve().parent)],
+                       check=True, env=env)
+        results.append(np.load(path))
+    assert results[0].size > 1000 and np.all(np.isfinite(results[0]))
+    np.testing.assert_array_equal(results[0], results[1])
+
+
+def test_smoother_only_run_skips_the_filtered_estimates_and_changes_nothing_else():
+    """filtered=False (a caller reading the smoother only): the filter's position estimates are
+    NaN or absent, every other output equals the full run's bit for bit (medians on and off,
+    known and unknown start)."""
+    plan = _hall()
+    steps, fixes, _ = _walk()
+    known = {"position_m": (18.0, 5.0), "floor": 0, "heading_offset_rad": 0.0, "time_s": 0.0}
+    skipped = {"mean_m", "covariance_m2", "posterior_covariance_m2", "fix_distance_m", "median_m"}
+    for median in (True, False):
+        tracker = fusion.GridTracker(plan, fusion.GridTrackerOptions(heading_offset_bins=3, heading_offset_sd_rad=0.1,
+                                                                      spatial_median=median))
+        for start in (None, known):
+            full = fusion.track_grid(tracker, steps, fixes=fixes, start=start, smooth=True)
+            part = fusion.track_grid(tracker, steps, fixes=fixes, start=start, smooth=True, filtered=False)
+            assert "median_m" not in part and ("median_m" in full) == median
+            assert np.all(np.isnan(part["mean_m"])) and np.all(np.isnan(part["covariance_m2"]))
+            for key in set(full) - skipped - {"summary"}:
+                np.testing.assert_array_equal(np.asarray(part[key]), np.asarray(full[key]), err_msg=key)
+            assert part["summary"].log_evidence == full["summary"].log_evidence
+            # Without smoothing the option does nothing: the filter is the result.
+            alone = fusion.track_grid(tracker, steps, fixes=fixes, start=start, smooth=False, filtered=False)
+            np.testing.assert_array_equal(alone["mean_m"], full["mean_m"])

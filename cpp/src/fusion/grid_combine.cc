@@ -249,15 +249,15 @@ class Combiner {
   }
 
   void Medians(const std::vector<double>& w_all, GridTrackResult* r) const {
-    r->filtered_median_m.resize(p_.m_steps, 2);
+    if (p_.filtered) r->filtered_median_m.resize(p_.m_steps, 2);
     if (p_.smooth) r->smoothed_median_m.resize(p_.m_steps, 2);
     for (int k = 0; k < p_.m_steps; ++k) {
       if (k < p_.k0) {
-        r->filtered_median_m.row(k) = r->filtered_mean_m.row(k);
+        if (p_.filtered) r->filtered_median_m.row(k) = r->filtered_mean_m.row(k);
         if (p_.smooth) r->smoothed_median_m.row(k) = r->smoothed_mean_m.row(k);
         continue;
       }
-      r->filtered_median_m.row(k) = MedianAt(LayerWeights(k).first, false, k).transpose();
+      if (p_.filtered) r->filtered_median_m.row(k) = MedianAt(LayerWeights(k).first, false, k).transpose();
       if (p_.smooth) r->smoothed_median_m.row(k) = MedianAt(w_all, true, k).transpose();
     }
   }
@@ -305,6 +305,14 @@ GridTrackResult CombineLayers(const RunPlan& plan, const std::vector<LayerRun>& 
   for (char g : gap) sum.smoother_gap_steps += g;
   if (plan.smooth) combine.Smoothed(w_all, &r);
   CalibrateCovariances(*plan.steps, *plan.fixes, plan.k0, plan.impl->options, &r);
+  if (!plan.filtered) {  // not computed (GridTracker::Run, filtered_estimates)
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    const Eigen::Index rows = plan.m_steps - plan.k0;
+    r.filtered_mean_m.bottomRows(rows).setConstant(nan);
+    r.filtered_covariance_m2.bottomRows(rows).setConstant(nan);
+    r.filtered_posterior_covariance_m2.bottomRows(rows).setConstant(nan);
+    r.filtered_fix_distance_m.tail(rows).setConstant(nan);
+  }
   if (plan.impl->options.spatial_median) combine.Medians(w_all, &r);
   return r;
 }

@@ -16,7 +16,7 @@ namespace {
 
 class LayerPass {
  public:
-  LayerPass(const RunPlan& plan, int layer_index, std::vector<float>* store, LayerRun* out)
+  LayerPass(const RunPlan& plan, int layer_index, StoreBuffer* store, LayerRun* out)
       : p_(plan),
         o_(plan.impl->options),
         layer_(plan.layer_set.layers[layer_index]),
@@ -43,7 +43,7 @@ class LayerPass {
     nb_ = p_.BlocksOf(layer_.floor_index);
     if (o_.spatial_median) {
       block_sums_.resize(nb_ * 3);
-      out_->filtered_blocks.assign(static_cast<std::size_t>(p_.m_steps) * nb_ * 3, 0.0f);
+      if (p_.filtered) out_->filtered_blocks.assign(static_cast<std::size_t>(p_.m_steps) * nb_ * 3, 0.0f);
       if (p_.smooth) out_->smoothed_blocks.assign(static_cast<std::size_t>(p_.m_steps) * nb_ * 3, 0.0f);
     }
     if (!Filter()) {
@@ -82,9 +82,13 @@ class LayerPass {
     if (has_fix && record) ResampleAt(fix->factor, layer_factor_[k], scratch_, fg_.nx, fg_.ny, op.rx / c_, op.ry / c_);
     const double s = MultiplyAndSum(alpha_, fg_.wall_factor, has_fix ? layer_factor_[k].data() : nullptr, fg_.nx, fg_.ny);
     if (!(s > 0)) return false;
-    if (record && !o_.spatial_median) {
+    if (record && !p_.filtered) {
+      // No filtered estimate asked: normalise, and the smoother's copy.
+      NormaliseAndFlush(alpha_, 1.0 / s);
+      if (p_.store_all) std::copy(alpha_.begin(), alpha_.end(), stored_ + static_cast<std::size_t>(k - p_.k0) * n_);
+    } else if (record && !o_.spatial_median) {
       // The filtered estimate (and the smoother's copy) in the normalising pass.
-      float* store = p_.store_all ? store_->data() + static_cast<std::size_t>(k - p_.k0) * n_ : nullptr;
+      float* store = p_.store_all ? stored_ + static_cast<std::size_t>(k - p_.k0) * n_ : nullptr;
       filtered_moments_ = NormaliseMomentsAndStore(alpha_, 1.0 / s, fg_, c_, store);
     } else {
       NormaliseAndFlush(alpha_, 1.0 / s);
@@ -124,6 +128,16 @@ class LayerPass {
       // far off). The product has no estimate; the filtered one stands in, and the run says so
       // (GridTrackSummary::smoother_gap_steps) rather than returning the grid's origin.
       out_->smoother_gaps.push_back(k);
+      // Without the filtered estimates, that of step k (and its blocks) from the forward grid:
+      // the forward pass's own operations on the same grid, so the same bits as a full run's.
+      if (!p_.filtered) {
+        const Moments mo_f = GridMoments(alpha, nullptr, fg_, c_, p_.q, BlockSums());
+        if (o_.spatial_median) StoreBlocks(&out_->smoothed_blocks, mo_f.mass, k);
+        const double log_evidence = out_->filtered[k].log_evidence;
+        out_->filtered[k] = FilteredLayerEstimate(mo_f, ops_[k], c_);
+        out_->filtered[k].log_evidence = log_evidence;
+        return out_->filtered[k];
+      }
       if (o_.spatial_median) {
         const std::size_t off = static_cast<std::size_t>(k) * nb_ * 3;
         std::copy(out_->filtered_blocks.begin() + static_cast<std::ptrdiff_t>(off),
@@ -141,14 +155,18 @@ class LayerPass {
   // grid in the store, or the checkpoints before each segment). False when the layer dies.
   bool Filter() {
     const int k0 = p_.k0;
-    if (p_.store_all) store_->resize(static_cast<std::size_t>(p_.m_steps - k0) * n_);
+    if (p_.store_all) stored_ = store_->Reserve(static_cast<std::size_t>(p_.m_steps - k0) * n_);
     for (int k = k0; k < p_.m_steps; ++k) {
       if (p_.smooth && !p_.store_all && (k - k0) % p_.segment == 0) checkpoints_.push_back(alpha_);
       if (!Forward(k, true)) return false;
+      if (!p_.filtered) {
+        out_->filtered[k].log_evidence = log_z_;
+        continue;
+      }
       if (o_.spatial_median) {
         StoreBlocks(&out_->filtered_blocks, filtered_moments_.mass, k);
         if (p_.store_all) {
-          std::copy(alpha_.begin(), alpha_.end(), store_->begin() + static_cast<std::ptrdiff_t>((k - k0) * n_));
+          std::copy(alpha_.begin(), alpha_.end(), stored_ + static_cast<std::size_t>(k - k0) * n_);
         }
       }
       out_->filtered[k] = FilteredLayerEstimate(filtered_moments_, ops_[k], c_);
@@ -176,7 +194,7 @@ class LayerPass {
         }
       }
       for (int k = k_end - 1; k >= k_begin; --k) {
-        const float* a = p_.store_all ? store_->data() + static_cast<std::size_t>(k - k0) * n_ : seg_alpha[k - k_begin].data();
+        const float* a = p_.store_all ? stored_ + static_cast<std::size_t>(k - k0) * n_ : seg_alpha[k - k_begin].data();
         out_->smoothed[k] = SmoothedEstimate(a, beta, k);
         BackwardStep(k, &beta);
       }
@@ -199,7 +217,8 @@ class LayerPass {
   const FloorGrid& fg_;
   const double c_;
   const std::size_t n_;
-  std::vector<float>* store_;
+  StoreBuffer* store_;
+  float* stored_ = nullptr;                         // the store's grids (store_all), step k0 first
   LayerRun* out_;
   double sc_ = 1, co_ = 1, so_ = 0;                 // the layer's scale and offset (cos, sin)
   double log_z_ = 0, rx_ = 0, ry_ = 0, pending_ = 0;  // evidence, remainder [m], pending variance [m²]
@@ -214,7 +233,7 @@ class LayerPass {
 
 }  // namespace
 
-void RunLayer(const RunPlan& plan, int layer_index, std::vector<float>* store, LayerRun* out) {
+void RunLayer(const RunPlan& plan, int layer_index, StoreBuffer* store, LayerRun* out) {
   LayerPass(plan, layer_index, store, out).Run();
 }
 

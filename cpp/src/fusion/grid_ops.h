@@ -12,10 +12,18 @@
 
 #include <Eigen/Core>
 
+#include "indoorloc/core/simd_dispatch.h"
 #include "indoorloc/fusion/grid_tracker.h"
 #include "grid_lanes.h"
 #if defined(__SSE2__)
 #include <emmintrin.h>
+#endif
+
+// The passes' bodies are inlined into both their portable and their AVX2 builds (grid_ops_avx2.cc).
+#if defined(__GNUC__)
+#define INDOORLOC_GRID_PASS inline __attribute__((always_inline))
+#else
+#define INDOORLOC_GRID_PASS inline
 #endif
 
 namespace indoorloc::fusion {
@@ -66,7 +74,8 @@ inline std::vector<float> GaussianKernel(double var_cells2) {
 // Separable blur with zero outside the grid: a symmetric operator (its own transpose). Both
 // passes add the taps in kernel order to each cell (from 0), one tap over a whole row at a time,
 // so that the loops vectorise; the order of the additions per cell is that of a per-cell loop.
-inline void Blur(std::vector<float>& g, std::vector<float>& scratch, int nx, int ny, double var_cells2) {
+INDOORLOC_GRID_PASS void BlurBody(std::vector<float>& g, std::vector<float>& scratch, int nx, int ny,
+                                  double var_cells2) {
   const std::vector<float> k = GaussianKernel(var_cells2);
   const int r = static_cast<int>(k.size() / 2);
   scratch.resize(g.size());
@@ -156,7 +165,7 @@ inline void ResampleAt(const std::vector<float>& g, std::vector<float>& out, std
 // g *= scale (in double: the result is at most 1 and never overflows a float), and entries below
 // 1e-30 set to 0: they are negligible beside the sum or maximum of 1, and float denormals would
 // slow every later pass and let a normalisation overflow.
-inline void NormaliseAndFlush(std::vector<float>& g, double scale) {
+INDOORLOC_GRID_PASS void NormaliseAndFlushBody(std::vector<float>& g, double scale) {
   if (scale < 1e30) {  // the common case, in float (vectorises): v * scale <= 1 cannot overflow
     const float f = static_cast<float>(scale);
     for (float& v : g) {
@@ -173,7 +182,8 @@ inline void NormaliseAndFlush(std::vector<float>& g, double scale) {
 
 // g *= wall (and *= fix when given); returns the sum (float lanes per row, grid_lanes.h; double
 // over rows).
-inline double MultiplyAndSum(std::vector<float>& g, const std::vector<float>& wall, const float* fix, int nx, int ny) {
+INDOORLOC_GRID_PASS double MultiplyAndSumBody(std::vector<float>& g, const std::vector<float>& wall, const float* fix,
+                                              int nx, int ny) {
   double total = 0;
   for (int y = 0; y < ny; ++y) {
     float* row = g.data() + static_cast<std::size_t>(y) * nx;
@@ -204,7 +214,7 @@ inline double MultiplyAndSum(std::vector<float>& g, const std::vector<float>& wa
 }
 
 // g *= wall (and *= fix when given), the products of MultiplyAndSum without its sum.
-inline void Multiply(std::vector<float>& g, const std::vector<float>& wall, const float* fix) {
+INDOORLOC_GRID_PASS void MultiplyBody(std::vector<float>& g, const std::vector<float>& wall, const float* fix) {
   const std::size_t n = g.size();
   float* d = g.data();
   const float* w = wall.data();
@@ -216,7 +226,7 @@ inline void Multiply(std::vector<float>& g, const std::vector<float>& wall, cons
 }
 
 // The largest entry of g (0 for an empty or all-zero grid), in lanes (the maximum is exact).
-inline float MaxOf(const std::vector<float>& g) {
+INDOORLOC_GRID_PASS float MaxOfBody(const std::vector<float>& g) {
   Lanes m = LanesOf(0.0f);
   const std::size_t n = g.size();
   std::size_t i = 0;
@@ -259,7 +269,8 @@ inline Moments MomentsInMetres(const Moments& m, const FloorGrid& fg, double cel
 // Sums over a row of v, v x and v x² (v = row, or row * weight when kWeighted), x the cell
 // index, in float lanes (kLanes), totals in double.
 template <bool kWeighted>
-inline void RowMomentsInFloat(const float* row, const float* weight, int nx, double* mass, double* sx, double* sxx) {
+INDOORLOC_GRID_PASS void RowMomentsInFloat(const float* row, const float* weight, int nx, double* mass, double* sx,
+                                           double* sxx) {
   Lanes m = LanesOf(0.0f), s1 = m, s2 = m, fx = Iota();
   const Lanes step = LanesOf(static_cast<float>(kLanes));
   int x = 0;
@@ -289,91 +300,14 @@ inline void RowMomentsInFloat(const float* row, const float* weight, int nx, dou
 // `coarse` row after row, as the plain loop does.
 constexpr int kDoubleRows = 4;  // two RowPairs (grid_lanes.h)
 
-// out[x] = (a[x], b[x]) in double, or (a[x] wa[x], b[x] wb[x]) with weights (products in double:
-// exact). SSE2: four cells per iteration (two loads, unpack, convert) instead of a scalar load
-// and convert per value; the same values either way.
-inline void InterleaveRowPair(const float* a, const float* b, const float* wa, const float* wb, int nx, RowPair* out) {
-  int x = 0;
-#if defined(__SSE2__) && defined(__GNUC__)
-  auto pairs = [](const float* p, const float* q, int at, __m128d d[4]) {
-    const __m128 u = _mm_loadu_ps(p + at), v = _mm_loadu_ps(q + at);
-    const __m128 lo = _mm_unpacklo_ps(u, v), hi = _mm_unpackhi_ps(u, v);  // (p0 q0 p1 q1), (p2 q2 p3 q3)
-    d[0] = _mm_cvtps_pd(lo);
-    d[1] = _mm_cvtps_pd(_mm_movehl_ps(lo, lo));
-    d[2] = _mm_cvtps_pd(hi);
-    d[3] = _mm_cvtps_pd(_mm_movehl_ps(hi, hi));
-  };
-  for (; x + 4 <= nx; x += 4) {
-    __m128d d[4], e[4];
-    pairs(a, b, x, d);
-    if (wa) {
-      pairs(wa, wb, x, e);
-      for (int j = 0; j < 4; ++j) d[j] = _mm_mul_pd(d[j], e[j]);
-    }
-    for (int j = 0; j < 4; ++j) std::memcpy(&out[x + j], &d[j], sizeof(RowPair));
-  }
-#endif
-  for (; x < nx; ++x) {
-    out[x] = wa ? RowPair{static_cast<double>(a[x]) * wa[x], static_cast<double>(b[x]) * wb[x]}
-                : RowPair{static_cast<double>(a[x]), static_cast<double>(b[x])};
-  }
-}
+void RowGroupMomentsInDouble(const float* g, const float* weight, const FloorGrid& fg, int y0, int rows, int q,
+                             double* coarse, Moments* m);
 
-inline void RowGroupMomentsInDouble(const float* g, const float* weight, const FloorGrid& fg, int y0, int rows, int q,
-                                    double* coarse, Moments* m) {
-  const int nx = fg.nx, nqx = (nx + q - 1) / q;
-  // The rows' values (the product alpha * beta in double: exact), interleaved: lo = rows 0, 1;
-  // hi = rows 2, 3 (missing rows repeat row 0 and are never read back).
-  thread_local std::vector<RowPair> lo, hi;
-  lo.resize(static_cast<std::size_t>(nx));
-  hi.resize(static_cast<std::size_t>(nx));
-  const float* rp[kDoubleRows];
-  const float* wp[kDoubleRows];
-  for (int r = 0; r < kDoubleRows; ++r) {
-    const std::size_t off = static_cast<std::size_t>(y0 + (r < rows ? r : 0)) * nx;
-    rp[r] = g + off;
-    wp[r] = weight ? weight + off : nullptr;
-  }
-  InterleaveRowPair(rp[0], rp[1], wp[0], wp[1], nx, lo.data());
-  InterleaveRowPair(rp[2], rp[3], wp[2], wp[3], nx, hi.data());
-  const RowPair zero = {0.0, 0.0};
-  RowPair mass0 = zero, sx0 = zero, sxx0 = zero, mass1 = zero, sx1 = zero, sxx1 = zero;
-  for (int bx = 0; bx < nqx; ++bx) {
-    RowPair bm0 = zero, bsx0 = zero, bm1 = zero, bsx1 = zero;
-    const int x_end = std::min(nx, bx * q + q);
-    for (int x = bx * q; x < x_end; ++x) {
-      const double xd = x;
-      const RowPair xx = {xd, xd};
-      // v x, shared by Σ v x, Σ v x² = Σ (v x) x and the block's Σ v x (the plain loop's products)
-      const RowPair v0 = lo[x], v1 = hi[x], vx0 = v0 * xx, vx1 = v1 * xx;
-      mass0 += v0;
-      mass1 += v1;
-      sx0 += vx0;
-      sx1 += vx1;
-      sxx0 += vx0 * xx;
-      sxx1 += vx1 * xx;
-      bm0 += v0;
-      bm1 += v1;
-      bsx0 += vx0;
-      bsx1 += vx1;
-    }
-    if (coarse) {
-      const double bm[kDoubleRows] = {bm0[0], bm0[1], bm1[0], bm1[1]};
-      const double bsx[kDoubleRows] = {bsx0[0], bsx0[1], bsx1[0], bsx1[1]};
-      for (int r = 0; r < rows; ++r) {
-        const int y = y0 + r;
-        double* blk = coarse + (static_cast<std::size_t>(y / q) * nqx + bx) * 3;
-        blk[0] += bm[r];
-        blk[1] += bsx[r];
-        blk[2] += bm[r] * y;
-      }
-    }
-  }
-  const double mass[kDoubleRows] = {mass0[0], mass0[1], mass1[0], mass1[1]};
-  const double sx[kDoubleRows] = {sx0[0], sx0[1], sx1[0], sx1[1]};
-  const double sxx[kDoubleRows] = {sxx0[0], sxx0[1], sxx1[0], sxx1[1]};
-  for (int r = 0; r < rows; ++r) AddRowMoments(mass[r], sx[r], sxx[r], y0 + r, m);
-}
+// The same sums for up to kDoubleRowsAvx2 rows, eight side by side in two 256-bit registers, bit for
+// bit those of RowGroupMomentsInDouble (call only when UseAvx2()). Both: grid_moments_double.cc.
+constexpr int kDoubleRowsAvx2 = 8;
+void RowGroupMomentsInDoubleAvx2(const float* g, const float* weight, const FloorGrid& fg, int y0, int rows, int q,
+                                 double* coarse, Moments* m);
 
 // Of g, or of the product g * weight (the smoother's alpha * beta, formed in double: both are
 // flushed at 1e-30, so the product stays far above double's underflow).
@@ -395,10 +329,15 @@ inline Moments GridMoments(const float* g, const float* weight, const FloorGrid&
       AddRowMoments(r_mass, r_sx, r_sxx, y, &m);
     }
   } else {
-    // Double sums (and block sums): kDoubleRows rows side by side.
-    for (int y = 0; y < fg.ny; y += kDoubleRows)
-      RowGroupMomentsInDouble(g, weight, fg, y, std::min(kDoubleRows, fg.ny - y), coarse ? q : std::max(1, fg.nx),
-                              coarse, &m);
+    // Double sums (and block sums): kDoubleRows (AVX2: kDoubleRowsAvx2) rows side by side.
+    const int block = coarse ? q : std::max(1, fg.nx);
+    if (UseAvx2()) {
+      for (int y = 0; y < fg.ny; y += kDoubleRowsAvx2)
+        RowGroupMomentsInDoubleAvx2(g, weight, fg, y, std::min(kDoubleRowsAvx2, fg.ny - y), block, coarse, &m);
+    } else {
+      for (int y = 0; y < fg.ny; y += kDoubleRows)
+        RowGroupMomentsInDouble(g, weight, fg, y, std::min(kDoubleRows, fg.ny - y), block, coarse, &m);
+    }
   }
   // The smoother's product alpha * beta in float can underflow where both are small: when its
   // total is that small, redo the sums in double.
@@ -408,8 +347,8 @@ inline Moments GridMoments(const float* g, const float* weight, const FloorGrid&
 
 // NormaliseAndFlush(g, scale) and then GridMoments(g) (no blocks) in one pass over the rows, each
 // row also copied to `store` when given: the same operations in the same order, so the same bits.
-inline Moments NormaliseMomentsAndStore(std::vector<float>& g, double scale, const FloorGrid& fg, double cell,
-                                        float* store) {
+INDOORLOC_GRID_PASS Moments NormaliseMomentsAndStoreBody(std::vector<float>& g, double scale, const FloorGrid& fg,
+                                                         double cell, float* store) {
   Moments m;
   const bool in_float = scale < 1e30;  // NormaliseAndFlush's two cases
   const float f = static_cast<float>(scale);
@@ -432,6 +371,44 @@ inline Moments NormaliseMomentsAndStore(std::vector<float>& g, double scale, con
     if (store) std::memcpy(store + static_cast<std::size_t>(y) * fg.nx, row, static_cast<std::size_t>(fg.nx) * sizeof(float));
   }
   return MomentsInMetres(m, fg, cell);
+}
+
+// The passes above in their AVX2 builds (grid_ops_avx2.cc): the same bodies compiled for 256-bit
+// vectors. The bodies are element-wise float operations and reductions in fixed lanes
+// (grid_lanes.h), without FMA, so both builds give the same bits (a test runs both).
+void BlurAvx2(std::vector<float>& g, std::vector<float>& scratch, int nx, int ny, double var_cells2);
+void NormaliseAndFlushAvx2(std::vector<float>& g, double scale);
+double MultiplyAndSumAvx2(std::vector<float>& g, const std::vector<float>& wall, const float* fix, int nx, int ny);
+void MultiplyAvx2(std::vector<float>& g, const std::vector<float>& wall, const float* fix);
+float MaxOfAvx2(const std::vector<float>& g);
+Moments NormaliseMomentsAndStoreAvx2(std::vector<float>& g, double scale, const FloorGrid& fg, double cell, float* store);
+
+// Separable blur with zero outside the grid (BlurBody).
+inline void Blur(std::vector<float>& g, std::vector<float>& scratch, int nx, int ny, double var_cells2) {
+  if (UseAvx2()) return BlurAvx2(g, scratch, nx, ny, var_cells2);
+  BlurBody(g, scratch, nx, ny, var_cells2);
+}
+// g *= scale, entries below 1e-30 flushed to 0 (NormaliseAndFlushBody).
+inline void NormaliseAndFlush(std::vector<float>& g, double scale) {
+  if (UseAvx2()) return NormaliseAndFlushAvx2(g, scale);
+  NormaliseAndFlushBody(g, scale);
+}
+// g *= wall (and fix); the sum (MultiplyAndSumBody).
+inline double MultiplyAndSum(std::vector<float>& g, const std::vector<float>& wall, const float* fix, int nx, int ny) {
+  return UseAvx2() ? MultiplyAndSumAvx2(g, wall, fix, nx, ny) : MultiplyAndSumBody(g, wall, fix, nx, ny);
+}
+// g *= wall (and fix) (MultiplyBody).
+inline void Multiply(std::vector<float>& g, const std::vector<float>& wall, const float* fix) {
+  if (UseAvx2()) return MultiplyAvx2(g, wall, fix);
+  MultiplyBody(g, wall, fix);
+}
+// The largest entry (MaxOfBody).
+inline float MaxOf(const std::vector<float>& g) { return UseAvx2() ? MaxOfAvx2(g) : MaxOfBody(g); }
+// Normalise, moments and the smoother's copy in one pass (NormaliseMomentsAndStoreBody).
+inline Moments NormaliseMomentsAndStore(std::vector<float>& g, double scale, const FloorGrid& fg, double cell,
+                                        float* store) {
+  return UseAvx2() ? NormaliseMomentsAndStoreAvx2(g, scale, fg, cell, store)
+                   : NormaliseMomentsAndStoreBody(g, scale, fg, cell, store);
 }
 
 // A layer's per-step estimate: mean, covariance, cumulative log evidence.

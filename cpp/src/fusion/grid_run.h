@@ -9,6 +9,7 @@
 // The model is in cpp/include/indoorloc/fusion/grid_tracker.h; the operators in grid_ops.h.
 #pragma once
 #include <cstddef>
+#include <memory>
 #include <vector>
 
 #include "grid_ops.h"
@@ -25,6 +26,7 @@ struct RunPlan {
   int m_steps = 0;
   int k0 = 0;                                    // first step after a known start (0: unknown)
   bool smooth = false;
+  bool filtered = true;    // the filter's per-step position estimates (always without smoothing)
   grid_ops::GridLayers layer_set;
   std::vector<std::vector<const PositionFix*>> fixes_at;  // per step: the fixes applied there
   int n_fixes = 0;
@@ -56,9 +58,34 @@ struct LayerRun {
   std::vector<int> smoother_gaps;
 };
 
+// The smoother's stored forward grids (plan.store_all): every entry is written by the forward
+// pass before the backward pass reads it, so the buffer is never zero-filled, and one buffer
+// serves the layers of a thread in turn (and its later runs: grid_tracker.cc).
+class StoreBuffer {
+ public:
+  // At least n floats (contents unspecified).
+  float* Reserve(std::size_t n) {
+    if (n > capacity_) {
+      data_.reset();  // free before allocating the larger one
+      data_.reset(new float[n]);
+      capacity_ = n;
+    }
+    return data_.get();
+  }
+  std::size_t capacity() const { return capacity_; }
+  void Release() {
+    data_.reset();
+    capacity_ = 0;
+  }
+
+ private:
+  std::unique_ptr<float[]> data_;
+  std::size_t capacity_ = 0;
+};
+
 // Filters (and with plan.smooth smooths) layer `layer_index` into *out. `store` holds the
-// smoother's forward grids when plan.store_all (reused across the layers of one thread).
-void RunLayer(const RunPlan& plan, int layer_index, std::vector<float>* store, LayerRun* out);
+// smoother's forward grids when plan.store_all.
+void RunLayer(const RunPlan& plan, int layer_index, StoreBuffer* store, LayerRun* out);
 
 // The result of the run from its layers (the summary's counts filled; its seconds not).
 GridTrackResult CombineLayers(const RunPlan& plan, const std::vector<LayerRun>& runs);

@@ -156,6 +156,15 @@ RowMatrixXd GridTracker::WalkableFraction(int floor_index) const {
 
 namespace {
 
+// Largest smoother store a thread keeps between runs (GridTracker::Run).
+constexpr std::size_t kKeptStoreBytes = 128u << 20;  // 128 MiB
+
+// The calling thread's smoother store.
+grid_run::StoreBuffer& ThreadStore() {
+  thread_local grid_run::StoreBuffer store;
+  return store;
+}
+
 // The public boundary's checks of Run's arguments; returns the known start's floor index (-1).
 int CheckRunInputs(const TrackerGrids& im, const std::vector<StepInput>& steps,
                    const std::vector<PositionFix>& fixes, const TrackStart& start) {
@@ -230,7 +239,7 @@ void PlanMemory(grid_run::RunPlan* p) {
     max_blocks = std::max(max_blocks, std::ceil(im.grids[f].nx / static_cast<double>(p->q)) *
                                           std::ceil(im.grids[f].ny / static_cast<double>(p->q)));
   const double median_bytes =
-      o.spatial_median ? static_cast<double>(n_layers) * m_run * max_blocks * 12.0 * (p->smooth ? 2 : 1) : 0.0;
+      o.spatial_median ? static_cast<double>(n_layers) * m_run * max_blocks * 12.0 * ((p->smooth ? 1 : 0) + (p->filtered ? 1 : 0)) : 0.0;
   p->bytes = fix_cells * 4.0 + p->threads * per_thread + median_bytes;
   CheckArgument(p->bytes <= o.max_memory_bytes, "steps",
                 std::to_string(m_run) + " steps on this grid need " + FormatBytes(p->bytes) +
@@ -254,7 +263,7 @@ void ComputeFixFactors(grid_run::RunPlan* p) {
 }  // namespace
 
 GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std::vector<PositionFix>& fixes,
-                                 const TrackStart& start, bool smooth) const {
+                                 const TrackStart& start, bool smooth, bool filtered_estimates) const {
   WallTimer timer;
   const Impl& im = *impl_;
   grid_run::RunPlan plan;
@@ -263,6 +272,7 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
   plan.fixes = &fixes;
   plan.start = &start;
   plan.smooth = smooth;
+  plan.filtered = filtered_estimates || !smooth;
   plan.start_floor_index = CheckRunInputs(im, steps, fixes, start);
   plan.m_steps = static_cast<int>(steps.size());
   // With a known start, steps up to its time are before the start: estimates there are the start.
@@ -274,16 +284,17 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
   PlanMemory(&plan);
   ComputeFixFactors(&plan);
 
-  // The layers in parallel, each into its own slot. The smoother's stored forward grids: with one
-  // thread, one buffer serves every layer in turn (its pages are touched once per run, not once
-  // per layer).
+  // The layers in parallel, each into its own slot. The smoother's stored forward grids: one
+  // buffer per thread serves its layers in turn and is kept for the thread's next run up to
+  // kKeptStoreBytes (a walk's store is tens of MB, and a fresh one costs a page fault per 4 KB
+  // page: about 7 % of a fusion evaluate's CPU time went to the kernel for them).
   const int n_layers = static_cast<int>(plan.layer_set.layers.size());
   std::vector<grid_run::LayerRun> runs(n_layers);
-  std::vector<float> single_thread_store;
   ParallelForRuns(n_layers, plan.threads, 0, [&](int li, RandomStream&) {
-    std::vector<float> own_store;
-    grid_run::RunLayer(plan, li, plan.threads == 1 ? &single_thread_store : &own_store, &runs[li]);
+    grid_run::RunLayer(plan, li, &ThreadStore(), &runs[li]);
   });
+  // (Worker threads end with the call and free theirs; the calling thread keeps its own.)
+  if (ThreadStore().capacity() * sizeof(float) > kKeptStoreBytes) ThreadStore().Release();
   GridTrackResult r = grid_run::CombineLayers(plan, runs);
   r.summary.seconds = timer.ElapsedSeconds();
   return r;

@@ -259,8 +259,9 @@ def _grid_options(settings: RealSettings, spread_rad: float, **changes):
 
 
 def _identification_options(settings: RealSettings, spread_rad: float):
-    median = settings.point_estimate == "median" or settings.score_both_point_estimates
-    return site_model.identification_grid_options(settings.track_settings(), spread_rad, median)
+    # Only the run's evidence per floor is scored (its track is used where the floor is wrong, and
+    # such waypoints are not scored): no spatial median, whose double sums cost as much as the run.
+    return site_model.identification_grid_options(settings.track_settings(), spread_rad, False)
 
 
 def _score_walk_grid(score: WalkScore, put, pdr_steps, fixes, known_fixes, known: dict, models: FoldModels,
@@ -279,7 +280,8 @@ def _score_walk_grid(score: WalkScore, put, pdr_steps, fixes, known_fixes, known
 
     def run(name_filtered, name_smoothed, tracker_, start, fx, smooth=True):
         tic = time.perf_counter()
-        r = fusion.track_grid(tracker_, pdr_steps, fixes=fx, start=start, smooth=smooth)
+        # A run scored by its smoother alone skips the filter's position estimates (same smoother).
+        r = fusion.track_grid(tracker_, pdr_steps, fixes=fx, start=start, smooth=smooth, filtered=bool(name_filtered))
         seconds = time.perf_counter() - tic
         for name, key, cov_key in ((name_filtered, "mean_m", "covariance_m2"),
                                    (name_smoothed, "smoothed_m", "smoothed_covariance_m2")):

@@ -205,8 +205,13 @@ class GridTracker {
   /// std::invalid_argument naming the argument for unsorted or malformed input, a start floor
   /// not in the plan, or memory above the limit; std::runtime_error when every layer was ruled
   /// out (hard walls with no walkable continuation: use a finite wall_log_penalty).
+  /// `filtered_estimates` false (with `smooth`): for a caller that reads the smoother only, the
+  /// causal filter's per-step position estimates are not computed (about a quarter of a
+  /// smoothing run's work with spatial medians): filtered_mean_m and its covariances are NaN from
+  /// the first tracked step, filtered_median_m is empty. Everything else (smoothed estimates,
+  /// floor, offset and scale posteriors, evidence, summary) is bit for bit that of a full run.
   GridTrackResult Run(const std::vector<StepInput>& steps, const std::vector<PositionFix>& fixes,
-                      const TrackStart& start, bool smooth) const;
+                      const TrackStart& start, bool smooth, bool filtered_estimates = true) const;
 
   const GridTrackerOptions& options() const;
   /// A tracker on the same grids (shared plan, options) whose fixes are evaluated at survey-
