@@ -39,6 +39,9 @@ def test_floor_identification_and_error_against_time(two_floor_site):
     row = result["waypoints"][0]
     assert set(row) == {"floor", "walk", "method", "t_s", "error_m"}
     assert "| fusion_smoother |" in fr.markdown(result) and "Floor identification" in fr.markdown(result)
+    # The WiFi-only sequence tracker is scored beside wifi_knn, at the same waypoints.
+    assert result["methods"]["wifi_sequence"]["n_waypoints"] == result["methods"]["wifi_knn"]["n_waypoints"]
+    assert math.isfinite(result["methods"]["wifi_sequence"]["mean_m"])
 
 
 def test_leave_one_floor_out_choice_never_looks_at_the_held_out_floor(two_floor_site):

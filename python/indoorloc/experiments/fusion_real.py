@@ -13,6 +13,9 @@ same folds:
     limit dropped): kNN on the placed training scans with the union dissimilarity
     (``wifi_fixes``: the centre of the scan's fix) / the posterior mean of paper 004's model on
     the crowdsourced cell map.
+``wifi_sequence``
+    WiFi only, as a sequence: the walk's fixes and their times on the walkable grid with a
+    random-walk motion, smoothed over the whole walk (:mod:`indoorloc.fusion.wifi_sequence`; no PDR).
 ``pdr_only``
     handheld PDR from the first waypoint, headings rotated by the training yaw offset.
 ``peer_costmin``

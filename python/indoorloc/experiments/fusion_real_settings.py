@@ -14,13 +14,14 @@ import numpy as np
 
 from indoorloc import fusion
 from indoorloc.fusion import crowdsourced_map as wc, wifi_fixes as wfx
-from indoorloc.fusion import site_model
+from indoorloc.fusion import site_model, wifi_sequence
 from indoorloc.pdr import handheld as ph
 
 FLOORS: Tuple[str, ...] = ()  #: none named: every floor folder under the data root, in building order
 METHODS = (
     "wifi_knn",
     "wifi_model",
+    "wifi_sequence",
     "pdr_only",
     "peer_costmin",
     "fusion_unknown_start",
@@ -70,6 +71,9 @@ class RealSettings:
     candidate_spacing_m: float = 2.0    #: unknown start and recovery on the mall floors
     #: The WiFi as fingerprint fixes (``wifi_fixes``); k, T, σ, c: LOFO.
     fixes: wfx.FixSettings = field(default_factory=wfx.FixSettings)
+    #: The WiFi-only sequence tracker (``wifi_sequence``: the fixes above on the walkable grid with
+    #: a random-walk motion, no PDR; its settings chosen by LOFO, ``experiments/wifi_sequence_study``).
+    wifi_sequence: wifi_sequence.SequenceSettings = field(default_factory=wifi_sequence.SequenceSettings)
     #: LOFO: ε of the fixes (the particle tracker's own default, read from TrackerOptions).
     fix_outlier_probability: float = field(default_factory=lambda: fusion.TrackerOptions().fix_outlier_probability)
     #: LOFO: τ_fix (consecutive scans share stale readings; TrackerOptions' default).

@@ -14,7 +14,7 @@ import numpy as np
 
 from indoorloc import fusion, wifi
 from indoorloc.fusion import crowdsourced_map as wc, wifi_fixes as wfx
-from indoorloc.fusion import site_model
+from indoorloc.fusion import site_model, wifi_sequence
 from indoorloc.pdr import handheld as ph
 from indoorloc.experiments.fusion_real_settings import COVARIANCE_METHODS, FoldModels, RealSettings, WalkScore
 
@@ -88,6 +88,16 @@ def _score_walk(walk, steps_raw: ph.HandheldSteps, models: FoldModels, settings:
     # WiFi only: the scan nearest in time to each waypoint.
     if len(fixes) and "wifi_knn" in want:
         put("wifi_knn", _nearest_rows(wt, fixes.times_s, centres))
+    if len(fixes) and "wifi_sequence" in want:
+        # WiFi only, as a sequence: the walk's fixes (and their times) on the walkable grid with a
+        # random-walk motion, forward-backward over the whole walk; no PDR, no IMU.
+        tic = time.perf_counter()
+        seq = settings.wifi_sequence
+        tracker = _grid_tracker(fl.plan, wifi_sequence.grid_options(seq, settings.grid_options),
+                                fl.name + "/wifi_sequence", models.database)
+        track = wifi_sequence.track_fixes(tracker, fixes, 0.0, float(walk.duration_s), seq)
+        put("wifi_sequence", wifi_sequence.at_times(track, wt))
+        score.seconds["wifi_sequence"] = time.perf_counter() - tic
     if "wifi_model" in want:
         scan_t, rss_fresh, _ = wc.scan_matrix(walk, models.crowd.bssids, dedup=False, max_age_s=settings.wifi_max_age_s)
         if scan_t.size:
