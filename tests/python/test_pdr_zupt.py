@@ -478,7 +478,7 @@ def test_the_ladder_refuses_swings_that_are_a_sliver_of_the_step_rhythm():
 @pytest.mark.parametrize("stride_m, swing_s, stance_s, tremor_radps, pitch_deg", [
     (0.3, 0.9, 0.4, 1.0, 5.0),   # stances that turn faster than the flat swings: read as 87 % stance, 0.2 m of 6 m
     (0.7, 0.9, 1.0, 1.0, 5.0),   # the same with long stances: 0.4 m of 14 m
-    (0.7, 0.6, 1.0, 1.0, 5.0),   # no rung at all: the base threshold, stances missing
+    (0.7, 0.6, 1.0, 1.0, 5.0),   # no rung at all: the bimodal split reads it whole (19 of 20), still flagged
     (0.3, 0.9, 0.15, 1.0, 5.0),  # sliver swings at the base threshold: 59 strides too many
     (0.7, 0.6, 0.4, 0.3, 30.0),  # an ordinary walk: read whole, not flagged
 ])
@@ -495,6 +495,37 @@ def test_a_walk_read_as_a_standstill_is_never_silent(stride_m, swing_s, stance_s
     broken = n < 10 or n > 40 or path < 0.5 * rec.distance_m
     if pitch_deg == 30.0:
         assert not broken and not out["health"]["implausible"], out["health"]["report"]
+    elif out["health"]["bimodal_split"] and not broken:
+        # the guard found no plausible rung and its fallback (the statistic's bimodal split) read
+        # the walk nearly whole; the result stays flagged, since no rung gave a plausible gait
+        assert abs(n - 20) <= 2 and abs(path - rec.distance_m) < 0.1 * rec.distance_m
+        assert out["health"]["implausible"], out["health"]["report"]
     else:
         assert broken  # SHOE cannot read these gaits: the test exercises the flag
         assert out["health"]["implausible"], out["health"]["report"]
+
+
+def test_the_bimodal_split_sits_between_rest_and_motion():
+    rng = np.random.default_rng(0)
+    stat = np.concatenate([10 ** rng.normal(2.0, 0.3, 5000), 10 ** rng.normal(6.0, 0.5, 3000)])
+    split = recommended.bimodal_threshold(stat)
+    assert 10 ** 2.5 < split < 10 ** 5                                 # between the two modes (2 and 6 decades)
+    assert math.isnan(recommended.bimodal_threshold(np.full(10, 5.0)))
+    assert math.isnan(recommended.bimodal_threshold(np.array([1.0])))
+
+
+def test_the_low_motion_fallback_is_used_only_when_the_guard_gives_up():
+    from indoorloc.simulate.foot_gait import slow_low_motion_gait
+
+    shuffle = slow_low_motion_gait(seed=104, pitch_deg=10.0, stance_rate_radps=1.0, swing_s=0.6)  # no plausible rung
+    regular = recommended.detect_stance(shuffle, low_motion_fallback="most_regular")
+    split = recommended.detect_stance(shuffle, low_motion_fallback="bimodal_split")
+    assert not regular["guard_satisfied"] and not split["guard_satisfied"]
+    assert split["bimodal_split"] and not regular["bimodal_split"]
+    assert split["threshold"] == pytest.approx(recommended.bimodal_threshold(split["statistic"]))
+    walk = foot_gait(10, seed=5)                                     # the guard is satisfied: nothing changes
+    a = recommended.detect_stance(walk, low_motion_fallback="bimodal_split")
+    b = recommended.detect_stance(walk, low_motion_fallback="most_regular")
+    assert a["guard_satisfied"] and not a["bimodal_split"] and np.array_equal(a["stance"], b["stance"])
+    with pytest.raises(ValueError, match="low_motion_fallback"):
+        recommended.detect_stance(walk, low_motion_fallback="otsu")

@@ -50,6 +50,18 @@ SHARE_GRID = [0.0, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4]
 STANCE_RULE_GRID = [{"split_swing_share": k, "stance_core_decades": c}
                     for k in (0.0, 1.0, 1.5, 2.0) for c in (0.0, 0.25, 0.5, 0.75, 1.0, 1.25, 1.5)]
 
+#: The guard's fallback (:data:`~indoorloc.pdr.recommended.LOW_MOTION_FALLBACK`) with the rhythm
+#: floor's share, chosen together because both decide where the ladder gives up (``--study
+#: low_motion_fallback``; the first is the rule before: share 0.25, the most regular rung).
+FALLBACK_GRID = ([{"min_swing_share": 0.25, "low_motion_fallback": "most_regular"}]
+                 + [{"min_swing_share": sh, "low_motion_fallback": fb} for fb in ("most_regular", "bimodal_split")
+                    for sh in SHARE_GRID if (sh, fb) != (0.25, "most_regular")])
+
+#: The low-motion rule's two constants of :data:`~indoorloc.pdr.recommended.ZUPT_DETECTOR`
+#: re-checked with issue 28's stance rules under this study's objective (``--study
+#: low_motion_constants``; the first is the shipped setting).
+LOW_MOTION_GRID = [{"min_plausible_swing_s": a, "low_motion_min_stance_s": b} for a in (0.2, 0.25) for b in (0.08, 0.05)]
+
 #: The sweep's axes: stride [m], swing [s], stance [s], stance tremor [rad/s], accelerometer
 #: noise sd [m/s^2] (gyro: a tenth, in rad/s), pitch [deg] (5: a flat swing with 2 cm of lift;
 #: 30: 10 cm).
@@ -99,8 +111,8 @@ def _stats(rows: Sequence[Dict[str, Any]]) -> Dict[str, float]:
             "standstill_unflagged": standstill_trades([r for r in rows if not r["health"]["implausible"]])}
 
 
-def _label(setting: Dict[str, float]) -> str:
-    return ", ".join(f"{k} {v:g}" for k, v in setting.items())
+def _label(setting: Dict[str, Any]) -> str:
+    return ", ".join(f"{k} {v:g}" if isinstance(v, (int, float)) else f"{k} {v}" for k, v in setting.items())
 
 
 def setting_cv(groups: Dict[str, Sequence[ImuRecording]], settings: Sequence[Dict[str, float]]) -> Dict[str, Any]:
@@ -172,16 +184,20 @@ def markdown(cv: Dict[str, Any]) -> str:
 def main(argv: Optional[Sequence[str]] = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data-root", required=True, help="the shared pdr data folder")
-    ap.add_argument("--study", choices=("min_swing_share", "stance_rules"), default="min_swing_share",
-                    help="the constants cross-validated: the rhythm floor's share (MIN_SWING_SHARE) or the two "
-                         "stance rules (SPLIT_SWING_SHARE, STANCE_CORE_DECADES)")
+    ap.add_argument("--study", choices=("min_swing_share", "stance_rules", "low_motion_fallback", "low_motion_constants"),
+                    default="min_swing_share",
+                    help="the constants cross-validated: the rhythm floor's share (MIN_SWING_SHARE), the two "
+                         "stance rules (SPLIT_SWING_SHARE, STANCE_CORE_DECADES) or the guard's fallback "
+                         "(LOW_MOTION_FALLBACK, with MIN_SWING_SHARE) or the low-motion rule's two constants")
     ap.add_argument("--pickle", default=None, help="also save the per-setting rows here (pickle, for analysis)")
     ap.add_argument("--quiet", action="store_true", help="no progress bars or lines")
     args = ap.parse_args(argv)
     set_quiet(args.quiet)
     shared = [load_pyshoe_trial(p) for p in list_pyshoe_trials(Path(args.data_root) / "pyshoe_vicon")]
     groups = {"PyShoe trials": shared, "synthetic slow shuffles": lm.synthetic_gaits(), "synthetic gait sweep": gait_sweep()}
-    cv = share_cv(groups) if args.study == "min_swing_share" else setting_cv(groups, STANCE_RULE_GRID)
+    grids = {"stance_rules": STANCE_RULE_GRID, "low_motion_fallback": FALLBACK_GRID,
+             "low_motion_constants": LOW_MOTION_GRID}
+    cv = share_cv(groups) if args.study == "min_swing_share" else setting_cv(groups, grids[args.study])
     print(markdown(cv))
     if args.pickle:
         import os

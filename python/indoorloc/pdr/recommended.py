@@ -34,7 +34,7 @@ if TYPE_CHECKING:  # `import indoorloc` loads no file-format module (CONVENTIONS
 
 __all__ = ["DEFAULT_METHOD", "HEALTH_LIMITS", "SHOE_SIGMA_ACC_MPS2", "SHOE_SIGMA_GYRO_RADPS", "SHOE_WINDOW",
            "MIN_SWING_SHARE", "SPLIT_SWING_SHARE", "STANCE_CORE_DECADES", "ZUPT_DETECTOR", "detect_stance",
-           "drop_mid_swing_stances", "onset_speed_share", "stance_cores",
+           "LOW_MOTION_FALLBACK", "bimodal_threshold", "drop_mid_swing_stances", "onset_speed_share", "stance_cores",
            "gait_evidence", "gait_plausibility", "run_recommended", "stance_motion_ratio", "swing_floor"]
 
 #: SHOE window [samples] and noise settings (the statistic's scale depends on them: T ~ 1/sigma^2).
@@ -89,7 +89,7 @@ HEALTH_LIMITS = {"min_swing_s": 0.15, "min_stride_m": 0.1, "min_path_per_rhythm_
 _GRAVITY_MPS2 = 9.81
 
 #: Keywords of :func:`detect_stance` that are not options of :func:`indoorloc.pdr.zero_velocity`.
-_PIPELINE_KEYWORDS = ("min_swing_share", "split_swing_share", "stance_core_decades")
+_PIPELINE_KEYWORDS = ("min_swing_share", "split_swing_share", "stance_core_decades", "low_motion_fallback")
 
 
 #: The least share of the gyroscope's stride period a swing may take (:func:`detect_stance`): a
@@ -98,15 +98,16 @@ _PIPELINE_KEYWORDS = ("min_swing_share", "split_swing_share", "stance_core_decad
 #: the gait cycle (more when running); SHOE's swings on the PyShoe trials are 50-92 % of the
 #: rhythm's period. Chosen by leave-one-recording-out cross-validation over the PyShoe trials,
 #: the synthetic slow shuffles and a sweep of synthetic gaits (speed, cadence, stance stillness,
-#: sensor noise): ``python -m indoorloc.experiments.pdr_gait_sweep`` (docs/pdr.md, "Swings
-#: against the step rhythm").
-MIN_SWING_SHARE = 0.25
+#: sensor noise): ``python -m indoorloc.experiments.pdr_gait_sweep`` chose 0.25 (docs/pdr.md,
+#: "Swings against the step rhythm"); re-chosen with the stance rules below and together with
+#: :data:`LOW_MOTION_FALLBACK` (``--study low_motion_fallback``): 0.2 in 356 of 357 folds.
+MIN_SWING_SHARE = 0.2
 
 #: A stance run with less motion than this times the swing floor (:func:`swing_floor`) on both
 #: sides, and shorter than that motion, is a mid-swing blip of SHOE and is removed
 #: (:func:`drop_mid_swing_stances`). Chosen by leave-one-recording-out cross-validation over the
 #: PyShoe trials, the synthetic slow shuffles and the gait sweep (``python -m
-#: indoorloc.experiments.pdr_gait_sweep --parameter split_swing_share``; docs/pdr.md).
+#: indoorloc.experiments.pdr_gait_sweep --study stance_rules``: 1.5 in all 357 folds; docs/pdr.md).
 SPLIT_SWING_SHARE = 1.5
 
 #: The ZUPT is applied only over the core of each stance phase: from its first to its last
@@ -114,8 +115,16 @@ SPLIT_SWING_SHARE = 1.5
 #: (:func:`stance_cores`). A threshold raised for a trembling stance also admits the slow ends of
 #: the swings; zeroing a foot that still moves makes the filter and the RTS smoother take that
 #: speed for integration error and shorten the whole stride. Chosen with
-#: :data:`SPLIT_SWING_SHARE` by the same cross-validation.
+#: :data:`SPLIT_SWING_SHARE` by the same cross-validation (1.0 in all 357 folds).
 STANCE_CORE_DECADES = 1.0
+
+#: When the swing guard finds no rung with a plausible gait (``guard_satisfied`` false), the
+#: threshold used: ``"most_regular"``, the detector's own choice (the plausible rung with the
+#: most regular swings), or ``"bimodal_split"``, :func:`bimodal_threshold` of the recording's
+#: SHOE statistic. Chosen with :data:`MIN_SWING_SHARE` by the same cross-validation (``--study
+#: low_motion_fallback``: the bimodal split in all 357 folds; docs/pdr.md, "Mid-swing blips").
+LOW_MOTION_FALLBACK = "bimodal_split"
+_FALLBACKS = ("most_regular", "bimodal_split")
 
 
 def swing_floor(evidence: Dict[str, float], min_plausible_swing_s: float = ZUPT_DETECTOR["min_plausible_swing_s"],
@@ -186,9 +195,36 @@ def stance_cores(stance: np.ndarray, statistic: np.ndarray, core_threshold: floa
     return out
 
 
+def bimodal_threshold(statistic: np.ndarray, bins: int = 200) -> float:
+    """The statistic's own split between rest and motion: Otsu's threshold (the cut that
+    maximises the between-class variance) of log10 of the SHOE statistic (N,) over ``bins``
+    histogram bins, returned as a statistic value; NaN when the statistic takes a single value.
+    A walk is stance and swing, so log T is bimodal even when no threshold of the ladder gives a
+    plausible gait."""
+    t = np.asarray(statistic, dtype=float)
+    t = t[np.isfinite(t)]
+    if t.size < 2:
+        return float("nan")
+    x = np.log10(np.maximum(t, 1e-3))
+    if not x.max() > x.min():
+        return float("nan")
+    counts, edges = np.histogram(x, bins=bins)
+    centres = 0.5 * (edges[:-1] + edges[1:])
+    w = counts / counts.sum()
+    w0 = np.cumsum(w)[:-1]                       # class "below" holds bins 0..i-1 for cut i = 1..bins-1
+    m0 = np.cumsum(w * centres)[:-1]
+    total = float((w * centres).sum())
+    valid = (w0 > 0) & (w0 < 1)
+    between = np.zeros_like(w0)
+    between[valid] = (total * w0[valid] - m0[valid]) ** 2 / (w0[valid] * (1.0 - w0[valid]))
+    cut = int(np.argmax(between)) + 1
+    return float(10.0 ** edges[cut])
+
+
 def detect_stance(recording: ImuRecording, evidence: Optional[Dict[str, float]] = None,
                   min_swing_share: float = MIN_SWING_SHARE, split_swing_share: float = SPLIT_SWING_SHARE,
-                  stance_core_decades: float = STANCE_CORE_DECADES, **overrides: Any) -> Dict[str, Any]:
+                  stance_core_decades: float = STANCE_CORE_DECADES, low_motion_fallback: str = LOW_MOTION_FALLBACK,
+                  **overrides: Any) -> Dict[str, Any]:
     """:func:`indoorloc.pdr.zero_velocity` on a recording with :data:`ZUPT_DETECTOR` (keywords
     override it) and the SHOE window and noise sds of this module, then
     :func:`drop_mid_swing_stances` and :func:`stance_cores`. Returns its result as a dict (stance,
@@ -201,7 +237,9 @@ def detect_stance(recording: ImuRecording, evidence: Optional[Dict[str, float]] 
     gyroscope's stride period when that is longer than ``min_plausible_swing_s``; 0 turns it off.
     A stance run is a mid-swing blip when the motion on both sides is shorter than
     ``split_swing_share`` times the swing floor (with any rule); 0 turns that off. The stance
-    core's threshold is the threshold used / 10^``stance_core_decades``; 0 turns it off."""
+    core's threshold is the threshold used / 10^``stance_core_decades``; 0 turns it off. When the
+    guard finds no plausible rung, ``low_motion_fallback`` (:data:`LOW_MOTION_FALLBACK`) decides
+    the threshold; ``bimodal_split`` in the result says whether :func:`bimodal_threshold` was used."""
     opts = dict(ZUPT_DETECTOR)
     opts.update(overrides)
     if not (math.isfinite(split_swing_share) and split_swing_share >= 0.0):
@@ -211,12 +249,26 @@ def detect_stance(recording: ImuRecording, evidence: Optional[Dict[str, float]] 
     ev = gait_evidence(recording) if evidence is None else evidence
     floor = swing_floor(ev, float(opts.get("min_plausible_swing_s", ZUPT_DETECTOR["min_plausible_swing_s"])),
                         min_swing_share, float(opts.get("max_swing_s", ZUPT_DETECTOR["max_swing_s"])))
+    if low_motion_fallback not in _FALLBACKS:
+        raise ValueError(f"indoorloc: argument 'low_motion_fallback': must be one of {_FALLBACKS}, got {low_motion_fallback!r}")
     if opts.get("rule", "swing_guard") == "swing_guard":
         opts["min_plausible_swing_s"] = floor
     options = _pdr.ZeroVelocityOptions(window=SHOE_WINDOW, sigma_acc_mps2=SHOE_SIGMA_ACC_MPS2,
                                        sigma_gyro_radps=SHOE_SIGMA_GYRO_RADPS, **opts)
     det = _pdr.zero_velocity(recording.acc_mps2, recording.gyro_radps, recording.rate_hz, options=options)
     out = {k: det[k] for k in det.keys()}
+    out["bimodal_split"] = False
+    if (opts.get("rule", "swing_guard") == "swing_guard" and not out["guard_satisfied"]
+            and low_motion_fallback == "bimodal_split"):
+        split = bimodal_threshold(out["statistic"])
+        if math.isfinite(split) and split > 0:
+            fixed = dict(opts, rule="fixed", threshold=split, max_threshold=10.0 * split)
+            again = _pdr.zero_velocity(recording.acc_mps2, recording.gyro_radps, recording.rate_hz, window=SHOE_WINDOW,
+                                       sigma_acc_mps2=SHOE_SIGMA_ACC_MPS2, sigma_gyro_radps=SHOE_SIGMA_GYRO_RADPS,
+                                       **fixed)
+            for key in ("stance", "threshold", "stance_fraction", "walking_stance_fraction", "report"):
+                out[key] = again[key]
+            out["bimodal_split"] = True
     out["mid_swing_stances_dropped"] = 0
     if split_swing_share > 0.0:
         out["stance"], out["mid_swing_stances_dropped"] = drop_mid_swing_stances(
@@ -358,7 +410,8 @@ def run_recommended(recording: ImuRecording, smooth: bool = True, **overrides: A
                    "stride_median_swing_s": float(count["median_swing_s"]),
                    "stride_median_stance_s": float(count["median_stance_s"]),
                    "split_strides": int(count["n_split_strides"]), "swing_floor_s": floor,
-                   "mid_swing_stances_dropped": int(det["mid_swing_stances_dropped"])})
+                   "mid_swing_stances_dropped": int(det["mid_swing_stances_dropped"]),
+                   "bimodal_split": bool(det.get("bimodal_split", False))})
     health.update({"gait_energy_mps2": evidence["energy_mps2"], "rhythm_period_s": evidence["period_s"],
                    "rhythm_strength": evidence["strength"], "rhythm_strides": evidence["rhythm_strides"],
                    "stance_motion_ratio": stance_motion_ratio(recording, det["zupt_stance"], evidence["energy_mps2"])})
