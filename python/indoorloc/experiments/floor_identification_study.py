@@ -43,11 +43,13 @@ from indoorloc.experiments import fusion_real as fr
 from indoorloc.experiments import study_cli
 
 #: (m strongest APs, α rate floor, ε outlier probability) of the AP evidence, and λ its weight
-#: (0: the grid filter alone). Edges moved out once (m 20 -> 50, α 0.03 -> 0.1, ε 0.4 -> 0.6).
+#: (0: the grid filter alone). (m, α, ε) are fixed at the values this study chose before the
+#: classifier (over m 1-50, α 0.001-0.1, ε 0.05-0.6): the floor sequence (``fusion.floor_sequence``,
+#: ``floor_change_study``) uses the same rates and its change rate was chosen with them; λ stays free.
 GRID: Dict[str, Sequence[Any]] = {
-    "ap_count": (1, 2, 3, 5, 10, 20, 30, 50),
-    "rate_floor": (1e-3, 3e-3, 1e-2, 3e-2, 0.1),
-    "outlier_probability": (0.05, 0.1, 0.2, 0.4, 0.6),
+    "ap_count": (20,),
+    "rate_floor": (0.1,),
+    "outlier_probability": (0.1,),
     "weight": (0.5, 1.0, 2.0, 3.0, 5.0, 10.0, 30.0),
 }
 
