@@ -60,25 +60,32 @@ def group_pdr() -> None:
 
     t, acc, gyro = _still_imu()
     stance = np.ones(t.size, bool)
-    probe(Case("shoe_statistic", pdr.shoe_statistic, {"acc_mps2": acc, "gyro_radps": gyro, "window": 5,
-                                                      "sigma_acc_mps2": 0.01, "gravity_mps2": 9.81}))
-    probe(Case("shoe_detector", pdr.shoe_detector, {"acc_mps2": acc, "gyro_radps": gyro, "window": 5,
-                                                    "threshold": 3e4}))
+    # Each function's settings are one Options object (options=): its fields are spoiled one at a time.
+    shoe = {"options": pdr.ShoeOptions(), "acc_mps2": acc, "gyro_radps": gyro}
+    probe(Case("shoe_statistic", pdr.shoe_statistic, shoe,
+               options_fields={"options": (pdr.ShoeOptions, ["window", "sigma_acc_mps2", "gravity_mps2"])}))
+    probe(Case("shoe_detector", pdr.shoe_detector, shoe,
+               options_fields={"options": (pdr.ShoeOptions, ["window", "threshold"])}))
     probe(Case("zupt_ekf", pdr.zupt_ekf, {"time_s": t, "acc_mps2": acc, "gyro_radps": gyro, "stance": stance,
-                                          "sigma_acc_mps2": 0.5, "sigma_zupt_mps": 0.01, "gravity_mps2": 9.81,
-                                          "init_samples": 20}))
-    probe(Case("steps_acceleration", pdr.steps_acceleration, {"acc_mps2": acc, "rate_hz": 100.0,
-                                                              "window_s": 0.1}))
-    probe(Case("steps_gyro", pdr.steps_gyro, {"gyro_radps": gyro, "rate_hz": 100.0, "threshold_radps": 1.0}))
+                                          "options": pdr.ZuptEkfOptions()},
+               options_fields={"options": (pdr.ZuptEkfOptions, ["sigma_acc_mps2", "sigma_zupt_mps", "gravity_mps2",
+                                                                "init_samples"])}))
+    probe(Case("steps_acceleration", pdr.steps_acceleration,
+               {"acc_mps2": acc, "rate_hz": 100.0, "options": pdr.AccelerationStepOptions()},
+               options_fields={"options": (pdr.AccelerationStepOptions, ["window_s"])}))
+    probe(Case("steps_gyro", pdr.steps_gyro, {"gyro_radps": gyro, "rate_hz": 100.0, "options": pdr.GyroStepOptions()},
+               options_fields={"options": (pdr.GyroStepOptions, ["threshold_radps"])}))
     probe(Case("butterworth_sos", pdr.butterworth_sos, {"order": 4, "cutoff_hz": 3.0, "rate_hz": 100.0}))
     sos = pdr.butterworth_sos(4, 3.0, 100.0)
     probe(Case("sos_filter", pdr.sos_filter, {"sos": sos, "x": acc[:, 2].copy(), "steady_state_start": True}))
     intervals = np.array([[10, 40], [40, 80]])
     probe(Case("weinberg_features", pdr.weinberg_features, {"acc_mps2": acc, "rate_hz": 100.0,
-                                                            "intervals": intervals, "filter_order": 4,
-                                                            "cutoff_hz": 3.0}))
+                                                            "intervals": intervals, "options": pdr.WeinbergOptions()},
+               options_fields={"options": (pdr.WeinbergOptions, ["filter_order", "cutoff_hz"])}))
     probe(Case("weinberg_stride_lengths", pdr.weinberg_stride_lengths,
-               {"acc_mps2": acc, "rate_hz": 100.0, "step_indices": np.array([20, 60, 100]), "k": 0.364}))
+               {"acc_mps2": acc, "rate_hz": 100.0, "step_indices": np.array([20, 60, 100]),
+                "options": pdr.WeinbergOptions()},
+               options_fields={"options": (pdr.WeinbergOptions, ["k"])}))
     feats = np.array([1.0, 1.2, 0.9])
     probe(Case("calibrate_weinberg_k", pdr.calibrate_weinberg_k, {"features": feats,
                                                                   "lengths_m": np.array([0.7, 0.8, 0.6])}))
@@ -87,18 +94,21 @@ def group_pdr() -> None:
     mag = np.tile([20.0, 0.0, -40.0], (t.size, 1))
     probe(Case("steps_magnetometer", pdr.steps_magnetometer, {"mag": mag, "rate_hz": 100.0}))
     probe(Case("attitude_mahony", pdr.attitude_mahony, {"time_s": t, "acc_mps2": acc, "gyro_radps": gyro,
-                                                        "kp": 1.0, "ki": 0.05, "gravity_mps2": 9.81}))
+                                                        "options": pdr.MahonyOptions()},
+               options_fields={"options": (pdr.MahonyOptions, ["kp", "ki", "gravity_mps2"])}))
     quats = np.tile([1.0, 0.0, 0.0, 0.0], (t.size, 1))
     probe(Case("stance_headings", pdr.stance_headings, {"quaternions_wxyz": quats,
                                                         "step_indices": np.array([10, 50, 90])}))
     probe(Case("positions_from_strides", pdr.positions_from_strides,
                {"stride_lengths_m": np.array([0.7, 0.7, 0.8]), "headings_rad": np.array([0.0, 0.1, 0.2]),
-                "start_xy": np.array([0.0, 0.0]), "sigma_stride_length_m": 0.1}))
+                "start_xy": np.array([0.0, 0.0]), "options": pdr.StepCovarianceOptions()},
+               options_fields={"options": (pdr.StepCovarianceOptions, ["sigma_stride_length_m"])}))
     probe(Case("positions_from_increments", pdr.positions_from_increments,
                {"increments_m": np.array([[0.7, 0.0], [0.7, 0.1]]), "start_xy": np.array([1.0, 2.0])}))
     probe(Case("ins_zupt_increments", pdr.ins_zupt_increments,
                {"time_s": t, "acc_mps2": acc, "quaternions_wxyz": quats, "step_indices": np.array([10, 50, 90]),
-                "window_s": 0.05, "gravity_mps2": 9.81}))
+                "options": pdr.InsZuptOptions()},
+               options_fields={"options": (pdr.InsZuptOptions, ["window_s", "gravity_mps2"])}))
     _handheld_cases()
 
 
