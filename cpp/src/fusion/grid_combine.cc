@@ -272,7 +272,7 @@ class Combiner {
 }  // namespace
 
 GridTrackResult CombineLayers(const RunPlan& plan, const std::vector<LayerRun>& runs) {
-  const int n_layers = static_cast<int>(runs.size());
+  const int n_layers = static_cast<int>(plan.layer_set.layers.size());  // runs may hold more (a pool)
   GridTrackResult r;
   GridTrackSummary& sum = r.summary;
   sum.steps = plan.m_steps;
@@ -280,7 +280,7 @@ GridTrackResult CombineLayers(const RunPlan& plan, const std::vector<LayerRun>& 
   sum.layers = n_layers;
   for (int f = 0; f < plan.num_floors(); ++f)
     if (!plan.start->known || f == plan.start_floor_index) sum.cells += static_cast<long long>(plan.impl->grids[f].size());
-  for (const LayerRun& run : runs) sum.dead_layers += run.dead ? 1 : 0;
+  for (int l = 0; l < n_layers; ++l) sum.dead_layers += runs[l].dead ? 1 : 0;
   sum.memory_bytes = plan.bytes;
   if (sum.dead_layers == n_layers) {
     throw std::runtime_error(

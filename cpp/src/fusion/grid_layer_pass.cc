@@ -24,7 +24,8 @@ class LayerPass {
         c_(o_.cell_size_m),
         n_(fg_.size()),
         store_(store),
-        out_(out) {
+        out_(out),
+        layer_factor_(out->fix_factors) {
     const double off = p_.layer_set.offsets[layer_.offset_bin];
     sc_ = p_.layer_set.scales[layer_.scale_bin];
     co_ = std::cos(off);
@@ -32,6 +33,7 @@ class LayerPass {
   }
 
   void Run() {
+    out_->Clear();
     out_->filtered.assign(p_.m_steps, LayerStep());
     if (p_.smooth) out_->smoothed.assign(p_.m_steps, LayerStep());
     if (!StartPrior()) {
@@ -39,7 +41,7 @@ class LayerPass {
       return;
     }
     ops_.resize(p_.m_steps);
-    layer_factor_.resize(p_.m_steps);
+    if (layer_factor_.size() < static_cast<std::size_t>(p_.m_steps)) layer_factor_.resize(p_.m_steps);
     nb_ = p_.BlocksOf(layer_.floor_index);
     if (o_.spatial_median) {
       block_sums_.resize(nb_ * 3);
@@ -225,7 +227,9 @@ class LayerPass {
   std::size_t nb_ = 0;                              // spatial-median blocks of the floor
   std::vector<float> alpha_, scratch_;
   std::vector<StepOps> ops_;
-  std::vector<std::vector<float>> layer_factor_;    // fix factors at the layer's positions, per step
+  // Fix factors at the layer's positions, per step with a fix (entries of other steps are stale,
+  // never read; the slot's vectors are reused across runs).
+  std::vector<std::vector<float>>& layer_factor_;
   std::vector<double> block_sums_;
   Moments filtered_moments_;                        // of the latest recorded forward step
   std::vector<std::vector<float>> checkpoints_;     // alpha before steps k0, k0 + segment, ...

@@ -47,7 +47,8 @@ struct RunPlan {
   }
 };
 
-// One layer's outputs per step (steps before k0 left default).
+// One layer's outputs per step (steps before k0 left default). Reused across runs by a thread
+// (grid_tracker.cc): RunLayer clears it first, keeping the vectors' memory.
 struct LayerRun {
   std::vector<grid_ops::LayerStep> filtered, smoothed;
   // Spatial medians: per step the block summaries (mass fraction, x [m], y [m]), step-major.
@@ -56,6 +57,24 @@ struct LayerRun {
   // Steps at which alpha ⊙ beta vanished (grid_layer_pass.cc, SmoothedEstimate): the filtered
   // estimate stands in for the smoothed one there.
   std::vector<int> smoother_gaps;
+  // Pages of this layer's fix factors (the fix factor resampled at the layer's positions, per step
+  // with a fix), kept with the slot so that the next run reuses them.
+  std::vector<std::vector<float>> fix_factors;
+  void Clear() {
+    filtered.clear();
+    smoothed.clear();
+    filtered_blocks.clear();
+    smoothed_blocks.clear();
+    smoother_gaps.clear();
+    dead = false;
+  }
+  // Bytes held (capacity).
+  double Bytes() const {
+    double b = static_cast<double>((filtered.capacity() + smoothed.capacity()) * sizeof(grid_ops::LayerStep) +
+                                   (filtered_blocks.capacity() + smoothed_blocks.capacity()) * sizeof(float));
+    for (const auto& f : fix_factors) b += static_cast<double>(f.capacity() * sizeof(float));
+    return b;
+  }
 };
 
 // The smoother's stored forward grids (plan.store_all): every entry is written by the forward
@@ -87,7 +106,8 @@ class StoreBuffer {
 // smoother's forward grids when plan.store_all.
 void RunLayer(const RunPlan& plan, int layer_index, StoreBuffer* store, LayerRun* out);
 
-// The result of the run from its layers (the summary's counts filled; its seconds not).
+// The result of the run from its layers runs[0 .. layers) (the summary's counts filled; its
+// seconds not).
 GridTrackResult CombineLayers(const RunPlan& plan, const std::vector<LayerRun>& runs);
 
 }  // namespace indoorloc::fusion::grid_run

@@ -157,7 +157,7 @@ RowMatrixXd GridTracker::WalkableFraction(int floor_index) const {
 namespace {
 
 // Largest smoother store a thread keeps between runs (GridTracker::Run).
-constexpr std::size_t kKeptStoreBytes = 128u << 20;  // 128 MiB
+constexpr std::size_t kKeptStoreBytes = 256u << 20;  // 256 MiB
 
 // The calling thread's smoother store.
 grid_run::StoreBuffer& ThreadStore() {
@@ -288,14 +288,21 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
   // buffer per thread serves its layers in turn and is kept for the thread's next run up to
   // kKeptStoreBytes (a walk's store is tens of MB, and a fresh one costs a page fault per 4 KB
   // page: about 7 % of a fusion evaluate's CPU time went to the kernel for them).
+  // The layers' outputs (blocks of the spatial medians, the fix factors: megabytes per layer) are
+  // slots of the calling thread kept for its next run likewise.
   const int n_layers = static_cast<int>(plan.layer_set.layers.size());
-  std::vector<grid_run::LayerRun> runs(n_layers);
+  thread_local std::vector<grid_run::LayerRun> kept_runs;
+  std::vector<grid_run::LayerRun>& runs = kept_runs;  // the calling thread's, also in the workers
+  if (runs.size() < static_cast<std::size_t>(n_layers)) runs.resize(static_cast<std::size_t>(n_layers));
   ParallelForRuns(n_layers, plan.threads, 0, [&](int li, RandomStream&) {
-    grid_run::RunLayer(plan, li, &ThreadStore(), &runs[li]);
+    grid_run::RunLayer(plan, li, &ThreadStore(), &runs[static_cast<std::size_t>(li)]);  // ThreadStore: the worker's
   });
   // (Worker threads end with the call and free theirs; the calling thread keeps its own.)
   if (ThreadStore().capacity() * sizeof(float) > kKeptStoreBytes) ThreadStore().Release();
   GridTrackResult r = grid_run::CombineLayers(plan, runs);
+  double kept = 0;
+  for (const grid_run::LayerRun& run : runs) kept += run.Bytes();
+  if (kept > static_cast<double>(kKeptStoreBytes)) std::vector<grid_run::LayerRun>().swap(runs);
   r.summary.seconds = timer.ElapsedSeconds();
   return r;
 }
