@@ -32,11 +32,13 @@ import numpy as np
 
 from indoorloc.fusion import wifi_sequence as ws
 
+#: The final grid (docs/fusion_real.md lists the four grids before it and the check grid after).
 GRID: Dict[str, Sequence[Any]] = {
-    "speed_sd_m_per_sqrt_s": (1.0, 2.0, 3.0),
-    "fix_tempering": (0.25, 0.5, 1.0),
-    "fix_outlier_probability": (0.01, 0.1),
-    "fix_survey_distance_factor": (0.75, 0.5),
+    "fix_sd_scale": (0.35, 0.5),
+    "speed_sd_m_per_sqrt_s": (1.5, 2.0),
+    "fix_tempering": (1.0,),
+    "fix_outlier_probability": (0.001, 0.01),
+    "fix_survey_distance_factor": (0.5, 0.25, 0.15, 0.0),
     "wall_log_penalty": (-1.0,),
     "point_estimate": ("mean", "median"),   # both from one run
 }
