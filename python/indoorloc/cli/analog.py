@@ -7,6 +7,7 @@ import json
 from pathlib import Path
 
 from indoorloc.registry import default_pdr_root
+from indoorloc.io.atomic_file import write_text_atomic
 
 
 def cmd_lorenz63(args: argparse.Namespace) -> int:
@@ -40,7 +41,7 @@ def cmd_lorenz63(args: argparse.Namespace) -> int:
     text = al.markdown_table(result)
     print(text)
     if args.json:
-        Path(args.json).write_text(json.dumps(result, indent=2, default=lambda o: getattr(o, "tolist", lambda: str(o))()))
+        write_text_atomic(args.json, json.dumps(result, indent=2, default=lambda o: getattr(o, "tolist", lambda: str(o))()))
     return 0
 
 

@@ -13,6 +13,7 @@ import argparse
 import json
 import time
 from pathlib import Path
+from indoorloc.io.atomic_file import write_text_atomic
 
 
 def cmd_synthetic(args: argparse.Namespace) -> int:
@@ -33,7 +34,7 @@ def cmd_synthetic(args: argparse.Namespace) -> int:
     print(f"\n{len(seeds)} walks (seeds {seeds[0]}..{seeds[-1]}) in {summary['seconds']:.1f} s")
     if args.json:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.json).write_text(json.dumps(summary, indent=2) + "\n")
+        write_text_atomic(args.json, json.dumps(summary, indent=2) + "\n")
         print(f"JSON written to {args.json}")
     return 0
 
@@ -76,7 +77,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         print(fr.markdown(result))
     if args.json:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.json).write_text(json.dumps(result, indent=1) + "\n")
+        write_text_atomic(args.json, json.dumps(result, indent=1) + "\n")
         print(f"JSON written to {args.json}")
     if args.plots and not args.select:
         from indoorloc import plots
@@ -104,7 +105,7 @@ def cmd_tune(args: argparse.Namespace) -> int:
                           grid=ft.GRIDS[args.round])
     print(ft.markdown_table(rows))
     if args.json:
-        Path(args.json).write_text(json.dumps(rows, indent=2) + "\n")
+        write_text_atomic(args.json, json.dumps(rows, indent=2) + "\n")
     return 0
 
 

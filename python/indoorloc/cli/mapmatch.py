@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 from pathlib import Path
+from indoorloc.io.atomic_file import write_text_atomic
 
 
 def cmd_reproduce(args: argparse.Namespace) -> int:
@@ -38,8 +39,8 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
                         f"{float(r.error_m[:, :-lag].mean()):.2f}) | | |")
         text.append("**Ablation (beyond the paper)**\n\n" + "\n".join(rows))
     output = "\n\n".join(text)
-    (out / "mapmatch_tables.md").write_text(output + "\n")
-    (out / "mapmatch_results.json").write_text(json.dumps(report, indent=2))
+    write_text_atomic(out / "mapmatch_tables.md", output + "\n")
+    write_text_atomic(out / "mapmatch_results.json", json.dumps(report, indent=2))
     print(output)
     print(f"\nwritten to {out}")
     return 0

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 from pathlib import Path
+from indoorloc.io.atomic_file import write_text_atomic
 
 
 def cmd_reproduce(args: argparse.Namespace) -> int:
@@ -21,8 +22,8 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
     if args.out:
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)
-        (out / "network_reproduce.md").write_text(text + "\n")
-        (out / "network_reproduce.json").write_text(json.dumps(results, indent=1, default=float))
+        write_text_atomic(out / "network_reproduce.md", text + "\n")
+        write_text_atomic(out / "network_reproduce.json", json.dumps(results, indent=1, default=float))
     return 0
 
 

@@ -16,6 +16,7 @@ import argparse
 import json
 from pathlib import Path
 from typing import Any, Dict
+from indoorloc.io.atomic_file import write_text_atomic
 
 
 def load_sweep_file(path: Path) -> Dict[str, Any]:
@@ -84,7 +85,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     for f in result.failed:
         print(f"failed: {f['params']} run {f['run']} seed {f['seed']}: {f['error']}")
     if args.json:
-        Path(args.json).write_text(json.dumps({"experiment": spec["experiment"], "grid": spec["grid"],
+        write_text_atomic(args.json, json.dumps({"experiment": spec["experiment"], "grid": spec["grid"],
                                                "runs": spec["runs"], "base_seed": spec["base_seed"],
                                                "summary": table, "rows": result.rows, "failed": result.failed},
                                               indent=1) + "\n")

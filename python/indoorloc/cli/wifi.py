@@ -7,6 +7,7 @@ import json
 from pathlib import Path
 
 from indoorloc.registry import default_data_root
+from indoorloc.io.atomic_file import write_text_atomic
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
@@ -42,7 +43,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         print()
         report[f"{name}/k={k}"] = entry
     if args.json:
-        Path(args.json).write_text(json.dumps(report, indent=2, default=float))
+        write_text_atomic(args.json, json.dumps(report, indent=2, default=float))
     return 0
 
 

@@ -39,6 +39,7 @@ from indoorloc.pdr import streaming as ps
 from indoorloc.fusion import wifi_fixes
 from indoorloc.fusion import live
 from indoorloc.io import load_floor_plan, read_ilc_floor
+from indoorloc.io.atomic_file import write_text_atomic
 
 ROOT = Path(__file__).resolve().parents[4] / "shared" / "data" / "fusion" / "ilc2020_site2"
 #: Query windows [s] tried for the live filter (the batch's 16 s was chosen with backdated fixes).
@@ -137,8 +138,8 @@ def main(argv: List[str]) -> int:
     md = ("Waypoint errors [m], mean / median / p90, 4 folds by walk per floor (python -m "
           "indoorloc.experiments.fusion_live_accuracy " + " ".join(floors) + ").\n\n" + "\n".join(lines) + "\n")
     out = Path(__file__).resolve().parents[3] / "benchmarks" / "results"
-    (out / "fusion_live_accuracy.json").write_text(json.dumps(result, indent=2))
-    (out / "fusion_live_accuracy.md").write_text(md)
+    write_text_atomic(out / "fusion_live_accuracy.json", json.dumps(result, indent=2))
+    write_text_atomic(out / "fusion_live_accuracy.md", md)
     print(md)
     return 0
 

@@ -41,6 +41,7 @@ from indoorloc import wifi
 from indoorloc.fusion import crowdsourced_map
 from indoorloc.progress import progress
 from indoorloc import progress as _progress
+from indoorloc.io.atomic_file import write_text_atomic
 
 PathLike = Union[str, Path]
 
@@ -308,7 +309,7 @@ def main(argv: Optional[Sequence[str]] = None) -> None:
     r = evaluate(a.data_root, a.floors, a.folds, seed=a.seed)
     print(markdown(r))
     if a.json:
-        Path(a.json).write_text(json.dumps(r, indent=1, default=float))
+        write_text_atomic(a.json, json.dumps(r, indent=1, default=float))
 
 
 if __name__ == "__main__":

@@ -29,6 +29,7 @@ import numpy as np
 from indoorloc import mapmatch
 from indoorloc.experiments import mapmatch_reproduce as mr
 from indoorloc import progress as _progress
+from indoorloc.io.atomic_file import write_text_atomic
 
 HALFWIDTHS_M = (0.1, 0.15, 0.2, 0.27, 0.35, 0.45, 0.6, 0.8, 1.0, 1.3)
 VALIDATION_SEEDS = (1000, 2000)
@@ -87,8 +88,7 @@ def main(argv=None) -> None:
                              "chosen": c["chosen"]} for v, c in choose(errors).items()}}
     print(json.dumps(result["choice"], indent=1))
     if args.out:
-        with open(args.out, "w") as f:
-            json.dump(result, f, indent=1)
+        write_text_atomic(args.out, json.dumps(result, indent=1))
 
 
 if __name__ == "__main__":

@@ -39,6 +39,7 @@ from indoorloc.io.pdr_datasets import ImuRecording, list_pyshoe_trials, load_pys
 from indoorloc.pdr import metrics, recommended
 from indoorloc.progress import progress, set_quiet
 from indoorloc.simulate.foot_gait import slow_low_motion_gait
+from indoorloc.io.atomic_file import write_text_atomic
 
 #: The constants cross-validated (grid order = tie order).
 GRID: List[Dict[str, float]] = [
@@ -124,7 +125,7 @@ def cross_validate(recs: Sequence[ImuRecording], n_shared: int, cache: Optional[
             rs = [score(r, **g) for r in recs]
             table[key] = [[x["armse_m"], x["stride_error"] or 0, x["strides_truth"] or 0] for x in rs]
             if cache is not None:
-                cache.write_text(json.dumps(table))
+                write_text_atomic(cache, json.dumps(table))
         rows[i] = [{"armse_m": a, "stride_error": e, "strides_truth": t} for a, e, t in table[key]]
     armse = np.array([[row["armse_m"] for row in rows[i]] for i in range(len(grid))])
     chosen, held = [], []

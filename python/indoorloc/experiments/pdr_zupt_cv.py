@@ -47,6 +47,7 @@ from indoorloc.experiments import pdr_evaluate as pe
 from indoorloc.io.pdr_datasets import ImuRecording, list_pyshoe_trials, load_pyshoe_trial
 from indoorloc.pdr import metrics, recommended
 from indoorloc.progress import progress
+from indoorloc.io.atomic_file import write_text_atomic
 
 Stats = Dict[str, np.ndarray]
 StanceRule = Callable[[ImuRecording, Stats, Dict[str, float]], np.ndarray]
@@ -215,7 +216,7 @@ def sweep(recs: Sequence[ImuRecording], stats: Sequence[Stats], family: str,
     for p in progress(todo, total=len(todo), desc=family):
         res[_key(p)] = score_setting(recs, stats, rule, p, smooth)
         if cache_file is not None:
-            cache_file.write_text(json.dumps(res))
+            write_text_atomic(cache_file, json.dumps(res))
     return {_key(p): res[_key(p)] for p in grid}
 
 
@@ -391,7 +392,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             print(f"| {label} | {np.mean(h['count_error_pct']):.2f} | {d.mean():.2f} | {np.median(d):.2f} | "
                   f"{np.percentile(d, 25):.2f}-{np.percentile(d, 75):.2f} |")
     if args.json:
-        Path(args.json).write_text(json.dumps(doc, indent=1))
+        write_text_atomic(args.json, json.dumps(doc, indent=1))
     return 0
 
 

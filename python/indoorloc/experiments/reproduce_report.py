@@ -25,6 +25,7 @@ from indoorloc.experiments.reproduce_cells import (
     VERDICT_BELOW,
     VERDICT_INSIDE,
 )
+from indoorloc.io.atomic_file import write_text_atomic
 
 #: The schema version of report.json (bump on an incompatible change; documented in docs/reproduce.md).
 SCHEMA_VERSION = 1
@@ -220,7 +221,7 @@ def write_report(out_dir: Path, sections: Sequence[Dict[str, Any]], settings: Di
     """Write ``report.md``, ``report.html`` and ``report.json`` into ``out_dir``; return their paths."""
     out_dir = Path(out_dir)
     paths = {"markdown": out_dir / "report.md", "html": out_dir / "report.html", "json": out_dir / "report.json"}
-    paths["markdown"].write_text(markdown(sections, settings), encoding="utf-8")
-    paths["html"].write_text(html_page(sections, settings, out_dir), encoding="utf-8")
-    paths["json"].write_text(json.dumps(report_json(sections, settings), indent=1), encoding="utf-8")
+    write_text_atomic(paths["markdown"], markdown(sections, settings), encoding="utf-8")
+    write_text_atomic(paths["html"], html_page(sections, settings, out_dir), encoding="utf-8")
+    write_text_atomic(paths["json"], json.dumps(report_json(sections, settings), indent=1), encoding="utf-8")
     return paths

@@ -29,6 +29,7 @@ import numpy as np
 from indoorloc.fusion.site import GROW_WEIGHT, Site
 from indoorloc.io.survey_layout import survey_floors
 from indoorloc import progress as _progress
+from indoorloc.io.atomic_file import write_text_atomic
 
 THRESHOLDS_M = (2.0, 4.0, 8.0, 16.0, 32.0)
 
@@ -124,7 +125,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     result = run(root, args.floors, args.seed, progress=lambda n: print(f"floor {n} done", flush=True))
     print(markdown(result))
     if args.json:
-        Path(args.json).write_text(json.dumps(result, indent=1) + "\n")
+        write_text_atomic(args.json, json.dumps(result, indent=1) + "\n")
     return 0
 
 

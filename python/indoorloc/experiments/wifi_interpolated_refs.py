@@ -32,6 +32,7 @@ from typing import Any, Dict, List, Optional, Sequence
 from indoorloc import progress as _progress
 
 import numpy as np
+from indoorloc.io.atomic_file import write_text_atomic
 
 GRID = {
     "scale_m": (2.0, 3.0, 6.0),      #: kernel length scale [m]
@@ -205,9 +206,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     md = markdown(r)
     print(md)
     if a.json:
-        a.json.write_text(json.dumps(r, indent=2))
+        write_text_atomic(a.json, json.dumps(r, indent=2))
     if a.markdown:
-        a.markdown.write_text(md + "\n")
+        write_text_atomic(a.markdown, md + "\n")
     return 0
 
 

@@ -33,6 +33,7 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple
 import numpy as np
 
 from indoorloc.io.ilc2020 import IlcWifi
+from indoorloc.io.atomic_file import write_text_atomic
 
 GRID_STEP_S = 0.1   #: time step of the cached walker positions [s]
 
@@ -79,7 +80,7 @@ def cache_floor(root: Path, name: str, cache_dir: Path, log=print) -> Tuple[List
             try:
                 walk = floor.walk(wid)
             except ValueError as e:  # e.g. 'Infinity' in an iBeacon field (F1): the loader fix is pending
-                (d / f"{wid}.skip").write_text(str(e))
+                write_text_atomic(d / f"{wid}.skip", str(e))
                 skipped.append(wid)
                 continue
             wf = walk.wifi

@@ -31,6 +31,7 @@ from typing import Any, Dict, List, Optional, Sequence
 import numpy as np
 
 from indoorloc.fusion import wifi_sequence as ws
+from indoorloc.io.atomic_file import write_text_atomic
 
 #: The final grid (docs/fusion_real.md lists the four grids before it and the check grid after).
 GRID: Dict[str, Sequence[Any]] = {
@@ -261,9 +262,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     md = markdown(r)
     print(md)
     if a.json:
-        a.json.write_text(json.dumps(r, indent=1))
+        write_text_atomic(a.json, json.dumps(r, indent=1))
     if a.markdown:
-        a.markdown.write_text(md)
+        write_text_atomic(a.markdown, md)
     return 0
 
 
