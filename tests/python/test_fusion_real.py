@@ -115,6 +115,29 @@ def test_cli_writes_the_json_contract_and_plots(two_floor_site, tmp_path, monkey
     assert "| method |" in capsys.readouterr().out
 
 
+def test_cli_several_seeds_gives_each_run_and_their_spread(two_floor_site, tmp_path, monkeypatch, capsys):
+    """``--seed 0 1``: one evaluation per fold seed, each the one-seed document, and the spread of
+    every method's mean across them; seed 0's run equals a one-seed run."""
+    monkeypatch.setattr(fr, "RealSettings", _fast_settings)
+    args = ["fusion", "evaluate", "--data-root", str(two_floor_site), "--floors", "F1", "--folds", "2", "--quiet"]
+    one, many = tmp_path / "one.json", tmp_path / "many.json"
+    assert cli.main(args + ["--seed", "0", "--json", str(one)]) == 0
+    assert cli.main(args + ["--seed", "0", "1", "--json", str(many)]) == 0
+    single, doc = json.loads(one.read_text()), json.loads(many.read_text())
+    assert "schema" not in single and "methods" in single  # one seed: the one-seed document as before
+    assert doc["schema"] == "indoorloc.fusion_evaluate_seeds" and doc["version"] == 1 and doc["seeds"] == [0, 1]
+    assert set(doc["runs"]) == {"0", "1"}
+    assert doc["runs"]["0"]["methods"] == single["methods"]
+    for name, m in doc["spread"]["methods"].items():
+        per_seed = [doc["runs"][s]["methods"][name]["mean_m"] for s in ("0", "1")]
+        assert m["mean_m"]["per_seed"] == per_seed
+        assert math.isclose(m["mean_m"]["mean"], sum(per_seed) / 2)
+        assert m["mean_m"]["min"] <= m["mean_m"]["mean"] <= m["mean_m"]["max"]
+    assert "mean ± sd" in capsys.readouterr().out
+    for bad in (["--seed", "1", "1"], ["--seed", "-1"], ["--seed", "0", "1", "--lowo"]):
+        assert cli.main(args + bad) == 2
+
+
 _RealSettings = fr.RealSettings
 
 

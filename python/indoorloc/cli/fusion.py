@@ -57,7 +57,13 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
     # --lowo: leave one walk out (folds = 0); floor identification is then skipped (it would
     # rebuild every floor's database once per walk).
-    settings = fr.RealSettings(folds=0 if args.lowo else args.folds, seed=args.seed, threads=args.threads,
+    seeds = list(args.seed)
+    if any(v < 0 for v in seeds) or len(set(seeds)) != len(seeds):
+        raise ValueError(f"indoorloc: argument '--seed': expected distinct seeds >= 0, got {seeds}")
+    if len(seeds) > 1 and (args.select or args.lowo):
+        raise ValueError("indoorloc: argument '--seed': several seeds only for the k-fold evaluation "
+                         "(not with --select or --lowo)")
+    settings = fr.RealSettings(folds=0 if args.lowo else args.folds, seed=seeds[0], threads=args.threads,
                                floor_identification=not args.lowo)
     root = Path(args.data_root) if args.data_root else fr.default_site_root()
     if not root.is_dir():
@@ -71,10 +77,23 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         result = fr.select_settings(root, floors, settings, grid=args.select_grid, progress=ticker.tick)
         ticker.close()
         print(fr.select_markdown(result))
-    else:
+    elif len(seeds) == 1:
         result = fr.evaluate(root, floors, settings, progress=ticker.tick, scheduler=args.scheduler)
         ticker.close()
         print(fr.markdown(result))
+    else:
+        from dataclasses import replace
+
+        from indoorloc.experiments import fusion_real_seeds
+
+        runs = {}
+        for seed in seeds:
+            runs[seed] = fr.evaluate(root, floors, replace(settings, seed=seed), progress=ticker.tick,
+                                     scheduler=args.scheduler)
+            print(f"## Fold seed {seed}\n\n{fr.markdown(runs[seed])}\n")
+        ticker.close()
+        result = fusion_real_seeds.seeds_document(runs)
+        print(fusion_real_seeds.spread_markdown(result["spread"]))
     if args.json:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         write_text_atomic(args.json, json.dumps(result, indent=1) + "\n")
@@ -85,12 +104,13 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         out = Path(args.plots)
         out.mkdir(parents=True, exist_ok=True)
         errors = {}
-        for row in result["waypoints"]:
+        first = result["runs"][str(seeds[0])] if len(seeds) > 1 else result  # plots of the first seed
+        for row in first["waypoints"]:
             errors.setdefault(row["method"], []).append(row["error_m"])
         written = [plots.error_cdfs(errors, out / "fusion_real_error_cdfs.png", xmax_m=60.0,
                                     title=f"Waypoint errors, floors {' '.join(floors)}")]
-        if result.get("heading_offsets"):
-            written.append(plots.heading_offsets(result["heading_offsets"], out / "fusion_real_heading_offsets.png"))
+        if first.get("heading_offsets"):
+            written.append(plots.heading_offsets(first["heading_offsets"], out / "fusion_real_heading_offsets.png"))
         for floor in floors:
             written.append(plots.fusion_real_walk(fr.walk_snapshot(root, floor, args.plot_walk, settings),
                                                   out / f"fusion_real_walk_{floor}.png"))
@@ -128,7 +148,9 @@ def add_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
     e.add_argument("--folds", type=int, default=4, help="k of the k-fold by walk within each floor")
     e.add_argument("--lowo", action="store_true",
                    help="leave one walk out instead of k-fold (no floor identification)")
-    e.add_argument("--seed", type=int, default=0)
+    e.add_argument("--seed", type=int, nargs="+", default=[0],
+                   help="fold assignment seed (default 0); several: one evaluation per seed and the spread of "
+                        "each figure across them (JSON: docs/fusion_real.md, 'Several fold seeds')")
     e.add_argument("--threads", type=int, default=2, help="walks tracked in parallel (results do not depend on it)")
     e.add_argument("--json", default=None, help="write the JSON (schema: docs/fusion_real.md)")
     e.add_argument("--select", action="store_true",
