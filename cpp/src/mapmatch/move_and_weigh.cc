@@ -42,6 +42,55 @@ class JunctionDraws {
   int next_ = RandomLanes::kLanes;
 };
 
+// The in-segment pass over particles [0, count) of a block: along += d · distance where
+// 0 <= along + d · distance <= limit; the others keep their along and are listed in at_end, in
+// index order (portable version, branch-free). Returns how many were listed. As
+// CorridorMotion::MoveWithinSegments, with the segment length read from the particle's own limit
+// (one load instead of an index load and a table load per particle).
+int MoveWithinLimitsScalar(int begin, int count, const double* distance, const signed char* direction,
+                           double* along_m, const double* limit, int* at_end, int listed) {
+  for (int i = begin; i < count; ++i) {
+    const double along = along_m[i];
+    const double u = along + direction[i] * distance[i];
+    const bool inside = (u >= 0.0) & (u <= limit[i]);
+    along_m[i] = inside ? u : along;
+    at_end[listed] = i;
+    listed += !inside;
+  }
+  return listed;
+}
+
+// The same pass with AVX2, four particles at a time (the same multiply and add, no FMA), the
+// listed indices compressed by a 16-entry shuffle table. Sets *done to the first particle not
+// done; returns how many were listed.
+__attribute__((target("avx2"))) int MoveWithinLimitsAvx2(int count, const double* distance,
+                                                         const signed char* direction, double* along_m,
+                                                         const double* limit, int* at_end, int* done) {
+  // kCompress[m]: the lanes j whose bit is 0 in the "inside" mask m, in order, then padding.
+  static const std::int32_t kCompress[16][4] = {
+      {0, 1, 2, 3}, {1, 2, 3, 0}, {0, 2, 3, 0}, {2, 3, 0, 0}, {0, 1, 3, 0}, {1, 3, 0, 0}, {0, 3, 0, 0}, {3, 0, 0, 0},
+      {0, 1, 2, 0}, {1, 2, 0, 0}, {0, 2, 0, 0}, {2, 0, 0, 0}, {0, 1, 0, 0}, {1, 0, 0, 0}, {0, 0, 0, 0}, {0, 0, 0, 0}};
+  const __m256d zero = _mm256_setzero_pd();
+  int listed = 0;
+  int i = 0;
+  for (; i + 4 <= count; i += 4) {
+    std::int32_t packed;
+    std::memcpy(&packed, direction + i, sizeof(packed));
+    const __m256d dir = _mm256_cvtepi32_pd(_mm_cvtepi8_epi32(_mm_cvtsi32_si128(packed)));
+    const __m256d along = _mm256_loadu_pd(along_m + i);
+    const __m256d u = _mm256_add_pd(along, _mm256_mul_pd(dir, _mm256_loadu_pd(distance + i)));
+    const __m256d inside =
+        _mm256_and_pd(_mm256_cmp_pd(u, zero, _CMP_GE_OQ), _mm256_cmp_pd(u, _mm256_loadu_pd(limit + i), _CMP_LE_OQ));
+    _mm256_storeu_pd(along_m + i, _mm256_blendv_pd(along, u, inside));
+    const int mask = _mm256_movemask_pd(inside);
+    const __m128i lanes = _mm_loadu_si128(reinterpret_cast<const __m128i*>(kCompress[mask]));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(at_end + listed), _mm_add_epi32(lanes, _mm_set1_epi32(i)));
+    listed += 4 - __builtin_popcount(static_cast<unsigned>(mask));
+  }
+  *done = i;
+  return listed;
+}
+
 // The update of particles [begin, end), particle i into lane i mod kSumLanes (portable version).
 void WeighScalar(const CorridorMotion& motion, const MoveWeighInputs& in, int begin, int end, LaneSums* acc) {
   const double* origin_x = motion.origin_x_m();
@@ -137,17 +186,25 @@ WeightSums MoveAndWeigh(const CorridorMotion& motion, const MoveWeighInputs& in,
   LaneSums acc;
   JunctionDraws draws(lanes);
   const bool avx2 = UseAvx2();
+  const double* lengths = motion.lengths_m();
   int at_end[kBlock + 4];  // + 4: the vectorised move stores whole groups
   for (int begin = 0; begin < in.n; begin += kBlock) {
     const int end = std::min(in.n, begin + kBlock);
     // The move: in-segment moves of the block, then its particles at a segment end in index order.
-    const int num_at_end = motion.MoveWithinSegments(end - begin, in.distance + begin, in.seg + begin,
-                                                     in.dir + begin, in.along + begin, at_end);
+    const int count = end - begin;
+    int moved = 0, num_at_end = 0;
+    if (avx2) {
+      num_at_end = MoveWithinLimitsAvx2(count, in.distance + begin, in.dir + begin, in.along + begin,
+                                        in.limit + begin, at_end, &moved);
+    }
+    num_at_end = MoveWithinLimitsScalar(moved, count, in.distance + begin, in.dir + begin, in.along + begin,
+                                        in.limit + begin, at_end, num_at_end);
     for (int k = 0; k < num_at_end; ++k) {
       const int i = begin + at_end[k];
       const double importance = motion.MoveFromEnd(&in.seg[i], &in.dir[i], &in.along[i], in.distance[i], draws.Next(),
                                                    in.heading_rad, rng);
       if (importance != 1.0) in.weight[i] *= importance;
+      in.limit[i] = lengths[in.seg[i]];
     }
     // The update of the block, its arrays still in L1.
     int done = begin;

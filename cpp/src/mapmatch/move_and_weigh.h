@@ -22,6 +22,7 @@ struct MoveWeighInputs {
   int* seg;
   signed char* dir;
   double* along;           ///< [m] from end A
+  double* limit;           ///< the length of each particle's segment [m] (kept up to date here)
   double* weight;          ///< linear weights, multiplied by scale · factor
   double scale;            ///< pending rescale of the weights (1 / previous maximum)
   const double* factor;    ///< 2M: heading likelihood per (segment, direction), index 2 S + (d > 0)

@@ -100,6 +100,7 @@ void ParticleMapMatcher::Spread(int first, int count, double offset_fraction) {
     const size_t i = static_cast<size_t>(first + k);
     segment_[i] = s;
     along_[i] = std::clamp(position - start_of_segment, 0.0, network_.lengths_m()[s]);
+    limit_[i] = network_.lengths_m()[s];
     direction_[i] = (k % 2 == 0) ? 1 : -1;
     bias_[i] = options_.estimate_speed_bias ? rng_.Uniform(-options_.bias_halfwidth_mps, options_.bias_halfwidth_mps) : 0.0;
   }
@@ -112,6 +113,7 @@ void ParticleMapMatcher::Reset() {
   segment_.assign(static_cast<size_t>(n), 0);
   direction_.assign(static_cast<size_t>(n), 1);
   along_.assign(static_cast<size_t>(n), 0.0);
+  limit_.assign(static_cast<size_t>(n), 0.0);
   bias_.assign(static_cast<size_t>(n), 0.0);
   Spread(0, n, 0.5);
   weights_.assign(static_cast<size_t>(n), 1.0);
@@ -142,6 +144,7 @@ void ParticleMapMatcher::SetParticles(const std::vector<int>& segments, const st
   segment_ = segments;
   direction_ = directions;
   along_ = along_m;
+  for (size_t i = 0; i < n; ++i) limit_[i] = network_.lengths_m()[segments[i]];
   std::fill(weights_.begin(), weights_.end(), 1.0);
   weight_scale_ = 1.0;
   weight_sum_ = static_cast<double>(n);
@@ -181,7 +184,7 @@ StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, doub
   // (eq. 11) with the sums, one fused pass (move_and_weigh.h).
   const bool recovery = options_.recovery_disagreement > 0.0;  // the only user of the disagreement
   const detail::WeightSums sums = detail::MoveAndWeigh(
-      motion_, {n, distance_.data(), seg, dir, along, weights_.data(), weight_scale_, factor_.data(),
+      motion_, {n, distance_.data(), seg, dir, along, limit_.data(), weights_.data(), weight_scale_, factor_.data(),
                 recovery ? disagree_.data() : nullptr, heading_rad},
       lanes_, rng_);
   const double sum = sums.sum, sum_sq = sums.sum_sq, sx = sums.sx, sy = sums.sy, sxx = sums.sxx, syy = sums.syy;
@@ -222,6 +225,7 @@ StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, doub
     segment_tmp_.resize(static_cast<size_t>(n));
     direction_tmp_.resize(static_cast<size_t>(n));
     along_tmp_.resize(static_cast<size_t>(n));
+    limit_tmp_.resize(static_cast<size_t>(n));
     bias_tmp_.resize(static_cast<size_t>(n));
     {
       // Local restrict pointers: the stores into one vector's data must not force reloads of
@@ -230,19 +234,23 @@ StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, doub
       const int* __restrict seg_in = segment_.data();
       const signed char* __restrict dir_in = direction_.data();
       const double* __restrict along_in = along_.data();
+      const double* __restrict limit_in = limit_.data();
       int* __restrict seg_out = segment_tmp_.data();
       signed char* __restrict dir_out = direction_tmp_.data();
       double* __restrict along_out = along_tmp_.data();
+      double* __restrict limit_out = limit_tmp_.data();
       for (int i = 0; i < n; ++i) {
         const int a = anc[i];
         seg_out[i] = seg_in[a];
         dir_out[i] = dir_in[a];
         along_out[i] = along_in[a];
+        limit_out[i] = limit_in[a];
       }
     }
     segment_.swap(segment_tmp_);
     direction_.swap(direction_tmp_);
     along_.swap(along_tmp_);
+    limit_.swap(limit_tmp_);
     if (options_.estimate_speed_bias) {  // otherwise every bias is 0
       for (int i = 0; i < n; ++i) bias_tmp_[static_cast<size_t>(i)] = bias_[static_cast<size_t>(ancestors_[static_cast<size_t>(i)])];
       bias_.swap(bias_tmp_);
