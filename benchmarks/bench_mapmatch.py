@@ -295,10 +295,13 @@ def markdown(result: dict) -> str:
         lines += [""] + [f"- {note}" for note in result["notes"]]
     lines += ["", (
         "Against the machine (docs/performance.md): per particle-step about 29 flops, 14 integer operations (the"
-        " random lanes), 100 bytes of L2-resident arrays, about 8 loads (3 from the segment tables: length,"
-        " von Mises factor, one 32-byte geometry row) and 3-4 shuffles to put table entries in vectors;"
-        " one-core limits about 0.7 ns (AVX2 flops) and 1 ns (3 loads per cycle at 2.6 GHz). Bound now by those"
-        " loads and shuffles and by the junction path (the few percent of particles reaching a segment end each"
-        " step, handled one by one, about 12 % of the time)."
+        " random lanes), about 100 bytes of L1/L2-resident arrays (the move and the update run block by block,"
+        " 512 particles), about 8 loads (2 from the segment tables: the von Mises factor and one 32-byte"
+        " geometry row; the segment length is kept per particle) and 3-4 shuffles to put table entries in"
+        " vectors; one-core limits about 0.7 ns (AVX2 flops) and 1 ns (3 loads per cycle at 2.6 GHz). Bound now"
+        " by instruction throughput (perf: the update pass about a third of the samples at about 75"
+        " instructions per four particles, the random lanes a sixth, the in-segment move a sixth), then the"
+        " junction path (about 5 % of the particles per step, dependent table loads: 12 %) and resampling"
+        " (the serial cumulative sum of ResampleLinear: 9 %)."
     )]
     return "\n".join(lines)

@@ -12,8 +12,14 @@ namespace {
 
 inline std::uint64_t RotateLeft(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
 
+// The outputs of the fills: the uniform u in [0, 1) itself, or mean + (2a · u − a) (FillCentred).
+struct Affine {
+  double mean = 0.0, two_a = 0.0, a = 0.0;
+};
+
 // Rounds of the eight lanes into out[0, rounds * kLanes), portable version.
-void FillRoundsScalar(std::uint64_t (&state)[4][RandomLanes::kLanes], double* out, int rounds) {
+template <bool kCentred>
+void FillRoundsScalar(std::uint64_t (&state)[4][RandomLanes::kLanes], double* out, int rounds, Affine f) {
   constexpr int kLanes = RandomLanes::kLanes;
   std::uint64_t s0[kLanes], s1[kLanes], s2[kLanes], s3[kLanes];
   std::memcpy(s0, state[0], sizeof(s0));
@@ -36,7 +42,10 @@ void FillRoundsScalar(std::uint64_t (&state)[4][RandomLanes::kLanes], double* ou
     }
     double unit[kLanes];
     std::memcpy(unit, bits, sizeof(unit));
-    for (int j = 0; j < kLanes; ++j) out[r * kLanes + j] = unit[j] - 1.0;
+    for (int j = 0; j < kLanes; ++j) {
+      const double u = unit[j] - 1.0;
+      out[r * kLanes + j] = kCentred ? f.mean + (f.two_a * u - f.a) : u;
+    }
   }
   std::memcpy(state[0], s0, sizeof(s0));
   std::memcpy(state[1], s1, sizeof(s1));
@@ -46,8 +55,9 @@ void FillRoundsScalar(std::uint64_t (&state)[4][RandomLanes::kLanes], double* ou
 
 // The same rounds with AVX2: each state word of the eight lanes is two 4 x 64-bit registers.
 // Integer operations and one exact subtraction: bit-identical to FillRoundsScalar.
+template <bool kCentred>
 __attribute__((target("avx2"))) void FillRoundsAvx2(std::uint64_t (&state)[4][RandomLanes::kLanes], double* out,
-                                                     int rounds) {
+                                                     int rounds, Affine f) {
   static_assert(RandomLanes::kLanes == 8, "two registers of four lanes");
 // (Macros, not lambdas: a lambda does not inherit the function's target attribute.)
 #define INDOORLOC_LOAD(p) _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p))
@@ -59,6 +69,7 @@ __attribute__((target("avx2"))) void FillRoundsAvx2(std::uint64_t (&state)[4][Ra
   __m256i s3[2] = {INDOORLOC_LOAD(state[3]), INDOORLOC_LOAD(state[3] + 4)};
   const __m256i one_exponent = _mm256_set1_epi64x(0x3FF0000000000000LL);
   const __m256d one = _mm256_set1_pd(1.0);
+  const __m256d mean = _mm256_set1_pd(f.mean), two_a = _mm256_set1_pd(f.two_a), a = _mm256_set1_pd(f.a);
   for (int r = 0; r < rounds; ++r) {
     for (int h = 0; h < 2; ++h) {
       const __m256i result = _mm256_add_epi64(INDOORLOC_ROTL(_mm256_add_epi64(s0[h], s3[h]), 23), s0[h]);
@@ -70,7 +81,10 @@ __attribute__((target("avx2"))) void FillRoundsAvx2(std::uint64_t (&state)[4][Ra
       s2[h] = _mm256_xor_si256(s2[h], t);
       s3[h] = INDOORLOC_ROTL(s3[h], 45);
       const __m256i bits = _mm256_or_si256(_mm256_srli_epi64(result, 12), one_exponent);
-      _mm256_storeu_pd(out + r * 8 + 4 * h, _mm256_sub_pd(_mm256_castsi256_pd(bits), one));
+      const __m256d u = _mm256_sub_pd(_mm256_castsi256_pd(bits), one);
+      // No FMA: the same two roundings as the portable version.
+      _mm256_storeu_pd(out + r * 8 + 4 * h,
+                       kCentred ? _mm256_add_pd(mean, _mm256_sub_pd(_mm256_mul_pd(two_a, u), a)) : u);
     }
   }
   for (int h = 0; h < 2; ++h) {
@@ -84,11 +98,26 @@ __attribute__((target("avx2"))) void FillRoundsAvx2(std::uint64_t (&state)[4][Ra
 #undef INDOORLOC_STORE
 #undef INDOORLOC_ROTL
 
-void FillRounds(std::uint64_t (&state)[4][RandomLanes::kLanes], double* out, int rounds) {
+template <bool kCentred>
+void FillRounds(std::uint64_t (&state)[4][RandomLanes::kLanes], double* out, int rounds, Affine f) {
   if (UseAvx2()) {
-    FillRoundsAvx2(state, out, rounds);
+    FillRoundsAvx2<kCentred>(state, out, rounds, f);
   } else {
-    FillRoundsScalar(state, out, rounds);
+    FillRoundsScalar<kCentred>(state, out, rounds, f);
+  }
+}
+
+template <bool kCentred>
+void Fill(std::uint64_t (&state)[4][RandomLanes::kLanes], double* out, int count, Affine f) {
+  constexpr int kLanes = RandomLanes::kLanes;
+  if (count <= 0) return;
+  const int full = count / kLanes;
+  FillRounds<kCentred>(state, out, full, f);
+  const int rest = count - full * kLanes;
+  if (rest > 0) {
+    double tail[kLanes];
+    FillRounds<kCentred>(state, tail, 1, f);
+    std::memcpy(out + full * kLanes, tail, static_cast<size_t>(rest) * sizeof(double));
   }
 }
 
@@ -106,16 +135,10 @@ RandomLanes::RandomLanes(std::uint64_t seed, std::uint64_t stream) {
   }
 }
 
-void RandomLanes::FillUniform01(double* out, int count) {
-  if (count <= 0) return;
-  const int full = count / kLanes;
-  FillRounds(state_, out, full);
-  const int rest = count - full * kLanes;
-  if (rest > 0) {
-    double tail[kLanes];
-    FillRounds(state_, tail, 1);
-    std::memcpy(out + full * kLanes, tail, static_cast<size_t>(rest) * sizeof(double));
-  }
+void RandomLanes::FillUniform01(double* out, int count) { Fill<false>(state_, out, count, Affine()); }
+
+void RandomLanes::FillCentred(double* out, int count, double mean, double halfwidth) {
+  Fill<true>(state_, out, count, Affine{mean, 2.0 * halfwidth, halfwidth});
 }
 
 }  // namespace indoorloc

@@ -124,43 +124,29 @@ __attribute__((target("avx2"))) int MoveWithinSegmentsAvx2(int count, const doub
 
 }  // namespace
 
+int CorridorMotion::MoveWithinSegments(int count, const double* distance_m, const int* segment,
+                                       const signed char* direction, double* along_m, int* at_end) const {
+  int num_at_end = 0;
+  const int done = UseAvx2() ? MoveWithinSegmentsAvx2(count, distance_m, segment, direction, along_m, lengths_.data(),
+                                                      at_end, &num_at_end)
+                             : 0;
+  MoveWithinSegmentsScalar(done, count, distance_m, segment, direction, along_m, lengths_.data(), at_end, &num_at_end);
+  return num_at_end;
+}
+
 void CorridorMotion::MoveAll(int count, const double* distance_m, int* segment, signed char* direction,
                              double* along_m, double heading_rad, RandomLanes& lanes, RandomStream& rng,
                              double* weight, MoveScratch* scratch) const {
   if (count <= 0) return;
   scratch->at_end.resize(static_cast<size_t>(count) + 4);  // + 4: the AVX2 pass stores whole groups
   int* at_end = scratch->at_end.data();
-  int num_at_end = 0;
-  const int done = UseAvx2() ? MoveWithinSegmentsAvx2(count, distance_m, segment, direction, along_m, lengths_.data(),
-                                                      at_end, &num_at_end)
-                             : 0;
-  MoveWithinSegmentsScalar(done, count, distance_m, segment, direction, along_m, lengths_.data(), at_end, &num_at_end);
+  const int num_at_end = MoveWithinSegments(count, distance_m, segment, direction, along_m, at_end);
   scratch->uniforms.resize(static_cast<size_t>(num_at_end));
   lanes.FillUniform01(scratch->uniforms.data(), num_at_end);
-  const bool uniform_policy = options_.junction_policy == JunctionPolicy::kUniform;
   for (int k = 0; k < num_at_end; ++k) {
     const int i = at_end[k];
-    const int s = segment[i];
-    const int d = direction[i];
-    const double u = along_m[i] + d * distance_m[i];
-    // The common case: forward over the end ahead (u past it in the direction of travel), one
-    // hop, the rest of the move within the continuation.
-    const int end = d > 0 ? 1 : 0;
-    const double leftover = d > 0 ? u - lengths_[s] : -u;
-    if (uniform_policy && leftover > 0.0) {
-      const int first = continuation_begin_[static_cast<size_t>(2 * s + end)];
-      const int n_choices = continuation_begin_[static_cast<size_t>(2 * s + end + 1)] - first;
-      const int pick = std::min(n_choices - 1, static_cast<int>(scratch->uniforms[static_cast<size_t>(k)] * n_choices));
-      const int next = continuation_segment_[static_cast<size_t>(first + pick)];
-      if (leftover <= lengths_[next]) {
-        const bool enter_a = continuation_enter_end_[static_cast<size_t>(first + pick)] == 0;
-        segment[i] = next;
-        direction[i] = static_cast<signed char>(enter_a ? 1 : -1);
-        along_m[i] = enter_a ? leftover : lengths_[next] - leftover;
-        continue;
-      }
-    }
-    const double importance = MoveAcrossEnds(&segment[i], &direction[i], &along_m[i], distance_m[i], heading_rad, rng);
+    const double importance = MoveFromEnd(&segment[i], &direction[i], &along_m[i], distance_m[i],
+                                          scratch->uniforms[static_cast<size_t>(k)], heading_rad, rng);
     if (importance != 1.0) weight[i] *= importance;
   }
 }

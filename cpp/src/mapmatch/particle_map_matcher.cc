@@ -5,13 +5,11 @@
 #include <cstdio>
 #include <numeric>
 
-#include <immintrin.h>
-
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/log_weights.h"
 #include "indoorloc/core/options.h"
-#include "indoorloc/core/simd_dispatch.h"
 #include "indoorloc/core/validate.h"
+#include "move_and_weigh.h"
 
 namespace indoorloc::mapmatch {
 namespace {
@@ -30,6 +28,10 @@ void DrawDistances(const FilterOptions& options, double mean_distance, double dt
     lanes.FillUniform01(uniform, n);
     for (int i = 0; i < n; ++i) bias[i] += -jitter + 2.0 * jitter * uniform[i];
   }
+  if (a > 0 && !estimate_bias) {  // the common case: one pass, the distances written by the lanes
+    lanes.FillCentred(distance, n, mean_distance, a);
+    return;
+  }
   if (a > 0) lanes.FillUniform01(uniform, n);
   for (int i = 0; i < n; ++i) {
     const double mean = estimate_bias ? mean_distance - bias[i] * dt_s : mean_distance;
@@ -44,137 +46,6 @@ constexpr std::uint64_t kNoiseLanesStream = 1;
 CorridorMotionOptions ValidatedMotionOptions(const FilterOptions& options) {
   ValidateOptions(options);
   return options.corridor_motion();
-}
-
-// The sums of the update pass, for the normalisation, ESS, estimate, spread and disagreement.
-struct WeightSums {
-  double sum = 0, sum_sq = 0, sx = 0, sy = 0, sxx = 0, syy = 0, disagreement = 0, max_w = 0;
-};
-
-// Pass 2 of a step (eq. 11): w_i <- w_i · scale · factor[2 S_i + (d_i > 0)], and the weighted
-// sums. Four interleaved accumulators (particle i into lane i mod 4, lanes added pairwise at the
-// end) make the AVX2 version below a plain four-wide loop; the order is fixed, so both versions
-// give the same sums to the bit.
-constexpr int kSumLanes = 4;
-
-struct LaneSums {
-  double sum[kSumLanes] = {}, sum_sq[kSumLanes] = {}, sx[kSumLanes] = {}, sy[kSumLanes] = {}, sxx[kSumLanes] = {},
-         syy[kSumLanes] = {}, dis[kSumLanes] = {}, max_w[kSumLanes] = {};
-};
-
-struct WeighInputs {
-  int n;
-  const int* seg;
-  const signed char* dir;
-  const double* along;
-  double* weight;
-  double scale;
-  const double* factor;
-  const double* disagree;  // null: no disagreement sum (recovery off)
-  const double* origin_x;
-  const double* origin_y;
-  const double* unit_x;
-  const double* unit_y;
-  const double* geometry_rows;  // M x 4: origin x, origin y, unit x, unit y
-};
-
-// Particles [begin, n), particle i into lane i mod kSumLanes (portable version).
-void WeighScalar(const WeighInputs& in, int begin, LaneSums* acc) {
-  for (int i = begin; i < in.n; ++i) {
-    const int j = i % kSumLanes;
-    const int si = in.seg[i];
-    const int key = 2 * si + (in.dir[i] > 0);
-    const double w = in.weight[i] * in.scale * in.factor[key];
-    in.weight[i] = w;
-    const double x = in.origin_x[si] + in.along[i] * in.unit_x[si];
-    const double y = in.origin_y[si] + in.along[i] * in.unit_y[si];
-    acc->sum[j] += w;
-    acc->sum_sq[j] += w * w;
-    acc->sx[j] += w * x;
-    acc->sy[j] += w * y;
-    acc->sxx[j] += w * x * x;
-    acc->syy[j] += w * y * y;
-    if (in.disagree != nullptr) acc->dis[j] += w * in.disagree[key];
-    acc->max_w[j] = acc->max_w[j] > w ? acc->max_w[j] : w;
-  }
-}
-
-// Whole groups of four with AVX2 (table entries loaded per particle; the same operations in the same order
-// as WeighScalar, no FMA). Returns the first particle not done.
-// Four table entries t[i0..i3] by scalar loads: faster than vgatherdpd on the machines measured
-// (docs/performance.md), and no uninitialised-source warning from GCC's gather intrinsic.
-#define INDOORLOC_GATHER4(t, i0, i1, i2, i3) _mm256_set_pd((t)[i3], (t)[i2], (t)[i1], (t)[i0])
-
-template <bool kDisagreement>
-__attribute__((target("avx2"))) int WeighAvx2(const WeighInputs& in, LaneSums* acc) {
-  // Locals (restrict) so that the weight stores do not force reloads of the inputs.
-  const int n = in.n;
-  const int* __restrict seg = in.seg;
-  const signed char* __restrict dir = in.dir;
-  const double* __restrict along_m = in.along;
-  double* __restrict weight = in.weight;
-  const double* __restrict factor = in.factor;
-  const double* __restrict disagree = in.disagree;
-  const double* __restrict geometry = in.geometry_rows;
-  __m256d sum = _mm256_setzero_pd(), sum_sq = sum, sx = sum, sy = sum, sxx = sum, syy = sum, dis = sum, max_w = sum;
-  const __m256d scale = _mm256_set1_pd(in.scale);
-  int i = 0;
-  for (; i + kSumLanes <= n; i += kSumLanes) {
-    const int s0 = seg[i], s1 = seg[i + 1], s2 = seg[i + 2], s3 = seg[i + 3];
-    const int k0 = 2 * s0 + (dir[i] > 0), k1 = 2 * s1 + (dir[i + 1] > 0), k2 = 2 * s2 + (dir[i + 2] > 0),
-              k3 = 2 * s3 + (dir[i + 3] > 0);
-    const __m256d w =
-        _mm256_mul_pd(_mm256_mul_pd(_mm256_loadu_pd(weight + i), scale), INDOORLOC_GATHER4(factor, k0, k1, k2, k3));
-    _mm256_storeu_pd(weight + i, w);
-    const __m256d along = _mm256_loadu_pd(along_m + i);
-    // The four particles' geometry rows, transposed: 4 vector loads and 8 shuffles instead of 16
-    // scalar loads.
-    const __m256d r0 = _mm256_loadu_pd(geometry + 4 * s0), r1 = _mm256_loadu_pd(geometry + 4 * s1);
-    const __m256d r2 = _mm256_loadu_pd(geometry + 4 * s2), r3 = _mm256_loadu_pd(geometry + 4 * s3);
-    const __m256d t0 = _mm256_unpacklo_pd(r0, r1), t1 = _mm256_unpackhi_pd(r0, r1);  // ox oy / ux uy of 0, 1
-    const __m256d t2 = _mm256_unpacklo_pd(r2, r3), t3 = _mm256_unpackhi_pd(r2, r3);
-    const __m256d origin_x = _mm256_permute2f128_pd(t0, t2, 0x20), unit_x = _mm256_permute2f128_pd(t0, t2, 0x31);
-    const __m256d origin_y = _mm256_permute2f128_pd(t1, t3, 0x20), unit_y = _mm256_permute2f128_pd(t1, t3, 0x31);
-    const __m256d x = _mm256_add_pd(origin_x, _mm256_mul_pd(along, unit_x));
-    const __m256d y = _mm256_add_pd(origin_y, _mm256_mul_pd(along, unit_y));
-    const __m256d wx = _mm256_mul_pd(w, x), wy = _mm256_mul_pd(w, y);
-    sum = _mm256_add_pd(sum, w);
-    sum_sq = _mm256_add_pd(sum_sq, _mm256_mul_pd(w, w));
-    sx = _mm256_add_pd(sx, wx);
-    sy = _mm256_add_pd(sy, wy);
-    sxx = _mm256_add_pd(sxx, _mm256_mul_pd(wx, x));
-    syy = _mm256_add_pd(syy, _mm256_mul_pd(wy, y));
-    if (kDisagreement) dis = _mm256_add_pd(dis, _mm256_mul_pd(w, INDOORLOC_GATHER4(disagree, k0, k1, k2, k3)));
-    max_w = _mm256_max_pd(max_w, w);  // max_w > w ? max_w : w, as the portable version
-  }
-  _mm256_storeu_pd(acc->sum, sum);
-  _mm256_storeu_pd(acc->sum_sq, sum_sq);
-  _mm256_storeu_pd(acc->sx, sx);
-  _mm256_storeu_pd(acc->sy, sy);
-  _mm256_storeu_pd(acc->sxx, sxx);
-  _mm256_storeu_pd(acc->syy, syy);
-  _mm256_storeu_pd(acc->dis, dis);
-  _mm256_storeu_pd(acc->max_w, max_w);
-  return i;
-}
-#undef INDOORLOC_GATHER4
-
-WeightSums WeighAndSum(const WeighInputs& in) {
-  LaneSums acc;
-  int done = 0;
-  if (UseAvx2()) done = in.disagree != nullptr ? WeighAvx2<true>(in, &acc) : WeighAvx2<false>(in, &acc);
-  WeighScalar(in, done, &acc);
-  auto reduce = [](const double* v) { return (v[0] + v[1]) + (v[2] + v[3]); };
-  WeightSums out;
-  out.sum = reduce(acc.sum);
-  out.sum_sq = reduce(acc.sum_sq);
-  out.sx = reduce(acc.sx);
-  out.sy = reduce(acc.sy);
-  out.sxx = reduce(acc.sxx);
-  out.syy = reduce(acc.syy);
-  out.disagreement = reduce(acc.dis);
-  out.max_w = std::max(std::max(acc.max_w[0], acc.max_w[1]), std::max(acc.max_w[2], acc.max_w[3]));
-  return out;
 }
 
 }  // namespace
@@ -229,6 +100,7 @@ void ParticleMapMatcher::Spread(int first, int count, double offset_fraction) {
     const size_t i = static_cast<size_t>(first + k);
     segment_[i] = s;
     along_[i] = std::clamp(position - start_of_segment, 0.0, network_.lengths_m()[s]);
+    limit_[i] = network_.lengths_m()[s];
     direction_[i] = (k % 2 == 0) ? 1 : -1;
     bias_[i] = options_.estimate_speed_bias ? rng_.Uniform(-options_.bias_halfwidth_mps, options_.bias_halfwidth_mps) : 0.0;
   }
@@ -241,6 +113,7 @@ void ParticleMapMatcher::Reset() {
   segment_.assign(static_cast<size_t>(n), 0);
   direction_.assign(static_cast<size_t>(n), 1);
   along_.assign(static_cast<size_t>(n), 0.0);
+  limit_.assign(static_cast<size_t>(n), 0.0);
   bias_.assign(static_cast<size_t>(n), 0.0);
   Spread(0, n, 0.5);
   weights_.assign(static_cast<size_t>(n), 1.0);
@@ -271,6 +144,7 @@ void ParticleMapMatcher::SetParticles(const std::vector<int>& segments, const st
   segment_ = segments;
   direction_ = directions;
   along_ = along_m;
+  for (size_t i = 0; i < n; ++i) limit_[i] = network_.lengths_m()[segments[i]];
   std::fill(weights_.begin(), weights_.end(), 1.0);
   weight_scale_ = 1.0;
   weight_sum_ = static_cast<double>(n);
@@ -302,18 +176,17 @@ StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, doub
   int* seg = segment_.data();
   signed char* dir = direction_.data();
   double* along = along_.data();
-  // Pass 1, prediction (eq. 8-10): the distances from the random lanes (vectorised), then the
-  // corridor model's batch move (in-segment moves vectorised, junction choices afterwards, in
-  // particle order).
+  // Pass 1: the distances of the prediction (eq. 8-9) from the random lanes (vectorised).
   uniform_.resize(static_cast<size_t>(n));
   distance_.resize(static_cast<size_t>(n));
   DrawDistances(options_, speed_mps * dt_s, dt_s, n, lanes_, bias_.data(), uniform_.data(), distance_.data());
-  motion_.MoveAll(n, distance_.data(), seg, dir, along, heading_rad, lanes_, rng_, weights_.data(), &move_scratch_);
-  // Pass 2, update (eq. 11) with the sums.
+  // Pass 2: the move (corridor model, junction choices in particle order) and the update
+  // (eq. 11) with the sums, one fused pass (move_and_weigh.h).
   const bool recovery = options_.recovery_disagreement > 0.0;  // the only user of the disagreement
-  const WeightSums sums = WeighAndSum({n, seg, dir, along, weights_.data(), weight_scale_, factor_.data(),
-                                       recovery ? disagree_.data() : nullptr, origin_x, origin_y, unit_x, unit_y,
-                                       motion_.geometry_rows()});
+  const detail::WeightSums sums = detail::MoveAndWeigh(
+      motion_, {n, distance_.data(), seg, dir, along, limit_.data(), weights_.data(), weight_scale_, factor_.data(),
+                recovery ? disagree_.data() : nullptr, heading_rad},
+      lanes_, rng_);
   const double sum = sums.sum, sum_sq = sums.sum_sq, sx = sums.sx, sy = sums.sy, sxx = sums.sxx, syy = sums.syy;
   double disagreement = sums.disagreement;
   const double max_w = sums.max_w;
@@ -352,16 +225,32 @@ StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, doub
     segment_tmp_.resize(static_cast<size_t>(n));
     direction_tmp_.resize(static_cast<size_t>(n));
     along_tmp_.resize(static_cast<size_t>(n));
+    limit_tmp_.resize(static_cast<size_t>(n));
     bias_tmp_.resize(static_cast<size_t>(n));
-    for (int i = 0; i < n; ++i) {
-      const size_t anc = static_cast<size_t>(ancestors_[static_cast<size_t>(i)]);
-      segment_tmp_[static_cast<size_t>(i)] = segment_[anc];
-      direction_tmp_[static_cast<size_t>(i)] = direction_[anc];
-      along_tmp_[static_cast<size_t>(i)] = along_[anc];
+    {
+      // Local restrict pointers: the stores into one vector's data must not force reloads of
+      // the others' data pointers (they did: a third of this loop's time).
+      const int* __restrict anc = ancestors_.data();
+      const int* __restrict seg_in = segment_.data();
+      const signed char* __restrict dir_in = direction_.data();
+      const double* __restrict along_in = along_.data();
+      const double* __restrict limit_in = limit_.data();
+      int* __restrict seg_out = segment_tmp_.data();
+      signed char* __restrict dir_out = direction_tmp_.data();
+      double* __restrict along_out = along_tmp_.data();
+      double* __restrict limit_out = limit_tmp_.data();
+      for (int i = 0; i < n; ++i) {
+        const int a = anc[i];
+        seg_out[i] = seg_in[a];
+        dir_out[i] = dir_in[a];
+        along_out[i] = along_in[a];
+        limit_out[i] = limit_in[a];
+      }
     }
     segment_.swap(segment_tmp_);
     direction_.swap(direction_tmp_);
     along_.swap(along_tmp_);
+    limit_.swap(limit_tmp_);
     if (options_.estimate_speed_bias) {  // otherwise every bias is 0
       for (int i = 0; i < n; ++i) bias_tmp_[static_cast<size_t>(i)] = bias_[static_cast<size_t>(ancestors_[static_cast<size_t>(i)])];
       bias_.swap(bias_tmp_);

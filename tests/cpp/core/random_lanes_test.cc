@@ -40,6 +40,24 @@ TEST(RandomLanes, SameSeedSameNumbersAndPartialRoundsAreDiscarded) {
   for (int k = 0; k < 8; ++k) EXPECT_EQ(x[k], y[k]);
 }
 
+TEST(RandomLanes, FillCentredIsTheTransformOfTheSameDraws) {
+  // 21 outputs: two whole rounds and a partial one (its last 3 outputs discarded by both).
+  RandomLanes a(9, 1), b(9, 1);
+  const double mean = 1.25, halfwidth = 0.6;
+  std::vector<double> u(21), d(21);
+  a.FillUniform01(u.data(), 21);
+  b.FillCentred(d.data(), 21, mean, halfwidth);
+  for (int k = 0; k < 21; ++k) {
+    EXPECT_EQ(d[k], mean + (2.0 * halfwidth * u[k] - halfwidth)) << "output " << k;  // the same bits
+    EXPECT_GE(d[k], mean - halfwidth);
+    EXPECT_LT(d[k], mean + halfwidth);
+  }
+  // Both streams are at the same round afterwards.
+  a.FillUniform01(u.data(), 8);
+  b.FillUniform01(d.data(), 8);
+  for (int k = 0; k < 8; ++k) EXPECT_EQ(u[k], d[k]);
+}
+
 TEST(RandomLanes, UniformMomentsAndRange) {
   RandomLanes lanes(3);
   const int n = 400000;

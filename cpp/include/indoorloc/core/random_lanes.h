@@ -28,6 +28,10 @@ class RandomLanes {
   /// Fills out[0, count) with uniforms on [0, 1). Every call advances all lanes by
   /// ceil(count / kLanes) rounds (the unused outputs of a last partial round are discarded).
   void FillUniform01(double* out, int count);
+  /// The same draws u as FillUniform01(out, count), written as mean + (2 halfwidth · u −
+  /// halfwidth), uniform on [mean − halfwidth, mean + halfwidth), computed with exactly those
+  /// two roundings (no FMA): the same bits as transforming FillUniform01's output.
+  void FillCentred(double* out, int count, double mean, double halfwidth);
 
  private:
   alignas(64) std::uint64_t state_[4][kLanes];

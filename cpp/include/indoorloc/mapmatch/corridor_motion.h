@@ -22,6 +22,7 @@
 // threads may share one CorridorMotion (each with its own RandomStream).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -88,6 +89,45 @@ class CorridorMotion {
   /// factor is not 1 it multiplies weight[i] (`weight` may be null with the uniform policy).
   void MoveAll(int count, const double* distance_m, int* segment, signed char* direction, double* along_m,
                double heading_rad, RandomLanes& lanes, RandomStream& rng, double* weight, MoveScratch* scratch) const;
+
+  /// The in-segment pass of MoveAll over particles [0, count): along_m[i] += d · distance_m[i]
+  /// where the particle stays on its segment (vectorised, branch-free); the others are left
+  /// unchanged and listed in at_end (count + 4 entries: whole groups are stored) in index order.
+  /// Returns how many were listed; finish each with MoveFromEnd.
+  int MoveWithinSegments(int count, const double* distance_m, const int* segment, const signed char* direction,
+                         double* along_m, int* at_end) const;
+  /// The junction part of MoveAll for one particle whose move u = along + d · distance_m leaves
+  /// its segment: with the uniform policy a single forward hop picks continuation
+  /// floor(junction_uniform · n) (junction_uniform in [0, 1)); every other case goes through
+  /// Move's general path with its draws from `rng`. Returns the importance factor (1 for the
+  /// uniform policy). Exposed so that a filter can fuse it into its own per-particle pass.
+  double MoveFromEnd(int* segment, signed char* direction, double* along_m, double distance_m,
+                     double junction_uniform, double heading_rad, RandomStream& rng) const {
+    // The common case: forward over the end ahead, one hop, the rest of the move within the
+    // continuation. Selections by arithmetic and table lookups rather than branches: the travel
+    // direction is a coin toss per particle, a mispredicted branch cost more than the rest.
+    const int s = *segment;
+    const int d = *direction;
+    const double u = *along_m + d * distance_m;
+    const int forward = d > 0;
+    const double leftover = d * u - lengths_[s] * forward;  // u - length forward, -u backward (exact)
+    if (options_.junction_policy == JunctionPolicy::kUniform && leftover > 0.0) {
+      const int first = continuation_begin_[static_cast<size_t>(2 * s + forward)];
+      const int n_choices = continuation_begin_[static_cast<size_t>(2 * s + forward + 1)] - first;
+      const int pick = std::min(n_choices - 1, static_cast<int>(junction_uniform * n_choices));
+      const int next = continuation_segment_[static_cast<size_t>(first + pick)];
+      const double next_length = lengths_[next];
+      if (leftover <= next_length) {
+        const int enter_b = continuation_enter_end_[static_cast<size_t>(first + pick)];  // 0: enter at end A
+        const double base[2] = {0.0, next_length}, sign[2] = {1.0, -1.0};
+        *segment = next;
+        *direction = static_cast<signed char>(1 - 2 * enter_b);
+        *along_m = base[enter_b] + sign[enter_b] * leftover;  // leftover or length - leftover (exact)
+        return 1.0;
+      }
+    }
+    return MoveAcrossEnds(segment, direction, along_m, distance_m, heading_rad, rng);
+  }
 
   /// log f_vM(φ; β(S, d), κ) = κ cos(φ − β(S, d)) − log(2π I0(κ)) [nats] (eq. 11), with
   /// β(S, d) = β_S (d > 0) or β_S + π (d < 0).

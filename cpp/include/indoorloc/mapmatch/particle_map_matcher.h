@@ -137,6 +137,7 @@ class ParticleMapMatcher {
   std::vector<int> segment_;
   std::vector<signed char> direction_;
   std::vector<double> along_;
+  std::vector<double> limit_;  // the length of each particle's segment [m]: one load in the move pass
   std::vector<double> bias_;
   // Linear weights, rescaled every step so that the largest is 1 (times weight_scale_, applied
   // at the next update): no exp() per particle; likelihood factors come from a per-step table of
@@ -148,7 +149,7 @@ class ParticleMapMatcher {
   // Scratch for resampling gathers and per-segment cos(φ - β).
   std::vector<int> segment_tmp_;
   std::vector<signed char> direction_tmp_;
-  std::vector<double> along_tmp_, bias_tmp_;
+  std::vector<double> along_tmp_, limit_tmp_, bias_tmp_;
   std::vector<double> factor_;        // 2M: exp(κ (d cos(φ - β_s) - 1)), index 2 s + (d > 0)
   std::vector<double> disagree_;      // 2M: 1 - d cos(φ - β_s)
   std::vector<double> uniform_, distance_;  // N: a step's draws and distances
