@@ -174,6 +174,13 @@ def run(quick: bool = False) -> dict:
     }
 
 
+def _table(caption: str, columns: list, rows: list) -> list:
+    """Markdown lines of a captioned table: a blank line, the caption, a blank line, the header
+    row of `columns`, the rule and one line per row (a list of cell strings)."""
+    return (["", caption, "", "| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
+            + ["| " + " | ".join(row) + " |" for row in rows])
+
+
 def markdown(result: dict) -> str:
     r = result
     lines = [f"Data: {r['data']}. Per floor the longest walk, models from the floor's other walks; 9 heading-offset "
@@ -192,21 +199,19 @@ def markdown(result: dict) -> str:
         lines.append(f"| {f['floor']} | {f['cells']:,} x {f['layers']} | {f['fingerprints']:,} | {pp(lat['imu'])} | "
                      f"{pp(lat['step'])} | {pp(lat['step_with_fix'])} | {pp(lat['wifi_scan'])} "
                      f"({f['scan_readings_median']:.0f}) | {pp(lat['wifi_scan_200'])} |")
-    lines += ["", "The same events' thread CPU time (time.thread_time_ns: the time waiting for a CPU on a loaded "
-              "machine excluded), p50 / p99 [µs]:", "",
-              "| floor | imu | step | step + fix | wifi | wifi 200 |", "|---|---|---|---|---|---|"]
-    for f in r["floors"]:
-        c = f["cpu_time"]
-        lines.append(f"| {f['floor']} | {pp(c['imu'])} | {pp(c['step'])} | {pp(c['step_with_fix'])} | "
-                     f"{pp(c['wifi_scan'])} | {pp(c['wifi_scan_200'])} |")
-    lines += ["", "A 200-reading scan (median µs): the compiled shared-AP matcher's k nearest alone, against the "
-              "whole scan event (pooling, matching, the fix, the binding's conversions); and the C++ session's "
-              "mean time per step [ms]:", "",
-              "| floor | matcher | scan event | session per step |", "|---|---|---|---|"]
-    for f in r["floors"]:
-        p = f["wifi_scan_200_parts_median_us"]
-        lines.append(f"| {f['floor']} | {p['matcher_us']:.0f} | {p['scan_event_us']:.0f} | "
-                     f"{1e3 * f['session_s_per_step']:.2f} |")
+    lines += _table("The same events' thread CPU time (time.thread_time_ns: the time waiting for a CPU on a "
+                    "loaded machine excluded), p50 / p99 [µs]:",
+                    ["floor", "imu", "step", "step + fix", "wifi", "wifi 200"],
+                    [[f["floor"]] + [pp(f["cpu_time"][event]) for event in
+                                     ("imu", "step", "step_with_fix", "wifi_scan", "wifi_scan_200")]
+                     for f in r["floors"]])
+    parts = [f["wifi_scan_200_parts_median_us"] for f in r["floors"]]
+    lines += _table("A 200-reading scan (median µs): the compiled shared-AP matcher's k nearest alone, against the "
+                    "whole scan event (pooling, matching, the fix, the binding's conversions); and the C++ "
+                    "session's mean time per step [ms]:",
+                    ["floor", "matcher", "scan event", "session per step"],
+                    [[f["floor"], f"{p['matcher_us']:.0f}", f"{p['scan_event_us']:.0f}",
+                      f"{1e3 * f['session_s_per_step']:.2f}"] for f, p in zip(r["floors"], parts)])
     worst = max(f["latency"]["wifi_scan_200"]["p99_us"] for f in r["floors"])
     worst_cpu = max(f["cpu_time"]["wifi_scan_200"]["p99_us"] for f in r["floors"])
     load = r["load_average_1min"]

@@ -22,6 +22,7 @@ import numpy as np
 
 from indoorloc import mapmatch
 from indoorloc.registry import DemoContext, DemoSection, register_demo
+from indoorloc.experiments.markdown_table import titled_table
 from indoorloc.progress import progress
 
 KAPPAS = (10.0, 5.0, 1.0, 0.5, 0.1)
@@ -113,21 +114,18 @@ def run_kappas(
 
 
 def markdown_tables(results: Dict[float, KappaResult], title: str) -> str:
-    lines = [
-        f"**{title}**",
-        "",
-        "| κ_P | Table I: mean error [m] (5-95 % of runs) | paper | Table II: P(correct segment) | P after 120 s | error < 2 m from [s] | time [s] |",
-        "|---|---|---|---|---|---|---|",
-    ]
+    rows = []
     for kappa, r in results.items():
         row = r.row()
         settle = row["error_stays_below_2m_after_s"]
-        lines.append(
-            f"| {kappa:g} | {row['mean_error_m']:.2f} ({row['mean_error_run_p05_m']:.1f}-{row['mean_error_run_p95_m']:.1f}) | "
-            f"{PAPER_TABLE_I.get(kappa, float('nan')):g} | {row['p_correct']:.2f} | {row['p_correct_after_120s']:.2f} | "
-            f"{'never' if settle is None else f'{settle:.0f}'} | {row['seconds']:.1f} |"
-        )
-    return "\n".join(lines)
+        rows.append([f"{kappa:g}",
+                     f"{row['mean_error_m']:.2f} ({row['mean_error_run_p05_m']:.1f}-{row['mean_error_run_p95_m']:.1f})",
+                     f"{PAPER_TABLE_I.get(kappa, float('nan')):g}", f"{row['p_correct']:.2f}",
+                     f"{row['p_correct_after_120s']:.2f}", "never" if settle is None else f"{settle:.0f}",
+                     f"{row['seconds']:.1f}"])
+    return titled_table(title, ["κ_P", "Table I: mean error [m] (5-95 % of runs)", "paper",
+                                "Table II: P(correct segment)", "P after 120 s", "error < 2 m from [s]", "time [s]"],
+                        rows)
 
 
 def snapshot_run(kappa: float = 1.0, seed: int = 3, times_s=(0.0, 8.0, 34.0, 54.0), num_particles: int = 10_000):

@@ -35,6 +35,7 @@ import numpy as np
 from indoorloc import metrics, wifi
 from indoorloc.wifi import matcher as wifi_matcher
 from indoorloc.io.wifi_datasets import FingerprintDataset, FingerprintSplit
+from indoorloc.experiments.markdown_table import titled_table
 from indoorloc.progress import progress
 
 NOT_HEARD_DBM = -105.0
@@ -360,17 +361,12 @@ def _shared_text(h: Dict[str, float]) -> str:
 
 
 def markdown(results: Dict[str, MethodResult], title: str) -> str:
-    lines = [
-        f"**{title}**",
-        "",
-        "| method | n | mean [m] (95 % CI) | median | p75 | p90 | floor hit | ms/estimate |",
-        "|---|---|---|---|---|---|---|---|",
-    ]
+    rows = []
     for r in results.values():
         row = r.row()
         lo, hi = row["mean_ci95_m"]
-        lines.append(
-            f"| {row['method']} | {row['n']} | {row['mean_m']:.2f} ({lo:.2f}-{hi:.2f}) | {row['median_m']:.2f} | "
-            f"{row['p75_m']:.2f} | {row['p90_m']:.2f} | {100 * row['floor_hit_rate']:.1f} % | {row['ms_per_estimate']:.2f} |"
-        )
-    return "\n".join(lines)
+        rows.append([row["method"], f"{row['n']}", f"{row['mean_m']:.2f} ({lo:.2f}-{hi:.2f})", f"{row['median_m']:.2f}",
+                     f"{row['p75_m']:.2f}", f"{row['p90_m']:.2f}", f"{100 * row['floor_hit_rate']:.1f} %",
+                     f"{row['ms_per_estimate']:.2f}"])
+    return titled_table(title, ["method", "n", "mean [m] (95 % CI)", "median", "p75", "p90", "floor hit",
+                                "ms/estimate"], rows)

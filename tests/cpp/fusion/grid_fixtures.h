@@ -1,5 +1,5 @@
 // Test helpers of the grid tracker tests (grid tracker, grid session, survey anchors): the 60 x 40 m
-// hall they walk in, the axis-aligned boxes rings are made of, and a one-component position fix.
+// hall they walk in, the axis-aligned boxes rings are made of, and position fixes of one or K components.
 #pragma once
 
 #include <vector>
@@ -40,6 +40,18 @@ inline PositionFix Fix(double t, double x, double y, double sd, int floor = Posi
   f.sds_m = Eigen::VectorXd::Constant(1, sd);
   f.weights = Eigen::VectorXd::Ones(1);
   f.floors = Eigen::VectorXi::Constant(1, floor);
+  return f;
+}
+
+/// A fix at time t [s] with K components on any floor: means (K, 2) [m], sds (K) [m], weights (K).
+inline PositionFix MixtureFix(double t, const RowMatrixXd& means_m, const Eigen::VectorXd& sds_m,
+                              const Eigen::VectorXd& weights) {
+  PositionFix f;
+  f.time_s = t;
+  f.means_m = means_m;
+  f.sds_m = sds_m;
+  f.weights = weights;
+  f.floors = Eigen::VectorXi::Constant(means_m.rows(), PositionFix::kAnyFloor);
   return f;
 }
 

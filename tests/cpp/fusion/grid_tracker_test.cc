@@ -6,6 +6,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -20,6 +21,28 @@ std::vector<StepInput> Straight(int n, double length_m, double heading_rad, doub
   std::vector<StepInput> s;
   for (int k = 0; k < n; ++k) s.push_back(StepFromPolar(t0 + 0.5 * (k + 1), length_m, heading_rad, 0.05, 0.05));
   return s;
+}
+
+// Options whose returned covariances are the posterior's own (scale 1, no floor, no fix-distance
+// or fix-sd term), heading offset known: the reference the calibration tests compare against.
+GridTrackerOptions PosteriorCovarianceOptions() {
+  GridTrackerOptions o;
+  o.heading_offset_sd_rad = 0.0;
+  o.filtered_covariance_scale = o.smoothed_covariance_scale = 1.0;
+  o.filtered_covariance_floor_m = o.smoothed_covariance_floor_m = 0.0;
+  o.filtered_covariance_fix_gain = o.smoothed_covariance_fix_gain = 0.0;
+  o.filtered_covariance_fix_sd_gain = o.smoothed_covariance_fix_sd_gain = 0.0;
+  return o;
+}
+
+// The same steps and fixes from an unknown start, smoothed, run with the `raw` and the
+// `calibrated` options: the pair (raw result, calibrated result).
+std::pair<GridTrackResult, GridTrackResult> RunRawAndCalibrated(const FloorPlan& plan, const GridTrackerOptions& raw,
+                                                                const GridTrackerOptions& calibrated,
+                                                                const std::vector<StepInput>& steps,
+                                                                const std::vector<PositionFix>& fixes) {
+  return {GridTracker(&plan, raw).Run(steps, fixes, TrackStart(), true),
+          GridTracker(&plan, calibrated).Run(steps, fixes, TrackStart(), true)};
 }
 
 TEST(GridTrackerTest, KnownStartFollowsTheSteps) {
@@ -81,32 +104,22 @@ TEST(GridTrackerTest, SmootherCarriesALateFixBack) {
 
 TEST(GridTrackerTest, ReturnedCovarianceIsCalibratedByTheFixDistance) {
   const FloorPlan plan = Hall();
-  GridTrackerOptions o;
-  o.heading_offset_sd_rad = 0.0;
-  o.fix.tempering = 1.0;
-  o.filtered_covariance_scale = o.smoothed_covariance_scale = 1.0;  // the posterior's own
-  o.filtered_covariance_floor_m = o.smoothed_covariance_floor_m = 0.0;
-  o.filtered_covariance_fix_gain = o.smoothed_covariance_fix_gain = 0.0;
-  o.filtered_covariance_fix_sd_gain = o.smoothed_covariance_fix_sd_gain = 0.0;
-  const GridTracker raw_tracker(&plan, o);
+  GridTrackerOptions raw = PosteriorCovarianceOptions();
+  raw.fix.tempering = 1.0;
+  GridTrackerOptions o = raw;
   o.filtered_covariance_scale = 2.0;
   o.filtered_covariance_floor_m = 1.5;
   o.filtered_covariance_fix_gain = 0.5;
   o.smoothed_covariance_scale = 3.0;
   o.smoothed_covariance_floor_m = 0.5;
   o.smoothed_covariance_fix_gain = 0.25;
-  const GridTracker tracker(&plan, o);
   const auto steps = Straight(30, 0.7, M_PI / 2);
   // Two fixes 10 m apart (weights 1 and 3: centre 7.5 m along) at 3 s, one at 12 s.
-  PositionFix two = Fix(3.0, 20, 10, 2.0);
-  two.means_m.resize(2, 2);
-  two.means_m << 20, 10, 30, 10;
-  two.sds_m = Eigen::VectorXd::Constant(2, 2.0);
-  two.weights = Eigen::Vector2d(1.0, 3.0);
-  two.floors = Eigen::VectorXi::Constant(2, PositionFix::kAnyFloor);
+  RowMatrixXd two_means(2, 2);
+  two_means << 20, 10, 30, 10;
+  const PositionFix two = MixtureFix(3.0, two_means, Eigen::VectorXd::Constant(2, 2.0), Eigen::Vector2d(1.0, 3.0));
   const std::vector<PositionFix> fixes = {two, Fix(12.0, 25, 25, 2.0)};
-  const GridTrackResult a = raw_tracker.Run(steps, fixes, TrackStart(), true);
-  const GridTrackResult b = tracker.Run(steps, fixes, TrackStart(), true);
+  const auto [a, b] = RunRawAndCalibrated(plan, raw, o, steps, fixes);
   // Estimates and the posterior's own spread do not change; d is 0 before the first fix.
   EXPECT_EQ(a.filtered_mean_m, b.filtered_mean_m);
   EXPECT_EQ(a.filtered_covariance_m2, b.filtered_posterior_covariance_m2);
@@ -136,30 +149,21 @@ TEST(GridTrackerTest, ReturnedCovarianceIsCalibratedByTheFixDistance) {
 
 TEST(GridTrackerTest, ReturnedCovarianceGrowsWithTheFixSdAboveTheKnee) {
   const FloorPlan plan = Hall();
-  GridTrackerOptions o;
-  o.heading_offset_sd_rad = 0.0;
-  o.filtered_covariance_scale = o.smoothed_covariance_scale = 1.0;  // only the fix-sd term
-  o.filtered_covariance_floor_m = o.smoothed_covariance_floor_m = 0.0;
-  o.filtered_covariance_fix_gain = o.smoothed_covariance_fix_gain = 0.0;
-  o.filtered_covariance_fix_sd_gain = o.smoothed_covariance_fix_sd_gain = 0.0;
-  const GridTracker raw_tracker(&plan, o);
+  const GridTrackerOptions raw = PosteriorCovarianceOptions();
+  GridTrackerOptions o = raw;  // only the fix-sd term
   o.filtered_covariance_fix_sd_gain = 0.5;
   o.smoothed_covariance_fix_sd_gain = 2.0;
   o.covariance_fix_sd_knee_m = 4.0;
-  const GridTracker tracker(&plan, o);
   const auto steps = Straight(30, 0.7, M_PI / 2);
   // A sharp fix (sd 2 m, below the knee: adds nothing) at 3 s; at 12 s a poor one whose
   // components have sds 6 and 12 m (weights 3 and 1: s = 7.5 m) and a padding component
   // (weight 0, sd 100 m) that must not count.
-  PositionFix poor = Fix(12.0, 25, 25, 6.0);
-  poor.means_m.resize(3, 2);
-  poor.means_m << 25, 25, 27, 25, 0, 0;
-  poor.sds_m = Eigen::Vector3d(6.0, 12.0, 100.0);
-  poor.weights = Eigen::Vector3d(3.0, 1.0, 0.0);
-  poor.floors = Eigen::VectorXi::Constant(3, PositionFix::kAnyFloor);
+  RowMatrixXd poor_means(3, 2);
+  poor_means << 25, 25, 27, 25, 0, 0;
+  const PositionFix poor =
+      MixtureFix(12.0, poor_means, Eigen::Vector3d(6.0, 12.0, 100.0), Eigen::Vector3d(3.0, 1.0, 0.0));
   const std::vector<PositionFix> fixes = {Fix(3.0, 20, 10, 2.0), poor};
-  const GridTrackResult a = raw_tracker.Run(steps, fixes, TrackStart(), true);
-  const GridTrackResult b = tracker.Run(steps, fixes, TrackStart(), true);
+  const auto [a, b] = RunRawAndCalibrated(plan, raw, o, steps, fixes);
   EXPECT_EQ(a.filtered_mean_m, b.filtered_mean_m);
   EXPECT_EQ(a.smoothed_mean_m, b.smoothed_mean_m);
   int poor_steps = 0;

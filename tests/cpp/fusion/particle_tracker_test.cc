@@ -36,11 +36,18 @@ TrackerOptions SmallOptions(int n = 2000) {
   return o;
 }
 
+// A tracker on `plan` alone (no WiFi model, no corridors) started at a known position [m] on floor
+// 0 at t = 0 s, heading offset 0.
+ParticleTracker KnownStartTracker(const FloorPlan& plan, const TrackerOptions& o, const Eigen::Vector2d& start_m) {
+  ParticleTracker tracker(&plan, nullptr, nullptr, o);
+  tracker.InitializeKnown(0.0, start_m, 0, 0.0);
+  return tracker;
+}
+
 TEST(ParticleTracker, PerfectStepsRecoverThePath) {
   const FloorPlan plan = RoomPlan();
   TrackerOptions o = SmallOptions();
-  ParticleTracker tracker(&plan, nullptr, nullptr, o);
-  tracker.InitializeKnown(0.0, Eigen::Vector2d(2.0, 1.5), 0, 0.0);
+  ParticleTracker tracker = KnownStartTracker(plan, o, Eigen::Vector2d(2.0, 1.5));
   Eigen::Vector2d truth(2.0, 1.5);
   // East along y = 1.5 to x = 18 (through the door region below? no: the wall at x = 16 spans
   // y 0..7, so go north first to y = 8.5, then east, then south-east).
@@ -65,8 +72,7 @@ TEST(ParticleTracker, NoParticleEverEndsInsideAnObstacle) {
   TrackerOptions o = SmallOptions(3000);
   o.start_position_sd_m = 3.0;
   o.start_heading_offset_sd_rad = 1.0;
-  ParticleTracker tracker(&plan, nullptr, nullptr, o);
-  tracker.InitializeKnown(0.0, Eigen::Vector2d(6.0, 5.0), 0, 0.0);
+  ParticleTracker tracker = KnownStartTracker(plan, o, Eigen::Vector2d(6.0, 5.0));
   RandomStream rng(11);
   for (int k = 0; k < 40; ++k) {
     const double h = rng.Uniform(-M_PI, M_PI);
@@ -84,8 +90,7 @@ TEST(ParticleTracker, EveryParticleBlockedIsIgnoredThenRespread) {
   TrackerOptions o = SmallOptions(500);
   o.start_position_sd_m = 0.0;
   o.respread_after_blocked_steps = 2;
-  ParticleTracker tracker(&plan, nullptr, nullptr, o);
-  tracker.InitializeKnown(0.0, Eigen::Vector2d(15.5, 2.0), 0, 0.0);
+  ParticleTracker tracker = KnownStartTracker(plan, o, Eigen::Vector2d(15.5, 2.0));
   // A 3 m step east crosses the thin wall at x = 16 for every particle.
   TrackerEstimate e = tracker.Step(Step(0.5, 3.0, 0.0));
   EXPECT_EQ(tracker.summary().all_blocked_steps, 1);
@@ -291,8 +296,7 @@ TEST(ParticleTracker, FixedLagSmootherReportsThePositionLagStepsBack) {
   const FloorPlan plan = RoomPlan();
   TrackerOptions o = SmallOptions(500);
   o.smoothing_lag_steps = 3;
-  ParticleTracker tracker(&plan, nullptr, nullptr, o);
-  tracker.InitializeKnown(0.0, Eigen::Vector2d(2.0, 1.5), 0, 0.0);
+  ParticleTracker tracker = KnownStartTracker(plan, o, Eigen::Vector2d(2.0, 1.5));
   std::vector<Eigen::Vector2d> means;
   for (int k = 0; k < 8; ++k) {
     const TrackerEstimate e = tracker.Step(Step(0.5 * (k + 1), 0.0, 0.7, 0.01));

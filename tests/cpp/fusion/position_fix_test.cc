@@ -4,6 +4,7 @@
 #include "indoorloc/fusion/position_fix.h"
 
 #include <cmath>
+#include <cstdint>
 #include <stdexcept>
 #include <vector>
 
@@ -34,6 +35,14 @@ PositionFix TwoComponentFix(double t, double x0, double y0, double x1, double y1
   f.sds_m = Eigen::Vector2d(2.0, 3.0);
   f.weights = Eigen::Vector2d(w0, 1.0 - w0);
   return f;
+}
+
+// Default tracker options with n particles and the given seed.
+TrackerOptions ParticlesAndSeed(int num_particles, std::uint64_t seed) {
+  TrackerOptions o;
+  o.num_particles = num_particles;
+  o.seed = seed;
+  return o;
 }
 
 StepInput EastStep(double t, double length = 0.7, double sd = 0.05) {
@@ -147,9 +156,7 @@ TEST(PositionFix, RejectsMalformedFixesNamingTheField) {
 
 TEST(ParticleTracker, AnUnknownStartIsPlacedByTheFirstFixAndFollowsTheSteps) {
   const FloorPlan plan = HallPlan();
-  TrackerOptions o;
-  o.num_particles = 3000;
-  o.seed = 3;
+  TrackerOptions o = ParticlesAndSeed(3000, 3);
   o.unknown_start_heading_sd_rad = 0.05;
   ParticleTracker tracker(&plan, nullptr, nullptr, o);
   EXPECT_NEAR(tracker.floor_areas_m2()[0], 400.0, 1e-9);
@@ -167,9 +174,7 @@ TEST(ParticleTracker, AnUnknownStartIsPlacedByTheFirstFixAndFollowsTheSteps) {
 
 TEST(ParticleTracker, OneOutlierFixCannotPullAConfidentCloudAcrossTheHall) {
   const FloorPlan plan = HallPlan();
-  TrackerOptions o;
-  o.num_particles = 2000;
-  o.seed = 5;
+  TrackerOptions o = ParticlesAndSeed(2000, 5);
   o.start_position_sd_m = 0.3;
   o.fix.outlier_probability = 0.2;
   ParticleTracker tracker(&plan, nullptr, nullptr, o);
@@ -195,9 +200,7 @@ TEST(Track, FixesAndStepsAreMergedInTimeAndTheResultIsTheSameForAnyThreadCount) 
   }
   std::vector<Eigen::Vector2d> means;
   for (int threads : {1, 2, 3}) {
-    TrackerOptions o;
-    o.num_particles = 2 * ParticleTracker::kBlockSize + 100;
-    o.seed = 11;
+    TrackerOptions o = ParticlesAndSeed(2 * ParticleTracker::kBlockSize + 100, 11);
     o.num_threads = threads;
     o.unknown_start_heading_sd_rad = 0.05;
     const TrackResult r = Track(&plan, nullptr, nullptr, rec, TrackStart(), o, SmootherOptions(), false);

@@ -35,6 +35,15 @@ bool OnNetwork(const RoadNetwork& net, const ParticleMapMatcher& pf) {
   return true;
 }
 
+// One particle, no step noise and no recovery: its move is the motion model's alone.
+FilterOptions OneNoiselessParticle() {
+  FilterOptions options;
+  options.num_particles = 1;
+  options.noise_halfwidth_m = 0.0;
+  options.recovery_disagreement = 0.0;
+  return options;
+}
+
 TEST(ParticleMapMatcher, PropagationKeepsParticlesOnTheNetwork) {
   const RoadNetwork net = Grid();
   FilterOptions options;
@@ -50,10 +59,7 @@ TEST(ParticleMapMatcher, PropagationKeepsParticlesOnTheNetwork) {
 
 TEST(ParticleMapMatcher, ConservesDistanceAcrossJunctionsAndUsesOnlyConnectedSegments) {
   const RoadNetwork net = Grid();
-  FilterOptions options;
-  options.num_particles = 1;
-  options.noise_halfwidth_m = 0.0;
-  options.recovery_disagreement = 0.0;
+  FilterOptions options = OneNoiselessParticle();
   std::set<int> reached;
   for (std::uint64_t seed = 0; seed < 40; ++seed) {
     options.seed = seed;
@@ -80,10 +86,7 @@ TEST(ParticleMapMatcher, ConservesDistanceAcrossJunctionsAndUsesOnlyConnectedSeg
 // floor at 0 biased the filter forward); it stops at the end behind it, same segment and direction.
 TEST(ParticleMapMatcher, NegativeStepMovesBackAndStopsAtTheEndBehind) {
   const RoadNetwork net = Grid();
-  FilterOptions options;
-  options.num_particles = 1;
-  options.noise_halfwidth_m = 0.0;
-  options.recovery_disagreement = 0.0;
+  FilterOptions options = OneNoiselessParticle();
   ParticleMapMatcher pf(net, options);
   pf.SetParticles({1}, {-1}, {2.0});  // segment (10,0)-(20,0), facing A
   pf.Step(-3.0, 0.0, 1.0);

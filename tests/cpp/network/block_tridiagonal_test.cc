@@ -21,9 +21,7 @@ using Eigen::VectorXd;
 using testing::FromDense;
 TEST(BlockTridiagonal, MatchesDenseSolveAndInverseForEveryCheckpointInterval) {
   const int n = 9, b = 4;
-  MatrixXd A;
-  VectorXd rhs;
-  testing::RandomBlockSystem(n, b, 3, &A, &rhs);
+  const auto [A, rhs] = testing::RandomBlockSystem(n, b, 3);
   const VectorXd x_dense = A.llt().solve(rhs);
   const MatrixXd inverse = A.inverse();
   BlockTridiagonalOptions o;
@@ -62,9 +60,7 @@ TEST(BlockTridiagonal, TwoThreadsGiveBitIdenticalResultsForEverySize) {
   // The twisted order does not depend on the thread count: the same operations in the same order.
   for (int n : {1, 2, 3, 4, 7, 10}) {
     const int b = 3;
-    MatrixXd A;
-    VectorXd rhs;
-    testing::RandomBlockSystem(n, b, 20 + n, &A, &rhs);
+    const auto [A, rhs] = testing::RandomBlockSystem(n, b, 20 + n);
     const MatrixXd inverse = A.inverse();
     for (int interval : {0, 1, 2}) {
       BlockTridiagonalOptions o;
@@ -121,9 +117,7 @@ TEST(BlockTridiagonal, DefectOfTheWholeNetworkShowsAtTheMiddleBlockOnAnyThreadCo
 }
 
 TEST(BlockTridiagonal, SingleBlockAndNoSelection) {
-  MatrixXd A;
-  VectorXd rhs;
-  testing::RandomBlockSystem(1, 5, 7, &A, &rhs);
+  const auto [A, rhs] = testing::RandomBlockSystem(1, 5, 7);
   const BlockTridiagonalSolution s = SolveBlockTridiagonal(1, 5, FromDense(A, rhs, 5));
   EXPECT_LT((s.x - A.llt().solve(rhs)).cwiseAbs().maxCoeff(), 1e-10);
   EXPECT_TRUE(s.covariance.empty());
@@ -131,9 +125,7 @@ TEST(BlockTridiagonal, SingleBlockAndNoSelection) {
 
 TEST(BlockTridiagonal, RankDeficiencyIsReportedWithItsBlock) {
   const int n = 5, b = 3;
-  MatrixXd A;
-  VectorXd rhs;
-  testing::RandomBlockSystem(n, b, 11, &A, &rhs);
+  auto [A, rhs] = testing::RandomBlockSystem(n, b, 11);
   // Block 2 loses one direction entirely (an unobservable parameter): row/column zero.
   A.row(2 * b + 1).setZero();
   A.col(2 * b + 1).setZero();
@@ -147,9 +139,7 @@ TEST(BlockTridiagonal, RankDeficiencyIsReportedWithItsBlock) {
 }
 
 TEST(BlockTridiagonal, BadInputGivesClearErrors) {
-  MatrixXd A;
-  VectorXd rhs;
-  testing::RandomBlockSystem(3, 2, 1, &A, &rhs);
+  const auto [A, rhs] = testing::RandomBlockSystem(3, 2, 1);
   EXPECT_THROW(SolveBlockTridiagonal(0, 2, FromDense(A, rhs, 2)), std::invalid_argument);
   EXPECT_THROW(SolveBlockTridiagonal(3, 0, FromDense(A, rhs, 2)), std::invalid_argument);
   EXPECT_THROW(SolveBlockTridiagonal(3, 2, BlockRowAssembler()), std::invalid_argument);

@@ -19,9 +19,7 @@ using Eigen::VectorXd;
 using testing::FromDense;
 TEST(BlockTridiagonalFactor, SolveAndMultiplyMatchDense) {
   const int n = 8, b = 3;
-  MatrixXd A;
-  VectorXd rhs;
-  testing::RandomBlockSystem(n, b, 4, &A, &rhs);
+  const auto [A, rhs] = testing::RandomBlockSystem(n, b, 4);
   const BlockTridiagonalFactor f(n, b, FromDense(A, rhs, b));
   EXPECT_LT((f.Solve(rhs) - A.llt().solve(rhs)).cwiseAbs().maxCoeff(), 1e-10);
   EXPECT_LT((f.Multiply(rhs) - A * rhs).cwiseAbs().maxCoeff(), 1e-10);
@@ -30,9 +28,7 @@ TEST(BlockTridiagonalFactor, SolveAndMultiplyMatchDense) {
 
 TEST(CrossoverPcg, MatchesTheDenseTiedSolution) {
   const int n = 30, b = 4;
-  MatrixXd A;
-  VectorXd rhs;
-  testing::RandomBlockSystem(n, b, 9, &A, &rhs);
+  const auto [A, rhs] = testing::RandomBlockSystem(n, b, 9);
   RandomStream rng(10);
   std::vector<Tie> ties;
   MatrixXd tied = A;
@@ -61,9 +57,7 @@ TEST(CrossoverPcg, MatchesTheDenseTiedSolution) {
 }
 
 TEST(CrossoverPcg, BadTiesGiveClearErrors) {
-  MatrixXd A;
-  VectorXd rhs;
-  testing::RandomBlockSystem(3, 2, 1, &A, &rhs);
+  const auto [A, rhs] = testing::RandomBlockSystem(3, 2, 1);
   const BlockTridiagonalFactor f(3, 2, FromDense(A, rhs, 2));
   EXPECT_THROW(SolveWithTies(f, rhs, {Tie{0, 6, 1.0, 0.0}}), std::invalid_argument);  // outside
   EXPECT_THROW(SolveWithTies(f, rhs, {Tie{1, 1, 1.0, 0.0}}), std::invalid_argument);  // a == b

@@ -11,9 +11,15 @@
 
 namespace indoorloc::network::testing {
 
+/// A random system A x = rhs of n blocks of b unknowns.
+struct BlockSystem {
+  Eigen::MatrixXd A;
+  Eigen::VectorXd rhs;
+};
+
 /// A = Jᵀ J + 0.1 I with J block lower-bidiagonal (n blocks of b): symmetric positive definite
-/// and block-tridiagonal; rhs standard normal.
-inline void RandomBlockSystem(int n, int b, std::uint64_t seed, Eigen::MatrixXd* A, Eigen::VectorXd* rhs) {
+/// and block-tridiagonal; rhs standard normal. The same seed gives the same system.
+inline BlockSystem RandomBlockSystem(int n, int b, std::uint64_t seed) {
   RandomStream rng(seed);
   Eigen::MatrixXd J = Eigen::MatrixXd::Zero(n * b, n * b);
   for (int i = 0; i < n; ++i)
@@ -22,9 +28,11 @@ inline void RandomBlockSystem(int n, int b, std::uint64_t seed, Eigen::MatrixXd*
         J(i * b + r, i * b + c) = rng.Normal();
         if (i > 0) J(i * b + r, (i - 1) * b + c) = rng.Normal();
       }
-  *A = J.transpose() * J + 0.1 * Eigen::MatrixXd::Identity(n * b, n * b);
-  rhs->resize(n * b);
-  for (int i = 0; i < n * b; ++i) (*rhs)[i] = rng.Normal();
+  BlockSystem system;
+  system.A = J.transpose() * J + 0.1 * Eigen::MatrixXd::Identity(n * b, n * b);
+  system.rhs.resize(n * b);
+  for (int i = 0; i < n * b; ++i) system.rhs[i] = rng.Normal();
+  return system;
 }
 
 /// Block row i of a dense matrix A (blocks of b) and of rhs.
