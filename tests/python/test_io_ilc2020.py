@@ -116,27 +116,28 @@ def test_walk_without_wifi_or_waypoints(tmp_path):
 
 
 # ------------------------------------------------------------------ damaged files
+def not_a_number(record, nth, k, name, value):
+    """A damaged-line case: field k (0-based, named `name`) of the nth `record` line set to `value`,
+    which the loader must reject as not a number, naming the field (1-based) and the value."""
+    return (f"\t{record}\t", nth, set_field(k, value), rf"{record} field {k + 1} \({name}\) is not a number: '{value}'")
+
+
 @pytest.mark.parametrize("needle, nth, fix, message", [
     ("\tTYPE_ACCELEROMETER\t", 4, drop_last_field,
      r"TYPE_ACCELEROMETER has 5 tab-separated fields, expected 6 \(unix_ms, type, x, y, z, "
      r"accuracy\)"),
     ("\tTYPE_GYROSCOPE_UNCALIBRATED\t", 7, lambda s: s + "\t1.0",
      "TYPE_GYROSCOPE_UNCALIBRATED has 10 tab-separated fields, expected 9"),
-    ("\tTYPE_GYROSCOPE\t", 2, set_field(3, "abc"),
-     r"TYPE_GYROSCOPE field 4 \(y\) is not a number: 'abc'"),
-    ("\tTYPE_MAGNETIC_FIELD\t", 9, set_field(4, ""),
-     r"TYPE_MAGNETIC_FIELD field 5 \(z\) is not a number: ''"),
-    ("\tTYPE_ROTATION_VECTOR\t", 0, set_field(2, "nan"),
-     r"TYPE_ROTATION_VECTOR field 3 \(x\) is not a number: 'nan'"),
-    ("\tTYPE_ACCELEROMETER_UNCALIBRATED\t", 11, set_field(3, "Infinity"),
-     r"TYPE_ACCELEROMETER_UNCALIBRATED field 4 \(y\) is not a number: 'Infinity'"),
+    not_a_number("TYPE_GYROSCOPE", 2, 3, "y", "abc"),
+    not_a_number("TYPE_MAGNETIC_FIELD", 9, 4, "z", ""),
+    not_a_number("TYPE_ROTATION_VECTOR", 0, 2, "x", "nan"),
+    not_a_number("TYPE_ACCELEROMETER_UNCALIBRATED", 11, 3, "y", "Infinity"),
     ("\tTYPE_GYROSCOPE\t", 12, set_field(2, "1e999"),
      r"TYPE_GYROSCOPE field 3 \(x\) is not finite: '1e999'"),
     ("\tTYPE_ACCELEROMETER\t", 12, set_field(0, "1574142012377.5"),
      r"field 1 \(unix_ms\) must be an integer"),
-    ("\tTYPE_WIFI\t", 2, set_field(4, "-7x"),
-     r"TYPE_WIFI field 5 \(rssi\) is not a number: '-7x'"),
-    ("\tTYPE_WIFI\t", 5, set_field(4, ""), r"TYPE_WIFI field 5 \(rssi\) is not a number: ''"),
+    not_a_number("TYPE_WIFI", 2, 4, "rssi", "-7x"),
+    not_a_number("TYPE_WIFI", 5, 4, "rssi", ""),
     ("\tTYPE_WIFI\t", 1, set_field(3, ""), r"TYPE_WIFI field 4 \(bssid\) is empty"),
     ("\tTYPE_WIFI\t", 0, drop_last_field, "TYPE_WIFI has 6 tab-separated fields, expected 7"),
     ("\tTYPE_WAYPOINT\t", 1, drop_last_field, "TYPE_WAYPOINT has 3 tab-separated fields"),

@@ -19,6 +19,7 @@ using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
 using testing::FromDense;
+
 TEST(BlockTridiagonal, MatchesDenseSolveAndInverseForEveryCheckpointInterval) {
   const int n = 9, b = 4;
   const auto [A, rhs] = testing::RandomBlockSystem(n, b, 3);
@@ -154,6 +155,15 @@ TEST(BlockTridiagonal, BadInputGivesClearErrors) {
   VectorXd bad = rhs;
   bad[3] = std::nan("");
   EXPECT_THROW(SolveBlockTridiagonal(3, 2, FromDense(A, bad, 2)), std::invalid_argument);
+}
+
+TEST(BlockTridiagonalFactor, SolveAndMultiplyMatchDense) {
+  const int n = 8, b = 3;
+  const auto [A, rhs] = testing::RandomBlockSystem(n, b, 4);
+  const BlockTridiagonalFactor f(n, b, FromDense(A, rhs, b));
+  EXPECT_LT((f.Solve(rhs) - A.llt().solve(rhs)).cwiseAbs().maxCoeff(), 1e-10);
+  EXPECT_LT((f.Multiply(rhs) - A * rhs).cwiseAbs().maxCoeff(), 1e-10);
+  EXPECT_EQ(f.rhs(), rhs);
 }
 
 }  // namespace

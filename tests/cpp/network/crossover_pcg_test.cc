@@ -17,14 +17,6 @@ using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
 using testing::FromDense;
-TEST(BlockTridiagonalFactor, SolveAndMultiplyMatchDense) {
-  const int n = 8, b = 3;
-  const auto [A, rhs] = testing::RandomBlockSystem(n, b, 4);
-  const BlockTridiagonalFactor f(n, b, FromDense(A, rhs, b));
-  EXPECT_LT((f.Solve(rhs) - A.llt().solve(rhs)).cwiseAbs().maxCoeff(), 1e-10);
-  EXPECT_LT((f.Multiply(rhs) - A * rhs).cwiseAbs().maxCoeff(), 1e-10);
-  EXPECT_EQ(f.rhs(), rhs);
-}
 
 TEST(CrossoverPcg, MatchesTheDenseTiedSolution) {
   const int n = 30, b = 4;
