@@ -4,6 +4,7 @@ synthetic two-floor site (simulate.ilc_site)."""
 
 import math
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -245,6 +246,24 @@ def test_study_calibration_recovers_an_overconfidence_factor_and_bins_every_walk
     assert cal["log_loss"] < raw["log_loss"] and cal["brier"] < raw["brier"]
     assert abs(cal["mean_reported"] - cal["fraction_right"]) < 0.02
     assert raw["mean_reported"] - raw["fraction_right"] > 0.05
+
+
+def test_study_markdown_prints_a_result_reloaded_from_json_with_an_infinite_log_loss():
+    """An uncalibrated walk given probability 0 for its true floor has an infinite log loss, which
+    the study's JSON stores as null: the reloaded result prints the same table as the run did."""
+    import json
+
+    from indoorloc.experiments import floor_identification_study as study
+
+    path = Path(__file__).resolve().parents[2] / "benchmarks" / "results" / "floor_identification_study.json"
+    reloaded = json.loads(path.read_text())
+    assert reloaded["calibration"]["uncalibrated_reliability"]["log_loss"] is None
+    in_memory = json.loads(path.read_text(), object_hook=lambda d: {
+        k: (math.inf if k == "log_loss" and v is None else v) for k, v in d.items()})
+    table = study.markdown(reloaded)
+    assert table == study.markdown(in_memory)
+    assert "| log loss / Brier |" in table and "| inf / " in table
+    assert table in path.with_suffix(".md").read_text()
 
 
 def test_identification_calibration_is_the_first_floors_with_the_widest_spread():

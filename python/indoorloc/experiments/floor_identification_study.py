@@ -315,12 +315,18 @@ def markdown(result: dict) -> str:
                           [str(row["walks"]), f"{row['mean_reported']:.4f}", f"{row['fraction_right']:.4f}"])
             lines.append(f"| {lo:g}-{hi:g} | " + " | ".join(cells) + " |")
         const = cal["constant_reliability"]
-        lines_after = [f"With b = 0 (one δ for every walk, the rest as on all floors): log loss {const['log_loss']:.3f}, "
+        lines_after = [f"With b = 0 (one δ for every walk, the rest as on all floors): log loss {_loss(const['log_loss'])}, "
                        f"Brier {const['brier']:.4f}."]
-        lines.append("| log loss / Brier | " + " | ".join(f"{t['log_loss']:.3f} / {t['brier']:.4f} |  | " for t in tables)
+        lines.append("| log loss / Brier | " + " | ".join(f"{_loss(t['log_loss'])} / {t['brier']:.4f} |  | " for t in tables)
                      .rstrip() + "")
         lines += [""] + lines_after
     return "\n".join(lines)
+
+
+def _loss(value: Optional[float]) -> str:
+    """A log loss [nats] for the table: an infinite one (a walk given probability 0 for its true
+    floor) is stored as JSON null by :func:`_jsonable`; a reloaded result prints it as the run did."""
+    return "inf" if value is None or value == math.inf else f"{value:.3f}"
 
 
 def _brief(c: Dict[str, float]) -> str:
