@@ -62,7 +62,7 @@ def test_offspring_counts_do_not_depend_on_thread_count():
 
 
 def test_resample_if_needed():
-    opts = core.ResamplingOptions("residual", ess_threshold=0.5)
+    opts = core.ResamplingOptions(scheme="residual", ess_threshold=0.5)
     anc, lw, summary = core.resample_if_needed(np.linspace(-50, 0, 100), opts, rng=1)
     assert summary.resampled and summary.num_particles == 100
     assert summary.ess_before < 50
@@ -72,7 +72,7 @@ def test_resample_if_needed():
     assert not summary.resampled
     np.testing.assert_array_equal(anc, np.arange(10))
     with pytest.raises(ValueError, match="ess_threshold"):
-        core.ResamplingOptions("systematic", ess_threshold=2.0)
+        core.ResamplingOptions(scheme="systematic", ess_threshold=2.0)
 
 
 def test_random_stream_distributions():
