@@ -212,7 +212,8 @@ def test_nearest_neighbour_fill_carries_previous_estimate():
 
 def test_table1_runner_without_anfb_and_markdown():
     result = analog_lorenz63.run_table1(
-        n_realisations=2, catalog_sizes=(2000,), methods=("enks", "anenks"), T=150, dt_obs=8
+        n_realisations=2, catalog_sizes=(2000,), methods=("enks", "anenks"),
+        setting=analog_lorenz63.Lorenz63Setting(T=150, dt_obs=8)
     )
     names = [(row["method"], row["M"]) for row in result["rows"]]
     assert names == [("EnKS", None), ("AnEnKS", 2000)]
@@ -233,20 +234,39 @@ def test_anfb_runner_reports_missing_bindings(monkeypatch):
         analog_lorenz63.run_table1(n_realisations=1, methods=("anfb",))
 
 
+SHORT_PROBLEM = analog_lorenz63.Lorenz63Setting(T=200, dt_obs=8)
+
+
+def test_lorenz63_setting_holds_the_papers_defaults_and_the_old_keywords_still_work():
+    """The paper's setting (§3.1) is written once; the former keywords T, dt_obs, R, n_members,
+    anenks_k warn and give the same result as the setting; a misspelt one is a TypeError."""
+    assert analog_lorenz63.PAPER_SETTING == analog_lorenz63.Lorenz63Setting(T=1000, dt_obs=40, R=2.0, n_members=100,
+                                                                            anenks_k=50)
+    args = dict(n_realisations=1, catalog_sizes=(2000,), methods=("enks",))
+    new = analog_lorenz63.run_table1(**args, setting=analog_lorenz63.Lorenz63Setting(T=120, dt_obs=8, n_members=20))
+    with pytest.warns(DeprecationWarning, match=r"run_table1\(T=.*setting=Lorenz63Setting"):
+        old = analog_lorenz63.run_table1(**args, T=120, dt_obs=8, n_members=20)
+    assert old["rows"][0]["rmse"] == new["rows"][0]["rmse"]
+    assert (old["settings"]["T"], old["settings"]["n_members"]) == (120, 20)
+    with pytest.raises(TypeError, match="'dt_ob'"):
+        analog_lorenz63.run_table1(**args, dt_ob=8)
+
+
 def test_anfb_lorenz63_below_climatology():
     result = analog_lorenz63.run_table1(
-        n_realisations=1, catalog_sizes=(10**4,), beams=(None, 1000), methods=("anfb",), T=200, dt_obs=8
+        n_realisations=1, catalog_sizes=(10**4,), beams=(None, 1000), methods=("anfb",), setting=SHORT_PROBLEM
     )
     assert [row["beam"] for row in result["rows"]] == ["exact", "1000"]
     for row in result["rows"]:
         assert row["rmse_mean"] < 0.3 * CLIMATOLOGY_STD
-    example = analog_lorenz63.reconstruction_example(M=10**4, methods=("anfb",), T=200, dt_obs=8)
+    example = analog_lorenz63.reconstruction_example(M=10**4, methods=("anfb",), setting=SHORT_PROBLEM)
     assert example["estimates"]["AnFB"].shape == (200, 3)
 
 
 def test_kernel_selection_uses_validation_problems_and_sorts():
     rows = analog_lorenz63.run_kernel_selection(
-        2000, ks=(5,), sigma_scales=(0.5, 1.0), beam=200, n_problems=2, T=120, dt_obs=8
+        2000, ks=(5,), sigma_scales=(0.5, 1.0), beam=200, n_problems=2,
+        setting=analog_lorenz63.Lorenz63Setting(T=120, dt_obs=8)
     )
     assert [r["k"] for r in rows] == [5, 5] and sorted(r["sigma_scale"] for r in rows) == [0.5, 1.0]
     assert rows[0]["rmse_mean"] <= rows[1]["rmse_mean"]
@@ -257,8 +277,8 @@ def test_kernel_selection_uses_validation_problems_and_sorts():
 
 def test_kernel_selection_with_incremental_rule_and_inflated_r():
     rows = analog_lorenz63.run_kernel_selection(
-        2000, ks=(5,), sigma_scales=(0.5,), beam=200, n_problems=1, T=120, dt_obs=8,
-        successor_rule="incremental", r_hmm_scales=(1.0, 2.0),
+        2000, ks=(5,), sigma_scales=(0.5,), beam=200, n_problems=1,
+        setting=analog_lorenz63.Lorenz63Setting(T=120, dt_obs=8), successor_rule="incremental", r_hmm_scales=(1.0, 2.0),
     )
     assert sorted(r["r_hmm_scale"] for r in rows) == [1.0, 2.0]
     assert all(r["successor_rule"] == "incremental" and r["rmse_mean"] < 0.5 * CLIMATOLOGY_STD for r in rows)

@@ -127,7 +127,8 @@ def test_analog_table1_merged_from_realisation_tasks_equals_one_run():
     from indoorloc.experiments import analog_lorenz63 as al
     from indoorloc.experiments import sweep_tasks
 
-    kwargs = dict(n_realisations=3, catalog_sizes=(1500,), beams=(None, 300), methods=("anfb",), T=200, k=10)
+    kwargs = dict(n_realisations=3, catalog_sizes=(1500,), beams=(None, 300), methods=("anfb",),
+                  setting=al.Lorenz63Setting(T=200), k=10)
     whole = al.run_table1(**kwargs)
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
                       dashboard_address=None) as cluster, Client(cluster) as client:

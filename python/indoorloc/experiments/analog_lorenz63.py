@@ -21,8 +21,10 @@ stochastic method of realisation r is seeded with ``seed + r``.
 
 from __future__ import annotations
 
+import dataclasses
 import time
-from typing import Dict, List, Optional, Sequence, Tuple
+import warnings
+from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -108,6 +110,38 @@ DEFAULT_K = 10
 #: the chain jump between passes of the attractor, a large one a narrow kernel that keeps it on
 #: a pass. Sizes not listed use (k, sigma_scale) as given.
 VALIDATED_KERNELS: Dict[int, Tuple[int, float]] = {10**4: (50, 0.35), 10**5: (10, 0.5)}
+
+
+@dataclasses.dataclass(frozen=True)
+class Lorenz63Setting:
+    """The paper's test problem and ensemble sizes (§3.1), written once: every runner of this
+    module takes ``setting=`` (default :data:`PAPER_SETTING`); a smaller case is
+    ``Lorenz63Setting(T=200, dt_obs=8)``."""
+
+    T: int = 1000  #: steps of a test sequence (dt = 0.01 each)
+    dt_obs: int = 40  #: steps between two observations of x
+    R: float = 2.0  #: observation noise variance of x [model units²]
+    n_members: int = 100  #: ensemble size of EnKS and AnEnKS
+    anenks_k: int = 50  #: analogs of the AnEnKS local linear regression
+
+
+#: The setting of the paper's Table 1 and Fig. 2.
+PAPER_SETTING = Lorenz63Setting()
+
+
+def _setting_with(setting: Lorenz63Setting, legacy: Dict[str, Any], caller: str) -> Lorenz63Setting:
+    """``setting`` with the fields given by the former keyword arguments (T, dt_obs, R, n_members,
+    anenks_k), which still work for one release with a DeprecationWarning."""
+    names = {f.name for f in dataclasses.fields(Lorenz63Setting)}
+    unknown = sorted(set(legacy) - names)
+    if unknown:
+        raise TypeError(f"{caller}() got an unexpected keyword argument {unknown[0]!r}")
+    if not legacy:
+        return setting
+    warnings.warn(f"indoorloc: {caller}({', '.join(f'{k}=...' for k in sorted(legacy))}) is deprecated; pass "
+                  f"setting=Lorenz63Setting({', '.join(f'{k}=...' for k in sorted(legacy))})",
+                  DeprecationWarning, stacklevel=3)
+    return dataclasses.replace(setting, **legacy)
 #: First seed of the validation problems used to choose the kernel (never used for the test).
 VALIDATION_SEED = 10_000
 
@@ -169,11 +203,7 @@ def run_table1(
     beams: Sequence[Optional[int]] = (1000, 3000, 10000),
     k: int = DEFAULT_K,
     methods: Sequence[str] = METHODS,
-    T: int = 1000,
-    dt_obs: int = 40,
-    R: float = 2.0,
-    n_members: int = 100,
-    anenks_k: int = 50,
+    setting: Lorenz63Setting = PAPER_SETTING,
     enks_Q: float = analog_baselines.DEFAULT_LORENZ_Q,
     seed: int = 0,
     sigma_scale: float = DEFAULT_SIGMA_SCALE,
@@ -182,6 +212,7 @@ def run_table1(
     successor_rule: str = DEFAULT_SUCCESSOR_RULE,
     r_hmm_scale: float = 1.0,
     realisations: Optional[Sequence[int]] = None,
+    **deprecated_setting_fields: Any,
 ) -> Dict[str, object]:
     """Run Table 1: RMSE and time of EnKS, AnEnKS and AnFB over seeded realisations.
 
@@ -196,11 +227,9 @@ def run_table1(
     k : int
         Successors per state of the analog HMM (K of eq. 4).
     methods : subset of ("enks", "anenks", "anfb")
-    T, dt_obs, R : test problem (1000, 40, 2 in the paper).
-    n_members : int
-        Ensemble size of EnKS and AnEnKS.
-    anenks_k : int
-        Analogs of the AnEnKS local linear regression.
+    setting : Lorenz63Setting
+        Test problem (T, dt_obs, R) and ensemble sizes (n_members, anenks_k); the paper's by
+        default. The former keywords T, dt_obs, R, n_members, anenks_k still work (deprecated).
     enks_Q : float
         Model noise variance per step of the EnKS.
     seed : int
@@ -225,6 +254,8 @@ def run_table1(
     Raises ImportError (with the reason) if "anfb" is requested and the bindings are missing.
     """
     methods = _check_methods(methods)
+    setting = _setting_with(setting, deprecated_setting_fields, "run_table1")
+    T, dt_obs, R, n_members, anenks_k = setting.T, setting.dt_obs, setting.R, setting.n_members, setting.anenks_k
     if int(n_realisations) != n_realisations or n_realisations < 1:
         raise ValueError(f"indoorloc: argument 'n_realisations': expected an integer >= 1, got {n_realisations}")
     if "anfb" in methods:
@@ -374,17 +405,15 @@ def reconstruction_example(
     beam: Optional[int] = 1000,
     k: Optional[int] = None,
     methods: Sequence[str] = METHODS,
-    T: int = 1000,
-    dt_obs: int = 40,
-    R: float = 2.0,
-    n_members: int = 100,
-    anenks_k: int = 50,
+    setting: Lorenz63Setting = PAPER_SETTING,
     sigma_scale: Optional[float] = None,
     max_dropped_mass: float = DEFAULT_MAX_DROPPED_MASS,
+    **deprecated_setting_fields: Any,
 ) -> Dict[str, object]:
     """One realisation for the paper's Fig. 2: truth, observations and each reconstruction.
 
-    k and sigma_scale default to :data:`VALIDATED_KERNELS` for M (else DEFAULT_K / DEFAULT_SIGMA_SCALE).
+    k and sigma_scale default to :data:`VALIDATED_KERNELS` for M (else DEFAULT_K / DEFAULT_SIGMA_SCALE);
+    ``setting`` (the paper's by default) gives the test problem and the ensemble sizes.
 
     Returns
     -------
@@ -392,6 +421,8 @@ def reconstruction_example(
     the observed steps), "estimates" {method: (T, 3)}, "rmse" {method: float}, "seconds".
     """
     methods = _check_methods(methods)
+    setting = _setting_with(setting, deprecated_setting_fields, "reconstruction_example")
+    T, dt_obs, R, n_members, anenks_k = setting.T, setting.dt_obs, setting.R, setting.n_members, setting.anenks_k
     if "anfb" in methods:
         analog_bindings()
     k_default, scale_default = VALIDATED_KERNELS.get(int(M), (DEFAULT_K, DEFAULT_SIGMA_SCALE))
@@ -435,12 +466,11 @@ def run_kernel_selection(
     beam: Optional[int] = 1000,
     max_dropped_mass: float = DEFAULT_MAX_DROPPED_MASS,
     n_problems: int = 6,
-    T: int = 1000,
-    dt_obs: int = 40,
-    R: float = 2.0,
+    setting: Lorenz63Setting = PAPER_SETTING,
     seed: int = 0,
     successor_rule: str = DEFAULT_SUCCESSOR_RULE,
     r_hmm_scales: Sequence[float] = (1.0,),
+    **deprecated_setting_fields: Any,
 ) -> List[Dict[str, object]]:
     """Choose K and the kernel width on validation problems, never on the test problems.
 
@@ -450,7 +480,8 @@ def run_kernel_selection(
     of Table 1 (``catalog_trajectory(M, seed)``).
 
     successor_rule selects the transition rule; r_hmm_scales the inflations of the HMM's
-    observation variance (r_hmm_scale · R) tried for every kernel.
+    observation variance (r_hmm_scale · R) tried for every kernel; ``setting`` gives the problems'
+    T, dt_obs and R (the paper's by default).
 
     Returns
     -------
@@ -458,6 +489,8 @@ def run_kernel_selection(
     "successor_rule", "r_hmm_scale", "rmse" (per problem), "rmse_mean", "rmse_median",
     "seconds_mean"; sorted by rmse_mean, best first.
     """
+    setting = _setting_with(setting, deprecated_setting_fields, "run_kernel_selection")
+    T, dt_obs, R = setting.T, setting.dt_obs, setting.R
     analog_bindings()
     catalog = lorenz63.catalog_trajectory(int(M), seed=seed)
     problems = [lorenz63.test_problem(VALIDATION_SEED + r, T=T, dt_obs=dt_obs, R=R) for r in range(int(n_problems))]
@@ -535,15 +568,17 @@ def run_error_anatomy(
     n_problems: int = 4,
     successor_rule: str = DEFAULT_SUCCESSOR_RULE,
     max_dropped_mass: float = DEFAULT_MAX_DROPPED_MASS,
-    T: int = 1000,
-    dt_obs: int = 40,
-    R: float = 2.0,
+    setting: Lorenz63Setting = PAPER_SETTING,
     seed: int = 0,
+    **deprecated_setting_fields: Any,
 ) -> List[Dict[str, object]]:
     """:func:`error_anatomy` of the AnFB on the first n_problems validation problems (seeds 10000+).
 
-    k and sigma_scale default to :data:`VALIDATED_KERNELS` for M.
+    k and sigma_scale default to :data:`VALIDATED_KERNELS` for M; ``setting`` gives the problems'
+    T, dt_obs and R (the paper's by default).
     """
+    setting = _setting_with(setting, deprecated_setting_fields, "run_error_anatomy")
+    T, dt_obs, R = setting.T, setting.dt_obs, setting.R
     k_default, scale_default = VALIDATED_KERNELS.get(int(M), (DEFAULT_K, DEFAULT_SIGMA_SCALE))
     k = k_default if k is None else int(k)
     sigma_scale = scale_default if sigma_scale is None else float(sigma_scale)

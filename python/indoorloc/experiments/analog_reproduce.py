@@ -42,6 +42,7 @@ FULL_RUNS = 50
 #: IMU erasure seeds at full size (each seed draws new masks and noise on the same walk).
 FULL_IMU_RUNS = 10
 PAPER_BEAM = al.PAPER_BEAM
+LORENZ63 = al.PAPER_SETTING  #: the paper's test problem (T, dt_obs, R) and ensemble sizes, written once
 #: The paper's execution times τ of Table 1, in seconds (their machine, their code).
 PAPER_SECONDS = {("EnKS", None): 7200.0, ("AnEnKS", 10**4): 780.0, ("AnEnKS", 10**5): 4680.0,
                  ("AnFB", 10**4): 480.0, ("AnFB", 10**5): 840.0}
@@ -72,8 +73,8 @@ class Scale:
     """Sizes of the section: the paper's (``full``) or small ones for tests (``quick``)."""
 
     catalog_sizes: Tuple[int, int] = (10**4, 10**5)
-    T: int = 1000
-    n_members: int = 100
+    T: int = LORENZ63.T
+    n_members: int = LORENZ63.n_members
     anda_nb_loop_train: Tuple[int, int] = (100, 1000)  # AnDA catalog runs [time units] for 10^4, 10^5
     imu_samples: int = 1000
     imu_catalog_trials: Optional[int] = None  # None: every walk but the test walk
@@ -106,9 +107,9 @@ def _models(M: int, kernel: Tuple[int, float], seed: int):
         analog = al.analog_bindings()
         traj = lorenz63.catalog_trajectory(int(M), seed=int(seed))
         catalog = analog.Catalog([np.ascontiguousarray(traj)], lag=1, stride=1)
-        hmm = analog.AnalogHMM(catalog, k=int(kernel[0]), observed=[0], R=np.array([[2.0]]),
+        hmm = analog.AnalogHMM(catalog, k=int(kernel[0]), observed=[0], R=np.array([[LORENZ63.R]]),
                                sigma_scale=float(kernel[1]))
-        forecaster = analog_baselines.AnalogForecaster(traj[:-1], traj[1:], k=50)
+        forecaster = analog_baselines.AnalogForecaster(traj[:-1], traj[1:], k=LORENZ63.anenks_k)
         _MODELS[key] = (np.asarray(catalog.states), hmm, forecaster)
     return _MODELS[key]
 
@@ -128,7 +129,7 @@ def table1_realisation(r: int, settings: Mapping[str, object]) -> Dict[str, obje
     :func:`_settings`). Returns {"r", "seed", "rows": {key: {"rmse", "rmse_xyz", "seconds"}}}.
     """
     seed = int(settings["seed"])
-    truth, obs = lorenz63.test_problem(seed + int(r), T=int(settings["T"]), dt_obs=40, R=2.0)
+    truth, obs = lorenz63.test_problem(seed + int(r), T=int(settings["T"]), dt_obs=LORENZ63.dt_obs, R=LORENZ63.R)
     rows: Dict[str, Dict[str, object]] = {}
 
     def record(key: str, estimate: np.ndarray, seconds: float) -> None:
@@ -137,12 +138,12 @@ def table1_realisation(r: int, settings: Mapping[str, object]) -> Dict[str, obje
                      "seconds": seconds}
 
     start = time.perf_counter()
-    est = analog_baselines.enks_lorenz63(obs, n_members=int(settings["n_members"]), seed=seed + int(r), R=2.0)
+    est = analog_baselines.enks_lorenz63(obs, n_members=int(settings["n_members"]), seed=seed + int(r), R=LORENZ63.R)
     record("EnKS|-", est, time.perf_counter() - start)
     for M in settings["catalog_sizes"]:
         states, hmm, forecaster = _models(int(M), tuple(settings["kernels"][str(M)]), seed)
         start = time.perf_counter()
-        est = analog_baselines.anenks(obs, None, None, observed=[0], R=2.0, n_members=int(settings["n_members"]),
+        est = analog_baselines.anenks(obs, None, None, observed=[0], R=LORENZ63.R, n_members=int(settings["n_members"]),
                                       seed=seed + int(r), forecaster=forecaster)
         record(f"AnEnKS|{M}", est, time.perf_counter() - start)
         for v in ANFB_VARIANTS:
@@ -269,7 +270,7 @@ def start_study(M: int, n_problems: int = 20, seed: int = 0, beam: int = PAPER_B
     out: Dict[str, object] = {"seeds": [], "rmse": {v.label: [] for v in ANFB_VARIANTS}, "slab_half_width": [],
                               "kept_distance": [], "catalog_distance": [], "obs_error": []}
     for r in range(int(n_problems)):
-        truth, obs = lorenz63.test_problem(al.VALIDATION_SEED + r, T=1000, dt_obs=40, R=2.0)
+        truth, obs = lorenz63.test_problem(al.VALIDATION_SEED + r, T=LORENZ63.T, dt_obs=LORENZ63.dt_obs, R=LORENZ63.R)
         out["seeds"].append(al.VALIDATION_SEED + r)
         for v in ANFB_VARIANTS:
             out["rmse"][v.label].append(al.rmse(_smooth(hmm, states, truth, obs, v), truth))
@@ -306,7 +307,7 @@ def anda_case(scale: Scale, seed: int) -> Tuple[Table, Dict[str, object]]:
             col = f"{_size_label(M)}, {cat_name} ({traj.shape[0] - 1} pairs)"
             paper_m = M if M in (10**4, 10**5) else None
             catalog = analog.Catalog([np.ascontiguousarray(traj)], lag=1, stride=1)
-            hmm = analog.AnalogHMM(catalog, k=int(kernel[0]), observed=[0], R=np.array([[2.0]]),
+            hmm = analog.AnalogHMM(catalog, k=int(kernel[0]), observed=[0], R=np.array([[LORENZ63.R]]),
                                    sigma_scale=float(kernel[1]))
             states = np.asarray(catalog.states)
             for v in ANFB_VARIANTS:
@@ -315,9 +316,9 @@ def anda_case(scale: Scale, seed: int) -> Tuple[Table, Dict[str, object]]:
                                   paper=al.PAPER_RMSE.get(("AnFB", paper_m))))
                 if cat_name == "AnDA catalog" and v is ANFB_VARIANTS[1]:
                     example["AnFB (N = 1000 fixed, AnDA prior)"] = est
-            forecaster = analog_baselines.AnalogForecaster(traj[:-1], traj[1:], k=50)
+            forecaster = analog_baselines.AnalogForecaster(traj[:-1], traj[1:], k=LORENZ63.anenks_k)
             for start_name, start in starts.items():
-                est = analog_baselines.anenks(obs, None, None, observed=[0], R=2.0, n_members=scale.n_members,
+                est = analog_baselines.anenks(obs, None, None, observed=[0], R=LORENZ63.R, n_members=scale.n_members,
                                               seed=lorenz63_anda.ANDA_SEED, forecaster=forecaster, **start)
                 cells.append(Cell(f"AnEnKS (100 members), {start_name}", col, [al.rmse(est, truth)],
                                   [lorenz63_anda.ANDA_SEED], paper=al.PAPER_RMSE.get(("AnEnKS", paper_m))))
@@ -326,7 +327,7 @@ def anda_case(scale: Scale, seed: int) -> Tuple[Table, Dict[str, object]]:
         example.update(truth=truth, observations=obs)
     # The test sequence does not depend on the catalog length (it is drawn first).
     for start_name, start in starts.items():
-        est = analog_baselines.enks_lorenz63(obs, n_members=scale.n_members, seed=lorenz63_anda.ANDA_SEED, R=2.0,
+        est = analog_baselines.enks_lorenz63(obs, n_members=scale.n_members, seed=lorenz63_anda.ANDA_SEED, R=LORENZ63.R,
                                              **start)
         cells.append(Cell(f"EnKS (Lorenz-63 equations, 100 members), {start_name}", "-", [al.rmse(est, truth)],
                           [lorenz63_anda.ANDA_SEED], paper=al.PAPER_RMSE[("EnKS", None)]))
