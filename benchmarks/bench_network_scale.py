@@ -69,9 +69,9 @@ import json, sys
 import numpy as np
 from indoorloc import network
 r = network.solve_repeated_pass_network(**{case}, checkpoint_interval={interval}, num_threads={threads})
-sig = r["gravity_sigma"]
+sig = r.gravity_sigma
 np.save({sigma_path!r}, sig)
-out = {{k: v for k, v in r.items() if k not in ("gravity_sigma", "gravity_estimate")}}
+out = {{k: v for k, v in r.to_dict().items() if k not in ("gravity_sigma", "gravity_estimate")}}
 out["gravity_sigma_mgal"] = {{
     axis: dict(min=float(sig[:, c].min() * 1e5), median=float(np.median(sig[:, c]) * 1e5), max=float(sig[:, c].max() * 1e5))
     for c, axis in enumerate(("x", "y", "z"))}}
@@ -86,8 +86,8 @@ import json, sys
 from indoorloc._core import network
 r = network.solve_linear_ins_network({rate}, {duration}, rule="leapfrog", gravity_covariance=True,
                                      checkpoint_interval={interval}, num_threads={threads})
-out = {{k: v for k, v in r.items() if k not in ("gravity_sigma", "gravity_estimate")}}
-out["gravity_sigma_median_mgal"] = float(__import__("numpy").median(r["gravity_sigma"]) * 1e5)
+out = {{k: v for k, v in r.to_dict().items() if k not in ("gravity_sigma", "gravity_estimate")}}
+out["gravity_sigma_median_mgal"] = float(__import__("numpy").median(r.gravity_sigma) * 1e5)
 # VmHWM: this process's own peak (ru_maxrss would inherit the parent's peak across fork + exec).
 hwm = [l for l in open("/proc/self/status") if l.startswith("VmHWM:")][0].split()[1]
 out["peak_rss_gib"] = int(hwm) / 2**20
@@ -104,7 +104,7 @@ def _peer_rows(durations) -> List[Dict[str, object]]:
     network.solve_linear_ins_network_ceres(RATE_HZ, durations[0], one_gauss_newton_step=True)
     for duration in durations:
         eq = network.linear_ins_equations(RATE_HZ, duration)
-        E = int(eq["imu_epochs"])
+        E = int(eq.imu_epochs)
         row: Dict[str, object] = {"duration_s": duration, "epochs": E, "unknowns": 18 * E}
         start = time.perf_counter()
         ours = network.solve_linear_ins_network(RATE_HZ, duration, gravity_covariance=False, keep_gravity_estimate=True)
@@ -113,7 +113,7 @@ def _peer_rows(durations) -> List[Dict[str, object]]:
         two = network.solve_linear_ins_network(RATE_HZ, duration, gravity_covariance=False, keep_gravity_estimate=True,
                                                num_threads=2)
         row["indoorloc_2threads_seconds"] = time.perf_counter() - start
-        assert np.array_equal(two["gravity_estimate"], ours["gravity_estimate"]), "thread count changed the result"
+        assert np.array_equal(two.gravity_estimate, ours.gravity_estimate), "thread count changed the result"
         start = time.perf_counter()
         network.solve_linear_ins_network(RATE_HZ, duration, gravity_covariance=True)
         row["indoorloc_with_covariance_seconds"] = time.perf_counter() - start
@@ -125,23 +125,23 @@ def _peer_rows(durations) -> List[Dict[str, object]]:
         if g is not None:
             row["gtsam_seconds"] = g["assemble_seconds"] + g["solve_seconds"]
             row["gtsam_solve_seconds"] = g["solve_seconds"]
-            row["gtsam_max_dg_diff"] = float(np.abs(g["x"].reshape(E, 18)[:, 15:] - ours["gravity_estimate"]).max())
+            row["gtsam_max_dg_diff"] = float(np.abs(g["x"].reshape(E, 18)[:, 15:] - ours.gravity_estimate).max())
         # GTSAM's QR elimination: not its default, but the one that solves this network at every size.
         gq = network_peers.solve_gtsam(eq, qr=True)
         if gq is not None:
             row["gtsam_qr_seconds"] = gq["assemble_seconds"] + gq["solve_seconds"]
-            row["gtsam_qr_max_dg_diff"] = float(np.abs(gq["x"].reshape(E, 18)[:, 15:] - ours["gravity_estimate"]).max())
+            row["gtsam_qr_max_dg_diff"] = float(np.abs(gq["x"].reshape(E, 18)[:, 15:] - ours.gravity_estimate).max())
         if duration <= CERES_MAX_DURATION_S:
             for key, one_step in (("ceres", False), ("ceres_one_step", True)):
                 c = network.solve_linear_ins_network_ceres(RATE_HZ, duration, one_gauss_newton_step=one_step)
-                row[f"{key}_seconds"] = c["build_seconds"] + c["solve_seconds"]
-                row[f"{key}_iterations"] = c["iterations"]
-                row[f"{key}_max_dg_diff"] = float(np.abs(c["x"][:, 15:] - ours["gravity_estimate"]).max())
+                row[f"{key}_seconds"] = c.build_seconds + c.solve_seconds
+                row[f"{key}_iterations"] = c.iterations
+                row[f"{key}_max_dg_diff"] = float(np.abs(c.x[:, 15:] - ours.gravity_estimate).max())
         if duration <= SCIPY_MAX_DURATION_S:
             s = network_peers.solve_scipy(eq)
             row["scipy_seconds"] = s["assemble_seconds"] + s["solve_seconds"]
             row["scipy_solve_seconds"] = s["solve_seconds"]
-            row["scipy_max_dg_diff"] = float(np.abs(s["x"].reshape(E, 18)[:, 15:] - ours["gravity_estimate"]).max())
+            row["scipy_max_dg_diff"] = float(np.abs(s["x"].reshape(E, 18)[:, 15:] - ours.gravity_estimate).max())
         rows.append(row)
     return rows
 

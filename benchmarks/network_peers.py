@@ -25,12 +25,12 @@ def sparse_normal_system(eq: Dict[str, object]):
     """(A, b) of the network: A = Jᵀ W J (scipy CSC), b = Jᵀ W l."""
     import scipy.sparse as sp
 
-    E = int(eq["imu_epochs"])
-    offsets = list(eq["offsets"])
-    J = [np.asarray(j) for j in eq["J"]]
-    sigma = np.asarray(eq["row_sigma"])
-    centres = np.asarray(eq["centres"], dtype=np.int64)
-    l_dyn = np.asarray(eq["dynamic_l"])
+    E = int(eq.imu_epochs)
+    offsets = list(eq.offsets)
+    J = [np.asarray(j) for j in eq.J]
+    sigma = np.asarray(eq.row_sigma)
+    centres = np.asarray(eq.centres, dtype=np.int64)
+    l_dyn = np.asarray(eq.dynamic_l)
     rows, cols, vals, rhs = [], [], [], []
     n_eq = centres.size
     row_base = np.arange(n_eq, dtype=np.int64)[:, None] * P + np.arange(P)[None, :]  # (n_eq, 18)
@@ -59,10 +59,10 @@ def sparse_normal_system(eq: Dict[str, object]):
         rhs.append(np.asarray(values).ravel() / s)
         next_row += k * width
 
-    add_static(eq["gps_epochs"], eq["gps_l"], 0, 3, eq["sigma_gps"])
-    prior_l = np.asarray(eq["prior_l"])
-    add_static(np.arange(prior_l.shape[0]), prior_l, 0, P, eq["sigma_prior"])
-    add_static(eq["gupt_epochs"], eq["gupt_l"], 15, 3, eq["sigma_gupt"])
+    add_static(eq.gps_epochs, eq.gps_l, 0, 3, eq.sigma_gps)
+    prior_l = np.asarray(eq.prior_l)
+    add_static(np.arange(prior_l.shape[0]), prior_l, 0, P, eq.sigma_prior)
+    add_static(eq.gupt_epochs, eq.gupt_l, 15, 3, eq.sigma_gupt)
     Jw = sp.csr_matrix(
         (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(next_row, E * P)
     )
@@ -106,12 +106,12 @@ def solve_gtsam(eq: Dict[str, object], qr: bool = False) -> Optional[Dict[str, o
 
     start = time.perf_counter()
     graph = gtsam.GaussianFactorGraph()
-    offsets = list(eq["offsets"])
-    J = [np.asarray(j) for j in eq["J"]]
-    sigma = np.asarray(eq["row_sigma"])
+    offsets = list(eq.offsets)
+    J = [np.asarray(j) for j in eq.J]
+    sigma = np.asarray(eq.row_sigma)
     dyn_noise = gtsam.noiseModel.Diagonal.Sigmas(sigma)
-    centres = np.asarray(eq["centres"], dtype=np.int64)
-    l_dyn = np.asarray(eq["dynamic_l"])
+    centres = np.asarray(eq.centres, dtype=np.int64)
+    l_dyn = np.asarray(eq.dynamic_l)
     for i, n in enumerate(centres):
         if len(offsets) == 3:
             graph.add(gtsam.JacobianFactor(int(n + offsets[0]), J[0], int(n + offsets[1]), J[1], int(n + offsets[2]), J[2],
@@ -120,14 +120,14 @@ def solve_gtsam(eq: Dict[str, object], qr: bool = False) -> Optional[Dict[str, o
             graph.add(gtsam.JacobianFactor(int(n + offsets[0]), J[0], int(n + offsets[1]), J[1], l_dyn[i], dyn_noise))
     sel_r = np.zeros((3, P)); sel_r[:, 0:3] = np.eye(3)  # noqa: E702
     sel_g = np.zeros((3, P)); sel_g[:, 15:18] = np.eye(3)  # noqa: E702
-    gps_noise = gtsam.noiseModel.Isotropic.Sigma(3, float(eq["sigma_gps"]))
-    for n, l in zip(eq["gps_epochs"], np.asarray(eq["gps_l"])):
+    gps_noise = gtsam.noiseModel.Isotropic.Sigma(3, float(eq.sigma_gps))
+    for n, l in zip(eq.gps_epochs, np.asarray(eq.gps_l)):
         graph.add(gtsam.JacobianFactor(int(n), sel_r, l, gps_noise))
-    prior_noise = gtsam.noiseModel.Isotropic.Sigma(P, float(eq["sigma_prior"]))
-    for n, l in enumerate(np.asarray(eq["prior_l"])):
+    prior_noise = gtsam.noiseModel.Isotropic.Sigma(P, float(eq.sigma_prior))
+    for n, l in enumerate(np.asarray(eq.prior_l)):
         graph.add(gtsam.JacobianFactor(int(n), np.eye(P), l, prior_noise))
-    gupt_noise = gtsam.noiseModel.Isotropic.Sigma(3, float(eq["sigma_gupt"]))
-    for n, l in zip(eq["gupt_epochs"], np.asarray(eq["gupt_l"])):
+    gupt_noise = gtsam.noiseModel.Isotropic.Sigma(3, float(eq.sigma_gupt))
+    for n, l in zip(eq.gupt_epochs, np.asarray(eq.gupt_l)):
         graph.add(gtsam.JacobianFactor(int(n), sel_g, l, gupt_noise))
     assemble = time.perf_counter() - start
     start = time.perf_counter()
@@ -136,6 +136,6 @@ def solve_gtsam(eq: Dict[str, object], qr: bool = False) -> Optional[Dict[str, o
     else:
         values = graph.optimize()
     solve = time.perf_counter() - start
-    E = int(eq["imu_epochs"])
+    E = int(eq.imu_epochs)
     x = np.concatenate([values.at(n) for n in range(E)])
     return {"x": x, "assemble_seconds": assemble, "solve_seconds": solve}

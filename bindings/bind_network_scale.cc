@@ -1,5 +1,7 @@
 // Bindings of the network subsystem's scale path: the streaming block-tridiagonal solver on the
 // linearised INS/GPS network (indoorloc/network/linear_ins_network.h), for the Table 2 benchmark.
+// Every function takes the network's size first (imu_rate_hz, duration_s, gps_rate_hz, rule:
+// DefOnNetwork) and returns a typed result (bind_network_scale_results.cc).
 #include <optional>
 #include <string>
 
@@ -41,14 +43,36 @@ std::string RuleName(network::Discretisation rule) {
   return rule == network::Discretisation::kLeapFrog ? "leapfrog" : "trapezoidal";
 }
 
+/// A benchmark scenario's own network size (its IMU and GPS rates and duration); the rest are
+/// the struct's defaults.
+network::LinearInsNetworkOptions Scenario(double imu_rate_hz, double duration_s, double gps_rate_hz) {
+  network::LinearInsNetworkOptions o;
+  o.imu_rate_hz = imu_rate_hz;
+  o.duration_s = duration_s;
+  o.gps_rate_hz = gps_rate_hz;
+  return o;
+}
+
+/// Binds `f` as `name` with the network's size first: imu_rate_hz, duration_s, gps_rate_hz and
+/// rule, their defaults those of `size`; then `extra` (the function's own py::arg, its docstring).
+template <typename F, typename... Extra>
+void DefOnNetwork(py::module_& m, const char* name, F&& f, const network::LinearInsNetworkOptions& size,
+                  Extra&&... extra) {
+  m.def(name, std::forward<F>(f), py::arg("imu_rate_hz") = size.imu_rate_hz, py::arg("duration_s") = size.duration_s,
+        py::arg("gps_rate_hz") = size.gps_rate_hz, py::arg("rule") = RuleName(size.rule),
+        std::forward<Extra>(extra)...);
+}
+
 }  // namespace
+
+void BindNetworkScaleResults(py::module_& m);
 
 /// The folded repeated-pass network (block-tridiagonal elimination with checkpoints).
 static void BindFoldedNetwork(py::module_& m) {
   const network::LinearInsNetworkOptions linear;
   const network::FoldedNetworkOptions folded;
-  m.def(
-      "solve_folded_linear_ins_network",
+  DefOnNetwork(
+      m, "solve_folded_linear_ins_network",
       [](double imu_rate_hz, double duration_s, double gps_rate_hz, const std::string& rule, long long num_ties,
          long long num_gupts, double sigma_xover_mps2, double sigma_gupt_mps2, int checkpoint_interval,
          bool gravity_covariance, bool keep_gravity_estimate, int num_threads) {
@@ -71,29 +95,9 @@ static void BindFoldedNetwork(py::module_& m) {
               network::MakeRepeatedPassLayout(o, num_ties, num_gupts, sigma_xover_mps2, sigma_gupt_mps2);
           r = network::SolveFoldedLinearInsNetwork(o, layout.ties, layout.gupts, fo);
         }
-        py::dict d;
-        d["imu_epochs"] = r.size.imu_epochs;
-        d["gps_epochs"] = r.size.gps_epochs;
-        d["unknowns"] = r.size.unknowns;
-        d["ties"] = r.ties;
-        d["gupts"] = r.gupts;
-        d["equations"] = r.equations;
-        d["folded_blocks"] = r.folded_blocks;
-        d["folded_block_size"] = r.folded_block_size;
-        d["factor_seconds"] = r.solver.factor_seconds;
-        d["backward_seconds"] = r.solver.backward_seconds;
-        d["total_seconds"] = r.total_seconds;
-        d["stored_factor_bytes"] = r.solver.stored_factor_bytes;
-        d["min_relative_pivot"] = r.solver.min_relative_pivot;
-        d["max_abs_error"] = r.max_abs_error;
-        d["gravity_rmse"] = r.gravity_rmse;
-        d["gravity_sigma"] = r.gravity_sigma;
-        d["gravity_estimate"] = r.gravity_estimate;
-        d["report"] = r.BriefReport();
-        return d;
+        return r;
       },
-      py::arg("imu_rate_hz") = 50.0, py::arg("duration_s") = 60.0, py::arg("gps_rate_hz") = 2.0,
-      py::arg("rule") = RuleName(linear.rule), py::arg("num_ties") = 1000, py::arg("num_gupts") = 10,
+      Scenario(50.0, 60.0, 2.0), py::arg("num_ties") = 1000, py::arg("num_gupts") = 10,
       py::arg("sigma_xover_mps2") = 1e-5, py::arg("sigma_gupt_mps2") = linear.sigma_gupt_mps2, py::arg("checkpoint_interval") = folded.checkpoint_interval,
       py::arg("gravity_covariance") = folded.gravity_covariance, py::arg("keep_gravity_estimate") = folded.keep_gravity_estimate, py::arg("num_threads") = folded.num_threads, R"doc(
 The linearised INS/GPS network of a survey re-flown in reverse over its own track, with
@@ -124,7 +128,8 @@ num_threads : int
 
 Returns
 -------
-dict: imu_epochs, gps_epochs, unknowns, ties, gupts, equations, folded_blocks,
+FoldedNetworkResult (read-only attributes; reading it as the former dict is deprecated):
+imu_epochs, gps_epochs, unknowns, ties, gupts, equations, folded_blocks,
 folded_block_size, factor_seconds, backward_seconds, total_seconds [s], stored_factor_bytes,
 min_relative_pivot, max_abs_error (every unknown, against the noise-free truth), gravity_rmse
 [m/s²], gravity_sigma (E, 3) [m/s²], gravity_estimate (E, 3) [m/s²] or empty, report.)doc");
@@ -134,8 +139,8 @@ min_relative_pivot, max_abs_error (every unknown, against the noise-free truth),
 static void BindCrossoverNetwork(py::module_& m) {
   const network::LinearInsNetworkOptions linear;
   const network::TiedSolveOptions tied_solve;
-  m.def(
-      "solve_linear_ins_network_with_crossovers",
+  DefOnNetwork(
+      m, "solve_linear_ins_network_with_crossovers",
       [](double imu_rate_hz, double duration_s, double gps_rate_hz, const std::string& rule, int lines, int cross_lines,
          double sigma_xover_mps2, int max_iterations, double relative_tolerance) {
         RequireInRange(sigma_xover_mps2, 1e-9, 1e3, "sigma_xover_mps2");
@@ -157,34 +162,17 @@ static void BindCrossoverNetwork(py::module_& m) {
           py::gil_scoped_release release;
           r = network::SolveLinearInsNetworkWithCrossovers(o, lines, cross_lines, sigma_xover_mps2, pcg);
         }
-        py::dict d;
-        d["imu_epochs"] = r.size.imu_epochs;
-        d["gps_epochs"] = r.size.gps_epochs;
-        d["unknowns"] = r.size.unknowns;
-        d["equations"] = r.size.equations + r.ties;
-        d["crossings"] = r.crossings;
-        d["ties"] = r.ties;
-        d["factor_seconds"] = r.factor_seconds;
-        d["factor_bytes"] = r.factor_bytes;
-        d["pcg_iterations"] = r.pcg.iterations;
-        d["pcg_seconds"] = r.pcg.seconds;
-        d["pcg_relative_residual"] = r.pcg.relative_residual;
-        d["pcg_converged"] = r.pcg.termination == Termination::kConverged;
-        d["max_abs_error"] = r.max_abs_error;
-        d["gravity_rmse"] = r.gravity_rmse;
-        d["total_seconds"] = r.total_seconds;
-        d["report"] = r.pcg.BriefReport();
-        return d;
+        return r;
       },
-      py::arg("imu_rate_hz") = 50.0, py::arg("duration_s") = 600.0, py::arg("gps_rate_hz") = 2.0,
-      py::arg("rule") = RuleName(linear.rule), py::arg("lines") = 10, py::arg("cross_lines") = 10,
+      Scenario(50.0, 600.0, 2.0), py::arg("lines") = 10, py::arg("cross_lines") = 10,
       py::arg("sigma_xover_mps2") = 1e-5, py::arg("max_iterations") = tied_solve.max_iterations, py::arg("relative_tolerance") = tied_solve.relative_tolerance, R"doc(
 The linearised INS/GPS network with cross-over ties of a grid survey (`lines` East-West lines,
 then `cross_lines` North-South lines; each crossing ties the three δg unknowns), solved by
 conjugate gradients preconditioned with the stored banded factor. Paper Table 2 case 4:
 50 Hz x 11,301 s, 2 Hz GPS, 332,150 cross-overs (576 x 577 lines gives 332,352).
 
-Returns a dict: sizes, crossings, ties, factor_seconds, factor_bytes, pcg_iterations,
+Returns a CrossoverNetworkResult (attributes; reading it as the former dict is deprecated):
+sizes, crossings, ties, factor_seconds, factor_bytes, pcg_iterations,
 pcg_seconds, pcg_relative_residual, pcg_converged, max_abs_error and gravity_rmse [m/s²]
 against the noise-free truth, total_seconds, report.)doc");
 }
@@ -192,8 +180,8 @@ against the noise-free truth, total_seconds, report.)doc");
 /// The linear INS network through Ceres, its equations and its normal blocks.
 static void BindLinearInsNetworkParts(py::module_& m) {
   const network::LinearInsNetworkOptions linear;
-  m.def(
-      "solve_linear_ins_network_ceres",
+  DefOnNetwork(
+      m, "solve_linear_ins_network_ceres",
       [](double imu_rate_hz, double duration_s, double gps_rate_hz, const std::string& rule, int prior_epochs,
          bool one_gauss_newton_step) {
         const network::LinearInsNetworkOptions o = MakeOptions(imu_rate_hz, duration_s, gps_rate_hz, rule, prior_epochs);
@@ -208,32 +196,21 @@ static void BindLinearInsNetworkParts(py::module_& m) {
           py::gil_scoped_release release;
           r = network::SolveLinearInsNetworkWithCeres(o, one_gauss_newton_step);
         }
-        py::dict d;
-        d["imu_epochs"] = r.size.imu_epochs;
-        d["unknowns"] = r.size.unknowns;
-        d["x"] = r.x;
-        d["build_seconds"] = r.build_seconds;
-        d["solve_seconds"] = r.solve_seconds;
-        d["iterations"] = r.iterations;
-        d["converged"] = r.converged;
-        d["max_abs_error"] = r.max_abs_error;
-        d["linear_solver"] = r.linear_solver;
-        d["report"] = r.report;
-        return d;
+        return r;
       },
-      py::arg("imu_rate_hz") = linear.imu_rate_hz, py::arg("duration_s") = linear.duration_s, py::arg("gps_rate_hz") = linear.gps_rate_hz,
-      py::arg("rule") = RuleName(linear.rule), py::arg("prior_epochs") = linear.prior_epochs, py::arg("one_gauss_newton_step") = false, R"doc(
+      linear, py::arg("prior_epochs") = linear.prior_epochs, py::arg("one_gauss_newton_step") = false, R"doc(
 The linearised INS/GPS network (same equations as solve_linear_ins_network) solved by Ceres
 (SPARSE_NORMAL_CHOLESKY with SuiteSparse, single thread): the peer of the benchmark, in process.
 With one_gauss_newton_step=False Ceres runs with its default Solver::Options (Levenberg-
 Marquardt from x = 0); with True, one Gauss-Newton step (exact for this linear problem).
 
-Returns a dict: imu_epochs, unknowns, x (E, 18) [δr m, δv m/s, ψ rad, a m/s², ω rad/s, δg m/s²],
+Returns a LinearInsCeresResult (attributes; reading it as the former dict is deprecated):
+imu_epochs, unknowns, x (E, 18) [δr m, δv m/s, ψ rad, a m/s², ω rad/s, δg m/s²],
 build_seconds, solve_seconds, iterations, converged, max_abs_error (against the noise-free
 truth), linear_solver, report.)doc");
 
-  m.def(
-      "linear_ins_equations",
+  DefOnNetwork(
+      m, "linear_ins_equations",
       [](double imu_rate_hz, double duration_s, double gps_rate_hz, const std::string& rule, int prior_epochs) {
         const network::LinearInsNetworkOptions o = MakeOptions(imu_rate_hz, duration_s, gps_rate_hz, rule, prior_epochs);
         CheckArgument(network::LinearInsNetworkSize(o).unknowns <= 20'000'000, "duration_s",
@@ -246,35 +223,17 @@ truth), linear_solver, report.)doc");
           py::gil_scoped_release release;
           e = network::LinearInsNetworkEquations(o);
         }
-        py::dict d;
-        d["offsets"] = e.offsets;
-        py::list J;
-        for (const auto& j : e.J) J.append(j);
-        d["J"] = J;
-        d["row_sigma"] = e.row_sigma;
-        d["centres"] = e.centres;
-        d["dynamic_l"] = e.dynamic_l;
-        d["gps_epochs"] = e.gps_epochs;
-        d["gps_l"] = e.gps_l;
-        d["prior_l"] = e.prior_l;
-        d["gupt_epochs"] = e.gupt_epochs;
-        d["gupt_l"] = e.gupt_l;
-        d["sigma_gps"] = e.sigma_gps;
-        d["sigma_prior"] = e.sigma_prior;
-        d["sigma_gupt"] = e.sigma_gupt;
-        d["imu_epochs"] = e.imu_epochs;
-        return d;
+        return e;
       },
-      py::arg("imu_rate_hz") = linear.imu_rate_hz, py::arg("duration_s") = linear.duration_s, py::arg("gps_rate_hz") = linear.gps_rate_hz,
-      py::arg("rule") = RuleName(linear.rule), py::arg("prior_epochs") = linear.prior_epochs, R"doc(
+      linear, py::arg("prior_epochs") = linear.prior_epochs, R"doc(
 The observation equations of the linearised INS/GPS network (for building it in other solvers):
-dict with offsets, J (list of 18x18: equation centred at n reads sum_a J[a] x[n + offsets[a]] =
+a LinearInsEquations (attributes; reading it as the former dict is deprecated) with offsets, J (list of 18x18: equation centred at n reads sum_a J[a] x[n + offsets[a]] =
 dynamic_l[i]), row_sigma (18,), centres, dynamic_l, gps_epochs, gps_l (CUPT on δr), prior_l
 (every unknown of the first epochs), gupt_epochs, gupt_l (δg), sigma_gps, sigma_prior,
 sigma_gupt, imu_epochs. Unknowns per epoch: δr, δv, ψ, accelerometer bias, gyro bias, δg.)doc");
 
-  m.def(
-      "linear_ins_normal_blocks",
+  DefOnNetwork(
+      m, "linear_ins_normal_blocks",
       [](double imu_rate_hz, double duration_s, double gps_rate_hz, const std::string& rule, int prior_epochs) {
         const network::LinearInsNetworkOptions o = MakeOptions(imu_rate_hz, duration_s, gps_rate_hz, rule, prior_epochs);
         const network::NetworkSize size = network::LinearInsNetworkSize(o);
@@ -309,8 +268,7 @@ sigma_gupt, imu_epochs. Unknowns per epoch: δr, δv, ψ, accelerometer bias, gy
         }
         return py::make_tuple(diagonal, lower, rhs);
       },
-      py::arg("imu_rate_hz") = linear.imu_rate_hz, py::arg("duration_s") = linear.duration_s, py::arg("gps_rate_hz") = linear.gps_rate_hz,
-      py::arg("rule") = RuleName(linear.rule), py::arg("prior_epochs") = linear.prior_epochs, R"doc(
+      linear, py::arg("prior_epochs") = linear.prior_epochs, R"doc(
 The normal equations of the linearised INS/GPS network as dense blocks, for solving it with other
 libraries: diagonal (n, b, b) = A_ii, lower (n, b, b) = A_{i,i-1} (lower[0] is zero), rhs (n, b).)doc");
 }
@@ -319,8 +277,8 @@ libraries: diagonal (n, b, b) = A_ii, lower (n, b, b) = A_{i,i-1} (lower[0] is z
 static void BindLinearInsNetworkSolve(py::module_& m) {
   const network::LinearInsNetworkOptions linear;
   const network::FoldedNetworkOptions folded;
-  m.def(
-      "solve_linear_ins_network",
+  DefOnNetwork(
+      m, "solve_linear_ins_network",
       [](double imu_rate_hz, double duration_s, double gps_rate_hz, const std::string& rule, bool gravity_covariance,
          int checkpoint_interval, int prior_epochs, bool keep_gravity_estimate, int num_threads,
          std::optional<double> pivot_tolerance, const std::string& method) {
@@ -349,32 +307,9 @@ static void BindLinearInsNetworkSolve(py::module_& m) {
                                                num_threads, pivot_tolerance.value_or(1e-12));
           }
         }
-        py::dict d;
-        d["imu_epochs"] = r.size.imu_epochs;
-        d["gps_epochs"] = r.size.gps_epochs;
-        d["unknowns"] = r.size.unknowns;
-        d["equations"] = r.size.equations;
-        d["block_size"] = r.size.block_size;
-        d["num_blocks"] = r.size.num_blocks;
-        d["factor_seconds"] = r.solver.factor_seconds;
-        d["backward_seconds"] = r.solver.backward_seconds;
-        d["total_seconds"] = r.total_seconds;
-        d["assembler_calls"] = r.solver.assembler_calls;
-        d["stored_factor_bytes"] = r.solver.stored_factor_bytes;
-        d["min_relative_pivot"] = r.solver.min_relative_pivot;
-        d["min_relative_pivot_block"] = r.solver.min_relative_pivot_block;
-        d["min_relative_pivot_unknown"] = r.solver.min_relative_pivot_unknown;
-        d["max_abs_error"] = r.max_abs_error;
-        d["max_abs_error_by_unknown"] = r.max_abs_error_by_unknown;
-        d["max_abs_error_epoch"] = r.max_abs_error_epoch;
-        d["gravity_rmse"] = r.gravity_rmse;
-        d["gravity_sigma"] = r.gravity_sigma;
-        d["gravity_estimate"] = r.gravity_estimate;
-        d["report"] = r.solver.BriefReport();
-        return d;
+        return r;
       },
-      py::arg("imu_rate_hz") = linear.imu_rate_hz, py::arg("duration_s") = linear.duration_s, py::arg("gps_rate_hz") = linear.gps_rate_hz,
-      py::arg("rule") = RuleName(linear.rule), py::arg("gravity_covariance") = folded.gravity_covariance, py::arg("checkpoint_interval") = 0,
+      linear, py::arg("gravity_covariance") = folded.gravity_covariance, py::arg("checkpoint_interval") = 0,
       py::arg("prior_epochs") = linear.prior_epochs, py::arg("keep_gravity_estimate") = folded.keep_gravity_estimate, py::arg("num_threads") = folded.num_threads,
       py::arg("pivot_tolerance") = py::none(), py::arg("method") = "cholesky", R"doc(
 Builds the linearised strapdown INS/GPS network (18 unknowns per IMU epoch, leap-frog or
@@ -411,7 +346,7 @@ method : "cholesky" or "qr"
 
 Returns
 -------
-dict: sizes (imu_epochs, gps_epochs, unknowns, equations, block_size, num_blocks), timings
+LinearInsNetworkResult (attributes; reading it as the former dict is deprecated): sizes (imu_epochs, gps_epochs, unknowns, equations, block_size, num_blocks), timings
 [s], stored_factor_bytes, min_relative_pivot with min_relative_pivot_block and
 min_relative_pivot_unknown (where it was seen), max_abs_error against the noise-free truth with
 max_abs_error_by_unknown (18,) and max_abs_error_epoch, gravity_rmse [m/s²], gravity_sigma (E, 3)
@@ -419,6 +354,7 @@ max_abs_error_by_unknown (18,) and max_abs_error_epoch, gravity_rmse [m/s²], gr
 }
 
 void BindNetworkScale(py::module_& m) {
+  BindNetworkScaleResults(m);
   // Keyword defaults equal to a struct's default are read from it (the struct is the one place a
   // default is written); the scenario sizes of the folded and crossover benchmarks (50 Hz, 2 Hz
   // GPS, their durations) are those scenarios' own and stay literal.

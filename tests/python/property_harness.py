@@ -208,7 +208,8 @@ def _unchanged(before: Any, after: Any) -> bool:
 
 def _non_finite(value: Any, nan_ok: Sequence[str], minus_inf_ok: bool = False,
                 path: str = "") -> Optional[str]:
-    """Where `value` (output) holds NaN or inf, or None."""
+    """Where `value` (output) holds NaN or inf, or None (a typed result: its fields, to_dict())."""
+    value = _as_dict(value)
     if isinstance(value, dict):
         for k, v in value.items():
             if k in nan_ok:
@@ -379,7 +380,16 @@ def same_for_threads(name: str, fn: Callable[[int], Any]) -> None:
         TALLY.problem("unclear", f"{name}: results differ for 1 and 2 threads")
 
 
+def _as_dict(x: Any) -> Any:
+    """A typed result of the bindings (result_binding.h: a read-only mapping with to_dict()) as
+    its dict of fields; anything else as it is."""
+    if not isinstance(x, dict) and hasattr(x, "to_dict") and hasattr(x, "_fields"):
+        return x.to_dict()
+    return x
+
+
 def _canonical(x: Any) -> Any:
+    x = _as_dict(x)
     if isinstance(x, dict):
         return {k: _canonical(v) for k, v in x.items() if "seconds" not in k}
     if isinstance(x, (list, tuple)):

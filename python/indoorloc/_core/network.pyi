@@ -1,10 +1,104 @@
 # Stubs of indoorloc._core.network: INS/GPS network adjustment, the Kalman smoother baseline,
 # the cross-over finder and normal gravity (paper 003); and the scale path (linearised INS/GPS
 # network, block-tridiagonal solver, cross-over PCG).
-from typing import Any, Dict, Optional, Tuple
+from typing import Any, Dict, List, Optional, Tuple
 
 import numpy as np
 import numpy.typing as npt
+
+from .pdr import _Result
+
+# The scale path's results: typed read-only objects (fields as annotations); reading them as the
+# former dicts (result["key"], keys(), items(), ...) is deprecated (DeprecationWarning), to_dict() is not.
+
+class LinearInsNetworkResult(_Result):
+    imu_epochs: int
+    gps_epochs: int
+    unknowns: int
+    equations: int
+    block_size: int
+    num_blocks: int
+    assembler_calls: int
+    factor_seconds: float
+    backward_seconds: float
+    total_seconds: float
+    stored_factor_bytes: float
+    min_relative_pivot: float
+    min_relative_pivot_block: int
+    min_relative_pivot_unknown: int
+    max_abs_error: float
+    max_abs_error_by_unknown: npt.NDArray[np.float64]
+    max_abs_error_epoch: int
+    gravity_rmse: float
+    gravity_sigma: npt.NDArray[np.float64]
+    gravity_estimate: npt.NDArray[np.float64]
+    report: str
+
+class FoldedNetworkResult(_Result):
+    imu_epochs: int
+    gps_epochs: int
+    unknowns: int
+    ties: int
+    gupts: int
+    equations: int
+    folded_blocks: int
+    folded_block_size: int
+    factor_seconds: float
+    backward_seconds: float
+    total_seconds: float
+    stored_factor_bytes: float
+    min_relative_pivot: float
+    max_abs_error: float
+    gravity_rmse: float
+    gravity_sigma: npt.NDArray[np.float64]
+    gravity_estimate: npt.NDArray[np.float64]
+    report: str
+
+class CrossoverNetworkResult(_Result):
+    imu_epochs: int
+    gps_epochs: int
+    unknowns: int
+    equations: int
+    crossings: int
+    ties: int
+    factor_seconds: float
+    factor_bytes: float
+    pcg_iterations: int
+    pcg_seconds: float
+    pcg_relative_residual: float
+    pcg_converged: bool
+    max_abs_error: float
+    gravity_rmse: float
+    total_seconds: float
+    report: str
+
+class LinearInsCeresResult(_Result):
+    imu_epochs: int
+    unknowns: int
+    x: npt.NDArray[np.float64]
+    build_seconds: float
+    solve_seconds: float
+    iterations: int
+    converged: bool
+    max_abs_error: float
+    linear_solver: str
+    report: str
+
+class LinearInsEquations(_Result):
+    offsets: List[int]
+    J: List[npt.NDArray[np.float64]]
+    row_sigma: npt.NDArray[np.float64]
+    centres: List[int]
+    dynamic_l: npt.NDArray[np.float64]
+    gps_epochs: List[int]
+    gps_l: npt.NDArray[np.float64]
+    prior_l: npt.NDArray[np.float64]
+    gupt_epochs: List[int]
+    gupt_l: npt.NDArray[np.float64]
+    sigma_gps: float
+    sigma_prior: float
+    sigma_gupt: float
+    imu_epochs: int
 
 def solve_linear_ins_network(
     imu_rate_hz: float = 200.0,
@@ -16,7 +110,7 @@ def solve_linear_ins_network(
     prior_epochs: int = 2,
     keep_gravity_estimate: bool = False,
     num_threads: int = 1,
-) -> Dict[str, object]: ...
+) -> LinearInsNetworkResult: ...
 def solve_folded_linear_ins_network(
     imu_rate_hz: float = 50.0,
     duration_s: float = 60.0,
@@ -30,7 +124,7 @@ def solve_folded_linear_ins_network(
     gravity_covariance: bool = True,
     keep_gravity_estimate: bool = False,
     num_threads: int = 1,
-) -> Dict[str, object]: ...
+) -> FoldedNetworkResult: ...
 def linear_ins_normal_blocks(
     imu_rate_hz: float = 200.0,
     duration_s: float = 60.0,
@@ -44,7 +138,7 @@ def linear_ins_equations(
     gps_rate_hz: float = 1.0,
     rule: str = "leapfrog",
     prior_epochs: int = 2,
-) -> Dict[str, object]: ...
+) -> LinearInsEquations: ...
 def solve_linear_ins_network_ceres(
     imu_rate_hz: float = 200.0,
     duration_s: float = 60.0,
@@ -52,7 +146,7 @@ def solve_linear_ins_network_ceres(
     rule: str = "leapfrog",
     prior_epochs: int = 2,
     one_gauss_newton_step: bool = False,
-) -> Dict[str, object]: ...
+) -> LinearInsCeresResult: ...
 def solve_linear_ins_network_with_crossovers(
     imu_rate_hz: float = 50.0,
     duration_s: float = 600.0,
@@ -63,7 +157,7 @@ def solve_linear_ins_network_with_crossovers(
     sigma_xover_mps2: float = 1e-5,
     max_iterations: int = 1000,
     relative_tolerance: float = 1e-8,
-) -> Dict[str, object]: ...
+) -> CrossoverNetworkResult: ...
 _ArrayLike = npt.ArrayLike
 _F64 = npt.NDArray[np.float64]
 _State = Dict[str, _F64]

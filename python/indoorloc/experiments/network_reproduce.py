@@ -234,8 +234,8 @@ if kind == "linear":
                                               checkpoint_interval=2048, num_threads={threads})
 else:
     r = network.solve_repeated_pass_network(**args, checkpoint_interval=2048, num_threads={threads})
-sigma = np.asarray(r["gravity_sigma"])
-out = {{k: v for k, v in r.items() if isinstance(v, (int, float, str))}}
+sigma = np.asarray(r.gravity_sigma)
+out = {{k: v for k, v in r.to_dict().items() if isinstance(v, (int, float, str))}}
 out["sigma_count"] = int(np.isfinite(sigma).sum())
 hwm = [l for l in open("/proc/self/status") if l.startswith("VmHWM:")][0].split()[1]
 out["peak_rss_gib"] = int(hwm) / 2**20

@@ -106,8 +106,9 @@ def solve_repeated_pass_network(
 
     Returns
     -------
-    dict
-        Sizes (``imu_epochs``, ``unknowns``, ``ties``, ``gupts``, ``equations``), timings [s],
+    FoldedNetworkResult
+        Read-only attributes (reading it as the former dict is deprecated; ``to_dict()``): sizes
+        (``imu_epochs``, ``unknowns``, ``ties``, ``gupts``, ``equations``), timings [s],
         ``max_abs_error`` (every unknown, against the noise-free truth), ``gravity_rmse``
         [m/s^2], ``gravity_sigma`` (E, 3) [m/s^2] (numpy), ``gravity_estimate`` (E, 3) [m/s^2]
         or empty, ``report``.
