@@ -74,7 +74,8 @@ def test_track_settings_carry_the_ap_evidence_settings():
     s = site_model.TrackSettings(identification_ap_weight=0.0, identification_ap_count=7)
     back = site_model.TrackSettings.from_dict(s.to_dict())
     assert back.identification_ap_weight == 0.0 and back.identification_ap_count == 7
-    # A site file written before these settings existed reads with the defaults.
+    # from_dict fills a missing key with the default (a site file's stored dict goes through
+    # fusion.site_settings instead: test_fusion_site_settings.py).
     d = s.to_dict()
     for k in ("identification_ap_weight", "identification_ap_count", "identification_ap_rate_floor",
               "identification_ap_outlier_probability"):

@@ -78,10 +78,14 @@ RELIABILITY_BINS = floor_evidence.RELIABILITY_BINS
 
 
 def walk_evidence(data_root: Optional[Path] = None, floors: Sequence[str] = (),
-                  grid: Optional[Dict[str, Sequence[Any]]] = None, progress=None, seed: int = 0) -> dict:
+                  grid: Optional[Dict[str, Sequence[Any]]] = None, progress=None, seed: int = 0,
+                  per_fold=None, per_walk=None) -> dict:
     """Per test walk: floor index, waypoints, the grid filter's log-evidence (F,), the WiFi vote
     (F,), the AP evidence (F,) per (m, α, ε) of ``grid``, the classifier's evidence (F,) per (C, ε)
-    of :data:`CLASSIFIER_GRID` and the match distance per floor (F,) [dB]. ``seed``: the fold assignment and tracker seed (``fusion evaluate --seed``)."""
+    of :data:`CLASSIFIER_GRID` and the match distance per floor (F,) [dB]. ``seed``: the fold assignment and tracker seed (``fusion evaluate --seed``).
+    Hooks for other studies on the same folds: ``per_fold(database, plan_floors, classifiers)`` (the fold's fitted
+    classifiers by C) returns a
+    fold context, ``per_walk(rec, walk, queries, database, context)`` adds keys to a walk's record."""
     grid = grid or GRID
     settings = fr.RealSettings(seed=seed)
     _, data = fr.load_site(data_root, floors)
@@ -97,6 +101,7 @@ def walk_evidence(data_root: Optional[Path] = None, floors: Sequence[str] = (),
                  for a in grid["rate_floor"]}
         classifiers = {c: floor_classifier.FloorClassifier.fit(db.rss_dbm, db.floors, plan_floors, c)
                        for c in CLASSIFIER_GRID["l2_scale"]}
+        context = per_fold(db, plan_floors, classifiers) if per_fold else None
         for fl in data:
             m = models[fl.name]
             for i in fold_of[fl.name][j]:
@@ -123,6 +128,8 @@ def walk_evidence(data_root: Optional[Path] = None, floors: Sequence[str] = (),
                     found = site_model.identify_floor(tracker, plan_floors, steps, wfx.fixes_for_walk(walk, db))
                     p = np.array([found["grid_probabilities"][f] for f in plan_floors])
                     rec["grid"] = np.log(np.maximum(p, 1e-300))
+                if per_walk:
+                    per_walk(rec, walk, q, db, context)
                 walks.append(rec)
                 if progress:
                     progress()

@@ -35,6 +35,7 @@ from indoorloc.pdr import handheld as ph
 from indoorloc.fusion import wifi_fixes
 from indoorloc._core.fusion import FloorPlan, FloorPlanOptions
 from indoorloc.fusion import site_model
+from indoorloc.fusion import site_settings
 from indoorloc.fusion import site_store as store
 from indoorloc.fusion import site_tables as tables
 from indoorloc.fusion.grid import GridTracker
@@ -131,7 +132,9 @@ class Site:
             row = con.execute("SELECT settings FROM tracker_settings WHERE name = 'default'").fetchone()
             if row is None:
                 raise store.SiteFileError(f"indoorloc: site file {self.path}: no tracker settings")
-            self.settings = site_model.TrackSettings.from_dict(json.loads(row[0]))
+            # A file written before part of floor identification keeps the evidence it was saved
+            # with (and warns): site_settings.
+            self.settings = site_settings.stored_track_settings(json.loads(row[0]), str(self.path))
             self._floors = {name: (int(num), (lon, lat)) for name, num, lon, lat in con.execute(
                 "SELECT name, number, origin_lon, origin_lat FROM floors ORDER BY number")}
         finally:
