@@ -37,7 +37,12 @@ from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
 EXAMPLES = int(os.environ.get("PROPERTY_EXAMPLES", "40"))
+# A hang is judged on the process's CPU time (user + system, every thread), not on the wall
+# clock: on a loaded machine (CI runners, parallel jobs) a bounded call can wait for a core far
+# longer than it computes. A call blocked without computing (a deadlock) is caught by the wall
+# clock at WALL_FACTOR times the limit.
 CALL_TIMEOUT_S = float(os.environ.get("PROPERTY_CALL_TIMEOUT_S", "20"))
+WALL_FACTOR = 10.0
 # Long work by design is stopped sooner: that it unwinds cleanly on the alarm is what counts.
 LONG_CALL_TIMEOUT_S = float(os.environ.get("PROPERTY_LONG_CALL_TIMEOUT_S", "3"))
 STATUS_FILE = os.environ.get("PROPERTY_STATUS_FILE")
@@ -65,11 +70,26 @@ class CallTimeout(BaseException):
     """A call ran longer than CALL_TIMEOUT_S (a hang, or an unbounded loop)."""
 
 
+def _arm(limit_s: float, cpu: bool = True) -> None:
+    """Starts a call's alarms: `limit_s` of CPU time and WALL_FACTOR x `limit_s` of wall clock
+    (cpu=True), or `limit_s` of wall clock alone (cpu=False: long work that must unwind soon)."""
+    if cpu:
+        signal.setitimer(signal.ITIMER_PROF, limit_s)
+        signal.setitimer(signal.ITIMER_REAL, WALL_FACTOR * limit_s)
+    else:
+        signal.setitimer(signal.ITIMER_REAL, limit_s)
+
+
+def _stop_alarms() -> None:
+    signal.setitimer(signal.ITIMER_PROF, 0)
+    signal.setitimer(signal.ITIMER_REAL, 0)
+
+
 def _disarm() -> None:
-    """Stops the call's alarm; an alarm that fires while the call's own error is being handled
+    """Stops the call's alarms; an alarm that fires while the call's own error is being handled
     (the call answered just in time) is not a hang."""
     try:
-        signal.setitimer(signal.ITIMER_REAL, 0)
+        _stop_alarms()
     except CallTimeout:
         pass
 
@@ -267,7 +287,7 @@ def call(case: Case, argument: str, value: Any, fields: Sequence[str] = (), show
             f.write(label)
     TALLY.calls += 1
     limit = LONG_CALL_TIMEOUT_S if case.long_work_ok else CALL_TIMEOUT_S
-    signal.setitimer(signal.ITIMER_REAL, limit)
+    _arm(limit, cpu=not case.long_work_ok)
     started = time.monotonic()
     try:
         out = case.fn(**kwargs)
@@ -276,7 +296,8 @@ def call(case: Case, argument: str, value: Any, fields: Sequence[str] = (), show
         if case.long_work_ok and time.monotonic() - started < limit + 5.0:
             TALLY.interrupted += 1
         else:
-            TALLY.problem("hangs", f"{label}: no answer in {CALL_TIMEOUT_S} s")
+            TALLY.problem("hangs", f"{label}: no answer in {CALL_TIMEOUT_S} s of CPU "
+                                   f"({time.monotonic() - started:.0f} s wall)")
         return
     except ALLOWED as exc:
         _disarm()
@@ -286,19 +307,19 @@ def call(case: Case, argument: str, value: Any, fields: Sequence[str] = (), show
     except (KeyboardInterrupt, SystemExit):
         raise
     except BaseException as exc:  # RuntimeError, OverflowError, MemoryError, ...
-        signal.setitimer(signal.ITIMER_REAL, 0)
+        _stop_alarms()
         if case.solver and type(exc) is RuntimeError and str(exc).startswith("indoorloc:"):
             TALLY.numerical_failures += 1
         else:
             TALLY.problem("wrong_type", f"{label}: {type(exc).__name__}: {str(exc)[:200]}")
     else:
-        signal.setitimer(signal.ITIMER_REAL, 0)
+        _stop_alarms()
         TALLY.returned += 1
         bad = _non_finite(out, case.nan_outputs, case.minus_inf_ok)
         if bad:
             TALLY.problem("silent_nan", f"{label}: non-finite {bad}")
     finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
+        _disarm()
     for k, v in kwargs.items():
         if not _unchanged(before[k], v):
             TALLY.problem("mutated", f"{label}: argument {k!r} was modified")
@@ -319,12 +340,12 @@ def _probe(case: Case) -> None:
     TALLY.cases += 1
     valid_out = None
     try:
-        signal.setitimer(signal.ITIMER_REAL, CALL_TIMEOUT_S)
+        _arm(CALL_TIMEOUT_S)
         valid_out = case.fn(**case.kwargs)
     except BaseException as exc:
         TALLY.problem("wrong_type", f"{case.name}: the valid call failed: {type(exc).__name__}: {exc}")
     finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
+        _stop_alarms()
     if valid_out is not None:
         bad = _non_finite(valid_out, case.nan_outputs, case.minus_inf_ok)
         if bad:
@@ -401,6 +422,7 @@ def _canonical(x: Any) -> Any:
 
 def main(groups: Dict[str, Callable[[], None]]) -> int:
     signal.signal(signal.SIGALRM, _alarm)
+    signal.signal(signal.SIGPROF, _alarm)
     # Spoiled path arguments ("x", "") are relative: run in a fresh temporary folder so that
     # writers never write beside the tests, also when this script is run by hand.
     os.chdir(tempfile.mkdtemp(prefix="indoorloc_properties_"))
