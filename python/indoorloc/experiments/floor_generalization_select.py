@@ -3,9 +3,9 @@ seeds and scored on the others, and by leave-one-floor-out (that module's docstr
 
 A decider is a score per walk and floor (the argmax is the walk's floor):
 
-    s_f = log p_grid(f) + λ L_f + μ n^(γ − 1) K_f − ν D_f + η H_f,
+    s_f = ω log p_grid(f) + λ L_f + μ n^(γ − 1) K_f − ν D_f + η H_f,
 
-L_f the AP rates' evidence (``floor_evidence``, m 20, α 0.1, ε 0.1 fixed), K_f = Σ_q log(ε + (1 − ε)
+ω the grid filter's weight (1 in ``fusion evaluate``), L_f the AP rates' evidence (``floor_evidence``, m 20, α 0.1, ε 0.1 fixed), K_f = Σ_q log(ε + (1 − ε)
 p_C(f | q)) the classifier's over the walk's n queries (γ = 1: summed as ``fusion evaluate`` does;
 γ < 1: pooled over the walk, so that a long walk's correlated queries do not outweigh the grid;
 γ = 0: the mean per query), D_f [dB] the walk's fingerprint match distance on floor f (the median
@@ -30,6 +30,7 @@ from indoorloc.experiments import floor_identification_study as fis
 #: The decider grid (module docstring). The first point of each list is the current default's value
 #: where it has one (λ 2, C 1, ε 0.2, μ 10, γ 1, ν 0).
 GRID: Dict[str, Sequence[float]] = {
+    "grid_weight": (1.0, 0.3, 0.1),
     "ap_weight": (2.0, 0.0, 1.0, 5.0),
     "l2_scale": (1.0, 0.1, 0.3, 3.0),
     "outlier_probability": (0.2, 0.01, 0.05, 0.5),
@@ -42,6 +43,9 @@ GRID: Dict[str, Sequence[float]] = {
 #: The strong-AP home-floor vote's fixed constants (set in advance): the walk's reading [dBm] from
 #: which an AP counts as near, the floor gap [dB] of a full vote, the level of "never heard" [dBm].
 HOME_NEAR_DBM, HOME_FULL_GAP_DB, HOME_NEVER_DBM = -55.0, 10.0, -110.0
+#: The coverage split of the report [m]: a walk's own floor is "covered" when the median over its
+#: waypoints of the distance to the closest training reference of its floor is at most this.
+COVERED_M = 20.0
 DEFAULT = {k: v[0] for k, v in GRID.items()}
 
 
@@ -70,7 +74,7 @@ class Evidence:
 
     def score(self, p: Dict[str, float]) -> np.ndarray:
         pool = self.n_q ** (p["pooling_exponent"] - 1.0)
-        s = self.grid + p["ap_weight"] * self.rates + p["classifier_weight"] * pool[:, None] \
+        s = p["grid_weight"] * self.grid + p["ap_weight"] * self.rates + p["classifier_weight"] * pool[:, None] \
             * self.k[(p["l2_scale"], p["outlier_probability"])]
         if p["home_weight"] > 0:
             s = s + p["home_weight"] * self.home
@@ -190,6 +194,16 @@ def study(parts: Sequence[dict], choose_seeds: Sequence[int]) -> dict:
     held = ~choose
     rel_held = fis.reliability(fis._calibrated(chosen_scores[held], ev.dist[held], cal), ev.label[held]) \
         if held.any() else None
+    default_cal = {"temperature": 0.5, "error_probability_at_10db": 0.01, "error_slope": 3.0}  # TrackSettings'
+    rel_default = fis.reliability(fis._calibrated(default_scores[held], ev.dist[held], default_cal), ev.label[held]) \
+        if held.any() else None
+    # Diagnostic (uses the true waypoints, not available to a decider): walks whose own floor's
+    # training references lie within COVERED_M of them (median over waypoints) or not.
+    own = np.array([w["coverage_m"][w["floor_index"]] for w in ev.walks])
+    coverage = {}
+    for name, sel_ in (("covered", own <= COVERED_M), ("not_covered", own > COVERED_M)):
+        coverage[name] = {int(sd): _figures(ev, default_ok, sel_ & (ev.seed == sd)) for sd in np.unique(ev.seed)
+                          if (sel_ & (ev.seed == sd)).any()}
     return {"floors": ev.names, "seeds": sorted(int(s) for s in np.unique(ev.seed)), "choose_seeds": list(choose_seeds),
             "n_points": len(points), "grid": {k: list(v) for k, v in GRID.items()},
             "default": {"settings": DEFAULT, "per_seed": _per_seed(ev, default_ok),
@@ -197,6 +211,8 @@ def study(parts: Sequence[dict], choose_seeds: Sequence[int]) -> dict:
             "chosen": {"settings": chosen, "per_seed": _per_seed(ev, chosen_ok),
                        "wrong_walks": wrong_walks(ev, chosen_scores), "calibration": cal,
                        "held_out_reliability": rel_held},
+            "default_calibration_held_out_reliability": rel_default, "coverage_m": COVERED_M,
+            "default_by_coverage": coverage,
             "families": family_rows,
             "lofo": {"chosen": lofo_chosen, "per_seed": _per_seed(ev, lofo_ok)}}
 
@@ -226,7 +242,18 @@ def markdown(result: dict) -> str:
     lines += ["", f"Chosen: {result['chosen']['settings']}; calibration {result['chosen']['calibration']}.",
               "Families: " + "; ".join(f"{n}: {r['chosen']}" for n, r in result["families"].items()),
               "LOFO choices: " + "; ".join(f"{f}: {v}" for f, v in result["lofo"]["chosen"].items())]
+    cov = result.get("default_by_coverage", {})
+    for name, title in (("covered", "within"), ("not_covered", "farther than")):
+        if cov.get(name):
+            lines.append(f"Current default, walks whose own floor's training references are {title} "
+                         f"{result['coverage_m']:g} m (median over waypoints): " + "; ".join(
+                             f"seed {sd}: {100 * r['accuracy']:.1f} % ({r['walks_right']} of {r['walks']} walks)"
+                             for sd, r in cov[name].items()))
     rel = result["chosen"].get("held_out_reliability")
+    rel_d = result.get("default_calibration_held_out_reliability")
+    if rel_d:
+        lines.append(f"The default calibration (T 0.5, δ_10 0.01, b 3) on the held-out seeds' walks: mean reported "
+                     f"{rel_d['mean_reported']:.4f}, right {rel_d['fraction_right']:.4f}, log loss {rel_d['log_loss']:.3f}.")
     if rel:
         lines.append(f"Calibrated on the choose seeds, on the held-out seeds' walks: mean reported {rel['mean_reported']:.4f}, "
                      f"right {rel['fraction_right']:.4f}, log loss {rel['log_loss']:.3f}.")
