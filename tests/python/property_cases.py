@@ -224,7 +224,8 @@ def group_network() -> None:
     flight = simulate_flight(small_config(line_length_m=400.0, turn_radius_m=100.0, cross_margin_m=100.0,
                                           imu_rate_hz=10.0, gps_rate_hz=1.0), seed=1, noise=False)
     init = dict(flight.truth)
-    probe(Case("solve_network", network.solve_network,
+    probe(Case("solve_network", lambda initial, options, **observations: network.solve_network(
+                   network.NetworkObservations(**observations), initial, options),
                {"imu_time_s": flight.imu_time_s, "acc_body_mps2": flight.acc_body_mps2,
                 "gyro_body_radps": flight.gyro_body_radps, "gps_time_s": flight.gps_time_s,
                 "gps_position_m": flight.gps_position_m, "initial": init,
@@ -241,7 +242,8 @@ def group_network() -> None:
                gps_position_m=flight.gps_position_m, zupt_epochs=flight.zupt_epochs,
                gupt_epochs=flight.gupt_epochs, gupt_gravity_mps2=flight.gupt_gravity_mps2, xover_epochs=None)
     start = network.start_state(flight, 0)
-    probe(Case("kalman_smoother", network.kalman_smoother,
+    probe(Case("kalman_smoother", lambda initial, model, options, **observations: network.kalman_smoother(
+                   network.NetworkObservations(**observations), initial, model, options),
                {**obs, "initial": start, "model": network.flight_options(flight.config),
                 "options": network.KalmanSmootherOptions()},
                vary=["acc_body_mps2", "gyro_body_radps", "gps_time_s", "gps_position_m", "zupt_epochs",

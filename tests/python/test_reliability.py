@@ -465,8 +465,8 @@ def test_network_noise_bounds_and_crossover_line_counts():
     ko = network.KalmanSmootherOptions()
     ko.init_sigma_heading_rad = 2.0**31
     with pytest.raises(ValueError, match=r"init_sigma_heading_rad must be in \[1e-12, 10\]"):
-        network.kalman_smoother(np.arange(3.0), np.zeros((3, 3)), np.zeros((3, 3)), np.arange(1.0), np.zeros((1, 3)),
-                                {}, options=ko)
+        network.kalman_smoother(network.NetworkObservations(np.arange(3.0), np.zeros((3, 3)), np.zeros((3, 3)),
+                                                           np.arange(1.0), np.zeros((1, 3))), {}, options=ko)
     with pytest.raises(ValueError, match=r"argument 'lines': must be in \[1, 1000000\]"):
         cn.solve_linear_ins_network_with_crossovers(10.0, 60.0, 1.0, "leapfrog", 2**31 - 1, 3)  # was bad_alloc
 

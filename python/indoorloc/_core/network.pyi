@@ -217,34 +217,37 @@ class KalmanSmootherOptions:
     def to_dict(self) -> Dict[str, Any]: ...
     def validate(self) -> None: ...
 
+class NetworkObservations:
+    """The observations of a flight for solve_network and kalman_smoother, checked once."""
+    def __init__(
+        self,
+        imu_time_s: _ArrayLike,
+        acc_body_mps2: _ArrayLike,
+        gyro_body_radps: _ArrayLike,
+        gps_time_s: _ArrayLike,
+        gps_position_m: _ArrayLike,
+        zupt_epochs: Optional[_ArrayLike] = None,
+        gupt_epochs: Optional[_ArrayLike] = None,
+        gupt_gravity_mps2: Optional[_ArrayLike] = None,
+        xover_epochs: Optional[_ArrayLike] = None,
+        vupt_epochs: Optional[_ArrayLike] = None,
+        vupt_velocity_mps: Optional[_ArrayLike] = None,
+        vupt_sd_mps: Optional[_ArrayLike] = None,
+        sgupt_epochs: Optional[_ArrayLike] = None,
+    ) -> None: ...
+    @property
+    def num_imu_epochs(self) -> int: ...
+    @property
+    def num_gps_epochs(self) -> int: ...
+
+# The former calls with the observation arrays as arguments still run (DeprecationWarning); they
+# are not listed here.
 def solve_network(
-    imu_time_s: _ArrayLike,
-    acc_body_mps2: _ArrayLike,
-    gyro_body_radps: _ArrayLike,
-    gps_time_s: _ArrayLike,
-    gps_position_m: _ArrayLike,
-    initial: Dict[str, _ArrayLike],
-    zupt_epochs: Optional[_ArrayLike] = None,
-    gupt_epochs: Optional[_ArrayLike] = None,
-    gupt_gravity_mps2: Optional[_ArrayLike] = None,
-    xover_epochs: Optional[_ArrayLike] = None,
-    options: NetworkOptions = ...,
-    vupt_epochs: Optional[_ArrayLike] = None,
-    vupt_velocity_mps: Optional[_ArrayLike] = None,
-    vupt_sd_mps: Optional[_ArrayLike] = None,
-    sgupt_epochs: Optional[_ArrayLike] = None,
+    observations: NetworkObservations, initial: Dict[str, _ArrayLike], options: NetworkOptions = ...
 ) -> Tuple[_State, Dict[str, Any]]: ...
 def kalman_smoother(
-    imu_time_s: _ArrayLike,
-    acc_body_mps2: _ArrayLike,
-    gyro_body_radps: _ArrayLike,
-    gps_time_s: _ArrayLike,
-    gps_position_m: _ArrayLike,
+    observations: NetworkObservations,
     initial: Dict[str, _ArrayLike],
-    zupt_epochs: Optional[_ArrayLike] = None,
-    gupt_epochs: Optional[_ArrayLike] = None,
-    gupt_gravity_mps2: Optional[_ArrayLike] = None,
-    xover_epochs: Optional[_ArrayLike] = None,
     model: NetworkOptions = ...,
     options: KalmanSmootherOptions = ...,
 ) -> Tuple[_State, _State, Dict[str, Any]]: ...
