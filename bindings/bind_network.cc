@@ -134,40 +134,8 @@ sgupt_epochs : (S,) int static epochs with constant gravity (SGUPT, paper §3.2)
     increasing; each must carry a ZUPT or a VUPT with zero velocity; each run of consecutive
     epochs is one static period, tied delta_g[n] = delta_g[n0] to its first epoch. Or None)doc";
 
-/// The fields of NetworkObservations, in its positional order (the first five are required).
-constexpr const char* kObservationNames[] = {
-    "imu_time_s",  "acc_body_mps2",     "gyro_body_radps", "gps_time_s",        "gps_position_m",
-    "zupt_epochs", "gupt_epochs",       "gupt_gravity_mps2", "xover_epochs",    "vupt_epochs",
-    "vupt_velocity_mps", "vupt_sd_mps", "sgupt_epochs"};
-constexpr int kRequiredObservations = 5;
-
-bool IsObservationName(const std::string& name) {
-  for (const char* n : kObservationNames)
-    if (name == n) return true;
-  return false;
-}
-
-/// NetworkObservations(imu_time_s, acc_body_mps2, ..., sgupt_epochs=None): positional in
-/// kObservationNames' order or by keyword, checked once by MakeObservations.
-NetworkObservations ObservationsFromCall(const py::args& args, const py::kwargs& kwargs) {
-  constexpr std::size_t n = std::size(kObservationNames);
-  if (args.size() > n) throw py::type_error("NetworkObservations takes at most " + std::to_string(n) + " positional arguments");
-  std::vector<py::object> value(n, py::none());
-  std::vector<bool> given(n, false);
-  for (std::size_t i = 0; i < args.size(); ++i) value[i] = args[i], given[i] = true;
-  for (const auto& [key, v] : kwargs) {
-    const std::string k = py::str(key);
-    std::size_t i = 0;
-    while (i < n && k != kObservationNames[i]) ++i;
-    if (i == n) throw py::type_error("NetworkObservations got an unexpected keyword argument '" + k + "'");
-    if (given[i]) throw py::type_error("NetworkObservations got multiple values for argument '" + k + "'");
-    value[i] = py::reinterpret_borrow<py::object>(v), given[i] = true;
-  }
-  for (int i = 0; i < kRequiredObservations; ++i)
-    if (!given[i]) throw py::type_error(std::string("NetworkObservations missing required argument '") + kObservationNames[i] + "'");
-  return MakeObservations(value[0], value[1], value[2], value[3], value[4], value[5], value[6], value[7], value[8],
-                          value[9], value[10], value[11], value[12]);
-}
+/// The arguments of a solver that are not observations (the rest of a former call is).
+bool IsSolverArgument(const std::string& name) { return name == "initial" || name == "options" || name == "model"; }
 
 /// The former call form of a solver that took the observation arrays one by one (`old_order`:
 /// its positional order): warns, gathers them into a NetworkObservations and calls the new form.
@@ -192,9 +160,9 @@ py::object CallWithGatheredObservations(const py::module_& m, const char* functi
   if (args.size() > old_order.size())
     throw py::type_error(std::string(function) + " takes at most " + std::to_string(old_order.size()) + " positional arguments");
   py::dict observations, rest;
-  for (std::size_t i = 0; i < args.size(); ++i) (IsObservationName(old_order[i]) ? observations : rest)[old_order[i]] = args[i];
+  for (std::size_t i = 0; i < args.size(); ++i) (IsSolverArgument(old_order[i]) ? rest : observations)[old_order[i]] = args[i];
   for (const auto& [key, v] : kwargs) {
-    py::dict& into = IsObservationName(py::str(key)) ? observations : rest;
+    py::dict& into = IsSolverArgument(py::str(key)) ? rest : observations;
     if (into.contains(key)) throw py::type_error(std::string(function) + " got multiple values for argument '" + std::string(py::str(key)) + "'");
     into[key] = v;
   }
@@ -302,10 +270,14 @@ static void BindNetworkObservations(py::module_& m) {
 The observations of a flight for solve_network and kalman_smoother, checked once (ValueError
 naming the argument): NetworkObservations(imu_time_s, acc_body_mps2, gyro_body_radps, gps_time_s,
 gps_position_m, zupt_epochs=None, gupt_epochs=None, gupt_gravity_mps2=None, xover_epochs=None,
-vupt_epochs=None, vupt_velocity_mps=None, vupt_sd_mps=None, sgupt_epochs=None), positional in
-this order or by keyword.
+vupt_epochs=None, vupt_velocity_mps=None, vupt_sd_mps=None, sgupt_epochs=None).
 )doc") + kObservationsDoc + kStaticDoc).c_str())
-      .def(py::init(&ObservationsFromCall))
+      .def(py::init(&MakeObservations), py::arg("imu_time_s"), py::arg("acc_body_mps2"), py::arg("gyro_body_radps"),
+           py::arg("gps_time_s"), py::arg("gps_position_m"), py::arg("zupt_epochs") = py::none(),
+           py::arg("gupt_epochs") = py::none(), py::arg("gupt_gravity_mps2") = py::none(),
+           py::arg("xover_epochs") = py::none(), py::arg("vupt_epochs") = py::none(),
+           py::arg("vupt_velocity_mps") = py::none(), py::arg("vupt_sd_mps") = py::none(),
+           py::arg("sgupt_epochs") = py::none())
       .def_property_readonly("num_imu_epochs", [](const NetworkObservations& o) { return o.imu_time_s.size(); })
       .def_property_readonly("num_gps_epochs", [](const NetworkObservations& o) { return o.gps_time_s.size(); })
       .def("__repr__", [](const NetworkObservations& o) {

@@ -227,8 +227,9 @@ from indoorloc import network
 from indoorloc._core import network as core_network
 kind, args = {kind!r}, {args!r}
 if kind == "linear":
-    r = core_network.solve_linear_ins_network(**args, gravity_covariance=True,
-                                              checkpoint_interval=2048, num_threads={threads})
+    method = args.pop("method", "cholesky")
+    r = core_network.solve_linear_ins_network(core_network.LinearInsNetworkOptions(**args), gravity_covariance=True,
+                                              checkpoint_interval=2048, num_threads={threads}, method=method)
 else:
     r = network.solve_repeated_pass_network(**args, checkpoint_interval=2048, num_threads={threads})
 sigma = np.asarray(r.gravity_sigma)

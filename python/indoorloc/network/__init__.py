@@ -34,6 +34,7 @@ from indoorloc.validate import integer, real_scalar
 
 from indoorloc._core.network import (
     KalmanSmootherOptions,
+    LinearInsNetworkOptions,
     NetworkObservations,
     NetworkOptions,
     earth_rate_enu,
@@ -46,6 +47,7 @@ from indoorloc._core.network import (
 
 __all__ = [
     "KalmanSmootherOptions",
+    "LinearInsNetworkOptions",
     "NetworkObservations",
     "NetworkOptions",
     "flight_observations",
@@ -117,10 +119,12 @@ def solve_repeated_pass_network(
         [m/s^2], ``gravity_sigma`` (E, 3) [m/s^2] (numpy), ``gravity_estimate`` (E, 3) [m/s^2]
         or empty, ``report``.
     """
+    network = LinearInsNetworkOptions(imu_rate_hz=imu_rate_hz, duration_s=duration_s, gps_rate_hz=gps_rate_hz,
+                                      rule=rule, sigma_gupt_mps2=sigma_gupt_mps2)
     return solve_folded_linear_ins_network(
-        imu_rate_hz, duration_s, gps_rate_hz, rule, integer(num_ties, "num_ties", lo=0, hi=2**62),
-        integer(num_gupts, "num_gupts", lo=0, hi=2**62), sigma_xover_mps2, sigma_gupt_mps2, checkpoint_interval, True,
-        keep_gravity_estimate, integer(num_threads, "num_threads", lo=-1024, hi=1024))
+        network, integer(num_ties, "num_ties", lo=0, hi=2**62), integer(num_gupts, "num_gupts", lo=0, hi=2**62),
+        sigma_xover_mps2, checkpoint_interval, True, keep_gravity_estimate,
+        integer(num_threads, "num_threads", lo=-1024, hi=1024))
 
 
 def flight_options(config, discretization: str = "trapezoidal", **overrides) -> NetworkOptions:
