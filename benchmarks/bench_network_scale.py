@@ -84,8 +84,8 @@ print(json.dumps(out))
 _CHILD = """
 import json, sys
 from indoorloc._core import network
-r = network.solve_linear_ins_network({rate}, {duration}, rule="leapfrog", gravity_covariance=True,
-                                     checkpoint_interval={interval}, num_threads={threads})
+r = network.solve_linear_ins_network(network.LinearInsNetworkOptions(imu_rate_hz={rate}, duration_s={duration}),
+                                     gravity_covariance=True, checkpoint_interval={interval}, num_threads={threads})
 out = {{k: v for k, v in r.to_dict().items() if k not in ("gravity_sigma", "gravity_estimate")}}
 out["gravity_sigma_median_mgal"] = float(__import__("numpy").median(r.gravity_sigma) * 1e5)
 # VmHWM: this process's own peak (ru_maxrss would inherit the parent's peak across fork + exec).
@@ -100,22 +100,24 @@ def _peer_rows(durations) -> List[Dict[str, object]]:
 
     rows = []
     # Warm-up (first call pays page faults and lazy initialisation), so the first row compares like with like.
-    network.solve_linear_ins_network(RATE_HZ, durations[0], gravity_covariance=False)
-    network.solve_linear_ins_network_ceres(RATE_HZ, durations[0], one_gauss_newton_step=True)
+    first = network.LinearInsNetworkOptions(imu_rate_hz=RATE_HZ, duration_s=durations[0])
+    network.solve_linear_ins_network(first, gravity_covariance=False)
+    network.solve_linear_ins_network_ceres(first, one_gauss_newton_step=True)
     for duration in durations:
-        eq = network.linear_ins_equations(RATE_HZ, duration)
+        net = network.LinearInsNetworkOptions(imu_rate_hz=RATE_HZ, duration_s=duration)
+        eq = network.linear_ins_equations(net)
         E = int(eq.imu_epochs)
         row: Dict[str, object] = {"duration_s": duration, "epochs": E, "unknowns": 18 * E}
         start = time.perf_counter()
-        ours = network.solve_linear_ins_network(RATE_HZ, duration, gravity_covariance=False, keep_gravity_estimate=True)
+        ours = network.solve_linear_ins_network(net, gravity_covariance=False, keep_gravity_estimate=True)
         row["indoorloc_seconds"] = time.perf_counter() - start
         start = time.perf_counter()
-        two = network.solve_linear_ins_network(RATE_HZ, duration, gravity_covariance=False, keep_gravity_estimate=True,
+        two = network.solve_linear_ins_network(net, gravity_covariance=False, keep_gravity_estimate=True,
                                                num_threads=2)
         row["indoorloc_2threads_seconds"] = time.perf_counter() - start
         assert np.array_equal(two.gravity_estimate, ours.gravity_estimate), "thread count changed the result"
         start = time.perf_counter()
-        network.solve_linear_ins_network(RATE_HZ, duration, gravity_covariance=True)
+        network.solve_linear_ins_network(net, gravity_covariance=True)
         row["indoorloc_with_covariance_seconds"] = time.perf_counter() - start
         try:
             g = network_peers.solve_gtsam(eq)
@@ -133,7 +135,7 @@ def _peer_rows(durations) -> List[Dict[str, object]]:
             row["gtsam_qr_max_dg_diff"] = float(np.abs(gq["x"].reshape(E, 18)[:, 15:] - ours.gravity_estimate).max())
         if duration <= CERES_MAX_DURATION_S:
             for key, one_step in (("ceres", False), ("ceres_one_step", True)):
-                c = network.solve_linear_ins_network_ceres(RATE_HZ, duration, one_gauss_newton_step=one_step)
+                c = network.solve_linear_ins_network_ceres(net, one_gauss_newton_step=one_step)
                 row[f"{key}_seconds"] = c.build_seconds + c.solve_seconds
                 row[f"{key}_iterations"] = c.iterations
                 row[f"{key}_max_dg_diff"] = float(np.abs(c.x[:, 15:] - ours.gravity_estimate).max())

@@ -2,7 +2,9 @@
 // smoother baseline, the cross-over finder and normal gravity. Arrays in and out as numpy; the
 // GIL is released around the solves; bad input raises ValueError naming the argument.
 #include <cmath>
+#include <iterator>
 #include <string>
+#include <vector>
 
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
@@ -132,6 +134,41 @@ sgupt_epochs : (S,) int static epochs with constant gravity (SGUPT, paper §3.2)
     increasing; each must carry a ZUPT or a VUPT with zero velocity; each run of consecutive
     epochs is one static period, tied delta_g[n] = delta_g[n0] to its first epoch. Or None)doc";
 
+/// The arguments of a solver that are not observations (the rest of a former call is).
+bool IsSolverArgument(const std::string& name) { return name == "initial" || name == "options" || name == "model"; }
+
+/// The former call form of a solver that took the observation arrays one by one (`old_order`:
+/// its positional order): warns, gathers them into a NetworkObservations and calls the new form.
+py::object CallWithGatheredObservations(const py::module_& m, const char* function,
+                                        const std::vector<const char*>& old_order, const py::args& args,
+                                        const py::kwargs& kwargs) {
+  // A call of the new form that reached here has an argument of the wrong type: say so, as
+  // pybind11 would, instead of reading the observations as the first former argument.
+  if ((args.size() > 0 && py::isinstance(args[0], m.attr("NetworkObservations"))) || kwargs.contains("observations")) {
+    std::string got;
+    for (const py::handle a : args) got += (got.empty() ? "" : ", ") + std::string(py::str(py::type::of(a).attr("__name__")));
+    for (const auto& [key, v] : kwargs)
+      got += (got.empty() ? "" : ", ") + std::string(py::str(key)) + "=" + std::string(py::str(py::type::of(v).attr("__name__")));
+    throw py::type_error(std::string(function) + "(): incompatible function arguments; see help(" + function +
+                         ") for the types of observations, initial and the options. Invoked with: " + got);
+  }
+  const std::string message = std::string("indoorloc: ") + function +
+                              "(imu_time_s, acc_body_mps2, ..., zupt_epochs=...) with the observation arrays one by "
+                              "one is deprecated since house (issue 27): pass " + function +
+                              "(NetworkObservations(imu_time_s, acc_body_mps2, ...), initial, ...)";
+  if (PyErr_WarnEx(PyExc_DeprecationWarning, message.c_str(), 1) != 0) throw py::error_already_set();
+  if (args.size() > old_order.size())
+    throw py::type_error(std::string(function) + " takes at most " + std::to_string(old_order.size()) + " positional arguments");
+  py::dict observations, rest;
+  for (std::size_t i = 0; i < args.size(); ++i) (IsSolverArgument(old_order[i]) ? rest : observations)[old_order[i]] = args[i];
+  for (const auto& [key, v] : kwargs) {
+    py::dict& into = IsSolverArgument(py::str(key)) ? rest : observations;
+    if (into.contains(key)) throw py::type_error(std::string(function) + " got multiple values for argument '" + std::string(py::str(key)) + "'");
+    into[key] = v;
+  }
+  return m.attr(function)(m.attr("NetworkObservations")(**observations), **rest);
+}
+
 }  // namespace
 
 /// Options of the network adjustment and of the Kalman smoother baseline.
@@ -227,19 +264,35 @@ tolerances; check_datum. Set fields by keyword (``NetworkOptions(sigma_gps_m=0.5
   BindOptionsProtocol(kalman_smoother_options, "KalmanSmootherOptions");
 }
 
+/// The observations of a flight, gathered and checked once for both solvers.
+static void BindNetworkObservations(py::module_& m) {
+  py::class_<NetworkObservations>(m, "NetworkObservations", (std::string(R"doc(
+The observations of a flight for solve_network and kalman_smoother, checked once (ValueError
+naming the argument): NetworkObservations(imu_time_s, acc_body_mps2, gyro_body_radps, gps_time_s,
+gps_position_m, zupt_epochs=None, gupt_epochs=None, gupt_gravity_mps2=None, xover_epochs=None,
+vupt_epochs=None, vupt_velocity_mps=None, vupt_sd_mps=None, sgupt_epochs=None).
+)doc") + kObservationsDoc + kStaticDoc).c_str())
+      .def(py::init(&MakeObservations), py::arg("imu_time_s"), py::arg("acc_body_mps2"), py::arg("gyro_body_radps"),
+           py::arg("gps_time_s"), py::arg("gps_position_m"), py::arg("zupt_epochs") = py::none(),
+           py::arg("gupt_epochs") = py::none(), py::arg("gupt_gravity_mps2") = py::none(),
+           py::arg("xover_epochs") = py::none(), py::arg("vupt_epochs") = py::none(),
+           py::arg("vupt_velocity_mps") = py::none(), py::arg("vupt_sd_mps") = py::none(),
+           py::arg("sgupt_epochs") = py::none())
+      .def_property_readonly("num_imu_epochs", [](const NetworkObservations& o) { return o.imu_time_s.size(); })
+      .def_property_readonly("num_gps_epochs", [](const NetworkObservations& o) { return o.gps_time_s.size(); })
+      .def("__repr__", [](const NetworkObservations& o) {
+        return "NetworkObservations(" + std::to_string(o.imu_time_s.size()) + " IMU epochs, " +
+               std::to_string(o.gps_time_s.size()) + " GPS fixes, " + std::to_string(o.zupt_epochs.size()) + " ZUPT, " +
+               std::to_string(o.gupt_epochs.size()) + " GUPT, " + std::to_string(o.xover_epochs.rows()) + " XOVER, " +
+               std::to_string(o.vupt_epochs.size()) + " VUPT, " + std::to_string(o.sgupt_epochs.size()) + " SGUPT)";
+      });
+}
+
 /// solve_network and the kalman_smoother baseline.
 static void BindNetworkSolvers(py::module_& m) {
   m.def("solve_network",
-        [](const py::object& imu_time_s, const py::object& acc, const py::object& gyro, const py::object& gps_time_s,
-           const py::object& gps_position_m, const py::dict& initial, const py::object& zupt_epochs,
-           const py::object& gupt_epochs, const py::object& gupt_gravity_mps2, const py::object& xover_epochs,
-           const network::NetworkOptions& options, const py::object& vupt_epochs,
-           const py::object& vupt_velocity_mps, const py::object& vupt_sd_mps, const py::object& sgupt_epochs) {
+        [](const NetworkObservations& obs, const py::dict& initial, const network::NetworkOptions& options) {
           ValidateOptions(options);
-          const NetworkObservations obs =
-              MakeObservations(imu_time_s, acc, gyro, gps_time_s, gps_position_m, zupt_epochs, gupt_epochs,
-                               gupt_gravity_mps2, xover_epochs, vupt_epochs, vupt_velocity_mps, vupt_sd_mps,
-                               sgupt_epochs);
           const NetworkState init = MakeState(initial, obs.imu_time_s.size());
           network::NetworkSummary s;
           NetworkState out;
@@ -275,33 +328,33 @@ static void BindNetworkSolvers(py::module_& m) {
           summary["brief_report"] = s.BriefReport();
           return py::make_tuple(StateDict(out), summary);
         },
-        py::arg("imu_time_s"), py::arg("acc_body_mps2"), py::arg("gyro_body_radps"), py::arg("gps_time_s"),
-        py::arg("gps_position_m"), py::arg("initial"), py::arg("zupt_epochs") = py::none(),
-        py::arg("gupt_epochs") = py::none(), py::arg("gupt_gravity_mps2") = py::none(),
-        py::arg("xover_epochs") = py::none(), py::arg("options") = network::NetworkOptions(),
-        py::arg("vupt_epochs") = py::none(), py::arg("vupt_velocity_mps") = py::none(),
-        py::arg("vupt_sd_mps") = py::none(), py::arg("sgupt_epochs") = py::none(),
-        (std::string(R"doc(
+        py::arg("observations"), py::arg("initial"), py::arg("options") = network::NetworkOptions(),
+        R"doc(
 INS/GPS network adjustment (paper 003): every epoch's position, velocity, attitude, biases and
 vertical gravity disturbance from one sparse least-squares network (Ceres, SuiteSparse).
-)doc") + kObservationsDoc + kStaticDoc + R"doc(
+observations : NetworkObservations (IMU, GPS and the update epochs, checked once)
 initial : dict of initial values, keys position_m (N, 3), velocity_mps (N, 3), attitude_wxyz (N, 4),
           acc_bias_mps2 (N, 3), gyro_bias_radps (N, 3), gravity_disturbance_mps2 (N,)
           (with options.slow_parameter_stride > 1 the biases and delta_g are averaged per interval)
 Returns (state dict with the same keys, one row per IMU epoch: with slow parameters the epochs of
 an interval share the values; summary dict with num_parameters, num_slow_nodes, num_xover,
 num_vupt, num_sgupt, timings, ...). Raises ValueError naming the argument for bad input and for
-datum defects (rank-deficient networks).)doc").c_str());
+datum defects (rank-deficient networks). The former form with the observation arrays as
+arguments (solve_network(imu_time_s, ..., initial, ...)) still works and warns (deprecated).)doc");
+  m.def("solve_network", [m](const py::args& args, const py::kwargs& kwargs) {
+    return CallWithGatheredObservations(
+        m, "solve_network",
+        {"imu_time_s", "acc_body_mps2", "gyro_body_radps", "gps_time_s", "gps_position_m", "initial", "zupt_epochs",
+         "gupt_epochs", "gupt_gravity_mps2", "xover_epochs", "options", "vupt_epochs", "vupt_velocity_mps",
+         "vupt_sd_mps", "sgupt_epochs"},
+        args, kwargs);
+  });
 
   m.def("kalman_smoother",
-        [](const py::object& imu_time_s, const py::object& acc, const py::object& gyro, const py::object& gps_time_s,
-           const py::object& gps_position_m, const py::dict& initial, const py::object& zupt_epochs,
-           const py::object& gupt_epochs, const py::object& gupt_gravity_mps2, const py::object& xover_epochs,
-           const network::NetworkOptions& model, const network::KalmanSmootherOptions& options) {
+        [](const NetworkObservations& obs, const py::dict& initial, const network::NetworkOptions& model,
+           const network::KalmanSmootherOptions& options) {
           ValidateOptions(model, "model");
           ValidateOptions(options);
-          const NetworkObservations obs = MakeObservations(imu_time_s, acc, gyro, gps_time_s, gps_position_m,
-                                                           zupt_epochs, gupt_epochs, gupt_gravity_mps2, xover_epochs);
           const NetworkState init = MakeState(initial, 1);
           network::KalmanSmootherSummary s;
           NetworkState out, filtered;
@@ -318,17 +371,21 @@ datum defects (rank-deficient networks).)doc").c_str());
           summary["brief_report"] = s.BriefReport();
           return py::make_tuple(StateDict(out), StateDict(filtered), summary);
         },
-        py::arg("imu_time_s"), py::arg("acc_body_mps2"), py::arg("gyro_body_radps"), py::arg("gps_time_s"),
-        py::arg("gps_position_m"), py::arg("initial"), py::arg("zupt_epochs") = py::none(),
-        py::arg("gupt_epochs") = py::none(), py::arg("gupt_gravity_mps2") = py::none(),
-        py::arg("xover_epochs") = py::none(), py::arg("model") = network::NetworkOptions(),
-        py::arg("options") = network::KalmanSmootherOptions(),
-        (std::string(R"doc(
+        py::arg("observations"), py::arg("initial"), py::arg("model") = network::NetworkOptions(),
+        py::arg("options") = network::KalmanSmootherOptions(), R"doc(
 State-space baseline (SSA): error-state EKF + RTS smoother with the model and noise densities of
-`model`. Same observations as solve_network; XOVER cannot enter a filter and is only counted.
-)doc") + kObservationsDoc + R"doc(
+`model`. Same observations as solve_network (NetworkObservations); XOVER cannot enter a filter
+and is only counted; VUPT and SGUPT are not used.
 initial : dict with the keys of solve_network, shape (1, .) or (N, .): only row 0 is used.
-Returns (smoothed state dict, filtered state dict, summary dict).)doc").c_str());
+Returns (smoothed state dict, filtered state dict, summary dict). The former form with the
+observation arrays as arguments still works and warns (deprecated).)doc");
+  m.def("kalman_smoother", [m](const py::args& args, const py::kwargs& kwargs) {
+    return CallWithGatheredObservations(
+        m, "kalman_smoother",
+        {"imu_time_s", "acc_body_mps2", "gyro_body_radps", "gps_time_s", "gps_position_m", "initial", "zupt_epochs",
+         "gupt_epochs", "gupt_gravity_mps2", "xover_epochs", "model", "options"},
+        args, kwargs);
+  });
 }
 
 /// Cross-overs of a trajectory, normal gravity and the earth rate.
@@ -376,6 +433,7 @@ crossing of two passes. time_s (N,) [s], position_m (N, 3) ENU [m].)doc");
 
 void BindNetwork(py::module_& m) {
   BindNetworkOptions(m);
+  BindNetworkObservations(m);
   BindNetworkSolvers(m);
   BindNetworkGeodesy(m);
 }

@@ -3,8 +3,8 @@
 // LinearInsEquations) bound once by result_binding.h. They replace the dicts the scale functions
 // used to copy field by field; reading them as those dicts still works for one release with a
 // DeprecationWarning (docs/api_changes.md). The fields several results share (the network's
-// size, the block-tridiagonal solver's summary, the error against the noise-free truth and the
-// gravity disturbance) are declared once below. The functions returning them are bound in
+// size, the block-tridiagonal solver's summary, the error against the noise-free truth, the
+// gravity disturbance) are declared once below; the stub (network.pyi) mirrors these groups. The functions returning them are bound in
 // bind_network_scale.cc, which calls BindNetworkScaleResults first.
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
@@ -39,12 +39,18 @@ void SolverFields(ResultBinder<R>& b) {
       .Field("min_relative_pivot", [](const R& r) { return r.solver.min_relative_pivot; });
 }
 
-/// The error against the noise-free truth and the gravity disturbance δg with its sigma.
+/// The error against the noise-free truth: over every unknown, and of δg.
+template <typename R>
+void TruthFields(ResultBinder<R>& b) {
+  b.Field("max_abs_error", [](const R& r) { return r.max_abs_error; }, "max |x - x*| over every unknown.")
+      .Field("gravity_rmse", [](const R& r) { return r.gravity_rmse; }, "δg error RMSE [m/s²].");
+}
+
+/// The gravity disturbance δg with its sigma per epoch.
 template <typename R>
 void GravityFields(ResultBinder<R>& b) {
-  b.Field("gravity_rmse", [](const R& r) { return r.gravity_rmse; }, "δg error RMSE [m/s²].")
-      .Field("gravity_sigma", [](const R& r) { return Eigen::MatrixXd(r.gravity_sigma); },
-             "(E, 3) sqrt of the diagonal of Σ_δg per epoch [m/s²].")
+  b.Field("gravity_sigma", [](const R& r) { return Eigen::MatrixXd(r.gravity_sigma); },
+          "(E, 3) sqrt of the diagonal of Σ_δg per epoch [m/s²].")
       .Field("gravity_estimate", [](const R& r) { return Eigen::MatrixXd(r.gravity_estimate); },
              "(E, 3) δg estimate [m/s²]; empty unless keep_gravity_estimate.");
 }
@@ -59,10 +65,10 @@ void BindLinearInsNetworkResult(py::module_& m) {
       .Field("assembler_calls", [](const R& r) { return r.solver.assembler_calls; });
   SolverFields(b);
   b.Field("min_relative_pivot_block", [](const R& r) { return r.solver.min_relative_pivot_block; })
-      .Field("min_relative_pivot_unknown", [](const R& r) { return r.solver.min_relative_pivot_unknown; })
-      .Field("max_abs_error", [](const R& r) { return r.max_abs_error; }, "max |x - x*| over every unknown.")
-      .Field("max_abs_error_by_unknown", [](const R& r) { return Eigen::VectorXd(r.max_abs_error_by_unknown); },
-             "(18,) max |x - x*| per unknown of an epoch, each in its own unit.")
+      .Field("min_relative_pivot_unknown", [](const R& r) { return r.solver.min_relative_pivot_unknown; });
+  TruthFields(b);
+  b.Field("max_abs_error_by_unknown", [](const R& r) { return Eigen::VectorXd(r.max_abs_error_by_unknown); },
+          "(18,) max |x - x*| per unknown of an epoch, each in its own unit.")
       .Field("max_abs_error_epoch", [](const R& r) { return r.max_abs_error_epoch; });
   GravityFields(b);
   b.Field("report", [](const R& r) { return r.solver.BriefReport(); }).MappingDeprecated(kSince).Finish();
@@ -78,7 +84,7 @@ void BindFoldedNetworkResult(py::module_& m) {
       .Field("folded_blocks", [](const R& r) { return r.folded_blocks; })
       .Field("folded_block_size", [](const R& r) { return r.folded_block_size; });
   SolverFields(b);
-  b.Field("max_abs_error", [](const R& r) { return r.max_abs_error; }, "max |x - x*| over every unknown.");
+  TruthFields(b);
   GravityFields(b);
   b.Field("report", [](const R& r) { return r.BriefReport(); }).MappingDeprecated(kSince).Finish();
 }
@@ -96,10 +102,9 @@ void BindCrossoverNetworkResult(py::module_& m) {
       .Field("pcg_iterations", [](const R& r) { return r.pcg.iterations; })
       .Field("pcg_seconds", [](const R& r) { return r.pcg.seconds; })
       .Field("pcg_relative_residual", [](const R& r) { return r.pcg.relative_residual; })
-      .Field("pcg_converged", [](const R& r) { return r.pcg.termination == Termination::kConverged; })
-      .Field("max_abs_error", [](const R& r) { return r.max_abs_error; }, "max |x - x*| over every unknown.")
-      .Field("gravity_rmse", [](const R& r) { return r.gravity_rmse; }, "δg error RMSE [m/s²].")
-      .Field("total_seconds", [](const R& r) { return r.total_seconds; })
+      .Field("pcg_converged", [](const R& r) { return r.pcg.termination == Termination::kConverged; });
+  TruthFields(b);
+  b.Field("total_seconds", [](const R& r) { return r.total_seconds; })
       .Field("report", [](const R& r) { return r.pcg.BriefReport(); })
       .MappingDeprecated(kSince)
       .Finish();

@@ -224,7 +224,8 @@ def group_network() -> None:
     flight = simulate_flight(small_config(line_length_m=400.0, turn_radius_m=100.0, cross_margin_m=100.0,
                                           imu_rate_hz=10.0, gps_rate_hz=1.0), seed=1, noise=False)
     init = dict(flight.truth)
-    probe(Case("solve_network", network.solve_network,
+    probe(Case("solve_network", lambda initial, options, **observations: network.solve_network(
+                   network.NetworkObservations(**observations), initial, options),
                {"imu_time_s": flight.imu_time_s, "acc_body_mps2": flight.acc_body_mps2,
                 "gyro_body_radps": flight.gyro_body_radps, "gps_time_s": flight.gps_time_s,
                 "gps_position_m": flight.gps_position_m, "initial": init,
@@ -241,7 +242,8 @@ def group_network() -> None:
                gps_position_m=flight.gps_position_m, zupt_epochs=flight.zupt_epochs,
                gupt_epochs=flight.gupt_epochs, gupt_gravity_mps2=flight.gupt_gravity_mps2, xover_epochs=None)
     start = network.start_state(flight, 0)
-    probe(Case("kalman_smoother", network.kalman_smoother,
+    probe(Case("kalman_smoother", lambda initial, model, options, **observations: network.kalman_smoother(
+                   network.NetworkObservations(**observations), initial, model, options),
                {**obs, "initial": start, "model": network.flight_options(flight.config),
                 "options": network.KalmanSmootherOptions()},
                vary=["acc_body_mps2", "gyro_body_radps", "gps_time_s", "gps_position_m", "zupt_epochs",
@@ -276,22 +278,27 @@ def group_network() -> None:
                long_work_ok=True, solver=True, examples=10))
     from indoorloc._core import network as cn
 
-    size = {"imu_rate_hz": 10.0, "duration_s": 20.0, "gps_rate_hz": 1.0, "rule": "leapfrog"}
+    def small(**fields):
+        return cn.LinearInsNetworkOptions(**{"imu_rate_hz": 10.0, "duration_s": 20.0, "gps_rate_hz": 1.0, **fields})
+
+    network_fields = {"network": (small, ["imu_rate_hz", "duration_s", "gps_rate_hz", "rule", "prior_epochs",
+                                          "sigma_gps_m", "sigma_prior"])}
     probe(Case("solve_linear_ins_network", cn.solve_linear_ins_network,
-               {**size, "gravity_covariance": True, "checkpoint_interval": 0, "prior_epochs": 2,
+               {"network": small(), "gravity_covariance": True, "checkpoint_interval": 0,
                 "keep_gravity_estimate": True, "num_threads": 1},
-               long_work_ok=True, solver=True, examples=10))
+               options_fields=network_fields, long_work_ok=True, solver=True, examples=10))
     probe(Case("solve_linear_ins_network_with_crossovers", cn.solve_linear_ins_network_with_crossovers,
-               {**size, "duration_s": 60.0, "lines": 3, "cross_lines": 3, "sigma_xover_mps2": 1e-5,
+               {"network": small(duration_s=60.0), "lines": 3, "cross_lines": 3, "sigma_xover_mps2": 1e-5,
                 "max_iterations": 200, "relative_tolerance": 1e-8},
+               options_fields={"network": (lambda: small(duration_s=60.0), network_fields["network"][1])},
                long_work_ok=True, solver=True, examples=10))
     probe(Case("solve_linear_ins_network_ceres", cn.solve_linear_ins_network_ceres,
-               {**size, "prior_epochs": 2, "one_gauss_newton_step": True},
-               long_work_ok=True, solver=True, examples=10))
-    probe(Case("linear_ins_equations", cn.linear_ins_equations, {**size, "prior_epochs": 2},
-               long_work_ok=True, examples=10))
-    probe(Case("linear_ins_normal_blocks", cn.linear_ins_normal_blocks, {**size, "prior_epochs": 2},
-               long_work_ok=True, examples=10))
+               {"network": small(), "one_gauss_newton_step": True},
+               options_fields=network_fields, long_work_ok=True, solver=True, examples=10))
+    probe(Case("linear_ins_equations", cn.linear_ins_equations, {"network": small()},
+               options_fields=network_fields, long_work_ok=True, examples=10))
+    probe(Case("linear_ins_normal_blocks", cn.linear_ins_normal_blocks, {"network": small()},
+               options_fields=network_fields, long_work_ok=True, examples=10))
 
 
 def group_analog() -> None:

@@ -95,7 +95,7 @@ def _expect(match, flight, initial, options=None, **changes):
     kw = _obs(flight)
     kw.update(changes)
     with pytest.raises(ValueError, match=match):
-        network.solve_network(initial=initial, options=options or network.NetworkOptions(), **kw)
+        network.solve_network(network.NetworkObservations(**kw), initial, options=options or network.NetworkOptions())
 
 
 def test_bad_input_names_the_argument(small_problem):
@@ -134,7 +134,34 @@ def test_kalman_smoother_rejects_bad_input(small_problem):
     kw = _obs(flight)
     kw["gps_time_s"] = kw["gps_time_s"][::-1].copy()
     with pytest.raises(ValueError, match="'gps_time_s'"):
-        network.kalman_smoother(initial={k: v[:1] for k, v in init.items()}, **kw)
+        network.kalman_smoother(network.NetworkObservations(**kw), {k: v[:1] for k, v in init.items()})
+
+
+def test_observations_are_gathered_once_and_the_former_form_warns(small_problem):
+    """solve_network and kalman_smoother take one NetworkObservations; the former call with the
+    observation arrays as arguments (positional or keyword) still works for one release, warns,
+    and gives the same state."""
+    flight, init = small_problem
+    kw = _obs(flight)
+    observations = network.NetworkObservations(**kw)
+    assert observations.num_imu_epochs == flight.imu_time_s.size and "GUPT" in repr(observations)
+    start = {k: v[:1] for k, v in init.items()}
+    model = network.flight_options(flight.config)
+    smoothed, _, _ = network.kalman_smoother(observations, start, model=model)
+    with pytest.warns(DeprecationWarning, match=r"kalman_smoother\(imu_time_s.*NetworkObservations"):
+        old, _, _ = network.kalman_smoother(initial=start, model=model, **kw)
+    assert all(np.array_equal(old[k], smoothed[k]) for k in smoothed)
+    with pytest.warns(DeprecationWarning, match=r"solve_network\(imu_time_s"):
+        positional, _ = network.solve_network(kw["imu_time_s"], kw["acc_body_mps2"], kw["gyro_body_radps"],
+                                              kw["gps_time_s"], kw["gps_position_m"], smoothed, kw["zupt_epochs"],
+                                              kw["gupt_epochs"], kw["gupt_gravity_mps2"], None, model)
+    state, _ = network.solve_network(observations, smoothed, model)
+    assert all(np.array_equal(positional[k], state[k]) for k in state)
+    assert repr(network.flight_observations(flight)) == repr(observations)
+    with pytest.raises(TypeError, match="incompatible constructor arguments"):  # gps_time_s, gps_position_m missing
+        network.NetworkObservations(kw["imu_time_s"], kw["acc_body_mps2"], kw["gyro_body_radps"])
+    with pytest.raises(TypeError, match="incompatible constructor arguments"):
+        network.NetworkObservations(**kw, xover=None)
 
 
 def test_normal_gravity_grs80():
@@ -220,12 +247,13 @@ def test_vupt_and_sgupt(small_problem):
     epochs = np.arange(20, flight.n_epochs - 20, 50)
     v0 = flight.truth["velocity_mps"][epochs]
     kw = _obs(flight)
-    state, summary = network.solve_network(initial=init, options=o, vupt_epochs=epochs, vupt_velocity_mps=v0,
-                                           vupt_sd_mps=np.full(epochs.size, 1e-3), **kw)
+    observations = network.NetworkObservations(**kw, vupt_epochs=epochs, vupt_velocity_mps=v0,
+                                               vupt_sd_mps=np.full(epochs.size, 1e-3))
+    state, summary = network.solve_network(observations, init, options=o)
     assert summary["num_vupt"] == epochs.size
     # SGUPT over the hovers (ZUPT epochs): δg constant over each static period.
     z = flight.zupt_epochs
-    state, summary = network.solve_network(initial=init, options=o, sgupt_epochs=z, **kw)
+    state, summary = network.solve_network(network.NetworkObservations(**kw, sgupt_epochs=z), init, options=o)
     runs = np.split(z, np.flatnonzero(np.diff(z) > 1) + 1)
     assert summary["num_sgupt"] == z.size - len(runs)
     for run in runs:
@@ -270,4 +298,4 @@ def test_kalman_smoother_refuses_absurd_times_instead_of_returning_nan(small_pro
         bad = dict(kw, imu_time_s=times, gps_time_s=times[:: max(1, len(times) // max(1, len(kw["gps_time_s"])))][
             :len(kw["gps_time_s"])])
         with pytest.raises(ValueError, match="'imu_time_s'"):
-            network.kalman_smoother(initial={k: v[:1] for k, v in init.items()}, **bad)
+            network.kalman_smoother(network.NetworkObservations(**bad), {k: v[:1] for k, v in init.items()})

@@ -90,7 +90,7 @@ OVER_LIMIT_CALLS = [
     ("offspring_counts", "core.offspring_counts(np.zeros(1000), n_runs=2**31 - 1 - f)"),
     ("monte_carlo", "mapmatch.monte_carlo(net, mapmatch.TrajectoryOptions(duration_s=1e7, dt_s=0.1), "
                     "mapmatch.FilterOptions(num_particles=10), n_runs=10**6 * f)"),
-    ("network blocks", "cn.linear_ins_normal_blocks(18109.0 * f, 60.0, 1.0, 'leapfrog', 2)"),
+    ("network blocks", "cn.linear_ins_normal_blocks(cn.LinearInsNetworkOptions(imu_rate_hz=18109.0 * f, gps_rate_hz=1.0))"),
     ("bootstrap", "metrics.bootstrap_interval(np.ones(1000 * f), n_boot=10**6)"),
 ]
 

@@ -374,9 +374,9 @@ def test_loader_column_errors_are_format_errors_naming_the_file(tmp_path):
 def test_linear_ins_network_names_the_rate_not_the_assembler():
     # Issue 17: a rate of 1e300 made every block NaN and was reported as argument 'assemble'.
     with pytest.raises(ValueError, match="imu_rate_hz must be finite and in"):
-        network.solve_folded_linear_ins_network(imu_rate_hz=1e300)
+        network.solve_folded_linear_ins_network(network.LinearInsNetworkOptions(imu_rate_hz=1e300))
     with pytest.raises(ValueError, match="duration_s"):
-        network.solve_folded_linear_ins_network(duration_s=np.inf)
+        network.solve_folded_linear_ins_network(network.LinearInsNetworkOptions(duration_s=np.inf))
 
 
 # ------------------------------------------------------- network options (issue 17, second pass)
@@ -385,11 +385,12 @@ def test_linear_ins_network_names_the_rate_not_the_assembler():
 def test_network_scale_solver_options_use_the_validation_vocabulary():
     from indoorloc._core import network as cn
 
+    SMALL = cn.LinearInsNetworkOptions(imu_rate_hz=10.0, duration_s=60.0, gps_rate_hz=1.0)
     # TiedSolveOptions: an iteration count of 2**31 - 1 used to be accepted (hours of PCG).
     with pytest.raises(ValueError, match=r"max_iterations must be in \[1, 1000000\], got 2147483647"):
-        cn.solve_linear_ins_network_with_crossovers(10.0, 60.0, 1.0, "leapfrog", 3, 3, 1e-5, 2**31 - 1, 1e-8)
+        cn.solve_linear_ins_network_with_crossovers(SMALL, 3, 3, 1e-5, 2**31 - 1, 1e-8)
     with pytest.raises(ValueError, match=r"relative_tolerance must be in \(0, 1\), got nan"):
-        cn.solve_linear_ins_network_with_crossovers(10.0, 60.0, 1.0, "leapfrog", 3, 3, 1e-5, 100, float("nan"))
+        cn.solve_linear_ins_network_with_crossovers(SMALL, 3, 3, 1e-5, 100, float("nan"))
     # FoldedNetworkOptions: any thread count used to pass.
     with pytest.raises(ValueError, match=r"num_threads.: must be in \[-1024, 1024\], got 1000000"):
         network.solve_repeated_pass_network(10.0, 20.0, 1.0, 10, 2, num_threads=10**6)
@@ -402,7 +403,7 @@ def test_network_exports_refuse_more_than_the_memory_limit():
 
     # 2e7 unknowns asked numpy for 34 GB of dense blocks.
     with pytest.raises(ValueError, match="argument 'duration_s': .* would need .* GB"):
-        cn.linear_ins_normal_blocks(18109.0, 60.0, 1.0, "leapfrog", 2)
+        cn.linear_ins_normal_blocks(cn.LinearInsNetworkOptions(imu_rate_hz=18109.0, duration_s=60.0, gps_rate_hz=1.0))
 
 
 # ------------------------------------------------------------- loaders (issue 17, second pass)
@@ -465,10 +466,11 @@ def test_network_noise_bounds_and_crossover_line_counts():
     ko = network.KalmanSmootherOptions()
     ko.init_sigma_heading_rad = 2.0**31
     with pytest.raises(ValueError, match=r"init_sigma_heading_rad must be in \[1e-12, 10\]"):
-        network.kalman_smoother(np.arange(3.0), np.zeros((3, 3)), np.zeros((3, 3)), np.arange(1.0), np.zeros((1, 3)),
-                                {}, options=ko)
+        network.kalman_smoother(network.NetworkObservations(np.arange(3.0), np.zeros((3, 3)), np.zeros((3, 3)),
+                                                           np.arange(1.0), np.zeros((1, 3))), {}, options=ko)
     with pytest.raises(ValueError, match=r"argument 'lines': must be in \[1, 1000000\]"):
-        cn.solve_linear_ins_network_with_crossovers(10.0, 60.0, 1.0, "leapfrog", 2**31 - 1, 3)  # was bad_alloc
+        cn.solve_linear_ins_network_with_crossovers(  # was bad_alloc
+            cn.LinearInsNetworkOptions(imu_rate_hz=10.0, duration_s=60.0, gps_rate_hz=1.0), 2**31 - 1, 3)
 
 
 def test_grid_posterior_refuses_reference_points_at_absurd_coordinates():

@@ -150,6 +150,42 @@ void ParticleMapMatcher::SetParticles(const std::vector<int>& segments, const st
   weight_sum_ = static_cast<double>(n);
 }
 
+void ParticleMapMatcher::TakeAncestorsStates(int n) {
+  segment_tmp_.resize(static_cast<size_t>(n));
+  direction_tmp_.resize(static_cast<size_t>(n));
+  along_tmp_.resize(static_cast<size_t>(n));
+  limit_tmp_.resize(static_cast<size_t>(n));
+  bias_tmp_.resize(static_cast<size_t>(n));
+  {
+    // Local restrict pointers: the stores into one vector's data must not force reloads of
+    // the others' data pointers (they did: a third of this loop's time).
+    const int* __restrict anc = ancestors_.data();
+    const int* __restrict seg_in = segment_.data();
+    const signed char* __restrict dir_in = direction_.data();
+    const double* __restrict along_in = along_.data();
+    const double* __restrict limit_in = limit_.data();
+    int* __restrict seg_out = segment_tmp_.data();
+    signed char* __restrict dir_out = direction_tmp_.data();
+    double* __restrict along_out = along_tmp_.data();
+    double* __restrict limit_out = limit_tmp_.data();
+    for (int i = 0; i < n; ++i) {
+      const int a = anc[i];
+      seg_out[i] = seg_in[a];
+      dir_out[i] = dir_in[a];
+      along_out[i] = along_in[a];
+      limit_out[i] = limit_in[a];
+    }
+  }
+  segment_.swap(segment_tmp_);
+  direction_.swap(direction_tmp_);
+  along_.swap(along_tmp_);
+  limit_.swap(limit_tmp_);
+  if (options_.estimate_speed_bias) {  // otherwise every bias is 0
+    for (int i = 0; i < n; ++i) bias_tmp_[static_cast<size_t>(i)] = bias_[static_cast<size_t>(ancestors_[static_cast<size_t>(i)])];
+    bias_.swap(bias_tmp_);
+  }
+}
+
 StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, double dt_s) {
   CheckArgument(std::isfinite(speed_mps), "speed_mps", "is not finite");
   CheckArgument(std::isfinite(heading_rad), "heading_rad", "is not finite");
@@ -222,39 +258,7 @@ StepEstimate ParticleMapMatcher::Step(double speed_mps, double heading_rad, doub
   const bool resample = est.ess < ro.ess_threshold * n && est.ess < n * (1.0 - 1e-12);
   if (resample) {
     ResampleLinear(weights_.data(), n, sum, ro.scheme, rng_, &ancestors_);
-    segment_tmp_.resize(static_cast<size_t>(n));
-    direction_tmp_.resize(static_cast<size_t>(n));
-    along_tmp_.resize(static_cast<size_t>(n));
-    limit_tmp_.resize(static_cast<size_t>(n));
-    bias_tmp_.resize(static_cast<size_t>(n));
-    {
-      // Local restrict pointers: the stores into one vector's data must not force reloads of
-      // the others' data pointers (they did: a third of this loop's time).
-      const int* __restrict anc = ancestors_.data();
-      const int* __restrict seg_in = segment_.data();
-      const signed char* __restrict dir_in = direction_.data();
-      const double* __restrict along_in = along_.data();
-      const double* __restrict limit_in = limit_.data();
-      int* __restrict seg_out = segment_tmp_.data();
-      signed char* __restrict dir_out = direction_tmp_.data();
-      double* __restrict along_out = along_tmp_.data();
-      double* __restrict limit_out = limit_tmp_.data();
-      for (int i = 0; i < n; ++i) {
-        const int a = anc[i];
-        seg_out[i] = seg_in[a];
-        dir_out[i] = dir_in[a];
-        along_out[i] = along_in[a];
-        limit_out[i] = limit_in[a];
-      }
-    }
-    segment_.swap(segment_tmp_);
-    direction_.swap(direction_tmp_);
-    along_.swap(along_tmp_);
-    limit_.swap(limit_tmp_);
-    if (options_.estimate_speed_bias) {  // otherwise every bias is 0
-      for (int i = 0; i < n; ++i) bias_tmp_[static_cast<size_t>(i)] = bias_[static_cast<size_t>(ancestors_[static_cast<size_t>(i)])];
-      bias_.swap(bias_tmp_);
-    }
+    TakeAncestorsStates(n);
     lag_ring_.Gather(ancestors_);
     std::fill(weights_.begin(), weights_.end(), 1.0);
     weight_scale_ = 1.0;

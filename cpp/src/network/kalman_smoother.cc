@@ -79,6 +79,90 @@ Vec16 Update(Mat16& p, const Eigen::Matrix<double, kM, 1>& innovation, const Eig
   return k * innovation;
 }
 
+/// The nominal state of row `k` of `s` (the inverse of Store).
+Nominal Load(const NetworkState& s, int k) {
+  Nominal x;
+  x.r = s.position_m.row(k).transpose();
+  x.v = s.velocity_mps.row(k).transpose();
+  x.q = Eigen::Quaterniond(s.attitude_wxyz(k, 0), s.attitude_wxyz(k, 1), s.attitude_wxyz(k, 2), s.attitude_wxyz(k, 3));
+  x.a = s.acc_bias_mps2.row(k).transpose();
+  x.o = s.gyro_bias_radps.row(k).transpose();
+  x.dg = s.gravity_disturbance_mps2[k];
+  return x;
+}
+
+/// The network checks of shapes and values, with the initial row broadcast to every epoch.
+void CheckInput(const NetworkObservations& obs, const NetworkState& initial) {
+  const int n = static_cast<int>(obs.imu_time_s.size());
+  CheckArgument(initial.position_m.rows() >= 1, "initial", "needs at least one row (the initial state)");
+  NetworkState probe = Allocate(n);
+  for (int i = 0; i < n; ++i) {
+    probe.position_m.row(i) = initial.position_m.row(0);
+    probe.velocity_mps.row(i) = initial.velocity_mps.row(0);
+    probe.attitude_wxyz.row(i) = initial.attitude_wxyz.row(0);
+    probe.acc_bias_mps2.row(i) = initial.acc_bias_mps2.row(0);
+    probe.gyro_bias_radps.row(i) = initial.gyro_bias_radps.row(0);
+    probe.gravity_disturbance_mps2[i] = initial.gravity_disturbance_mps2[0];
+  }
+  CheckNetworkInput(obs, probe);
+}
+
+/// The initial error covariance: the options' sds squared on the diagonal.
+Mat16 InitialCovariance(const KalmanSmootherOptions& options) {
+  Mat16 p = Mat16::Zero();
+  p.block<3, 3>(kP, kP).diagonal().setConstant(options.init_sigma_position_m * options.init_sigma_position_m);
+  p.block<3, 3>(kV, kV).diagonal().setConstant(options.init_sigma_velocity_mps * options.init_sigma_velocity_mps);
+  p(kE, kE) = p(kE + 1, kE + 1) = options.init_sigma_level_rad * options.init_sigma_level_rad;
+  p(kE + 2, kE + 2) = options.init_sigma_heading_rad * options.init_sigma_heading_rad;
+  p.block<3, 3>(kA, kA).diagonal().setConstant(options.init_sigma_acc_bias_mps2 * options.init_sigma_acc_bias_mps2);
+  p.block<3, 3>(kO, kO).diagonal().setConstant(options.init_sigma_gyro_bias_radps * options.init_sigma_gyro_bias_radps);
+  p(kG, kG) = options.init_sigma_gravity_mps2 * options.init_sigma_gravity_mps2;
+  return p;
+}
+
+/// The discrete process noise of one step (diagonal `qd`) and the bias decay factors.
+struct ProcessNoise {
+  Vec16 qd = Vec16::Zero();
+  double phi_a = 1.0, phi_o = 1.0;  ///< b[k+1] = φ b[k] of the accelerometer and gyro biases
+};
+
+ProcessNoise MakeProcessNoise(const NetworkOptions& model, double dt) {
+  ProcessNoise noise;
+  Vec16& qd = noise.qd;
+  qd.segment<3>(kV).setConstant(model.acc_noise_mps2_rthz * model.acc_noise_mps2_rthz * dt);
+  qd.segment<3>(kE).setConstant(model.gyro_noise_radps_rthz * model.gyro_noise_radps_rthz * dt);
+  // Bias models: random walk (τ = 0) or Gauss-Markov with φ = exp(-δt/τ), var = q² τ/2 (1 - φ²).
+  auto bias_model = [dt](double q, double tau, double* phi, double* var) {
+    if (tau <= 0.0) {
+      *phi = 1.0;
+      *var = q * q * dt;
+    } else {
+      *phi = std::exp(-dt / tau);
+      *var = q * q * 0.5 * tau * (1.0 - *phi * *phi);
+    }
+  };
+  double var_a = 0.0, var_o = 0.0;
+  bias_model(model.acc_bias_walk_mps2_rts, model.acc_bias_correlation_time_s, &noise.phi_a, &var_a);
+  bias_model(model.gyro_bias_walk_radps_rts, model.gyro_bias_correlation_time_s, &noise.phi_o, &var_o);
+  qd.segment<3>(kA).setConstant(var_a);
+  qd.segment<3>(kO).setConstant(var_o);
+  qd[kG] = model.gravity_walk_mps2_rts * model.gravity_walk_mps2_rts * dt;
+  return noise;
+}
+
+/// The RTS pass on the error states: from the last epoch back, δ_k = G_k (δ_{k+1} + u_{k+1})
+/// (gains G_k, filter corrections u_k), injected into the filtered nominal states of `out`.
+void SmoothBackward(const std::vector<Mat16>& gains, const std::vector<Vec16>& corrections, NetworkState& out) {
+  const int n = static_cast<int>(out.position_m.rows());
+  Vec16 delta = Vec16::Zero();
+  for (int k = n - 2; k >= 0; --k) {
+    delta = gains[static_cast<size_t>(k)] * (delta + corrections[static_cast<size_t>(k + 1)]);
+    Nominal xs = Load(out, k);
+    Inject(xs, delta);
+    Store(xs, k, out);
+  }
+}
+
 }  // namespace
 
 bool KalmanSmootherOptions::IsValid(std::string* error) const {
@@ -107,21 +191,8 @@ NetworkState RunKalmanSmoother(const NetworkObservations& obs, const NetworkStat
                                NetworkState* filtered) {
   ValidateOptions(model, "model");
   ValidateOptions(options);
-  // Shapes and values: reuse the network checks with the initial row broadcast.
+  CheckInput(obs, initial);
   const int n = static_cast<int>(obs.imu_time_s.size());
-  CheckArgument(initial.position_m.rows() >= 1, "initial", "needs at least one row (the initial state)");
-  {
-    NetworkState probe = Allocate(n);
-    for (int i = 0; i < n; ++i) {
-      probe.position_m.row(i) = initial.position_m.row(0);
-      probe.velocity_mps.row(i) = initial.velocity_mps.row(0);
-      probe.attitude_wxyz.row(i) = initial.attitude_wxyz.row(0);
-      probe.acc_bias_mps2.row(i) = initial.acc_bias_mps2.row(0);
-      probe.gyro_bias_radps.row(i) = initial.gyro_bias_radps.row(0);
-      probe.gravity_disturbance_mps2[i] = initial.gravity_disturbance_mps2[0];
-    }
-    CheckNetworkInput(obs, probe);
-  }
   WallTimer timer;
   const double dt = (obs.imu_time_s[n - 1] - obs.imu_time_s[0]) / (n - 1);
   const Eigen::Vector3d wie = EarthRateEnu(model.latitude_rad) * (model.earth_rate_radps / kEarthRateRadps);
@@ -148,43 +219,12 @@ NetworkState RunKalmanSmoother(const NetworkObservations& obs, const NetworkStat
   for (Eigen::Index i = 0; i < obs.gupt_epochs.size(); ++i)
     gupt_at[static_cast<size_t>(obs.gupt_epochs[i])].push_back(static_cast<int>(i));
 
-  Nominal x;
-  x.r = initial.position_m.row(0).transpose();
-  x.v = initial.velocity_mps.row(0).transpose();
-  x.q = Eigen::Quaterniond(initial.attitude_wxyz(0, 0), initial.attitude_wxyz(0, 1), initial.attitude_wxyz(0, 2),
-                           initial.attitude_wxyz(0, 3))
-            .normalized();
-  x.a = initial.acc_bias_mps2.row(0).transpose();
-  x.o = initial.gyro_bias_radps.row(0).transpose();
-  x.dg = initial.gravity_disturbance_mps2[0];
-  Mat16 p = Mat16::Zero();
-  p.block<3, 3>(kP, kP).diagonal().setConstant(options.init_sigma_position_m * options.init_sigma_position_m);
-  p.block<3, 3>(kV, kV).diagonal().setConstant(options.init_sigma_velocity_mps * options.init_sigma_velocity_mps);
-  p(kE, kE) = p(kE + 1, kE + 1) = options.init_sigma_level_rad * options.init_sigma_level_rad;
-  p(kE + 2, kE + 2) = options.init_sigma_heading_rad * options.init_sigma_heading_rad;
-  p.block<3, 3>(kA, kA).diagonal().setConstant(options.init_sigma_acc_bias_mps2 * options.init_sigma_acc_bias_mps2);
-  p.block<3, 3>(kO, kO).diagonal().setConstant(options.init_sigma_gyro_bias_radps * options.init_sigma_gyro_bias_radps);
-  p(kG, kG) = options.init_sigma_gravity_mps2 * options.init_sigma_gravity_mps2;
-
-  Vec16 qd = Vec16::Zero();
-  qd.segment<3>(kV).setConstant(model.acc_noise_mps2_rthz * model.acc_noise_mps2_rthz * dt);
-  qd.segment<3>(kE).setConstant(model.gyro_noise_radps_rthz * model.gyro_noise_radps_rthz * dt);
-  // Bias models: random walk (τ = 0) or Gauss-Markov with φ = exp(-δt/τ), var = q² τ/2 (1 - φ²).
-  auto bias_model = [dt](double q, double tau, double* phi, double* var) {
-    if (tau <= 0.0) {
-      *phi = 1.0;
-      *var = q * q * dt;
-    } else {
-      *phi = std::exp(-dt / tau);
-      *var = q * q * 0.5 * tau * (1.0 - *phi * *phi);
-    }
-  };
-  double phi_a = 1.0, phi_o = 1.0, var_a = 0.0, var_o = 0.0;
-  bias_model(model.acc_bias_walk_mps2_rts, model.acc_bias_correlation_time_s, &phi_a, &var_a);
-  bias_model(model.gyro_bias_walk_radps_rts, model.gyro_bias_correlation_time_s, &phi_o, &var_o);
-  qd.segment<3>(kA).setConstant(var_a);
-  qd.segment<3>(kO).setConstant(var_o);
-  qd[kG] = model.gravity_walk_mps2_rts * model.gravity_walk_mps2_rts * dt;
+  Nominal x = Load(initial, 0);
+  x.q.normalize();
+  Mat16 p = InitialCovariance(options);
+  const ProcessNoise noise = MakeProcessNoise(model, dt);
+  const Vec16& qd = noise.qd;
+  const double phi_a = noise.phi_a, phi_o = noise.phi_o;
 
   NetworkState out = Allocate(n);
   std::vector<Mat16> gains(options.smooth ? static_cast<size_t>(n) : 0);
@@ -278,22 +318,7 @@ NetworkState RunKalmanSmoother(const NetworkObservations& obs, const NetworkStat
   }
   const double seconds_filter = timer.ElapsedSeconds();
   WallTimer smoother_timer;
-  if (options.smooth) {
-    Vec16 delta = Vec16::Zero();
-    for (int k = n - 2; k >= 0; --k) {
-      delta = gains[static_cast<size_t>(k)] * (delta + corrections[static_cast<size_t>(k + 1)]);
-      Nominal xs;
-      xs.r = out.position_m.row(k).transpose();
-      xs.v = out.velocity_mps.row(k).transpose();
-      xs.q = Eigen::Quaterniond(out.attitude_wxyz(k, 0), out.attitude_wxyz(k, 1), out.attitude_wxyz(k, 2),
-                                out.attitude_wxyz(k, 3));
-      xs.a = out.acc_bias_mps2.row(k).transpose();
-      xs.o = out.gyro_bias_radps.row(k).transpose();
-      xs.dg = out.gravity_disturbance_mps2[k];
-      Inject(xs, delta);
-      Store(xs, k, out);
-    }
-  }
+  if (options.smooth) SmoothBackward(gains, corrections, out);
   if (summary) {
     summary->num_epochs = n;
     summary->num_updates = num_updates;

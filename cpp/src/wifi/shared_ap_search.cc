@@ -1,6 +1,8 @@
 // The shared-AP matcher's searches (indoorloc/wifi/shared_ap_matcher.h): the full pass over the
 // query's posting lists (Parts, and Nearest's fallback) and the pruned k-nearest search, each
-// for both RSS storages of the index (shared_ap_index.h).
+// for both RSS storages of the index (shared_ap_index.h). SelectPruned is 152 lines (the house's
+// limit: 150 lines): one search whose phases (weights, first pass, bounds, exact sums) share the query's
+// scratch; it is left whole while the matcher's speed work goes on (splitting it is pending).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>

@@ -11,53 +11,50 @@ from .pdr import _Result
 # The scale path's results: typed read-only objects (fields as annotations); reading them as the
 # former dicts (result["key"], keys(), items(), ...) is deprecated (DeprecationWarning), to_dict() is not.
 
-class LinearInsNetworkResult(_Result):
+class _NetworkSize(_Result):
+    """The network solved (bindings: SizeFields)."""
     imu_epochs: int
     gps_epochs: int
     unknowns: int
-    equations: int
-    block_size: int
-    num_blocks: int
-    assembler_calls: int
+
+class _SolverSummary(_Result):
+    """The block-tridiagonal solver's timings [s], memory and smallest pivot (bindings: SolverFields)."""
     factor_seconds: float
     backward_seconds: float
     total_seconds: float
     stored_factor_bytes: float
     min_relative_pivot: float
-    min_relative_pivot_block: int
-    min_relative_pivot_unknown: int
+
+class _TruthError(_Result):
+    """The error against the noise-free truth (bindings: TruthFields)."""
     max_abs_error: float
-    max_abs_error_by_unknown: npt.NDArray[np.float64]
-    max_abs_error_epoch: int
     gravity_rmse: float
+
+class _GravityDisturbance(_Result):
+    """δg with its sigma per epoch, (E, 3) [m/s²] (bindings: GravityFields)."""
     gravity_sigma: npt.NDArray[np.float64]
     gravity_estimate: npt.NDArray[np.float64]
+
+class LinearInsNetworkResult(_NetworkSize, _SolverSummary, _TruthError, _GravityDisturbance):
+    equations: int
+    block_size: int
+    num_blocks: int
+    assembler_calls: int
+    min_relative_pivot_block: int
+    min_relative_pivot_unknown: int
+    max_abs_error_by_unknown: npt.NDArray[np.float64]
+    max_abs_error_epoch: int
     report: str
 
-class FoldedNetworkResult(_Result):
-    imu_epochs: int
-    gps_epochs: int
-    unknowns: int
+class FoldedNetworkResult(_NetworkSize, _SolverSummary, _TruthError, _GravityDisturbance):
     ties: int
     gupts: int
     equations: int
     folded_blocks: int
     folded_block_size: int
-    factor_seconds: float
-    backward_seconds: float
-    total_seconds: float
-    stored_factor_bytes: float
-    min_relative_pivot: float
-    max_abs_error: float
-    gravity_rmse: float
-    gravity_sigma: npt.NDArray[np.float64]
-    gravity_estimate: npt.NDArray[np.float64]
     report: str
 
-class CrossoverNetworkResult(_Result):
-    imu_epochs: int
-    gps_epochs: int
-    unknowns: int
+class CrossoverNetworkResult(_NetworkSize, _TruthError):
     equations: int
     crossings: int
     ties: int
@@ -67,8 +64,6 @@ class CrossoverNetworkResult(_Result):
     pcg_seconds: float
     pcg_relative_residual: float
     pcg_converged: bool
-    max_abs_error: float
-    gravity_rmse: float
     total_seconds: float
     report: str
 
@@ -100,64 +95,66 @@ class LinearInsEquations(_Result):
     sigma_gupt: float
     imu_epochs: int
 
+class LinearInsNetworkOptions:
+    """Fields and defaults: read them from the compiled struct (``LinearInsNetworkOptions().to_dict()``);
+    they are not restated here."""
+    accel_bias_density: float
+    accel_density: float
+    duration_s: float
+    gps_rate_hz: float
+    gravity_density: float
+    gupt_end_epochs: int
+    gyro_bias_density: float
+    gyro_density: float
+    imu_rate_hz: float
+    prior_epochs: int
+    rule: str
+    sigma_gps_m: float
+    sigma_gupt_mps2: float
+    sigma_prior: float
+    specific_force_mps2: List[float]
+    velocity_density: float
+    def __init__(self, *args: Any, **fields: Any) -> None: ...
+    def replace(self, **fields: Any) -> "LinearInsNetworkOptions": ...
+    def to_dict(self) -> Dict[str, Any]: ...
+    def validate(self) -> None: ...
+
+# The former calls with the network's fields (imu_rate_hz, duration_s, gps_rate_hz, rule,
+# prior_epochs, sigma_gupt_mps2) as arguments still run (DeprecationWarning); not listed here.
 def solve_linear_ins_network(
-    imu_rate_hz: float = 200.0,
-    duration_s: float = 60.0,
-    gps_rate_hz: float = 1.0,
-    rule: str = "leapfrog",
-    gravity_covariance: bool = True,
-    checkpoint_interval: int = 0,
-    prior_epochs: int = 2,
-    keep_gravity_estimate: bool = False,
-    num_threads: int = 1,
+    network: LinearInsNetworkOptions = ...,
+    gravity_covariance: bool = ...,
+    checkpoint_interval: int = ...,
+    keep_gravity_estimate: bool = ...,
+    num_threads: int = ...,
+    pivot_tolerance: Optional[float] = ...,
+    method: str = ...,
 ) -> LinearInsNetworkResult: ...
 def solve_folded_linear_ins_network(
-    imu_rate_hz: float = 50.0,
-    duration_s: float = 60.0,
-    gps_rate_hz: float = 2.0,
-    rule: str = "leapfrog",
-    num_ties: int = 1000,
-    num_gupts: int = 10,
-    sigma_xover_mps2: float = 1e-5,
-    sigma_gupt_mps2: float = 1e-5,
-    checkpoint_interval: int = 2048,
-    gravity_covariance: bool = True,
-    keep_gravity_estimate: bool = False,
-    num_threads: int = 1,
+    network: LinearInsNetworkOptions = ...,
+    num_ties: int = ...,
+    num_gupts: int = ...,
+    sigma_xover_mps2: float = ...,
+    checkpoint_interval: int = ...,
+    gravity_covariance: bool = ...,
+    keep_gravity_estimate: bool = ...,
+    num_threads: int = ...,
 ) -> FoldedNetworkResult: ...
-def linear_ins_normal_blocks(
-    imu_rate_hz: float = 200.0,
-    duration_s: float = 60.0,
-    gps_rate_hz: float = 1.0,
-    rule: str = "leapfrog",
-    prior_epochs: int = 2,
-) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64]]: ...
-def linear_ins_equations(
-    imu_rate_hz: float = 200.0,
-    duration_s: float = 60.0,
-    gps_rate_hz: float = 1.0,
-    rule: str = "leapfrog",
-    prior_epochs: int = 2,
-) -> LinearInsEquations: ...
-def solve_linear_ins_network_ceres(
-    imu_rate_hz: float = 200.0,
-    duration_s: float = 60.0,
-    gps_rate_hz: float = 1.0,
-    rule: str = "leapfrog",
-    prior_epochs: int = 2,
-    one_gauss_newton_step: bool = False,
-) -> LinearInsCeresResult: ...
 def solve_linear_ins_network_with_crossovers(
-    imu_rate_hz: float = 50.0,
-    duration_s: float = 600.0,
-    gps_rate_hz: float = 2.0,
-    rule: str = "leapfrog",
-    lines: int = 10,
-    cross_lines: int = 10,
-    sigma_xover_mps2: float = 1e-5,
-    max_iterations: int = 1000,
-    relative_tolerance: float = 1e-8,
+    network: LinearInsNetworkOptions = ...,
+    lines: int = ...,
+    cross_lines: int = ...,
+    sigma_xover_mps2: float = ...,
+    max_iterations: int = ...,
+    relative_tolerance: float = ...,
 ) -> CrossoverNetworkResult: ...
+def solve_linear_ins_network_ceres(
+    network: LinearInsNetworkOptions = ..., one_gauss_newton_step: bool = ...
+) -> LinearInsCeresResult: ...
+def linear_ins_equations(network: LinearInsNetworkOptions = ...) -> LinearInsEquations: ...
+def linear_ins_normal_blocks(
+    network: LinearInsNetworkOptions = ...,
+) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64]]: ...
 _ArrayLike = npt.ArrayLike
 _F64 = npt.NDArray[np.float64]
 _State = Dict[str, _F64]
@@ -217,34 +214,37 @@ class KalmanSmootherOptions:
     def to_dict(self) -> Dict[str, Any]: ...
     def validate(self) -> None: ...
 
+class NetworkObservations:
+    """The observations of a flight for solve_network and kalman_smoother, checked once."""
+    def __init__(
+        self,
+        imu_time_s: _ArrayLike,
+        acc_body_mps2: _ArrayLike,
+        gyro_body_radps: _ArrayLike,
+        gps_time_s: _ArrayLike,
+        gps_position_m: _ArrayLike,
+        zupt_epochs: Optional[_ArrayLike] = None,
+        gupt_epochs: Optional[_ArrayLike] = None,
+        gupt_gravity_mps2: Optional[_ArrayLike] = None,
+        xover_epochs: Optional[_ArrayLike] = None,
+        vupt_epochs: Optional[_ArrayLike] = None,
+        vupt_velocity_mps: Optional[_ArrayLike] = None,
+        vupt_sd_mps: Optional[_ArrayLike] = None,
+        sgupt_epochs: Optional[_ArrayLike] = None,
+    ) -> None: ...
+    @property
+    def num_imu_epochs(self) -> int: ...
+    @property
+    def num_gps_epochs(self) -> int: ...
+
+# The former calls with the observation arrays as arguments still run (DeprecationWarning); they
+# are not listed here.
 def solve_network(
-    imu_time_s: _ArrayLike,
-    acc_body_mps2: _ArrayLike,
-    gyro_body_radps: _ArrayLike,
-    gps_time_s: _ArrayLike,
-    gps_position_m: _ArrayLike,
-    initial: Dict[str, _ArrayLike],
-    zupt_epochs: Optional[_ArrayLike] = None,
-    gupt_epochs: Optional[_ArrayLike] = None,
-    gupt_gravity_mps2: Optional[_ArrayLike] = None,
-    xover_epochs: Optional[_ArrayLike] = None,
-    options: NetworkOptions = ...,
-    vupt_epochs: Optional[_ArrayLike] = None,
-    vupt_velocity_mps: Optional[_ArrayLike] = None,
-    vupt_sd_mps: Optional[_ArrayLike] = None,
-    sgupt_epochs: Optional[_ArrayLike] = None,
+    observations: NetworkObservations, initial: Dict[str, _ArrayLike], options: NetworkOptions = ...
 ) -> Tuple[_State, Dict[str, Any]]: ...
 def kalman_smoother(
-    imu_time_s: _ArrayLike,
-    acc_body_mps2: _ArrayLike,
-    gyro_body_radps: _ArrayLike,
-    gps_time_s: _ArrayLike,
-    gps_position_m: _ArrayLike,
+    observations: NetworkObservations,
     initial: Dict[str, _ArrayLike],
-    zupt_epochs: Optional[_ArrayLike] = None,
-    gupt_epochs: Optional[_ArrayLike] = None,
-    gupt_gravity_mps2: Optional[_ArrayLike] = None,
-    xover_epochs: Optional[_ArrayLike] = None,
     model: NetworkOptions = ...,
     options: KalmanSmootherOptions = ...,
 ) -> Tuple[_State, _State, Dict[str, Any]]: ...

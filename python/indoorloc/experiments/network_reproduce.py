@@ -79,11 +79,8 @@ def run_once(config: FlightConfig, seed: int, discretization: str = "trapezoidal
         names = slow_methods(slow_stride)
         runs += [(names[0], False, slow), (names[1], True, slow)]
     for name, use, o in runs:
-        st, summ = network.solve_network(
-            imu_time_s=flight.imu_time_s, acc_body_mps2=flight.acc_body_mps2, gyro_body_radps=flight.gyro_body_radps,
-            gps_time_s=flight.gps_time_s, gps_position_m=flight.gps_position_m, initial=ssa,
-            zupt_epochs=flight.zupt_epochs, gupt_epochs=flight.gupt_epochs, gupt_gravity_mps2=flight.gupt_gravity_mps2,
-            xover_epochs=pairs if (use and pairs.size) else None, options=o)
+        st, summ = network.solve_network(network.flight_observations(flight, xover_epochs=pairs if use else None), ssa,
+                                         options=o)
         states[name] = st
         seconds[name] = summ["seconds_datum_check"] + summ["seconds_solve"]
         summaries[name] = summ
@@ -230,8 +227,9 @@ from indoorloc import network
 from indoorloc._core import network as core_network
 kind, args = {kind!r}, {args!r}
 if kind == "linear":
-    r = core_network.solve_linear_ins_network(**args, gravity_covariance=True,
-                                              checkpoint_interval=2048, num_threads={threads})
+    method = args.pop("method", "cholesky")
+    r = core_network.solve_linear_ins_network(core_network.LinearInsNetworkOptions(**args), gravity_covariance=True,
+                                              checkpoint_interval=2048, num_threads={threads}, method=method)
 else:
     r = network.solve_repeated_pass_network(**args, checkpoint_interval=2048, num_threads={threads})
 sigma = np.asarray(r.gravity_sigma)

@@ -1,7 +1,8 @@
 """INS/GPS network adjustment for strapdown inertial kinematic gravimetry (paper 003, Térmens &
 Colomina): the network approach (NA, :func:`solve_network`: one sparse least-squares problem over
 all epochs, with cross-overs) and the state-space approach (SSA, :func:`kalman_smoother`: an
-error-state EKF + RTS smoother with the same model, without cross-overs).
+error-state EKF + RTS smoother with the same model, without cross-overs). Both take the same
+:class:`NetworkObservations` (IMU, GPS and the update epochs, checked once).
 
 Model (docs/network.md): local Earth-fixed ENU frame with Earth rotation and GRS80 normal gravity
 γ(h); per epoch position, velocity, attitude quaternion, accelerometer and gyro biases (random
@@ -33,6 +34,8 @@ from indoorloc.validate import integer, real_scalar
 
 from indoorloc._core.network import (
     KalmanSmootherOptions,
+    LinearInsNetworkOptions,
+    NetworkObservations,
     NetworkOptions,
     earth_rate_enu,
     find_crossovers,
@@ -44,7 +47,10 @@ from indoorloc._core.network import (
 
 __all__ = [
     "KalmanSmootherOptions",
+    "LinearInsNetworkOptions",
+    "NetworkObservations",
     "NetworkOptions",
+    "flight_observations",
     "earth_rate_enu",
     "find_crossovers",
     "flight_options",
@@ -113,10 +119,12 @@ def solve_repeated_pass_network(
         [m/s^2], ``gravity_sigma`` (E, 3) [m/s^2] (numpy), ``gravity_estimate`` (E, 3) [m/s^2]
         or empty, ``report``.
     """
+    network = LinearInsNetworkOptions(imu_rate_hz=imu_rate_hz, duration_s=duration_s, gps_rate_hz=gps_rate_hz,
+                                      rule=rule, sigma_gupt_mps2=sigma_gupt_mps2)
     return solve_folded_linear_ins_network(
-        imu_rate_hz, duration_s, gps_rate_hz, rule, integer(num_ties, "num_ties", lo=0, hi=2**62),
-        integer(num_gupts, "num_gupts", lo=0, hi=2**62), sigma_xover_mps2, sigma_gupt_mps2, checkpoint_interval, True,
-        keep_gravity_estimate, integer(num_threads, "num_threads", lo=-1024, hi=1024))
+        network, integer(num_ties, "num_ties", lo=0, hi=2**62), integer(num_gupts, "num_gupts", lo=0, hi=2**62),
+        sigma_xover_mps2, checkpoint_interval, True, keep_gravity_estimate,
+        integer(num_threads, "num_threads", lo=-1024, hi=1024))
 
 
 def flight_options(config, discretization: str = "trapezoidal", **overrides) -> NetworkOptions:
@@ -171,10 +179,17 @@ def _check_flight(flight) -> None:
                         f"(indoorloc.simulate.flight.simulate_flight), got {type(flight).__name__}")
 
 
-def _obs(flight) -> dict:
-    return dict(imu_time_s=flight.imu_time_s, acc_body_mps2=flight.acc_body_mps2, gyro_body_radps=flight.gyro_body_radps,
-                gps_time_s=flight.gps_time_s, gps_position_m=flight.gps_position_m, zupt_epochs=flight.zupt_epochs,
-                gupt_epochs=flight.gupt_epochs, gupt_gravity_mps2=flight.gupt_gravity_mps2)
+def flight_observations(flight, xover_epochs: Optional[np.ndarray] = None,
+                        sgupt_epochs: Optional[np.ndarray] = None) -> NetworkObservations:
+    """The :class:`NetworkObservations` of a simulated flight: its IMU and GPS samples, ZUPT (hover)
+    and GUPT epochs; ``xover_epochs`` (K, 2) cross-over pairs and ``sgupt_epochs`` static epochs
+    when given (None or empty: none)."""
+    _check_flight(flight)
+    return NetworkObservations(
+        flight.imu_time_s, flight.acc_body_mps2, flight.gyro_body_radps, flight.gps_time_s, flight.gps_position_m,
+        zupt_epochs=flight.zupt_epochs, gupt_epochs=flight.gupt_epochs, gupt_gravity_mps2=flight.gupt_gravity_mps2,
+        xover_epochs=xover_epochs if xover_epochs is not None and np.size(xover_epochs) else None,
+        sgupt_epochs=sgupt_epochs)
 
 
 def smooth_flight(flight, options: Optional[NetworkOptions] = None, seed: int = 0, smooth: bool = True,
@@ -185,7 +200,7 @@ def smooth_flight(flight, options: Optional[NetworkOptions] = None, seed: int = 
     options = options or flight_options(flight.config)
     ko = kalman_options or KalmanSmootherOptions()
     ko.smooth = smooth
-    return kalman_smoother(initial=start_state(flight, seed), model=options, options=ko, **_obs(flight))
+    return kalman_smoother(flight_observations(flight), start_state(flight, seed), model=options, options=ko)
 
 
 def solve_flight(flight, options: Optional[NetworkOptions] = None, xover: bool = True, seed: int = 0,
@@ -210,6 +225,6 @@ def solve_flight(flight, options: Optional[NetworkOptions] = None, xover: bool =
     if xover:
         pairs = find_crossovers(flight.imu_time_s, initial["position_m"], radius_m=crossover_radius_m,
                                 min_separation_s=min_separation_s)
-    state, summary = solve_network(initial=initial, xover_epochs=pairs if pairs.size else None, options=options,
-                                   sgupt_epochs=flight.zupt_epochs if sgupt else None, **_obs(flight))
+    observations = flight_observations(flight, xover_epochs=pairs, sgupt_epochs=flight.zupt_epochs if sgupt else None)
+    state, summary = solve_network(observations, initial, options=options)
     return state, summary, pairs

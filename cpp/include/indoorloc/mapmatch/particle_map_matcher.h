@@ -126,6 +126,8 @@ class ParticleMapMatcher {
 
  private:
   void Spread(int first, int count, double offset_fraction);
+  /// Replaces every particle's state by its ancestor's (ancestors_, after ResampleLinear).
+  void TakeAncestorsStates(int n);
 
   const RoadNetwork& network_;
   FilterOptions options_;
