@@ -237,8 +237,11 @@ class KeptBuffers {
   std::unique_ptr<T> Take(std::vector<std::unique_ptr<T>>* idle) {
     std::lock_guard<std::mutex> lock(mutex_);
     if (idle->empty()) return std::make_unique<T>();
-    std::unique_ptr<T> b = std::move(idle->back());
-    idle->pop_back();
+    // The largest idle buffer: a run then rarely grows one (fresh pages) while a larger one idles.
+    auto largest = std::max_element(idle->begin(), idle->end(),
+                                    [](const auto& a, const auto& b) { return a->Bytes() < b->Bytes(); });
+    std::unique_ptr<T> b = std::move(*largest);
+    idle->erase(largest);
     bytes_ -= b->Bytes();
     return b;
   }
