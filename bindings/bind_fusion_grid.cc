@@ -160,6 +160,28 @@ Build once per plan and options (keeps a reference to the plan); ``run`` is thre
 A tracker on the same grids whose fixes are evaluated at survey-anchored positions
 (options.fix_survey_distance_factor β): positions_m (N, 2) [m] the survey (fingerprint reference)
 positions, floor_numbers (N,) their floors. β = 1 or a floor without positions: the cell centres.)doc")
+      .def(
+          "with_options",
+          [](const GridTracker& t, const GridTrackerOptions& options) {
+            py::gil_scoped_release release;
+            return t.WithOptions(options);
+          },
+          py::arg("options"), py::keep_alive<0, 1>(), R"doc(
+A tracker on the same plan and grid with other options (GridTrackerOptions): the same results,
+bit for bit, as GridTracker(plan, options) (and its with_survey_positions with this tracker's
+survey positions), without recomputing the walkable fractions or the survey anchors unless
+wall_log_penalty or fix_survey_distance_factor changed. ValueError for options whose grid differs
+(cell_size_m, walkable_subsamples, wall_margin_m).)doc")
+      .def_static("release_kept_memory", &GridTracker::ReleaseKeptMemory, R"doc(
+Free the memory that runs keep for later runs (the smoother's stored forward grids and the
+layers' output slots, at most kept_memory_limit_bytes for the whole process: a batch of walks
+reuses them instead of paging in fresh memory every run). Buffers of runs in progress are kept
+until those runs end. Returns the bytes freed. Thread-safe; results never depend on it.)doc")
+      .def_static("kept_memory_bytes", &GridTracker::KeptMemoryBytes,
+                  "Bytes kept now for later runs (release_kept_memory frees them).")
+      .def_property_readonly_static("kept_memory_limit_bytes",
+                                    [](const py::object&) { return GridTracker::kept_memory_limit_bytes; },
+                                    "Largest memory kept for later runs, for the whole process [bytes].")
       .def("run",
            [](const GridTracker& t, const py::object& step_times_s, const py::object& displacements_m,
               const py::object& covariances_m2, const py::object& fixes, const py::object& start, bool smooth,

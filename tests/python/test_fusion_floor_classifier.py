@@ -152,3 +152,29 @@ def test_study_chooses_the_classifier_when_it_alone_tells_the_floors_and_reports
     assert r["lofo"]["accuracy"] == 1.0 and r["classifier_alone"]["accuracy"] == 1.0
     assert r["rates_only"]["chosen_all_figures"]["accuracy"] < 0.9
     assert "grid + AP rates + classifier, held out (LOFO)" in study.markdown(r)
+
+
+def test_the_fit_runs_blas_on_one_thread_and_restores_the_pool(monkeypatch):
+    """L-BFGS-B's BLAS calls run on one thread during the fit (threaded BLAS sums would depend on
+    the machine's core count, and its idle threads spin beside the caller's), and the caller's
+    BLAS thread count is restored afterwards."""
+    from threadpoolctl import threadpool_info
+
+    from indoorloc.fusion import floor_classifier as fc
+
+    def blas_threads():
+        return [pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"]
+
+    before = blas_threads()
+    seen = []
+    real_minimize = fc.minimize
+
+    def recording_minimize(*args, **kwargs):
+        seen.append(blas_threads())
+        return real_minimize(*args, **kwargs)
+
+    monkeypatch.setattr(fc, "minimize", recording_minimize)
+    rss, floors = _survey(np.random.default_rng(0))
+    FloorClassifier.fit(rss, floors, [1, 2, 3], l2_scale=1.0)
+    assert seen and seen[0] and all(n == 1 for n in seen[0])
+    assert blas_threads() == before

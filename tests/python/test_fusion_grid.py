@@ -292,3 +292,30 @@ def test_smoother_only_run_skips_the_filtered_estimates_and_changes_nothing_else
             # Without smoothing the option does nothing: the filter is the result.
             alone = fusion.track_grid(tracker, steps, fixes=fixes, start=start, smooth=False, filtered=False)
             np.testing.assert_array_equal(alone["mean_m"], full["mean_m"])
+
+
+def test_with_options_equals_a_fresh_tracker_and_kept_memory_is_released():
+    """GridTracker.with_options: another tracker on the same grid, bit for bit the one built
+    afresh (walls and survey anchoring changed too); release_kept_memory frees the buffers runs
+    keep for later runs, and results do not depend on them."""
+    plan = _hall()
+    steps, fixes, _ = _walk()
+    survey = np.array([[x, y] for x in np.arange(1.0, 30.0, 3.0) for y in np.arange(1.0, 30.0, 3.0)])
+    base_options = fusion.GridTrackerOptions(heading_offset_bins=3, heading_offset_sd_rad=0.1,
+                                             fix_survey_distance_factor=0.75)
+    base = fusion.GridTracker(plan, base_options).with_survey_positions(survey, np.zeros(len(survey), int))
+    other = base_options.replace(wall_log_penalty=-1.0, fix_survey_distance_factor=0.4, heading_offset_bins=5)
+    fresh = fusion.GridTracker(plan, other).with_survey_positions(survey, np.zeros(len(survey), int))
+    a = fusion.track_grid(base.with_options(other), steps, fixes=fixes)
+    b = fusion.track_grid(fresh, steps, fixes=fixes)
+    for key in ("mean_m", "smoothed_m", "heading_offset_probabilities"):
+        np.testing.assert_array_equal(a[key], b[key], err_msg=key)
+    with pytest.raises(ValueError, match="grid"):
+        base.with_options(base_options.replace(cell_size_m=2.0))
+    assert fusion.GridTracker.kept_memory_bytes() > 0
+    assert 0 < fusion.GridTracker.kept_memory_bytes() <= fusion.GridTracker.kept_memory_limit_bytes
+    kept = fusion.GridTracker.kept_memory_bytes()
+    assert fusion.GridTracker.release_kept_memory() == kept
+    assert fusion.GridTracker.kept_memory_bytes() == 0
+    c = fusion.track_grid(fresh, steps, fixes=fixes)
+    np.testing.assert_array_equal(c["smoothed_m"], b["smoothed_m"])

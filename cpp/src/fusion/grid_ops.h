@@ -47,8 +47,24 @@ struct FloorGrid {
   std::vector<unsigned char> fix_step_x;
   std::vector<int> fix_step_y;
   std::vector<float> fix_wx, fix_wy;
+  // The survey positions on this floor [m] the anchors above were computed from (kept so that
+  // GridTracker::WithOptions can anchor again for another β).
+  std::vector<Eigen::Vector2d> survey_points;
   std::size_t size() const { return static_cast<std::size_t>(nx) * ny; }
 };
+
+// Fills the fix positions of `g` (fix_cell, ...) from g->survey_points for β = `beta` on cells of
+// side `cell` [m]; clears them (the cell centres) for β >= 1 or no survey point
+// (grid_survey_anchors.cc).
+void AnchorFixesToSurvey(double beta, double cell, FloorGrid* g);
+
+// The wall factor m(c) = a + (1 - a) e^λ of a cell with `walkable` of its n_sub² subsamples
+// walkable (`penalty` = e^λ, 0 for λ = -inf); a = walkable / n_sub² in double, as the grid's
+// walkable fraction (stored in float) was computed.
+inline float WallFactor(int walkable, int n_sub, double penalty) {
+  const double a = static_cast<double>(walkable) / (n_sub * n_sub);
+  return static_cast<float>(a + (1.0 - a) * penalty);
+}
 
 // What the forward pass did at one step of a layer, so that the backward pass can apply the
 // transposed operators and the recomputation of a segment repeats the forward pass exactly.

@@ -47,8 +47,8 @@ struct RunPlan {
   }
 };
 
-// One layer's outputs per step (steps before k0 left default). Reused across runs by a thread
-// (grid_tracker.cc): RunLayer clears it first, keeping the vectors' memory.
+// One layer's outputs per step (steps before k0 left default). Reused by later runs
+// (grid_tracker.cc, KeptBuffers): RunLayer clears it first, keeping the vectors' memory.
 struct LayerRun {
   std::vector<grid_ops::LayerStep> filtered, smoothed;
   // Spatial medians: per step the block summaries (mass fraction, x [m], y [m]), step-major.
@@ -77,9 +77,19 @@ struct LayerRun {
   }
 };
 
+// The output slots of a run's layers (reused by later runs: grid_tracker.cc).
+struct RunSlots {
+  std::vector<LayerRun> runs;
+  double Bytes() const {
+    double b = static_cast<double>(runs.capacity() * sizeof(LayerRun));
+    for (const LayerRun& run : runs) b += run.Bytes();
+    return b;
+  }
+};
+
 // The smoother's stored forward grids (plan.store_all): every entry is written by the forward
 // pass before the backward pass reads it, so the buffer is never zero-filled, and one buffer
-// serves the layers of a thread in turn (and its later runs: grid_tracker.cc).
+// serves layers and runs in turn (grid_tracker.cc, KeptBuffers).
 class StoreBuffer {
  public:
   // At least n floats (contents unspecified).
@@ -92,6 +102,7 @@ class StoreBuffer {
     return data_.get();
   }
   std::size_t capacity() const { return capacity_; }
+  double Bytes() const { return static_cast<double>(capacity_ * sizeof(float)); }
   void Release() {
     data_.reset();
     capacity_ = 0;

@@ -112,6 +112,12 @@ void AnchorFloor(const std::vector<Eigen::Vector2d>& pts, double beta, double c,
 
 }  // namespace
 
+void grid_ops::AnchorFixesToSurvey(double beta, double cell, grid_ops::FloorGrid* g) {
+  g->fix_cell.clear();
+  if (beta >= 1.0 || g->survey_points.empty()) return;
+  AnchorFloor(g->survey_points, beta, cell, g);
+}
+
 GridTracker GridTracker::WithSurveyPositions(const RowMatrixXd& positions_m, const Eigen::VectorXi& floor_numbers) const {
   CheckArgument(positions_m.cols() == 2, "positions_m",
                 "must have 2 columns (x, y) [m], got " + std::to_string(positions_m.cols()));
@@ -124,12 +130,10 @@ GridTracker GridTracker::WithSurveyPositions(const RowMatrixXd& positions_m, con
   const double beta = impl_->options.fix_survey_distance_factor;
   const double c = impl_->options.cell_size_m;
   for (grid_ops::FloorGrid& g : out.impl_->grids) {
-    g.fix_cell.clear();
-    if (beta >= 1.0) continue;
-    std::vector<Eigen::Vector2d> pts;
+    g.survey_points.clear();
     for (Eigen::Index i = 0; i < positions_m.rows(); ++i)
-      if (floor_numbers[i] == g.floor_number) pts.emplace_back(positions_m(i, 0), positions_m(i, 1));
-    if (!pts.empty()) AnchorFloor(pts, beta, c, &g);
+      if (floor_numbers[i] == g.floor_number) g.survey_points.emplace_back(positions_m(i, 0), positions_m(i, 1));
+    grid_ops::AnchorFixesToSurvey(beta, c, &g);
   }
   return out;
 }

@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
+#include <mutex>
 #include <sstream>
 #include <stdexcept>
 
@@ -78,27 +80,39 @@ void ErodeObstacles(const FloorPlan& plan, int floor_index, const RowMatrixXd& p
     if (d[static_cast<Eigen::Index>(j)] <= margin_m) (*walk)[blocked[j]] = true;
 }
 
-}  // namespace
-
-GridTracker::GridTracker(const FloorPlan* plan, const GridTrackerOptions& options) : impl_(new Impl) {
-  CheckArgument(plan != nullptr, "plan", "must not be None");
-  ValidateOptions(options);
-  impl_->plan = plan;
-  impl_->options = options;
+// The grid of `plan` with `options`' cells, checked against max_memory_bytes (the walkable
+// fractions and, per run, about ten grids per thread): refuse before allocating.
+void CheckGridMemory(const FloorPlan& plan, const GridTrackerOptions& options) {
   const double c = options.cell_size_m;
   const int n_sub = options.walkable_subsamples;
   double cells = 0;
-  for (int f = 0; f < plan->num_floors(); ++f) {
-    const Eigen::Vector4d b = plan->Bounds(f);
+  for (int f = 0; f < plan.num_floors(); ++f) {
+    const Eigen::Vector4d b = plan.Bounds(f);
     cells += std::ceil((b[2] - b[0]) / c) * std::ceil((b[3] - b[1]) / c);
   }
-  // The walkable fractions and, per run, about ten grids per thread: refuse before allocating.
   const double bytes = cells * (8.0 + n_sub * n_sub * 17.0);
   CheckArgument(bytes <= options.max_memory_bytes, "options",
                 "the grid of " + FormatValue(cells) + " cells needs " + FormatBytes(bytes) +
                     " to build, above max_memory_bytes = " + FormatBytes(options.max_memory_bytes) +
                     " (use larger cells)");
-  const double penalty = std::isinf(options.wall_log_penalty) ? 0.0 : std::exp(options.wall_log_penalty);
+}
+
+// e^λ of the wall factor (0 for λ = -inf).
+double WallPenalty(const GridTrackerOptions& options) {
+  return std::isinf(options.wall_log_penalty) ? 0.0 : std::exp(options.wall_log_penalty);
+}
+
+}  // namespace
+
+GridTracker::GridTracker(const FloorPlan* plan, const GridTrackerOptions& options) : impl_(new Impl) {
+  CheckArgument(plan != nullptr, "plan", "must not be None");
+  ValidateOptions(options);
+  CheckGridMemory(*plan, options);
+  impl_->plan = plan;
+  impl_->options = options;
+  const double c = options.cell_size_m;
+  const int n_sub = options.walkable_subsamples;
+  const double penalty = WallPenalty(options);
   for (int f = 0; f < plan->num_floors(); ++f) {
     const Eigen::Vector4d b = plan->Bounds(f);
     FloorGrid g;
@@ -124,9 +138,8 @@ GridTracker::GridTracker(const FloorPlan* plan, const GridTrackerOptions& option
     for (std::size_t i = 0; i < g.size(); ++i) {
       int n = 0;
       for (int s = 0; s < n_sub * n_sub; ++s) n += walk[static_cast<Eigen::Index>(i) * n_sub * n_sub + s];
-      const double a = static_cast<double>(n) / (n_sub * n_sub);
-      g.walkable_fraction[i] = static_cast<float>(a);
-      g.wall_factor[i] = static_cast<float>(a + (1.0 - a) * penalty);
+      g.walkable_fraction[i] = static_cast<float>(static_cast<double>(n) / (n_sub * n_sub));
+      g.wall_factor[i] = WallFactor(n, n_sub, penalty);
     }
     impl_->grids.push_back(std::move(g));
     impl_->total_area_m2 += plan->WalkableArea(f);
@@ -138,6 +151,35 @@ GridTracker::GridTracker(GridTracker&&) noexcept = default;
 GridTracker& GridTracker::operator=(GridTracker&&) noexcept = default;
 
 const GridTrackerOptions& GridTracker::options() const { return impl_->options; }
+
+GridTracker GridTracker::WithOptions(const GridTrackerOptions& options) const {
+  ValidateOptions(options);
+  const GridTrackerOptions& own = impl_->options;
+  CheckArgument(options.cell_size_m == own.cell_size_m && options.walkable_subsamples == own.walkable_subsamples &&
+                    options.wall_margin_m == own.wall_margin_m,
+                "options",
+                "must keep this tracker's grid (cell_size_m " + FormatValue(own.cell_size_m) +
+                    ", walkable_subsamples " + std::to_string(own.walkable_subsamples) + ", wall_margin_m " +
+                    FormatValue(own.wall_margin_m) + "); build a new GridTracker for another grid");
+  CheckGridMemory(*impl_->plan, options);
+  GridTracker out;
+  out.impl_.reset(new Impl(*impl_));
+  out.impl_->options = options;
+  const int n_sub = options.walkable_subsamples;
+  const bool walls = options.wall_log_penalty != own.wall_log_penalty;
+  const bool anchors = options.fix_survey_distance_factor != own.fix_survey_distance_factor;
+  const double penalty = WallPenalty(options);
+  for (grid_ops::FloorGrid& g : out.impl_->grids) {
+    if (walls) {
+      // The walkable fraction is n / n_sub² stored in float: the count n is recovered exactly.
+      for (std::size_t i = 0; i < g.size(); ++i)
+        g.wall_factor[i] = WallFactor(static_cast<int>(std::lround(g.walkable_fraction[i] * (n_sub * n_sub))), n_sub,
+                                      penalty);
+    }
+    if (anchors) grid_ops::AnchorFixesToSurvey(options.fix_survey_distance_factor, options.cell_size_m, &g);
+  }
+  return out;
+}
 
 Eigen::Vector4d GridTracker::GridGeometry(int floor_index) const {
   RequireIntInRange(floor_index, 0, static_cast<int>(impl_->grids.size()) - 1, "floor_index");
@@ -156,14 +198,67 @@ RowMatrixXd GridTracker::WalkableFraction(int floor_index) const {
 
 namespace {
 
-// Largest smoother store a thread keeps between runs (GridTracker::Run).
-constexpr std::size_t kKeptStoreBytes = 256u << 20;  // 256 MiB
+// Buffers kept between runs (GridTracker::Run): a run takes its layers' output slots and, per
+// layer, a smoother store from here and gives them back when done; idle buffers are kept while
+// their total stays within GridTracker::kept_memory_limit_bytes (a batch of walks then reuses
+// them instead of paying a page fault per 4 KB of fresh memory on every run), and
+// GridTracker::ReleaseKeptMemory frees them. What a buffer holds never reaches a result (every
+// entry is written before it is read), so results do not depend on which buffer a run gets.
+class KeptBuffers {
+ public:
+  static KeptBuffers& Instance() {
+    static KeptBuffers* pool = new KeptBuffers;  // never destroyed: no order problem at exit
+    return *pool;
+  }
+  std::unique_ptr<grid_run::StoreBuffer> TakeStore() { return Take(&stores_); }
+  std::unique_ptr<grid_run::RunSlots> TakeSlots() { return Take(&slots_); }
+  void Give(std::unique_ptr<grid_run::StoreBuffer> b) { Keep(std::move(b), &stores_); }
+  void Give(std::unique_ptr<grid_run::RunSlots> b) { Keep(std::move(b), &slots_); }
+  double Bytes() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return bytes_;
+  }
+  double Release() {
+    std::vector<std::unique_ptr<grid_run::StoreBuffer>> stores;
+    std::vector<std::unique_ptr<grid_run::RunSlots>> slots;
+    double freed;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stores.swap(stores_);
+      slots.swap(slots_);
+      freed = bytes_;
+      bytes_ = 0;
+    }
+    return freed;  // the buffers are freed here, outside the lock
+  }
 
-// The calling thread's smoother store.
-grid_run::StoreBuffer& ThreadStore() {
-  thread_local grid_run::StoreBuffer store;
-  return store;
-}
+ private:
+  template <class T>
+  std::unique_ptr<T> Take(std::vector<std::unique_ptr<T>>* idle) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (idle->empty()) return std::make_unique<T>();
+    // The largest idle buffer: a run then rarely grows one (fresh pages) while a larger one idles.
+    auto largest = std::max_element(idle->begin(), idle->end(),
+                                    [](const auto& a, const auto& b) { return a->Bytes() < b->Bytes(); });
+    std::unique_ptr<T> b = std::move(*largest);
+    idle->erase(largest);
+    bytes_ -= b->Bytes();
+    return b;
+  }
+  template <class T>
+  void Keep(std::unique_ptr<T> b, std::vector<std::unique_ptr<T>>* idle) {
+    const double bytes = b->Bytes();
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (bytes_ + bytes > GridTracker::kept_memory_limit_bytes) return;  // b is freed (under the lock: rare)
+    bytes_ += bytes;
+    idle->push_back(std::move(b));
+  }
+
+  std::mutex mutex_;
+  std::vector<std::unique_ptr<grid_run::StoreBuffer>> stores_;
+  std::vector<std::unique_ptr<grid_run::RunSlots>> slots_;
+  double bytes_ = 0;
+};
 
 // The public boundary's checks of Run's arguments; returns the known start's floor index (-1).
 int CheckRunInputs(const TrackerGrids& im, const std::vector<StepInput>& steps,
@@ -284,27 +379,29 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
   PlanMemory(&plan);
   ComputeFixFactors(&plan);
 
-  // The layers in parallel, each into its own slot. The smoother's stored forward grids: one
-  // buffer per thread serves its layers in turn and is kept for the thread's next run up to
-  // kKeptStoreBytes (a walk's store is tens of MB, and a fresh one costs a page fault per 4 KB
-  // page: about 7 % of a fusion evaluate's CPU time went to the kernel for them).
-  // The layers' outputs (blocks of the spatial medians, the fix factors: megabytes per layer) are
-  // slots of the calling thread kept for its next run likewise.
+  // The layers in parallel, each into its own slot. The layers' outputs (blocks of the spatial
+  // medians, the fix factors: megabytes per layer) and the smoother's stored forward grids (tens
+  // of MB per walk; each layer takes a store and gives it back for the next layer) come from the
+  // kept buffers of earlier runs: fresh memory costs a page fault per 4 KB page, and about 7 % of
+  // a fusion evaluate's CPU time went to the kernel for them.
   const int n_layers = static_cast<int>(plan.layer_set.layers.size());
-  thread_local std::vector<grid_run::LayerRun> kept_runs;
-  std::vector<grid_run::LayerRun>& runs = kept_runs;  // the calling thread's, also in the workers
+  KeptBuffers& kept = KeptBuffers::Instance();
+  std::unique_ptr<grid_run::RunSlots> slots = kept.TakeSlots();
+  std::vector<grid_run::LayerRun>& runs = slots->runs;
   if (runs.size() < static_cast<std::size_t>(n_layers)) runs.resize(static_cast<std::size_t>(n_layers));
   ParallelForRuns(n_layers, plan.threads, 0, [&](int li, RandomStream&) {
-    grid_run::RunLayer(plan, li, &ThreadStore(), &runs[static_cast<std::size_t>(li)]);  // ThreadStore: the worker's
+    std::unique_ptr<grid_run::StoreBuffer> store = plan.store_all ? kept.TakeStore() : nullptr;
+    grid_run::RunLayer(plan, li, store.get(), &runs[static_cast<std::size_t>(li)]);
+    if (store) kept.Give(std::move(store));
   });
-  // (Worker threads end with the call and free theirs; the calling thread keeps its own.)
-  if (ThreadStore().capacity() * sizeof(float) > kKeptStoreBytes) ThreadStore().Release();
   GridTrackResult r = grid_run::CombineLayers(plan, runs);
-  double kept = 0;
-  for (const grid_run::LayerRun& run : runs) kept += run.Bytes();
-  if (kept > static_cast<double>(kKeptStoreBytes)) std::vector<grid_run::LayerRun>().swap(runs);
+  kept.Give(std::move(slots));
   r.summary.seconds = timer.ElapsedSeconds();
   return r;
 }
+
+double GridTracker::ReleaseKeptMemory() { return KeptBuffers::Instance().Release(); }
+
+double GridTracker::KeptMemoryBytes() { return KeptBuffers::Instance().Bytes(); }
 
 }  // namespace indoorloc::fusion

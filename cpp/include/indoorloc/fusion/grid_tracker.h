@@ -222,6 +222,22 @@ class GridTracker {
   /// keeps the cell centres. Throws std::invalid_argument for non-finite positions or sizes that
   /// differ.
   GridTracker WithSurveyPositions(const RowMatrixXd& positions_m, const Eigen::VectorXi& floor_numbers) const;
+  /// A tracker on the same plan and grid with other options: the same results, bit for bit, as
+  /// GridTracker(plan, options) (and its WithSurveyPositions with this tracker's survey
+  /// positions), without recomputing the walkable fractions (a batch of point-in-polygon queries)
+  /// or the survey anchors (a nearest search per cell) unless wall_log_penalty or
+  /// fix_survey_distance_factor changed. Throws std::invalid_argument for invalid options, or
+  /// options whose grid differs (cell_size_m, walkable_subsamples, wall_margin_m).
+  GridTracker WithOptions(const GridTrackerOptions& options) const;
+  /// Frees the memory that runs keep for later runs (the smoother's stored forward grids and the
+  /// layers' output slots, kept so that a batch of walks does not page-fault on fresh memory every
+  /// run; at most kept_memory_limit_bytes for the whole process); buffers of runs in progress are
+  /// kept until those runs end. Returns the bytes freed. Thread-safe.
+  static double ReleaseKeptMemory();
+  /// Bytes kept for later runs now (see ReleaseKeptMemory). Thread-safe.
+  static double KeptMemoryBytes();
+  /// Largest memory kept for later runs, for the whole process [bytes].
+  static constexpr double kept_memory_limit_bytes = 512.0 * 1024 * 1024;
   /// Grid of a floor: origin (x, y of the first cell's corner) [m], columns, rows.
   Eigen::Vector4d GridGeometry(int floor_index) const;
   /// Walkable fraction of every cell of a floor, rows x columns (row 0 at the lowest y).
