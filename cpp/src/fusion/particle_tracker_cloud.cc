@@ -66,55 +66,97 @@ void ParticleTracker::Impl::Gather(const std::vector<int>& anc) {
   lag_ring.Gather(anc);
 }
 
-// After an update of log_w that was normalised before it: one pass of exp() gives the linear
-// weights, the log normaliser (the event's log-likelihood increment), the ESS and the estimate;
-// resamples (from the linear weights) when ESS < threshold N. Leaves log_w normalised.
+// After an update of log_w that was normalised before it: one pass gives the linear weights
+// (exp only where a weight is neither the largest nor zero), their sum (the log normaliser, the
+// event's log-likelihood increment), the ESS and, in the same pass, the weighted sums of the
+// estimate; resamples (from the linear weights) when ESS < threshold N, and then estimates from
+// the resampled cloud. Leaves log_w normalised.
 double ParticleTracker::Impl::FinishUpdate(double max_log_w, TrackerEstimate* est) {
   weights.resize(static_cast<size_t>(n));
+  // Second moments about a particle of the cloud (x[0], y[0]): one pass, without the
+  // cancellation of raw moments far from the origin.
+  const double rx = x[0], ry = y[0];
   double sum = 0.0, sum_sq = 0.0;
+  double mx = 0.0, my = 0.0, so = 0.0, co = 0.0, sc = 0.0, cxx = 0.0, cxy = 0.0, cyy = 0.0;
   for (int i = 0; i < n; ++i) {
     // exp(0) = 1 and exp(-inf) = 0 exactly: equal weights (after resampling, with walls only)
-    // and dropped particles need no exp call.
+    // and dropped particles need no exp call. One branch, taken only for an exp (the dropped
+    // particles lie at random in the cloud: a branch on them would be mispredicted).
     const double d = log_w[i] - max_log_w;
-    const double w = d == 0.0 ? 1.0 : (d == kNegInfinity ? 0.0 : std::exp(d));
+    double w = d == 0.0 ? 1.0 : 0.0;
+    if ((d != 0.0) & (d != kNegInfinity)) w = std::exp(d);
     weights[i] = w;
     sum += w;
     sum_sq += w * w;
+    const double dx = x[i] - rx, dy = y[i] - ry;
+    mx += w * dx;
+    my += w * dy;
+    so += w * sin_offset[i];
+    co += w * cos_offset[i];
+    sc += w * scale[i];
+    cxx += w * dx * dx;
+    cxy += w * dx * dy;
+    cyy += w * dy * dy;
   }
   const double log_z = max_log_w + std::log(sum);
   est->ess = sum * sum / sum_sq;
   const double threshold = options.resampling.ess_threshold * n;
   est->resampled = options.resampling.ess_threshold > 0.0 && est->ess < threshold;
+  ess_sum += est->ess;
+  ++events;
+  summary.mean_ess = ess_sum / events;
   if (est->resampled) {
     ResampleLinear(weights.data(), n, sum, options.resampling.scheme, rng, &ancestors);
     Gather(ancestors);
     log_w.setConstant(-std::log(static_cast<double>(n)));
     std::fill(weights.begin(), weights.end(), 1.0 / n);
     ++summary.resamplings;
-  } else {
-    log_w.array() -= log_z;
-    const double inv = 1.0 / sum;
-    for (double& w : weights) w *= inv;
+    FillEstimate(weights, est);
+    return log_z;
   }
-  ess_sum += est->ess;
-  ++events;
-  summary.mean_ess = ess_sum / events;
-  FillEstimate(weights, est);
+  const double inv = 1.0 / sum;
+  for (int i = 0; i < n; ++i) {
+    log_w[i] -= log_z;
+    weights[i] *= inv;
+  }
+  // The estimate from the pass's sums (FillEstimate's quantities, normalised by the sum).
+  const double ex = mx * inv, ey = my * inv;
+  est->mean_m = Eigen::Vector2d(rx + ex, ry + ey);
+  const double vxx = cxx * inv - ex * ex, vxy = cxy * inv - ex * ey, vyy = cyy * inv - ey * ey;
+  est->covariance_m2 << std::max(vxx, 0.0), vxy, vxy, std::max(vyy, 0.0);
+  est->heading_offset_rad = std::atan2(so * inv, co * inv);
+  est->scale = sc * inv;
+  FillFloorsAndLag(weights, est);
   return log_z;
+}
+
+// The floor probabilities, the most probable floor and the fixed-lag position from normalised
+// linear weights w.
+void ParticleTracker::Impl::FillFloorsAndLag(const std::vector<double>& w, TrackerEstimate* est) const {
+  est->floor_probabilities = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(floors.size()));
+  if (floors.size() == 1) {
+    double total = 0.0;
+    for (int i = 0; i < n; ++i) total += w[i];
+    est->floor_probabilities[0] = total;
+  } else {
+    for (int i = 0; i < n; ++i) est->floor_probabilities[floor[i]] += w[i];
+  }
+  Eigen::Index best = 0;
+  est->floor_probabilities.maxCoeff(&best);
+  est->floor_index = static_cast<int>(best);
+  if (lag_ring.has_lagged()) est->lagged_m = lag_ring.WeightedSum(w.data());
 }
 
 // The weighted estimate from normalised linear weights w: mean, covariance, circular mean
 // offset, mean scale, floor probabilities and the fixed-lag position.
 void ParticleTracker::Impl::FillEstimate(const std::vector<double>& w, TrackerEstimate* est) const {
   double mx = 0.0, my = 0.0, so = 0.0, co = 0.0, sc = 0.0;
-  est->floor_probabilities = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(floors.size()));
   for (int i = 0; i < n; ++i) {
     mx += w[i] * x[i];
     my += w[i] * y[i];
     so += w[i] * sin_offset[i];
     co += w[i] * cos_offset[i];
     sc += w[i] * scale[i];
-    est->floor_probabilities[floor[i]] += w[i];
   }
   double cxx = 0.0, cxy = 0.0, cyy = 0.0;
   for (int i = 0; i < n; ++i) {
@@ -127,10 +169,7 @@ void ParticleTracker::Impl::FillEstimate(const std::vector<double>& w, TrackerEs
   est->covariance_m2 << cxx, cxy, cxy, cyy;
   est->heading_offset_rad = std::atan2(so, co);
   est->scale = sc;
-  Eigen::Index best = 0;
-  est->floor_probabilities.maxCoeff(&best);
-  est->floor_index = static_cast<int>(best);
-  if (lag_ring.has_lagged()) est->lagged_m = lag_ring.WeightedSum(w.data());
+  FillFloorsAndLag(w, est);
 }
 
 // Estimate from the current log-weights (outside an update).

@@ -42,6 +42,8 @@ constexpr double kMaxCoordinate = 1e7;
 /// Systematic resampling stream id of the tracker's own stream family: the per-event block
 /// streams use DeriveSeed(seed, event) instead, so the two never overlap.
 constexpr std::uint64_t kTrackerStream = 0x7f3a5c11ULL;
+/// Stream id of the motion's random lanes (RandomLanes(block stream's first draw, this)).
+constexpr std::uint64_t kMotionLanesStream = 0x5eed1a7eULL;
 
 /// Angle wrapped to [-pi, pi] [rad].
 inline double WrapAngle(double a) { return std::remainder(a, 2.0 * M_PI); }
@@ -138,6 +140,7 @@ struct ParticleTracker::Impl {
   double FinishUpdate(double max_log_w, TrackerEstimate* est);
   void FillEstimate(const std::vector<double>& w, TrackerEstimate* est) const;
   void FillEstimate(TrackerEstimate* est) const;
+  void FillFloorsAndLag(const std::vector<double>& w, TrackerEstimate* est) const;
   void PushLag();
   void Snapshot(bool replace_last);
 

@@ -16,6 +16,8 @@
 
 #include <cstdint>
 
+#include "indoorloc/core/random.h"
+
 namespace indoorloc {
 
 class RandomLanes {
@@ -32,6 +34,13 @@ class RandomLanes {
   /// halfwidth), uniform on [mean − halfwidth, mean + halfwidth), computed with exactly those
   /// two roundings (no FMA): the same bits as transforming FillUniform01's output.
   void FillCentred(double* out, int count, double mean, double halfwidth);
+  /// Fills out[0, count) with standard normals by the ziggurat (RandomStream::NormalZiggurat's
+  /// tables, Doornik's ZIGNOR): output k takes raw draw k (lanes and rounds as FillUniform01),
+  /// u = 2 v - 3 from its top 52 bits (v in [1, 2) by the exponent trick) and the layer from its
+  /// low 7 bits; the fast path u x_layer is taken in about 98.8 % of outputs, the others are
+  /// resolved in order of k by fallback.NormalZigguratOutside (which draws from `fallback`).
+  /// Same numbers with or without AVX2.
+  void FillNormal(double* out, int count, RandomStream& fallback);
 
  private:
   alignas(64) std::uint64_t state_[4][kLanes];
