@@ -100,8 +100,12 @@ struct BlockMotion {
     const double sd = delta * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0 - d2 * (1.0 / 5040.0))));
     const double cn = co[k] * cd - so[k] * sd;
     const double sn = so[k] * cd + co[k] * sd;
-    o = o > M_PI ? o - 2.0 * M_PI : o;
-    o = o <= -M_PI ? o + 2.0 * M_PI : o;
+    // Both wraps computed unconditionally, then selected: a select without arithmetic in its
+    // arms is what lets the compiler turn the loop into vector code.
+    const double o_down = o - 2.0 * M_PI;
+    o = o > M_PI ? o_down : o;
+    const double o_up = o + 2.0 * M_PI;
+    o = o <= -M_PI ? o_up : o;
     double sc = scale[k] + c.scale_walk * z[m + k];
     sc = sc < c.min_scale ? c.min_scale : sc;
     sc = sc > c.max_scale ? c.max_scale : sc;
