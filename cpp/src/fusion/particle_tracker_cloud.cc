@@ -73,11 +73,7 @@ void ParticleTracker::Impl::Gather(const std::vector<int>& anc) {
 // the resampled cloud. Leaves log_w normalised.
 double ParticleTracker::Impl::FinishUpdate(double max_log_w, TrackerEstimate* est) {
   weights.resize(static_cast<size_t>(n));
-  // Second moments about a particle of the cloud (x[0], y[0]): one pass, without the
-  // cancellation of raw moments far from the origin.
-  const double rx = x[0], ry = y[0];
   double sum = 0.0, sum_sq = 0.0;
-  double mx = 0.0, my = 0.0, so = 0.0, co = 0.0, sc = 0.0, cxx = 0.0, cxy = 0.0, cyy = 0.0;
   for (int i = 0; i < n; ++i) {
     // exp(0) = 1 and exp(-inf) = 0 exactly: equal weights (after resampling, with walls only)
     // and dropped particles need no exp call. One branch, taken only for an exp (the dropped
@@ -88,16 +84,8 @@ double ParticleTracker::Impl::FinishUpdate(double max_log_w, TrackerEstimate* es
     weights[i] = w;
     sum += w;
     sum_sq += w * w;
-    const double dx = x[i] - rx, dy = y[i] - ry;
-    mx += w * dx;
-    my += w * dy;
-    so += w * sin_offset[i];
-    co += w * cos_offset[i];
-    sc += w * scale[i];
-    cxx += w * dx * dx;
-    cxy += w * dx * dy;
-    cyy += w * dy * dy;
   }
+  const CloudSums m = WeightedSums(weights.data());
   const double log_z = max_log_w + std::log(sum);
   est->ess = sum * sum / sum_sq;
   const double threshold = options.resampling.ess_threshold * n;
@@ -119,15 +107,55 @@ double ParticleTracker::Impl::FinishUpdate(double max_log_w, TrackerEstimate* es
     log_w[i] -= log_z;
     weights[i] *= inv;
   }
-  // The estimate from the pass's sums (FillEstimate's quantities, normalised by the sum).
-  const double ex = mx * inv, ey = my * inv;
-  est->mean_m = Eigen::Vector2d(rx + ex, ry + ey);
-  const double vxx = cxx * inv - ex * ex, vxy = cxy * inv - ex * ey, vyy = cyy * inv - ey * ey;
+  // The estimate from the sums (FillEstimate's quantities, normalised by the sum).
+  const double ex = m.dx * inv, ey = m.dy * inv;
+  est->mean_m = Eigen::Vector2d(m.rx + ex, m.ry + ey);
+  const double vxx = m.dxx * inv - ex * ex, vxy = m.dxy * inv - ex * ey, vyy = m.dyy * inv - ey * ey;
   est->covariance_m2 << std::max(vxx, 0.0), vxy, vxy, std::max(vyy, 0.0);
-  est->heading_offset_rad = std::atan2(so * inv, co * inv);
-  est->scale = sc * inv;
+  est->heading_offset_rad = std::atan2(m.sin * inv, m.cos * inv);
+  est->scale = m.scale * inv;
   FillFloorsAndLag(weights, est);
   return log_z;
+}
+
+// The weighted sums of the estimate for linear weights w (not normalised): positions about the
+// reference particle (x[0], y[0]) (one pass, without the cancellation of raw moments far from the
+// origin), their products, sin and cos of the offset, the scale. Four interleaved partial sums
+// per quantity (particle i into lane i mod 4, added in a fixed order at the end): independent
+// chains that the compiler can keep in vector registers; the result depends on n only.
+ParticleTracker::Impl::CloudSums ParticleTracker::Impl::WeightedSums(const double* w) const {
+  constexpr int kLanes = 4;
+  CloudSums out;
+  out.rx = x[0];
+  out.ry = y[0];
+  double a[8][kLanes] = {};
+  const int full = n - n % kLanes;
+  auto add = [&](int lane, int i) {
+    const double dx = x[i] - out.rx, dy = y[i] - out.ry;
+    a[0][lane] += w[i] * dx;
+    a[1][lane] += w[i] * dy;
+    a[2][lane] += w[i] * dx * dx;
+    a[3][lane] += w[i] * dx * dy;
+    a[4][lane] += w[i] * dy * dy;
+    a[5][lane] += w[i] * sin_offset[i];
+    a[6][lane] += w[i] * cos_offset[i];
+    a[7][lane] += w[i] * scale[i];
+  };
+  for (int i = 0; i < full; i += kLanes) {
+    for (int lane = 0; lane < kLanes; ++lane) add(lane, i + lane);
+  }
+  for (int i = full; i < n; ++i) add(i - full, i);
+  double total[8];
+  for (int q = 0; q < 8; ++q) total[q] = (a[q][0] + a[q][1]) + (a[q][2] + a[q][3]);
+  out.dx = total[0];
+  out.dy = total[1];
+  out.dxx = total[2];
+  out.dxy = total[3];
+  out.dyy = total[4];
+  out.sin = total[5];
+  out.cos = total[6];
+  out.scale = total[7];
+  return out;
 }
 
 // The floor probabilities, the most probable floor and the fixed-lag position from normalised

@@ -141,6 +141,12 @@ struct ParticleTracker::Impl {
   void FillEstimate(const std::vector<double>& w, TrackerEstimate* est) const;
   void FillEstimate(TrackerEstimate* est) const;
   void FillFloorsAndLag(const std::vector<double>& w, TrackerEstimate* est) const;
+  struct CloudSums {
+    double rx = 0, ry = 0;                  // the reference particle's position [m]
+    double dx = 0, dy = 0, dxx = 0, dxy = 0, dyy = 0;  // Σ w d, Σ w d dᵀ, d = p - reference [m, m²]
+    double sin = 0, cos = 0, scale = 0;     // Σ w sin o, Σ w cos o, Σ w s
+  };
+  CloudSums WeightedSums(const double* w) const;
   void PushLag();
   void Snapshot(bool replace_last);
 
