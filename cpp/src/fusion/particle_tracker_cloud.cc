@@ -3,6 +3,8 @@
 // fixed-lag ring of past positions and the recorded history for the backward smoother.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 #include <string>
 
@@ -73,17 +75,35 @@ void ParticleTracker::Impl::Gather(const std::vector<int>& anc) {
 // the resampled cloud. Leaves log_w normalised.
 double ParticleTracker::Impl::FinishUpdate(double max_log_w, TrackerEstimate* est) {
   weights.resize(static_cast<size_t>(n));
+  // exp(0) = 1 and exp(-inf) = 0 exactly: equal weights (after resampling, with walls only) and
+  // dropped particles need no exp call. First pass without a branch (the dropped particles lie at
+  // random in the cloud: a branch on them is mispredicted); the exp pass only if some weight
+  // needs it (after a WiFi update or a fix every weight does: then its branch is predictable).
   double sum = 0.0, sum_sq = 0.0;
+  bool need_exp = false;
+  constexpr std::uint64_t kNegInfinityBits = 0xFFF0000000000000ULL;
   for (int i = 0; i < n; ++i) {
-    // exp(0) = 1 and exp(-inf) = 0 exactly: equal weights (after resampling, with walls only)
-    // and dropped particles need no exp call. One branch, taken only for an exp (the dropped
-    // particles lie at random in the cloud: a branch on them would be mispredicted).
+    // On the bits (integer compares give flags, not the two-flag FP compare that the compiler
+    // turns into a branch): d is +-0 iff its bits without the sign are zero.
     const double d = log_w[i] - max_log_w;
-    double w = d == 0.0 ? 1.0 : 0.0;
-    if ((d != 0.0) & (d != kNegInfinity)) w = std::exp(d);
+    std::uint64_t bits;
+    std::memcpy(&bits, &d, sizeof(bits));
+    const bool zero = (bits << 1) == 0;
+    const double w = static_cast<double>(zero);
+    need_exp |= !zero & (bits != kNegInfinityBits);
     weights[i] = w;
     sum += w;
     sum_sq += w * w;
+  }
+  if (need_exp) {
+    sum = 0.0;
+    sum_sq = 0.0;
+    for (int i = 0; i < n; ++i) {
+      const double d = log_w[i] - max_log_w;
+      if ((d != 0.0) & (d != kNegInfinity)) weights[i] = std::exp(d);
+      sum += weights[i];
+      sum_sq += weights[i] * weights[i];
+    }
   }
   const CloudSums m = WeightedSums(weights.data());
   const double log_z = max_log_w + std::log(sum);
