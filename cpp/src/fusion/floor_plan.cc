@@ -117,7 +117,8 @@ FloorPlan::FloorPlan(std::vector<FloorGeometry> floors, const FloorPlanOptions& 
   }
   for (size_t f = 0; f < floors.size(); ++f) {
     impl_->floors.push_back(BuildFloor(floors[f], static_cast<int>(f), options));
-    impl_->floors.back().BuildSubcellMasks();  // the wall test's fast path (floor_plan_index.h)
+    impl_->floors.back().BuildSubcellMasks();  // the wall test's fast paths (floor_plan_index.h)
+    impl_->floors.back().BuildFreeQuarterBlocks();
     impl_->floor_numbers.push_back(floors[f].floor);
   }
 }

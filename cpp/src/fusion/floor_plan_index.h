@@ -102,6 +102,12 @@ struct FloorData {
   // sub-cell meets no edge, which decides most wall tests without touching an edge.
   std::vector<std::uint64_t> subcell_masks;
   static constexpr int kSubcells = 8;
+  // Quarter cells (4 x 4 sub-cells, h / 2 on a side; 2 nx x 2 ny of them): bit 4 a + b of
+  // free_quarter_blocks[q] says that the block of (a + 1) x (b + 1) quarters (a, b in 0..3) whose
+  // lowest corner is quarter q holds no marked sub-cell (BuildFreeQuarterBlocks). A step whose
+  // box lies in such a block meets no edge: the cheapest decision of the wall test, one 16-bit
+  // load per step, for steps up to about a cell and a half (a box within 4 x 4 quarters).
+  std::vector<std::uint16_t> free_quarter_blocks;
 
   int CellOf(double x, double y, int* i, int* j) const {
     const double fx = (x - gx) * inv_h, fy = (y - gy) * inv_h;
@@ -155,6 +161,38 @@ struct FloorData {
     }
   }
 
+  // The free-block bits of every quarter cell from the sub-cell masks (quarters beyond the grid
+  // count as marked). Exactness: a block without a marked sub-cell contains no sub-cell that the
+  // masks would find marked (BuildSubcellMasks), so a box inside it reaches no marked sub-cell.
+  void BuildFreeQuarterBlocks() {
+    const int qx = 2 * nx, qy = 2 * ny;
+    std::vector<std::uint8_t> marked(static_cast<size_t>(qx) * static_cast<size_t>(qy), 0);
+    for (int j = 0; j < qy; ++j) {
+      for (int i = 0; i < qx; ++i) {
+        const std::uint64_t mask = subcell_masks[static_cast<size_t>(j >> 1) * nx + (i >> 1)];
+        const int c0 = 4 * (i & 1), r0 = 4 * (j & 1);
+        marked[static_cast<size_t>(j) * qx + i] = (mask & BoxMask(c0, c0 + 3, r0, r0 + 3)) != 0;
+      }
+    }
+    auto is_marked = [&](int i, int j) { return i >= qx || j >= qy || marked[static_cast<size_t>(j) * qx + i]; };
+    free_quarter_blocks.assign(marked.size(), 0);
+    for (int j = 0; j < qy; ++j) {
+      for (int i = 0; i < qx; ++i) {
+        std::uint16_t bits = 0;
+        for (int a = 0; a < 4; ++a) {
+          for (int b = 0; b < 4; ++b) {
+            bool free = true;
+            for (int di = 0; di <= a && free; ++di) {
+              for (int dj = 0; dj <= b && free; ++dj) free = !is_marked(i + di, j + dj);
+            }
+            if (free) bits = static_cast<std::uint16_t>(bits | (1u << (4 * a + b)));
+          }
+        }
+        free_quarter_blocks[static_cast<size_t>(j) * qx + i] = bits;
+      }
+    }
+  }
+
   // Bits of sub-columns c0..c1 in sub-rows r0..r1 of a cell's mask (all within 0..7).
   static std::uint64_t BoxMask(int c0, int c1, int r0, int r1) {
     const std::uint64_t columns = (0xFFULL >> (7 - c1)) & (0xFFULL << c0);
@@ -199,6 +237,12 @@ struct FloorData {
     if (lo_x >= 0 && hi_x < static_cast<double>(nx) && lo_y >= 0 && hi_y < static_cast<double>(ny)) {
       const int sx0 = SubcellOf(lo_x), sx1 = SubcellOf(hi_x);
       const int sy0 = SubcellOf(lo_y), sy1 = SubcellOf(hi_y);
+      // The quarters of the box's corners (4 sub-cells each way).
+      const int a = (sx1 >> 2) - (sx0 >> 2), b = (sy1 >> 2) - (sy0 >> 2);
+      if (a <= 3 && b <= 3 &&
+          ((free_quarter_blocks[static_cast<size_t>(sy0 >> 2) * (2 * nx) + (sx0 >> 2)] >> (4 * a + b)) & 1)) {
+        return false;
+      }
       if ((sx1 >> 3) - (sx0 >> 3) <= 1 && (sy1 >> 3) - (sy0 >> 3) <= 1 && BoxIsFree(sx0, sx1, sy0, sy1)) {
         return false;
       }

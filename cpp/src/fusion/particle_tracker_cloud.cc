@@ -3,6 +3,8 @@
 // fixed-lag ring of past positions and the recorded history for the backward smoother.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 #include <string>
 
@@ -66,55 +68,143 @@ void ParticleTracker::Impl::Gather(const std::vector<int>& anc) {
   lag_ring.Gather(anc);
 }
 
-// After an update of log_w that was normalised before it: one pass of exp() gives the linear
-// weights, the log normaliser (the event's log-likelihood increment), the ESS and the estimate;
-// resamples (from the linear weights) when ESS < threshold N. Leaves log_w normalised.
+// After an update of log_w that was normalised before it: one pass gives the linear weights
+// (exp only where a weight is neither the largest nor zero), their sum (the log normaliser, the
+// event's log-likelihood increment), the ESS and, in the same pass, the weighted sums of the
+// estimate; resamples (from the linear weights) when ESS < threshold N, and then estimates from
+// the resampled cloud. Leaves log_w normalised.
 double ParticleTracker::Impl::FinishUpdate(double max_log_w, TrackerEstimate* est) {
   weights.resize(static_cast<size_t>(n));
+  // exp(0) = 1 and exp(-inf) = 0 exactly: equal weights (after resampling, with walls only) and
+  // dropped particles need no exp call. First pass without a branch (the dropped particles lie at
+  // random in the cloud: a branch on them is mispredicted); the exp pass only if some weight
+  // needs it (after a WiFi update or a fix every weight does: then its branch is predictable).
   double sum = 0.0, sum_sq = 0.0;
+  bool need_exp = false;
+  constexpr std::uint64_t kNegInfinityBits = 0xFFF0000000000000ULL;
   for (int i = 0; i < n; ++i) {
-    // exp(0) = 1 and exp(-inf) = 0 exactly: equal weights (after resampling, with walls only)
-    // and dropped particles need no exp call.
+    // On the bits (integer compares give flags, not the two-flag FP compare that the compiler
+    // turns into a branch): d is +-0 iff its bits without the sign are zero.
     const double d = log_w[i] - max_log_w;
-    const double w = d == 0.0 ? 1.0 : (d == kNegInfinity ? 0.0 : std::exp(d));
+    std::uint64_t bits;
+    std::memcpy(&bits, &d, sizeof(bits));
+    const bool zero = (bits << 1) == 0;
+    const double w = static_cast<double>(zero);
+    need_exp |= !zero & (bits != kNegInfinityBits);
     weights[i] = w;
     sum += w;
     sum_sq += w * w;
   }
+  if (need_exp) {
+    sum = 0.0;
+    sum_sq = 0.0;
+    for (int i = 0; i < n; ++i) {
+      const double d = log_w[i] - max_log_w;
+      if ((d != 0.0) & (d != kNegInfinity)) weights[i] = std::exp(d);
+      sum += weights[i];
+      sum_sq += weights[i] * weights[i];
+    }
+  }
+  const CloudSums m = WeightedSums(weights.data());
   const double log_z = max_log_w + std::log(sum);
   est->ess = sum * sum / sum_sq;
   const double threshold = options.resampling.ess_threshold * n;
   est->resampled = options.resampling.ess_threshold > 0.0 && est->ess < threshold;
+  ess_sum += est->ess;
+  ++events;
+  summary.mean_ess = ess_sum / events;
   if (est->resampled) {
     ResampleLinear(weights.data(), n, sum, options.resampling.scheme, rng, &ancestors);
     Gather(ancestors);
     log_w.setConstant(-std::log(static_cast<double>(n)));
     std::fill(weights.begin(), weights.end(), 1.0 / n);
     ++summary.resamplings;
-  } else {
-    log_w.array() -= log_z;
-    const double inv = 1.0 / sum;
-    for (double& w : weights) w *= inv;
+    FillEstimate(weights, est);
+    return log_z;
   }
-  ess_sum += est->ess;
-  ++events;
-  summary.mean_ess = ess_sum / events;
-  FillEstimate(weights, est);
+  const double inv = 1.0 / sum;
+  for (int i = 0; i < n; ++i) {
+    log_w[i] -= log_z;
+    weights[i] *= inv;
+  }
+  // The estimate from the sums (FillEstimate's quantities, normalised by the sum).
+  const double ex = m.dx * inv, ey = m.dy * inv;
+  est->mean_m = Eigen::Vector2d(m.rx + ex, m.ry + ey);
+  const double vxx = m.dxx * inv - ex * ex, vxy = m.dxy * inv - ex * ey, vyy = m.dyy * inv - ey * ey;
+  est->covariance_m2 << std::max(vxx, 0.0), vxy, vxy, std::max(vyy, 0.0);
+  est->heading_offset_rad = std::atan2(m.sin * inv, m.cos * inv);
+  est->scale = m.scale * inv;
+  FillFloorsAndLag(weights, est);
   return log_z;
+}
+
+// The weighted sums of the estimate for linear weights w (not normalised): positions about the
+// reference particle (x[0], y[0]) (one pass, without the cancellation of raw moments far from the
+// origin), their products, sin and cos of the offset, the scale. Four interleaved partial sums
+// per quantity (particle i into lane i mod 4, added in a fixed order at the end): independent
+// chains that the compiler can keep in vector registers; the result depends on n only.
+ParticleTracker::Impl::CloudSums ParticleTracker::Impl::WeightedSums(const double* w) const {
+  constexpr int kLanes = 4;
+  CloudSums out;
+  out.rx = x[0];
+  out.ry = y[0];
+  double a[8][kLanes] = {};
+  const int full = n - n % kLanes;
+  auto add = [&](int lane, int i) {
+    const double dx = x[i] - out.rx, dy = y[i] - out.ry;
+    a[0][lane] += w[i] * dx;
+    a[1][lane] += w[i] * dy;
+    a[2][lane] += w[i] * dx * dx;
+    a[3][lane] += w[i] * dx * dy;
+    a[4][lane] += w[i] * dy * dy;
+    a[5][lane] += w[i] * sin_offset[i];
+    a[6][lane] += w[i] * cos_offset[i];
+    a[7][lane] += w[i] * scale[i];
+  };
+  for (int i = 0; i < full; i += kLanes) {
+    for (int lane = 0; lane < kLanes; ++lane) add(lane, i + lane);
+  }
+  for (int i = full; i < n; ++i) add(i - full, i);
+  double total[8];
+  for (int q = 0; q < 8; ++q) total[q] = (a[q][0] + a[q][1]) + (a[q][2] + a[q][3]);
+  out.dx = total[0];
+  out.dy = total[1];
+  out.dxx = total[2];
+  out.dxy = total[3];
+  out.dyy = total[4];
+  out.sin = total[5];
+  out.cos = total[6];
+  out.scale = total[7];
+  return out;
+}
+
+// The floor probabilities, the most probable floor and the fixed-lag position from normalised
+// linear weights w.
+void ParticleTracker::Impl::FillFloorsAndLag(const std::vector<double>& w, TrackerEstimate* est) const {
+  est->floor_probabilities = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(floors.size()));
+  if (floors.size() == 1) {
+    double total = 0.0;
+    for (int i = 0; i < n; ++i) total += w[i];
+    est->floor_probabilities[0] = total;
+  } else {
+    for (int i = 0; i < n; ++i) est->floor_probabilities[floor[i]] += w[i];
+  }
+  Eigen::Index best = 0;
+  est->floor_probabilities.maxCoeff(&best);
+  est->floor_index = static_cast<int>(best);
+  if (lag_ring.has_lagged()) est->lagged_m = lag_ring.WeightedSum(w.data());
 }
 
 // The weighted estimate from normalised linear weights w: mean, covariance, circular mean
 // offset, mean scale, floor probabilities and the fixed-lag position.
 void ParticleTracker::Impl::FillEstimate(const std::vector<double>& w, TrackerEstimate* est) const {
   double mx = 0.0, my = 0.0, so = 0.0, co = 0.0, sc = 0.0;
-  est->floor_probabilities = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(floors.size()));
   for (int i = 0; i < n; ++i) {
     mx += w[i] * x[i];
     my += w[i] * y[i];
     so += w[i] * sin_offset[i];
     co += w[i] * cos_offset[i];
     sc += w[i] * scale[i];
-    est->floor_probabilities[floor[i]] += w[i];
   }
   double cxx = 0.0, cxy = 0.0, cyy = 0.0;
   for (int i = 0; i < n; ++i) {
@@ -127,10 +217,7 @@ void ParticleTracker::Impl::FillEstimate(const std::vector<double>& w, TrackerEs
   est->covariance_m2 << cxx, cxy, cxy, cyy;
   est->heading_offset_rad = std::atan2(so, co);
   est->scale = sc;
-  Eigen::Index best = 0;
-  est->floor_probabilities.maxCoeff(&best);
-  est->floor_index = static_cast<int>(best);
-  if (lag_ring.has_lagged()) est->lagged_m = lag_ring.WeightedSum(w.data());
+  FillFloorsAndLag(w, est);
 }
 
 // Estimate from the current log-weights (outside an update).

@@ -28,8 +28,11 @@ void ParticleTracker::Impl::MoveFreeSpace(const StepMotion& motion, std::vector<
     const int count = end - begin;
     double qx[kBlockSize], qy[kBlockSize];
     bool hit[kBlockSize];
+    // The block's normals from eight lanes seeded by the block's stream (which also serves the
+    // ziggurat's rare slow path): depends on (seed, event, block) only.
+    RandomLanes lanes(block_rng(), tracker_detail::kMotionLanesStream);
     motion.SampleBlock(count, offset.data() + begin, cos_offset.data() + begin, sin_offset.data() + begin,
-                       scale.data() + begin, block_rng, qx, qy);
+                       scale.data() + begin, lanes, block_rng, qx, qy);
     for (int k = 0; k < count; ++k) {
       qx[k] = x[begin + k] + qx[k];
       qy[k] = y[begin + k] + qy[k];
@@ -44,10 +47,17 @@ void ParticleTracker::Impl::MoveFreeSpace(const StepMotion& motion, std::vector<
     // Tracker floor index f is plan floor index f whenever there is a plan.
     plan->CrossesWallSpan(count, x.data() + begin, y.data() + begin, qx, qy, floor.data() + begin, hit);
     double blocked = 0.0;
+    // Most blocked particles share one log-weight (equal weights since the last resampling):
+    // its exp is kept (the same bits as calling exp again).
+    double last_log_w = 0.0, last_w = 1.0;
     for (int k = 0; k < count; ++k) {
       const int i = begin + k;
       if (hit[k]) {
-        blocked += std::exp(log_w[i]);
+        if (log_w[i] != last_log_w) {
+          last_log_w = log_w[i];
+          last_w = std::exp(last_log_w);
+        }
+        blocked += last_w;
         log_w[i] += penalty;
         if (drop) continue;  // dropped: stays where it was
       }

@@ -42,6 +42,8 @@ constexpr double kMaxCoordinate = 1e7;
 /// Systematic resampling stream id of the tracker's own stream family: the per-event block
 /// streams use DeriveSeed(seed, event) instead, so the two never overlap.
 constexpr std::uint64_t kTrackerStream = 0x7f3a5c11ULL;
+/// Stream id of the motion's random lanes (RandomLanes(block stream's first draw, this)).
+constexpr std::uint64_t kMotionLanesStream = 0x5eed1a7eULL;
 
 /// Angle wrapped to [-pi, pi] [rad].
 inline double WrapAngle(double a) { return std::remainder(a, 2.0 * M_PI); }
@@ -138,6 +140,13 @@ struct ParticleTracker::Impl {
   double FinishUpdate(double max_log_w, TrackerEstimate* est);
   void FillEstimate(const std::vector<double>& w, TrackerEstimate* est) const;
   void FillEstimate(TrackerEstimate* est) const;
+  void FillFloorsAndLag(const std::vector<double>& w, TrackerEstimate* est) const;
+  struct CloudSums {
+    double rx = 0, ry = 0;                  // the reference particle's position [m]
+    double dx = 0, dy = 0, dxx = 0, dxy = 0, dyy = 0;  // Σ w d, Σ w d dᵀ, d = p - reference [m, m²]
+    double sin = 0, cos = 0, scale = 0;     // Σ w sin o, Σ w cos o, Σ w s
+  };
+  CloudSums WeightedSums(const double* w) const;
   void PushLag();
   void Snapshot(bool replace_last);
 

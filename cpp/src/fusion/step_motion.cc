@@ -6,6 +6,7 @@
 #include <Eigen/LU>
 
 #include "indoorloc/core/check.h"
+#include "indoorloc/core/simd_dispatch.h"
 #include "indoorloc/core/validate.h"
 
 namespace indoorloc::fusion {
@@ -74,6 +75,106 @@ StepMotion::StepMotion(const StepInput& step, const StepMotionOptions& options) 
   const double l11 = std::sqrt(std::max(noise(1, 1) - l10 * l10, 1e-18));
   chol_ << l00, 0.0, l10, l11;
   noise_inverse_ = noise.inverse();
+}
+
+namespace {
+// The per-step constants of the block motion.
+struct BlockMotion {
+  double offset_walk, scale_walk, min_scale, max_scale;
+  double d_x, d_y, l00, l10, l11;  // step displacement [m], Cholesky factor of its noise
+};
+
+// The motion of particles 0..m-1 given their normals z (offset walk z[k], scale walk z[m + k],
+// step noise z[2m + k], z[3m + k]): StepMotion::Move written without branches (the Taylor
+// rotation for every particle; the few with |delta| >= 0.1 are redone by FixLargeTurns) so that
+// it compiles to one vector loop. Elementwise IEEE operations only: the same bits at any width.
+[[gnu::always_inline]] inline void MoveChunkBody(int m, const double* __restrict z, double* __restrict offset,
+                                                 double* __restrict co, double* __restrict so,
+                                                 double* __restrict scale, double* __restrict dx_m,
+                                                 double* __restrict dy_m, const BlockMotion& c) {
+  for (int k = 0; k < m; ++k) {
+    const double delta = c.offset_walk * z[k];
+    double o = offset[k] + delta;
+    const double d2 = delta * delta;
+    const double cd = 1.0 - d2 * (0.5 - d2 * (1.0 / 24.0 - d2 * (1.0 / 720.0)));
+    const double sd = delta * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0 - d2 * (1.0 / 5040.0))));
+    const double cn = co[k] * cd - so[k] * sd;
+    const double sn = so[k] * cd + co[k] * sd;
+    // Both wraps computed unconditionally, then selected: a select without arithmetic in its
+    // arms is what lets the compiler turn the loop into vector code.
+    const double o_down = o - 2.0 * M_PI;
+    o = o > M_PI ? o_down : o;
+    const double o_up = o + 2.0 * M_PI;
+    o = o <= -M_PI ? o_up : o;
+    double sc = scale[k] + c.scale_walk * z[m + k];
+    sc = sc < c.min_scale ? c.min_scale : sc;
+    sc = sc > c.max_scale ? c.max_scale : sc;
+    const double ex = c.d_x + c.l00 * z[2 * m + k];
+    const double ey = c.d_y + c.l10 * z[2 * m + k] + c.l11 * z[3 * m + k];
+    offset[k] = o;
+    scale[k] = sc;
+    co[k] = cn;
+    so[k] = sn;
+    dx_m[k] = sc * (cn * ex - sn * ey);
+    dy_m[k] = sc * (sn * ex + cn * ey);
+  }
+}
+
+void MoveChunkPortable(int m, const double* z, double* offset, double* co, double* so, double* scale, double* dx_m,
+                       double* dy_m, const BlockMotion& c) {
+  MoveChunkBody(m, z, offset, co, so, scale, dx_m, dy_m, c);
+}
+
+__attribute__((target("avx2"))) void MoveChunkAvx2(int m, const double* z, double* offset, double* co, double* so,
+                                                   double* scale, double* dx_m, double* dy_m, const BlockMotion& c) {
+  MoveChunkBody(m, z, offset, co, so, scale, dx_m, dy_m, c);
+}
+
+// The particles whose offset increment |delta| >= 0.1 rad (beyond the Taylor series' accuracy):
+// cos o', sin o' from the library and the displacement again.
+void FixLargeTurns(int m, const double* z, const double* offset, double* co, double* so, const double* scale,
+                   double* dx_m, double* dy_m, const BlockMotion& c) {
+  for (int k = 0; k < m; ++k) {
+    if (!(std::abs(c.offset_walk * z[k]) >= 0.1)) continue;
+    const double cn = std::cos(offset[k]), sn = std::sin(offset[k]);
+    const double ex = c.d_x + c.l00 * z[2 * m + k];
+    const double ey = c.d_y + c.l10 * z[2 * m + k] + c.l11 * z[3 * m + k];
+    co[k] = cn;
+    so[k] = sn;
+    dx_m[k] = scale[k] * (cn * ex - sn * ey);
+    dy_m[k] = scale[k] * (sn * ex + cn * ey);
+  }
+}
+}  // namespace
+
+void StepMotion::SampleBlock(int count, double* offset_rad, double* cos_offset, double* sin_offset, double* scale,
+                             RandomLanes& lanes, RandomStream& fallback, double* dx_m, double* dy_m) const {
+  const BlockMotion c{options_.heading_offset_walk_rad,
+                      options_.scale_walk,
+                      options_.min_scale,
+                      options_.max_scale,
+                      step_.displacement_m.x(),
+                      step_.displacement_m.y(),
+                      chol_(0, 0),
+                      chol_(1, 0),
+                      chol_(1, 1)};
+  const bool avx2 = UseAvx2();
+  constexpr int kChunk = 256;
+  double z[4 * kChunk];
+  for (int begin = 0; begin < count; begin += kChunk) {
+    const int m = std::min(kChunk, count - begin);
+    lanes.FillNormal(z, 4 * m, fallback);
+    double* o = offset_rad + begin;
+    double* co = cos_offset + begin;
+    double* so = sin_offset + begin;
+    double* sc = scale + begin;
+    if (avx2) {
+      MoveChunkAvx2(m, z, o, co, so, sc, dx_m + begin, dy_m + begin, c);
+    } else {
+      MoveChunkPortable(m, z, o, co, so, sc, dx_m + begin, dy_m + begin, c);
+    }
+    FixLargeTurns(m, z, o, co, so, sc, dx_m + begin, dy_m + begin, c);
+  }
 }
 
 double StepMotion::TransitionLogDensity(const Eigen::Vector2d& from_m, double from_offset_rad, double from_scale,

@@ -297,6 +297,51 @@ TEST(FloorPlan, LatticePlanMatchesExactBruteForceOnDegenerateQueries) {
   }
 }
 
+// The wall test's fast paths (free quarter blocks, sub-cell masks) on the case they are built
+// for: a lattice of square pillars whose sides lie on cell boundaries (every side registered in
+// two cells), short steps in random directions from walkable points, some grazing the pillars
+// and some running along their sides; CrossesWallSpan equals the brute force.
+TEST(FloorPlan, PillarLatticeOnCellBoundariesMatchesBruteForceForShortSteps) {
+  FloorGeometry g;
+  g.outlines.push_back(Box(0, 0, 40, 40));
+  for (int i = 0; i < 10; ++i) {
+    for (int j = 0; j < 10; ++j) g.obstacles.push_back(Box(4 * i + 1.5, 4 * j + 1.5, 4 * i + 2.5, 4 * j + 2.5));
+  }
+  FloorPlanOptions options;
+  options.cell_size_m = 1.0;
+  const FloorPlan plan({g}, options);
+  const BruteForce brute(plan, 0);
+  RandomStream rng(21);
+  const int n = 6000;
+  std::vector<double> x0, y0, x1, y1;
+  while (static_cast<int>(x0.size()) < n) {
+    // Half of the starts on the 1/8 m lattice of the sub-cells (boundaries of the fast paths).
+    double x = rng.Uniform(0.0, 40.0), y = rng.Uniform(0.0, 40.0);
+    if (x0.size() % 2 == 0) {
+      x = std::round(8.0 * x) / 8.0;
+      y = std::round(8.0 * y) / 8.0;
+    }
+    if (!brute.Walkable(x, y) || brute.OnEdge(x, y)) continue;
+    const double len = rng.Uniform(0.0, 2.0), a = rng.Uniform(-M_PI, M_PI);
+    const bool axis = x0.size() % 5 == 0;  // some along the axes (parallel to the sides)
+    x0.push_back(x);
+    y0.push_back(y);
+    x1.push_back(x + (axis ? len * (a > 0 ? 1 : -1) : len * std::cos(a)));
+    y1.push_back(y + (axis ? 0.0 : len * std::sin(a)));
+  }
+  std::vector<int> floors(n, 0);
+  std::unique_ptr<bool[]> out(new bool[n]);
+  plan.CrossesWallSpan(n, x0.data(), y0.data(), x1.data(), y1.data(), floors.data(), out.get());
+  int crossing = 0;
+  for (int k = 0; k < n; ++k) {
+    const bool expected = brute.Crosses(Eigen::Vector4d(x0[k], y0[k], x1[k], y1[k]));
+    crossing += expected;
+    ASSERT_EQ(out[k], expected) << x0[k] << ", " << y0[k] << " -> " << x1[k] << ", " << y1[k];
+  }
+  EXPECT_GT(crossing, 300);
+  EXPECT_LT(crossing, n - 3000);
+}
+
 // ---- random plans against brute force -----------------------------------------------------
 
 TEST(FloorPlan, RandomPlanWithManyEdgesMatchesBruteForce) {

@@ -88,13 +88,18 @@ class RandomStream {
   /// gives the limiting normal of variance 1/kappa. Throws std::invalid_argument for a
   /// non-finite mu_rad or a negative / non-finite kappa.
   double VonMises(double mu_rad, double kappa);
+  /// The ziggurat's slow path for a draw (u on [-1, 1), layer in [0, 128)) that failed the fast
+  /// test |u| < kZigguratRatio[layer]: the tail, the wedge test, or a new draw, all from this
+  /// stream. RandomLanes::FillNormal resolves its rare rejected lanes with it.
+  double NormalZigguratOutside(double u, int layer);
 
  private:
+  friend class RandomLanes;  // the vectorised ziggurat reads the tables
   static std::uint64_t RotateLeft(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
-  // The ziggurat's layer edges x_i and ratios x_{i+1} / x_i (random.cc), and its slow path.
+  // The ziggurat's layer edges x_i and ratios x_{i+1} / x_i (random.cc).
   static const double kZigguratX[129];
   static const double kZigguratRatio[128];
-  double NormalZigguratOutside(double u, int layer);
+  static const double kZigguratF[129];  // exp(-x_i² / 2)
 
   std::uint64_t state_[4];
   double spare_normal_ = 0.0;

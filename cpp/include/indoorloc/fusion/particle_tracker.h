@@ -31,8 +31,10 @@
 // (backward_smoother.h).
 //
 // Randomness: particles are processed in fixed blocks of kBlockSize, block b of event e drawing
-// from RandomStream(DeriveSeed(seed, e), b); resampling uses the tracker's own stream. Results
-// are therefore identical for any num_threads.
+// from RandomStream(DeriveSeed(seed, e), b) (in free space the block's normals come from eight
+// RandomLanes seeded by that stream's first draw, the ziggurat's rare slow path from the stream
+// itself); resampling uses the tracker's own stream. Results are therefore identical for any
+// num_threads, and with or without AVX2.
 #pragma once
 #include <cstdint>
 #include <limits>

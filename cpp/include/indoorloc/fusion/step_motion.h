@@ -25,6 +25,7 @@
 #include <Eigen/Core>
 
 #include "indoorloc/core/random.h"
+#include "indoorloc/core/random_lanes.h"
 
 namespace indoorloc::fusion {
 
@@ -86,23 +87,12 @@ class StepMotion {
   }
   /// Sample for particles 0..count-1 of structure-of-arrays state, in place: offset_rad,
   /// cos_offset, sin_offset and scale become o', cos o', sin o', s'; the displacements go to
-  /// dx_m, dy_m. The same draws in the same order as `count` calls of Sample (identical results),
-  /// the normals drawn first for a chunk of particles so that the arithmetic runs without
-  /// waiting on the generator.
+  /// dx_m, dy_m. The normals come from `lanes` (RandomLanes::FillNormal, its rare slow-path
+  /// draws from `fallback`), four blocks of them per chunk of particles (offset walk, scale walk,
+  /// step noise 1 and 2), and the arithmetic runs as one vector loop per chunk (AVX2 where the
+  /// CPU has it, same bits). Same model as Sample, different draws.
   void SampleBlock(int count, double* offset_rad, double* cos_offset, double* sin_offset, double* scale,
-                   RandomStream& rng, double* dx_m, double* dy_m) const {
-    constexpr int kChunk = 256;
-    double z[4 * kChunk];
-    for (int begin = 0; begin < count; begin += kChunk) {
-      const int m = std::min(kChunk, count - begin);
-      for (int k = 0; k < 4 * m; ++k) z[k] = rng.NormalZiggurat();
-      for (int k = 0; k < m; ++k) {
-        const int i = begin + k;
-        Move(z[4 * k], z[4 * k + 1], z[4 * k + 2], z[4 * k + 3], offset_rad[i], cos_offset + i, sin_offset + i,
-             scale[i], offset_rad + i, scale + i, dx_m + i, dy_m + i);
-      }
-    }
-  }
+                   RandomLanes& lanes, RandomStream& fallback, double* dx_m, double* dy_m) const;
   /// log p(p', o', s' | p, o, s) up to the constant common to all pairs (the backward smoother
   /// only needs ratios over the predecessor (p, o, s)).
   double TransitionLogDensity(const Eigen::Vector2d& from_m, double from_offset_rad, double from_scale,
