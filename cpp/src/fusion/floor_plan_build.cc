@@ -390,7 +390,8 @@ FloorData BuildFloor(const FloorGeometry& input, int floor_index, const FloorPla
   // registered 8e7 times, 3 GB, with 0.25 m cells).
   constexpr double kBytesPerCell = 3 * sizeof(std::int64_t) + 3 * sizeof(std::int32_t) +
                                    3 * sizeof(std::int32_t) + sizeof(CellInfo) +
-                                   sizeof(std::int32_t) + sizeof(std::uint64_t);  // + the sub-cell mask
+                                   sizeof(std::int32_t) + sizeof(std::uint64_t) +  // + the sub-cell mask
+                                   4 * (sizeof(std::uint16_t) + 1);  // + 4 quarters' free-block words (and marks)
   constexpr double kBytesPerEntry = sizeof(Segment) + sizeof(std::int32_t);
   const bool automatic = options.cell_size_m <= 0.0;
   const double num_edges = static_cast<double>(d.edges.size());
