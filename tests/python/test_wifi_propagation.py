@@ -130,3 +130,13 @@ def test_block_fixes_match_brute_force():
         w = np.array([m for m, _ in cand[:4]])
         got = dict(zip(map(tuple, f.means_m[j]), f.weights[j]))
         np.testing.assert_allclose([got[c] for _, c in cand[:4]], np.exp(w - w.max()), rtol=1e-9)
+
+
+def test_stack_fixes_interleaves_in_time():
+    a = Fixes.from_arrays([0.0, 2.0], np.zeros((2, 2, 2)), 1.0)
+    b = Fixes.from_arrays([1.0, 2.0], np.ones((2, 3, 2)), 2.0)
+    s = pf.stack_fixes(a, b)
+    np.testing.assert_array_equal(s.times_s, [0.0, 1.0, 2.0, 2.0])
+    assert s.means_m.shape == (4, 3, 2)
+    np.testing.assert_array_equal(s.weights[0], [1.0, 1.0, 0.0])   # a's fix padded
+    np.testing.assert_array_equal(s.sds_m[1], [2.0, 2.0, 2.0])     # b's fix

@@ -35,7 +35,9 @@ from indoorloc.fusion import propagation_fixes as pf
 from indoorloc.fusion import wifi_sequence as ws
 from indoorloc.wifi import propagation as pr
 
-#: model_weight 0 is the kNN fixes alone (today's wifi_sequence when β = 0.15).
+#: model_weight w: 0 is the kNN fixes alone (today's wifi_sequence when β = 0.15); w in (0, 1]
+#: the mixture (1 - w) kNN + w model; w in [-1, 0) the product of the kNN fix and the mixture of
+#: weight |w| (both as separate fixes at the same times, ``propagation_fixes.stack_fixes``).
 GRID: Dict[str, Sequence[Any]] = {
     "model_weight": (0.0, 0.5, 1.0),
     "temperature": (3.0, 10.0),
@@ -118,7 +120,11 @@ def evaluate_floor(floor: str, case: Dict[str, Any], models: List[pr.PathLossMod
                     fl.append(kf)
                     continue
                 mf = pf.model_fixes(w["query_t_s"], ll, cells, ms, case["number"])
-                fl.append(mf if fp["model_weight"] == 1 else pf.mix_fixes(kf, mf, fp["model_weight"]))
+                if fp["model_weight"] < 0:  # a product: the kNN fix times the mixture of weight |w| on the model
+                    w_m = -fp["model_weight"]
+                    fl.append(pf.stack_fixes(kf, mf if w_m == 1 else pf.mix_fixes(kf, mf, w_m)))
+                else:
+                    fl.append(mf if fp["model_weight"] == 1 else pf.mix_fixes(kf, mf, fp["model_weight"]))
             fixes.append(fl)
         for svals in itertools.product(*(grid[k] for k in seq_names)):
             sp = dict(zip(seq_names, svals))

@@ -120,4 +120,23 @@ def mix_fixes(a: Fixes, b: Fixes, weight_b: float) -> Fixes:
                              np.concatenate([a.floors, b.floors], axis=1))
 
 
-__all__ = ["ModelFixSettings", "mix_fixes", "model_fixes", "walkable_cells"]
+def stack_fixes(a: Fixes, b: Fixes) -> Fixes:
+    """Both sets of fixes as separate fixes, in time order (a's first at equal times): the
+    tracker multiplies the likelihoods of fixes at the same step (a product of the two sources
+    instead of :func:`mix_fixes`' mixture). Components padded to the larger K with weight 0."""
+    k = max(a.sds_m.shape[1], b.sds_m.shape[1])
+
+    def pad(f: Fixes):
+        n = k - f.sds_m.shape[1]
+        if n == 0:
+            return f.means_m, f.sds_m, f.weights, f.floors
+        z = np.zeros((len(f), n))
+        return (np.concatenate([f.means_m, np.zeros((len(f), n, 2))], axis=1), np.concatenate([f.sds_m, z + 1], axis=1),
+                np.concatenate([f.weights, z], axis=1), np.concatenate([f.floors, f.floors[:, :1].repeat(n, 1)], axis=1))
+    pa, pb = pad(a), pad(b)
+    t = np.concatenate([a.times_s, b.times_s])
+    order = np.argsort(t, kind="stable")
+    return Fixes.from_arrays(t[order], *(np.concatenate([x, y])[order] for x, y in zip(pa, pb)))
+
+
+__all__ = ["ModelFixSettings", "mix_fixes", "model_fixes", "stack_fixes", "walkable_cells"]
