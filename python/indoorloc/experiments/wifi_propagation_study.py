@@ -5,7 +5,8 @@ WiFi-only method <= 0.8x today's wifi_knn on every floor"; docs/fusion_real.md, 
 model that extrapolates").
 
 ``python -m indoorloc.experiments.wifi_propagation_study [--data-root DIR] [--floors ...] [--seed 0]
-[--cache-dir DIR] [--grid JSON] [--json FILE]``
+[--cache-dir DIR] [--grid JSON] [--options JSON] [--huber-sd 1.5] [--json FILE]``;
+``... --merge A.json B.json``: the LOFO over the union of runs' grid points.
 
 Per floor, 4-fold by walk (seed 0: the folds of ``indoorloc fusion evaluate``; the databases and
 kNN fixes are those of ``fusion evaluate``, :mod:`wifi_propagation_cases`). Per fold the model is
@@ -38,13 +39,25 @@ from indoorloc.wifi import propagation as pr
 #: model_weight w: 0 is the kNN fixes alone (today's wifi_sequence when β = 0.15); w in (0, 1]
 #: the mixture (1 - w) kNN + w model; w in [-1, 0) the product of the kNN fix and the mixture of
 #: weight |w| (both as separate fixes at the same times, ``propagation_fixes.stack_fixes``).
+#: Grid 4 of docs/fusion_real.md (six floors); grid 5 is GRID_5; the LOFO of the docs is over
+#: their union (``--merge``).
 GRID: Dict[str, Sequence[Any]] = {
-    "model_weight": (0.0, 0.5, 1.0),
-    "temperature": (3.0, 10.0),
+    "model_weight": (0.0, -1.0),
+    "temperature": (1.0, 3.0, 10.0),
     "k": (20,),
-    "sd_m": (6.0, 12.0),
-    "block_m": (0.0, 6.0),
-    "fix_survey_distance_factor": (0.15, 1.0),
+    "sd_m": (3.0, 6.0),
+    "block_m": (6.0, 10.0),
+    "fix_survey_distance_factor": (0.15, 0.35, 0.5, 0.75),
+    "fix_sd_scale": (0.35, 0.5),
+}
+GRID_5: Dict[str, Sequence[Any]] = {
+    "model_weight": (-1.0, -0.8, -0.5),
+    "temperature": (3.0,),
+    "k": (20,),
+    "sd_m": (6.0, 10.0),
+    "block_m": (10.0, 15.0),
+    "fix_survey_distance_factor": (0.35, 0.5, 0.75),
+    "fix_sd_scale": (0.5, 0.7),
 }
 FIT_KEYS = ("miss_weight",)
 
@@ -172,6 +185,32 @@ def run(data_root: Path, floors: Sequence[str], seed: int, cache_dir: Optional[P
             "miss_weight": miss_weight, "huber_sd": huber_sd, "lofo": choice, "per_floor": per_floor}
 
 
+def lofo_from_means(results: Sequence[Dict[str, Any]]) -> Dict[str, Any]:
+    """Leave-one-floor-out over the union of several runs' grid points (their per-floor means
+    times the floor's waypoint count: the pooled means of :func:`wifi_sequence_study.lofo`)."""
+    floors = list(results[0]["per_floor"])
+    n = np.array([results[0]["per_floor"][f]["all_floor_choice"]["n"] for f in floors], float)
+    points: Dict[str, Dict[str, float]] = {}
+    for r in results:
+        for f in floors:
+            for k, v in r["per_floor"][f]["points"].items():
+                if k not in ("wifi_knn", "model_centre"):
+                    points.setdefault(k, {})[f] = v
+    keys = [k for k, v in points.items() if len(v) == len(floors)]
+    means = np.array([[points[k][f] for f in floors] for k in keys])
+    pooled = means @ n / n.sum()
+    held = {}
+    for j, f in enumerate(floors):
+        o = np.arange(len(floors)) != j
+        b = int(np.argmin(means[:, o] @ n[o] / n[o].sum()))
+        held[f] = {"chosen": keys[b], "mean_m": float(means[b, j])}
+    best = int(np.argmin(pooled))
+    return {"points": len(keys), "all_floor_choice": keys[best],
+            "all_floor_means": dict(zip(floors, means[best].tolist())), "all_floor_pooled_m": float(pooled[best]),
+            "held_out": held, "held_out_pooled_m": float(sum(held[f]["mean_m"] * n[j] for j, f in enumerate(floors))
+                                                      / n.sum())}
+
+
 def markdown(r: Dict[str, Any]) -> str:
     fmt = lambda s: f"{s['mean_m']:.2f} / {s['median_m']:.2f} / {s['p90_m']:.1f}"  # noqa: E731
     lines = [f"Seed {r['seed']}; all-floor choice: `{r['lofo']['all_floor_choice']}`", "",
@@ -200,7 +239,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     ap.add_argument("--huber-sd", type=float, default=0.0)
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--json", type=Path, default=None)
+    ap.add_argument("--merge", type=Path, nargs="+", default=None,
+                    help="print the LOFO over the union of these --json outputs' grid points (no run)")
     a = ap.parse_args(argv)
+    if a.merge:
+        print(json.dumps(lofo_from_means([json.loads(Path(p).read_text()) for p in a.merge]), indent=1))
+        return 0
     root = a.data_root or default_site_root()
     floors = a.floors or ilc_floor_names(root, with_plan=True, argument="data_root")
     grid = dict(GRID)
