@@ -140,3 +140,34 @@ def test_stack_fixes_interleaves_in_time():
     assert s.means_m.shape == (4, 3, 2)
     np.testing.assert_array_equal(s.weights[0], [1.0, 1.0, 0.0])   # a's fix padded
     np.testing.assert_array_equal(s.sds_m[1], [2.0, 2.0, 2.0])     # b's fix
+
+
+def test_gate_fixes_flattens_where_the_gate_is_closed():
+    f = Fixes.from_arrays([0.0, 1.0], np.array([[[0.0, 0.0], [2.0, 0.0]], [[4.0, 4.0], [6.0, 4.0]]]), 3.0,
+                          np.array([[1.0, 3.0], [1.0, 1.0]]))
+    g = pf.gate_fixes(f, np.array([0.0, 0.25]))
+    assert g.means_m.shape == (2, 3, 2)
+    np.testing.assert_allclose(g.weights, [[0.0, 0.0, 1.0], [0.125, 0.125, 0.75]])
+    np.testing.assert_allclose(g.means_m[:, 2], [[1.5, 0.0], [5.0, 4.0]])
+    assert np.all(g.sds_m[:, 2] == 1e3)
+    with pytest.raises(ValueError, match="gate"):
+        pf.gate_fixes(f, np.array([0.5, 1.5]))
+
+
+def test_capped_huber_likelihood_matches_brute_force():
+    xy, rss, *_ = _synthetic(4)
+    m = pr.fit_path_loss(rss, xy)
+    pts = np.array([[0.0, 0.0], [20.0, 0.0], [35.0, 15.0]])
+    mu = m.predict(pts)
+    q = np.array([[-60.0, np.nan, -45.0], [-90.0, -50.0, np.nan]])
+    for cap in (0.0, 2.0):
+        ll = pr.scan_log_likelihood(m, q, mu, huber_sd=1.5, cap_sd=cap)
+        ref = np.zeros((2, 3))
+        for i in range(2):
+            for j in range(3):
+                for a in range(3):
+                    if np.isfinite(q[i, a]):
+                        z = abs(q[i, a] - mu[j, a]) / m.residual_sd_db[a]
+                        z = min(z, cap) if cap else z
+                        ref[i, j] -= 0.5 * z * z if z <= 1.5 else 1.5 * z - 1.125
+        np.testing.assert_allclose(ll, ref, rtol=1e-5, atol=1e-4)   # float32 inside

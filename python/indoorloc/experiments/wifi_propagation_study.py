@@ -33,6 +33,7 @@ from typing import Any, Dict, List, Optional, Sequence
 import numpy as np
 
 from indoorloc.fusion import propagation_fixes as pf
+from indoorloc.fusion.wifi_fixes import FixSettings
 from indoorloc.fusion import wifi_sequence as ws
 from indoorloc.wifi import propagation as pr
 
@@ -84,7 +85,7 @@ def fitted_models(case: Dict[str, Any], floor: str, seed: int, cache_dir: Option
 
 
 def evaluate_floor(floor: str, case: Dict[str, Any], models: List[pr.PathLossModel], grid, threads: int = 2,
-                   miss_weight: float = 0.0, huber_sd: float = 0.0) -> Dict[str, np.ndarray]:
+                   miss_weight: float = 0.0, huber_sd: float = 0.0, cap_sd: float = 0.0) -> Dict[str, np.ndarray]:
     """errors[point key] (the floor's waypoints in case order), plus "wifi_knn"."""
     from indoorloc.experiments.wifi_sequence_study import TestWalk, _point_key, knn_errors  # noqa: F401
     from indoorloc.io import load_floor_plan
@@ -97,7 +98,7 @@ def evaluate_floor(floor: str, case: Dict[str, Any], models: List[pr.PathLossMod
     for fo, m in zip(case["folds"], models):
         mu = m.predict(cells)
         lls.append([pr.scan_log_likelihood(m, np.asarray(w["query_rss_dbm"], float), mu, miss_weight,
-                                           huber_sd)
+                                           huber_sd, cap_sd)
                     for w in fo["walks"]])
     out: Dict[str, List[np.ndarray]] = {"wifi_knn": [], "model_centre": []}
     for fo, ll_f in zip(case["folds"], lls):
@@ -115,12 +116,13 @@ def evaluate_floor(floor: str, case: Dict[str, Any], models: List[pr.PathLossMod
                 out["model_centre"].append(np.hypot(*(est - w["waypoint_xy_m"]).T))
             else:
                 out["model_centre"].append(np.full(w["waypoint_t_s"].size, np.nan))
-    fix_names = ["model_weight", "temperature", "k", "sd_m", "block_m"]
+    fix_names = [k for k in ("model_weight", "temperature", "k", "sd_m", "block_m", "gate_db") if k in grid]
     seq_names = [k for k in grid if k not in fix_names]
     for fvals in itertools.product(*(grid[k] for k in fix_names)):
         fp = dict(zip(fix_names, fvals))
         if fp["model_weight"] == 0 and (fp["temperature"] != grid["temperature"][0] or fp["k"] != grid["k"][0]
-                                        or fp["sd_m"] != grid["sd_m"][0] or fp["block_m"] != grid["block_m"][0]):
+                                        or fp["sd_m"] != grid["sd_m"][0] or fp["block_m"] != grid["block_m"][0]
+                                        or fp.get("gate_db", 0) != grid.get("gate_db", (0,))[0]):
             continue  # the kNN fixes alone do not depend on the model-fix settings
         ms = pf.ModelFixSettings(k=int(fp["k"]), temperature=float(fp["temperature"]), sd_m=float(fp["sd_m"]),
                                  block_m=float(fp["block_m"]))
@@ -133,6 +135,12 @@ def evaluate_floor(floor: str, case: Dict[str, Any], models: List[pr.PathLossMod
                     fl.append(kf)
                     continue
                 mf = pf.model_fixes(w["query_t_s"], ll, cells, ms, case["number"])
+                if fp.get("gate_db", 0) > 0:
+                    # The model fix counts where the kNN's best match is poor: g from 0 at gate_db to 1
+                    # at gate_db + 20 dB of the kNN fix's best dissimilarity (read back from its sd).
+                    fs = FixSettings()
+                    d_min = (kf.sds_m[:, 0] - fs.sd_m) / fs.sd_per_db
+                    mf = pf.gate_fixes(mf, np.clip((d_min - fp["gate_db"]) / 20.0, 0.0, 1.0))
                 if fp["model_weight"] < 0:  # a product: the kNN fix times the mixture of weight |w| on the model
                     w_m = -fp["model_weight"]
                     fl.append(pf.stack_fixes(kf, mf if w_m == 1 else pf.mix_fixes(kf, mf, w_m)))
@@ -159,7 +167,7 @@ def evaluate_floor(floor: str, case: Dict[str, Any], models: List[pr.PathLossMod
 
 def run(data_root: Path, floors: Sequence[str], seed: int, cache_dir: Optional[Path], grid,
         options: pr.PathLossOptions, miss_weight: float = 0.0, huber_sd: float = 0.0, threads: int = 2,
-        log=print) -> Dict[str, Any]:
+        log=print, cap_sd: float = 0.0) -> Dict[str, Any]:
     from indoorloc.experiments.wifi_propagation_cases import load_cases
     from indoorloc.experiments.wifi_sequence_study import _stats, coverage_split, lofo
 
@@ -168,7 +176,7 @@ def run(data_root: Path, floors: Sequence[str], seed: int, cache_dir: Optional[P
         case = load_cases(data_root, [f], seed, cache_dir, log)[f]
         models = fitted_models(case, f, seed, cache_dir, options, log)
         tic = time.perf_counter()
-        errors[f] = evaluate_floor(f, case, models, grid, threads, miss_weight, huber_sd)
+        errors[f] = evaluate_floor(f, case, models, grid, threads, miss_weight, huber_sd, cap_sd)
         coverage[f] = np.concatenate([w["coverage_m"] for fo in case["folds"] for w in fo["walks"]])
         log(f"{f}: {time.perf_counter() - tic:.0f} s")
     lofo_errors = {f: {k: v for k, v in e.items() if k not in ("wifi_knn", "model_centre")} for f, e in errors.items()}
@@ -182,7 +190,7 @@ def run(data_root: Path, floors: Sequence[str], seed: int, cache_dir: Optional[P
                         "by_coverage": {k: coverage_split(errors[f][k], coverage[f])
                                         for k in ("wifi_knn", "model_centre", best)}}
     return {"seed": seed, "grid": {k: list(v) for k, v in grid.items()}, "options": repr(options),
-            "miss_weight": miss_weight, "huber_sd": huber_sd, "lofo": choice, "per_floor": per_floor}
+            "miss_weight": miss_weight, "huber_sd": huber_sd, "cap_sd": cap_sd, "lofo": choice, "per_floor": per_floor}
 
 
 def lofo_from_means(results: Sequence[Dict[str, Any]]) -> Dict[str, Any]:
@@ -237,6 +245,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     ap.add_argument("--options", default=None, help="JSON object of PathLossOptions fields")
     ap.add_argument("--miss-weight", type=float, default=0.0)
     ap.add_argument("--huber-sd", type=float, default=0.0)
+    ap.add_argument("--cap-sd", type=float, default=0.0)
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--json", type=Path, default=None)
     ap.add_argument("--merge", type=Path, nargs="+", default=None,
@@ -252,7 +261,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         grid.update({k: tuple(v) for k, v in json.loads(a.grid).items()})
     options = pr.PathLossOptions(**(json.loads(a.options) if a.options else {}))
     r = run(root, floors, a.seed, a.cache_dir, grid, options, a.miss_weight, a.huber_sd, a.threads,
-            log=lambda m: print(m, file=sys.stderr))
+            log=lambda m: print(m, file=sys.stderr), cap_sd=a.cap_sd)
     md = markdown(r)
     print(md)
     if a.json:

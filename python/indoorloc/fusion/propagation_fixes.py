@@ -120,6 +120,22 @@ def mix_fixes(a: Fixes, b: Fixes, weight_b: float) -> Fixes:
                              np.concatenate([a.floors, b.floors], axis=1))
 
 
+def gate_fixes(fixes: Fixes, gate: np.ndarray, flat_sd_m: float = 1e3) -> Fixes:
+    """Each fix j with its components' weights times g_j (F,) in [0, 1] plus one flat component
+    (sd ``flat_sd_m`` [m], at the fix's centre) of weight 1 − g_j: g_j = 0 makes the fix
+    uninformative over a floor (its product with another fix changes nothing), g_j = 1 leaves it."""
+    g = np.asarray(gate, float).reshape(-1)
+    if g.shape != (len(fixes),) or np.any(~np.isfinite(g)) or np.any((g < 0) | (g > 1)):
+        raise ValueError(f"indoorloc: argument 'gate': expected ({len(fixes)},) values in [0, 1]")
+    w = fixes.weights / np.maximum(fixes.weights.sum(axis=1, keepdims=True), 1e-300)
+    used = fixes.weights > 0
+    centre = (np.where(used[:, :, None], fixes.means_m, 0.0) * w[:, :, None]).sum(axis=1)
+    return Fixes.from_arrays(fixes.times_s, np.concatenate([fixes.means_m, centre[:, None, :]], axis=1),
+                             np.concatenate([fixes.sds_m, np.full((len(fixes), 1), flat_sd_m)], axis=1),
+                             np.concatenate([w * g[:, None], (1.0 - g)[:, None]], axis=1),
+                             np.concatenate([fixes.floors, fixes.floors[:, :1]], axis=1))
+
+
 def stack_fixes(a: Fixes, b: Fixes) -> Fixes:
     """Both sets of fixes as separate fixes, in time order (a's first at equal times): the
     tracker multiplies the likelihoods of fixes at the same step (a product of the two sources
@@ -139,4 +155,4 @@ def stack_fixes(a: Fixes, b: Fixes) -> Fixes:
     return Fixes.from_arrays(t[order], *(np.concatenate([x, y])[order] for x, y in zip(pa, pb)))
 
 
-__all__ = ["ModelFixSettings", "mix_fixes", "model_fixes", "stack_fixes", "walkable_cells"]
+__all__ = ["ModelFixSettings", "gate_fixes", "mix_fixes", "model_fixes", "stack_fixes", "walkable_cells"]

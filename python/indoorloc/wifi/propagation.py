@@ -235,13 +235,14 @@ def fit_path_loss(rss_dbm: np.ndarray, positions_m: np.ndarray, options: Optiona
 
 
 def scan_log_likelihood(model: PathLossModel, queries_dbm: np.ndarray, predicted_dbm: np.ndarray,
-                        miss_weight: float = 0.0, huber_sd: float = 0.0) -> np.ndarray:
+                        miss_weight: float = 0.0, huber_sd: float = 0.0, cap_sd: float = 0.0) -> np.ndarray:
     """ℓ (Q, M) of queries (Q, K) [dBm, NaN = not heard] at the M points whose predictions
     ``predicted_dbm`` = ``model.predict(points)`` (M, K) are given (module docstring); APs not
     fitted are ignored. ``miss_weight`` w ≥ 0 scales the not-heard term. ``huber_sd`` c > 0: each
     heard AP's term is −ρ_c(z), z = (q_i − μ_i)/σ_i, ρ_c the Huber loss (z²/2 up to |z| = c, then
     linear): a robust likelihood, for the APs whose prediction beyond the survey is off by tens
-    of dB (one loop over the queries instead of three matrix products)."""
+    of dB (one loop over the queries instead of three matrix products). ``cap_sd`` k > 0 (with
+    huber_sd): |z| is clipped at k first, so that one AP costs at most ρ_c(k) (a redescending loss)."""
     q = real_array(queries_dbm, "queries_dbm", ndim=2, finite=False)
     mu = np.asarray(predicted_dbm, float)
     if q.shape[1] != mu.shape[1]:
@@ -259,6 +260,8 @@ def scan_log_likelihood(model: PathLossModel, queries_dbm: np.ndarray, predicted
         for j in range(q.shape[0]):
             h = np.flatnonzero(heard[j])
             z = np.abs((q[j, h].astype(np.float32)[None, :] - mu32[:, h]) * inv_sd[h][None, :])
+            if cap_sd > 0:
+                z = np.minimum(z, np.float32(cap_sd))
             ll[j] = -np.where(z <= huber_sd, 0.5 * z * z, huber_sd * z - 0.5 * huber_sd * huber_sd).sum(axis=1)
     else:
         # Σ_i h_i p_i (q_i − μ_i)² = Σ h p q² − 2 Σ (h p q) μ + Σ (h p) μ²
