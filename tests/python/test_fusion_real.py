@@ -268,3 +268,23 @@ def test_fold_models_from_the_walk_cache_equal_the_direct_construction(two_floor
         for name in ("rss_dbm", "positions_m", "floors", "walk_index", "ap_ratio"):
             assert np.array_equal(getattr(models["F1"].all_database, name), getattr(direct_all, name),
                                   equal_nan=True), name
+
+
+def test_propagation_fixes_setting(two_floor_site):
+    """RealSettings.propagation: the path-loss fixes reach wifi_sequence and the smoother only;
+    wifi_knn keeps the kNN fixes; a bad mode is named."""
+    from dataclasses import replace
+
+    data = fr.load_site(two_floor_site, ["F2"])[1]
+    methods = ("wifi_knn", "wifi_sequence", "fusion_smoother")
+    base = fr.RealSettings(**FAST, threads=1, floor_identification=False)
+    off = fr.evaluate_floors(data, base, methods=methods)
+    on = fr.evaluate_floors(data, replace(base, propagation="product"), methods=methods)
+    changed = False
+    for a, b in zip(off, on):
+        assert np.array_equal(a.errors_m["wifi_knn"], b.errors_m["wifi_knn"])
+        assert np.all(np.isfinite(b.errors_m["wifi_sequence"])) and np.all(np.isfinite(b.errors_m["fusion_smoother"]))
+        changed |= not np.array_equal(a.errors_m["wifi_sequence"], b.errors_m["wifi_sequence"])
+    assert changed
+    with pytest.raises(ValueError, match="propagation"):
+        fr.evaluate_floors(data, replace(base, propagation="sum"), methods=methods)

@@ -95,6 +95,22 @@ class WalkTrainingCache:
         return wfx.assemble_database(per_walk, settings)
 
 
+def _propagation(fl: FloorData, database: wfx.FingerprintDatabase, settings: RealSettings):
+    """(path-loss model, walkable 2 m cells, predictions) of the fold's training fingerprints
+    when the propagation fixes are on (``RealSettings.propagation``), else None."""
+    if settings.propagation == "off":
+        return None
+    from indoorloc.fusion import propagation_fixes, wifi_sequence
+    from indoorloc.wifi import propagation
+
+    own = database.floors == fl.number
+    model = propagation.fit_path_loss(database.rss_dbm[own], database.positions_m[own],
+                                      propagation.PathLossOptions(iterations=20))
+    cells = propagation_fixes.walkable_cells(
+        fusion.GridTracker(fl.plan, wifi_sequence.grid_options(wifi_sequence.SequenceSettings())), 0)
+    return model, cells, model.predict(cells)
+
+
 def _fold_models(floors: Sequence[FloorData], fold_of: Dict[str, List[np.ndarray]], j: int,
                  settings: RealSettings, all_plan, with_crowd_map: bool = True,
                  cache: Optional[WalkTrainingCache] = None) -> Dict[str, FoldModels]:
@@ -121,7 +137,7 @@ def _fold_models(floors: Sequence[FloorData], fold_of: Dict[str, List[np.ndarray
         database = cache.database([(fl, i) for i in train_idx], settings.fixes)
         crowd_grid = wifi.GridPosterior(crowd.model, settings.grid_spacing_m) if crowd is not None else None
         out[fl.name] = FoldModels(fl, cal, crowd, database, coverage_tree=_coverage_tree(database, fl.number),
-                                  crowd_grid=crowd_grid)
+                                  crowd_grid=crowd_grid, propagation=_propagation(fl, database, settings))
         all_walks += [(fl, i) for i in train_idx]
     if all_plan is not None:
         all_database = cache.database(all_walks, settings.fixes)

@@ -74,6 +74,15 @@ class RealSettings:
     #: The WiFi-only sequence tracker (``wifi_sequence``: the fixes above on the walkable grid with
     #: a random-walk motion, no PDR; its settings chosen by LOFO, ``experiments/wifi_sequence_study``).
     wifi_sequence: wifi_sequence.SequenceSettings = field(default_factory=wifi_sequence.SequenceSettings)
+    #: Propagation-model fixes (``fusion.propagation_fixes``, a per-AP path-loss model fitted per
+    #: fold) added to the fixes of ``wifi_sequence`` and of the grid engine's methods: "off" (the
+    #: kNN fixes alone), "product" (both as separate fixes at the same times) or "mixture" (one
+    #: fix, ``propagation_weight`` on the model's components). ``wifi_knn`` and the peer keep the
+    #: kNN fixes. A study setting (docs/fusion_real.md, "A propagation model that extrapolates").
+    propagation: str = "off"
+    propagation_weight: float = 0.5
+    propagation_fixes: Any = None        #: ``propagation_fixes.ModelFixSettings`` (None: its defaults)
+    propagation_huber_sd: float = 1.5    #: ``wifi.propagation.scan_log_likelihood``'s huber_sd
     #: LOFO: ε of the fixes (the particle tracker's own default, read from TrackerOptions).
     fix_outlier_probability: float = field(default_factory=lambda: fusion.TrackerOptions().fix_outlier_probability)
     #: LOFO: τ_fix (consecutive scans share stale readings; TrackerOptions' default).
@@ -215,6 +224,9 @@ class FoldModels:
     coverage_tree: Any = None
     #: ``wifi.GridPosterior`` of ``crowd`` (the wifi_model method), built once per fold, or None.
     crowd_grid: Any = None
+    #: (path-loss model, cells (M, 2) [m], its predictions (M, K) [dBm]) when
+    #: ``RealSettings.propagation_weight`` > 0, else None.
+    propagation: Any = None
 
 
 def default_site_root() -> Path:

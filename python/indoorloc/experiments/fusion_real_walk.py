@@ -68,6 +68,26 @@ def replace_options(options: fusion.TrackerOptions, **changes) -> fusion.Tracker
     return options.replace(**changes)
 
 
+def _with_propagation(walk, knn_fixes, models: FoldModels, settings: RealSettings):
+    """The kNN fixes with the propagation-model fixes (``RealSettings.propagation``)."""
+    if settings.propagation == "off" or models.propagation is None or len(knn_fixes) == 0:
+        return knn_fixes
+    if settings.propagation not in ("product", "mixture"):
+        raise ValueError(f"indoorloc: RealSettings.propagation: expected 'off', 'product' or 'mixture', "
+                         f"got {settings.propagation!r}")
+    from indoorloc.fusion import propagation_fixes
+    from indoorloc.wifi import propagation
+
+    model, cells, mu = models.propagation
+    t, q = wfx.walk_queries(walk, models.database)
+    ll = propagation.scan_log_likelihood(model, q, mu, huber_sd=settings.propagation_huber_sd)
+    mf = propagation_fixes.model_fixes(t, ll, cells, settings.propagation_fixes or propagation_fixes.ModelFixSettings(),
+                                       models.floor.number)
+    if settings.propagation == "product":
+        return propagation_fixes.stack_fixes(knn_fixes, mf)
+    return propagation_fixes.mix_fixes(knn_fixes, mf, settings.propagation_weight)
+
+
 def _score_walk(walk, steps_raw: ph.HandheldSteps, models: FoldModels, settings: RealSettings, peer,
                 methods: Sequence[str]) -> WalkScore:
     fl = models.floor
@@ -83,11 +103,12 @@ def _score_walk(walk, steps_raw: ph.HandheldSteps, models: FoldModels, settings:
     def put(name: str, est: np.ndarray) -> None:
         err[name] = np.hypot(*(np.asarray(est) - wxy).T)
 
-    fixes = wfx.fixes_for_walk(walk, models.database)
-    centres = wfx.fix_centres(fixes) if len(fixes) else np.zeros((0, 2))
+    knn_fixes = wfx.fixes_for_walk(walk, models.database)
+    centres = wfx.fix_centres(knn_fixes) if len(knn_fixes) else np.zeros((0, 2))
+    fixes = _with_propagation(walk, knn_fixes, models, settings)
     # WiFi only: the scan nearest in time to each waypoint.
     if len(fixes) and "wifi_knn" in want:
-        put("wifi_knn", _nearest_rows(wt, fixes.times_s, centres))
+        put("wifi_knn", _nearest_rows(wt, knn_fixes.times_s, centres))
     if len(fixes) and "wifi_sequence" in want:
         # WiFi only, as a sequence: the walk's fixes (and their times) on the walkable grid with a
         # random-walk motion, forward-backward over the whole walk; no PDR, no IMU.
@@ -115,7 +136,7 @@ def _score_walk(walk, steps_raw: ph.HandheldSteps, models: FoldModels, settings:
         tic = time.perf_counter()
         # Positions before the first step and after each step: M + 1 times, M displacements.
         t_nodes = np.r_[min(float(wt[0]), float(pdr_steps.times_s[0]) - 0.5), pdr_steps.times_s]
-        track = peer.costmin_track(t_nodes, pdr_steps.displacements_m, fixes.times_s, centres)
+        track = peer.costmin_track(t_nodes, pdr_steps.displacements_m, knn_fixes.times_s, centres)
         score.seconds["peer_costmin"] = time.perf_counter() - tic
         put("peer_costmin", peer.evaluate_at(wt, t_nodes, track))
     if len(pdr_steps) == 0:
