@@ -262,9 +262,8 @@ def detect_stance(recording: ImuRecording, evidence: Optional[Dict[str, float]] 
             and low_motion_fallback == "bimodal_split"):
         split = bimodal_threshold(out["statistic"])
         if math.isfinite(split) and split > 0:
-            fixed = dict(opts, rule="fixed", threshold=split, max_threshold=10.0 * split)
-            again = _pdr.zero_velocity(recording.acc_mps2, recording.gyro_radps, recording.rate_hz,
-                                       options=options.replace(**fixed))
+            fixed = options.replace(rule="fixed", threshold=split, max_threshold=10.0 * split)
+            again = _pdr.zero_velocity(recording.acc_mps2, recording.gyro_radps, recording.rate_hz, options=fixed)
             for key in ("stance", "threshold", "stance_fraction", "walking_stance_fraction", "report"):
                 out[key] = again[key]
             out["bimodal_split"] = True
