@@ -13,16 +13,38 @@ namespace {
 
 inline std::uint64_t RotateLeft(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
 
+// The eight lanes' state copied out of the generator (so that the compiler keeps it in registers
+// or on the stack, not behind the generator's pointer) and copied back.
+struct ScalarLanes {
+  std::uint64_t s0[RandomLanes::kLanes], s1[RandomLanes::kLanes], s2[RandomLanes::kLanes], s3[RandomLanes::kLanes];
+};
+
+inline ScalarLanes LoadScalarLanes(const std::uint64_t (&state)[4][RandomLanes::kLanes]) {
+  ScalarLanes l;
+  std::memcpy(l.s0, state[0], sizeof(l.s0));
+  std::memcpy(l.s1, state[1], sizeof(l.s1));
+  std::memcpy(l.s2, state[2], sizeof(l.s2));
+  std::memcpy(l.s3, state[3], sizeof(l.s3));
+  return l;
+}
+
+inline void StoreScalarLanes(const ScalarLanes& l, std::uint64_t (&state)[4][RandomLanes::kLanes]) {
+  std::memcpy(state[0], l.s0, sizeof(l.s0));
+  std::memcpy(state[1], l.s1, sizeof(l.s1));
+  std::memcpy(state[2], l.s2, sizeof(l.s2));
+  std::memcpy(state[3], l.s3, sizeof(l.s3));
+}
+
 // One xoshiro256++ step of lane j (Blackman & Vigna 2019, as RandomStream::operator()): its output.
-inline std::uint64_t NextScalar(std::uint64_t* s0, std::uint64_t* s1, std::uint64_t* s2, std::uint64_t* s3, int j) {
-  const std::uint64_t result = RotateLeft(s0[j] + s3[j], 23) + s0[j];
-  const std::uint64_t t = s1[j] << 17;
-  s2[j] ^= s0[j];
-  s3[j] ^= s1[j];
-  s1[j] ^= s2[j];
-  s0[j] ^= s3[j];
-  s2[j] ^= t;
-  s3[j] = RotateLeft(s3[j], 45);
+inline std::uint64_t NextScalar(ScalarLanes& l, int j) {
+  const std::uint64_t result = RotateLeft(l.s0[j] + l.s3[j], 23) + l.s0[j];
+  const std::uint64_t t = l.s1[j] << 17;
+  l.s2[j] ^= l.s0[j];
+  l.s3[j] ^= l.s1[j];
+  l.s1[j] ^= l.s2[j];
+  l.s0[j] ^= l.s3[j];
+  l.s2[j] ^= t;
+  l.s3[j] = RotateLeft(l.s3[j], 45);
   return result;
 }
 
@@ -77,15 +99,11 @@ struct Affine {
 template <bool kCentred>
 void FillRoundsScalar(std::uint64_t (&state)[4][RandomLanes::kLanes], double* out, int rounds, Affine f) {
   constexpr int kLanes = RandomLanes::kLanes;
-  std::uint64_t s0[kLanes], s1[kLanes], s2[kLanes], s3[kLanes];
-  std::memcpy(s0, state[0], sizeof(s0));
-  std::memcpy(s1, state[1], sizeof(s1));
-  std::memcpy(s2, state[2], sizeof(s2));
-  std::memcpy(s3, state[3], sizeof(s3));
+  ScalarLanes lanes = LoadScalarLanes(state);
   for (int r = 0; r < rounds; ++r) {
     std::uint64_t bits[kLanes];
     for (int j = 0; j < kLanes; ++j) {
-      bits[j] = (NextScalar(s0, s1, s2, s3, j) >> 12) | 0x3FF0000000000000ULL;  // a double in [1, 2)
+      bits[j] = (NextScalar(lanes, j) >> 12) | 0x3FF0000000000000ULL;  // a double in [1, 2)
     }
     double unit[kLanes];
     std::memcpy(unit, bits, sizeof(unit));
@@ -94,10 +112,7 @@ void FillRoundsScalar(std::uint64_t (&state)[4][RandomLanes::kLanes], double* ou
       out[r * kLanes + j] = kCentred ? f.mean + (f.two_a * u - f.a) : u;
     }
   }
-  std::memcpy(state[0], s0, sizeof(s0));
-  std::memcpy(state[1], s1, sizeof(s1));
-  std::memcpy(state[2], s2, sizeof(s2));
-  std::memcpy(state[3], s3, sizeof(s3));
+  StoreScalarLanes(lanes, state);
 }
 
 // The same rounds with AVX2: each state word of the eight lanes is two 4 x 64-bit registers.
@@ -162,14 +177,10 @@ inline double ZigguratU(std::uint64_t bits) {
 void NormalRoundsScalar(std::uint64_t (&state)[4][RandomLanes::kLanes], double* out, int rounds, int valid,
                         const double* table_x, const double* table_ratio, RandomStream& fallback) {
   constexpr int kLanes = RandomLanes::kLanes;
-  std::uint64_t s0[kLanes], s1[kLanes], s2[kLanes], s3[kLanes];
-  std::memcpy(s0, state[0], sizeof(s0));
-  std::memcpy(s1, state[1], sizeof(s1));
-  std::memcpy(s2, state[2], sizeof(s2));
-  std::memcpy(s3, state[3], sizeof(s3));
+  ScalarLanes lanes = LoadScalarLanes(state);
   for (int r = 0; r < rounds; ++r) {
     for (int j = 0; j < kLanes; ++j) {
-      const std::uint64_t bits = NextScalar(s0, s1, s2, s3, j);
+      const std::uint64_t bits = NextScalar(lanes, j);
       const double u = ZigguratU(bits);
       const int layer = static_cast<int>(bits & 0x7F);
       const int k = r * kLanes + j;
@@ -179,10 +190,7 @@ void NormalRoundsScalar(std::uint64_t (&state)[4][RandomLanes::kLanes], double* 
       }
     }
   }
-  std::memcpy(state[0], s0, sizeof(s0));
-  std::memcpy(state[1], s1, sizeof(s1));
-  std::memcpy(state[2], s2, sizeof(s2));
-  std::memcpy(state[3], s3, sizeof(s3));
+  StoreScalarLanes(lanes, state);
 }
 
 // The same with AVX2: the layer's table entries by gathers, the fast test on four lanes at once;

@@ -21,31 +21,22 @@ def build_cases(data_root: Path, floors: Sequence[str], seed: int, log=print) ->
     positions_m (N, 2), floors (N,), walk_index (N,), bssids), "walks": [dict]}]}``; each walk dict
     holds ``walk_id, duration_s, waypoint_t_s (W,), waypoint_xy_m (W, 2), coverage_m (W,),
     query_t_s (Q,), query_rss_dbm (Q, K), knn_fixes`` (``fusion.Fixes``)."""
-    from indoorloc.experiments.fusion_real_folds import WalkTrainingCache, _folds, load_floor
-    from indoorloc.experiments.fusion_real_settings import RealSettings
-    from indoorloc.experiments.fusion_real_walk import survey_coverage_m
+    from indoorloc.experiments.wifi_study_folds import floor_folds
     from indoorloc.fusion import wifi_fixes as wfx
 
-    settings = RealSettings(seed=seed)
     out = {}
     for name in floors:
         tic = time.perf_counter()
-        fl = load_floor(data_root, name)
-        cache = WalkTrainingCache()
         folds = []
-        for j, test_idx in enumerate(_folds(len(fl.walks), settings.folds, seed)):
-            test = set(test_idx.tolist())
-            train_idx = [i for i in range(len(fl.walks)) if i not in test]
-            db = cache.database([(fl, i) for i in train_idx], settings.fixes)
-            train_xy = db.positions_m[db.floors == fl.number]
+        for fl, fold in floor_folds(data_root, name, seed):
+            db = fold.database
             walks = []
-            for i in test_idx:
-                w = fl.walks[i]
-                wt, wxy = np.asarray(w.waypoint_t_s, float), np.asarray(w.waypoint_xy_m, float)
+            for fw in fold.walks:
+                w = fw.walk
                 qt, qrss = wfx.walk_queries(w, db)
-                walks.append({"walk_id": w.walk_id, "fold": j, "duration_s": float(w.duration_s),
-                              "waypoint_t_s": wt, "waypoint_xy_m": wxy,
-                              "coverage_m": survey_coverage_m(wxy, train_xy),
+                walks.append({"walk_id": w.walk_id, "fold": fold.index, "duration_s": float(w.duration_s),
+                              "waypoint_t_s": fw.waypoint_t_s, "waypoint_xy_m": fw.waypoint_xy_m,
+                              "coverage_m": fw.coverage_m,
                               "query_t_s": qt, "query_rss_dbm": qrss.astype(np.float32),
                               "knn_fixes": wfx.fixes_for_walk(w, db)})
             folds.append({"database": SimpleNamespace(rss_dbm=np.asarray(db.rss_dbm, np.float32),

@@ -220,15 +220,10 @@ def lofo_from_means(results: Sequence[Dict[str, Any]]) -> Dict[str, Any]:
 
 
 def markdown(r: Dict[str, Any]) -> str:
-    fmt = lambda s: f"{s['mean_m']:.2f} / {s['median_m']:.2f} / {s['p90_m']:.1f}"  # noqa: E731
-    lines = [f"Seed {r['seed']}; all-floor choice: `{r['lofo']['all_floor_choice']}`", "",
-             "| floor | wifi_knn | model argmax | all-floor choice | held out (LOFO) | LOFO choice |",
-             "|---|---|---|---|---|---|"]
-    for f, p in r["per_floor"].items():
-        lines.append(f"| {f} | {fmt(p['wifi_knn'])} | {fmt(p['model_centre'])} | {fmt(p['all_floor_choice'])} | "
-                     f"{fmt(p['held_out'])} | `{p['held_out']['chosen']}` |")
-    lines.append(f"| pooled (held out) | | | | {fmt(r['lofo']['held_out_pooled'])} | |")
-    return "\n".join(lines) + "\n"
+    from indoorloc.experiments.wifi_study_folds import lofo_markdown
+
+    return lofo_markdown(r, f"Seed {r['seed']}", [("wifi_knn", "wifi_knn"), ("model argmax", "model_centre"),
+                                                   ("all-floor choice", "all_floor_choice")])
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:

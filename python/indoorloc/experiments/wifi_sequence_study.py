@@ -68,32 +68,23 @@ def _fix_variants(grid: Dict[str, Sequence[Any]]) -> List[Dict[str, Any]]:
 def build_cases(data_root: Path, floors: Sequence[str], seed: int, variants: Sequence[Dict[str, Any]], log=print):
     """Per floor: its plan, per fold the training database, and the test walks (``TestWalk``)
     with their fixes for each variant of the fix settings."""
-    from indoorloc.experiments.fusion_real_folds import WalkTrainingCache, _folds, load_floor
     from indoorloc.experiments.fusion_real_settings import RealSettings
-    from indoorloc.experiments.fusion_real_walk import survey_coverage_m
+    from indoorloc.experiments.wifi_study_folds import floor_folds
     from indoorloc.fusion import wifi_fixes as wfx
 
     settings = RealSettings(seed=seed)
     out = {}
     for name in floors:
         tic = time.perf_counter()
-        fl = load_floor(data_root, name)
-        cache = WalkTrainingCache()
         folds = []
-        for j, test_idx in enumerate(_folds(len(fl.walks), settings.folds, seed)):
-            test = set(test_idx.tolist())
-            train_idx = [i for i in range(len(fl.walks)) if i not in test]
-            db = cache.database([(fl, i) for i in train_idx], settings.fixes)
+        for fl, fold in floor_folds(data_root, name, seed):
+            db = fold.database
             # "": the default fixes (wifi_knn's); one more set per variant of the fix settings.
             dbs = {"": db, **{_point_key(v): db.with_settings(replace(settings.fixes, **v)) for v in variants}}
-            train_xy = db.positions_m[db.floors == fl.number]
-            walks = []
-            for i in test_idx:
-                w = fl.walks[i]
-                wt, wxy = np.asarray(w.waypoint_t_s, float), np.asarray(w.waypoint_xy_m, float)
-                walks.append(TestWalk(name, w.walk_id, j, float(w.duration_s), wt, wxy,
-                                      survey_coverage_m(wxy, train_xy),
-                                      {k: wfx.fixes_for_walk(w, d) for k, d in dbs.items()}).__dict__)
+            walks = [TestWalk(name, fw.walk.walk_id, fold.index, float(fw.walk.duration_s), fw.waypoint_t_s,
+                              fw.waypoint_xy_m, fw.coverage_m,
+                              {k: wfx.fixes_for_walk(fw.walk, d) for k, d in dbs.items()}).__dict__
+                     for fw in fold.walks]
             # What the anchoring needs of the database (picklable; the matcher index is not).
             folds.append({"database": SimpleNamespace(positions_m=np.asarray(db.positions_m),
                                                       floors=np.asarray(db.floors)), "walks": walks})
@@ -226,16 +217,11 @@ def run(data_root: Path, floors: Sequence[str], seed: int, cache: Optional[Path]
 
 
 def markdown(r: Dict[str, Any]) -> str:
-    fmt = lambda s: f"{s['mean_m']:.2f} / {s['median_m']:.2f} / {s['p90_m']:.1f}"  # noqa: E731
-    lines = [f"Seed {r['seed']}, {'smoothed' if r['smooth'] else 'causal filter'}; all-floor choice: "
-             f"`{r['lofo']['all_floor_choice']}`", "",
-             "| floor | wifi_knn | sequence, all-floor choice | sequence, held out (LOFO) | LOFO choice |",
-             "|---|---|---|---|---|"]
-    for f, p in r["per_floor"].items():
-        lines.append(f"| {f} | {fmt(p['wifi_knn'])} | {fmt(p['all_floor_choice'])} | {fmt(p['held_out'])} | "
-                     f"`{p['held_out']['chosen']}` |")
-    lines.append(f"| pooled (held out) | | | {fmt(r['lofo']['held_out_pooled'])} | |")
-    return "\n".join(lines) + "\n"
+    from indoorloc.experiments.wifi_study_folds import lofo_markdown
+
+    title = f"Seed {r['seed']}, {'smoothed' if r['smooth'] else 'causal filter'}"
+    return lofo_markdown(r, title, [("wifi_knn", "wifi_knn"), ("sequence, all-floor choice", "all_floor_choice")],
+                         held_out_head="sequence, held out (LOFO)")
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
