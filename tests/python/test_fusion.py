@@ -204,17 +204,8 @@ def test_particle_tracker_gives_the_same_numbers_with_and_without_avx2(tmp_path)
     lanes) and motion loop (compiled for AVX2 and for the baseline) do the same IEEE operations in
     the same order as the portable versions: bit-identical particles, weights and estimates. The
     offset walk of 0.06 rad makes some increments exceed the Taylor rotation's 0.1 rad."""
-    import os
-    import subprocess
-    import sys
-    from pathlib import Path
+    from simd_check import outputs_with_and_without_avx2
 
-    src = str(Path(fusion.__file__).resolve().parent.parent)
-    results = []
-    for disable in ("0", "1"):
-        path = tmp_path / f"avx2_off_{disable}.npy"
-        env = dict(os.environ, INDOORLOC_DISABLE_AVX2=disable, PYTHONPATH=src)
-        subprocess.run([sys.executable, "-c", _TRACKER_SIMD_SCRIPT, str(path)], check=True, env=env)
-        results.append(np.load(path))
+    results = outputs_with_and_without_avx2(_TRACKER_SIMD_SCRIPT, tmp_path, fusion.__file__)
     assert results[0].size > 10000 and np.all(np.isfinite(results[0][:240]))
     np.testing.assert_array_equal(results[0], results[1])

@@ -255,17 +255,10 @@ def test_grid_tracker_gives_the_same_numbers_with_and_without_avx2(tmp_path):
     """The AVX2 versions of the grid's passes (the double moments and block sums of the spatial
     median, core/simd_dispatch.h) do the same operations in the same order as the portable ones:
     bit-identical results, medians on and off, known and unknown start."""
-    import os
-    import subprocess
+    from simd_check import outputs_with_and_without_avx2
 
-    src = str(Path(fusion.__file__).resolve().parent.parent)
-    results = []
-    for disable in ("0", "1"):
-        path = tmp_path / f"avx2_off_{disable}.npy"
-        env = dict(os.environ, INDOORLOC_DISABLE_AVX2=disable, PYTHONPATH=src)
-        subprocess.run([sys.executable, "-c", _SIMD_SCRIPT, str(path), str(Path(__file__).resolve().parent)],
-                       check=True, env=env)
-        results.append(np.load(path))
+    results = outputs_with_and_without_avx2(_SIMD_SCRIPT, tmp_path, fusion.__file__,
+                                            [str(Path(__file__).resolve().parent)])
     assert results[0].size > 1000 and np.all(np.isfinite(results[0]))
     np.testing.assert_array_equal(results[0], results[1])
 

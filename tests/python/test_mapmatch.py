@@ -157,16 +157,8 @@ def test_filter_gives_the_same_numbers_with_and_without_avx2(tmp_path):
     """The AVX2 loops (random lanes, in-segment move, weights and sums) and their portable versions
     perform the same operations in the same order: bit-identical results (same seed, any machine).
     1001 particles: whole groups of four and a remainder."""
-    import os
-    import subprocess
-    import sys
+    from simd_check import outputs_with_and_without_avx2
 
-    src = str(Path(mapmatch.__file__).resolve().parent.parent)
-    results = []
-    for disable in ("0", "1"):
-        path = tmp_path / f"avx2_off_{disable}.npy"
-        env = dict(os.environ, INDOORLOC_DISABLE_AVX2=disable, PYTHONPATH=src)
-        subprocess.run([sys.executable, "-c", _SIMD_SCRIPT, str(path)], check=True, env=env)
-        results.append(np.load(path))
+    results = outputs_with_and_without_avx2(_SIMD_SCRIPT, tmp_path, mapmatch.__file__)
     assert results[0].size > 1000
     np.testing.assert_array_equal(results[0], results[1])

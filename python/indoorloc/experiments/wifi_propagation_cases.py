@@ -8,7 +8,6 @@ redo the PDR and the matching.
 from __future__ import annotations
 
 import pickle
-import time
 from pathlib import Path
 from types import SimpleNamespace
 from typing import Any, Dict, Optional, Sequence
@@ -21,33 +20,26 @@ def build_cases(data_root: Path, floors: Sequence[str], seed: int, log=print) ->
     positions_m (N, 2), floors (N,), walk_index (N,), bssids), "walks": [dict]}]}``; each walk dict
     holds ``walk_id, duration_s, waypoint_t_s (W,), waypoint_xy_m (W, 2), coverage_m (W,),
     query_t_s (Q,), query_rss_dbm (Q, K), knn_fixes`` (``fusion.Fixes``)."""
-    from indoorloc.experiments.wifi_study_folds import floor_folds
+    from indoorloc.experiments.wifi_study_folds import floor_cases
     from indoorloc.fusion import wifi_fixes as wfx
 
-    out = {}
-    for name in floors:
-        tic = time.perf_counter()
-        folds = []
-        for fl, fold in floor_folds(data_root, name, seed):
-            db = fold.database
-            walks = []
-            for fw in fold.walks:
-                w = fw.walk
-                qt, qrss = wfx.walk_queries(w, db)
-                walks.append({"walk_id": w.walk_id, "fold": fold.index, "duration_s": float(w.duration_s),
-                              "waypoint_t_s": fw.waypoint_t_s, "waypoint_xy_m": fw.waypoint_xy_m,
-                              "coverage_m": fw.coverage_m,
-                              "query_t_s": qt, "query_rss_dbm": qrss.astype(np.float32),
-                              "knn_fixes": wfx.fixes_for_walk(w, db)})
-            folds.append({"database": SimpleNamespace(rss_dbm=np.asarray(db.rss_dbm, np.float32),
-                                                      positions_m=np.asarray(db.positions_m),
-                                                      floors=np.asarray(db.floors),
-                                                      walk_index=np.asarray(db.walk_index),
-                                                      bssids=list(db.bssids)),
-                          "walks": walks})
-        out[name] = {"geojson_path": str(fl.geojson_path), "number": fl.number, "folds": folds}
-        log(f"{name}: {len(fl.walks)} walks, {time.perf_counter() - tic:.0f} s")
-    return out
+    def record(fl, fold):
+        db = fold.database
+        walks = []
+        for fw in fold.walks:
+            w = fw.walk
+            qt, qrss = wfx.walk_queries(w, db)
+            walks.append({"walk_id": w.walk_id, "fold": fold.index, "duration_s": float(w.duration_s),
+                          "waypoint_t_s": fw.waypoint_t_s, "waypoint_xy_m": fw.waypoint_xy_m,
+                          "coverage_m": fw.coverage_m,
+                          "query_t_s": qt, "query_rss_dbm": qrss.astype(np.float32),
+                          "knn_fixes": wfx.fixes_for_walk(w, db)})
+        return {"database": SimpleNamespace(rss_dbm=np.asarray(db.rss_dbm, np.float32),
+                                            positions_m=np.asarray(db.positions_m), floors=np.asarray(db.floors),
+                                            walk_index=np.asarray(db.walk_index), bssids=list(db.bssids)),
+                "walks": walks}
+
+    return floor_cases(data_root, floors, seed, record, log)
 
 
 def load_cases(data_root: Path, floors: Sequence[str], seed: int, cache_dir: Optional[Path], log=print

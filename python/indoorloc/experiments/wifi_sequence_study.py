@@ -69,28 +69,24 @@ def build_cases(data_root: Path, floors: Sequence[str], seed: int, variants: Seq
     """Per floor: its plan, per fold the training database, and the test walks (``TestWalk``)
     with their fixes for each variant of the fix settings."""
     from indoorloc.experiments.fusion_real_settings import RealSettings
-    from indoorloc.experiments.wifi_study_folds import floor_folds
+    from indoorloc.experiments.wifi_study_folds import floor_cases
     from indoorloc.fusion import wifi_fixes as wfx
 
     settings = RealSettings(seed=seed)
-    out = {}
-    for name in floors:
-        tic = time.perf_counter()
-        folds = []
-        for fl, fold in floor_folds(data_root, name, seed):
-            db = fold.database
-            # "": the default fixes (wifi_knn's); one more set per variant of the fix settings.
-            dbs = {"": db, **{_point_key(v): db.with_settings(replace(settings.fixes, **v)) for v in variants}}
-            walks = [TestWalk(name, fw.walk.walk_id, fold.index, float(fw.walk.duration_s), fw.waypoint_t_s,
-                              fw.waypoint_xy_m, fw.coverage_m,
-                              {k: wfx.fixes_for_walk(fw.walk, d) for k, d in dbs.items()}).__dict__
-                     for fw in fold.walks]
-            # What the anchoring needs of the database (picklable; the matcher index is not).
-            folds.append({"database": SimpleNamespace(positions_m=np.asarray(db.positions_m),
-                                                      floors=np.asarray(db.floors)), "walks": walks})
-        out[name] = {"geojson_path": str(fl.geojson_path), "number": fl.number, "folds": folds}
-        log(f"{name}: {len(fl.walks)} walks, {time.perf_counter() - tic:.0f} s")
-    return out
+
+    def record(fl, fold):
+        db = fold.database
+        # "": the default fixes (wifi_knn's); one more set per variant of the fix settings.
+        dbs = {"": db, **{_point_key(v): db.with_settings(replace(settings.fixes, **v)) for v in variants}}
+        walks = [TestWalk(fl.name, fw.walk.walk_id, fold.index, float(fw.walk.duration_s), fw.waypoint_t_s,
+                          fw.waypoint_xy_m, fw.coverage_m,
+                          {k: wfx.fixes_for_walk(fw.walk, d) for k, d in dbs.items()}).__dict__
+                 for fw in fold.walks]
+        # What the anchoring needs of the database (picklable; the matcher index is not).
+        return {"database": SimpleNamespace(positions_m=np.asarray(db.positions_m), floors=np.asarray(db.floors)),
+                "walks": walks}
+
+    return floor_cases(data_root, floors, seed, record, log)
 
 
 def knn_errors(w: TestWalk, variant: str = "") -> np.ndarray:

@@ -6,9 +6,10 @@ Markdown table of a leave-one-floor-out choice."""
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Dict, Iterator, List, Sequence
+from typing import Any, Callable, Dict, Iterator, List, Sequence
 
 import numpy as np
 
@@ -54,6 +55,21 @@ def floor_folds(data_root: Path, floor: str, seed: int) -> Iterator[tuple]:
             wt, wxy = np.asarray(w.waypoint_t_s, float), np.asarray(w.waypoint_xy_m, float)
             walks.append(FoldWalk(w, wt, wxy, survey_coverage_m(wxy, train_xy)))
         yield fl, Fold(j, db, walks)
+
+
+def floor_cases(data_root: Path, floors: Sequence[str], seed: int, fold_record: Callable[[Any, Fold], dict],
+                log=print) -> Dict[str, Any]:
+    """Per floor ``{"geojson_path", "number", "folds": [fold_record(floor_data, fold) per fold]}``
+    over the folds of :func:`floor_folds`; ``log`` gets a line per floor (walks, seconds)."""
+    out = {}
+    for name in floors:
+        tic = time.perf_counter()
+        folds = []
+        for fl, fold in floor_folds(data_root, name, seed):
+            folds.append(fold_record(fl, fold))
+        out[name] = {"geojson_path": str(fl.geojson_path), "number": fl.number, "folds": folds}
+        log(f"{name}: {len(fl.walks)} walks, {time.perf_counter() - tic:.0f} s")
+    return out
 
 
 def lofo_markdown(r: Dict[str, Any], title: str, columns: Sequence[tuple],
