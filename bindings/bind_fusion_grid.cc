@@ -47,9 +47,8 @@ py::dict ResultToDict(const GridTrackResult& r) {
   return d;
 }
 
-}  // namespace
-
-void BindFusionGrid(py::module_& m) {
+// GridTrackerOptions and GridTrackSummary.
+void BindGridOptionsAndSummary(py::module_& m) {
   py::class_<GridTrackerOptions> options(m, "GridTrackerOptions", R"doc(
 Options of the grid tracker (docs/fusion.md, "Grid tracker"; each default and how it was chosen
 is in cpp/include/indoorloc/fusion/grid_tracker.h). Set fields by keyword:
@@ -121,7 +120,10 @@ equality and pickling as for every Options class. The fix likelihood's ε and τ
       .def_readonly("seconds", &GridTrackSummary::seconds)
       .def("brief_report", &GridTrackSummary::BriefReport)
       .def("__repr__", [](const GridTrackSummary& s) { return "<GridTrackSummary " + s.BriefReport() + ">"; });
+}
 
+// GridTracker: construction, derived trackers, runs and the kept-memory pool.
+void BindGridTrackerClass(py::module_& m) {
   py::class_<GridTracker>(m, "GridTracker", R"doc(
 Exact grid filter and forward-backward smoother of a walk (unknown or known start) on a plan's
 floors: cells x heading-offset bins x stride-scale bins (docs/fusion.md, "Grid tracker").
@@ -218,6 +220,13 @@ heading_offset_bins_rad / heading_offset_probabilities (H,), scale_bins / scale_
 (S,), walk_heading_offset_rad, walk_heading_offset_sd_rad, walk_scale; summary. filtered=False
 with smooth: the causal filter's position estimates are not computed (mean_m, the covariances
 and fix_distance_m NaN after a known start, no median_m), everything else unchanged bit for bit.)doc");
+}
+
+}  // namespace
+
+void BindFusionGrid(py::module_& m) {
+  BindGridOptionsAndSummary(m);
+  BindGridTrackerClass(m);
 }
 
 }  // namespace indoorloc::bindings
