@@ -164,9 +164,16 @@ A tracker on the same grids whose fixes are evaluated at survey-anchored positio
 positions, floor_numbers (N,) their floors. β = 1 or a floor without positions: the cell centres.)doc")
       .def(
           "with_options",
-          [](const GridTracker& t, const GridTrackerOptions& options) {
+          [](const GridTracker& t, const py::object& options) {
+            // Checked here, not by pybind11's overload resolution: a wrong type given to the
+            // reference parameter crashed the interpreter instead of raising.
+            if (!py::isinstance<GridTrackerOptions>(options)) {
+              ThrowInvalidArgument("options", "expected a GridTrackerOptions, got " +
+                                                  std::string(Py_TYPE(options.ptr())->tp_name));
+            }
+            const GridTrackerOptions o = options.cast<GridTrackerOptions>();
             py::gil_scoped_release release;
-            return t.WithOptions(options);
+            return t.WithOptions(o);
           },
           py::arg("options"), py::keep_alive<0, 1>(), R"doc(
 A tracker on the same plan and grid with other options (GridTrackerOptions): the same results,

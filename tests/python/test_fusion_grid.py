@@ -312,3 +312,12 @@ def test_with_options_equals_a_fresh_tracker_and_kept_memory_is_released():
     assert fusion.GridTracker.kept_memory_bytes() == 0
     c = fusion.track_grid(fresh, steps, fixes=fixes)
     np.testing.assert_array_equal(c["smoothed_m"], b["smoothed_m"])
+
+
+@pytest.mark.parametrize("bad", ["x", None, 3, {"cell_size_m": 1.0}])
+def test_with_options_of_another_type_is_a_value_error_naming_options(bad):
+    """A wrong type crashed the interpreter (pybind11's conversion of the reference parameter)
+    before the binding checked it itself."""
+    tracker = fusion.GridTracker(_hall(), fusion.GridTrackerOptions())
+    with pytest.raises(ValueError, match="options"):
+        tracker.with_options(bad)
