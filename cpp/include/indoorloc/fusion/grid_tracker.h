@@ -35,8 +35,9 @@
 // Floors: a walk stays on one floor (no stairs or lifts are modelled); the floor posterior is
 // then the layers' evidence summed per floor. Memory: the smoother keeps a layer's forward grids
 // (float32) while they fit in 256 MB per thread, else about sqrt(M) checkpoints of the M steps,
-// recomputing each segment once (same results either way). The calling thread keeps these buffers
-// for its next run (the store and the layers' outputs each up to 256 MiB; grid_tracker.cc).
+// recomputing each segment once (same results either way). A run takes these buffers from a
+// process-wide pool and returns them when it ends; the pool keeps at most kept_memory_limit_bytes
+// idle (512 MiB) and ReleaseKeptMemory() frees them (grid_tracker.cc).
 #pragma once
 #include <limits>
 #include <memory>
