@@ -40,6 +40,14 @@ def test_unknown_demo_is_a_clear_error(tmp_path, capsys):
     assert "unknown demo" in capsys.readouterr().err
 
 
+def test_missing_data_folder_is_a_clear_error(tmp_path, capsys):
+    # A path that does not exist is the user's to fix: one line naming the argument, exit code 2.
+    missing = tmp_path / "no_such_site"
+    assert cli.main(["fusion", "evaluate", "--quiet", "--data-root", str(missing)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: ") and "data_root" in err and "Traceback" not in err
+
+
 def test_console_script_entry_point_runs():
     # `python -m indoorloc` goes through the same main() as the console script.
     result = subprocess.run(

@@ -157,6 +157,8 @@ def main(argv: Optional[List[str]] = None) -> int:
     progress.configure(quiet=args.quiet, lines=True)
     try:
         return int(args.func(args) or 0)
-    except ValueError as exc:
+    except (ValueError, OSError) as exc:
+        # Bad arguments and paths (a missing folder, an unreadable file) are the user's to fix:
+        # one line naming the argument, no traceback.
         print(f"error: {exc}", file=sys.stderr)
         return 2
