@@ -43,3 +43,16 @@ def test_quiet_silences_the_progress_of_a_study(monkeypatch, capsys):
         assert not progress.enabled() and not progress.lines_enabled()
     finally:
         progress.set_quiet(False)
+
+
+@pytest.mark.parametrize("study", ["floor_change_study", "floor_identification_study"])
+def test_a_missing_data_folder_is_one_error_line(study, tmp_path, capsys):
+    # A study sharing study_cli: a folder that does not exist is an 'error:' line and exit code 2.
+    module = importlib.import_module(f"indoorloc.experiments.{study}")
+    missing = tmp_path / "no_such_site"
+    try:
+        assert module.main(["--data-root", str(missing), "--quiet"]) == 2
+    finally:
+        progress.set_quiet(False)
+    err = capsys.readouterr().err
+    assert err.startswith("error: ") and str(missing) in err

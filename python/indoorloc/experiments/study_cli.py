@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 from typing import Any, Callable, Dict, List, Optional, Sequence
 
@@ -21,7 +22,8 @@ def run_study(argv: Optional[Sequence[str]], description: str,
               jsonable: Callable[[Dict[str, Any]], Any] = lambda result: result) -> int:
     """Parses ``argv``, runs ``compute(data_root, floors, seeds)`` (``seeds`` the list of ``--seed``
     values; its result gains ``seconds``, the wall time [s], and ``seeds``), prints ``markdown(result)`` and writes ``--json`` (``jsonable(result)``) and
-    ``--markdown`` if given. Returns the exit status 0."""
+    ``--markdown`` if given. Returns the exit status: 0, or 2 after one ``error:`` line on stderr
+    when ``compute`` raised ValueError or OSError (a missing folder or floor)."""
     ap = argparse.ArgumentParser(description=description)
     ap.add_argument("--data-root", default=None)
     ap.add_argument("--floors", nargs="*", default=[])
@@ -35,7 +37,11 @@ def run_study(argv: Optional[Sequence[str]], description: str,
     if any(v < 0 for v in args.seed) or len(set(args.seed)) != len(args.seed):
         ap.error(f"argument --seed: expected distinct seeds >= 0, got {args.seed}")
     tic = time.perf_counter()
-    result = compute(args.data_root, args.floors, list(args.seed))
+    try:
+        result = compute(args.data_root, args.floors, list(args.seed))
+    except (ValueError, OSError) as exc:  # a bad folder or floor: one line, as the indoorloc CLI
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     result["seeds"] = list(args.seed)
     result["seconds"] = round(time.perf_counter() - tic, 1)
     text = markdown(result)
