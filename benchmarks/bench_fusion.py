@@ -131,7 +131,7 @@ def _motion_agreement(a: dict, b: dict) -> dict:
 
 
 def _per_call_seconds(one, states0, floors0, disp, covs, calls: int = 2000) -> float:
-    """Per-call overhead [s] of tracker.step with one particle (checks, the StepMotion, the dict):
+    """Per-call overhead [s] of tracker.step with one particle (checks, the StepMotion, the estimate object):
     `one` is a one-particle tracker, set to the first particle of the common start."""
     steps = len(disp)
     one.set_particles(states0[:1], floors0[:1])
@@ -216,7 +216,7 @@ def _motion(quick: bool) -> dict:
                 for k in range(steps):
                     out = f.step(t0 + k, disp[k], covs[k])
                     if record:
-                        blocked[name].append(out["blocked_fraction"])
+                        blocked[name].append(out.blocked_fraction)
         _best(go, seconds, name, cpu_seconds)
 
     for name in runs:  # warm-up, untimed
@@ -324,7 +324,7 @@ def _wifi(quick: bool) -> dict:
         tr.set_particles(st, floors)  # untimed
         holder = {}
         _best(lambda: holder.setdefault("e", tr.wifi(obs)), seconds, name, cpu_seconds)
-        estimates[name] = holder["e"]
+        estimates[name] = holder["e"].to_dict()  # a TrackerEstimate; the peer's estimate is a dict
 
     def peer_update():
         peer.set_particles(states)  # untimed
@@ -346,7 +346,7 @@ def _wifi(quick: bool) -> dict:
     # Agreement: the log-likelihood increment of the whole cloud, and per particle on 300
     # particles (a one-particle tracker: its increment is that particle's log-likelihood).
     trackers[CPP].set_particles(states, floors)
-    estimates[CPP] = trackers[CPP].wifi(obs)
+    estimates[CPP] = trackers[CPP].wifi(obs).to_dict()
     peer.set_particles(states)
     estimates[PEER_WIFI] = peer.wifi(interp, rss)
     ll_cpp = estimates[CPP]["log_likelihood"]
@@ -357,7 +357,7 @@ def _wifi(quick: bool) -> dict:
     per_cpp = np.empty(300)
     for i in range(300):
         one.set_particles(states[i:i + 1], floors[i:i + 1])
-        per_cpp[i] = one.wifi(obs)["log_likelihood"]
+        per_cpp[i] = one.wifi(obs).log_likelihood
     per_rel = np.abs(per_cpp - per_peer) / np.abs(per_peer)
     rates = {name: N * NUM_APS / sec for name, sec in seconds.items()}
     return {

@@ -90,16 +90,12 @@ not after the latest step.)doc")
                                 np.attr("asarray")(displacement_m, "float64").attr("reshape")(1, 2),
                                 np.attr("asarray")(covariance_m2, "float64").attr("reshape")(1, 3));
             if (st.size() != 1) ThrowInvalidArgument("time_s", "expected one time (a single step)");
-            GridFilterEstimate e;
-            {
-              py::gil_scoped_release release;
-              e = s.AddStep(st.front());
-            }
-            return GridEstimateToDict(e);
+            py::gil_scoped_release release;
+            return s.AddStep(st.front());
           },
           py::arg("time_s"), py::arg("displacement_m"), py::arg("covariance_m2"), R"doc(
 Add a step: time_s [s], displacement_m (2,) [m] in the PDR frame, covariance_m2 (3,) = (xx, xy, yy)
-[m²]; applies the pending fixes with time <= time_s. Returns the estimate after it: a dict with
+[m²]; applies the pending fixes with time <= time_s. Returns the estimate after it: a GridFilterEstimate with
 time_s, steps, mean_m (2,) [m], covariance_m2 (3,) [m²] (calibrated as GridTracker.run's),
 posterior_covariance_m2 (3,), fix_distance_m, fix_sd_m, floor_probabilities (F,), heading_offset_rad,
 log_evidence. ValueError for a step before the previous step or fix;
@@ -139,9 +135,9 @@ RuntimeError when every hypothesis is ruled out (hard walls).)doc")
           "estimate",
           [](const GridFilterSession& s) -> py::object {
             if (s.steps() == 0) return py::none();
-            return GridEstimateToDict(s.Estimate());
+            return py::cast(s.Estimate());
           },
-          "The estimate after the latest step (dict as add_step returns), None before the first step.")
+          "The estimate after the latest step (a GridFilterEstimate, as add_step returns), None before the first step.")
       .def_property_readonly("steps", &GridFilterSession::steps, "Steps added.")
       .def_property_readonly("floors", &GridFilterSession::floors,
                              "Floor numbers of the plan, the order of floor_probabilities.")

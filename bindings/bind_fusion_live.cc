@@ -13,6 +13,7 @@
 #include "indoorloc/fusion/live_session.h"
 #include "indoorloc/pdr/streaming_step_detector.h"
 #include "fusion_args.h"
+#include "fusion_estimates.h"
 #include "numpy_args.h"
 #include "options_binding.h"
 
@@ -64,19 +65,11 @@ FingerprintMap MapFromTuple(const py::tuple& t) {
   return map;
 }
 
-// The estimate dict of GridFilterSession.add_step plus the floors and the most probable floor.
+// The current estimate (a LiveEstimate: the grid filter's, the floors and the most probable floor),
+// None before the first step.
 py::object EstimateOrNone(const LiveSession& s) {
   if (!s.HasEstimate()) return py::none();
-  const GridFilterEstimate& e = s.Estimate();
-  py::dict d = GridEstimateToDict(e);
-  const std::vector<int> floors = s.floors();
-  py::array_t<long long> fl(static_cast<py::ssize_t>(floors.size()));
-  for (std::size_t i = 0; i < floors.size(); ++i) fl.mutable_at(static_cast<py::ssize_t>(i)) = floors[i];
-  d["floors"] = fl;
-  Eigen::Index best = 0;
-  if (e.floor_probabilities.size()) e.floor_probabilities.maxCoeff(&best);
-  d["floor"] = floors.empty() ? 0 : floors[static_cast<std::size_t>(best)];
-  return std::move(d);
+  return py::cast(MakeLiveEstimate(s.Estimate(), s.floors()));
 }
 
 // A live session with the GridTracker it reads kept alive by the Python object (keep_alive) and
@@ -209,8 +202,8 @@ Raw sensor events in time order in, the grid filter's current estimate out after
 ``LiveSession(tracker, options, map=None, fix_options=None, start=None)``: ``map`` None (WiFi
 ignored) or ``(bssids, rss_dbm (N, K), positions_m (N, 2), floors (N,), weights (N,) or None,
 ap_weights (K,) or None)``; ``start`` as for GridFilterSession. Every ``add_*`` returns the
-current estimate (dict: time_s, steps, mean_m, covariance_m2, floor_probabilities, floors, floor,
-heading_offset_rad, ...) or None before the first step. Events out of time order raise ValueError
+current estimate (a LiveEstimate: time_s, steps, mean_m, covariance_m2, floor_probabilities, floors,
+floor, heading_offset_rad, ...) or None before the first step. Events out of time order raise ValueError
 naming the event's index, kind and time and the previous event's; the session is then unchanged.)doc")
       .def(py::init([](const GridTracker* tracker, const LiveSessionOptions& options, const py::object& map,
                        const py::object& fix_options, const py::object& start) {

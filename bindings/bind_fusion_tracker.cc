@@ -33,33 +33,11 @@ py::array_t<T> VectorToArray(const std::vector<T>& v) {
   return out;
 }
 
-py::dict EstimateToDict(const TrackerEstimate& e) {
-  py::dict d;
-  d["time_s"] = e.time_s;
-  d["mean_m"] = Eigen::Vector2d(e.mean_m);
-  d["covariance_m2"] = Eigen::Matrix2d(e.covariance_m2);
-  d["floor_probabilities"] = Eigen::VectorXd(e.floor_probabilities);
-  d["floor_index"] = e.floor_index;
-  d["heading_offset_rad"] = e.heading_offset_rad;
-  d["scale"] = e.scale;
-  d["ess"] = e.ess;
-  d["log_likelihood"] = e.log_likelihood;
-  d["blocked_fraction"] = e.blocked_fraction;
-  d["resampled"] = e.resampled;
-  d["recovered"] = e.recovered;
-  d["lagged_m"] = Eigen::Vector2d(e.lagged_m);
-  return d;
-}
-
-// One tracker update run with the GIL released, its estimate returned as a dict.
+// One tracker update run with the GIL released; its estimate (a TrackerEstimate object).
 template <typename Update>
-py::dict UpdateWithoutGil(const Update& update) {
-  TrackerEstimate e;
-  {
-    py::gil_scoped_release release;
-    e = update();
-  }
-  return EstimateToDict(e);
+TrackerEstimate UpdateWithoutGil(const Update& update) {
+  py::gil_scoped_release release;
+  return update();
 }
 
 template <typename T>
@@ -324,11 +302,11 @@ options : TrackerOptions)doc")
              return UpdateWithoutGil([&] { return t.Step(s); });
            },
            py::arg("time_s"), py::arg("displacement_m"), py::arg("covariance_m2"),
-           "One step: displacement (2,) [m] in the PDR frame and its covariance (2, 2) [m²]. Returns the estimate dict.")
+           "One step: displacement (2,) [m] in the PDR frame and its covariance (2, 2) [m²]. Returns a TrackerEstimate.")
       .def("wifi", [](ParticleTracker& t, const WifiObservation& o) {
              return UpdateWithoutGil([&] { return t.Wifi(o); });
            },
-           py::arg("observation"), "One WiFi observation. Returns the estimate dict.")
+           py::arg("observation"), "One WiFi observation. Returns a TrackerEstimate.")
       .def("fix", [](ParticleTracker& t, double time_s, const py::object& means_m, const py::object& sds_m,
                      const py::object& weights, const py::object& floors) {
              MatrixArg m = ToMatrix(means_m, "means_m", -1, 2);
@@ -345,10 +323,10 @@ options : TrackerOptions)doc")
            py::arg("time_s"), py::arg("means_m"), py::arg("sds_m"), py::arg("weights"), py::arg("floors") = py::none(),
            "One position fix: a Gaussian mixture with component means (K, 2) [m], isotropic sds (K,) [m], "
            "weights (K,) and floor numbers (K,) (None or ANY_FLOOR: any floor), plus the outlier floor of "
-           "TrackerOptions.fix_outlier_probability. Returns the estimate dict.")
+           "TrackerOptions.fix_outlier_probability. Returns a TrackerEstimate.")
       .def_property_readonly("floor_areas_m2", &ParticleTracker::floor_areas_m2,
                              "Walkable area [m²] per tracker floor (the outlier density of a fix is 1 / area).")
-      .def("estimate", [](const ParticleTracker& t) { return EstimateToDict(t.Estimate()); })
+      .def("estimate", &ParticleTracker::Estimate, "The estimate after the latest update (a TrackerEstimate).")
       .def("particles", [](const ParticleTracker& t) {
              return py::make_tuple(t.ParticleStates(), t.ParticleFloorIndices(), t.ParticleWeights());
            },

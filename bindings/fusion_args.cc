@@ -126,19 +126,4 @@ TrackStart StartFromDict(const py::object& start, double first_step_time_s) {
   return st;
 }
 
-py::dict GridEstimateToDict(const fusion::GridFilterEstimate& e) {
-  py::dict d;
-  d["time_s"] = e.time_s;
-  d["steps"] = e.steps;
-  d["mean_m"] = Eigen::VectorXd(e.mean_m);
-  d["covariance_m2"] = Eigen::VectorXd(e.covariance_m2);
-  d["posterior_covariance_m2"] = Eigen::VectorXd(e.posterior_covariance_m2);
-  d["fix_distance_m"] = e.fix_distance_m;
-  d["fix_sd_m"] = e.fix_sd_m;
-  d["floor_probabilities"] = e.floor_probabilities;
-  d["heading_offset_rad"] = e.heading_offset_rad;
-  d["log_evidence"] = e.log_evidence;
-  return d;
-}
-
 }  // namespace indoorloc::bindings

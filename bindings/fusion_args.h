@@ -10,7 +10,6 @@
 
 #include "indoorloc/fusion/position_fix.h"
 #include "indoorloc/fusion/step_motion.h"
-#include "indoorloc/fusion/grid_filter_session.h"
 #include "indoorloc/fusion/track.h"
 
 namespace indoorloc::bindings {
@@ -30,8 +29,5 @@ double ToFiniteDouble(const py::handle& obj, const std::string& name);
 
 /// The known start {"position_m", "floor", "heading_offset_rad", "time_s"} or None (unknown start).
 fusion::TrackStart StartFromDict(const py::object& start, double first_step_time_s);
-
-/// The dict of a grid filter estimate (GridFilterSession.add_step, LiveSession.estimate).
-py::dict GridEstimateToDict(const fusion::GridFilterEstimate& e);
 
 }  // namespace indoorloc::bindings

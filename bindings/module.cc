@@ -35,6 +35,7 @@ bool PollPythonSignals() {
 namespace indoorloc::bindings {
 void BindAnalog(py::module_& m);
 void BindCore(py::module_& m);
+void BindFusionEstimates(py::module_& m);
 void BindFusionFloorPlan(py::module_& m);
 void BindFusionGrid(py::module_& m);
 void BindFusionGridSession(py::module_& m);
@@ -101,6 +102,7 @@ PYBIND11_MODULE(_core, m) {
   indoorloc::bindings::BindWifiMatcher(wifi);
   py::module_ fusion = m.def_submodule("fusion", "Particle-filter fusion of PDR steps, WiFi and a floor plan (docs/fusion.md).");
   indoorloc::bindings::BindFusionFloorPlan(fusion);
+  indoorloc::bindings::BindFusionEstimates(fusion);
   indoorloc::bindings::BindFusionTracker(fusion);
   indoorloc::bindings::BindFusionGrid(fusion);
   indoorloc::bindings::BindFusionGridSession(fusion);

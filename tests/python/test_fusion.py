@@ -76,7 +76,7 @@ def test_streaming_tracker_follows_perfect_steps_and_never_enters_obstacles():
         states, floors, weights = tracker.particles()
         assert plan.is_walkable(states[:, :2]).all()
         assert np.isfinite(weights).all() and abs(weights.sum() - 1) < 1e-9
-    assert np.linalg.norm(est["mean_m"] - truth) < 1.0
+    assert np.linalg.norm(est.mean_m - truth) < 1.0
     assert tracker.summary.steps == 30
 
 
@@ -101,7 +101,7 @@ def test_bad_input_gives_clear_errors_and_no_ops():
     before = tracker.particles()[2].copy()
     est = tracker.wifi(fusion.WifiObservation(2.0, [], []))
     assert np.array_equal(tracker.particles()[2], before) and tracker.summary.empty_wifi_updates == 1
-    assert np.isfinite(est["mean_m"]).all()
+    assert np.isfinite(est.mean_m).all()
     # A signal map on a floor the plan does not have.
     other, _ = room_model(floor=4)
     with pytest.raises(ValueError, match="floor 0"):
@@ -193,7 +193,7 @@ out = []
 for k in range(60):
     h = rng.uniform(-np.pi, np.pi)
     est = tracker.step(1.0 + k, [0.7 * np.cos(h), 0.7 * np.sin(h)], [[0.01, 0.0], [0.0, 0.01]])
-    out.append([est["mean_m"][0], est["mean_m"][1], est["blocked_fraction"], est["ess"]])
+    out.append([est.mean_m[0], est.mean_m[1], est.blocked_fraction, est.ess])
 states, floors, log_w = tracker.particles()
 np.save(sys.argv[1], np.concatenate([np.ravel(out), states.ravel(), log_w]))
 """

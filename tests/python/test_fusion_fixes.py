@@ -63,7 +63,7 @@ def test_padding_components_are_ignored_and_streaming_equals_batch():
         while k < ft.size and ft[k] <= t:
             est = tr.fix(ft[k], means[k, :1], [2.0], [1.0])
             k += 1
-    np.testing.assert_allclose(est["mean_m"], batch["mean_m"][-1], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(est.mean_m, batch["mean_m"][-1], rtol=0, atol=1e-12)
     assert tr.floor_areas_m2[0] == pytest.approx(400.0)
 
 

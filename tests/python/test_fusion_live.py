@@ -43,7 +43,7 @@ def _replay(tracker, walk, cal, db, **kw):
     out = []
     for ev in live.walk_events(walk, beacons=True):
         e = lt.add_event(*ev)
-        if e is not None and (not out or out[-1]["steps"] != e["steps"]):
+        if e is not None and (not out or out[-1].steps != e.steps):
             out.append(e)
     return lt, out
 
@@ -52,11 +52,11 @@ def _assert_replay_equals_batch(tracker, walk, cal, db, **kw):
     batch = live.causal_track(tracker, walk, cal, db, **kw)
     lt, out = _replay(tracker, walk, cal, db, **kw)
     assert len(out) == len(batch["times_s"]) > 0, walk.walk_id
-    np.testing.assert_array_equal([e["time_s"] for e in out], batch["times_s"])
-    np.testing.assert_array_equal(np.array([e["mean_m"] for e in out]), batch["mean_m"])
-    np.testing.assert_array_equal(np.array([e["covariance_m2"] for e in out]), batch["covariance_m2"])
-    np.testing.assert_array_equal(np.array([e["floor_probabilities"] for e in out]), batch["floor_probabilities"])
-    np.testing.assert_array_equal([e["heading_offset_rad"] for e in out], batch["heading_offset_rad"])
+    np.testing.assert_array_equal([e.time_s for e in out], batch["times_s"])
+    np.testing.assert_array_equal(np.array([e.mean_m for e in out]), batch["mean_m"])
+    np.testing.assert_array_equal(np.array([e.covariance_m2 for e in out]), batch["covariance_m2"])
+    np.testing.assert_array_equal(np.array([e.floor_probabilities for e in out]), batch["floor_probabilities"])
+    np.testing.assert_array_equal([e.heading_offset_rad for e in out], batch["heading_offset_rad"])
     # Every fix the batch used was applied live (the later ones wait for a step).
     assert lt.session.summary.fixes == batch["summary"].fixes
     return batch, lt
@@ -85,17 +85,17 @@ def test_session_equals_batch_filter_and_refuses_out_of_order_events():
             session.add_fix(ft[j], means[j], [3.0, 5.0], [0.8, 0.2], [0, 1])
             j += 1
         e = session.add_step(t[k], steps.displacements_m[k], steps.covariances_m2[k])
-        assert e["steps"] == k + 1
-        np.testing.assert_array_equal(e["mean_m"], batch["mean_m"][k])
-        np.testing.assert_array_equal(e["covariance_m2"], batch["covariance_m2"][k])
-        np.testing.assert_array_equal(e["floor_probabilities"], batch["floor_probabilities"][k])
+        assert e.steps == k + 1
+        np.testing.assert_array_equal(e.mean_m, batch["mean_m"][k])
+        np.testing.assert_array_equal(e.covariance_m2, batch["covariance_m2"][k])
+        np.testing.assert_array_equal(e.floor_probabilities, batch["floor_probabilities"][k])
     assert session.summary.log_evidence == batch["summary"].log_evidence
     before = session.estimate()
     with pytest.raises(ValueError, match=r"'step'.*out of time order.*before the previous step"):
         session.add_step(t[-1] - 1.0, [0.7, 0.0], [0.01, 0.0, 0.01])
     with pytest.raises(ValueError, match=r"'fix'.*not after the latest step.*add it before the step"):
         session.add_fix(t[-1], [[1.0, 1.0]], [3.0])
-    assert session.steps == n and np.array_equal(session.estimate()["mean_m"], before["mean_m"])
+    assert session.steps == n and np.array_equal(session.estimate().mean_m, before.mean_m)
     # The batch-of-steps form gives the same as one at a time.
     s2 = fusion.GridFilterSession(tracker)
     got = s2.add_steps(steps.times_s[:3], steps.displacements_m[:3], steps.covariances_m2[:3])
@@ -189,7 +189,7 @@ def test_events_out_of_time_order_are_refused_naming_index_type_and_times(synthe
     assert lt.events == 2000 and lt.estimate() is before
     for ev in events[2000:]:   # continues normally
         lt.add_event(*ev)
-    assert lt.estimate()["steps"] > before["steps"]
+    assert lt.estimate().steps > before.steps
 
 
 @pytest.mark.skipif(not SHARED_F8.is_dir(), reason="the shared ILC 2020 data (../shared/data/fusion) is absent")
@@ -282,3 +282,59 @@ def test_bound_session_errors_name_the_argument_and_the_event(synthetic_floor):
     with pytest.raises(ValueError, match=r"step_length_k"):
         LiveSession(tracker, live.session_options().replace(step_length_k=-1.0))
     assert s.events == 1 and s.summary["steps"] == 0
+
+
+# ------------------------------------------------------------------ the estimates' types
+def _stub_fields(stub_name):
+    """Each class of the stub with its annotated fields, those of its private bases first."""
+    import ast
+
+    import indoorloc
+
+    tree = ast.parse((Path(indoorloc.__file__).parent / "_core" / stub_name).read_text())
+    classes = {n.name: n for n in tree.body if isinstance(n, ast.ClassDef)}
+
+    def fields(node):
+        inherited = [f for b in node.bases if isinstance(b, ast.Name) and b.id in classes for f in fields(classes[b.id])]
+        return inherited + [s.target.id for s in node.body if isinstance(s, ast.AnnAssign)]
+
+    return {name: fields(node) for name, node in classes.items()}
+
+
+def test_estimates_are_typed_results_that_still_read_as_the_former_dicts_with_a_warning(synthetic_floor):
+    import pickle
+    import warnings
+    from collections.abc import Mapping
+
+    particle = fusion.ParticleTracker(_hall(), None, None, fusion.tracker_options(num_particles=200))
+    particle.initialize_known(0.0, [5.0, 5.0])
+    session = fusion.GridFilterSession(fusion.GridTracker(_hall(2), fusion.GridTrackerOptions(heading_offset_bins=5)))
+    walk = next(iter(synthetic_floor.walks()))
+    plan = load_floor_plan(synthetic_floor.geojson_path, floors=[1], origin_lon_lat="outline_sw")
+    lt = live.LiveTracker(fusion.GridTracker(plan, fusion.GridTrackerOptions()))
+    for ev in list(live.walk_events(walk))[:2000]:
+        lt.add_event(*ev)
+    estimates = [particle.step(0.5, [0.7, 0.0], 0.01 * np.eye(2)), particle.estimate(),
+                 session.add_step(0.5, [0.7, 0.0], [0.01, 0.0, 0.01]), session.estimate(), lt.estimate()]
+    assert [type(e).__name__ for e in estimates] == ["TrackerEstimate"] * 2 + ["GridFilterEstimate"] * 2 + ["LiveEstimate"]
+    assert type(lt.estimate()) is live.LiveEstimate and type(estimates[0]) is fusion.TrackerEstimate
+    stubs = _stub_fields("fusion.pyi")
+    for e in estimates:
+        assert stubs[type(e).__name__] == list(type(e)._fields)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            plain = e.to_dict()
+        assert isinstance(e, Mapping) and list(plain) == list(type(e)._fields)
+        with pytest.raises(AttributeError):
+            e.time_s = 1.0  # read-only
+        with pytest.warns(DeprecationWarning, match=rf"reading a {type(e).__name__} as a dict \(result\[key\]\)"):
+            np.testing.assert_array_equal(e["mean_m"], e.mean_m)
+        with pytest.warns(DeprecationWarning, match=r"items\(\)"):
+            assert [k for k, _ in e.items()] == list(plain)
+        back = pickle.loads(pickle.dumps(e))
+        assert isinstance(back, dict) and back["time_s"] == e.time_s
+    assert estimates[0].mean_m.shape == (2,) and estimates[0].covariance_m2.shape == (2, 2)
+    assert estimates[2].mean_m.shape == (2,) and estimates[2].covariance_m2.shape == (3,) and estimates[2].steps == 1
+    e = lt.estimate()
+    assert e.floors.dtype == np.int64 and list(e.floors) == [1] and e.floor == 1
+    assert e.floor_probabilities.shape == (1,)

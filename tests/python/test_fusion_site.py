@@ -383,10 +383,10 @@ def test_site_live_replays_the_causal_track(built):
     out = []
     for ev in live.walk_events(walk):
         e = tracker.add_event(*ev)
-        if e is not None and (not out or out[-1]["steps"] != e["steps"]):
+        if e is not None and (not out or out[-1].steps != e.steps):
             out.append(e)
     assert len(out) == len(batch["times_s"]) > 10
-    np.testing.assert_array_equal(np.array([e["mean_m"] for e in out]), batch["mean_m"])
-    np.testing.assert_array_equal(np.array([e["covariance_m2"] for e in out]), batch["covariance_m2"])
+    np.testing.assert_array_equal(np.array([e.mean_m for e in out]), batch["mean_m"])
+    np.testing.assert_array_equal(np.array([e.covariance_m2 for e in out]), batch["covariance_m2"])
     with pytest.raises(ValueError, match="floor"):
         site.live("F99")

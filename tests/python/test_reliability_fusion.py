@@ -228,7 +228,7 @@ def test_streaming_events_must_not_go_back_in_time():
     with pytest.raises(RuntimeError, match="not initialised"):
         t.estimate()
     t.initialize_known(1.0, np.array([2.0, 2.0]), 0, 0.0)
-    assert t.estimate()["time_s"] == 1.0
+    assert t.estimate().time_s == 1.0
     with pytest.raises(ValueError, match=r"'fix.time_s'.*back in time"):
         t.fix(0.5, np.array([[2.0, 2.0]]), np.array([1.0]), np.array([1.0]))
     t.step(2.0, np.array([0.5, 0.0]), 0.01 * np.eye(2))
@@ -263,7 +263,7 @@ def test_set_particles_refuses_absurd_states():
     inside[0, :2] = (10.0, 5.0)  # inside the block, hard walls
     with pytest.raises(ValueError, match=r"'states'.*not walkable"):
         t.set_particles(inside, floors)
-    assert np.all(np.isfinite(t.estimate()["covariance_m2"]))
+    assert np.all(np.isfinite(t.estimate().covariance_m2))
 
 
 def test_track_skips_steps_before_a_known_start():

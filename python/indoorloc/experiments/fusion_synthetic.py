@@ -245,7 +245,7 @@ def walk_snapshot(seed: int, options: Optional[fusion.TrackerOptions] = None, cl
         while k_obs < len(observations) and observations[k_obs].time_s <= t:
             est = tracker.wifi(observations[k_obs])
             k_obs += 1
-        means[k] = est["mean_m"]
+        means[k] = est.mean_m
         if k in picks:
             states, _, weights = tracker.particles()
             clouds.append({"t_s": float(t - t0), "xy_m": states[:, :2].copy(), "weights": weights.copy(),

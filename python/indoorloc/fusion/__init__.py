@@ -9,9 +9,10 @@ a floor plan (the "future work" of papers 000 §IV and 002 §VI).
   ``obstacles``, ``walls``, e.g. ``simulate.building``'s floors); GeoJSON plans through
   :func:`indoorloc.io.load_floor_plan`.
 - :class:`ParticleTracker`: the streaming filter (``initialize_known`` / ``initialize_unknown``,
-  ``step``, ``wifi``), state (x, y, floor, heading offset, stride scale), walls, WiFi (paper 004's
-  interpolated Gaussian model, tempered, stale readings handled), corridor mode (paper 000's
-  particles on a RoadNetwork), recovery, fixed-lag smoothing.
+  ``step``, ``wifi``, ``fix``: each returns a :class:`TrackerEstimate`), state (x, y, floor,
+  heading offset, stride scale), walls, WiFi (paper 004's interpolated Gaussian model, tempered,
+  stale readings handled), corridor mode (paper 000's particles on a RoadNetwork), recovery,
+  fixed-lag smoothing.
 - :func:`track`: the batch API over a recording, with the backward (FFBSi) smoother.
 - :func:`make_wifi_observations`: scans (NaN = not heard, per-reading ages) to observations.
 - :class:`Steps`: steps as displacements with covariances, from polar steps or ZUPT increments.
@@ -43,6 +44,7 @@ from indoorloc._core.fusion import (
     FloorPlanOptions,
     ParticleTracker,
     SmootherOptions,
+    TrackerEstimate,
     TrackerOptions,
     TrackerSummary,
     WifiObservation,
@@ -296,7 +298,15 @@ def track(steps: Steps, observations: Sequence[WifiObservation] = (), *, plan=No
                        None if fixes is None or len(fixes) == 0 else fixes.as_arrays())
 
 
-from indoorloc.fusion.grid import GridFilterSession, GridTracker, GridTrackerOptions, GridTrackSummary, region95_contains, track_grid  # noqa: E402
+from indoorloc.fusion.grid import (  # noqa: E402
+    GridFilterEstimate,
+    GridFilterSession,
+    GridTracker,
+    GridTrackerOptions,
+    GridTrackSummary,
+    region95_contains,
+    track_grid,
+)
 
 
 
@@ -312,6 +322,7 @@ def __getattr__(name: str):  # noqa: ANN202 - module attribute hook
 
 __all__ = [
     "ANY_FLOOR",
+    "GridFilterEstimate",
     "GridFilterSession",
     "GridTracker",
     "GridTrackerOptions",
@@ -326,6 +337,7 @@ __all__ = [
     "Site",
     "SmootherOptions",
     "Steps",
+    "TrackerEstimate",
     "TrackerOptions",
     "TrackerSummary",
     "WifiObservation",

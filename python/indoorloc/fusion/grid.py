@@ -20,7 +20,7 @@ from typing import Optional
 
 import numpy as np
 
-from indoorloc._core.fusion import GridFilterSession, GridTracker, GridTrackerOptions, GridTrackSummary
+from indoorloc._core.fusion import GridFilterEstimate, GridFilterSession, GridTracker, GridTrackerOptions, GridTrackSummary
 
 
 def track_grid(tracker: GridTracker, steps, *, fixes=None, start: Optional[dict] = None, smooth: bool = True,
@@ -82,4 +82,5 @@ def region95_contains(means_m: np.ndarray, covariances_m2: np.ndarray, truth_m: 
     return np.where(det > 0, m2 <= 5.991, False)
 
 
-__all__ = ["GridFilterSession", "GridTracker", "GridTrackerOptions", "GridTrackSummary", "region95_contains", "track_grid"]
+__all__ = ["GridFilterEstimate", "GridFilterSession", "GridTracker", "GridTrackerOptions", "GridTrackSummary",
+           "region95_contains", "track_grid"]

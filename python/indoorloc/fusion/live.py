@@ -26,9 +26,10 @@ What happens to each event (docs/fusion.md, "Live tracking"):
   whole stretch walked, not one point of it.
 - **Beacons**: accepted and ignored (the site has no beacon map yet).
 
-Every method returns the current estimate (a dict: ``time_s``, ``steps``, ``mean_m`` (2,),
-``covariance_m2`` (3,) = (xx, xy, yy), ``floor_probabilities`` (F,), ``floors`` (F,) floor numbers,
-``floor``, ``heading_offset_rad``), or None before the first step. Events must come in
+Every method returns the current estimate (a ``fusion.LiveEstimate``, read-only attributes:
+``time_s``, ``steps``, ``mean_m`` (2,), ``covariance_m2`` (3,) = (xx, xy, yy),
+``floor_probabilities`` (F,), ``floors`` (F,) floor numbers, ``floor``, ``heading_offset_rad``, ...;
+``to_dict()`` gives them as a dict), or None before the first step. Events must come in
 non-decreasing time: otherwise ValueError naming the event's index, type and both times, and the
 tracker is unchanged.
 
@@ -44,7 +45,8 @@ from typing import Any, Iterator, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from indoorloc._core.fusion import FingerprintFixOptions, GridFilterSession, GridTracker, LiveSession, LiveSessionOptions
+from indoorloc._core.fusion import (FingerprintFixOptions, GridFilterSession, GridTracker, LiveEstimate, LiveSession,
+                                    LiveSessionOptions)
 from indoorloc.io.ilc2020.walk_types import quaternion_from_rotation_vector
 from indoorloc.pdr import handheld as ph
 from indoorloc.pdr import streaming as ps
@@ -235,22 +237,22 @@ class LiveTracker:
             arrays, fix = fingerprint_map(database)
             fix = fix.replace(with_floors=bool(with_floors))
         self._live = LiveSession(tracker, options, arrays, fix, start)
-        self._estimate: Optional[dict] = None
+        self._estimate: Optional[LiveEstimate] = None
 
-    def _keep(self, estimate: Optional[dict]) -> Optional[dict]:
+    def _keep(self, estimate: Optional[LiveEstimate]) -> Optional[LiveEstimate]:
         self._estimate = estimate
         return estimate
 
     # ------------------------------------------------------------------ events
-    def add_accelerometer(self, t_s: float, acc_mps2: Sequence[float]) -> Optional[dict]:
+    def add_accelerometer(self, t_s: float, acc_mps2: Sequence[float]) -> Optional[LiveEstimate]:
         """Accelerometer sample: specific force (3,) [m/s²], device frame."""
         return self._keep(self._live.add_accelerometer(t_s, _vector(acc_mps2, "acc_mps2", 3)))
 
-    def add_gyroscope(self, t_s: float, gyro_radps: Sequence[float]) -> Optional[dict]:
+    def add_gyroscope(self, t_s: float, gyro_radps: Sequence[float]) -> Optional[LiveEstimate]:
         """Gyroscope sample: angular rate (3,) [rad/s], device frame."""
         return self._keep(self._live.add_gyroscope(t_s, _vector(gyro_radps, "gyro_radps", 3)))
 
-    def add_rotation_vector(self, t_s: float, values: Sequence[float]) -> Optional[dict]:
+    def add_rotation_vector(self, t_s: float, values: Sequence[float]) -> Optional[LiveEstimate]:
         """Android rotation vector (x, y, z[, w]) of the device -> east-north-up rotation."""
         v = np.asarray(values, dtype=np.float64).reshape(-1)
         if v.size not in (3, 4, 5) or not np.all(np.isfinite(v[:3])):
@@ -258,16 +260,16 @@ class LiveTracker:
         return self._keep(self._live.add_rotation_vector(t_s, v))
 
     def add_wifi_scan(self, t_s: float, bssids: Sequence[str], rssi_dbm: Sequence[float],
-                      last_seen_s: Sequence[float]) -> Optional[dict]:
+                      last_seen_s: Sequence[float]) -> Optional[LiveEstimate]:
         """One WiFi scan reported at t_s: per reading its BSSID, RSSI [dBm] and last-seen time [s]
         (on the events' clock). The scan's fix waits for the first step at or after t_s."""
         return self._keep(self._live.add_wifi_scan(t_s, list(bssids), rssi_dbm, last_seen_s))
 
-    def add_beacon(self, t_s: float, *values: Any) -> Optional[dict]:
+    def add_beacon(self, t_s: float, *values: Any) -> Optional[LiveEstimate]:
         """An iBeacon reading: accepted (time order checked) and ignored."""
         return self._keep(self._live.add_beacon(t_s))
 
-    def add_event(self, kind: str, t_s: float, *values: Any) -> Optional[dict]:
+    def add_event(self, kind: str, t_s: float, *values: Any) -> Optional[LiveEstimate]:
         """Dispatch by kind (``EVENT_KINDS``): ``("accelerometer", t, xyz)``, ``("gyroscope", t, xyz)``,
         ``("rotation_vector", t, values)``, ``("wifi", t, bssids, rssi_dbm, last_seen_s)``,
         ``("beacon", t, ...)``."""
@@ -279,7 +281,7 @@ class LiveTracker:
                              f"(expected one of {EVENT_KINDS})")
         return method(t_s, *values)
 
-    def estimate(self) -> Optional[dict]:
+    def estimate(self) -> Optional[LiveEstimate]:
         """The current estimate (module docstring), None before the first step."""
         return self._estimate
 
@@ -332,6 +334,6 @@ def walk_events(walk: Any, beacons: bool = False) -> Iterator[Tuple]:
         yield row[3]
 
 
-__all__ = ["EVENT_KINDS", "LiveTracker", "STEP_HEADING_SD_RAD", "STEP_LENGTH_SD_FRACTION", "causal_inputs",
+__all__ = ["EVENT_KINDS", "LiveEstimate", "LiveTracker", "STEP_HEADING_SD_RAD", "STEP_LENGTH_SD_FRACTION", "causal_inputs",
            "causal_queries", "causal_track", "fingerprint_map", "quaternion_from_rotation_vector", "session_options",
            "walk_events"]

@@ -44,8 +44,15 @@ ParticleTracker KnownStartTracker(const FloorPlan& plan, const TrackerOptions& o
   return tracker;
 }
 
-TEST(ParticleTracker, PerfectStepsRecoverThePath) {
+// The room of room_fixture.h (one floor) and its four APs' RSS model, built for each test.
+class ParticleTrackerInRoom : public ::testing::Test {
+ protected:
   const FloorPlan plan = RoomPlan();
+  const wifi::RssModel model{RoomMap()};
+};
+class TrackInRoom : public ParticleTrackerInRoom {};
+
+TEST_F(ParticleTrackerInRoom, PerfectStepsRecoverThePath) {
   TrackerOptions o = SmallOptions();
   ParticleTracker tracker = KnownStartTracker(plan, o, Eigen::Vector2d(2.0, 1.5));
   Eigen::Vector2d truth(2.0, 1.5);
@@ -67,8 +74,7 @@ TEST(ParticleTracker, PerfectStepsRecoverThePath) {
   EXPECT_LT((tracker.Estimate().mean_m - truth).norm(), 1.0);
 }
 
-TEST(ParticleTracker, NoParticleEverEndsInsideAnObstacle) {
-  const FloorPlan plan = RoomPlan();
+TEST_F(ParticleTrackerInRoom, NoParticleEverEndsInsideAnObstacle) {
   TrackerOptions o = SmallOptions(3000);
   o.start_position_sd_m = 3.0;
   o.start_heading_offset_sd_rad = 1.0;
@@ -85,8 +91,7 @@ TEST(ParticleTracker, NoParticleEverEndsInsideAnObstacle) {
   }
 }
 
-TEST(ParticleTracker, EveryParticleBlockedIsIgnoredThenRespread) {
-  const FloorPlan plan = RoomPlan();
+TEST_F(ParticleTrackerInRoom, EveryParticleBlockedIsIgnoredThenRespread) {
   TrackerOptions o = SmallOptions(500);
   o.start_position_sd_m = 0.0;
   o.respread_after_blocked_steps = 2;
@@ -104,9 +109,7 @@ TEST(ParticleTracker, EveryParticleBlockedIsIgnoredThenRespread) {
   EXPECT_TRUE(e.mean_m.allFinite());
 }
 
-TEST(ParticleTracker, UnderflowingWifiLikelihoodsStayFinite) {
-  const FloorPlan plan = RoomPlan();
-  const wifi::RssModel model(RoomMap());
+TEST_F(ParticleTrackerInRoom, UnderflowingWifiLikelihoodsStayFinite) {
   TrackerOptions o = SmallOptions(1000);
   o.wifi.max_term = std::numeric_limits<double>::infinity();
   o.wifi.tempering = 1.0;
@@ -124,8 +127,7 @@ TEST(ParticleTracker, UnderflowingWifiLikelihoodsStayFinite) {
   EXPECT_NEAR(tracker.ParticleWeights().sum(), 1.0, 1e-9);
 }
 
-TEST(ParticleTracker, SoftWallsAcceptAStartInsideAnObstacleAndPenaliseCrossings) {
-  const FloorPlan plan = RoomPlan();
+TEST_F(ParticleTrackerInRoom, SoftWallsAcceptAStartInsideAnObstacleAndPenaliseCrossings) {
   TrackerOptions o = SmallOptions(400);
   o.wall_log_penalty = std::log(0.1);
   ParticleTracker tracker(&plan, nullptr, nullptr, o);
@@ -137,9 +139,7 @@ TEST(ParticleTracker, SoftWallsAcceptAStartInsideAnObstacleAndPenaliseCrossings)
   EXPECT_EQ(tracker.summary().all_blocked_steps, 0);
 }
 
-TEST(ParticleTracker, RecoveryRedrawsWhenTheWifiKeepsDisagreeing) {
-  const FloorPlan plan = RoomPlan();
-  const wifi::RssModel model(RoomMap());
+TEST_F(ParticleTrackerInRoom, RecoveryRedrawsWhenTheWifiKeepsDisagreeing) {
   TrackerOptions o = SmallOptions(1000);
   o.wifi.tempering = 0.5;
   o.recovery_scans = 2;
@@ -154,9 +154,7 @@ TEST(ParticleTracker, RecoveryRedrawsWhenTheWifiKeepsDisagreeing) {
   EXPECT_LT((e.mean_m - Eigen::Vector2d(18.0, 8.5)).norm(), 2.0);
 }
 
-TEST(ParticleTracker, EmptyScanIsANoOp) {
-  const FloorPlan plan = RoomPlan();
-  const wifi::RssModel model(RoomMap());
+TEST_F(ParticleTrackerInRoom, EmptyScanIsANoOp) {
   ParticleTracker tracker(&plan, &model, nullptr, SmallOptions(300));
   tracker.InitializeKnown(0.0, Eigen::Vector2d(3.0, 3.0), 0, 0.0);
   const Eigen::VectorXd before = tracker.ParticleWeights();
@@ -167,9 +165,7 @@ TEST(ParticleTracker, EmptyScanIsANoOp) {
   EXPECT_EQ(tracker.ParticleWeights(), before);
 }
 
-TEST(ParticleTracker, RejectsBadInput) {
-  const FloorPlan plan = RoomPlan();
-  const wifi::RssModel model(RoomMap());
+TEST_F(ParticleTrackerInRoom, RejectsBadInput) {
   ParticleTracker tracker(&plan, &model, nullptr, SmallOptions(100));
   EXPECT_THROW(tracker.Step(Step(0.0, 0.5, 0.0)), std::invalid_argument);  // not initialised
   EXPECT_THROW(tracker.InitializeKnown(0.0, Eigen::Vector2d(10.0, 5.0), 0, 0.0), std::invalid_argument);  // in the block
@@ -195,9 +191,7 @@ TEST(ParticleTracker, RejectsBadInput) {
   EXPECT_THROW(ParticleTracker(&plan, nullptr, nullptr, bad_options), std::invalid_argument);
 }
 
-TEST(ParticleTracker, SameSeedSameResultForAnyThreadCount) {
-  const FloorPlan plan = RoomPlan();
-  const wifi::RssModel model(RoomMap());
+TEST_F(ParticleTrackerInRoom, SameSeedSameResultForAnyThreadCount) {
   std::vector<RowMatrixXd> results;
   for (int threads : {1, 2, 3}) {
     TrackerOptions o = SmallOptions(3 * ParticleTracker::kBlockSize + 17);
@@ -215,9 +209,7 @@ TEST(ParticleTracker, SameSeedSameResultForAnyThreadCount) {
   EXPECT_EQ(results[0], results[2]);
 }
 
-TEST(ParticleTracker, UnknownStartFindsTheWalkerFromWifiAndSteps) {
-  const FloorPlan plan = RoomPlan();
-  const wifi::RssModel model(RoomMap());
+TEST_F(ParticleTrackerInRoom, UnknownStartFindsTheWalkerFromWifiAndSteps) {
   TrackerOptions o = SmallOptions(4000);
   ParticleTracker tracker(&plan, &model, nullptr, o);
   Eigen::Vector2d truth(2.0, 8.5);
@@ -233,13 +225,11 @@ TEST(ParticleTracker, UnknownStartFindsTheWalkerFromWifiAndSteps) {
   EXPECT_LT(std::abs(e.heading_offset_rad), 0.3);
 }
 
-TEST(ParticleTracker, CorridorModeFollowsTheNetworkAndTheHeading) {
+TEST_F(ParticleTrackerInRoom, CorridorModeFollowsTheNetworkAndTheHeading) {
   // An L of corridors: (2, 1.5) -> (2, 8.5) -> (18, 8.5), plus a dead-end spur (2, 8.5) -> (2, 9.5).
   RowMatrixXd segments(3, 4);
   segments << 2, 1.5, 2, 8.5, 2, 8.5, 18, 8.5, 2, 8.5, 2, 9.5;
   const mapmatch::RoadNetwork corridors(segments, Eigen::VectorXi(), mapmatch::RoadNetworkOptions());
-  const FloorPlan plan = RoomPlan();
-  const wifi::RssModel model(RoomMap());
   TrackerOptions o = SmallOptions(2000);
   o.corridor_kappa = 4.0;
   ParticleTracker tracker(&plan, &model, &corridors, o);
@@ -292,8 +282,7 @@ TEST(ParticleTracker, CorridorKappaHasTheSharedCorridorModelsLimit) {
   EXPECT_NE(error.find("corridor_kappa"), std::string::npos) << error;
 }
 
-TEST(ParticleTracker, FixedLagSmootherReportsThePositionLagStepsBack) {
-  const FloorPlan plan = RoomPlan();
+TEST_F(ParticleTrackerInRoom, FixedLagSmootherReportsThePositionLagStepsBack) {
   TrackerOptions o = SmallOptions(500);
   o.smoothing_lag_steps = 3;
   ParticleTracker tracker = KnownStartTracker(plan, o, Eigen::Vector2d(2.0, 1.5));
@@ -310,9 +299,7 @@ TEST(ParticleTracker, FixedLagSmootherReportsThePositionLagStepsBack) {
   }
 }
 
-TEST(Track, SmootherIsCloserToTheTruthThanTheFilterOnAverage) {
-  const FloorPlan plan = RoomPlan();
-  const wifi::RssModel model(RoomMap());
+TEST_F(TrackInRoom, SmootherIsCloserToTheTruthThanTheFilterOnAverage) {
   TrackerOptions o = SmallOptions(2000);
   o.start_position_sd_m = 1.5;
   o.wifi.tempering = 0.3;
@@ -356,8 +343,7 @@ TEST(Track, SmootherIsCloserToTheTruthThanTheFilterOnAverage) {
 // ---- Reliability: memory refused by size, events in time order, absurd states ----
 
 
-TEST(ParticleTracker, MemoryIsRefusedBySizeBeforeAllocating) {
-  const FloorPlan plan = RoomPlan();
+TEST_F(ParticleTrackerInRoom, MemoryIsRefusedBySizeBeforeAllocating) {
   // 5e7 particles: ~4.8 GB of state (the smoother's history would come on top).
   TrackerOptions o = SmallOptions();
   o.num_particles = 50000000;
@@ -384,9 +370,7 @@ TEST(ParticleTracker, MemoryIsRefusedBySizeBeforeAllocating) {
   EXPECT_NO_THROW(RequireWifiReadingsMemory(1e4, 100));
 }
 
-TEST(ParticleTracker, EventsBeforeThePreviousOneAreRefusedWhateverTheirKind) {
-  const FloorPlan plan = RoomPlan();
-  const wifi::RssModel model(RoomMap());
+TEST_F(ParticleTrackerInRoom, EventsBeforeThePreviousOneAreRefusedWhateverTheirKind) {
   ParticleTracker tracker(&plan, &model, nullptr, SmallOptions(200));
   EXPECT_THROW(tracker.Estimate(), std::runtime_error);  // not initialised
   try {
@@ -415,8 +399,7 @@ TEST(ParticleTracker, EventsBeforeThePreviousOneAreRefusedWhateverTheirKind) {
   EXPECT_EQ(tracker.Estimate().time_s, 3.0);
 }
 
-TEST(ParticleTracker, SetParticlesRefusesAbsurdStates) {
-  const FloorPlan plan = RoomPlan();
+TEST_F(ParticleTrackerInRoom, SetParticlesRefusesAbsurdStates) {
   ParticleTracker tracker(&plan, nullptr, nullptr, SmallOptions(10));
   RowMatrixXd states(2, 4);
   states << 3.0, 3.0, 0.0, 1.0, 4.0, 3.0, 0.1, 1.0;
@@ -441,8 +424,7 @@ TEST(ParticleTracker, SetParticlesRefusesAbsurdStates) {
   EXPECT_NO_THROW(soft_tracker.SetParticles(bad, floors));
 }
 
-TEST(Track, StepsBeforeAKnownStartDoNotMoveTheCloud) {
-  const FloorPlan plan = RoomPlan();
+TEST_F(TrackInRoom, StepsBeforeAKnownStartDoNotMoveTheCloud) {
   Recording rec;
   for (int k = 0; k < 10; ++k) rec.steps.push_back(Step(0.5 * (k + 1), 0.5, 0.0));
   TrackStart start;

@@ -1,6 +1,8 @@
 #include "indoorloc/network/crossover_pcg.h"
 
+#include <cstdint>
 #include <stdexcept>
+#include <vector>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Dense>
@@ -18,20 +20,30 @@ using Eigen::VectorXd;
 
 using testing::FromDense;
 
-TEST(CrossoverPcg, MatchesTheDenseTiedSolution) {
-  const int n = 30, b = 4;
-  const auto [A, rhs] = testing::RandomBlockSystem(n, b, 9);
-  RandomStream rng(10);
+// `count` ties between an unknown of the first half of `num_unknowns` and one of the second (far
+// apart, as cross-overs are), weights in [1, 101), values standard normal; the same seed gives
+// the same ties.
+std::vector<Tie> FarApartTies(int num_unknowns, int count, std::uint64_t seed) {
+  RandomStream rng(seed);
+  const int half = num_unknowns / 2;
   std::vector<Tie> ties;
-  MatrixXd tied = A;
-  VectorXd tied_rhs = rhs;
-  for (int k = 0; k < 40; ++k) {  // far-apart ties, as cross-overs are
+  for (int k = 0; k < count; ++k) {
     Tie t;
-    t.a = static_cast<long long>(rng.UniformInt(static_cast<std::uint64_t>(n * b / 2)));
-    t.b = n * b / 2 + static_cast<long long>(rng.UniformInt(static_cast<std::uint64_t>(n * b / 2)));
+    t.a = static_cast<long long>(rng.UniformInt(static_cast<std::uint64_t>(half)));
+    t.b = half + static_cast<long long>(rng.UniformInt(static_cast<std::uint64_t>(half)));
     t.weight = 100.0 * rng.Uniform01() + 1.0;
     t.value = rng.Normal();
     ties.push_back(t);
+  }
+  return ties;
+}
+
+// The brute-force reference: each tie adds w u uᵀ to the matrix and w v u to the right-hand side
+// (u = e_a - e_b: w to A_aa and A_bb, -w to A_ab and A_ba), the dense system solved by Cholesky.
+VectorXd DenseTiedSolution(const MatrixXd& A, const VectorXd& rhs, const std::vector<Tie>& ties) {
+  MatrixXd tied = A;
+  VectorXd tied_rhs = rhs;
+  for (const Tie& t : ties) {
     tied(t.a, t.a) += t.weight;
     tied(t.b, t.b) += t.weight;
     tied(t.a, t.b) -= t.weight;
@@ -39,11 +51,18 @@ TEST(CrossoverPcg, MatchesTheDenseTiedSolution) {
     tied_rhs[t.a] += t.weight * t.value;
     tied_rhs[t.b] -= t.weight * t.value;
   }
+  return tied.llt().solve(tied_rhs);
+}
+
+TEST(CrossoverPcg, MatchesTheDenseTiedSolution) {
+  const int n = 30, b = 4;
+  const auto [A, rhs] = testing::RandomBlockSystem(n, b, 9);
+  const std::vector<Tie> ties = FarApartTies(n * b, 40, 10);
   const BlockTridiagonalFactor f(n, b, FromDense(A, rhs, b));
   const TiedSolution s = SolveWithTies(f, rhs, ties);
   EXPECT_EQ(s.summary.termination, Termination::kConverged) << s.summary.BriefReport();
   EXPECT_LE(s.summary.iterations, 81);  // CG: at most 1 + rank of the tie update, here 40
-  EXPECT_LT((s.x - tied.llt().solve(tied_rhs)).cwiseAbs().maxCoeff(), 1e-7);
+  EXPECT_LT((s.x - DenseTiedSolution(A, rhs, ties)).cwiseAbs().maxCoeff(), 1e-7);
   // No ties: the band solution, zero iterations.
   EXPECT_EQ(SolveWithTies(f, rhs, {}).summary.iterations, 0);
 }
