@@ -123,6 +123,8 @@ SmoothedTrack SmoothBackward(const ParticleHistory& history, const FloorPlan* pl
       const int n = static_cast<int>(c.states.rows());
       lw.resize(n);
       double max_lw = kNegInf;
+      // cos and sin of the successor's offset once for the n predecessors (same bits).
+      const StepMotion::Successor to = StepMotion::SuccessorOf(succ.head<2>(), succ[2], succ[3]);
       for (int i = 0; i < n; ++i) {
         double v = c.log_w[i];
         if (c.floors[i] != succ_floor) {
@@ -132,7 +134,7 @@ SmoothedTrack SmoothBackward(const ParticleHistory& history, const FloorPlan* pl
         }
         if (v > kNegInf) {
           v += motion.TransitionLogDensity(Eigen::Vector2d(c.states(i, 0), c.states(i, 1)), c.states(i, 2), c.states(i, 3),
-                                           succ.head<2>(), succ[2], succ[3]);
+                                           to);
         }
         lw[i] = v;
         max_lw = std::max(max_lw, v);
