@@ -6,6 +6,7 @@
 #include <string>
 
 #include "indoorloc/core/check.h"
+#include "indoorloc/core/log_weights.h"
 #include "indoorloc/core/validate.h"
 
 namespace indoorloc::fusion {
@@ -100,7 +101,14 @@ FixLikelihood::FixLikelihood(const PositionFix& fix, const FixLikelihoodOptions&
 
 double FixLikelihood::LogLikelihood(double x_m, double y_m, int floor, double area_m2) const {
   if (fix_.empty()) return 0.0;
-  const double log_outlier = std::log(options_.outlier_probability / area_m2);
+  // log(ε / A) is the same for every particle of a cloud: kept per thread for the last (ε, A).
+  thread_local double last_ratio = std::numeric_limits<double>::quiet_NaN(), last_log_outlier = 0.0;
+  const double ratio = options_.outlier_probability / area_m2;
+  if (!(ratio == last_ratio)) {
+    last_ratio = ratio;
+    last_log_outlier = std::log(ratio);
+  }
+  const double log_outlier = last_log_outlier;
   double best = log_outlier;
   const Eigen::Index k = fix_.means_m.rows();
   const bool any_floor = fix_.floors.size() == 0;
@@ -116,8 +124,8 @@ double FixLikelihood::LogLikelihood(double x_m, double y_m, int floor, double ar
     terms[i] = log_component_scale_[i] - (dx * dx + dy * dy) * inv_two_var_[i];
     best = std::max(best, terms[i]);
   }
-  double sum = std::exp(log_outlier - best);
-  for (Eigen::Index i = 0; i < k; ++i) sum += std::exp(terms[i] - best);
+  double sum = ExpOfLogDifference(log_outlier - best);
+  for (Eigen::Index i = 0; i < k; ++i) sum += ExpOfLogDifference(terms[i] - best);
   return options_.tempering * (best + std::log(sum));
 }
 
