@@ -201,37 +201,6 @@ def test_match_distance_against_brute_force():
         fe.walk_match_distance_db(rss, floors[:2], 3, q)
 
 
-def _match_distance_per_query(x, f_ref, floor, q, m, cost):
-    """walk_match_distance_db as first written: one (references, APs) block per query."""
-    rows = np.flatnonzero(f_ref == floor)
-    per_query = []
-    for row in q if rows.size else ():
-        heard = np.flatnonzero(np.isfinite(row))
-        if heard.size == 0:
-            continue
-        top = heard[np.argsort(-row[heard], kind="stable")[:m]]
-        ref = x[np.ix_(rows, top)]
-        per_query.append(np.where(np.isfinite(ref), np.abs(ref - row[top]), cost).mean(axis=1).min())
-    return float(np.median(per_query)) if per_query else cost
-
-
-def test_match_distances_of_all_floors_equal_the_per_query_blocks_bit_for_bit():
-    # Queries hearing 0, 1, ..., 14 APs (blocks of every length L <= m, several queries per L),
-    # references on three floors and one floor without any.
-    rng = np.random.default_rng(5)
-    n, k = 300, 40
-    x = np.where(rng.random((n, k)) < 0.35, rng.normal(-75, 10, (n, k)).round(1), NAN)
-    f_ref = rng.choice([1, 2, 3], n)
-    q = np.full((45, k), NAN)
-    for i in range(q.shape[0]):
-        heard = rng.choice(k, i % 15, replace=False)
-        q[i, heard] = rng.normal(-70, 9, heard.size).round()
-    for m, cost in ((10, 30.0), (3, 12.5)):
-        got = fe.walk_match_distances_db(x, f_ref, [2, 7, 1, 3], q, m, cost)
-        want = [_match_distance_per_query(x, f_ref, f, q, m, cost) for f in (2, 7, 1, 3)]
-        assert np.asarray(want).tobytes() == got.tobytes()
-
-
 def test_calibration_bad_arguments_name_themselves():
     for kwargs, name in ((dict(temperature=0.0), "temperature"), (dict(error_probability=1.0), "error_probability"),
                          (dict(error_probability=-0.1), "error_probability"), (dict(temperature=np.nan), "temperature")):

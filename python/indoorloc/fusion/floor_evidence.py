@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Dict, List, Optional, Sequence, Tuple
+from typing import Any, Optional, Sequence
 
 import numpy as np
 
@@ -140,14 +140,6 @@ def walk_match_distance_db(rss_dbm: np.ndarray, reference_floors: np.ndarray, fl
     the walk's is the median over queries. ``unheard_db`` when there is nothing to compare (no
     query hears an AP, or the floor has no reference). ``rss_dbm`` (N, K) and
     ``reference_floors`` (N,) as in :meth:`ApFloorRates.from_references`."""
-    return float(walk_match_distances_db(rss_dbm, reference_floors, [floor], queries_dbm, ap_count, unheard_db)[0])
-
-
-def walk_match_distances_db(rss_dbm: np.ndarray, reference_floors: np.ndarray, floors, queries_dbm: np.ndarray,
-                            ap_count: int = MATCH_AP_COUNT, unheard_db: float = MATCH_UNHEARD_DB) -> np.ndarray:
-    """:func:`walk_match_distance_db` of each floor of ``floors`` (F,) [dB]: each query's strongest
-    APs found once for all floors, and the queries with as many of them taken together (the same
-    per-reference means, each over its own row of the same length, so the same values)."""
     x = real_array(rss_dbm, "rss_dbm", ndim=2, finite=False)
     q = real_array(queries_dbm, "queries_dbm", ndim=2, finite=False)
     f_ref = np.asarray(reference_floors)
@@ -158,33 +150,17 @@ def walk_match_distances_db(rss_dbm: np.ndarray, reference_floors: np.ndarray, f
                          f"got {q.shape[1]}")
     m = integer(ap_count, "ap_count", lo=1, hi=100_000)
     cost = real_scalar(unheard_db, "unheard_db", lo=0.0, hi=1e3)
-    # Each query's strongest APs (at most m), grouped by their count L.
-    by_length: Dict[int, Tuple[List[int], List[np.ndarray]]] = {}
-    for i, row in enumerate(q):
+    rows = np.flatnonzero(f_ref == floor)
+    per_query = []
+    for row in q if rows.size else ():
         heard = np.flatnonzero(np.isfinite(row))
-        if heard.size:
-            top = heard[np.argsort(-row[heard], kind="stable")[:m]]
-            group = by_length.setdefault(top.size, ([], []))
-            group[0].append(i)
-            group[1].append(top)
-    out = np.full(len(floors), cost)
-    for j, floor in enumerate(floors):
-        rows = np.flatnonzero(f_ref == floor)
-        if rows.size == 0 or not by_length:
+        if heard.size == 0:
             continue
-        per_query = []
-        for queries, tops in by_length.values():
-            # (G, L) APs of G queries; (G, n, L) blocks of at most ~4 M values.
-            top_all = np.array(tops)
-            chunk = max(1, 4_000_000 // (rows.size * top_all.shape[1]))
-            for a in range(0, top_all.shape[0], chunk):
-                top = top_all[a:a + chunk]
-                ref = x[rows[None, :, None], top[:, None, :]]
-                wanted = q[np.asarray(queries[a:a + chunk])[:, None], top][:, None, :]
-                d = np.where(np.isfinite(ref), np.abs(ref - wanted), cost).mean(axis=2)
-                per_query.append(d.min(axis=1))
-        out[j] = float(np.median(np.concatenate(per_query)))
-    return out
+        top = heard[np.argsort(-row[heard], kind="stable")[:m]]
+        ref = x[np.ix_(rows, top)]
+        d = np.where(np.isfinite(ref), np.abs(ref - row[top]), cost).mean(axis=1)
+        per_query.append(d.min())
+    return float(np.median(per_query)) if per_query else cost
 
 
 @dataclass(frozen=True)
@@ -268,5 +244,4 @@ def reliability_table(reported: np.ndarray, right: np.ndarray, bins: Sequence[fl
 __all__ = ["ApFloorRates", "FloorCalibration", "MATCH_AP_COUNT", "MATCH_UNHEARD_DB", "RELIABILITY_BINS",
            "calibrated_floor_probabilities", "query_floor_log_posteriors", "reliability_table",
            "robust_query_log_likelihoods",
-           "walk_floor_log_likelihood", "walk_match_distance_db",
-           "walk_match_distances_db"]
+           "walk_floor_log_likelihood", "walk_match_distance_db"]

@@ -298,8 +298,8 @@ def walk_floor_evidence(walk: Any, database: wifi_fixes.FingerprintDatabase, rat
     log_p, used = floor_evidence.query_floor_log_posteriors(rates, queries, settings.identification_ap_count)
     per_query = floor_evidence.robust_query_log_likelihoods(log_p, settings.identification_ap_outlier_probability)
     seq = floor_sequence(per_query, t[used], settings.identification_floor_change_rate_per_s)
-    dist = floor_evidence.walk_match_distances_db(database.rss_dbm, database.floors, [int(f) for f in rates.floors],
-                                                  queries)
+    dist = np.array([floor_evidence.walk_match_distance_db(database.rss_dbm, database.floors, int(f), queries)
+                     for f in rates.floors])
     classifier = None
     if rates.classifier is not None:
         classifier = rates.classifier.walk_log_likelihood(queries, settings.identification_classifier_outlier_probability)
