@@ -147,6 +147,38 @@ def test_ap_reliability_down_weights_a_noisy_ap():
     np.testing.assert_array_equal(g, 1.0)
 
 
+def _dense_ap_reliability(x, positions_m, walk_index, power, pair_radius_m=2.0, prior_pairs=10.0):
+    """ap_reliability as first written: (P, K) blocks of differences summed over the pairs."""
+    from scipy.spatial import cKDTree
+
+    pairs = cKDTree(positions_m).query_pairs(pair_radius_m, output_type="ndarray")
+    pairs = pairs[walk_index[pairs[:, 0]] != walk_index[pairs[:, 1]]]
+    sq, n = np.zeros(x.shape[1]), np.zeros(x.shape[1])
+    for a in range(0, pairs.shape[0], 20_000):
+        p = pairs[a:a + 20_000]
+        diff = x[p[:, 0]] - x[p[:, 1]]
+        both = np.isfinite(diff)
+        sq += np.where(both, diff * diff, 0.0).sum(axis=0)
+        n += both.sum(axis=0)
+    pooled = sq.sum() / (2.0 * n.sum())
+    return (pooled / ((sq / 2.0 + prior_pairs * pooled) / (n + prior_pairs))) ** power
+
+
+def test_ap_reliability_equals_the_dense_sums_bit_for_bit():
+    # More than one block of 20,000 pairs, a sparse (N, K) matrix with APs heard by none or one.
+    rng = np.random.default_rng(3)
+    n, k = 700, 60
+    xy = rng.uniform(0, 10, (n, 2))
+    walk = rng.integers(0, 12, n)
+    x = np.where(rng.random((n, k)) < 0.3, rng.normal(-70, 9, (n, k)).round(), nan)
+    x[:, 5] = nan
+    x[:, 7] = nan
+    x[3, 7] = -50.0
+    got = wifi_matcher.ap_reliability(x, xy, walk, power=1.0, max_pairs=10**9)
+    want = _dense_ap_reliability(x, xy, walk, 1.0)
+    assert got.tobytes() == want.tobytes()
+
+
 @pytest.mark.parametrize("field, value", [
     ("query_window_s", 0.0), ("ref_spacing_s", -1.0), ("ref_window_s", float("nan")), ("penalty_db", -5.0),
     ("ap_weight_power", float("inf")), ("strength_scale_db", 0.5), ("pooling", "scan"), ("query_align", "start"),

@@ -61,13 +61,55 @@ int Draw(const std::vector<double>& lw, double max_lw, RandomStream& rng, std::v
   cumulative->resize(lw.size());
   double total = 0.0;
   for (size_t i = 0; i < lw.size(); ++i) {
-    total += lw[i] > kNegInf ? std::exp(lw[i] - max_lw) : 0.0;
+    total += lw[i] > kNegInf ? ExpOfLogDifference(lw[i] - max_lw) : 0.0;
     (*cumulative)[i] = total;
   }
   const double u = rng.Uniform01() * total;
   const auto it = std::upper_bound(cumulative->begin(), cumulative->end(), u);
   return static_cast<int>(std::min<std::ptrdiff_t>(it - cumulative->begin(), static_cast<std::ptrdiff_t>(lw.size()) - 1));
 }
+
+// Draw's distribution kept between draws from the same log-weights: the weights exp(lw - max)
+// and their running sums. After an entry is ruled out (set to -inf: a predecessor behind a wall)
+// only the running sums are redone while the maximum stays, so each draw sees the values Draw
+// would compute from scratch, without n exps per draw.
+class BackwardKernel {
+ public:
+  void Set(const std::vector<double>& lw, double max_lw) {
+    max_ = max_lw;
+    weight_.resize(lw.size());
+    for (size_t i = 0; i < lw.size(); ++i) weight_[i] = lw[i] > kNegInf ? ExpOfLogDifference(lw[i] - max_lw) : 0.0;
+    Accumulate();
+  }
+  // lw[i] was set to -inf; max_lw is the new maximum of lw.
+  void RuleOut(const std::vector<double>& lw, int i, double max_lw) {
+    if (max_lw != max_) {
+      Set(lw, max_lw);
+      return;
+    }
+    weight_[static_cast<size_t>(i)] = 0.0;
+    Accumulate();
+  }
+  int Draw(RandomStream& rng) const {
+    const double u = rng.Uniform01() * total_;
+    const auto it = std::upper_bound(cumulative_.begin(), cumulative_.end(), u);
+    return static_cast<int>(
+        std::min<std::ptrdiff_t>(it - cumulative_.begin(), static_cast<std::ptrdiff_t>(cumulative_.size()) - 1));
+  }
+
+ private:
+  void Accumulate() {
+    cumulative_.resize(weight_.size());
+    double total = 0.0;
+    for (size_t i = 0; i < weight_.size(); ++i) {
+      total += weight_[i];
+      cumulative_[i] = total;
+    }
+    total_ = total;
+  }
+  double max_ = 0, total_ = 0;
+  std::vector<double> weight_, cumulative_;
+};
 }  // namespace
 
 SmoothedTrack SmoothBackward(const ParticleHistory& history, const FloorPlan* plan,
@@ -110,6 +152,7 @@ SmoothedTrack SmoothBackward(const ParticleHistory& history, const FloorPlan* pl
   std::vector<RowMatrixXd> paths(static_cast<size_t>(m), RowMatrixXd(num_steps, 3));
   ParallelForRuns(m, options.num_threads, DeriveSeed(options.seed, 0x6a11ULL), [&](int j, RandomStream& rng) {
     std::vector<double> lw, cumulative;
+    BackwardKernel kernel;
     RowMatrixXd& path = paths[j];
     const Cloud& last = clouds[num_steps - 1];
     lw.assign(last.log_w.data(), last.log_w.data() + last.log_w.size());
@@ -123,6 +166,8 @@ SmoothedTrack SmoothBackward(const ParticleHistory& history, const FloorPlan* pl
       const int n = static_cast<int>(c.states.rows());
       lw.resize(n);
       double max_lw = kNegInf;
+      // cos and sin of the successor's offset once for the n predecessors (same bits).
+      const StepMotion::Successor to = StepMotion::SuccessorOf(succ.head<2>(), succ[2], succ[3]);
       for (int i = 0; i < n; ++i) {
         double v = c.log_w[i];
         if (c.floors[i] != succ_floor) {
@@ -132,7 +177,7 @@ SmoothedTrack SmoothBackward(const ParticleHistory& history, const FloorPlan* pl
         }
         if (v > kNegInf) {
           v += motion.TransitionLogDensity(Eigen::Vector2d(c.states(i, 0), c.states(i, 1)), c.states(i, 2), c.states(i, 3),
-                                           succ.head<2>(), succ[2], succ[3]);
+                                           to);
         }
         lw[i] = v;
         max_lw = std::max(max_lw, v);
@@ -140,8 +185,9 @@ SmoothedTrack SmoothBackward(const ParticleHistory& history, const FloorPlan* pl
       int pick = -1;
       // Draw, then test the wall only for the drawn predecessor (rejection: a few wall tests per
       // step instead of n).
+      if (max_lw > kNegInf) kernel.Set(lw, max_lw);
       for (int attempt = 0; attempt < 32 && max_lw > kNegInf; ++attempt) {
-        const int i = Draw(lw, max_lw, rng, &cumulative);
+        const int i = kernel.Draw(rng);
         const bool same_floor = c.floors[i] == succ_floor;
         const bool blocked = plan && same_floor &&
                              plan->CrossesWall(c.states(i, 0), c.states(i, 1), succ[0], succ[1], c.floors[i]);
@@ -151,14 +197,16 @@ SmoothedTrack SmoothBackward(const ParticleHistory& history, const FloorPlan* pl
         }
         if (std::isinf(penalty)) {
           lw[i] = kNegInf;
+          max_lw = *std::max_element(lw.begin(), lw.end());
+          if (max_lw > kNegInf) kernel.RuleOut(lw, i, max_lw);
         } else {
-          // Accept with probability exp(penalty) (the wall factor of the density).
+          // Accept with probability exp(penalty) (the wall factor of the density); lw is
+          // unchanged, so is the kernel.
           if (rng.Uniform01() < std::exp(penalty)) {
             pick = i;
             break;
           }
         }
-        max_lw = *std::max_element(lw.begin(), lw.end());
       }
       if (pick < 0) {
         // No predecessor explains the successor (a recovery or re-spread happened in between):

@@ -87,14 +87,21 @@ TrackerGrids::FixFactor TrackerGrids::ComputeFixFactor(const std::vector<const P
     if (power == 1.0) {
       for (std::size_t i = 0; i < n; ++i) out.factor[i] = static_cast<float>((floor_density + acc[i]) * inv);
     } else {
-      for (std::size_t i = 0; i < n; ++i) out.factor[i] = static_cast<float>(std::pow((floor_density + acc[i]) * inv, power));
+      // Cells beyond every component's reach (density exactly 0, also after the bilinear
+      // anchoring) share one value: the library's pow once for all of them, the same bits.
+      const float outlier_only = static_cast<float>(std::pow(floor_density * inv, power));
+      for (std::size_t i = 0; i < n; ++i) {
+        out.factor[i] = acc[i] == 0.0 ? outlier_only : static_cast<float>(std::pow((floor_density + acc[i]) * inv, power));
+      }
     }
     return out;
   }
   std::vector<double> log_l(n, 0.0);
+  const double log_outlier_only = std::log(floor_density);  // log(floor_density + 0), as above
   for (const PositionFix* fix : fixes) {
     AddFixDensity(*fix, fg, options, &acc, &ex, &anchored);
-    for (std::size_t i = 0; i < n; ++i) log_l[i] += power * std::log(floor_density + acc[i]);
+    for (std::size_t i = 0; i < n; ++i)
+      log_l[i] += power * (acc[i] == 0.0 ? log_outlier_only : std::log(floor_density + acc[i]));
   }
   out.log_scale = *std::max_element(log_l.begin(), log_l.end());
   for (std::size_t i = 0; i < n; ++i) out.factor[i] = static_cast<float>(std::exp(log_l[i] - out.log_scale));

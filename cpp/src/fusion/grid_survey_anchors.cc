@@ -14,10 +14,10 @@ namespace indoorloc::fusion {
 namespace {
 
 // Nearest-point search over a bucket grid that covers both the points and the queries, so that a
-// query's bucket always exists: rings of buckets around the query's bucket are scanned outwards
-// until the best distance found is no more than the least distance of the next ring (r b, b the
-// bucket side), which makes the result exact. Ties go to the lower point index (scan order is
-// fixed), so the result is deterministic.
+// query's bucket always exists. Queries come in small boxes (tiles of cells): the candidates of a
+// box are found once by scanning rings of buckets outwards (Candidates), then each query's
+// nearest among them; ties go to the lower point index, so the result is deterministic and is
+// that of a brute-force search over all points.
 class NearestPoint {
  public:
   NearestPoint(const std::vector<Eigen::Vector2d>& pts, const Eigen::Vector4d& query_box, double bucket_m)
@@ -38,30 +38,49 @@ class NearestPoint {
     for (int i = 0; i < static_cast<int>(pts.size()); ++i) index_[fill[Bucket(pts[i].x(), pts[i].y())]++] = i;
   }
 
-  int Nearest(double x, double y) const {
-    const int bx = Clamp(static_cast<int>(std::floor((x - x0_) / b_)), nx_);
-    const int by = Clamp(static_cast<int>(std::floor((y - y0_) / b_)), ny_);
-    int best = -1;
-    double best_d2 = std::numeric_limits<double>::infinity();
+  // Every point that can be the nearest to some query in the axis-aligned box [x0, x1] x [y0, y1]
+  // (ascending index): the points whose distance to the box is at most U, U the least distance
+  // from any point to the box's farthest corner (a query's nearest point is no farther than U,
+  // and no nearer than its distance to the box). Bucket rings around the box's buckets are
+  // scanned until the next ring lies beyond U. A relative margin keeps rounding on the safe side
+  // (a few extra candidates).
+  void Candidates(double x0, double y0, double x1, double y1, std::vector<int>* out) const {
+    out->clear();
+    const int bx0 = Clamp(static_cast<int>(std::floor((x0 - x0_) / b_)), nx_);
+    const int bx1 = Clamp(static_cast<int>(std::floor((x1 - x0_) / b_)), nx_);
+    const int by0 = Clamp(static_cast<int>(std::floor((y0 - y0_) / b_)), ny_);
+    const int by1 = Clamp(static_cast<int>(std::floor((y1 - y0_) / b_)), ny_);
+    double upper = std::numeric_limits<double>::infinity();
+    scanned_.clear();
     const int r_max = std::max(nx_, ny_);
     for (int r = 0; r <= r_max; ++r) {
-      for (int j = by - r; j <= by + r; ++j) {
+      for (int j = by0 - r; j <= by1 + r; ++j) {
         if (j < 0 || j >= ny_) continue;
-        const bool edge_row = j == by - r || j == by + r;
-        for (int i = bx - r; i <= bx + r; i += edge_row ? 1 : 2 * std::max(r, 1)) {
+        const bool edge_row = j == by0 - r || j == by1 + r;
+        for (int i = bx0 - r; i <= bx1 + r; ++i) {
+          if (r > 0 && !edge_row && i > bx0 - r && i < bx1 + r) i = bx1 + r;  // inside: the ring's sides only
           if (i < 0 || i >= nx_) continue;
           const std::size_t bucket = static_cast<std::size_t>(j) * nx_ + i;
           for (int k = start_[bucket]; k < start_[bucket + 1]; ++k) {
             const int p = index_[k];
-            const double d2 = (pts_[p].x() - x) * (pts_[p].x() - x) + (pts_[p].y() - y) * (pts_[p].y() - y);
-            if (d2 < best_d2 || (d2 == best_d2 && p < best)) best_d2 = d2, best = p;
+            const double px = pts_[p].x(), py = pts_[p].y();
+            const double fx = std::max(std::abs(px - x0), std::abs(px - x1));
+            const double fy = std::max(std::abs(py - y0), std::abs(py - y1));
+            upper = std::min(upper, std::sqrt(fx * fx + fy * fy));
+            scanned_.push_back(p);
           }
         }
       }
-      const double reach = r * b_;
-      if (best >= 0 && best_d2 <= reach * reach) break;
+      // Points of ring r + 1 and beyond lie at least r b from the box.
+      if (upper * (1.0 + 1e-9) + 1e-9 < r * b_) break;
     }
-    return best;
+    const double reach = upper * (1.0 + 1e-9) + 1e-9;
+    for (int p : scanned_) {
+      const double px = pts_[p].x(), py = pts_[p].y();
+      const double dx = std::max({0.0, x0 - px, px - x1}), dy = std::max({0.0, y0 - py, py - y1});
+      if (std::sqrt(dx * dx + dy * dy) <= reach) out->push_back(p);
+    }
+    std::sort(out->begin(), out->end());
   }
 
  private:
@@ -75,6 +94,7 @@ class NearestPoint {
   double b_, x0_ = 0, y0_ = 0;
   int nx_ = 1, ny_ = 1;
   std::vector<int> start_, index_;
+  mutable std::vector<int> scanned_;
 };
 
 // Bilinear lattice coordinate of u (in cells from the first centre) on n centres: the lower
@@ -95,18 +115,35 @@ void AnchorFloor(const std::vector<Eigen::Vector2d>& pts, double beta, double c,
   g->fix_step_y.resize(n);
   g->fix_wx.resize(n);
   g->fix_wy.resize(n);
-  for (int y = 0; y < g->ny; ++y)
-    for (int x = 0; x < g->nx; ++x) {
-      const double cx = g->x0 + (x + 0.5) * c, cy = g->y0 + (y + 0.5) * c;
-      const Eigen::Vector2d& s = pts[static_cast<std::size_t>(search.Nearest(cx, cy))];
-      const double qx = s.x() + beta * (cx - s.x()), qy = s.y() + beta * (cy - s.y());
-      const std::size_t i = static_cast<std::size_t>(y) * g->nx + x;
-      int ix, iy, sx, sy;
-      Lattice((qx - g->x0) / c - 0.5, g->nx, &ix, &sx, &g->fix_wx[i]);
-      Lattice((qy - g->y0) / c - 0.5, g->ny, &iy, &sy, &g->fix_wy[i]);
-      g->fix_cell[i] = iy * g->nx + ix;
-      g->fix_step_x[i] = static_cast<unsigned char>(sx);
-      g->fix_step_y[i] = sy * g->nx;
+  // Cells in tiles of kTile x kTile: the tile's candidate points once (NearestPoint::Candidates),
+  // then each cell's nearest among them, ties to the lower index (the result of Nearest, without
+  // a ring search per cell).
+  constexpr int kTile = 4;
+  std::vector<int> cand;
+  for (int ty = 0; ty < g->ny; ty += kTile)
+    for (int tx = 0; tx < g->nx; tx += kTile) {
+      const int x_end = std::min(g->nx, tx + kTile), y_end = std::min(g->ny, ty + kTile);
+      search.Candidates(g->x0 + (tx + 0.5) * c, g->y0 + (ty + 0.5) * c, g->x0 + (x_end - 1 + 0.5) * c,
+                        g->y0 + (y_end - 1 + 0.5) * c, &cand);
+      for (int y = ty; y < y_end; ++y)
+        for (int x = tx; x < x_end; ++x) {
+          const double cx = g->x0 + (x + 0.5) * c, cy = g->y0 + (y + 0.5) * c;
+          int best = -1;
+          double best_d2 = std::numeric_limits<double>::infinity();
+          for (int p : cand) {
+            const double d2 = (pts[p].x() - cx) * (pts[p].x() - cx) + (pts[p].y() - cy) * (pts[p].y() - cy);
+            if (d2 < best_d2) best_d2 = d2, best = p;  // ascending index: the first of equals stays
+          }
+          const Eigen::Vector2d& s = pts[static_cast<std::size_t>(best)];
+          const double qx = s.x() + beta * (cx - s.x()), qy = s.y() + beta * (cy - s.y());
+          const std::size_t i = static_cast<std::size_t>(y) * g->nx + x;
+          int ix, iy, sx, sy;
+          Lattice((qx - g->x0) / c - 0.5, g->nx, &ix, &sx, &g->fix_wx[i]);
+          Lattice((qy - g->y0) / c - 0.5, g->ny, &iy, &sy, &g->fix_wy[i]);
+          g->fix_cell[i] = iy * g->nx + ix;
+          g->fix_step_x[i] = static_cast<unsigned char>(sx);
+          g->fix_step_y[i] = sy * g->nx;
+        }
     }
 }
 

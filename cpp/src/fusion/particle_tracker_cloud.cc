@@ -100,7 +100,7 @@ double ParticleTracker::Impl::FinishUpdate(double max_log_w, TrackerEstimate* es
     sum_sq = 0.0;
     for (int i = 0; i < n; ++i) {
       const double d = log_w[i] - max_log_w;
-      if ((d != 0.0) & (d != kNegInfinity)) weights[i] = std::exp(d);
+      if ((d != 0.0) & (d != kNegInfinity)) weights[i] = ExpOfLogDifference(d);
       sum += weights[i];
       sum_sq += weights[i] * weights[i];
     }

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "indoorloc/core/check.h"
+#include "indoorloc/core/log_weights.h"
 #include "indoorloc/core/validate.h"
 
 namespace indoorloc::fusion {
@@ -43,28 +44,40 @@ PositionFix FixFromCandidates(double time_s, const Eigen::Ref<const PositionFix:
   return fix;
 }
 
+// The messages below are built only for a fix that fails its check (every fix of every run is
+// checked: formatting the bounds eagerly took a few per cent of an evaluation).
 void CheckPositionFix(const PositionFix& fix, const char* argument) {
   const std::string arg(argument);
   CheckArgument(std::isfinite(fix.time_s), arg + ".time_s", "must be finite");
   const Eigen::Index k = fix.means_m.rows();
-  CheckArgument(fix.sds_m.size() == k, arg + ".sds_m",
-                "has " + std::to_string(fix.sds_m.size()) + " entries, means_m has " + std::to_string(k) + " rows");
-  CheckArgument(fix.weights.size() == k, arg + ".weights",
-                "has " + std::to_string(fix.weights.size()) + " entries, means_m has " + std::to_string(k) + " rows");
-  CheckArgument(fix.floors.size() == 0 || fix.floors.size() == k, arg + ".floors",
-                "has " + std::to_string(fix.floors.size()) + " entries, means_m has " + std::to_string(k) +
-                    " rows (or pass none: any floor)");
+  if (fix.sds_m.size() != k) {
+    CheckArgument(false, arg + ".sds_m",
+                  "has " + std::to_string(fix.sds_m.size()) + " entries, means_m has " + std::to_string(k) + " rows");
+  }
+  if (fix.weights.size() != k) {
+    CheckArgument(false, arg + ".weights",
+                  "has " + std::to_string(fix.weights.size()) + " entries, means_m has " + std::to_string(k) + " rows");
+  }
+  if (!(fix.floors.size() == 0 || fix.floors.size() == k)) {
+    CheckArgument(false, arg + ".floors",
+                  "has " + std::to_string(fix.floors.size()) + " entries, means_m has " + std::to_string(k) +
+                      " rows (or pass none: any floor)");
+  }
   if (k == 0) return;
   CheckFinite(fix.means_m, (arg + ".means_m").c_str());
   RequireAllInRange(fix.means_m, -kMaxScale, kMaxScale, arg + ".means_m");
   double total = 0.0;
   for (Eigen::Index i = 0; i < k; ++i) {
     // A Scale: 1e-300 passed "> 0" but 1 / (2 sd²) is inf and the estimate became NaN.
-    CheckArgument(fix.sds_m[i] >= kMinScale && fix.sds_m[i] <= kMaxScale, arg + ".sds_m",
-                  "entry " + std::to_string(i) + " must be finite and in [" + FormatValue(kMinScale) + ", " +
-                      FormatValue(kMaxScale) + "] m, got " + FormatValue(fix.sds_m[i]));
-    CheckArgument(std::isfinite(fix.weights[i]) && fix.weights[i] >= 0.0, arg + ".weights",
-                  "entry " + std::to_string(i) + " = " + std::to_string(fix.weights[i]) + " must be finite and >= 0");
+    if (!(fix.sds_m[i] >= kMinScale && fix.sds_m[i] <= kMaxScale)) {
+      CheckArgument(false, arg + ".sds_m",
+                    "entry " + std::to_string(i) + " must be finite and in [" + FormatValue(kMinScale) + ", " +
+                        FormatValue(kMaxScale) + "] m, got " + FormatValue(fix.sds_m[i]));
+    }
+    if (!(std::isfinite(fix.weights[i]) && fix.weights[i] >= 0.0)) {
+      CheckArgument(false, arg + ".weights",
+                    "entry " + std::to_string(i) + " = " + std::to_string(fix.weights[i]) + " must be finite and >= 0");
+    }
     total += fix.weights[i];
   }
   CheckArgument(total > 0.0, arg + ".weights", "sum to 0 (a fix needs at least one component with weight > 0)");
@@ -88,7 +101,14 @@ FixLikelihood::FixLikelihood(const PositionFix& fix, const FixLikelihoodOptions&
 
 double FixLikelihood::LogLikelihood(double x_m, double y_m, int floor, double area_m2) const {
   if (fix_.empty()) return 0.0;
-  const double log_outlier = std::log(options_.outlier_probability / area_m2);
+  // log(ε / A) is the same for every particle of a cloud: kept per thread for the last (ε, A).
+  thread_local double last_ratio = std::numeric_limits<double>::quiet_NaN(), last_log_outlier = 0.0;
+  const double ratio = options_.outlier_probability / area_m2;
+  if (!(ratio == last_ratio)) {
+    last_ratio = ratio;
+    last_log_outlier = std::log(ratio);
+  }
+  const double log_outlier = last_log_outlier;
   double best = log_outlier;
   const Eigen::Index k = fix_.means_m.rows();
   const bool any_floor = fix_.floors.size() == 0;
@@ -104,8 +124,8 @@ double FixLikelihood::LogLikelihood(double x_m, double y_m, int floor, double ar
     terms[i] = log_component_scale_[i] - (dx * dx + dy * dy) * inv_two_var_[i];
     best = std::max(best, terms[i]);
   }
-  double sum = std::exp(log_outlier - best);
-  for (Eigen::Index i = 0; i < k; ++i) sum += std::exp(terms[i] - best);
+  double sum = ExpOfLogDifference(log_outlier - best);
+  for (Eigen::Index i = 0; i < k; ++i) sum += ExpOfLogDifference(terms[i] - best);
   return options_.tempering * (best + std::log(sum));
 }
 

@@ -12,9 +12,11 @@
 namespace indoorloc::fusion {
 
 namespace {
+// remainder(a, 2 pi) is a itself when |a| <= pi (the quotient rounds to 0, a tie to the even 0):
+// the common case of the smoother's offset differences, without the library call.
 double WrapAngle(double a) {
-  a = std::remainder(a, 2.0 * M_PI);
-  return a;
+  if (std::abs(a) <= M_PI) return a;
+  return std::remainder(a, 2.0 * M_PI);
 }
 }  // namespace
 
@@ -177,17 +179,26 @@ void StepMotion::SampleBlock(int count, double* offset_rad, double* cos_offset, 
   }
 }
 
+StepMotion::Successor StepMotion::SuccessorOf(const Eigen::Vector2d& to_m, double to_offset_rad, double to_scale) {
+  return Successor{to_m, to_offset_rad, to_scale, std::cos(to_offset_rad), std::sin(to_offset_rad)};
+}
+
 double StepMotion::TransitionLogDensity(const Eigen::Vector2d& from_m, double from_offset_rad, double from_scale,
                                         const Eigen::Vector2d& to_m, double to_offset_rad, double to_scale) const {
+  return TransitionLogDensity(from_m, from_offset_rad, from_scale, SuccessorOf(to_m, to_offset_rad, to_scale));
+}
+
+double StepMotion::TransitionLogDensity(const Eigen::Vector2d& from_m, double from_offset_rad, double from_scale,
+                                        const Successor& to) const {
   double log_density = 0.0;
-  const double d_offset = WrapAngle(to_offset_rad - from_offset_rad);
+  const double d_offset = WrapAngle(to.offset_rad - from_offset_rad);
   if (options_.heading_offset_walk_rad > 0.0) {
     const double z = d_offset / options_.heading_offset_walk_rad;
     log_density -= 0.5 * z * z;
   } else if (std::abs(d_offset) > 1e-12) {
     return -std::numeric_limits<double>::infinity();
   }
-  const double d_scale = to_scale - from_scale;
+  const double d_scale = to.scale - from_scale;
   if (options_.scale_walk > 0.0) {
     const double z = d_scale / options_.scale_walk;
     log_density -= 0.5 * z * z;
@@ -196,10 +207,10 @@ double StepMotion::TransitionLogDensity(const Eigen::Vector2d& from_m, double fr
   }
   // r = R(o')ᵀ (p' - p) / s' - d ~ N(0, Σ_d + σ_p² I); the Jacobian 1/s'² depends on the
   // successor only and cancels in the backward kernel.
-  const double c = std::cos(to_offset_rad), s = std::sin(to_offset_rad);
-  const Eigen::Vector2d delta = to_m - from_m;
-  const Eigen::Vector2d r(( c * delta.x() + s * delta.y()) / to_scale - step_.displacement_m.x(),
-                          (-s * delta.x() + c * delta.y()) / to_scale - step_.displacement_m.y());
+  const double c = to.cos_offset, s = to.sin_offset;
+  const Eigen::Vector2d delta = to.position_m - from_m;
+  const Eigen::Vector2d r(( c * delta.x() + s * delta.y()) / to.scale - step_.displacement_m.x(),
+                          (-s * delta.x() + c * delta.y()) / to.scale - step_.displacement_m.y());
   log_density -= 0.5 * r.dot(noise_inverse_ * r);
   return log_density;
 }

@@ -54,6 +54,8 @@ PointLikelihoodTable::PointLikelihoodTable(const ApBackground& background, doubl
       building_points_(static_cast<size_t>(background.mean_dbm.size())),
       building_values_(static_cast<size_t>(background.mean_dbm.size())) {
   background_ = background;
+  bg_log_var_.resize(background.variance_db2.size());
+  for (Eigen::Index a = 0; a < bg_log_var_.size(); ++a) bg_log_var_[a] = std::log(background.variance_db2[a]);
 }
 
 void PointLikelihoodTable::AddPoint(const double* mean_dbm, const double* variance_db2) {
@@ -62,7 +64,8 @@ void PointLikelihoodTable::AddPoint(const double* mean_dbm, const double* varian
   double log_norm = 0.0, base = 0.0;
   for (Eigen::Index a = 0; a < k; ++a) {
     const double v = variance_db2[a];
-    log_norm += 0.5 * (kLog2Pi + std::log(v));
+    // Most of a point's APs are at their background variance: its log computed once.
+    log_norm += 0.5 * (kLog2Pi + (v == background_.variance_db2[a] ? bg_log_var_[a] : std::log(v)));
     if (IsBackground(background_, a, mean_dbm[a], v)) continue;  // u_a(p) = 0 to rounding
     const double inv_var = 1.0 / v;
     const double r = bg_mean_[a] - mean_dbm[a];

@@ -55,6 +55,7 @@ class PointLikelihoodTable {
  private:
   ApBackground background_;
   Eigen::VectorXd bg_mean_, bg_inv_var_;
+  Eigen::VectorXd bg_log_var_;  // log of the background variances (AddPoint: most points' variances)
   double cap_ = 0.0;
   std::vector<double> log_norm_acc_, base_acc_;  // while adding points
   Eigen::VectorXd point_term_;  // Σ_a ½ log(2π δ_a(p)) + u_a(p), one scan's share without heard APs

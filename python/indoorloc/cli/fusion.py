@@ -72,6 +72,11 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if args.select_grid is not None and not args.select:
         raise ValueError("indoorloc: argument '--select-grid': only with --select (the grid of the "
                          "leave-one-floor-out choice); without it nothing would be selected")
+    # A batch run to completion: freed buffers are kept for the next walk instead of being faulted
+    # in again (indoorloc.allocator; no result depends on it).
+    from indoorloc.allocator import retain_freed_memory
+
+    retain_freed_memory()
     ticker = progress.Ticker(desc="fusion evaluate: walks")
     if args.select:
         result = fr.select_settings(root, floors, settings, grid=args.select_grid, progress=ticker.tick)

@@ -214,7 +214,9 @@ def _identify_floor(score: WalkScore, walk, steps_raw, pdr_steps, models: FoldMo
     fl = models.floor
     wt = score.t_s + score.waypoint_t0
     wxy = score.waypoint_xy_m
-    all_fixes = wfx.fixes_for_walk(walk, models.all_database)
+    # The walk's queries in the all-floor database's columns, for its fixes and its AP evidence.
+    all_queries = wfx.walk_queries(walk, models.all_database)
+    all_fixes = wfx.fixes_for_walk(walk, models.all_database, queries=all_queries)
     tic = time.perf_counter()
     plan_floors = list(models.all_plan.floors)
     step_idx = np.clip(np.searchsorted(pdr_steps.times_s, wt), 0, len(pdr_steps) - 1)
@@ -230,7 +232,7 @@ def _identify_floor(score: WalkScore, walk, steps_raw, pdr_steps, models: FoldMo
         id_cal, id_spread = site_model.identification_calibration(models.all_calibrations)
         id_steps = site_model.tracker_steps(steps_raw, id_cal, ts)
         ident = _grid_tracker(models.all_plan, _identification_options(settings, id_spread), "all")
-        evidence = (site_model.walk_floor_evidence(walk, models.all_database, models.all_ap_rates, ts)
+        evidence = (site_model.walk_floor_evidence(walk, models.all_database, models.all_ap_rates, ts, all_queries)
                     if models.all_ap_rates is not None else {"ap_log_likelihood": None, "match_distance_db": None})
         found = site_model.identify_floor(ident, plan_floors, id_steps, all_fixes, evidence["ap_log_likelihood"],
                                           ts.identification_ap_weight, ts.floor_calibration(),

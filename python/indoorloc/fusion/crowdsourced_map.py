@@ -359,10 +359,11 @@ def map_statistics(placed: Sequence[PlacedReadings], settings: Optional[CrowdMap
     v = len(names)
     walks_of = np.zeros(v, np.int64)
     if b_r.size:
-        pairs = np.unique(np.column_stack([b_r, walk_r]), axis=0)
-        walks_of = np.bincount(pairs[:, 0], minlength=v)
-        cpairs = np.unique(np.column_stack([b_r, c_r]), axis=0)
-        cells_of = np.bincount(cpairs[:, 0], minlength=v)
+        # Distinct (BSSID, walk) and (BSSID, cell) pairs, each as one integer key (a row-wise
+        # np.unique sorts rows as opaque bytes, several times slower; the counts are the same).
+        n_w = int(walk_r.max()) + 1
+        walks_of = np.bincount(np.unique(b_r * n_w + walk_r) // n_w, minlength=v)
+        cells_of = np.bincount(np.unique(b_r * n_cells + c_r) // n_cells, minlength=v)
     else:
         cells_of = np.zeros(v, np.int64)
     keep = (walks_of >= int(s.min_walks)) & (cells_of >= int(s.min_cells))

@@ -359,9 +359,10 @@ class Site:
             first_cal, _ = site_model.identification_calibration([self.floor_models(n).calibration
                                                                   for n in self.floors])
             weight = self.settings.identification_ap_weight
-            evidence = site_model.walk_floor_evidence(walk, database, rates, self.settings)
+            queries = wifi_fixes.walk_queries(walk, database)  # for the AP evidence and the fixes
+            evidence = site_model.walk_floor_evidence(walk, database, rates, self.settings, queries)
             ident = site_model.identify_floor(tracker_all, numbers, site_model.tracker_steps(
-                steps_raw, first_cal, self.settings), wifi_fixes.fixes_for_walk(walk, database),
+                steps_raw, first_cal, self.settings), wifi_fixes.fixes_for_walk(walk, database, queries=queries),
                 evidence["ap_log_likelihood"], weight, self.settings.floor_calibration(), evidence["match_distance_db"],
                 evidence["classifier_log_likelihood"], self.settings.identification_classifier_weight)
             by_number = {n: name for name, (n, _) in self._floors.items()}

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, field
-from typing import Any, Dict, List, Optional, Sequence
+from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -285,7 +285,8 @@ def walk_ap_log_likelihood(walk: Any, database: wifi_fixes.FingerprintDatabase, 
 
 
 def walk_floor_evidence(walk: Any, database: wifi_fixes.FingerprintDatabase, rates: floor_evidence.ApFloorRates,
-                        settings: TrackSettings) -> Dict[str, Any]:
+                        settings: TrackSettings,
+                        queries: Optional[Tuple[np.ndarray, np.ndarray]] = None) -> Dict[str, Any]:
     """What :func:`identify_floor` takes from the walk's WiFi, per floor of ``rates`` (F,):
     ``ap_log_likelihood`` [nats] (``floor_evidence.walk_floor_log_likelihood``) and
     ``match_distance_db`` [dB] (``floor_evidence.walk_match_distance_db``), both on the walk's
@@ -293,8 +294,9 @@ def walk_floor_evidence(walk: Any, database: wifi_fixes.FingerprintDatabase, rat
     floor classifier's evidence (``fusion.floor_classifier``; None when ``rates`` has no
     classifier); and the AP evidence's floor sequence
     (``fusion.floor_sequence`` at ``identification_floor_change_rate_per_s``): ``query_t_s``
-    (Q,) [s], ``query_floors`` (Q,) floor numbers, ``floor_changes`` the changes along it."""
-    t, queries = wifi_fixes.walk_queries(walk, database)
+    (Q,) [s], ``query_floors`` (Q,) floor numbers, ``floor_changes`` the changes along it.
+    ``queries``: ``wifi_fixes.walk_queries(walk, database)`` when the caller has it already."""
+    t, queries = wifi_fixes.walk_queries(walk, database) if queries is None else queries
     log_p, used = floor_evidence.query_floor_log_posteriors(rates, queries, settings.identification_ap_count)
     per_query = floor_evidence.robust_query_log_likelihoods(log_p, settings.identification_ap_outlier_probability)
     seq = floor_sequence(per_query, t[used], settings.identification_floor_change_rate_per_s)

@@ -457,12 +457,14 @@ def nearest(queries_dbm: np.ndarray, database: "FingerprintDatabase", num_thread
     return wifi_matcher.knn(dissimilarity(queries_dbm, database), s.k, s.temperature_db)
 
 
-def fixes_for_walk(walk: Any, database: FingerprintDatabase, with_floors: bool = True) -> Fixes:
+def fixes_for_walk(walk: Any, database: FingerprintDatabase, with_floors: bool = True,
+                   queries: Optional[Tuple[np.ndarray, np.ndarray]] = None) -> Fixes:
     """One fix per query fingerprint of the walk (``walk_queries``): the ``k`` most similar
     training fingerprints as components (module docstring), each on the floor of its training
-    walk (``with_floors``; else on any floor)."""
+    walk (``with_floors``; else on any floor). ``queries``: ``walk_queries(walk, database)`` when
+    the caller has it already (the same fixes, without pooling the walk's readings again)."""
     s = database.settings
-    t, rss = walk_queries(walk, database)
+    t, rss = walk_queries(walk, database) if queries is None else queries
     k = min(s.k, database.n_scans)
     if t.size == 0:
         return Fixes.from_arrays(np.zeros(0), np.zeros((0, k, 2)), np.zeros((0, k)), np.zeros((0, k)))

@@ -208,14 +208,26 @@ def ap_reliability(rss_dbm: np.ndarray, positions_m: np.ndarray, walk_index: np.
         return np.ones(k)
     if pairs.shape[0] > max_pairs:
         pairs = pairs[np.random.default_rng(seed).choice(pairs.shape[0], max_pairs, replace=False)]
+    from scipy import sparse
+
+    # Which references heard which APs (a few per cent of the (N, K) entries), so that a pair
+    # visits only the APs both heard instead of all K (dense (P, K) blocks took most of the time
+    # of building a site's databases).
+    heard_r, heard_c = np.nonzero(np.isfinite(x))
+    heard = sparse.csr_matrix((np.ones(heard_r.size), (heard_r, heard_c)), shape=x.shape)
     sq = np.zeros(k)
     n = np.zeros(k)
-    for a in range(0, pairs.shape[0], 20_000):  # blocks bound the (P, K) temporaries
+    for a in range(0, pairs.shape[0], 20_000):  # per block of pairs, as the sums were always formed
         p = pairs[a:a + 20_000]
-        diff = x[p[:, 0]] - x[p[:, 1]]
-        both = np.isfinite(diff)
-        sq += np.where(both, diff * diff, 0.0).sum(axis=0)
-        n += both.sum(axis=0)
+        both = heard[p[:, 0]].multiply(heard[p[:, 1]]).tocsr()
+        both.sort_indices()
+        rows = np.repeat(np.arange(p.shape[0]), np.diff(both.indptr))
+        cols = both.indices
+        diff = x[p[rows, 0], cols] - x[p[rows, 1], cols]
+        # Per AP the pairs' squared differences added in pair order (bincount adds its entries
+        # in order, here pair-major): the additions of the dense column sums without their zeros.
+        sq += np.bincount(cols, weights=diff * diff, minlength=k)
+        n += np.bincount(cols, minlength=k)
     if n.sum() == 0:
         return np.ones(k)
     pooled = sq.sum() / (2.0 * n.sum())

@@ -1,15 +1,20 @@
 // Tests of the grid tracker's survey-anchored fixes (GridTrackerOptions::fix_survey_distance_factor,
 // GridTracker::WithSurveyPositions): a survey everywhere changes nothing, a fix at the edge of the
 // survey lets the walker be beyond it, β = 1 is the plain tracker, and the errors it promises.
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <vector>
+
+#include "indoorloc/core/random.h"
 
 #include <gtest/gtest.h>
 
 #include "indoorloc/fusion/grid_tracker.h"
 
 #include "grid_fixtures.h"
+#include "grid_ops.h"
 
 namespace indoorloc::fusion {
 namespace {
@@ -40,6 +45,63 @@ GridTrackerOptions Options(double beta) {
 }
 
 const std::vector<StepInput> kStill = {StepFromPolar(0.5, 0.0, 0.0, 0.01, 0.01)};
+
+// Brute force of the anchors: per cell the survey point nearest to its centre (ties: the lower
+// index), q = s + β (c - s), and the bilinear lattice coordinates of q.
+void BruteForceAnchors(const grid_ops::FloorGrid& g, double beta, double c, std::vector<int>* cell,
+                       std::vector<float>* wx, std::vector<float>* wy) {
+  const auto lattice = [](double u, int n, int* lower, float* weight) {
+    u = std::min(static_cast<double>(n - 1), std::max(0.0, u));
+    *lower = std::min(static_cast<int>(std::floor(u)), std::max(0, n - 2));
+    *weight = static_cast<float>(n > 1 ? u - *lower : 0.0);
+  };
+  const std::vector<Eigen::Vector2d>& pts = g.survey_points;
+  for (int y = 0; y < g.ny; ++y)
+    for (int x = 0; x < g.nx; ++x) {
+      const double cx = g.x0 + (x + 0.5) * c, cy = g.y0 + (y + 0.5) * c;
+      int best = -1;
+      double best_d2 = std::numeric_limits<double>::infinity();
+      for (int p = 0; p < static_cast<int>(pts.size()); ++p) {
+        const double d2 = (pts[p].x() - cx) * (pts[p].x() - cx) + (pts[p].y() - cy) * (pts[p].y() - cy);
+        if (d2 < best_d2) best_d2 = d2, best = p;
+      }
+      const double qx = pts[best].x() + beta * (cx - pts[best].x()), qy = pts[best].y() + beta * (cy - pts[best].y());
+      int ix, iy;
+      float fx, fy;
+      lattice((qx - g.x0) / c - 0.5, g.nx, &ix, &fx);
+      lattice((qy - g.y0) / c - 0.5, g.ny, &iy, &fy);
+      cell->push_back(iy * g.nx + ix);
+      wx->push_back(fx);
+      wy->push_back(fy);
+    }
+}
+
+TEST(GridSurveyAnchorsTest, TheNearestSurveyPointIsThatOfABruteForceSearch) {
+  // Clusters along "corridors", isolated points, duplicates (ties), points outside the grid, and
+  // a lattice whose points are equidistant from cell centres (more ties).
+  RandomStream rng(7);
+  for (const double c : {1.0, 0.5, 2.0}) {
+    grid_ops::FloorGrid g;
+    g.x0 = -3.0;
+    g.y0 = 2.0;
+    g.nx = static_cast<int>(61 / c);
+    g.ny = static_cast<int>(37 / c);
+    for (int i = 0; i < 300; ++i) g.survey_points.emplace_back(rng.Uniform(5.0, 50.0), rng.Uniform(10.0, 12.0));
+    for (int i = 0; i < 20; ++i) g.survey_points.emplace_back(rng.Uniform(-10.0, 70.0), rng.Uniform(-5.0, 45.0));
+    for (int i = 0; i < 10; ++i) g.survey_points.push_back(g.survey_points[static_cast<std::size_t>(3 * i)]);
+    for (double x = 20.0; x < 30.0; x += 2.0) g.survey_points.emplace_back(x, 30.0);
+    std::vector<int> cell;
+    std::vector<float> wx, wy;
+    BruteForceAnchors(g, 0.75, c, &cell, &wx, &wy);
+    grid_ops::AnchorFixesToSurvey(0.75, c, &g);
+    ASSERT_EQ(g.fix_cell.size(), cell.size());
+    for (std::size_t i = 0; i < cell.size(); ++i) {
+      ASSERT_EQ(g.fix_cell[i], cell[i]) << "cell " << i << ", c " << c;
+      ASSERT_EQ(g.fix_wx[i], wx[i]) << "cell " << i;
+      ASSERT_EQ(g.fix_wy[i], wy[i]) << "cell " << i;
+    }
+  }
+}
 
 TEST(GridSurveyAnchorsTest, ASurveyAtEveryCellCentreChangesNothing) {
   const FloorPlan plan = NarrowHall();

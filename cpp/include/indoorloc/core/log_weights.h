@@ -5,6 +5,8 @@
 // NaN and +inf are not. Follows the `particles` library's resampling.py helpers.
 #pragma once
 
+#include <cmath>
+
 #include <Eigen/Core>
 
 namespace indoorloc {
@@ -28,5 +30,9 @@ Eigen::VectorXd NormalizedWeights(const Eigen::Ref<const Eigen::VectorXd>& log_w
 
 /// Effective sample size (sum w)^2 / sum w^2, in [1, N]. The weights need not be normalised.
 double EffectiveSampleSize(const Eigen::Ref<const Eigen::VectorXd>& log_weights);
+
+/// exp(d) of a log-weight difference d: 0 without the library call for d < -746, where exp
+/// underflows to 0 anyway (the same value; the library's underflow path is slow).
+inline double ExpOfLogDifference(double d) { return d < -746.0 ? 0.0 : std::exp(d); }
 
 }  // namespace indoorloc

@@ -97,6 +97,16 @@ class StepMotion {
   /// only needs ratios over the predecessor (p, o, s)).
   double TransitionLogDensity(const Eigen::Vector2d& from_m, double from_offset_rad, double from_scale,
                               const Eigen::Vector2d& to_m, double to_offset_rad, double to_scale) const;
+  /// A successor (p', o', s') with cos o' and sin o' computed once (SuccessorOf), for the
+  /// backward smoother's many predecessors of one successor.
+  struct Successor {
+    Eigen::Vector2d position_m;
+    double offset_rad, scale, cos_offset, sin_offset;
+  };
+  static Successor SuccessorOf(const Eigen::Vector2d& to_m, double to_offset_rad, double to_scale);
+  /// TransitionLogDensity to a successor of SuccessorOf: the same operations, so the same bits.
+  double TransitionLogDensity(const Eigen::Vector2d& from_m, double from_offset_rad, double from_scale,
+                              const Successor& to) const;
   const StepInput& step() const { return step_; }
   /// Lower Cholesky factor of Σ_d + σ_p² I.
   const Eigen::Matrix2d& cholesky() const { return chol_; }
