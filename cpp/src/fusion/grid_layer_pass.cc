@@ -156,7 +156,9 @@ class LayerPass {
   // The smoother's estimate at step k from alpha ⊙ beta; with spatial medians also the step's
   // block summaries.
   LayerStep SmoothedEstimate(const float* alpha, const std::vector<float>& beta, int k) {
-    const Moments mo = GridMoments(alpha, beta.data(), fg_, c_, p_.q, BlockSums());
+    // alpha is zero outside its window (known start): the product too.
+    const CellWindow* win = p_.window ? &windows_[k + 1] : nullptr;
+    const Moments mo = GridMoments(alpha, beta.data(), fg_, c_, p_.q, BlockSums(), false, win);
     if (!(mo.mass > 0)) {
       // alpha and beta share no cell (each is flushed below 1e-30 of its scale): what the walk
       // says before step k and after it cannot be joined by the motion model (steps lost, a fix

@@ -326,18 +326,21 @@ void RowGroupMomentsInDoubleAvx2(const float* g, const float* weight, const Floo
 // flushed at 1e-30, so the product stays far above double's underflow).
 // With `coarse` (nqx * nqy * 3 doubles, zeroed by the caller), also the mass and the mass-weighted
 // cell indices of every block of q x q cells (the summary the spatial median is computed from).
+// With `win` (x0 a multiple of kLanes; g zero outside it), the float sums over its cells only (the
+// double sums always over the whole grid).
 inline Moments GridMoments(const float* g, const float* weight, const FloorGrid& fg, double cell, int q = 1,
-                    double* coarse = nullptr, bool force_double = false) {
+                    double* coarse = nullptr, bool force_double = false, const CellWindow* win = nullptr) {
   Moments m;
   const bool in_float = !coarse && (!weight || !force_double);
   if (in_float) {  // the common case: float lane accumulators along the row (vectorises)
-    for (int y = 0; y < fg.ny; ++y) {
+    const CellWindow w = win ? *win : CellWindow::Full(fg.nx, fg.ny);
+    for (int y = w.y0; y < w.y1; ++y) {
       const float* row = g + static_cast<std::size_t>(y) * fg.nx;
       double r_mass = 0, r_sx = 0, r_sxx = 0;
       if (weight) {
-        RowMomentsInFloat<true>(row, weight + static_cast<std::size_t>(y) * fg.nx, fg.nx, &r_mass, &r_sx, &r_sxx);
+        RowMomentsInFloat<true>(row, weight + static_cast<std::size_t>(y) * fg.nx, w.x1, &r_mass, &r_sx, &r_sxx, w.x0);
       } else {
-        RowMomentsInFloat<false>(row, nullptr, fg.nx, &r_mass, &r_sx, &r_sxx);
+        RowMomentsInFloat<false>(row, nullptr, w.x1, &r_mass, &r_sx, &r_sxx, w.x0);
       }
       AddRowMoments(r_mass, r_sx, r_sxx, y, &m);
     }
