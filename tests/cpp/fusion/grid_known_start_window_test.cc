@@ -120,5 +120,33 @@ TEST(GridKnownStartWindowTest, HardWallsEqualTheWholeGridsBitForBit) {
                      "hard walls");
 }
 
+// A smoother too large to keep every forward grid (more than 256 MB of steps x cells): it keeps
+// checkpoints and recomputes each segment's forward grids on the windows recorded the first time.
+TEST(GridKnownStartWindowTest, CheckpointedSmootherEqualsTheWholeGridsBitForBit) {
+  const FloorPlan plan = Hall(true);
+  GridTrackerOptions o;
+  o.cell_size_m = 0.2;  // 300 x 200 cells, x 1,100 steps: 66 M floats
+  const GridTracker tracker(&plan, o);
+  std::vector<StepInput> steps;
+  double t = 0;
+  for (int k = 0; k < 1100; ++k) {
+    const double heading = (k / 100) % 2 == 0 ? 0.0 : M_PI;  // to and fro along y = 10 (x 1 .. 8 m)
+    steps.push_back(StepFromPolar(t += 0.5, 0.07, heading, 0.05, 0.05));
+  }
+  TrackStart start;
+  start.known = true;
+  start.position_m = Eigen::Vector2d(1.2, 10.0);
+  start.time_s = 0.2;
+  const std::vector<PositionFix> fixes = {Fix(100.0, 4.0, 10.0, 2.0), Fix(400.0, 5.0, 9.0, 2.0)};
+  test_hooks::SetKnownStartWindow(false);
+  const GridTrackResult full = tracker.Run(steps, fixes, start, true, false);
+  test_hooks::SetKnownStartWindow(true);
+  const GridTrackResult window = tracker.Run(steps, fixes, start, true, false);
+  EXPECT_GT(full.summary.memory_bytes, 0.0);
+  EXPECT_LT(full.summary.memory_bytes, 256e6);  // checkpoints, not every grid
+  EXPECT_TRUE(full.smoothed_mean_m.allFinite());
+  ExpectBitIdentical(full, window, "checkpointed smoother");
+}
+
 }  // namespace
 }  // namespace indoorloc::fusion
