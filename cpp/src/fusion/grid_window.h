@@ -97,3 +97,11 @@ inline void ShiftInWindow(std::vector<float>& g, int nx, const CellWindow& w, in
 }
 
 }  // namespace indoorloc::fusion::grid_ops
+
+namespace indoorloc::fusion::test_hooks {
+// For the C++ tests only (not installed): with `on` false, GridTracker::Run filters a known
+// start's layers on their whole floor grid, as before the forward pass was limited to the window
+// of nonzero cells (same results, slower). Process-wide; default true (grid_tracker.cc).
+void SetKnownStartWindow(bool on);
+}  // namespace indoorloc::fusion::test_hooks
+

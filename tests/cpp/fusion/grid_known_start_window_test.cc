@@ -13,6 +13,7 @@
 #include "indoorloc/fusion/step_motion.h"
 
 #include "grid_fixtures.h"
+#include "grid_window.h"  // test_hooks (internal)
 
 namespace indoorloc::fusion {
 namespace {

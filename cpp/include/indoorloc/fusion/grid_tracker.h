@@ -251,11 +251,4 @@ class GridTracker {
   std::unique_ptr<Impl> impl_;
 };
 
-namespace test_hooks {
-/// For tests only: with `on` false, GridTracker::Run filters a known start's layers on their whole
-/// floor grid, as before the forward pass was limited to the window of nonzero cells (same
-/// results, slower). Process-wide; default true.
-void SetKnownStartWindow(bool on);
-}  // namespace test_hooks
-
 }  // namespace indoorloc::fusion
