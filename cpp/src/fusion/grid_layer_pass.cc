@@ -66,6 +66,10 @@ class LayerPass {
     for (float v : alpha_) s += v;
     if (!(s > 0)) return false;
     for (float& v : alpha_) v = static_cast<float>(v / s);
+    if (p_.window) {
+      windows_.resize(static_cast<std::size_t>(p_.m_steps) + 1);
+      windows_[p_.k0] = NonzeroExtent(alpha_, fg_.nx, fg_.ny, CellWindow::Full(fg_.nx, fg_.ny));
+    }
     return true;
   }
 
@@ -77,27 +81,56 @@ class LayerPass {
       op = PlanStep((*p_.steps)[k], sc_, co_, so_, c_, o_.position_noise_m, p_.layer_set.bin_width, p_.has_fix(k),
                     &rx_, &ry_, &pending_);
     }
-    Shift(alpha_, fg_.nx, fg_.ny, op.shift_x, op.shift_y);
-    if (op.blur_var_cells2 > 1e-6) Blur(alpha_, scratch_, fg_.nx, fg_.ny, op.blur_var_cells2);
+    // With a window (known start): the step's passes on the cells that can be nonzero (null: all).
+    const CellWindow* win = p_.window ? StepWindow(k) : nullptr;
+    if (win) {
+      ShiftInWindow(alpha_, fg_.nx, shift_window_, op.shift_x, op.shift_y);
+    } else {
+      Shift(alpha_, fg_.nx, fg_.ny, op.shift_x, op.shift_y);
+    }
+    if (op.blur_var_cells2 > 1e-6) Blur(alpha_, scratch_, fg_.nx, fg_.ny, op.blur_var_cells2, win);
     const bool has_fix = p_.has_fix(k);
     const grid_ops::TrackerGrids::FixFactor* fix = has_fix ? &p_.factor[k][layer_.floor_index] : nullptr;
-    if (has_fix && record) ResampleAt(fix->factor, layer_factor_[k], scratch_, fg_.nx, fg_.ny, op.rx / c_, op.ry / c_);
-    const double s = MultiplyAndSum(alpha_, fg_.wall_factor, has_fix ? layer_factor_[k].data() : nullptr, fg_.nx, fg_.ny);
+    // The smoother's backward pass reads the whole fix factor; the filter alone only the window's.
+    if (has_fix && record) {
+      ResampleAt(fix->factor, layer_factor_[k], scratch_, fg_.nx, fg_.ny, op.rx / c_, op.ry / c_,
+                 p_.smooth ? nullptr : win);
+    }
+    const double s =
+        MultiplyAndSum(alpha_, fg_.wall_factor, has_fix ? layer_factor_[k].data() : nullptr, fg_.nx, fg_.ny, win);
     if (!(s > 0)) return false;
+    float* store = record && p_.store_all ? stored_ + static_cast<std::size_t>(k - p_.k0) * n_ : nullptr;
     if (record && !p_.filtered) {
       // No filtered estimate asked: normalise, and the smoother's copy.
-      NormaliseAndFlush(alpha_, 1.0 / s);
-      if (p_.store_all) std::copy(alpha_.begin(), alpha_.end(), stored_ + static_cast<std::size_t>(k - p_.k0) * n_);
+      NormaliseAndFlush(alpha_, 1.0 / s, fg_.nx, win);
+      if (store) std::copy(alpha_.begin(), alpha_.end(), store);
     } else if (record && !o_.spatial_median) {
-      // The filtered estimate (and the smoother's copy) in the normalising pass.
-      float* store = p_.store_all ? stored_ + static_cast<std::size_t>(k - p_.k0) * n_ : nullptr;
-      filtered_moments_ = NormaliseMomentsAndStore(alpha_, 1.0 / s, fg_, c_, store);
+      // The filtered estimate (and the smoother's copy) in the normalising pass; with a window the
+      // copy of the whole grid after it (zero outside the window).
+      filtered_moments_ = NormaliseMomentsAndStore(alpha_, 1.0 / s, fg_, c_, win ? nullptr : store, win);
+      if (win && store) std::copy(alpha_.begin(), alpha_.end(), store);
     } else {
-      NormaliseAndFlush(alpha_, 1.0 / s);
+      NormaliseAndFlush(alpha_, 1.0 / s, fg_.nx, win);
       if (record) filtered_moments_ = GridMoments(alpha_.data(), nullptr, fg_, c_, p_.q, BlockSums());
     }
     if (record) log_z_ += std::log(s) + (has_fix ? fix->log_scale : 0.0);
+    // The nonzero cells after the step (the flush leaves the posterior's support small).
+    if (win && record) windows_[k + 1] = NonzeroExtent(alpha_, fg_.nx, fg_.ny, *win);
     return true;
+  }
+
+  // Known start, step k: from the window of the nonzero cells before it (windows_[k]), the window
+  // its shift moves within (shift_window_) and the one its blur can reach (returned), clipped to
+  // the grid (grid_window.h).
+  const CellWindow* StepWindow(int k) {
+    const StepOps& op = ops_[k];
+    const CellWindow& before = windows_[k];
+    const CellWindow moved = MovedWindow(before, op.shift_x, op.shift_y, 0, fg_.nx, fg_.ny);
+    shift_window_ = CellWindow{std::min(before.x0, moved.x0), std::max(before.x1, moved.x1),
+                               std::min(before.y0, moved.y0), std::max(before.y1, moved.y1)};
+    const int grow = op.blur_var_cells2 > 1e-6 ? KernelRadius(op.blur_var_cells2) : 0;
+    step_window_ = MovedWindow(before, op.shift_x, op.shift_y, grow, fg_.nx, fg_.ny);
+    return &step_window_;
   }
 
   // The block sums, zeroed, when spatial medians are asked, else null.
@@ -123,7 +156,9 @@ class LayerPass {
   // The smoother's estimate at step k from alpha ⊙ beta; with spatial medians also the step's
   // block summaries.
   LayerStep SmoothedEstimate(const float* alpha, const std::vector<float>& beta, int k) {
-    const Moments mo = GridMoments(alpha, beta.data(), fg_, c_, p_.q, BlockSums());
+    // alpha is zero outside its window (known start): the product too.
+    const CellWindow* win = p_.window ? &windows_[k + 1] : nullptr;
+    const Moments mo = GridMoments(alpha, beta.data(), fg_, c_, p_.q, BlockSums(), false, win);
     if (!(mo.mass > 0)) {
       // alpha and beta share no cell (each is flushed below 1e-30 of its scale): what the walk
       // says before step k and after it cannot be joined by the motion model (steps lost, a fix
@@ -227,6 +262,10 @@ class LayerPass {
   std::size_t nb_ = 0;                              // spatial-median blocks of the floor
   std::vector<float> alpha_, scratch_;
   std::vector<StepOps> ops_;
+  // Known start (p_.window): per step the window holding every nonzero cell before it (entry
+  // m_steps: after the last), and the current step's windows (StepWindow).
+  std::vector<CellWindow> windows_;
+  CellWindow shift_window_, step_window_;
   // Fix factors at the layer's positions, per step with a fix (entries of other steps are stale,
   // never read; the slot's vectors are reused across runs).
   std::vector<std::vector<float>>& layer_factor_;

@@ -15,6 +15,7 @@
 #include "indoorloc/core/simd_dispatch.h"
 #include "indoorloc/fusion/grid_tracker.h"
 #include "grid_lanes.h"
+#include "grid_window.h"
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -77,8 +78,7 @@ struct StepOps {
 
 // Discrete Gaussian kernel of variance var [cells²], normalised, radius ceil(3 sd).
 inline std::vector<float> GaussianKernel(double var_cells2) {
-  const double sd = std::sqrt(var_cells2);
-  const int radius = std::max(1, static_cast<int>(std::ceil(3.0 * sd)));
+  const int radius = KernelRadius(var_cells2);
   std::vector<double> k(2 * radius + 1);
   double sum = 0;
   for (int j = -radius; j <= radius; ++j) sum += k[j + radius] = std::exp(-0.5 * j * j / var_cells2);
@@ -90,33 +90,37 @@ inline std::vector<float> GaussianKernel(double var_cells2) {
 // Separable blur with zero outside the grid: a symmetric operator (its own transpose). Both
 // passes add the taps in kernel order to each cell (from 0), one tap over a whole row at a time,
 // so that the loops vectorise; the order of the additions per cell is that of a per-cell loop.
+// Only the cells of `win` are computed, from the cells of `win`: every cell outside it must be zero
+// before and after the blur (grid_window.h), so the taps skipped would add +0.0.
 INDOORLOC_GRID_PASS void BlurBody(std::vector<float>& g, std::vector<float>& scratch, int nx, int ny,
-                                  double var_cells2) {
+                                  double var_cells2, const CellWindow& win) {
+  (void)ny;
   const std::vector<float> k = GaussianKernel(var_cells2);
   const int r = static_cast<int>(k.size() / 2);
+  const int x0 = win.x0, x1 = win.x1;
   scratch.resize(g.size());
-  // Along y: whole rows at a time; the first tap inside the grid sets the row (0 + a is a).
-  for (int y = 0; y < ny; ++y) {
+  // Along y: whole rows at a time; the first tap inside the window sets the row (0 + a is a).
+  for (int y = win.y0; y < win.y1; ++y) {
     float* out = scratch.data() + static_cast<std::size_t>(y) * nx;
-    const int j_lo = std::max(-r, -y), j_hi = std::min(r, ny - 1 - y);
+    const int j_lo = std::max(-r, win.y0 - y), j_hi = std::min(r, win.y1 - 1 - y);
     for (int j = j_lo; j <= j_hi; ++j) {
       const float w = k[j + r];
       const float* in = g.data() + static_cast<std::size_t>(y + j) * nx;
       if (j == j_lo) {
-        for (int x = 0; x < nx; ++x) out[x] = w * in[x];
+        for (int x = x0; x < x1; ++x) out[x] = w * in[x];
       } else {
-        for (int x = 0; x < nx; ++x) out[x] += w * in[x];
+        for (int x = x0; x < x1; ++x) out[x] += w * in[x];
       }
     }
   }
-  // Along x: tap j adds k_j in(x + j) to every x with x + j inside the row.
-  for (int y = 0; y < ny; ++y) {
+  // Along x: tap j adds k_j in(x + j) to every x with x + j inside the window's row.
+  for (int y = win.y0; y < win.y1; ++y) {
     const float* in = scratch.data() + static_cast<std::size_t>(y) * nx;
     float* out = g.data() + static_cast<std::size_t>(y) * nx;
-    std::fill(out, out + nx, 0.0f);
+    std::fill(out + x0, out + x1, 0.0f);
     for (int j = -r; j <= r; ++j) {
       const float w = k[j + r];
-      const int lo = std::max(0, -j), hi = std::min(nx, nx - j);
+      const int lo = std::max(x0, x0 - j), hi = std::min(x1, x1 - j);
       const float* src = in + j;
       for (int x = lo; x < hi; ++x) out[x] += w * src[x];
     }
@@ -126,101 +130,92 @@ INDOORLOC_GRID_PASS void BlurBody(std::vector<float>& g, std::vector<float>& scr
 // g(x, y) <- g(x - sx, y - sy), zero where the source is outside the grid; in place (rows moved
 // in the order that never overwrites a row still to be read, only the vacated cells zeroed).
 inline void Shift(std::vector<float>& g, int nx, int ny, int sx, int sy) {
-  if (sx == 0 && sy == 0) return;
-  float* d = g.data();
-  const std::size_t row = static_cast<std::size_t>(nx);
-  if (std::abs(sx) >= nx || std::abs(sy) >= ny) {
-    std::fill(g.begin(), g.end(), 0.0f);
-    return;
-  }
-  const int x_lo = std::max(0, sx), x_hi = std::min(nx, nx + sx);  // destination columns
-  const int width = x_hi - x_lo;
-  auto move_row = [&](int y) {
-    float* dst = d + y * row;
-    const float* src = d + (y - sy) * row + (x_lo - sx);
-    std::memmove(dst + x_lo, src, static_cast<std::size_t>(width) * sizeof(float));
-    std::fill(dst, dst + x_lo, 0.0f);
-    std::fill(dst + x_hi, dst + nx, 0.0f);
-  };
-  if (sy > 0) {
-    for (int y = ny - 1; y >= sy; --y) move_row(y);
-    std::fill(d, d + sy * row, 0.0f);
-  } else {
-    for (int y = 0; y < ny + sy; ++y) move_row(y);
-    std::fill(d + (ny + sy) * row, d + ny * row, 0.0f);
-  }
+  ShiftInWindow(g, nx, CellWindow::Full(nx, ny), sx, sy);
 }
 
 // out(x, y) = g at (x + fx, y + fy) cells by bilinear interpolation, |fx|, |fy| <= 1, edges
 // clamped: the fix factor of a layer whose positions are the cell centres plus a remainder.
+// Only the cells of `win` are written (the default: all); each with the same operations.
 inline void ResampleAt(const std::vector<float>& g, std::vector<float>& out, std::vector<float>& scratch, int nx, int ny,
-                double fx, double fy) {
+                double fx, double fy, const CellWindow* win = nullptr) {
   scratch.resize(g.size());
   out.resize(g.size());
+  const CellWindow w = win ? *win : CellWindow::Full(nx, ny);
   const int dx = fx >= 0 ? 1 : -1, dy = fy >= 0 ? 1 : -1;
   const float ax = static_cast<float>(std::abs(fx)), ay = static_cast<float>(std::abs(fy));
-  for (int y = 0; y < ny; ++y) {
+  // The rows of the window and the row next to it that the second pass reads.
+  const int ya = std::max(0, w.y0 - 1), yb = std::min(ny, w.y1 + 1);
+  for (int y = ya; y < yb; ++y) {
     const float* in = g.data() + static_cast<std::size_t>(y) * nx;
     float* o = scratch.data() + static_cast<std::size_t>(y) * nx;
     // Interior cells (x + dx inside the row) in one loop that vectorises; the clamped edge cell apart.
-    const int lo = dx > 0 ? 0 : 1, hi = dx > 0 ? nx - 1 : nx;
+    const int lo = std::max(w.x0, dx > 0 ? 0 : 1), hi = std::min(w.x1, dx > 0 ? nx - 1 : nx);
     const float* in2 = in + dx;
     for (int x = lo; x < hi; ++x) o[x] = (1.0f - ax) * in[x] + ax * in2[x];
     const int edge = dx > 0 ? nx - 1 : 0;
-    o[edge] = (1.0f - ax) * in[edge] + ax * in[edge];
+    if (edge >= w.x0 && edge < w.x1) o[edge] = (1.0f - ax) * in[edge] + ax * in[edge];
   }
-  for (int y = 0; y < ny; ++y) {
+  for (int y = w.y0; y < w.y1; ++y) {
     const int y2 = std::min(ny - 1, std::max(0, y + dy));
     const float* a = scratch.data() + static_cast<std::size_t>(y) * nx;
     const float* b = scratch.data() + static_cast<std::size_t>(y2) * nx;
     float* o = out.data() + static_cast<std::size_t>(y) * nx;
-    for (int x = 0; x < nx; ++x) o[x] = (1.0f - ay) * a[x] + ay * b[x];
+    for (int x = w.x0; x < w.x1; ++x) o[x] = (1.0f - ay) * a[x] + ay * b[x];
   }
 }
 
 // g *= scale (in double: the result is at most 1 and never overflows a float), and entries below
 // 1e-30 set to 0: they are negligible beside the sum or maximum of 1, and float denormals would
 // slow every later pass and let a normalisation overflow.
-INDOORLOC_GRID_PASS void NormaliseAndFlushBody(std::vector<float>& g, double scale) {
+INDOORLOC_GRID_PASS void NormaliseAndFlushSpan(float* g, std::size_t n, double scale) {
   if (scale < 1e30) {  // the common case, in float (vectorises): v * scale <= 1 cannot overflow
     const float f = static_cast<float>(scale);
-    for (float& v : g) {
-      const float x = v * f;
-      v = x < 1e-30f ? 0.0f : x;
+    for (std::size_t i = 0; i < n; ++i) {
+      const float x = g[i] * f;
+      g[i] = x < 1e-30f ? 0.0f : x;
     }
     return;
   }
-  for (float& v : g) {
-    const double x = static_cast<double>(v) * scale;
-    v = x < 1e-30 ? 0.0f : static_cast<float>(x);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double x = static_cast<double>(g[i]) * scale;
+    g[i] = x < 1e-30 ? 0.0f : static_cast<float>(x);
   }
+}
+// The same on the cells of `win` only (null: the whole grid; cells outside are zero and stay so).
+INDOORLOC_GRID_PASS void NormaliseAndFlushBody(std::vector<float>& g, double scale, int nx,
+                                               const CellWindow* win) {
+  if (!win) return NormaliseAndFlushSpan(g.data(), g.size(), scale);
+  for (int y = win->y0; y < win->y1; ++y)
+    NormaliseAndFlushSpan(g.data() + static_cast<std::size_t>(y) * nx + win->x0,
+                          static_cast<std::size_t>(win->x1 - win->x0), scale);
 }
 
 // g *= wall (and *= fix when given); returns the sum (float lanes per row, grid_lanes.h; double
-// over rows).
+// over rows). Only the cells of `win` (its x0 a multiple of kLanes): those outside must be zero.
 INDOORLOC_GRID_PASS double MultiplyAndSumBody(std::vector<float>& g, const std::vector<float>& wall, const float* fix,
-                                              int nx, int ny) {
+                                              int nx, const CellWindow& win) {
   double total = 0;
-  for (int y = 0; y < ny; ++y) {
+  for (int y = win.y0; y < win.y1; ++y) {
     float* row = g.data() + static_cast<std::size_t>(y) * nx;
     const float* w = wall.data() + static_cast<std::size_t>(y) * nx;
     const float* f = fix ? fix + static_cast<std::size_t>(y) * nx : nullptr;
     Lanes acc = LanesOf(0.0f);
-    int x = 0;
+    int x = win.x0;
+    const int x_end = win.x1;
     if (f) {
-      for (; x + kLanes <= nx; x += kLanes) {
+      for (; x + kLanes <= x_end; x += kLanes) {
         const Lanes v = LoadLanes(row + x) * (LoadLanes(w + x) * LoadLanes(f + x));
         StoreLanes(row + x, v);
         acc += v;
       }
     } else {
-      for (; x + kLanes <= nx; x += kLanes) {
+      for (; x + kLanes <= x_end; x += kLanes) {
         const Lanes v = LoadLanes(row + x) * LoadLanes(w + x);
         StoreLanes(row + x, v);
         acc += v;
       }
     }
-    for (; x < nx; ++x) {
+    for (; x < x_end; ++x) {
       row[x] *= f ? w[x] * f[x] : w[x];
       acc.Add(x % kLanes, row[x]);
     }
@@ -282,14 +277,16 @@ inline Moments MomentsInMetres(const Moments& m, const FloorGrid& fg, double cel
   return out;
 }
 
-// Sums over a row of v, v x and v x² (v = row, or row * weight when kWeighted), x the cell
-// index, in float lanes (kLanes), totals in double.
+// Sums over a row's cells x_begin .. nx - 1 (x_begin a multiple of kLanes; the others zero) of v,
+// v x and v x² (v = row, or row * weight when kWeighted), x the cell index, in float lanes
+// (kLanes), totals in double.
 template <bool kWeighted>
 INDOORLOC_GRID_PASS void RowMomentsInFloat(const float* row, const float* weight, int nx, double* mass, double* sx,
-                                           double* sxx) {
+                                           double* sxx, int x_begin = 0) {
   Lanes m = LanesOf(0.0f), s1 = m, s2 = m, fx = Iota();
+  if (x_begin != 0) fx += LanesOf(static_cast<float>(x_begin));  // exact: far below 2^24
   const Lanes step = LanesOf(static_cast<float>(kLanes));
-  int x = 0;
+  int x = x_begin;
   for (; x + kLanes <= nx; x += kLanes) {
     const Lanes v = kWeighted ? LoadLanes(row + x) * LoadLanes(weight + x) : LoadLanes(row + x);
     m += v;
@@ -329,18 +326,21 @@ void RowGroupMomentsInDoubleAvx2(const float* g, const float* weight, const Floo
 // flushed at 1e-30, so the product stays far above double's underflow).
 // With `coarse` (nqx * nqy * 3 doubles, zeroed by the caller), also the mass and the mass-weighted
 // cell indices of every block of q x q cells (the summary the spatial median is computed from).
+// With `win` (x0 a multiple of kLanes; g zero outside it), the float sums over its cells only (the
+// double sums always over the whole grid).
 inline Moments GridMoments(const float* g, const float* weight, const FloorGrid& fg, double cell, int q = 1,
-                    double* coarse = nullptr, bool force_double = false) {
+                    double* coarse = nullptr, bool force_double = false, const CellWindow* win = nullptr) {
   Moments m;
   const bool in_float = !coarse && (!weight || !force_double);
   if (in_float) {  // the common case: float lane accumulators along the row (vectorises)
-    for (int y = 0; y < fg.ny; ++y) {
+    const CellWindow w = win ? *win : CellWindow::Full(fg.nx, fg.ny);
+    for (int y = w.y0; y < w.y1; ++y) {
       const float* row = g + static_cast<std::size_t>(y) * fg.nx;
       double r_mass = 0, r_sx = 0, r_sxx = 0;
       if (weight) {
-        RowMomentsInFloat<true>(row, weight + static_cast<std::size_t>(y) * fg.nx, fg.nx, &r_mass, &r_sx, &r_sxx);
+        RowMomentsInFloat<true>(row, weight + static_cast<std::size_t>(y) * fg.nx, w.x1, &r_mass, &r_sx, &r_sxx, w.x0);
       } else {
-        RowMomentsInFloat<false>(row, nullptr, fg.nx, &r_mass, &r_sx, &r_sxx);
+        RowMomentsInFloat<false>(row, nullptr, w.x1, &r_mass, &r_sx, &r_sxx, w.x0);
       }
       AddRowMoments(r_mass, r_sx, r_sxx, y, &m);
     }
@@ -363,26 +363,29 @@ inline Moments GridMoments(const float* g, const float* weight, const FloorGrid&
 
 // NormaliseAndFlush(g, scale) and then GridMoments(g) (no blocks) in one pass over the rows, each
 // row also copied to `store` when given: the same operations in the same order, so the same bits.
+// Only the cells of `win` (x0 a multiple of kLanes; the others zero) are normalised and summed,
+// and only its rows stored (from their first cell to the row's end): with a window smaller than
+// the grid, `store` must be null.
 INDOORLOC_GRID_PASS Moments NormaliseMomentsAndStoreBody(std::vector<float>& g, double scale, const FloorGrid& fg,
-                                                         double cell, float* store) {
+                                                         double cell, float* store, const CellWindow& win) {
   Moments m;
   const bool in_float = scale < 1e30;  // NormaliseAndFlush's two cases
   const float f = static_cast<float>(scale);
-  for (int y = 0; y < fg.ny; ++y) {
+  for (int y = win.y0; y < win.y1; ++y) {
     float* row = g.data() + static_cast<std::size_t>(y) * fg.nx;
     if (in_float) {
-      for (int x = 0; x < fg.nx; ++x) {
+      for (int x = win.x0; x < win.x1; ++x) {
         const float v = row[x] * f;
         row[x] = v < 1e-30f ? 0.0f : v;
       }
     } else {
-      for (int x = 0; x < fg.nx; ++x) {
+      for (int x = win.x0; x < win.x1; ++x) {
         const double v = static_cast<double>(row[x]) * scale;
         row[x] = v < 1e-30 ? 0.0f : static_cast<float>(v);
       }
     }
     double r_mass = 0, r_sx = 0, r_sxx = 0;
-    RowMomentsInFloat<false>(row, nullptr, fg.nx, &r_mass, &r_sx, &r_sxx);
+    RowMomentsInFloat<false>(row, nullptr, win.x1, &r_mass, &r_sx, &r_sxx, win.x0);
     AddRowMoments(r_mass, r_sx, r_sxx, y, &m);
     if (store) std::memcpy(store + static_cast<std::size_t>(y) * fg.nx, row, static_cast<std::size_t>(fg.nx) * sizeof(float));
   }
@@ -392,26 +395,34 @@ INDOORLOC_GRID_PASS Moments NormaliseMomentsAndStoreBody(std::vector<float>& g, 
 // The passes above in their AVX2 builds (grid_ops_avx2.cc): the same bodies compiled for 256-bit
 // vectors. The bodies are element-wise float operations and reductions in fixed lanes
 // (grid_lanes.h), without FMA, so both builds give the same bits (a test runs both).
-void BlurAvx2(std::vector<float>& g, std::vector<float>& scratch, int nx, int ny, double var_cells2);
-void NormaliseAndFlushAvx2(std::vector<float>& g, double scale);
-double MultiplyAndSumAvx2(std::vector<float>& g, const std::vector<float>& wall, const float* fix, int nx, int ny);
+void BlurAvx2(std::vector<float>& g, std::vector<float>& scratch, int nx, int ny, double var_cells2,
+              const CellWindow& win);
+void NormaliseAndFlushAvx2(std::vector<float>& g, double scale, int nx, const CellWindow* win);
+double MultiplyAndSumAvx2(std::vector<float>& g, const std::vector<float>& wall, const float* fix, int nx,
+                          const CellWindow& win);
 void MultiplyAvx2(std::vector<float>& g, const std::vector<float>& wall, const float* fix);
 float MaxOfAvx2(const std::vector<float>& g);
-Moments NormaliseMomentsAndStoreAvx2(std::vector<float>& g, double scale, const FloorGrid& fg, double cell, float* store);
+Moments NormaliseMomentsAndStoreAvx2(std::vector<float>& g, double scale, const FloorGrid& fg, double cell, float* store,
+                                     const CellWindow& win);
 
 // Separable blur with zero outside the grid (BlurBody).
-inline void Blur(std::vector<float>& g, std::vector<float>& scratch, int nx, int ny, double var_cells2) {
-  if (UseAvx2()) return BlurAvx2(g, scratch, nx, ny, var_cells2);
-  BlurBody(g, scratch, nx, ny, var_cells2);
+// With `win`, on its cells only (every cell outside it zero before and after: grid_window.h).
+inline void Blur(std::vector<float>& g, std::vector<float>& scratch, int nx, int ny, double var_cells2,
+                 const CellWindow* win = nullptr) {
+  const CellWindow w = win ? *win : CellWindow::Full(nx, ny);
+  if (UseAvx2()) return BlurAvx2(g, scratch, nx, ny, var_cells2, w);
+  BlurBody(g, scratch, nx, ny, var_cells2, w);
 }
-// g *= scale, entries below 1e-30 flushed to 0 (NormaliseAndFlushBody).
-inline void NormaliseAndFlush(std::vector<float>& g, double scale) {
-  if (UseAvx2()) return NormaliseAndFlushAvx2(g, scale);
-  NormaliseAndFlushBody(g, scale);
+// g *= scale, entries below 1e-30 flushed to 0 (NormaliseAndFlushBody); with `win` on its cells only.
+inline void NormaliseAndFlush(std::vector<float>& g, double scale, int nx = 0, const CellWindow* win = nullptr) {
+  if (UseAvx2()) return NormaliseAndFlushAvx2(g, scale, nx, win);
+  NormaliseAndFlushBody(g, scale, nx, win);
 }
-// g *= wall (and fix); the sum (MultiplyAndSumBody).
-inline double MultiplyAndSum(std::vector<float>& g, const std::vector<float>& wall, const float* fix, int nx, int ny) {
-  return UseAvx2() ? MultiplyAndSumAvx2(g, wall, fix, nx, ny) : MultiplyAndSumBody(g, wall, fix, nx, ny);
+// g *= wall (and fix); the sum (MultiplyAndSumBody); with `win` on its cells only.
+inline double MultiplyAndSum(std::vector<float>& g, const std::vector<float>& wall, const float* fix, int nx, int ny,
+                             const CellWindow* win = nullptr) {
+  const CellWindow w = win ? *win : CellWindow::Full(nx, ny);
+  return UseAvx2() ? MultiplyAndSumAvx2(g, wall, fix, nx, w) : MultiplyAndSumBody(g, wall, fix, nx, w);
 }
 // g *= wall (and fix) (MultiplyBody).
 inline void Multiply(std::vector<float>& g, const std::vector<float>& wall, const float* fix) {
@@ -421,10 +432,12 @@ inline void Multiply(std::vector<float>& g, const std::vector<float>& wall, cons
 // The largest entry (MaxOfBody).
 inline float MaxOf(const std::vector<float>& g) { return UseAvx2() ? MaxOfAvx2(g) : MaxOfBody(g); }
 // Normalise, moments and the smoother's copy in one pass (NormaliseMomentsAndStoreBody).
+// With `win`, on its cells only (store null unless the window is the whole grid).
 inline Moments NormaliseMomentsAndStore(std::vector<float>& g, double scale, const FloorGrid& fg, double cell,
-                                        float* store) {
-  return UseAvx2() ? NormaliseMomentsAndStoreAvx2(g, scale, fg, cell, store)
-                   : NormaliseMomentsAndStoreBody(g, scale, fg, cell, store);
+                                        float* store, const CellWindow* win = nullptr) {
+  const CellWindow w = win ? *win : CellWindow::Full(fg.nx, fg.ny);
+  return UseAvx2() ? NormaliseMomentsAndStoreAvx2(g, scale, fg, cell, store, w)
+                   : NormaliseMomentsAndStoreBody(g, scale, fg, cell, store, w);
 }
 
 // A layer's per-step estimate: mean, covariance, cumulative log evidence.

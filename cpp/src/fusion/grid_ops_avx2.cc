@@ -14,39 +14,45 @@ namespace indoorloc::fusion::grid_ops {
 
 #define INDOORLOC_AVX2 __attribute__((target("avx2")))
 
-INDOORLOC_AVX2 void BlurAvx2(std::vector<float>& g, std::vector<float>& scratch, int nx, int ny, double var_cells2) {
-  BlurBody(g, scratch, nx, ny, var_cells2);
+INDOORLOC_AVX2 void BlurAvx2(std::vector<float>& g, std::vector<float>& scratch, int nx, int ny, double var_cells2,
+                             const CellWindow& win) {
+  BlurBody(g, scratch, nx, ny, var_cells2, win);
 }
-INDOORLOC_AVX2 void NormaliseAndFlushAvx2(std::vector<float>& g, double scale) { NormaliseAndFlushBody(g, scale); }
+INDOORLOC_AVX2 void NormaliseAndFlushAvx2(std::vector<float>& g, double scale, int nx, const CellWindow* win) {
+  NormaliseAndFlushBody(g, scale, nx, win);
+}
 INDOORLOC_AVX2 double MultiplyAndSumAvx2(std::vector<float>& g, const std::vector<float>& wall, const float* fix,
-                                         int nx, int ny) {
-  return MultiplyAndSumBody(g, wall, fix, nx, ny);
+                                         int nx, const CellWindow& win) {
+  return MultiplyAndSumBody(g, wall, fix, nx, win);
 }
 INDOORLOC_AVX2 void MultiplyAvx2(std::vector<float>& g, const std::vector<float>& wall, const float* fix) {
   MultiplyBody(g, wall, fix);
 }
 INDOORLOC_AVX2 float MaxOfAvx2(const std::vector<float>& g) { return MaxOfBody(g); }
 INDOORLOC_AVX2 Moments NormaliseMomentsAndStoreAvx2(std::vector<float>& g, double scale, const FloorGrid& fg,
-                                                    double cell, float* store) {
-  return NormaliseMomentsAndStoreBody(g, scale, fg, cell, store);
+                                                    double cell, float* store, const CellWindow& win) {
+  return NormaliseMomentsAndStoreBody(g, scale, fg, cell, store, win);
 }
 
 #else  // never called (UseAvx2() is false): the portable bodies
 
-void BlurAvx2(std::vector<float>& g, std::vector<float>& scratch, int nx, int ny, double v) {
-  BlurBody(g, scratch, nx, ny, v);
+void BlurAvx2(std::vector<float>& g, std::vector<float>& scratch, int nx, int ny, double v, const CellWindow& win) {
+  BlurBody(g, scratch, nx, ny, v, win);
 }
-void NormaliseAndFlushAvx2(std::vector<float>& g, double scale) { NormaliseAndFlushBody(g, scale); }
-double MultiplyAndSumAvx2(std::vector<float>& g, const std::vector<float>& wall, const float* fix, int nx, int ny) {
-  return MultiplyAndSumBody(g, wall, fix, nx, ny);
+void NormaliseAndFlushAvx2(std::vector<float>& g, double scale, int nx, const CellWindow* win) {
+  NormaliseAndFlushBody(g, scale, nx, win);
+}
+double MultiplyAndSumAvx2(std::vector<float>& g, const std::vector<float>& wall, const float* fix, int nx,
+                          const CellWindow& win) {
+  return MultiplyAndSumBody(g, wall, fix, nx, win);
 }
 void MultiplyAvx2(std::vector<float>& g, const std::vector<float>& wall, const float* fix) {
   MultiplyBody(g, wall, fix);
 }
 float MaxOfAvx2(const std::vector<float>& g) { return MaxOfBody(g); }
 Moments NormaliseMomentsAndStoreAvx2(std::vector<float>& g, double scale, const FloorGrid& fg, double cell,
-                                     float* store) {
-  return NormaliseMomentsAndStoreBody(g, scale, fg, cell, store);
+                                     float* store, const CellWindow& win) {
+  return NormaliseMomentsAndStoreBody(g, scale, fg, cell, store, win);
 }
 #endif
 

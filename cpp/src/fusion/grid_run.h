@@ -26,6 +26,9 @@ struct RunPlan {
   int m_steps = 0;
   int k0 = 0;                                    // first step after a known start (0: unknown)
   bool smooth = false;
+  // Known start: the forward pass runs on the window of the grid holding its nonzero cells
+  // (grid_window.h; the same bits as the whole grid's passes).
+  bool window = false;
   bool filtered = true;    // the filter's per-step position estimates (always without smoothing)
   grid_ops::GridLayers layer_set;
   std::vector<std::vector<const PositionFix*>> fixes_at;  // per step: the fixes applied there

@@ -6,6 +6,7 @@
 #include "indoorloc/fusion/grid_tracker.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <memory>
 #include <mutex>
@@ -357,6 +358,14 @@ void ComputeFixFactors(grid_run::RunPlan* p) {
 
 }  // namespace
 
+namespace {
+// Whether a known start's forward pass runs on its window of nonzero cells (test_hooks::SetKnownStartWindow).
+std::atomic<bool>& KnownStartWindow() {
+  static std::atomic<bool> on{true};
+  return on;
+}
+}  // namespace
+
 GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std::vector<PositionFix>& fixes,
                                  const TrackStart& start, bool smooth, bool filtered_estimates) const {
   WallTimer timer;
@@ -374,6 +383,7 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
   if (start.known) {
     while (plan.k0 < plan.m_steps && steps[plan.k0].time_s <= start.time_s) ++plan.k0;
   }
+  plan.window = start.known && KnownStartWindow().load(std::memory_order_relaxed);
   plan.layer_set = MakeGridLayers(im.options, *im.plan, plan.num_floors(), im.total_area_m2, start, plan.start_floor_index);
   AttachFixes(&plan);
   PlanMemory(&plan);
@@ -399,6 +409,10 @@ GridTrackResult GridTracker::Run(const std::vector<StepInput>& steps, const std:
   r.summary.seconds = timer.ElapsedSeconds();
   return r;
 }
+
+namespace test_hooks {
+void SetKnownStartWindow(bool on) { KnownStartWindow().store(on, std::memory_order_relaxed); }
+}  // namespace test_hooks
 
 double GridTracker::ReleaseKeptMemory() { return KeptBuffers::Instance().Release(); }
 
