@@ -18,6 +18,8 @@ from indoorloc.fusion import live
 from indoorloc.io import load_floor_plan, read_ilc_floor, read_ilc_site
 from indoorloc.simulate.ilc_site import make_ilc_site
 
+from stub_fields import stub_fields
+
 SHARED_F8 = Path(__file__).resolve().parents[3] / "shared" / "data" / "fusion" / "ilc2020_site2" / "F8"
 
 
@@ -285,22 +287,6 @@ def test_bound_session_errors_name_the_argument_and_the_event(synthetic_floor):
 
 
 # ------------------------------------------------------------------ the estimates' types
-def _stub_fields(stub_name):
-    """Each class of the stub with its annotated fields, those of its private bases first."""
-    import ast
-
-    import indoorloc
-
-    tree = ast.parse((Path(indoorloc.__file__).parent / "_core" / stub_name).read_text())
-    classes = {n.name: n for n in tree.body if isinstance(n, ast.ClassDef)}
-
-    def fields(node):
-        inherited = [f for b in node.bases if isinstance(b, ast.Name) and b.id in classes for f in fields(classes[b.id])]
-        return inherited + [s.target.id for s in node.body if isinstance(s, ast.AnnAssign)]
-
-    return {name: fields(node) for name, node in classes.items()}
-
-
 def test_estimates_are_typed_results_that_still_read_as_the_former_dicts_with_a_warning(synthetic_floor):
     import pickle
     import warnings
@@ -318,7 +304,7 @@ def test_estimates_are_typed_results_that_still_read_as_the_former_dicts_with_a_
                  session.add_step(0.5, [0.7, 0.0], [0.01, 0.0, 0.01]), session.estimate(), lt.estimate()]
     assert [type(e).__name__ for e in estimates] == ["TrackerEstimate"] * 2 + ["GridFilterEstimate"] * 2 + ["LiveEstimate"]
     assert type(lt.estimate()) is live.LiveEstimate and type(estimates[0]) is fusion.TrackerEstimate
-    stubs = _stub_fields("fusion.pyi")
+    stubs = stub_fields("fusion.pyi")
     for e in estimates:
         assert stubs[type(e).__name__] == list(type(e)._fields)
         with warnings.catch_warnings():

@@ -62,15 +62,10 @@ def test_every_pdr_result_type_lists_its_fields_once():
 
 
 def test_result_stubs_list_the_bound_fields():
-    import ast
-    from pathlib import Path
-
-    import indoorloc
     from indoorloc._core import pdr as core_pdr
+    from stub_fields import stub_fields
 
-    tree = ast.parse((Path(indoorloc.__file__).parent / "_core" / "pdr.pyi").read_text())
-    stubs = {n.name: [s.target.id for s in n.body if isinstance(s, ast.AnnAssign)]
-             for n in tree.body if isinstance(n, ast.ClassDef) and not n.name.startswith("_")}
+    stubs = stub_fields("pdr.pyi")
     results = {name: cls for name, cls in vars(core_pdr).items() if isinstance(cls, type) and hasattr(cls, "_fields")}
     assert len(results) == 8
     for name, cls in results.items():
