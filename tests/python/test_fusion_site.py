@@ -191,7 +191,10 @@ def test_unknown_floor_and_walk_without_waypoints(built, tmp_path, floor_dir):
     other = read_ilc_walk(next((floor_dir.parent / "F1" / "path_data_files").glob("*.txt")))
     with pytest.raises(ValueError, match=r"its floor 'F1' is not in site .*floor='auto'"):
         site.track(other)
-    # A survey walk without waypoints: build refuses, naming the file; the old site stays.
+    from indoorloc.io.errors import RecordingWarning
+
+    # A floor whose only walk has no waypoints: build refuses, naming the floor and the file; the
+    # old site stays.
     bare = tmp_path / "bare" / FLOOR / "path_data_files"
     bare.mkdir(parents=True)
     for name in ("geojson_map.json", "floor_info.json"):
@@ -199,14 +202,15 @@ def test_unknown_floor_and_walk_without_waypoints(built, tmp_path, floor_dir):
     lines = paths[0].read_text().splitlines(keepends=True)
     (bare / "nowaypoints.txt").write_text("".join(l for l in lines if "TYPE_WAYPOINT" not in l))
     before = site.path.read_bytes()
-    with pytest.raises(ValueError, match=r"nowaypoints.txt: 0 waypoint\(s\); a survey walk needs at least 2"):
-        Site.build(tmp_path / "bare", site.path)
+    with pytest.warns(RecordingWarning, match="nowaypoints.txt skipped"):
+        with pytest.raises(ValueError, match=rf"floor {FLOOR} has no survey walk .*nowaypoints.txt: 0 waypoint\(s\); "
+                                             r"a survey walk needs at least 2"):
+            Site.build(tmp_path / "bare", site.path)
     assert site.path.read_bytes() == before
     with pytest.raises(ValueError, match="nowaypoints.txt: 0 waypoint"):
         site.add([bare / "nowaypoints.txt"])
-    # An unreadable walk file is skipped with a warning and listed (the loader rule), not fatal.
-    from indoorloc.io.errors import RecordingWarning
-
+    # An unreadable walk file, or one cut short before its second waypoint, is skipped with a
+    # warning and listed (the loader rule), not fatal.
     good = tmp_path / "good" / FLOOR / "path_data_files"
     good.mkdir(parents=True)
     for name in ("geojson_map.json", "floor_info.json"):
@@ -214,9 +218,13 @@ def test_unknown_floor_and_walk_without_waypoints(built, tmp_path, floor_dir):
     (good / paths[0].name).symlink_to(paths[0])
     (good / paths[1].name).symlink_to(paths[1])
     (good / "broken.txt").write_text("1574231797021\tTYPE_ACCELEROMETER\tnot-a-number\t1\t2\t3\n")
-    with pytest.warns(RecordingWarning, match="broken.txt skipped"):
+    first_waypoint = next(i for i, l in enumerate(lines) if "TYPE_WAYPOINT" in l)
+    (good / "cut_short.txt").write_text("".join(lines[:first_waypoint + 1]))  # one waypoint, then the end
+    with pytest.warns(RecordingWarning) as said:
         g = Site.build(tmp_path / "good", tmp_path / "good.db")
-    assert "broken.txt" in g.info()["meta"]["skipped_walks"] and len(g.info()["walks"]) == 2
+    assert sorted(str(w.message).split(" skipped:")[0].rsplit("/", 1)[1] for w in said) == ["broken.txt", "cut_short.txt"]
+    skipped = g.info()["meta"]["skipped_walks"]
+    assert "broken.txt" in skipped and "cut_short.txt: 1 waypoint(s)" in skipped and len(g.info()["walks"]) == 2
     # ... but it can be tracked (no errors printed for it).
     track = site.track(bare / "nowaypoints.txt")
     assert track.errors_m is None and track.xy_m.shape[1] == 2
@@ -335,6 +343,18 @@ def test_cli_build_info_track(tmp_path, floor_dir, capsys):
     assert head[0].startswith("walk,t_s,unix_ms,x_m,y_m,floor,sd_x_m,sd_y_m,floor_probability")
     assert main(["--quiet", "track", str(paths[5]), "--site", str(db), "-o", str(tmp_path / "t.txt")]) == 2
     assert "extension" in capsys.readouterr().err
+    # A walk that cannot be tracked (an empty file) is named and costs the others nothing: their
+    # tracks are written, and the exit status is 1; with none tracked, nothing is written and it is 2.
+    empty = tmp_path / "empty.txt"
+    empty.write_text("")
+    both = tmp_path / "both.json"
+    assert main(["--quiet", "track", str(paths[5]), str(empty), "--site", str(db), "-o", str(both)]) == 1
+    err = capsys.readouterr().err
+    assert f"walk {empty} not tracked" in err and "1 of 2 walks not tracked" in err
+    assert [w["source"] for w in json.loads(both.read_text())["walks"]] == [str(paths[5])]
+    none = tmp_path / "none.json"
+    assert main(["--quiet", "track", str(empty), "--site", str(db), "-o", str(none)]) == 2
+    assert "nothing written" in capsys.readouterr().err and not none.exists()
 
 
 def test_cli_track_says_when_no_wifi_fix_was_available(tmp_path, floor_dir, capsys):

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 from pathlib import Path
 
@@ -123,8 +124,16 @@ def cmd_track(args: argparse.Namespace) -> int:
     site = Site.open(args.site)
     tracks = []
     floor = None if args.floor is None else args.floor
+    failed = 0
     for w in progress.progress(args.walks, desc="track: walks"):
-        tr = site.track(Path(w), floor=floor, smooth=args.smooth)
+        try:
+            tr = site.track(Path(w), floor=floor, smooth=args.smooth)
+        except (ValueError, OSError) as exc:
+            # One walk that cannot be tracked (unreadable, empty, a floor the site lacks) does not
+            # cost the others their tracks: it is named, and the exit status says it.
+            print(f"error: walk {w} not tracked: {exc}", file=sys.stderr)
+            failed += 1
+            continue
         tracks.append(tr)
         st = error_stats(tr.errors_m)
         line = f"{tr.walk_id}: floor {tr.floor} (p {tr.floor_probability:.3f}), {tr.times_s.size} steps"
@@ -144,10 +153,17 @@ def cmd_track(args: argparse.Namespace) -> int:
             line += (f", error at {st['n_waypoints']} waypoints: mean {st['mean_m']:.2f} m, median "
                      f"{st['median_m']:.2f} m, p90 {st['p90_m']:.2f} m")
         print(line)
+    if not tracks:
+        print(f"error: no walk could be tracked; nothing written to {args.output}", file=sys.stderr)
+        return 2
     write_tracks(args.output, tracks, str(args.site))
     print(f"written: {args.output}")
     if args.html:
         print(f"viewer: {site.write_viewer_html(args.html, tracks, title=f'indoorloc track: {Path(args.site).name}')}")
+    if failed:
+        print(f"error: {failed} of {len(args.walks)} walks not tracked (named above); the others are written",
+              file=sys.stderr)
+        return 1
     return 0
 
 

@@ -154,9 +154,10 @@ class Site:
               floors: Optional[Sequence[str]] = None, settings: Optional[site_model.TrackSettings] = None,
               progress: Optional[Callable[[str], None]] = None) -> "Site":
         """Build a site file from a survey folder (ILC 2020 or Kaggle 2021 layout,
-        :func:`indoorloc.io.survey_layout.survey_floors`): every walk of the floors (all by
-        default) must have waypoints; a walk file that cannot be read is skipped with a
-        RecordingWarning and listed in the meta table (``skipped_walks``). Written to a temporary file and renamed: an existing
+        :func:`indoorloc.io.survey_layout.survey_floors`), all floors by default. A walk file that
+        cannot be read, or has fewer than two waypoints (e.g. cut short), is skipped with a
+        RecordingWarning and listed in the meta table (``skipped_walks``); a floor left without
+        any survey walk is a ValueError naming the floor and the reasons. Written to a temporary file and renamed: an existing
         ``path`` is replaced only when the build succeeded. ``progress(walk_id)`` after each walk."""
         settings = settings or site_model.TrackSettings()
         settings.validate()
@@ -180,17 +181,26 @@ class Site:
                 tables.insert_floor(con, fl)
             seq, skipped = 0, {}
             for fl in survey:
+                surveyed = 0
                 for wp in fl.walk_paths:
                     try:
                         walk = read_ilc_walk(wp)
-                    except FormatError as exc:  # the loader rule: an unreadable walk is skipped, said, listed
+                        tables.check_survey_waypoints(walk, str(wp))
+                    except (FormatError, ValueError) as exc:
+                        # The loader rule: a walk that cannot be read, or cannot be a survey walk
+                        # (fewer than two waypoints, e.g. a file cut short), is skipped, said, listed.
                         warnings.warn(f"indoorloc: walk {wp} skipped: {exc}", RecordingWarning, stacklevel=2)
                         skipped[str(wp)] = str(exc)
                         continue
                     tables.insert_survey_walk(con, walk, fl.name, seq, settings, str(wp))
                     seq += 1
+                    surveyed += 1
                     if progress:
                         progress(wp.stem)
+                if not surveyed:
+                    reasons = "; ".join(skipped[str(wp)] for wp in fl.walk_paths if str(wp) in skipped)
+                    raise ValueError(f"indoorloc: argument 'survey_dir': floor {fl.name} has no survey walk "
+                                     f"with waypoints to build from ({reasons or 'no walk file'})")
                 tables.recalibrate(con, fl.name)
                 tables.store_fingerprint_columns(con, fl.name, settings.fixes)
             con.execute("INSERT INTO meta VALUES ('skipped_walks', ?)", (json.dumps(skipped),))

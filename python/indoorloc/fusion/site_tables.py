@@ -53,13 +53,20 @@ def ap_ids(con: sqlite3.Connection, bssids: Sequence[str]) -> np.ndarray:
     return np.array([ids[b] for b in bssids], dtype=np.int64)
 
 
-def insert_survey_walk(con: sqlite3.Connection, walk: Any, floor: str, seq: int,
-                        settings: site_model.TrackSettings, source: str) -> None:
-    """Insert a survey walk (waypoints required): its row, PDR intervals, fingerprints, beacon sightings."""
+def check_survey_waypoints(walk: Any, source: str) -> np.ndarray:
+    """The walk's waypoint times [s]; ValueError naming ``source`` when it has fewer than two
+    (a survey walk places its readings between waypoints)."""
     wt = np.asarray(walk.waypoint_t_s, float)
     if wt.size < 2:
         raise ValueError(f"indoorloc: walk {source}: {wt.size} waypoint(s); a survey walk needs at least 2 "
                          f"(a walk without waypoints can be tracked, not surveyed)")
+    return wt
+
+
+def insert_survey_walk(con: sqlite3.Connection, walk: Any, floor: str, seq: int,
+                        settings: site_model.TrackSettings, source: str) -> None:
+    """Insert a survey walk (waypoints required): its row, PDR intervals, fingerprints, beacon sightings."""
+    wt = check_survey_waypoints(walk, source)
     if con.execute("SELECT 1 FROM walks WHERE id = ?", (walk.walk_id,)).fetchone():
         raise ValueError(f"indoorloc: walk {source}: walk id {walk.walk_id} is already in the site")
     wxy = np.asarray(walk.waypoint_xy_m, float).reshape(-1, 2)
