@@ -172,7 +172,7 @@ def add_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
     ssub = p.add_subparsers(dest="site_command", required=True)
     b = ssub.add_parser("build", parents=[quiet_parent()],
                         help="build SITE.db from a survey folder (ILC 2020 SITE/FLOOR/path_data_files or Kaggle "
-                             "2021 train/SITE/FLOOR + metadata/SITE/FLOOR); every walk needs waypoints")
+                             "2021 train/SITE/FLOOR + metadata/SITE/FLOOR) from its walks with waypoints (others skipped, listed)")
     b.add_argument("survey_dir")
     b.add_argument("-o", "--output", required=True, help="the site file to write (replaced only on success)")
     b.add_argument("--floors", nargs="+", default=None, help="floor folders (default: all, in building order)")
