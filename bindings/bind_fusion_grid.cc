@@ -84,6 +84,12 @@ equality and pickling as for every Options class. The fix likelihood's ε and τ
       .def_readwrite("fix_survey_distance_factor", &GridTrackerOptions::fix_survey_distance_factor,
                      "β: fixes evaluated at s + β (c - s), s the survey position nearest to cell c "
                      "(GridTracker.with_survey_positions); 1: the cell centres.")
+      .def_readwrite("survey_walkable_radius_m", &GridTrackerOptions::survey_walkable_radius_m,
+                     "Cells within this distance [m] of a survey position (GridTracker.with_survey_positions) "
+                     "pay no wall penalty: the surveyors walked there; 0: the plan as drawn.")
+      .def_readwrite("survey_walkable_min_walks", &GridTrackerOptions::survey_walkable_min_walks,
+                     "A cell is opened only when positions of at least this many distinct survey walks lie "
+                     "within survey_walkable_radius_m.")
       .def_readwrite("start_position_sd_m", &GridTrackerOptions::start_position_sd_m, "Known start: sd [m].")
       .def_readwrite("filtered_covariance_scale", &GridTrackerOptions::filtered_covariance_scale,
                      "a of the filter's returned covariance a Σ + (b² + (g d)² + (h max(0, s - s0))²) I.")
@@ -149,19 +155,25 @@ Build once per plan and options (keeps a reference to the plan); ``run`` is thre
            "Walkable fraction of every cell (rows, columns), row 0 at the lowest y.")
       .def(
           "with_survey_positions",
-          [](const GridTracker& t, const py::object& positions_m, const py::object& floor_numbers) {
+          [](const GridTracker& t, const py::object& positions_m, const py::object& floor_numbers,
+             const py::object& walk_ids) {
             // The project's checked conversions (a ValueError naming the argument for anything that
             // is not a finite (N, 2) array / N integers), not pybind11's Eigen caster.
             const MatrixArg positions = ToMatrix(positions_m, "positions_m", -1, 2);
             const Eigen::VectorXi floors = ToIntVector(floor_numbers, "floor_numbers");
+            const Eigen::VectorXi walks = walk_ids.is_none() ? Eigen::VectorXi() : ToIntVector(walk_ids, "walk_ids");
             const RowMatrixXd p = positions.map;
             py::gil_scoped_release release;
-            return t.WithSurveyPositions(p, floors);
+            return t.WithSurveyPositions(p, floors, walks);
           },
-          py::arg("positions_m"), py::arg("floor_numbers"), py::keep_alive<0, 1>(), R"doc(
+          py::arg("positions_m"), py::arg("floor_numbers"), py::arg("walk_ids") = py::none(), py::keep_alive<0, 1>(),
+          R"doc(
 A tracker on the same grids whose fixes are evaluated at survey-anchored positions
-(options.fix_survey_distance_factor β): positions_m (N, 2) [m] the survey (fingerprint reference)
-positions, floor_numbers (N,) their floors. β = 1 or a floor without positions: the cell centres.)doc")
+(options.fix_survey_distance_factor β) and whose cells near the survey are open
+(options.survey_walkable_radius_m): positions_m (N, 2) [m] the survey (fingerprint reference)
+positions, floor_numbers (N,) their floors, walk_ids (N,) or None the survey walk of each
+(options.survey_walkable_min_walks; None: each position a walk of its own). β = 1 or a floor
+without positions: the cell centres.)doc")
       .def(
           "with_options",
           [](const GridTracker& t, const py::object& options) {

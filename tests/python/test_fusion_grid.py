@@ -206,14 +206,15 @@ def test_survey_anchored_fixes_reach_beyond_the_survey():
     floors = np.zeros(len(survey), dtype=np.int64)
     steps = fusion.Steps.from_polar([0.5], [0.0], [0.0], 0.01, 0.01)
     fix = fusion.Fixes.from_arrays([0.5], np.array([[[11.5, 25.0]]]), 2.0, np.ones((1, 1)))
-    plain = fusion.GridTracker(plan, fusion.GridTrackerOptions(heading_offset_sd_rad=0.0, fix_survey_distance_factor=1.0))
+    plain = fusion.GridTracker(plan, fusion.GridTrackerOptions(heading_offset_sd_rad=0.0, fix_survey_distance_factor=1.0,
+                                                               survey_walkable_radius_m=0.0))
     anchored = fusion.GridTracker(plan, fusion.GridTrackerOptions(heading_offset_sd_rad=0.0, fix_survey_distance_factor=0.0)
                                   ).with_survey_positions(survey, floors)
     x_plain = fusion.track_grid(plain, steps, fixes=fix, smooth=False)["mean_m"][0, 0]
     x_anchored = fusion.track_grid(anchored, steps, fixes=fix, smooth=False)["mean_m"][0, 0]
     assert abs(x_plain - 11.5) < 0.5
     assert x_anchored > x_plain + 5.0
-    # The factor 1: the same tracker back (no anchoring to do).
+    # The factor 1 and no cell to open: the same tracker back (no survey position to use).
     assert site_model.survey_anchored(plain, plan, type("Db", (), {"positions_m": survey, "floors": floors})) is plain
     with pytest.raises(ValueError, match="positions_m"):
         anchored.with_survey_positions(np.zeros((3, 3)), np.zeros(3, dtype=np.int64))
@@ -230,6 +231,50 @@ def test_survey_anchored_fixes_reach_beyond_the_survey():
     with pytest.raises(ValueError, match="fix_survey_distance_factor"):
         fusion.GridTrackerOptions(fix_survey_distance_factor=1.5)
 
+
+
+def test_survey_opens_the_cells_it_walked_through():
+    """A survey line through the hall's shop (y = 15, x 10..30): with survey_walkable_radius_m the
+    walk along it crosses the shop instead of going round it; with survey_walkable_min_walks 2
+    only two walks' lines open it; walk_ids of the wrong length or type are refused naming the
+    argument (docs/fusion.md, "Walls the survey walked through")."""
+    from indoorloc.fusion import site_model
+
+    plan = _hall()
+    line = np.c_[np.arange(10.0, 31.0), np.full(21, 15.0)]
+    survey, floors = np.vstack([line, line]), np.zeros(42, dtype=np.int64)
+    one_walk, two_walks = np.zeros(42, dtype=np.int64), np.repeat([0, 1], 21)
+    steps = fusion.Steps.from_polar(0.5 * np.arange(1, 21), np.ones(20), np.zeros(20), 0.05, 0.05)
+    fixes = fusion.Fixes.from_arrays([0.4, 10.1], np.array([[[10.0, 15.0]], [[30.0, 15.0]]]), 1.0, np.ones((2, 1)))
+    assert fusion.GridTrackerOptions().survey_walkable_radius_m == 0.75
+    base = fusion.GridTrackerOptions(heading_offset_sd_rad=0.0, wall_log_penalty=-3.0, fix_survey_distance_factor=1.0,
+                                     survey_walkable_radius_m=0.0)
+    assert not site_model.uses_survey_positions(base)
+
+    def run(options, walk_ids):
+        tracker = fusion.GridTracker(plan, options).with_survey_positions(survey, floors, walk_ids)
+        r = fusion.track_grid(tracker, steps, fixes=fixes, smooth=True)
+        return r["smoothed_posterior_covariance_m2"][10], r["summary"].log_evidence
+
+    # Mid-walk, inside the shop: drawn, the walk goes round it on either side (a wide spread in y,
+    # the mean between the two); opened, it crosses on the line.
+    drawn, z_drawn = run(base, one_walk)
+    opened, z_opened = run(base.replace(survey_walkable_radius_m=1.0), one_walk)
+    assert opened[2] < 1.0 and drawn[2] > 9.0
+    assert z_opened > z_drawn + 10.0
+    two = base.replace(survey_walkable_radius_m=1.0, survey_walkable_min_walks=2)
+    assert site_model.uses_survey_positions(two)
+    assert run(two, one_walk)[1] == z_drawn
+    assert run(two, two_walks)[1] == z_opened
+    tracker = fusion.GridTracker(plan, two)
+    with pytest.raises(ValueError, match="walk_ids"):
+        tracker.with_survey_positions(survey, floors, one_walk[:-1])
+    with pytest.raises(ValueError, match="walk_ids"):
+        tracker.with_survey_positions(survey, floors, "abc")
+    with pytest.raises(ValueError, match="survey_walkable_radius_m"):
+        fusion.GridTrackerOptions(survey_walkable_radius_m=-1.0)
+    with pytest.raises(ValueError, match="survey_walkable_min_walks"):
+        fusion.GridTrackerOptions(survey_walkable_min_walks=0)
 
 _SIMD_SCRIPT = """
 import sys

@@ -51,6 +51,7 @@ struct FloorGrid {
   // The survey positions on this floor [m] the anchors above were computed from (kept so that
   // GridTracker::WithOptions can anchor again for another β).
   std::vector<Eigen::Vector2d> survey_points;
+  std::vector<int> survey_walks;  // the survey walk of each point (for the opened cells' walk count)
   std::size_t size() const { return static_cast<std::size_t>(nx) * ny; }
 };
 
@@ -58,6 +59,17 @@ struct FloorGrid {
 // side `cell` [m]; clears them (the cell centres) for β >= 1 or no survey point
 // (grid_survey_anchors.cc).
 void AnchorFixesToSurvey(double beta, double cell, FloorGrid* g);
+
+// Fills g->wall_factor from the walkable fractions for `penalty` = e^λ (0 for λ = -inf), then sets
+// it to 1 at every cell whose centre lies within `radius_m` of points of g->survey_points from at
+// least `min_walks` distinct g->survey_walks (GridTrackerOptions::survey_walkable_radius_m and
+// survey_walkable_min_walks; radius 0: none) on cells of side `cell` [m] (grid_survey_walkable.cc).
+void ComputeWallFactors(double penalty, int n_sub, double radius_m, int min_walks, double cell, FloorGrid* g);
+
+// e^λ of the wall factor for λ = `wall_log_penalty` (0 for λ = -inf).
+inline double WallPenalty(double wall_log_penalty) {
+  return std::isinf(wall_log_penalty) ? 0.0 : std::exp(wall_log_penalty);
+}
 
 // The wall factor m(c) = a + (1 - a) e^λ of a cell with `walkable` of its n_sub² subsamples
 // walkable (`penalty` = e^λ, 0 for λ = -inf); a = walkable / n_sub² in double, as the grid's

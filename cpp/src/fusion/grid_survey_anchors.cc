@@ -155,22 +155,34 @@ void grid_ops::AnchorFixesToSurvey(double beta, double cell, grid_ops::FloorGrid
   AnchorFloor(g->survey_points, beta, cell, g);
 }
 
-GridTracker GridTracker::WithSurveyPositions(const RowMatrixXd& positions_m, const Eigen::VectorXi& floor_numbers) const {
+GridTracker GridTracker::WithSurveyPositions(const RowMatrixXd& positions_m, const Eigen::VectorXi& floor_numbers,
+                                             const Eigen::VectorXi& walk_ids) const {
   CheckArgument(positions_m.cols() == 2, "positions_m",
                 "must have 2 columns (x, y) [m], got " + std::to_string(positions_m.cols()));
   CheckArgument(floor_numbers.size() == positions_m.rows(), "floor_numbers",
                 "must have one floor per position (" + std::to_string(positions_m.rows()) + "), got " +
                     std::to_string(floor_numbers.size()));
   CheckArgument(positions_m.allFinite(), "positions_m", "must be finite");
+  CheckArgument(walk_ids.size() == 0 || walk_ids.size() == positions_m.rows(), "walk_ids",
+                "must be empty or have one walk per position (" + std::to_string(positions_m.rows()) + "), got " +
+                    std::to_string(walk_ids.size()));
   GridTracker out;
   out.impl_.reset(new Impl(*impl_));
   const double beta = impl_->options.fix_survey_distance_factor;
   const double c = impl_->options.cell_size_m;
   for (grid_ops::FloorGrid& g : out.impl_->grids) {
     g.survey_points.clear();
+    g.survey_walks.clear();
     for (Eigen::Index i = 0; i < positions_m.rows(); ++i)
-      if (floor_numbers[i] == g.floor_number) g.survey_points.emplace_back(positions_m(i, 0), positions_m(i, 1));
+      if (floor_numbers[i] == g.floor_number) {
+        g.survey_points.emplace_back(positions_m(i, 0), positions_m(i, 1));
+        if (walk_ids.size()) g.survey_walks.push_back(walk_ids[i]);
+      }
     grid_ops::AnchorFixesToSurvey(beta, c, &g);
+    if (impl_->options.survey_walkable_radius_m > 0)
+      grid_ops::ComputeWallFactors(grid_ops::WallPenalty(impl_->options.wall_log_penalty), impl_->options.walkable_subsamples,
+                                   impl_->options.survey_walkable_radius_m, impl_->options.survey_walkable_min_walks,
+                                   c, &g);
   }
   return out;
 }

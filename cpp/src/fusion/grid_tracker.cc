@@ -40,6 +40,8 @@ bool GridTrackerOptions::IsValid(std::string* error) const {
       .InRange(wall_margin_m, 0.0, 100.0, "wall_margin_m")
       .Check(fix_ok, "fix", fix_error)
       .InRange(fix_survey_distance_factor, 0.0, 1.0, "fix_survey_distance_factor")
+      .InRange(survey_walkable_radius_m, 0.0, 100.0, "survey_walkable_radius_m")
+      .IntInRange(survey_walkable_min_walks, 1, 1000000, "survey_walkable_min_walks")
       .InRange(median_block_m, 0.1, 100.0, "median_block_m")
       .InRange(start_position_sd_m, 0.01, 1e4, "start_position_sd_m")
       .InRange(filtered_covariance_scale, 1e-6, 1e6, "filtered_covariance_scale")
@@ -98,11 +100,6 @@ void CheckGridMemory(const FloorPlan& plan, const GridTrackerOptions& options) {
                     " (use larger cells)");
 }
 
-// e^λ of the wall factor (0 for λ = -inf).
-double WallPenalty(const GridTrackerOptions& options) {
-  return std::isinf(options.wall_log_penalty) ? 0.0 : std::exp(options.wall_log_penalty);
-}
-
 }  // namespace
 
 GridTracker::GridTracker(const FloorPlan* plan, const GridTrackerOptions& options) : impl_(new Impl) {
@@ -113,7 +110,7 @@ GridTracker::GridTracker(const FloorPlan* plan, const GridTrackerOptions& option
   impl_->options = options;
   const double c = options.cell_size_m;
   const int n_sub = options.walkable_subsamples;
-  const double penalty = WallPenalty(options);
+  const double penalty = WallPenalty(options.wall_log_penalty);
   for (int f = 0; f < plan->num_floors(); ++f) {
     const Eigen::Vector4d b = plan->Bounds(f);
     FloorGrid g;
@@ -167,16 +164,14 @@ GridTracker GridTracker::WithOptions(const GridTrackerOptions& options) const {
   out.impl_.reset(new Impl(*impl_));
   out.impl_->options = options;
   const int n_sub = options.walkable_subsamples;
-  const bool walls = options.wall_log_penalty != own.wall_log_penalty;
+  const bool walls = options.wall_log_penalty != own.wall_log_penalty ||
+                     options.survey_walkable_radius_m != own.survey_walkable_radius_m ||
+                     options.survey_walkable_min_walks != own.survey_walkable_min_walks;
   const bool anchors = options.fix_survey_distance_factor != own.fix_survey_distance_factor;
-  const double penalty = WallPenalty(options);
+  const double penalty = WallPenalty(options.wall_log_penalty);
   for (grid_ops::FloorGrid& g : out.impl_->grids) {
-    if (walls) {
-      // The walkable fraction is n / n_sub² stored in float: the count n is recovered exactly.
-      for (std::size_t i = 0; i < g.size(); ++i)
-        g.wall_factor[i] = WallFactor(static_cast<int>(std::lround(g.walkable_fraction[i] * (n_sub * n_sub))), n_sub,
-                                      penalty);
-    }
+    if (walls) grid_ops::ComputeWallFactors(penalty, n_sub, options.survey_walkable_radius_m,
+                                            options.survey_walkable_min_walks, options.cell_size_m, &g);
     if (anchors) grid_ops::AnchorFixesToSurvey(options.fix_survey_distance_factor, options.cell_size_m, &g);
   }
   return out;

@@ -243,6 +243,8 @@ GridTrackerOptions SiteFile::TrackerOptions(const std::string& floor) const {
   o.wall_log_penalty = get("wall_log_penalty", o.wall_log_penalty);
   o.wall_margin_m = get("wall_margin_m", o.wall_margin_m);
   o.fix_survey_distance_factor = get("fix_survey_distance_factor", o.fix_survey_distance_factor);
+  o.survey_walkable_radius_m = get("survey_walkable_radius_m", o.survey_walkable_radius_m);
+  o.survey_walkable_min_walks = static_cast<int>(get("survey_walkable_min_walks", o.survey_walkable_min_walks));
   o.fix.outlier_probability = get("fix_outlier_probability", o.fix.outlier_probability);
   o.fix.tempering = get("fix_tempering", o.fix.tempering);
   o.fix_tempering_by_variance = get("fix_tempering_by_variance", o.fix_tempering_by_variance) != 0.0;
@@ -270,7 +272,15 @@ GridTracker SiteFile::Tracker(const FloorPlan* plan, const std::string& floor) c
   GridTracker tracker(plan, TrackerOptions(floor));
   const RowMatrixXd positions = FingerprintPositions(floor);
   if (positions.rows() == 0) return tracker;
-  return tracker.WithSurveyPositions(positions, Eigen::VectorXi::Constant(positions.rows(), plan->floors()[0]));
+  // The survey walk of each fingerprint (for the cells the survey opens), numbered in order of
+  // appearance: the same partition as the Python site's database.
+  Statement s(impl_->db, "SELECT walk FROM fingerprints WHERE floor = ? ORDER BY id", impl_->path);
+  s.Bind(1, floor);
+  std::map<std::string, int> number;
+  Eigen::VectorXi walks(positions.rows());
+  for (Eigen::Index i = 0; s.Step() && i < walks.size(); ++i)
+    walks[i] = number.emplace(s.Text(0), static_cast<int>(number.size())).first->second;
+  return tracker.WithSurveyPositions(positions, Eigen::VectorXi::Constant(positions.rows(), plan->floors()[0]), walks);
 }
 
 RowMatrixXd SiteFile::FingerprintPositions(const std::string& floor) const {

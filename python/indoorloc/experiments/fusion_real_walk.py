@@ -287,13 +287,13 @@ def _grid_tracker(plan, options, key: str, database=None):
             tracker = (plan, sibling[1].with_options(options) if sibling is not None and sibling[0] is plan
                        else fusion.GridTracker(plan, options))
             _TRACKERS[k] = _TRACKERS[same_grid] = tracker
-        if database is None or options.fix_survey_distance_factor >= 1.0:
+        if database is None or not site_model.uses_survey_positions(options):
             return tracker[1]
         anchored = _TRACKERS.get(k + (id(database),))
         if anchored is None or anchored[0] is not database:
             sibling = _TRACKERS.get(same_grid + (id(database),))
             anchored = (database, sibling[1].with_options(options) if sibling is not None and sibling[0] is database
-                        and sibling[1].options.fix_survey_distance_factor < 1.0
+                        and site_model.uses_survey_positions(sibling[1].options)
                         else site_model.survey_anchored(tracker[1], plan, database))
             _TRACKERS[k + (id(database),)] = _TRACKERS[same_grid + (id(database),)] = anchored
         return anchored[1]

@@ -243,18 +243,25 @@ def identification_grid_options(settings: TrackSettings, spread_rad: float, spat
                                          fix_outlier_probability=settings.identification_fix_outlier_probability)
 
 
+def uses_survey_positions(options: GridTrackerOptions) -> bool:
+    """Whether a grid tracker with ``options`` reads the survey positions: fixes anchored to them
+    (``fix_survey_distance_factor`` < 1) or cells near them opened (``survey_walkable_radius_m`` > 0)."""
+    return options.fix_survey_distance_factor < 1.0 or options.survey_walkable_radius_m > 0.0
+
+
 def survey_anchored(tracker: GridTracker, plan: Any, database: wifi_fixes.FingerprintDatabase) -> GridTracker:
     """The tracker (on ``plan``) whose fixes are evaluated at survey-anchored positions: the
     fingerprint positions of ``database`` (``GridTrackerOptions.fix_survey_distance_factor``,
-    ``GridTracker.with_survey_positions``); the tracker itself when that factor is 1. A floor's own
+    ``GridTracker.with_survey_positions``), with the cells within ``survey_walkable_radius_m`` of
+    the positions of ``survey_walkable_min_walks`` distinct walks open; the tracker itself when it reads no survey position (:func:`uses_survey_positions`). A floor's own
     database may leave its floor numbers at 0: on a one-floor plan every position is on its floor."""
-    if tracker.options.fix_survey_distance_factor >= 1.0:
+    if not uses_survey_positions(tracker.options):
         return tracker
     positions = np.asarray(database.positions_m, dtype=float).reshape(-1, 2)
     floors = np.asarray(database.floors, dtype=np.int64)
     if len(plan.floors) == 1:
         floors = np.full(positions.shape[0], plan.floors[0], dtype=np.int64)
-    return tracker.with_survey_positions(positions, floors)
+    return tracker.with_survey_positions(positions, floors, np.asarray(database.walk_index, dtype=np.int64))
 
 
 def run_default(tracker: GridTracker, steps: Steps, fixes, smooth: bool = True) -> dict:

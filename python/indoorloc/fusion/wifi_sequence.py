@@ -58,6 +58,9 @@ class SequenceSettings:
     #: Smaller than the fused tracker's 0.75: without PDR nothing else carries the walker beyond
     #: the survey.
     fix_survey_distance_factor: float = 0.15
+    #: Cells within this distance [m] of a survey position pay no wall penalty
+    #: (GridTrackerOptions.survey_walkable_radius_m; 0: the plan as drawn).
+    survey_walkable_radius_m: float = 0.0
     #: Grid cell [m] (fixed in advance, not tuned: a tenth of the fixes' typical error, and 4x
     #: fewer cells than the fused tracker's 1 m, which the study's grid could not afford).
     cell_size_m: float = 2.0
@@ -75,6 +78,7 @@ class SequenceSettings:
             "fix_sd_scale": self.fix_sd_scale > 0 and math.isfinite(self.fix_sd_scale),
             "wall_log_penalty": self.wall_log_penalty <= 0 and not math.isnan(self.wall_log_penalty),
             "fix_survey_distance_factor": 0 <= self.fix_survey_distance_factor <= 1,
+            "survey_walkable_radius_m": 0 <= self.survey_walkable_radius_m <= 100,
             "cell_size_m": self.cell_size_m > 0 and math.isfinite(self.cell_size_m),
             "point_estimate": self.point_estimate in ("mean", "median"),
         }
@@ -93,6 +97,7 @@ def grid_options(settings: SequenceSettings, base: Optional[GridTrackerOptions] 
                         fix_outlier_probability=settings.fix_outlier_probability,
                         fix_tempering=settings.fix_tempering,
                         fix_survey_distance_factor=settings.fix_survey_distance_factor,
+                        survey_walkable_radius_m=settings.survey_walkable_radius_m,
                         spatial_median=settings.point_estimate == "median")
 
 
