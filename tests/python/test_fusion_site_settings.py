@@ -68,6 +68,22 @@ def test_older_files_turn_off_each_missing_evidence():
         site_settings.stored_track_settings(dict(grid_only, bogus=1), "g.db")
 
 
+def test_a_file_saved_before_the_open_survey_cells_keeps_the_walls_as_drawn():
+    stored = site_model.TrackSettings().to_dict()
+    stored["grid_options"] = _without(stored["grid_options"], ("survey_walkable_radius_m", "survey_walkable_min_walks"))
+    before = json.dumps(stored, sort_keys=True)
+    assert site_settings.missing_grid_features(stored) == ["the survey's open cells"]
+    assert site_settings.missing_evidence(stored) == []
+    with pytest.warns(SiteSettingsWarning, match=r"old\.db was saved before the survey's open cells existed.*"
+                                                 r"indoorloc site build SURVEY_DIR -o old\.db"):
+        s = site_settings.stored_track_settings(stored, "old.db")
+    assert json.dumps(stored, sort_keys=True) == before  # the input is not modified
+    assert s.grid_options.survey_walkable_radius_m == 0.0 and s.grid_options.survey_walkable_min_walks == 1
+    assert site_model.TrackSettings().grid_options.survey_walkable_radius_m == 0.75  # today's default
+    # Everything else as stored.
+    assert s.grid_options.fix_survey_distance_factor == site_model.TrackSettings().grid_options.fix_survey_distance_factor
+
+
 @pytest.fixture(scope="module")
 def two_floor_survey(tmp_path_factory):
     from indoorloc.simulate.ilc_site import write_ilc_site

@@ -243,8 +243,10 @@ GridTrackerOptions SiteFile::TrackerOptions(const std::string& floor) const {
   o.wall_log_penalty = get("wall_log_penalty", o.wall_log_penalty);
   o.wall_margin_m = get("wall_margin_m", o.wall_margin_m);
   o.fix_survey_distance_factor = get("fix_survey_distance_factor", o.fix_survey_distance_factor);
-  o.survey_walkable_radius_m = get("survey_walkable_radius_m", o.survey_walkable_radius_m);
-  o.survey_walkable_min_walks = static_cast<int>(get("survey_walkable_min_walks", o.survey_walkable_min_walks));
+  // A file written before the survey's open cells existed tracked with the walls as drawn
+  // (python fusion.site_settings.LEGACY_GRID_VALUES).
+  o.survey_walkable_radius_m = get("survey_walkable_radius_m", 0.0);
+  o.survey_walkable_min_walks = static_cast<int>(get("survey_walkable_min_walks", 1.0));
   o.fix.outlier_probability = get("fix_outlier_probability", o.fix.outlier_probability);
   o.fix.tempering = get("fix_tempering", o.fix.tempering);
   o.fix_tempering_by_variance = get("fix_tempering_by_variance", o.fix_tempering_by_variance) != 0.0;

@@ -17,6 +17,10 @@ weight. :func:`stored_track_settings` instead reads a stored dict as the indoorl
 used it: a missing evidence is off (weight 0), a missing calibration is the plain normalised score
 (T 1, δ 0), a missing ε of the identification fixes is the tracker's own (what the pass used
 then), and it warns (:class:`SiteSettingsWarning`) with what to do: rebuild the site file.
+
+The grid tracker's options grew the same way: a file whose ``grid_options`` lack the survey's open
+cells (``survey_walkable_radius_m``) was written by a tracker with the walls as drawn, and reads
+radius 0 (:data:`LEGACY_GRID_VALUES`), with the same warning.
 """
 
 from __future__ import annotations
@@ -33,6 +37,11 @@ LEGACY_VALUES: Dict[str, Dict[str, Any]] = {
     "the calibrated floor probabilities": {"identification_temperature": 1.0, "identification_error_probability": 0.0,
                                            "identification_error_slope": 0.0},
     "the floor classifier": {"identification_classifier_weight": 0.0},
+}
+#: Grid tracker options (``grid_options``) that a file written before them did not use, and the
+#: values that reproduce its tracker: per feature, (marker key, values).
+LEGACY_GRID_VALUES: Dict[str, Dict[str, Any]] = {
+    "the survey's open cells": {"survey_walkable_radius_m": 0.0, "survey_walkable_min_walks": 1},
 }
 #: Keys whose absence marks each evidence (any one of them).
 _MARKERS: Dict[str, tuple] = {
@@ -55,12 +64,26 @@ def missing_evidence(stored: Mapping[str, Any]) -> List[str]:
     return [name for name, keys in _MARKERS.items() if not any(k in stored for k in keys)]
 
 
+def missing_grid_features(stored: Mapping[str, Any]) -> List[str]:
+    """The grid tracker features (keys of :data:`LEGACY_GRID_VALUES`) whose options the stored
+    settings' ``grid_options`` do not carry at all (none when no ``grid_options`` is stored)."""
+    grid = stored.get("grid_options")
+    if not isinstance(grid, Mapping):
+        return []
+    return [name for name, values in LEGACY_GRID_VALUES.items() if not any(k in grid for k in values)]
+
+
 def legacy_completed(stored: Mapping[str, Any]) -> Dict[str, Any]:
     """``stored`` with every missing floor-identification setting set as the writing indoorloc used
     it (module docstring); keys present are kept as stored. Does not modify ``stored``."""
     d = dict(stored)
     for name in missing_evidence(stored):
         d.update(LEGACY_VALUES[name])
+    grid_missing = missing_grid_features(stored)
+    if grid_missing:
+        d["grid_options"] = dict(stored["grid_options"])
+        for name in grid_missing:
+            d["grid_options"].update(LEGACY_GRID_VALUES[name])
     if "identification_fix_outlier_probability" not in d:
         # Before this key the identification pass used the tracker's own fix ε.
         eps = dict(d.get("grid_options") or {}).get("fix_outlier_probability")
@@ -75,6 +98,11 @@ def stored_track_settings(stored: Mapping[str, Any], source: str):
     :class:`SiteSettingsWarning` once, naming the file, what its settings lack and the command that
     rebuilds it, when an evidence is missing. ValueError as ``from_dict`` for unknown keys."""
     missing = missing_evidence(stored)
+    grid_missing = missing_grid_features(stored)
+    if grid_missing:
+        warnings.warn(f"indoorloc: site file {source} was saved before {', '.join(grid_missing)} existed: tracks use "
+                      f"the tracker it was saved with. Rebuild the site file for the current tracker: "
+                      f"'indoorloc site build SURVEY_DIR -o {source}'", SiteSettingsWarning, stacklevel=3)
     if missing:
         warnings.warn(f"indoorloc: site file {source} was saved before {', '.join(missing)} existed: floor "
                       f"identification (floor='auto') uses the evidence and calibration saved with it, without "
@@ -83,4 +111,5 @@ def stored_track_settings(stored: Mapping[str, Any], source: str):
     return site_model.TrackSettings.from_dict(legacy_completed(stored))
 
 
-__all__ = ["LEGACY_VALUES", "SiteSettingsWarning", "legacy_completed", "missing_evidence", "stored_track_settings"]
+__all__ = ["LEGACY_GRID_VALUES", "LEGACY_VALUES", "SiteSettingsWarning", "legacy_completed", "missing_evidence",
+           "missing_grid_features", "stored_track_settings"]
