@@ -83,7 +83,8 @@ def build_cases(data_root: Path, floors: Sequence[str], seed: int, variants: Seq
                           {k: wfx.fixes_for_walk(fw.walk, d) for k, d in dbs.items()}).__dict__
                  for fw in fold.walks]
         # What the anchoring needs of the database (picklable; the matcher index is not).
-        return {"database": SimpleNamespace(positions_m=np.asarray(db.positions_m), floors=np.asarray(db.floors)),
+        return {"database": SimpleNamespace(positions_m=np.asarray(db.positions_m), floors=np.asarray(db.floors),
+                                            walk_index=np.asarray(db.walk_index)),
                 "walks": walks}
 
     return floor_cases(data_root, floors, seed, record, log)

@@ -253,15 +253,18 @@ def survey_anchored(tracker: GridTracker, plan: Any, database: wifi_fixes.Finger
     """The tracker (on ``plan``) whose fixes are evaluated at survey-anchored positions: the
     fingerprint positions of ``database`` (``GridTrackerOptions.fix_survey_distance_factor``,
     ``GridTracker.with_survey_positions``), with the cells within ``survey_walkable_radius_m`` of
-    the positions of ``survey_walkable_min_walks`` distinct walks open; the tracker itself when it reads no survey position (:func:`uses_survey_positions`). A floor's own
-    database may leave its floor numbers at 0: on a one-floor plan every position is on its floor."""
+    the positions of ``survey_walkable_min_walks`` distinct walks open (a database without
+    ``walk_index``: each position a walk of its own); the tracker itself when it reads no survey
+    position (:func:`uses_survey_positions`). A floor's own database may leave its floor numbers at
+    0: on a one-floor plan every position is on its floor."""
     if not uses_survey_positions(tracker.options):
         return tracker
     positions = np.asarray(database.positions_m, dtype=float).reshape(-1, 2)
     floors = np.asarray(database.floors, dtype=np.int64)
     if len(plan.floors) == 1:
         floors = np.full(positions.shape[0], plan.floors[0], dtype=np.int64)
-    return tracker.with_survey_positions(positions, floors, np.asarray(database.walk_index, dtype=np.int64))
+    walks = getattr(database, "walk_index", None)  # None: each position a walk of its own
+    return tracker.with_survey_positions(positions, floors, None if walks is None else np.asarray(walks, dtype=np.int64))
 
 
 def run_default(tracker: GridTracker, steps: Steps, fixes, smooth: bool = True) -> dict:
