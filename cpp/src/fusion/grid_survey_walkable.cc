@@ -4,7 +4,7 @@
 // within the radius of the cell's centre.
 #include <algorithm>
 #include <cmath>
-#include <utility>
+#include <limits>
 #include <vector>
 
 #include "grid_ops.h"
@@ -21,28 +21,32 @@ void grid_ops::ComputeWallFactors(double penalty, int n_sub, double radius_m, in
   if (!(radius_m > 0)) return;
   const double r2 = radius_m * radius_m;
   const int reach = static_cast<int>(std::ceil(radius_m / cell));
-  // (cell, walk) for every cell whose centre is within the radius of a point; a point without a
-  // walk id is a walk of its own.
+  // Points in order of their walk (a point without a walk id is a walk of its own), so that a
+  // cell counts each walk once with a stamp of the last walk that reached it: memory of one
+  // counter per cell, whatever the radius.
   const bool ids = g->survey_walks.size() == g->survey_points.size();
-  std::vector<std::pair<std::size_t, long long>> hits;
-  for (std::size_t k = 0; k < g->survey_points.size(); ++k) {
+  std::vector<std::size_t> order(g->survey_points.size());
+  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+  if (ids)
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return g->survey_walks[a] < g->survey_walks[b]; });
+  std::vector<long long> stamp(g->size(), std::numeric_limits<long long>::min());
+  std::vector<int> walks(g->size(), 0);
+  for (std::size_t k : order) {
     const Eigen::Vector2d& p = g->survey_points[k];
     const long long walk = ids ? g->survey_walks[k] : -1 - static_cast<long long>(k);
-    const int px = static_cast<int>(std::floor((p.x() - g->x0) / cell));
-    const int py = static_cast<int>(std::floor((p.y() - g->y0) / cell));
+    const double fx = std::floor((p.x() - g->x0) / cell), fy = std::floor((p.y() - g->y0) / cell);
+    if (fx < -reach - 1.0 || fx > g->nx + reach + 1.0 || fy < -reach - 1.0 || fy > g->ny + reach + 1.0) continue;
+    const int px = static_cast<int>(fx), py = static_cast<int>(fy);
     for (int y = std::max(0, py - reach); y <= std::min(g->ny - 1, py + reach); ++y)
       for (int x = std::max(0, px - reach); x <= std::min(g->nx - 1, px + reach); ++x) {
         const double dx = g->x0 + (x + 0.5) * cell - p.x(), dy = g->y0 + (y + 0.5) * cell - p.y();
-        if (dx * dx + dy * dy <= r2) hits.emplace_back(static_cast<std::size_t>(y) * g->nx + x, walk);
+        const std::size_t i = static_cast<std::size_t>(y) * g->nx + x;
+        if (dx * dx + dy * dy <= r2 && stamp[i] != walk) {
+          stamp[i] = walk;
+          if (++walks[i] >= min_walks) g->wall_factor[i] = 1.0f;
+        }
       }
-  }
-  std::sort(hits.begin(), hits.end());
-  hits.erase(std::unique(hits.begin(), hits.end()), hits.end());
-  for (std::size_t a = 0; a < hits.size();) {
-    std::size_t b = a;
-    while (b < hits.size() && hits[b].first == hits[a].first) ++b;
-    if (static_cast<int>(b - a) >= min_walks) g->wall_factor[hits[a].first] = 1.0f;
-    a = b;
   }
 }
 

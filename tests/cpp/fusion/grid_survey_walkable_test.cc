@@ -54,6 +54,9 @@ TEST(GridSurveyWalkableTest, WallFactorIsThatOfABruteForce) {
             g.survey_points.emplace_back(rng.Uniform(-8.0, 45.0), rng.Uniform(-5.0, 38.0));
             if (ids) g.survey_walks.push_back(static_cast<int>(rng.Uniform(0.0, 6.0)));
           }
+          // Far off the grid (no cell within reach; no integer overflow).
+          g.survey_points.emplace_back(1e12, -3e15);
+          if (ids) g.survey_walks.push_back(2);
           const double penalty = std::exp(-1.0);
           grid_ops::ComputeWallFactors(penalty, n_sub, r, min_walks, c, &g);
           ASSERT_EQ(g.wall_factor.size(), g.size());
