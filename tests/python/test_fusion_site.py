@@ -149,6 +149,21 @@ def test_kaggle_layout(tmp_path, floor_dir):
     assert [w["id"] for w in info["walks"]] == [p.stem for p in paths]
 
 
+def test_info_reports_the_survey_off_the_plan(built):
+    """``survey_off_plan``: the fraction of surveyed fingerprints the plan puts outside walkable
+    space, as counted from the floor's plan and fingerprint positions; shown in the CLI table."""
+    from indoorloc.cli.site import _floor_table
+
+    site, _ = built
+    info = site.info()
+    m = site.floor_models(FLOOR)
+    xy = np.asarray(m.database.positions_m, float)
+    off = float(np.mean(~np.asarray(m.plan.is_walkable(xy, 0), bool)))
+    assert info["floors"][FLOOR]["survey_off_plan"] == round(off, 4)
+    assert 0.0 <= off < 0.2
+    assert f"{100 * off:.1f} % |" in _floor_table(info) and "survey off the plan" in _floor_table(info)
+
+
 def test_bad_files_give_clear_errors(built, tmp_path):
     from indoorloc.fusion.site import Site
     from indoorloc.fusion.site_store import SiteFileError

@@ -19,11 +19,13 @@ from pathlib import Path
 
 
 def _floor_table(info: dict) -> str:
-    lines = ["| floor | walks | fingerprints | APs | beacons | walkable [m²] | survey coverage (within 5 m) |",
-             "|---|---|---|---|---|---|---|"]
+    lines = ["| floor | walks | fingerprints | APs | beacons | walkable [m²] | survey coverage (within 5 m) "
+             "| survey off the plan |",
+             "|---|---|---|---|---|---|---|---|"]
     for name, f in info["floors"].items():
         lines.append(f"| {name} | {f['walks']} | {f['fingerprints']} | {f['access_points']} | {f['beacons']} | "
-                     f"{f['walkable_area_m2']:.0f} | {100 * f['survey_coverage']:.0f} % |")
+                     f"{f['walkable_area_m2']:.0f} | {100 * f['survey_coverage']:.0f} % | "
+                     f"{100 * f['survey_off_plan']:.1f} % |")
     return "\n".join(lines)
 
 

@@ -485,7 +485,10 @@ class Site:
     def info(self) -> Dict[str, Any]:
         """Provenance and a per-floor summary: walks, fingerprints, access points, beacons,
         walkable area [m²], survey coverage (fraction of the walkable area within 5 m of a
-        fingerprint) and the PDR calibration."""
+        fingerprint), the fraction of the surveyed fingerprints (weight 1) that the plan puts
+        inside an obstacle or outside the outline (where the survey contradicts the plan; the
+        tracker opens those cells, ``GridTrackerOptions.survey_walkable_radius_m``) and the PDR
+        calibration."""
         con = store.connect(self.path)
         try:
             out = {"path": str(self.path), "size_bytes": self.path.stat().st_size, "meta": store.meta(con),
@@ -504,6 +507,7 @@ class Site:
                     "number": number, "origin_lon_lat": list(origin), "walks": n_walks, "fingerprints": n_fp,
                     "access_points": len(ids), "beacons": n_b, "walkable_area_m2": round(area, 1),
                     "survey_coverage": round(self.coverage(name)["fraction_within_5m"], 4),
+                    "survey_off_plan": round(self._survey_off_plan(con, name), 4),
                     "pdr_calibration": None if cal is None else {
                         "k": cal[0], "yaw_offset_deg": math.degrees(cal[1]), "yaw_offset_spread_deg": math.degrees(cal[2])}}
             out["walks"] = [dict(zip(("id", "floor", "source", "kind", "weight", "added"), r)) for r in con.execute(
@@ -511,6 +515,17 @@ class Site:
         finally:
             con.close()
         return out
+
+    def _survey_off_plan(self, con, name: str) -> float:
+        """Fraction of the floor's surveyed fingerprints (weight 1) that are not walkable on the plan
+        as drawn (0 when there is none)."""
+        number, origin = self._floors[name]
+        xy = np.array(con.execute("SELECT x_m, y_m FROM fingerprints WHERE floor = ? AND weight = 1", (name,)).fetchall(),
+                      float).reshape(-1, 2)
+        if xy.shape[0] == 0:
+            return 0.0
+        plan = tables.plan(con, name, number, origin)
+        return float(np.mean(~np.asarray(plan.is_walkable(xy, 0), bool)))
 
     def coverage(self, name: str, cell_m: float = 2.0) -> Dict[str, Any]:
         """Survey coverage of a floor: on a grid of ``cell_m`` cells over the plan, the distance
