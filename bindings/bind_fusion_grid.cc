@@ -172,7 +172,8 @@ A tracker on the same grids whose fixes are evaluated at survey-anchored positio
 (options.fix_survey_distance_factor β) and whose cells near the survey are open
 (options.survey_walkable_radius_m): positions_m (N, 2) [m] the survey (fingerprint reference)
 positions, floor_numbers (N,) their floors, walk_ids (N,) or None the survey walk of each
-(options.survey_walkable_min_walks; None: each position a walk of its own). β = 1 or a floor
+(options.survey_walkable_min_walks; None: each position a walk of its own; negative: a position
+that anchors fixes but opens no cell, e.g. a walk placed by the tracker). β = 1 or a floor
 without positions: the cell centres.)doc")
       .def(
           "with_options",

@@ -266,6 +266,12 @@ def test_survey_opens_the_cells_it_walked_through():
     assert site_model.uses_survey_positions(two)
     assert run(two, one_walk)[1] == z_drawn
     assert run(two, two_walks)[1] == z_opened
+    # Negative walk ids (positions placed by the tracker, not surveyed) anchor but open nothing; so
+    # do fingerprints of weight < 1 in a database (Site.grow).
+    assert run(base.replace(survey_walkable_radius_m=1.0), np.full(42, -1))[1] == z_drawn
+    grown = type("Db", (), {"positions_m": survey, "floors": floors, "walk_index": two_walks, "weights": np.full(42, 0.5)})
+    tracker = site_model.survey_anchored(fusion.GridTracker(plan, base.replace(survey_walkable_radius_m=1.0)), plan, grown)
+    assert fusion.track_grid(tracker, steps, fixes=fixes, smooth=True)["summary"].log_evidence == z_drawn
     tracker = fusion.GridTracker(plan, two)
     with pytest.raises(ValueError, match="walk_ids"):
         tracker.with_survey_positions(survey, floors, one_walk[:-1])

@@ -34,6 +34,9 @@ void grid_ops::ComputeWallFactors(double penalty, int n_sub, double radius_m, in
   std::vector<int> walks(g->size(), 0);
   for (std::size_t k : order) {
     const Eigen::Vector2d& p = g->survey_points[k];
+    // A negative walk id: a position that anchors fixes but opens no cell (a walk placed by the
+    // tracker, not surveyed).
+    if (ids && g->survey_walks[k] < 0) continue;
     const long long walk = ids ? g->survey_walks[k] : -1 - static_cast<long long>(k);
     const double fx = std::floor((p.x() - g->x0) / cell), fy = std::floor((p.y() - g->y0) / cell);
     if (fx < -reach - 1.0 || fx > g->nx + reach + 1.0 || fy < -reach - 1.0 || fy > g->ny + reach + 1.0) continue;

@@ -276,12 +276,13 @@ GridTracker SiteFile::Tracker(const FloorPlan* plan, const std::string& floor) c
   if (positions.rows() == 0) return tracker;
   // The survey walk of each fingerprint (for the cells the survey opens), numbered in order of
   // appearance: the same partition as the Python site's database.
-  Statement s(impl_->db, "SELECT walk FROM fingerprints WHERE floor = ? ORDER BY id", impl_->path);
+  // Fingerprints of walks placed by the tracker (weight < 1, `site grow`) anchor but open no cell.
+  Statement s(impl_->db, "SELECT walk, weight FROM fingerprints WHERE floor = ? ORDER BY id", impl_->path);
   s.Bind(1, floor);
   std::map<std::string, int> number;
   Eigen::VectorXi walks(positions.rows());
   for (Eigen::Index i = 0; s.Step() && i < walks.size(); ++i)
-    walks[i] = number.emplace(s.Text(0), static_cast<int>(number.size())).first->second;
+    walks[i] = s.Double(1) < 1.0 ? -1 : number.emplace(s.Text(0), static_cast<int>(number.size())).first->second;
   return tracker.WithSurveyPositions(positions, Eigen::VectorXi::Constant(positions.rows(), plan->floors()[0]), walks);
 }
 

@@ -253,8 +253,9 @@ def survey_anchored(tracker: GridTracker, plan: Any, database: wifi_fixes.Finger
     """The tracker (on ``plan``) whose fixes are evaluated at survey-anchored positions: the
     fingerprint positions of ``database`` (``GridTrackerOptions.fix_survey_distance_factor``,
     ``GridTracker.with_survey_positions``), with the cells within ``survey_walkable_radius_m`` of
-    the positions of ``survey_walkable_min_walks`` distinct walks open (a database without
-    ``walk_index``: each position a walk of its own); the tracker itself when it reads no survey
+    the positions of ``survey_walkable_min_walks`` distinct surveyed walks open (a database without
+    ``walk_index``: each position a walk of its own; fingerprints of weight < 1, placed by the
+    tracker, anchor but open nothing); the tracker itself when it reads no survey
     position (:func:`uses_survey_positions`). A floor's own database may leave its floor numbers at
     0: on a one-floor plan every position is on its floor."""
     if not uses_survey_positions(tracker.options):
@@ -264,7 +265,12 @@ def survey_anchored(tracker: GridTracker, plan: Any, database: wifi_fixes.Finger
     if len(plan.floors) == 1:
         floors = np.full(positions.shape[0], plan.floors[0], dtype=np.int64)
     walks = getattr(database, "walk_index", None)  # None: each position a walk of its own
-    return tracker.with_survey_positions(positions, floors, None if walks is None else np.asarray(walks, dtype=np.int64))
+    if walks is not None:
+        walks = np.asarray(walks, dtype=np.int64).copy()
+        weights = getattr(database, "weights", None)
+        if weights is not None:  # fingerprints of walks placed by the tracker (Site.grow) open no cell
+            walks[np.asarray(weights, float) < 1.0] = -1
+    return tracker.with_survey_positions(positions, floors, walks)
 
 
 def run_default(tracker: GridTracker, steps: Steps, fixes, smooth: bool = True) -> dict:

@@ -52,7 +52,7 @@ TEST(GridSurveyWalkableTest, WallFactorIsThatOfABruteForce) {
             g.walkable_fraction.push_back(static_cast<float>(static_cast<int>(rng.Uniform(0.0, 10.0)) % 10) / 9.0f);
           for (int i = 0; i < 120; ++i) {
             g.survey_points.emplace_back(rng.Uniform(-8.0, 45.0), rng.Uniform(-5.0, 38.0));
-            if (ids) g.survey_walks.push_back(static_cast<int>(rng.Uniform(0.0, 6.0)));
+            if (ids) g.survey_walks.push_back(static_cast<int>(rng.Uniform(-1.0, 6.0)));  // -1: opens nothing
           }
           // Far off the grid (no cell within reach; no integer overflow).
           g.survey_points.emplace_back(1e12, -3e15);
@@ -67,6 +67,7 @@ TEST(GridSurveyWalkableTest, WallFactorIsThatOfABruteForce) {
               for (std::size_t k = 0; k < g.survey_points.size(); ++k) {
                 const Eigen::Vector2d& p = g.survey_points[k];
                 const double dx = g.x0 + (x + 0.5) * c - p.x(), dy = g.y0 + (y + 0.5) * c - p.y();
+                if (ids && g.survey_walks[k] < 0) continue;
                 if (r > 0 && dx * dx + dy * dy <= r * r) walks.insert(ids ? g.survey_walks[k] : -1 - static_cast<int>(k));
               }
               const float plan = grid_ops::WallFactor(static_cast<int>(std::lround(g.walkable_fraction[i] * 9.0f)),

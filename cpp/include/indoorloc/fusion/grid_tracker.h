@@ -239,7 +239,10 @@ class GridTracker {
   /// keeps the cell centres. With options.survey_walkable_radius_m > 0 the cells within that
   /// radius of a survey position also pay no wall penalty. Throws std::invalid_argument for
   /// non-finite positions or sizes that differ.
-  /// `walk_ids` (N, or empty): the survey walk of each position, for survey_walkable_min_walks.
+  /// `walk_ids` (N, or empty): the survey walk of each position, for survey_walkable_min_walks; a
+  /// negative id marks a position that anchors fixes but opens no cell (a walk placed by the
+  /// tracker rather than surveyed: where it crossed an obstacle is the tracker's choice, not
+  /// evidence against the plan).
   GridTracker WithSurveyPositions(const RowMatrixXd& positions_m, const Eigen::VectorXi& floor_numbers,
                                   const Eigen::VectorXi& walk_ids = Eigen::VectorXi()) const;
   /// A tracker on the same plan and grid with other options: the same results, bit for bit, as
