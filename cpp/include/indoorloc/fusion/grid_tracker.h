@@ -21,7 +21,8 @@
 //             v_k = s² tr(Σ_k)/2 + σ_p² + (s |d_k| δ_h)² / 12     (δ_h: the offset bins' width)
 //   update:   α_k(c) ∝ p_k(c) · m(c) · Π_{fixes j at k} L_j(c)^τ
 //   walls:    m(c) = a(c) + (1 - a(c)) e^{λ}, a(c) the walkable fraction of the cell, λ the
-//             wall log-penalty (-inf: hard walls, shops never entered)
+//             wall log-penalty (-inf: hard walls, shops never entered); m(c) = 1 where the survey
+//             walked through the cell (survey_walkable_radius_m, WithSurveyPositions)
 //   fixes:    L_j(c) = ε / A + (1 - ε) Σ_k w_k N(x_c; μ_k, σ_k² I)  (position_fix.h)
 // The displacement is applied exactly: each layer carries its sub-cell remainder r (|r| < one
 // cell) and shifts by whole cells, so the grid adds no numerical diffusion to the motion; the
