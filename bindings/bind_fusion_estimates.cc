@@ -65,7 +65,10 @@ void GridEstimateFields(ResultBinder<R>& b, Grid grid) {
              "(F,) per floor of the plan.")
       .Field("heading_offset_rad", [grid](const R& r) { return grid(r).heading_offset_rad; },
              "Posterior circular mean of the heading offset [rad].")
-      .Field("log_evidence", [grid](const R& r) { return grid(r).log_evidence; }, "log p(fixes so far | steps so far).");
+      .Field("log_evidence", [grid](const R& r) { return grid(r).log_evidence; }, "log p(fixes so far | steps so far).")
+      .Field("fixes", [grid](const R& r) { return grid(r).fixes; }, "Fixes applied so far.")
+      .Field("located", [grid](const R& r) { return grid(r).located; },
+             "A known start or at least one fix applied; False: the unknown start's prior (not a position).");
 }
 
 void BindGridFilterEstimate(py::module_& m) {

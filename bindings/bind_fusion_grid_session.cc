@@ -98,7 +98,8 @@ Add a step: time_s [s], displacement_m (2,) [m] in the PDR frame, covariance_m2 
 [m²]; applies the pending fixes with time <= time_s. Returns the estimate after it: a GridFilterEstimate with
 time_s, steps, mean_m (2,) [m], covariance_m2 (3,) [m²] (calibrated as GridTracker.run's),
 posterior_covariance_m2 (3,), fix_distance_m, fix_sd_m, floor_probabilities (F,), heading_offset_rad,
-log_evidence. ValueError for a step before the previous step or fix;
+log_evidence, fixes (applied so far), located (a known start or a fix applied: else the unknown start's
+prior, not a position). ValueError for a step before the previous step or fix;
 RuntimeError when every hypothesis is ruled out (hard walls).)doc")
       .def(
           "add_steps",
@@ -108,6 +109,7 @@ RuntimeError when every hypothesis is ruled out (hard walls).)doc")
             const Eigen::Index m = static_cast<Eigen::Index>(st.size());
             RowMatrixXd mean(m, 2), cov(m, 3), posterior(m, 3), floors;
             Eigen::VectorXd heading(m);
+            std::vector<bool> located(static_cast<std::size_t>(m));
             {
               py::gil_scoped_release release;
               for (Eigen::Index k = 0; k < m; ++k) {
@@ -118,6 +120,7 @@ RuntimeError when every hypothesis is ruled out (hard walls).)doc")
                 posterior.row(k) = e.posterior_covariance_m2.transpose();
                 floors.row(k) = e.floor_probabilities.transpose();
                 heading[k] = e.heading_offset_rad;
+                located[static_cast<std::size_t>(k)] = e.located;
               }
             }
             py::dict d;
@@ -126,11 +129,14 @@ RuntimeError when every hypothesis is ruled out (hard walls).)doc")
             d["posterior_covariance_m2"] = posterior;
             d["floor_probabilities"] = floors;
             d["heading_offset_rad"] = heading;
+            py::array_t<bool> located_out(static_cast<py::ssize_t>(m));
+            for (Eigen::Index k = 0; k < m; ++k) located_out.mutable_at(k) = located[static_cast<std::size_t>(k)];
+            d["located"] = located_out;
             return d;
           },
           py::arg("step_times_s"), py::arg("displacements_m"), py::arg("covariances_m2"),
           "Add several steps (arrays as GridTracker.run); returns per step mean_m (M, 2), covariance_m2 (M, 3), "
-          "floor_probabilities (M, F), heading_offset_rad (M,).")
+          "floor_probabilities (M, F), heading_offset_rad (M,), located (M,) bool (GridFilterEstimate.located).")
       .def(
           "estimate",
           [](const GridFilterSession& s) -> py::object {

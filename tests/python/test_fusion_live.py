@@ -59,6 +59,11 @@ def _assert_replay_equals_batch(tracker, walk, cal, db, **kw):
     np.testing.assert_array_equal(np.array([e.covariance_m2 for e in out]), batch["covariance_m2"])
     np.testing.assert_array_equal(np.array([e.floor_probabilities for e in out]), batch["floor_probabilities"])
     np.testing.assert_array_equal([e.heading_offset_rad for e in out], batch["heading_offset_rad"])
+    # located: False until the first fix is applied (an unknown start's prior is not a position),
+    # the same per step live and in the batch.
+    np.testing.assert_array_equal([e.located for e in out], batch["located"])
+    assert all((e.fixes > 0) == e.located for e in out)
+    assert [e.fixes for e in out] == sorted(e.fixes for e in out)
     # Every fix the batch used was applied live (the later ones wait for a step).
     assert lt.session.summary.fixes == batch["summary"].fixes
     return batch, lt
@@ -88,6 +93,7 @@ def test_session_equals_batch_filter_and_refuses_out_of_order_events():
             j += 1
         e = session.add_step(t[k], steps.displacements_m[k], steps.covariances_m2[k])
         assert e.steps == k + 1
+        assert e.fixes == j and e.located == (j > 0)
         np.testing.assert_array_equal(e.mean_m, batch["mean_m"][k])
         np.testing.assert_array_equal(e.covariance_m2, batch["covariance_m2"][k])
         np.testing.assert_array_equal(e.floor_probabilities, batch["floor_probabilities"][k])
@@ -106,6 +112,12 @@ def test_session_equals_batch_filter_and_refuses_out_of_order_events():
         s2.add_step(t[2], steps.displacements_m[2], steps.covariances_m2[2])
     got4 = s2.add_steps(steps.times_s[3:4], steps.displacements_m[3:4], steps.covariances_m2[3:4])
     np.testing.assert_array_equal(np.vstack([got["mean_m"], got4["mean_m"]]), batch["mean_m"][:4])
+    np.testing.assert_array_equal(np.r_[got["located"], got4["located"]], [False, False, False, True])
+    # A known start is a position from the first step, with no fix.
+    known = fusion.GridFilterSession(tracker, {"position_m": [10.0, 12.0], "floor": 0, "heading_offset_rad": 0.0,
+                                               "time_s": t[1]})
+    assert all(known.add_step(t[k], steps.displacements_m[k], steps.covariances_m2[k]).located for k in range(4))
+    assert known.estimate().fixes == 0
 
 
 # ------------------------------------------------------------------ step detector

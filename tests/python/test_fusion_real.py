@@ -98,11 +98,17 @@ def test_cli_writes_the_json_contract_and_plots(two_floor_site, tmp_path, monkey
         # Issue 15's names stay; the keys added beside them are documented in docs/fusion_real.md.
         assert {"mean_m", "median_m", "p90_m", "n_waypoints"} <= set(stats)
         assert set(stats) - {"mean_m", "median_m", "p90_m", "n_waypoints"} <= {
-            "first_10s_mean_m", "by_coverage", "region95_coverage", "offset_error_deg"}
+            "first_10s_mean_m", "by_coverage", "region95_coverage", "offset_error_deg", "first_position"}
         assert all(math.isfinite(stats[k]) for k in ("mean_m", "median_m", "p90_m"))
         assert set(stats["by_coverage"]) == {"within_5m", "5_to_10m", "beyond_10m"}
     smoother = data["methods"]["fusion_smoother"]
     assert 0.0 <= smoother["region95_coverage"] <= 1.0
+    # The live tracker: scored from its first located estimate, which comes after the first waypoint.
+    first = data["methods"]["fusion_live"]["first_position"]
+    assert set(first) == {"median_s", "p90_s", "max_s", "waypoints_before", "walks_never_located"}
+    assert 0.0 < first["median_s"] <= first["p90_s"] <= first["max_s"] and first["waypoints_before"] >= 1
+    assert first["walks_never_located"] == 0   # every synthetic walk has scans
+    assert data["methods"]["fusion_live"]["n_waypoints"] == data["methods"]["fusion_unknown_start"]["n_waypoints"]
     assert smoother["offset_error_deg"]["n_walks"] >= 1
     # Per walk, the final offset beside the residual; the mean |difference| is offset_error_deg's.
     rows = [r for r in data["heading_offsets"] if "fusion_smoother" in r["final_deg"]]

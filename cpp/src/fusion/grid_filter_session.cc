@@ -168,6 +168,8 @@ GridFilterEstimate GridFilterSession::AddStep(const StepInput& step) {
     e.floor_probabilities[s.start_floor_index] = 1.0;
     e.heading_offset_rad = s.start.heading_offset_rad;
     e.log_evidence = 0.0;
+    e.fixes = s.summary.fixes;
+    e.located = true;
     s.summary.seconds += timer.ElapsedSeconds();
     return e;
   }
@@ -277,6 +279,8 @@ GridFilterEstimate GridFilterSession::AddStep(const StepInput& step) {
   }
   e.heading_offset_rad = std::atan2(sn, cs);
   e.log_evidence = mx + std::log(total);
+  e.fixes = s.summary.fixes;
+  e.located = s.start.known || e.fixes > 0;
   s.summary.log_evidence = e.log_evidence;
   s.summary.seconds += timer.ElapsedSeconds();
   return e;

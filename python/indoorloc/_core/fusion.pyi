@@ -302,6 +302,8 @@ class _GridEstimateFields(_Result):
     floor_probabilities: _F64
     heading_offset_rad: float
     log_evidence: float
+    fixes: int
+    located: bool
 
 class GridFilterEstimate(_GridEstimateFields):
     pass

@@ -25,6 +25,7 @@ METHODS = (
     "pdr_only",
     "peer_costmin",
     "fusion_unknown_start",
+    "fusion_live",
     "fusion_known_start",
     "fusion_smoother",
     "fusion_no_walls",
@@ -35,7 +36,7 @@ METHODS = (
     "particle_known_start",
 )
 #: Methods whose estimate comes with a covariance: the 95 % region's coverage is reported.
-COVARIANCE_METHODS = ("fusion_unknown_start", "fusion_smoother", "fusion_known_start", "particle_unknown_start",
+COVARIANCE_METHODS = ("fusion_unknown_start", "fusion_live", "fusion_smoother", "fusion_known_start", "particle_unknown_start",
                       "particle_smoother")
 
 #: The default method (unknown start + smoother): the objective of ``--select`` and the method
@@ -186,6 +187,10 @@ class WalkScore:
     waypoint_t0: float = 0.0                          #: the first waypoint's time [s]
     waypoint_xy_m: Optional[np.ndarray] = None        #: surveyed waypoints (W, 2) [m]
     smoothed_track_m: Optional[np.ndarray] = None     #: the default's smoothed track (per step)
+    #: fusion_live: time from the first waypoint to the live tracker's first located estimate [s]
+    #: (None: never located, or not run) and the waypoints before it (scored with that estimate).
+    live_first_position_s: Optional[float] = None
+    live_waypoints_before_position: int = 0
     #: Per grid method: what the covariance calibration is fitted on (``fusion_uncertainty``):
     #: ``error_m`` (W, 2) estimate minus truth, ``posterior_covariance_m2`` (W, 3), ``fix_distance_m`` (W,),
     #: ``fix_sd_m`` (W,).

@@ -91,6 +91,15 @@ def summarize(scores: Sequence[WalkScore], settings: RealSettings, seconds: floa
         v = [s.seconds[name] for s in scores if name in s.seconds]
         if v:
             walk_seconds[name] = float(np.mean(v))
+    live_walks = [s for s in scores if "fusion_live" in s.errors_m]
+    if "fusion_live" in methods and live_walks:
+        first = np.array([s.live_first_position_s for s in live_walks], float)
+        methods["fusion_live"]["first_position"] = {
+            "median_s": float(np.median(first)), "p90_s": float(np.percentile(first, 90)),
+            "max_s": float(first.max()),
+            "waypoints_before": int(sum(s.live_waypoints_before_position for s in live_walks)),
+            "walks_never_located": int(sum(1 for s in scores if "fusion_unknown_start" in s.errors_m
+                                           and "fusion_live" not in s.errors_m))}
     out = {"methods": methods, "waypoints": rows, "settings": settings.to_dict(), "per_floor": per_floor,
            "error_vs_time": by_time, "seconds": round(seconds, 2), "mean_seconds_per_walk": walk_seconds}
     # Per walk: the final heading offset of each method with an offset state against the walk's
@@ -142,6 +151,12 @@ def markdown(result: dict) -> str:
                   "| method | " + " | ".join(heads) + " |", "|---|" + "---|" * len(heads)]
         for name, bs in result["error_vs_time"].items():
             lines.append(f"| {name} | " + " | ".join("-" if b["mean_m"] is None else f"{b['mean_m']:.1f}" for b in bs) + " |")
+    fp = result["methods"].get("fusion_live", {}).get("first_position")
+    if fp:
+        lines += ["", f"Live tracker (fusion_live: causal steps, each WiFi fix applied when its scan exists): first "
+                  f"position {fp['median_s']:.1f} s after the walk's first waypoint (median; p90 {fp['p90_s']:.1f} s, "
+                  f"max {fp['max_s']:.1f} s); the {fp['waypoints_before']} waypoints before it are scored with that "
+                  f"first position; {fp['walks_never_located']} walks never located (not scored)."]
     fi = result.get("floor_identification")
     if fi:
         lines += ["", f"Floor identification (floor not given, {SELECT_OBJECTIVE} on all floors' plans and fixes): "

@@ -14,7 +14,7 @@ import numpy as np
 
 from indoorloc import fusion, wifi
 from indoorloc.fusion import crowdsourced_map as wc, wifi_fixes as wfx
-from indoorloc.fusion import site_model, wifi_sequence
+from indoorloc.fusion import live, site_model, wifi_sequence
 from indoorloc.pdr import handheld as ph
 from indoorloc.experiments.fusion_real_settings import COVARIANCE_METHODS, FoldModels, RealSettings, WalkScore
 
@@ -200,6 +200,8 @@ def _score_walk(walk, steps_raw: ph.HandheldSteps, models: FoldModels, settings:
             score.offset_error_rad[smoothed] = _wrap(float(np.asarray(result["heading_offset_rad"])[-1]) - residual)
     if not particle:
         _score_walk_grid(score, put, pdr_steps, fixes, known_fixes, known, models, settings, want, residual)
+        if "fusion_live" in want:
+            _score_walk_live(score, put, walk, models, settings)
     if settings.floor_identification and models.all_plan is not None and "fusion_smoother" in want:
         _identify_floor(score, walk, steps_raw, pdr_steps, models, settings, options, smoother)
     return score
@@ -308,6 +310,37 @@ def _identification_options(settings: RealSettings, spread_rad: float):
     # Only the run's evidence per floor is scored (its track is used where the floor is wrong, and
     # such waypoints are not scored): no spatial median, whose double sums cost as much as the run.
     return site_model.identification_grid_options(settings.track_settings(), spread_rad, False)
+
+
+def _score_walk_live(score: WalkScore, put, walk, models: FoldModels, settings: RealSettings) -> None:
+    """fusion_live: the live tracker (``Site.live()``) replayed, i.e. ``fusion.live.causal_track`` on
+    the fold's models and the default's tracker: causal steps, each WiFi fix applied when its scan
+    exists (not at the earlier mean last-seen time of its readings, as fusion_unknown_start). Its
+    estimates from the first located one on (``LiveEstimate.located``: before the first fix an unknown
+    start's estimate is the prior's mean, not a position); waypoints before it are scored with that
+    first position and counted (``live_waypoints_before_position``). A walk never located is not
+    scored."""
+    fl = models.floor
+    wt = score.t_s + score.waypoint_t0
+    wxy = score.waypoint_xy_m
+    tic = time.perf_counter()
+    tracker = _grid_tracker(fl.plan, _grid_options(settings, max(models.cal.yaw_offset_spread_rad, 1e-3)),
+                            fl.name, models.database)
+    r = live.causal_track(tracker, walk, models.cal, models.database,
+                          step_length_sd_fraction=settings.step_length_sd_fraction,
+                          step_heading_sd_rad=settings.step_heading_sd_rad)
+    located = np.asarray(r["located"], bool)
+    if not located.any():
+        return
+    k0 = int(np.argmax(located))
+    t = np.asarray(r["times_s"], float)[k0:]
+    est = _interp_track(wt, t, np.asarray(r["mean_m"], float)[k0:])
+    put("fusion_live", est)
+    score.seconds["fusion_live"] = time.perf_counter() - tic
+    score.live_first_position_s = float(t[0] - wt[0])
+    score.live_waypoints_before_position = int(np.sum(wt < t[0]))
+    idx = np.clip(np.searchsorted(t, wt), 0, t.size - 1)
+    score.in_region95["fusion_live"] = fusion.region95_contains(est, np.asarray(r["covariance_m2"])[k0:][idx], wxy)
 
 
 def _score_walk_grid(score: WalkScore, put, pdr_steps, fixes, known_fixes, known: dict, models: FoldModels,

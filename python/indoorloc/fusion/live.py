@@ -28,8 +28,12 @@ What happens to each event (docs/fusion.md, "Live tracking"):
 
 Every method returns the current estimate (a ``fusion.LiveEstimate``, read-only attributes:
 ``time_s``, ``steps``, ``mean_m`` (2,), ``covariance_m2`` (3,) = (xx, xy, yy),
-``floor_probabilities`` (F,), ``floors`` (F,) floor numbers, ``floor``, ``heading_offset_rad``, ...;
-``to_dict()`` gives them as a dict), or None before the first step. Events must come in
+``floor_probabilities`` (F,), ``floors`` (F,) floor numbers, ``floor``, ``heading_offset_rad``,
+``fixes`` (applied so far), ``located``, ...; ``to_dict()`` gives them as a dict), or None before the
+first step. **``located`` is False until the first fix is applied** (unknown start): the estimate is
+then the prior's, the mean of the floor's walkable area with a covariance the size of the floor, not
+a position; an app shows "locating" rather than that point. On the shared site the first fix comes
+2.3 s (median; p90 3.5 s) after a walk's first waypoint (`indoorloc fusion evaluate`, ``fusion_live``). Events must come in
 non-decreasing time: otherwise ValueError naming the event's index, type and both times, and the
 tracker is unchanged.
 
@@ -171,9 +175,19 @@ def causal_track(tracker: GridTracker, walk: Any, calibration: Optional[ph.Handh
                                  step_heading_sd_rad=step_heading_sd_rad, with_floors=with_floors,
                                  delay_compensation=delay_compensation)
     if len(steps) == 0:
-        return {"times_s": np.zeros(0), "mean_m": np.zeros((0, 2)), "covariance_m2": np.zeros((0, 3))}
+        return {"times_s": np.zeros(0), "mean_m": np.zeros((0, 2)), "covariance_m2": np.zeros((0, 3)),
+                "located": np.zeros(0, bool)}
     arrays = None if fixes is None or len(fixes) == 0 else fixes.as_arrays()
-    return tracker.run(steps.times_s, steps.displacements_m, steps.covariances_m2, arrays, start, False)
+    out = tracker.run(steps.times_s, steps.displacements_m, steps.covariances_m2, arrays, start, False)
+    # LiveEstimate.located per step: a known start, or a fix applied (a fix at time t is applied at
+    # the first step at or after t).
+    if start is not None:
+        out["located"] = np.ones(len(steps), bool)
+    elif arrays is None:
+        out["located"] = np.zeros(len(steps), bool)
+    else:
+        out["located"] = np.asarray(steps.times_s) >= float(np.min(fixes.times_s))
+    return out
 
 
 def session_options(calibration: Optional[ph.HandheldCalibration] = None, *,

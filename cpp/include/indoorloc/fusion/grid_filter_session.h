@@ -53,6 +53,11 @@ struct GridFilterEstimate {
   Eigen::VectorXd floor_probabilities;     ///< per floor of the plan (F)
   double heading_offset_rad = 0;           ///< posterior circular mean of the heading offset
   double log_evidence = 0;                 ///< log p(fixes so far | steps so far), over all layers
+  int fixes = 0;                           ///< fixes applied so far
+  /// Whether the estimate rests on evidence of where the walker is: a known start, or at least one
+  /// fix applied. Before that an unknown start's estimate is the prior's (the mean of the walkable
+  /// area, a covariance the size of the floor): not a position, and an app should not show it.
+  bool located = false;
 };
 
 class GridFilterSession {
