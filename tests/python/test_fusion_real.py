@@ -180,8 +180,74 @@ def test_default_floors_are_every_floor_of_the_site(two_floor_site, tmp_path, mo
 def test_missing_site_and_floor_are_clear_errors(tmp_path, two_floor_site):
     with pytest.raises(FileNotFoundError, match="data_root"):
         fr.evaluate(tmp_path / "nowhere", ["F1"])
-    with pytest.raises(FileNotFoundError, match="floors"):
+    with pytest.raises(ValueError, match=r"argument 'floors': \['F9'\] not in .*floors: \['F1', 'F2'\]"):
         fr.evaluate(two_floor_site, ["F9"])
+
+
+def _kaggle_layout(site, root, floors, plans=None):
+    """The ILC 2020 site's walks laid out as the Kaggle 2021 data (symlinks): walks in
+    ``root/train/site3/FLOOR/*.txt``, plans in ``root/metadata/site3/FLOOR/`` (for ``plans``,
+    default every floor)."""
+    for name in floors:
+        walks = root / "train" / "site3" / name
+        walks.mkdir(parents=True)
+        for p in sorted((site / name / "path_data_files").glob("*.txt")):
+            (walks / p.name).symlink_to(p)
+        if name in (floors if plans is None else plans):
+            plan = root / "metadata" / "site3" / name
+            plan.mkdir(parents=True)
+            for f in ("geojson_map.json", "floor_info.json"):
+                (plan / f).symlink_to(site / name / f)
+    (root / "metadata").mkdir(exist_ok=True)
+    return root
+
+
+def test_kaggle_layout_evaluates_as_the_ilc_layout(two_floor_site, tmp_path, monkeypatch):
+    """The same walks and plans laid out as Kaggle 2021 (plans apart from the walks): ``fusion
+    evaluate --data-root ROOT`` finds the floor and gives exactly the figures of the ILC layout."""
+    kaggle = _kaggle_layout(two_floor_site, tmp_path / "kaggle", ["F1"])
+    # ROOT of a one-site folder and ROOT/train/SITE are the same site.
+    for root in (kaggle, kaggle / "train" / "site3"):
+        _, (sf,) = fr.site_floors(root, ())
+        assert (sf.name, sf.number, sf.floor_dir, sf.plan_dir) == (
+            "F1", 1, kaggle / "train" / "site3" / "F1", kaggle / "metadata" / "site3" / "F1")
+        assert sf.open().width_m is not None and sf.open().geojson_path == sf.plan_dir / "geojson_map.json"
+    ilc = fr.evaluate(two_floor_site, ["F1"], fr.RealSettings(**FAST))
+    monkeypatch.setattr(fr, "RealSettings", _fast_settings)
+    out = tmp_path / "k.json"
+    assert cli.main(["fusion", "evaluate", "--data-root", str(kaggle), "--folds", "2", "--json", str(out),
+                     "--quiet"]) == 0  # no --floors: every floor of the site (here F1)
+    got = json.loads(out.read_text())
+    expected = json.loads(json.dumps(ilc))  # as the CLI writes it (tuples as lists)
+    assert got["methods"]["fusion_smoother"]["n_waypoints"] > 0
+    for key in ("methods", "per_floor", "waypoints", "heading_offsets", "loader"):
+        assert got[key] == expected[key], key
+
+
+def test_floor_without_plan_is_skipped_unless_named(two_floor_site, tmp_path, monkeypatch, capsys):
+    """A floor folder with walks but no geojson_map.json: skipped with a RecordingWarning naming it
+    when the floors are not named, an error naming it when it is named (as ``site build``)."""
+    from indoorloc.io.errors import RecordingWarning
+
+    kaggle = _kaggle_layout(two_floor_site, tmp_path / "kaggle", ["F1", "F2"], plans=["F1"])
+    with pytest.warns(RecordingWarning, match=r"argument 'data_root': floor F2 skipped: 6 walk file\(s\) .*"
+                                              r"no floor plan .*metadata/site3/F2/geojson_map.json"):
+        _, found = fr.site_floors(kaggle, ())
+    assert [sf.name for sf in found] == ["F1"]
+    with pytest.raises(ValueError, match=r"argument 'data_root': floor F2: no floor plan .*site3/F2/geojson_map"):
+        fr.site_floors(kaggle, ["F2"])
+    seen = []
+    monkeypatch.setattr(fr, "evaluate", lambda root, floors, *a, **k: seen.append(list(floors)) or {})
+    monkeypatch.setattr(fr, "markdown", lambda result: "table")
+    with pytest.warns(RecordingWarning, match="floor F2 skipped"):
+        assert cli.main(["fusion", "evaluate", "--data-root", str(kaggle), "--quiet"]) == 0
+    assert seen == [["F1"]]
+    assert cli.main(["fusion", "evaluate", "--data-root", str(kaggle), "--floors", "F2", "--quiet"]) == 2
+    assert "error: indoorloc: argument 'data_root': floor F2: no floor plan" in capsys.readouterr().err
+    # No floor with a plan at all: the error says which floors lack one.
+    bare = _kaggle_layout(two_floor_site, tmp_path / "bare", ["F1"], plans=[])
+    with pytest.warns(RecordingWarning), pytest.raises(ValueError, match=r"no floor folder .*floors without a plan"):
+        fr.site_floors(bare, ())
 
 
 def test_leave_one_walk_out_scores_every_walk_once(two_floor_site, tmp_path, monkeypatch):

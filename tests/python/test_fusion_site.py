@@ -139,9 +139,18 @@ def test_leave_one_walk_out_and_auto_floor(built):
 
 def test_kaggle_layout(tmp_path, floor_dir):
     from indoorloc.fusion.site import Site
+    from indoorloc.io.errors import RecordingWarning
 
     paths = _walk_paths(floor_dir)[:2]
-    site = Site.build(_survey(tmp_path, floor_dir, paths, kaggle=True), tmp_path / "k.db")
+    survey = _survey(tmp_path, floor_dir, paths, kaggle=True)
+    # A floor folder with walks but no plan in metadata/: skipped with a warning naming it (as
+    # fusion evaluate does, one function: survey_floors), an error when it is named.
+    (survey / "train" / "site2" / "F9").mkdir()
+    (survey / "train" / "site2" / "F9" / paths[0].name).symlink_to(paths[0])
+    with pytest.raises(ValueError, match=r"argument 'survey_dir': floor F9: no floor plan"):
+        Site.build(survey, tmp_path / "k.db", floors=["F9"])
+    with pytest.warns(RecordingWarning, match="floor F9 skipped: 1 walk file"):
+        site = Site.build(survey, tmp_path / "k.db")
     info = site.info()
     assert list(info["floors"]) == [FLOOR]
     assert info["floors"][FLOOR]["walks"] == 2 and info["floors"][FLOOR]["fingerprints"] > 0

@@ -205,6 +205,45 @@ def test_floor_folders_in_building_order_and_the_kaggle_layout(tmp_path):
         ilc_floor_names(site / "none")
 
 
+def test_plan_dir_and_survey_floors_of_both_layouts(tmp_path):
+    """The plan files in another folder than the walks (Kaggle 2021's metadata/), and
+    survey_floors giving each floor's walk and plan folders in either layout."""
+    from indoorloc.io.survey_layout import survey_floors
+
+    site = write_site(tmp_path)
+    ilc = survey_floors(site)
+    assert [(f.name, f.number) for f in ilc] == [("B1", -1), ("F1", 1)]
+    assert ilc[1].floor_dir == ilc[1].plan_dir == site / "F1"
+    assert ilc[1].open().walk_ids == read_ilc_floor(site / "F1").walk_ids
+    # Kaggle 2021: ROOT/train/SITE/F1/*.txt, ROOT/metadata/SITE/F1/{floor_info,geojson_map}.json
+    root = tmp_path / "kaggle"
+    walks, plans = root / "train" / "site9" / "F1", root / "metadata" / "site9" / "F1"
+    walks.mkdir(parents=True)
+    plans.mkdir(parents=True)
+    for p in (site / "F1" / "path_data_files").glob("*.txt"):
+        (walks / p.name).write_bytes(p.read_bytes())
+    for name in ("floor_info.json", "geojson_map.json"):
+        (plans / name).write_bytes((site / "F1" / name).read_bytes())
+    (kaggle,) = survey_floors(root, argument="data_root")
+    assert (kaggle.floor_dir, kaggle.plan_dir, kaggle.number) == (walks, plans, 1)
+    f = kaggle.open()
+    assert f.plan_dir == plans and f.walk_ids == ["walk01", "walk02"]
+    assert f.width_m == pytest.approx(236.71181213998395) and f.origin_lonlat() == (LON0, LAT0)
+    assert read_ilc_floor(walks).geojson_path is None  # without plan_dir: the walks' folder only
+    with pytest.raises(ValueError, match="argument 'data_root': folder not found"):
+        survey_floors(tmp_path / "none", argument="data_root")
+    # Errors about the plan files name plan_dir.
+    with pytest.raises(ValueError, match="argument 'plan_dir': no folder"):
+        read_ilc_floor(walks, plan_dir=tmp_path / "none")
+    empty = tmp_path / "empty_plans"
+    empty.mkdir()
+    with pytest.raises(ValueError, match=r"argument 'plan_dir': no geojson_map.json in .*empty_plans"):
+        read_ilc_floor(walks, plan_dir=empty).origin_lonlat()
+    (empty / "floor_info.json").write_text('{"map_info": {"width": 10}}')
+    with pytest.raises(FormatError, match=r"argument 'plan_dir': .*floor_info.json: expected"):
+        read_ilc_floor(walks, plan_dir=empty)
+
+
 # ------------------------------------------------------------------ the shared site
 # Per floor of the shared site, counted with grep on the files (e.g. grep -c $'\tTYPE_WIFI\t'):
 # walks, waypoints, samples per sensor type, WiFi readings, iBeacon readings, and the loader's

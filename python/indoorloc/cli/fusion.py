@@ -53,7 +53,6 @@ def _json_grid(text: str) -> dict:
 def cmd_evaluate(args: argparse.Namespace) -> int:
     from indoorloc import progress
     from indoorloc.experiments import fusion_real as fr
-    from indoorloc.io import ilc_floor_names
 
     # --lowo: leave one walk out (folds = 0); floor identification is then skipped (it would
     # rebuild every floor's database once per walk).
@@ -65,10 +64,10 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
                          "(not with --select or --lowo)")
     settings = fr.RealSettings(folds=0 if args.lowo else args.folds, seed=seeds[0], threads=args.threads,
                                floor_identification=not args.lowo)
-    root = Path(args.data_root) if args.data_root else fr.default_site_root()
-    if not root.is_dir():
-        raise FileNotFoundError(f"indoorloc: argument 'data_root': {root} is not a folder of ILC floors")
-    floors = args.floors or ilc_floor_names(root, with_plan=True, argument="data_root")
+    # The site's floors (either competition layout), checked before any work: those named, or
+    # every floor folder with walks and a plan (one without a plan is skipped with a warning).
+    root, found = fr.site_floors(args.data_root, args.floors)
+    floors = [sf.name for sf in found]
     if args.select_grid is not None and not args.select:
         raise ValueError("indoorloc: argument '--select-grid': only with --select (the grid of the "
                          "leave-one-floor-out choice); without it nothing would be selected")
@@ -145,11 +144,16 @@ def add_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
     s.add_argument("--json", default=None, help="write the JSON summary here")
     s.set_defaults(func=cmd_synthetic)
     e = fsub.add_parser("evaluate", parents=[quiet_parent()],
-                        help="real phone walks (ILC 2020 layout): k-fold by walk, every method scored at the waypoints")
-    e.add_argument("--data-root", default=None, help="site folder with one sub-folder per floor (default: shared data)")
+                        help="real phone walks (ILC 2020 or Kaggle 2021 layout): k-fold by walk, every method "
+                             "scored at the waypoints")
+    e.add_argument("--data-root", default=None,
+                   help="a site's survey folder (default: shared data): ILC 2020 SITE (SITE/FLOOR/path_data_files/*.txt "
+                        "beside SITE/FLOOR/geojson_map.json), or Kaggle 2021 ROOT/train/SITE or a one-site ROOT "
+                        "(walks ROOT/train/SITE/FLOOR/*.txt, plans ROOT/metadata/SITE/FLOOR/)")
     e.add_argument("--floors", nargs="+", default=None,
-                   help="floor folders to evaluate (default: every floor folder under --data-root, i.e. one holding "
-                        "path_data_files/ or *.txt walks plus geojson_map.json, in building order B2, B1, F1, F2, ...)")
+                   help="floor folders to evaluate (default: every floor folder with walk files and a floor plan "
+                        "geojson_map.json, in building order B2, B1, F1, F2, ...; one with walks but no plan is "
+                        "skipped with a warning, an error when named here)")
     e.add_argument("--folds", type=int, default=4, help="k of the k-fold by walk within each floor")
     e.add_argument("--lowo", action="store_true",
                    help="leave one walk out instead of k-fold (no floor identification)")

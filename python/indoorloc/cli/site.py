@@ -177,7 +177,8 @@ def add_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
                              "2021 train/SITE/FLOOR + metadata/SITE/FLOOR) from its walks with waypoints (others skipped, listed)")
     b.add_argument("survey_dir")
     b.add_argument("-o", "--output", required=True, help="the site file to write (replaced only on success)")
-    b.add_argument("--floors", nargs="+", default=None, help="floor folders (default: all, in building order)")
+    b.add_argument("--floors", nargs="+", default=None, help="floor folders (default: every floor folder with walks and a plan, in "
+                   "building order; one with walks but no plan is skipped with a warning, an error when named here)")
     b.add_argument("--coverage", default=None, metavar="DIR",
                    help="folder of the coverage map PNGs (default: SITE_coverage beside the site file)")
     b.add_argument("--no-coverage", action="store_true", help="no coverage maps")

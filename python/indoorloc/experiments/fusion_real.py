@@ -58,15 +58,16 @@ import numpy as np
 from indoorloc import fusion
 from indoorloc.fusion import wifi_fixes as wfx
 from indoorloc.pdr import handheld as ph
-from indoorloc.io import read_ilc_floor
 from indoorloc.experiments.fusion_real_settings import (  # noqa: F401  (re-exported)
     COVARIANCE_METHODS, FLOORS, METHODS, SELECT_OBJECTIVE, FloorData, FoldModels, RealSettings, WalkScore,
-    default_site_root, floor_number)
+    default_site_root)
+from indoorloc.io.survey_layout import floor_number  # noqa: F401  (re-exported)
 from indoorloc.experiments.fusion_real_walk import (  # noqa: F401  (re-exported)
     _TRACKERS, _TRACKERS_LOCK, _grid_options, _grid_tracker, _identification_options, _interp_track, _nearest_rows,
     _score_walk, _score_walk_grid, _walkable_start, _wrap, heading_residual_rad, replace_options)
 from indoorloc.experiments.fusion_real_folds import (  # noqa: F401  (re-exported)
-    _all_floor_plan, _fold_models, _folds, _peer, evaluate_floors, load_floor, load_site)
+    _all_floor_plan, _fold_models, _folds, _peer, evaluate_floors, load_floor, load_site, site_floors,
+    survey_floor_data)
 from indoorloc.experiments.fusion_real_summary import (  # noqa: F401  (re-exported)
     COVERAGE_CLASSES, TIME_BINS_S, _extra_stats, _stats, markdown, summarize)
 from indoorloc.experiments.fusion_real_select import (  # noqa: F401  (re-exported)
@@ -126,7 +127,8 @@ def walk_snapshot(data_root: Optional[Path], floor: str, walk_index: int = 0,
     and its extent [m], plan edges, surveyed waypoints, WiFi fix centres, PDR from the first
     waypoint, the smoothed track from the unknown start and its FFBSi trajectories."""
     settings = replace(settings or RealSettings(), floor_identification=False)
-    root, (fl,) = load_site(data_root, [floor])
+    _, (survey,) = site_floors(data_root, [floor])
+    fl = survey_floor_data(survey)
     if not 0 <= walk_index < len(fl.walks):
         raise ValueError(f"indoorloc: argument 'walk_index': {walk_index} is not in [0, {len(fl.walks)})")
     k = settings.folds if settings.folds > 0 else len(fl.walks)
@@ -155,7 +157,7 @@ def walk_snapshot(data_root: Optional[Path], floor: str, walk_index: int = 0,
                                                               seed=settings.seed))
     t_pdr = np.r_[wt[0], steps.t_s]
     pdr = ph.pdr_track(steps, wxy[0], t_pdr, yaw_offset_rad=models.cal.yaw_offset_rad)
-    info = read_ilc_floor(root / floor)
+    info = survey.open()
     extent = (0.0, info.width_m, 0.0, info.height_m) if info.width_m and info.height_m else None
     return {"floor": floor, "walk": walk.walk_id, "image_path": str(info.image_path) if info.image_path else None,
             "extent_m": extent, "edges_m": np.asarray(fl.plan.edges(0)), "waypoints_m": wxy, "waypoint_t_s": wt - wt[0],

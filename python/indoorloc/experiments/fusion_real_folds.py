@@ -15,9 +15,10 @@ from indoorloc import fusion, wifi
 from indoorloc.fusion import crowdsourced_map as wc, wifi_fixes as wfx
 from indoorloc.fusion import site_model
 from indoorloc.pdr import handheld as ph
-from indoorloc.io import ilc_floor_names, load_floor_plan, read_ilc_floor
+from indoorloc.io import load_floor_plan
+from indoorloc.io.survey_layout import SurveyFloor, survey_floors
 from indoorloc.experiments.fusion_real_settings import (METHODS, FloorData, FoldModels, RealSettings, WalkScore,
-                                                        default_site_root, floor_number)
+                                                        default_site_root)
 from indoorloc.experiments.fusion_real_walk import _score_walk
 
 
@@ -35,9 +36,16 @@ def _folds(n: int, k: int, seed: int) -> List[np.ndarray]:
 
 
 def load_floor(root: Path, name: str) -> FloorData:
+    """Floor ``name`` of the site folder ``root`` (either competition layout,
+    :func:`indoorloc.io.survey_layout.survey_floors`): see :func:`survey_floor_data`."""
+    (survey,) = survey_floors(Path(root), [name], argument="data_root")
+    return survey_floor_data(survey)
+
+
+def survey_floor_data(survey: SurveyFloor) -> FloorData:
     """Walks, plan (origin at the outline's south-west corner, the floor frame) and detected steps."""
-    floor = read_ilc_floor(Path(root) / name)
-    number = floor_number(name)
+    floor = survey.open()
+    number = survey.number
     # walks() reports and skips a walk it cannot read (docs/errors.md, "Loader rule"); what it
     # skipped or dropped goes into the evaluation's output (``loader``).
     walks = list(floor.walks())
@@ -45,8 +53,8 @@ def load_floor(root: Path, name: str) -> FloorData:
     outline = fusion.FloorPlan([fusion.FloorGeometry(number, list(plan.geometry(0).outlines), [], np.zeros((0, 4)))])
     report = floor.load_report()
     report.pop("walks_with_dropped_fields", None)
-    return FloorData(name, number, walks, plan, [ph.handheld_steps(w) for w in walks], Path(floor.geojson_path),
-                     outline, report)
+    return FloorData(survey.name, number, walks, plan, [ph.handheld_steps(w) for w in walks],
+                     Path(floor.geojson_path), outline, report)
 
 
 def _coverage_tree(database: wfx.FingerprintDatabase, floor: int):
@@ -197,16 +205,27 @@ def _collect(futures: List, scores: List[WalkScore], progress) -> None:
             progress()
 
 
-def load_site(data_root: Optional[Path], floors: Sequence[str]) -> Tuple[Path, List[FloorData]]:
-    """The site folder (default: the shared data) and its floors; clear errors for a missing folder."""
+def site_floors(data_root: Optional[Path], floors: Sequence[str]) -> Tuple[Path, List[SurveyFloor]]:
+    """The site folder (default: the shared data) and its floors, found by
+    :func:`indoorloc.io.survey_layout.survey_floors` (ILC 2020 or Kaggle 2021 layout): those
+    named, in the order named, or every floor with walks and a plan in building order.
+
+    Raises FileNotFoundError (``argument 'data_root'``) when the folder does not exist, and
+    ValueError as ``survey_floors`` does (a named floor absent, without walks or plan; no floor)."""
     root = Path(data_root) if data_root else default_site_root()
     if not root.is_dir():
-        raise FileNotFoundError(f"indoorloc: argument 'data_root': {root} is not a folder of ILC floors")
-    floors = floors or ilc_floor_names(root, with_plan=True, argument="data_root")
-    for name in floors:
-        if not (root / name).is_dir():
-            raise FileNotFoundError(f"indoorloc: argument 'floors': {root / name} is not a floor folder")
-    return root, [load_floor(root, name) for name in floors]
+        raise FileNotFoundError(f"indoorloc: argument 'data_root': {root} is not a folder "
+                                f"(a site's survey folder, ILC 2020 or Kaggle 2021 layout)")
+    found = survey_floors(root, floors, argument="data_root")
+    if floors:  # the order named (the all-floor database's row order follows it)
+        found.sort(key=lambda sf: list(floors).index(sf.name))
+    return root, found
+
+
+def load_site(data_root: Optional[Path], floors: Sequence[str]) -> Tuple[Path, List[FloorData]]:
+    """The site folder and its floors' data (:func:`site_floors`, :func:`survey_floor_data`)."""
+    root, found = site_floors(data_root, floors)
+    return root, [survey_floor_data(sf) for sf in found]
 
 
 def _all_floor_plan(floors: Sequence[FloorData]):

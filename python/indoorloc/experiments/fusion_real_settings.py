@@ -239,9 +239,3 @@ def default_site_root() -> Path:
     from indoorloc.registry import default_data_root
 
     return default_data_root().parent / "fusion" / "ilc2020_site2"
-
-
-def floor_number(name: str) -> int:
-    """Floor number of an ILC floor folder: F3 -> 3, B1 -> -1 (digits of the name)."""
-    digits = "".join(ch for ch in name if ch.isdigit())
-    return int(digits or 0) * (-1 if name.upper().startswith("B") else 1)

@@ -55,8 +55,8 @@ def floor_runs(survey_dir: Path, floor: str, seed: int, work: Path, thresholds=T
     src = work / floor / "survey" / floor / "path_data_files"
     src.mkdir(parents=True)
     for name in ("geojson_map.json", "floor_info.json"):
-        if (fl.geojson_path.parent / name).is_file():
-            shutil.copy(fl.geojson_path.parent / name, src.parent / name)
+        if (fl.plan_dir / name).is_file():
+            shutil.copy(fl.plan_dir / name, src.parent / name)
     for p in survey:
         (src / p.name).symlink_to(p.resolve())
     base = Site.build(work / floor / "survey", work / floor / "quarter.db", floors=[floor])

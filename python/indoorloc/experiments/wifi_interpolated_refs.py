@@ -44,10 +44,6 @@ MIN_GAP_M = 2.0    #: no extra reference closer than this to a training one [m] 
 BASELINE = "baseline"
 
 
-def _floor_number(name: str) -> int:
-    return -int(name[1:]) if name.startswith("B") else int(name[1:])
-
-
 def lattice(plan, positions_m: np.ndarray, reach_m: float) -> np.ndarray:
     """Walkable lattice points (M, 2) [m] between MIN_GAP_M and reach_m from every reference."""
     from scipy.spatial import cKDTree
@@ -141,13 +137,14 @@ def _stats(e):
 
 def run(data_root: Path, floors: Sequence[str], cache_dir: Path, log=print) -> Dict[str, Any]:
     from indoorloc.experiments.wifi_matcher_study import cache_floor
-    from indoorloc.io import load_floor_plan, read_ilc_floor
+    from indoorloc.io import load_floor_plan
+    from indoorloc.io.survey_layout import survey_floors
 
     per: Dict[str, Any] = {}
     for name in floors:
         walks, skipped = cache_floor(data_root, name, cache_dir, log=log)
-        floor = read_ilc_floor(Path(data_root) / name)
-        plan = load_floor_plan(floor.geojson_path, floors=[_floor_number(name)], origin_lon_lat="outline_sw")
+        (survey,) = survey_floors(Path(data_root), [name], argument="data_root")
+        plan = load_floor_plan(survey.geojson_path, floors=[survey.number], origin_lon_lat="outline_sw")
         per[name] = floor_errors(walks, plan, log=log)
     keys = list(per[floors[0]]["errors"].keys())
     sums = {f: np.array([np.nansum(per[f]["errors"][k]) for k in keys]) for f in floors}

@@ -68,9 +68,10 @@ def cache_floor(root: Path, name: str, cache_dir: Path, log=print) -> Tuple[List
     """The floor's walks from the cache, parsing and placing the missing ones; also the ids of
     walks the loader refused (skipped)."""
     from indoorloc.fusion import crowdsourced_map
-    from indoorloc.io import read_ilc_floor
+    from indoorloc.io.survey_layout import survey_floors
 
-    floor = read_ilc_floor(Path(root) / name)
+    (survey,) = survey_floors(Path(root), [name], argument="data_root")
+    floor = survey.open()
     out, skipped = [], []
     d = Path(cache_dir) / name
     d.mkdir(parents=True, exist_ok=True)
@@ -112,11 +113,6 @@ def cache_floor(root: Path, name: str, cache_dir: Path, log=print) -> Tuple[List
     skipped = sorted(set(skipped))
     log(f"{name}: {len(out)} walks, {len(skipped)} skipped by the loader")
     return out, skipped
-
-
-def floor_names(root: Path) -> List[str]:
-    """Every sub-folder holding path_data_files."""
-    return sorted(p.name for p in Path(root).iterdir() if (p / "path_data_files").is_dir())
 
 
 # --------------------------------------------------------------------------------------------
@@ -555,17 +551,19 @@ def markdown(r: Dict[str, Any]) -> str:
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
     from indoorloc.experiments.fusion_real import default_site_root
+    from indoorloc.io.survey_layout import survey_floors
 
     p = argparse.ArgumentParser(prog="python -m indoorloc.experiments.wifi_matcher_study", description=__doc__.split("\n")[0])
     p.add_argument("--data-root", type=Path, default=None, help="site folder (default: the shared ilc2020_site2)")
-    p.add_argument("--floors", nargs="+", default=None, help="floor folders (default: every floor folder)")
+    p.add_argument("--floors", nargs="+", default=None, help="floor folders (default: every floor folder "
+                   "with walks and a plan, io.survey_layout.survey_floors)")
     p.add_argument("--json", type=Path, default=None, help="write the results as JSON")
     p.add_argument("--markdown", type=Path, default=None, help="write the tables as markdown")
     p.add_argument("--cache-dir", type=Path, default=Path("/tmp/wifi_cache"), help="per-walk parse/placement cache")
     p.add_argument("--quiet", action="store_true")
     a = p.parse_args(argv)
     root = a.data_root or default_site_root()
-    floors = a.floors or floor_names(root)
+    floors = [sf.name for sf in survey_floors(root, a.floors, argument="data_root")]
     log = (lambda *x: None) if a.quiet else (lambda *x: print(*x, flush=True))
     r = run(root, floors, a.cache_dir, log=log)
     md = markdown(r)

@@ -228,7 +228,7 @@ def markdown(r: Dict[str, Any]) -> str:
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
     from indoorloc.experiments.fusion_real_settings import default_site_root
-    from indoorloc.io import ilc_floor_names
+    from indoorloc.io.survey_layout import survey_floors
     from indoorloc.io.atomic_file import write_text_atomic
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -250,7 +250,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         print(json.dumps(lofo_from_means([json.loads(Path(p).read_text()) for p in a.merge]), indent=1))
         return 0
     root = a.data_root or default_site_root()
-    floors = a.floors or ilc_floor_names(root, with_plan=True, argument="data_root")
+    floors = [sf.name for sf in survey_floors(root, a.floors, argument="data_root")]
     grid = dict(GRID)
     if a.grid:
         grid.update({k: tuple(v) for k, v in json.loads(a.grid).items()})

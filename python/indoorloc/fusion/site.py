@@ -154,7 +154,9 @@ class Site:
               floors: Optional[Sequence[str]] = None, settings: Optional[site_model.TrackSettings] = None,
               progress: Optional[Callable[[str], None]] = None) -> "Site":
         """Build a site file from a survey folder (ILC 2020 or Kaggle 2021 layout,
-        :func:`indoorloc.io.survey_layout.survey_floors`), all floors by default. A walk file that
+        :func:`indoorloc.io.survey_layout.survey_floors`), all floors by default (a floor folder
+        with walks but no plan is then skipped with a RecordingWarning; named in ``floors``, it
+        is a ValueError). A walk file that
         cannot be read, or has fewer than two waypoints (e.g. cut short), is skipped with a
         RecordingWarning and listed in the meta table (``skipped_walks``); a floor left without
         any survey walk is a ValueError naming the floor and the reasons. Written to a temporary file and renamed: an existing

@@ -66,6 +66,7 @@ from typing import Dict, List, Optional, Sequence, Union
 
 import numpy as np
 
+from indoorloc.io.survey_layout import floor_number  # re-exported: the level fusion evaluate reads
 from indoorloc.simulate.ilc_layout import IlcLayout, _geojson, make_layout
 from indoorloc.simulate.ilc_site_config import IlcSiteConfig
 from indoorloc.simulate.ilc_walk import GRAVITY_MPS2, IlcWalkTruth, make_walk
@@ -111,13 +112,6 @@ class IlcSite:
                 with open(d / "path_data_files" / f"{w.walk_id}.txt", "w", encoding="utf-8", newline="") as f:
                     f.write("\n".join(w.lines) + "\n")
         return root
-
-
-def floor_number(name: str) -> int:
-    """Floor number of a floor folder name as ``indoorloc fusion evaluate`` reads it: its digits,
-    negative for a name starting with B (``"F3"`` -> 3, ``"B1"`` -> -1, no digit -> 0)."""
-    n = int("".join(ch for ch in name if ch.isdigit()) or 0)
-    return -n if name.upper().startswith("B") else n
 
 
 def make_ilc_site(*, floors: Sequence[str] = ("F1",), walks_per_floor: int = 8, seed: int = 0,

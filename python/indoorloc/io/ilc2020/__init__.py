@@ -11,11 +11,13 @@ any folder in that layout into numpy arrays:
   times, WiFi readings, iBeacon readings, waypoints, header metadata);
 - :func:`read_ilc_floor`: one floor folder -> :class:`IlcFloor` (floor extent, GeoJSON path,
   the walk files, loaded on demand, and a floor-level BSSID vocabulary,
-  :class:`BssidVocabulary`);
+  :class:`BssidVocabulary`); ``plan_dir=`` when the plan files are elsewhere (Kaggle 2021);
 - :func:`read_ilc_site`: a site folder -> ``{floor name: IlcFloor}`` in building order
   (:func:`ilc_floor_names`: B2, B1, F1, F2, ...);
-- :func:`ilc_floor_names`: the floor folders of a site in building order (what
-  ``indoorloc fusion evaluate`` evaluates when no ``--floors`` is given);
+- :func:`ilc_floor_names`: the floor folders of a site in the ILC 2020 layout in building
+  order (a survey folder of either competition layout, with each floor's walk and plan
+  folders: :func:`indoorloc.io.survey_layout.survey_floors`, what ``indoorloc site build`` and
+  ``indoorloc fusion evaluate`` read);
 - :func:`ilc_floor_origin_lonlat`: the (lon, lat) of the floor frame's origin (the south-west
   corner of the first GeoJSON feature's bounding box). The floor polygons themselves are read
   by :mod:`indoorloc.io.floor_plan`.

@@ -16,7 +16,7 @@ from typing import Any, Dict, Iterable, Iterator, List, Optional, Set, Tuple, Un
 
 import numpy as np
 
-from indoorloc.io.errors import RecordingWarning, reads_file
+from indoorloc.io.errors import RecordingWarning, format_error, reads_file
 from indoorloc.io.ilc2020.walk_types import IlcWalk, PathLike
 from indoorloc.io.ilc2020.walk_reader import read_ilc_walk
 from indoorloc.io.ilc2020.vocabulary import BssidVocabulary
@@ -30,11 +30,16 @@ class UnknownWalkError(KeyError):
 
 
 class IlcFloor:
-    """One floor folder: ``floor_info.json``, ``geojson_map.json`` and the walk files.
+    """One floor: its walk files and its plan files (``floor_info.json``, ``geojson_map.json``,
+    ``floor_image.png``).
 
     The walks are ``path_data_files/*.txt`` (the competition's 2020 layout) or, when that folder
     is absent, ``*.txt`` in the floor folder itself (the Kaggle 2021 layout). They are read on
     demand (:meth:`walk`, :meth:`walks`) and kept when ``cache`` is True.
+
+    The plan files are in the floor folder (ILC 2020) unless ``plan_dir`` names another folder:
+    the Kaggle 2021 data keeps them in ``ROOT/metadata/SITE/FLOOR`` beside the walks'
+    ``ROOT/train/SITE/FLOOR`` (:func:`indoorloc.io.survey_layout.survey_floors` finds both).
 
     :meth:`walk` raises for a walk that cannot be read; the readers that iterate over walks
     (:meth:`walks`, :meth:`bssid_vocabulary`, :func:`describe_ilc_floor`) skip it instead, with a
@@ -46,7 +51,9 @@ class IlcFloor:
     name : str
         Floor folder name (e.g. ``"F3"``).
     floor_dir : pathlib.Path
-        The floor folder.
+        The floor folder (the walks' folder).
+    plan_dir : pathlib.Path
+        The folder of the plan files: ``plan_dir`` when given, else ``floor_dir``.
     width_m, height_m : float or None
         ``map_info.width`` / ``map_info.height`` of ``floor_info.json`` [m] (the floor frame's
         extent); None when the file is absent.
@@ -58,16 +65,22 @@ class IlcFloor:
         The walk files, sorted by name.
     """
 
-    def __init__(self, floor_dir: PathLike, *, cache: bool = True,
+    def __init__(self, floor_dir: PathLike, *, plan_dir: Optional[PathLike] = None, cache: bool = True,
                  allow_unsorted: bool = False) -> None:
         d = Path(floor_dir)
         walk_dir = d / "path_data_files"
         if not d.is_dir():
             raise ValueError(f"indoorloc: argument 'floor_dir': no folder {d}")
+        plans = d if plan_dir is None else Path(plan_dir)
+        # The argument the plan files' errors name: the floor folder's unless they are elsewhere.
+        plan_arg = "floor_dir" if plan_dir is None else "plan_dir"
+        if not plans.is_dir():
+            raise ValueError(f"indoorloc: argument 'plan_dir': no folder {plans}")
         if not walk_dir.is_dir():
             walk_dir = d
         self.name = d.name
         self.floor_dir = d
+        self.plan_dir = plans
         self.walk_paths = sorted(p for p in walk_dir.glob("*.txt") if p.is_file())
         if not self.walk_paths:
             where = (f"{d} (and no folder {d / 'path_data_files'})" if walk_dir == d
@@ -75,12 +88,12 @@ class IlcFloor:
             raise ValueError(f"indoorloc: argument 'floor_dir': no *.txt walk file in {where}")
         self.width_m: Optional[float] = None
         self.height_m: Optional[float] = None
-        info = d / "floor_info.json"
+        info = plans / "floor_info.json"
         if info.is_file():
-            self.width_m, self.height_m = _floor_info(info)
-        geo = d / "geojson_map.json"
+            self.width_m, self.height_m = _floor_info(info, plan_arg)
+        geo = plans / "geojson_map.json"
         self.geojson_path: Optional[Path] = geo if geo.is_file() else None
-        image = d / "floor_image.png"
+        image = plans / "floor_image.png"
         self.image_path: Optional[Path] = image if image.is_file() else None
         self._cache = cache
         self._allow_unsorted = allow_unsorted
@@ -226,37 +239,41 @@ class IlcFloor:
     def origin_lonlat(self) -> Tuple[float, float]:
         """(lon, lat) [deg] of the floor frame's origin: see :func:`ilc_floor_origin_lonlat`."""
         if self.geojson_path is None:
-            raise ValueError(f"indoorloc: argument 'floor_dir': no geojson_map.json in "
-                             f"{self.floor_dir}")
+            arg = "floor_dir" if self.plan_dir == self.floor_dir else "plan_dir"
+            raise ValueError(f"indoorloc: argument '{arg}': no geojson_map.json in {self.plan_dir}")
         return ilc_floor_origin_lonlat(self.geojson_path)
 
 
-def _floor_info(path: Path) -> Tuple[float, float]:
+def _floor_info(path: Path, argument: str = "floor_dir") -> Tuple[float, float]:
     try:
         info = json.loads(path.read_text(encoding="utf-8"))
         width, height = float(info["map_info"]["width"]), float(info["map_info"]["height"])
     except (ValueError, KeyError, TypeError) as exc:
-        raise ValueError(f"indoorloc: argument 'floor_dir': {path}: expected "
-                         f"{{'map_info': {{'width': ..., 'height': ...}}}} ({exc})") from None
+        raise format_error(path, f"expected {{'map_info': {{'width': ..., 'height': ...}}}} ({exc})",
+                           argument=argument) from None
     if not (np.isfinite(width) and np.isfinite(height) and width > 0 and height > 0):
-        raise ValueError(f"indoorloc: argument 'floor_dir': {path}: width and height must be "
-                         f"positive, got {width}, {height}")
+        raise format_error(path, f"width and height must be positive, got {width}, {height}",
+                           argument=argument)
     return width, height
 
 
 @reads_file("floor_dir")  # a damaged walk or floor folder is a FormatError, as for every reader
-def read_ilc_floor(floor_dir: PathLike, *, cache: bool = True,
+def read_ilc_floor(floor_dir: PathLike, *, plan_dir: Optional[PathLike] = None, cache: bool = True,
                    allow_unsorted: bool = False) -> IlcFloor:
-    """Open one floor folder (``<floor>/path_data_files/*.txt`` or ``<floor>/*.txt``,
-    ``floor_info.json``, ``geojson_map.json``); walks are read on demand. See :class:`IlcFloor`.
+    """Open one floor: its walks (``<floor>/path_data_files/*.txt`` or ``<floor>/*.txt``, read on
+    demand) and its plan files (``floor_info.json``, ``geojson_map.json``, ``floor_image.png``)
+    in ``plan_dir``, by default the floor folder itself (ILC 2020); the Kaggle 2021 data keeps
+    them in ``ROOT/metadata/SITE/FLOOR``. See :class:`IlcFloor`; to find a site's floors in
+    either layout, :func:`indoorloc.io.survey_layout.survey_floors` (``SurveyFloor.open()``).
 
     Raises
     ------
     ValueError
         ``indoorloc: argument 'floor_dir': ...`` when the folder does not exist or holds no
-        walk file, or ``floor_info.json`` is malformed.
+        walk file; ``argument 'plan_dir'`` (``'floor_dir'`` without one) when that folder does
+        not exist or its ``floor_info.json`` is malformed.
     """
-    return IlcFloor(floor_dir, cache=cache, allow_unsorted=allow_unsorted)
+    return IlcFloor(floor_dir, plan_dir=plan_dir, cache=cache, allow_unsorted=allow_unsorted)
 
 
 _FLOOR_LEVEL = (  # (pattern of a floor name, sign of its level)
@@ -287,8 +304,10 @@ def _is_floor_dir(d: Path, with_plan: bool) -> bool:
 
 def ilc_floor_names(site_dir: PathLike, *, with_plan: bool = False,
                     argument: str = "site_dir") -> List[str]:
-    """The floor folders of a site folder, in building order (B2, B1, G, F1, F2, ...; names
-    that are not levels (:func:`ilc_floor_level`) last, by name).
+    """The floor folders of a site folder in the ILC 2020 layout, in building order (B2, B1, G,
+    F1, F2, ...; names that are not levels (:func:`ilc_floor_level`) last, by name). For a
+    survey folder of either competition layout (Kaggle 2021 keeps the plans apart), use
+    :func:`indoorloc.io.survey_layout.survey_floors`.
 
     A floor folder is a sub-folder holding ``path_data_files/`` or ``*.txt`` walk files, and,
     with ``with_plan=True`` (what a tracker needs), ``geojson_map.json``. ``argument`` is the
