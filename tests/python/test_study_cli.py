@@ -9,9 +9,8 @@ import pytest
 from indoorloc import progress
 
 #: Studies whose ``main(argv)`` parses a command line with argparse (the floor studies through
-#: ``study_cli.run_study``). Not listed: ``fusion_live_accuracy`` (its argv is the floor list) and
-#: ``pdr_handheld`` (``main`` takes Python arguments).
-STUDIES = ["floor_change_study", "floor_identification_study", "fusion_uncertainty", "ilc_signal_map",
+#: ``study_cli.run_study``). Not listed: ``pdr_handheld`` (``main`` takes Python arguments).
+STUDIES = ["floor_change_study", "floor_identification_study", "fusion_live_accuracy", "fusion_uncertainty", "ilc_signal_map",
            "mapmatch_noise_tuning", "pdr_gait_sweep", "pdr_health_signals", "pdr_low_motion", "pdr_zupt_cv",
            "site_growth", "wifi_interpolated_refs", "wifi_matcher_agreement", "wifi_matcher_study",
            "wifi_previous_matcher", "wifi_wknn_wide_k"]

@@ -329,18 +329,30 @@ def _score_walk_live(score: WalkScore, put, walk, models: FoldModels, settings: 
     r = live.causal_track(tracker, walk, models.cal, models.database,
                           step_length_sd_fraction=settings.step_length_sd_fraction,
                           step_heading_sd_rad=settings.step_heading_sd_rad)
-    located = np.asarray(r["located"], bool)
-    if not located.any():
+    at = located_track_at(wt, r)
+    if at is None:
         return
-    k0 = int(np.argmax(located))
-    t = np.asarray(r["times_s"], float)[k0:]
-    est = _interp_track(wt, t, np.asarray(r["mean_m"], float)[k0:])
+    est, first_t, cov = at
     put("fusion_live", est)
     score.seconds["fusion_live"] = time.perf_counter() - tic
-    score.live_first_position_s = float(t[0] - wt[0])
-    score.live_waypoints_before_position = int(np.sum(wt < t[0]))
-    idx = np.clip(np.searchsorted(t, wt), 0, t.size - 1)
-    score.in_region95["fusion_live"] = fusion.region95_contains(est, np.asarray(r["covariance_m2"])[k0:][idx], wxy)
+    score.live_first_position_s = float(first_t - wt[0])
+    score.live_waypoints_before_position = int(np.sum(wt < first_t))
+    score.in_region95["fusion_live"] = fusion.region95_contains(est, cov, wxy)
+
+
+def located_track_at(t_query_s: np.ndarray, run: dict):
+    """A live run's track (``fusion.live.causal_track``) at the query times [s], from its first
+    located estimate on: ``(positions (W, 2) [m] interpolated between the located steps and held at
+    the first one before it, the first located step's time [s], the covariance (W, 3) [m²] of the
+    step at or after each query)``; None when the run never located the walker."""
+    located = np.asarray(run["located"], bool)
+    if not located.any():
+        return None
+    k0 = int(np.argmax(located))
+    t = np.asarray(run["times_s"], float)[k0:]
+    est = _interp_track(t_query_s, t, np.asarray(run["mean_m"], float)[k0:])
+    idx = np.clip(np.searchsorted(t, t_query_s), 0, t.size - 1)
+    return est, float(t[0]), np.asarray(run["covariance_m2"])[k0:][idx]
 
 
 def _score_walk_grid(score: WalkScore, put, pdr_steps, fixes, known_fixes, known: dict, models: FoldModels,
