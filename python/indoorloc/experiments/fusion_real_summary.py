@@ -156,7 +156,7 @@ def markdown(result: dict) -> str:
         lines += ["", f"Live tracker (fusion_live: causal steps, each WiFi fix applied when its scan exists): first "
                   f"position {fp['median_s']:.1f} s after the walk's first waypoint (median; p90 {fp['p90_s']:.1f} s, "
                   f"max {fp['max_s']:.1f} s); the {fp['waypoints_before']} waypoints before it are scored with that "
-                  f"first position; {fp['walks_never_located']} walks never located (not scored)."]
+                  f"first position; {fp['walks_never_located']} walk(s) never located (not scored)."]
     fi = result.get("floor_identification")
     if fi:
         lines += ["", f"Floor identification (floor not given, {SELECT_OBJECTIVE} on all floors' plans and fixes): "
