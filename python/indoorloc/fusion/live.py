@@ -21,9 +21,9 @@ What happens to each event (docs/fusion.md, "Live tracking"):
   fix is applied at the first step at or after its time. ``delay_compensation`` (off by
   default) moves each component of the fix by the PDR displacement (calibrated, nominal heading
   offset) of the steps between its measurements' mean last-seen time and the step that applies
-  it. Measured on four shared floors it does not help (mean error +0.6, +0.7, -0.9 m on F8, F3,
-  F4, ...: benchmarks/results/fusion_live_accuracy.md): a max-pooled 16 s query describes the
-  whole stretch walked, not one point of it.
+  it. Measured on the six shared floors it does not help (10.93 m pooled without, 11.01 m with:
+  benchmarks/results/fusion_live_accuracy.md): a max-pooled 16 s query describes the whole stretch
+  walked, not one point of it.
 - **Beacons**: accepted and ignored (the site has no beacon map yet).
 
 Every method returns the current estimate (a ``fusion.LiveEstimate``, read-only attributes:
