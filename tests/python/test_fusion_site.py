@@ -80,9 +80,23 @@ def test_round_trip_equals_in_memory_models(built, floor_dir):
     db = site_model.build_fingerprints(walks, steps, 8, settings.fixes)
     plan = load_floor_plan(floor_dir / "geojson_map.json", floors=[8], origin_lon_lat="outline_sw")
     tracker = site_model.survey_anchored(GridTracker(plan, site_model.floor_grid_options(settings, cal)), plan, db)
+    second = tracker.with_options(site_model.second_pass_options(tracker.options, settings))
     test = read_ilc_walk(paths[N_SURVEY + 2])
-    r = site_model.run_default(tracker, site_model.tracker_steps(ph.handheld_steps(test), cal, settings),
-                               wifi_fixes.fixes_for_walk(test, db))
+    test_steps = site_model.tracker_steps(ph.handheld_steps(test), cal, settings)
+    test_fixes = wifi_fixes.fixes_for_walk(test, db)
+    median = settings.point_estimate == "median"
+    r = site_model.run_default(tracker, test_steps, test_fixes, second_pass=second, floor=8, median=median)
+    # "Locate, then track": the smoothed track is the second pass's, from the first pass's
+    # smoothed estimate at the first step; the covariance stays the first pass's.
+    first = r["first_pass"]
+    one_pass = site_model.run_default(tracker, test_steps, test_fixes)
+    np.testing.assert_array_equal(first["smoothed_median_m"], one_pass["smoothed_median_m"])
+    start = site_model.located_start(first, test_steps, 8, median)
+    np.testing.assert_array_equal(start["position_m"], first["smoothed_median_m"][0])
+    assert start["time_s"] == test_steps.times_s[0] and start["floor"] == 8
+    assert not np.array_equal(r["smoothed_median_m"], first["smoothed_median_m"])
+    np.testing.assert_array_equal(r["smoothed_covariance_m2"], first["smoothed_covariance_m2"])
+    assert np.hypot(*(r["smoothed_median_m"][0] - start["position_m"])) < 3 * settings.second_pass_start_sd_m
     reopened = Site.open(site.path)
     track = reopened.track(test, floor=FLOOR)
     key = "smoothed_median_m" if settings.point_estimate == "median" else "smoothed_m"

@@ -4,6 +4,7 @@ wrote them used them (no mix of stored and new floor-identification evidence), w
 from __future__ import annotations
 
 import json
+import math
 import shutil
 import sqlite3
 import warnings
@@ -82,6 +83,25 @@ def test_a_file_saved_before_the_open_survey_cells_keeps_the_walls_as_drawn():
     assert site_model.TrackSettings().grid_options.survey_walkable_radius_m == 0.75  # today's default
     # Everything else as stored.
     assert s.grid_options.fix_survey_distance_factor == site_model.TrackSettings().grid_options.fix_survey_distance_factor
+
+
+def test_a_file_saved_before_the_second_pass_smooths_in_one_pass():
+    stored = _without(site_model.TrackSettings().to_dict(), ("second_pass_start_sd_m",))
+    before = json.dumps(stored, sort_keys=True)
+    assert site_settings.missing_track_features(stored) == ["the smoother's second pass"]
+    with pytest.warns(SiteSettingsWarning, match=r"old\.db was saved before the smoother's second pass existed"):
+        s = site_settings.stored_track_settings(stored, "old.db")
+    assert json.dumps(stored, sort_keys=True) == before  # the input is not modified
+    assert s.second_pass_start_sd_m == 0.0 and site_model.TrackSettings().second_pass_start_sd_m > 0
+    assert s.known_start_fix_tempering == site_model.TrackSettings().known_start_fix_tempering
+    # The settings round-trip, a hard known-start wall included; bad values are refused by name.
+    hard = site_model.TrackSettings(known_start_wall_log_penalty=-math.inf)
+    assert site_model.TrackSettings.from_dict(json.loads(json.dumps(hard.to_dict()))) == hard
+    for bad in (dict(second_pass_start_sd_m=-1.0), dict(second_pass_start_sd_m=math.nan),
+                dict(known_start_fix_tempering=0.0), dict(known_start_fix_outlier_probability=1.0),
+                dict(known_start_wall_log_penalty=0.5)):
+        with pytest.raises(ValueError, match=f"TrackSettings.{next(iter(bad))}"):
+            site_model.TrackSettings(**bad).validate()
 
 
 @pytest.fixture(scope="module")

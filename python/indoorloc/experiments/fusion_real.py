@@ -56,7 +56,7 @@ from typing import Any, Dict, List, Optional, Sequence
 import numpy as np
 
 from indoorloc import fusion
-from indoorloc.fusion import wifi_fixes as wfx
+from indoorloc.fusion import site_model, wifi_fixes as wfx
 from indoorloc.pdr import handheld as ph
 from indoorloc.experiments.fusion_real_settings import (  # noqa: F401  (re-exported)
     COVARIANCE_METHODS, FLOORS, METHODS, SELECT_OBJECTIVE, FloorData, FoldModels, RealSettings, WalkScore,
@@ -144,8 +144,13 @@ def walk_snapshot(data_root: Optional[Path], floor: str, walk_index: int = 0,
                                         settings.step_length_sd_fraction * steps.length_m, settings.step_heading_sd_rad)
     spread = max(models.cal.yaw_offset_spread_rad, 1e-3)
     if settings.engine == "grid":  # the default's engine; a grid has no trajectories to draw
-        result = dict(fusion.track_grid(_grid_tracker(fl.plan, _grid_options(settings, spread), fl.name, models.database),
-                                        pdr_steps, fixes=fixes))
+        # The default as the site model tracks (its smoother's second pass included).
+        base = _grid_options(settings, spread)
+        second = (_grid_tracker(fl.plan, site_model.second_pass_options(base, settings.track_settings()), fl.name,
+                                models.database) if settings.second_pass_start_sd_m > 0 else None)
+        result = site_model.run_default(_grid_tracker(fl.plan, base, fl.name, models.database), pdr_steps, fixes,
+                                        second_pass=second, floor=fl.number,
+                                        median=settings.point_estimate == "median")
         if settings.point_estimate == "median":
             result["smoothed_m"], result["mean_m"] = result["smoothed_median_m"], result["median_m"]
         result["smoothed_trajectories_m"] = np.zeros((0, 2))

@@ -96,13 +96,19 @@ class RealSettings:
     #: own τ and ε below).
     known_start_fix_metric: str = "shared"
     #: (LOFO on fusion_known_start over the grid of SELECT_GRID, the same point for every held-out
-    #: floor: τ 0.2 at the grid's lower edge, 0.4 within 0.02 m of it.)
-    known_start_fix_tempering: float = 0.2
-    known_start_fix_outlier_probability: float = 0.3
+    #: floor: τ 0.2 at the grid's lower edge, 0.4 within 0.02 m of it.) Defaults: the site model's.
+    known_start_fix_tempering: float = field(default_factory=lambda: site_model.TrackSettings().known_start_fix_tempering)
+    known_start_fix_outlier_probability: float = field(
+        default_factory=lambda: site_model.TrackSettings().known_start_fix_outlier_probability)
     #: The grid engine's known start: its own wall penalty and tempering mode (LOFO on
     #: fusion_known_start, like its τ and ε).
-    known_start_wall_log_penalty: float = -3.0
-    known_start_fix_tempering_by_variance: bool = False
+    known_start_wall_log_penalty: float = field(
+        default_factory=lambda: site_model.TrackSettings().known_start_wall_log_penalty)
+    known_start_fix_tempering_by_variance: bool = field(
+        default_factory=lambda: site_model.TrackSettings().known_start_fix_tempering_by_variance)
+    #: The smoother's second pass from the located start (site model's ``second_pass_start_sd_m``;
+    #: 0: one pass).
+    second_pass_start_sd_m: float = field(default_factory=lambda: site_model.TrackSettings().second_pass_start_sd_m)
     #: The known start's calibration of its returned covariance (a, b [m], g of
     #: GridTrackerOptions.filtered_covariance_*): the all-floor choice of
     #: ``experiments/fusion_uncertainty`` (LOFO coverage 0.951, 0.93-0.98 per floor; re-chosen
@@ -156,7 +162,12 @@ class RealSettings:
             identification_ap_weight=self.floor_identification_ap_weight,
             identification_ap_count=self.floor_identification_ap_count,
             identification_ap_rate_floor=self.floor_identification_ap_rate_floor,
-            identification_ap_outlier_probability=self.floor_identification_ap_outlier_probability)
+            identification_ap_outlier_probability=self.floor_identification_ap_outlier_probability,
+            known_start_fix_tempering=self.known_start_fix_tempering,
+            known_start_fix_outlier_probability=self.known_start_fix_outlier_probability,
+            known_start_wall_log_penalty=self.known_start_wall_log_penalty,
+            known_start_fix_tempering_by_variance=self.known_start_fix_tempering_by_variance,
+            second_pass_start_sd_m=self.second_pass_start_sd_m)
 
     def to_dict(self) -> Dict[str, Any]:
         d = asdict(self)

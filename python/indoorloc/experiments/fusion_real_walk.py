@@ -312,6 +312,36 @@ def _identification_options(settings: RealSettings, spread_rad: float):
     return site_model.identification_grid_options(settings.track_settings(), spread_rad, False)
 
 
+def _second_pass(score: WalkScore, put, first: dict, pdr_steps, fixes, models: FoldModels, settings: RealSettings,
+                 base) -> None:
+    """fusion_smoother as the site model tracks: the second smoother pass from the first pass's
+    located start (``site_model.run_second_pass``). Its estimates replace the first pass's (both
+    point estimates, for --select); the 95 % region keeps the first pass's calibrated covariance
+    (``site_model.SECOND_PASS_KEYS``)."""
+    fl = models.floor
+    wt = score.t_s + score.waypoint_t0
+    wxy = score.waypoint_xy_m
+    tic = time.perf_counter()
+    tracker = _grid_tracker(fl.plan, site_model.second_pass_options(base, settings.track_settings()), fl.name,
+                            models.database)
+    r2 = site_model.run_second_pass(tracker, first, pdr_steps, fixes, fl.number, settings.point_estimate == "median")
+    alternatives = {"mean": _interp_track(wt, pdr_steps.times_s, r2["smoothed_m"])}
+    if "smoothed_median_m" in r2:
+        alternatives["median"] = _interp_track(wt, pdr_steps.times_s, r2["smoothed_median_m"])
+    for pe, est in alternatives.items():
+        put(f"_alt/fusion_smoother/{pe}", est)
+    est = alternatives["median"] if settings.point_estimate == "median" and "median" in alternatives \
+        else alternatives["mean"]
+    put("fusion_smoother", est)
+    score.seconds["fusion_smoother"] = score.seconds.get("fusion_smoother", 0.0) + time.perf_counter() - tic
+    idx = np.clip(np.searchsorted(pdr_steps.times_s, wt), 0, len(pdr_steps) - 1)
+    score.in_region95["fusion_smoother"] = fusion.region95_contains(
+        est, np.asarray(first["smoothed_covariance_m2"])[idx], wxy)
+    if "fusion_smoother" in score.calibration_inputs:
+        score.calibration_inputs["fusion_smoother"]["error_m"] = est - wxy
+    score.smoothed_track_m = np.asarray(r2["smoothed_m"])
+
+
 def _score_walk_live(score: WalkScore, put, walk, models: FoldModels, settings: RealSettings) -> None:
     """fusion_live: the live tracker (``Site.live()``) replayed, i.e. ``fusion.live.causal_track`` on
     the fold's models and the default's tracker: causal steps, each WiFi fix applied when its scan
@@ -404,6 +434,8 @@ def _score_walk_grid(score: WalkScore, put, pdr_steps, fixes, known_fixes, known
         # The offset prior's own error (its centre, 0: the training yaw offset), for comparison.
         score.offset_error_rad["fusion_no_heading_offset"] = _wrap(0.0 - residual)
         score.smoothed_track_m = np.asarray(r["smoothed_m"])
+        if settings.second_pass_start_sd_m > 0:
+            _second_pass(score, put, r, pdr_steps, fixes, models, settings, base)
     # The known start's own choice of τ, ε, walls and tempering mode (LOFO on its own error). Its
     # runs are scored by their means (run() reads medians only from an unknown start): no spatial
     # median, whose double sums cost about 40 % of such a run (the means then come from the float

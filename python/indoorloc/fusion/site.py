@@ -57,6 +57,9 @@ class FloorModels:
     calibration: ph.HandheldCalibration
     database: wifi_fixes.FingerprintDatabase
     tracker: GridTracker
+    #: The smoother's second pass (``site_model.second_pass_options``), None when the settings
+    #: have one pass (``TrackSettings.second_pass_start_sd_m`` 0).
+    second_pass_tracker: Optional[GridTracker] = None
 
 
 @dataclass
@@ -328,7 +331,10 @@ class Site:
                 con.close()
             tracker = site_model.survey_anchored(GridTracker(plan, site_model.floor_grid_options(self.settings, cal)),
                                                  plan, database)
-            self._models[name] = FloorModels(name, number, origin, plan, cal, database, tracker)
+            # The same grid and survey anchors with the second pass's options.
+            second = (tracker.with_options(site_model.second_pass_options(tracker.options, self.settings))
+                      if self.settings.second_pass_start_sd_m > 0 else None)
+            self._models[name] = FloorModels(name, number, origin, plan, cal, database, tracker, second)
         return self._models[name]
 
     def _all_floors(self) -> tuple:
@@ -392,13 +398,14 @@ class Site:
         if len(steps) == 0:
             raise ValueError(f"indoorloc: walk {src}: no step detected, nothing to track")
         fixes = wifi_fixes.fixes_for_walk(walk, m.database)
-        r = site_model.run_default(m.tracker, steps, fixes, smooth=smooth)
+        median = self.settings.point_estimate == "median"
+        r = site_model.run_default(m.tracker, steps, fixes, smooth=smooth, second_pass=m.second_pass_tracker,
+                                   floor=m.number, median=median)
         gaps = int(getattr(r.get("summary"), "smoother_gap_steps", 0) or 0) if smooth else 0
         if gaps:
             warnings.warn(f"indoorloc: walk {src}: at {gaps} of {len(steps)} steps the walk before and after cannot "
                           "be joined by the motion model (steps lost, or fixes far off); the smoothed track uses the "
                           "causal filter's estimate there and is less reliable", RuntimeWarning, stacklevel=2)
-        median = self.settings.point_estimate == "median"
         key = ("smoothed_median_m" if median else "smoothed_m") if smooth else ("median_m" if median else "mean_m")
         cov = np.asarray(r["smoothed_covariance_m2" if smooth else "covariance_m2"], float)
         posterior = np.asarray(r["smoothed_posterior_covariance_m2" if smooth else "posterior_covariance_m2"], float)

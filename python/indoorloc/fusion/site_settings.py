@@ -20,7 +20,9 @@ then), and it warns (:class:`SiteSettingsWarning`) with what to do: rebuild the 
 
 The grid tracker's options grew the same way: a file whose ``grid_options`` lack the survey's open
 cells (``survey_walkable_radius_m``) was written by a tracker with the walls as drawn, and reads
-radius 0 (:data:`LEGACY_GRID_VALUES`), with the same warning.
+radius 0 (:data:`LEGACY_GRID_VALUES`), with the same warning. So did the tracker's own settings: a
+file without ``second_pass_start_sd_m`` was written by a one-pass smoother and reads 0
+(:data:`LEGACY_TRACK_VALUES`).
 """
 
 from __future__ import annotations
@@ -42,6 +44,11 @@ LEGACY_VALUES: Dict[str, Dict[str, Any]] = {
 #: values that reproduce its tracker: per feature, (marker key, values).
 LEGACY_GRID_VALUES: Dict[str, Dict[str, Any]] = {
     "the survey's open cells": {"survey_walkable_radius_m": 0.0, "survey_walkable_min_walks": 1},
+}
+#: Tracker settings (top-level keys) that a file written before them did not use, and the values
+#: that reproduce its tracker: per feature, the values (their keys mark it).
+LEGACY_TRACK_VALUES: Dict[str, Dict[str, Any]] = {
+    "the smoother's second pass": {"second_pass_start_sd_m": 0.0},
 }
 #: Keys whose absence marks each evidence (any one of them).
 _MARKERS: Dict[str, tuple] = {
@@ -73,12 +80,20 @@ def missing_grid_features(stored: Mapping[str, Any]) -> List[str]:
     return [name for name, values in LEGACY_GRID_VALUES.items() if not any(k in grid for k in values)]
 
 
+def missing_track_features(stored: Mapping[str, Any]) -> List[str]:
+    """The tracker features (keys of :data:`LEGACY_TRACK_VALUES`) whose settings the stored
+    settings do not carry at all."""
+    return [name for name, values in LEGACY_TRACK_VALUES.items() if not any(k in stored for k in values)]
+
+
 def legacy_completed(stored: Mapping[str, Any]) -> Dict[str, Any]:
     """``stored`` with every missing floor-identification setting set as the writing indoorloc used
     it (module docstring); keys present are kept as stored. Does not modify ``stored``."""
     d = dict(stored)
     for name in missing_evidence(stored):
         d.update(LEGACY_VALUES[name])
+    for name in missing_track_features(stored):
+        d.update(LEGACY_TRACK_VALUES[name])
     grid_missing = missing_grid_features(stored)
     if grid_missing:
         d["grid_options"] = dict(stored["grid_options"])
@@ -98,7 +113,7 @@ def stored_track_settings(stored: Mapping[str, Any], source: str):
     :class:`SiteSettingsWarning` once, naming the file, what its settings lack and the command that
     rebuilds it, when an evidence is missing. ValueError as ``from_dict`` for unknown keys."""
     missing = missing_evidence(stored)
-    grid_missing = missing_grid_features(stored)
+    grid_missing = missing_grid_features(stored) + missing_track_features(stored)
     if grid_missing:
         warnings.warn(f"indoorloc: site file {source} was saved before {', '.join(grid_missing)} existed: tracks use "
                       f"the tracker it was saved with. Rebuild the site file for the current tracker: "
@@ -111,5 +126,5 @@ def stored_track_settings(stored: Mapping[str, Any], source: str):
     return site_model.TrackSettings.from_dict(legacy_completed(stored))
 
 
-__all__ = ["LEGACY_GRID_VALUES", "LEGACY_VALUES", "SiteSettingsWarning", "legacy_completed", "missing_evidence",
-           "missing_grid_features", "stored_track_settings"]
+__all__ = ["LEGACY_GRID_VALUES", "LEGACY_TRACK_VALUES", "LEGACY_VALUES", "SiteSettingsWarning", "legacy_completed",
+           "missing_evidence", "missing_grid_features", "missing_track_features", "stored_track_settings"]
