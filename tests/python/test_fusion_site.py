@@ -96,6 +96,7 @@ def test_round_trip_equals_in_memory_models(built, floor_dir):
     assert start["time_s"] == test_steps.times_s[0] and start["floor"] == 8
     assert not np.array_equal(r["smoothed_median_m"], first["smoothed_median_m"])
     np.testing.assert_array_equal(r["smoothed_covariance_m2"], first["smoothed_covariance_m2"])
+    np.testing.assert_array_equal(r["smoothed_median_m"], r["smoothed_m"])  # the second pass's mean
     assert np.hypot(*(r["smoothed_median_m"][0] - start["position_m"])) < 3 * settings.second_pass_start_sd_m
     reopened = Site.open(site.path)
     track = reopened.track(test, floor=FLOOR)

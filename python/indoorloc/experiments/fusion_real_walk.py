@@ -315,9 +315,9 @@ def _identification_options(settings: RealSettings, spread_rad: float):
 def _second_pass(score: WalkScore, put, first: dict, pdr_steps, fixes, models: FoldModels, settings: RealSettings,
                  base) -> None:
     """fusion_smoother as the site model tracks: the second smoother pass from the first pass's
-    located start (``site_model.run_second_pass``). Its estimates replace the first pass's (both
-    point estimates, for --select); the 95 % region keeps the first pass's calibrated covariance
-    (``site_model.SECOND_PASS_KEYS``)."""
+    located start (``site_model.run_second_pass``). Its mean replaces the first pass's estimates
+    (both point estimates, for --select); the 95 % region keeps the first pass's calibrated
+    covariance (``site_model.SECOND_PASS_KEYS``)."""
     fl = models.floor
     wt = score.t_s + score.waypoint_t0
     wxy = score.waypoint_xy_m
@@ -325,13 +325,10 @@ def _second_pass(score: WalkScore, put, first: dict, pdr_steps, fixes, models: F
     tracker = _grid_tracker(fl.plan, site_model.second_pass_options(base, settings.track_settings()), fl.name,
                             models.database)
     r2 = site_model.run_second_pass(tracker, first, pdr_steps, fixes, fl.number, settings.point_estimate == "median")
-    alternatives = {"mean": _interp_track(wt, pdr_steps.times_s, r2["smoothed_m"])}
-    if "smoothed_median_m" in r2:
-        alternatives["median"] = _interp_track(wt, pdr_steps.times_s, r2["smoothed_median_m"])
-    for pe, est in alternatives.items():
+    # Its point estimate is its mean whatever the first pass's (site_model.SECOND_PASS_KEYS).
+    est = _interp_track(wt, pdr_steps.times_s, r2["smoothed_m"])
+    for pe in ("mean", "median"):
         put(f"_alt/fusion_smoother/{pe}", est)
-    est = alternatives["median"] if settings.point_estimate == "median" and "median" in alternatives \
-        else alternatives["mean"]
     put("fusion_smoother", est)
     score.seconds["fusion_smoother"] = score.seconds.get("fusion_smoother", 0.0) + time.perf_counter() - tic
     idx = np.clip(np.searchsorted(pdr_steps.times_s, wt), 0, len(pdr_steps) - 1)

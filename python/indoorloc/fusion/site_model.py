@@ -316,8 +316,11 @@ def survey_anchored(tracker: GridTracker, plan: Any, database: wifi_fixes.Finger
 
 def second_pass_options(options: GridTrackerOptions, settings: TrackSettings) -> GridTrackerOptions:
     """The grid options of the smoother's second pass (``TrackSettings.second_pass_start_sd_m``):
-    ``options`` with the start sd and the known start's fix weighting and walls."""
-    return options.replace(start_position_sd_m=settings.second_pass_start_sd_m,
+    ``options`` with the start sd and the known start's fix weighting and walls, without the
+    spatial median: its posterior is one mode around the located start, whose mean is its point
+    estimate (the median gave the same errors within 0.004 m on fold seeds 0-1, at about twice the
+    pass's cost)."""
+    return options.replace(start_position_sd_m=settings.second_pass_start_sd_m, spatial_median=False,
                            fix_tempering=settings.known_start_fix_tempering,
                            fix_outlier_probability=settings.known_start_fix_outlier_probability,
                            wall_log_penalty=settings.known_start_wall_log_penalty,
@@ -334,8 +337,9 @@ def located_start(first_pass: dict, steps: Steps, floor: int, median: bool) -> d
             "heading_offset_rad": float(first_pass["walk_heading_offset_rad"]), "time_s": float(steps.times_s[0])}
 
 
-#: The smoothed keys of a run that the second pass replaces (its covariances stay the first
-#: pass's: they are calibrated for a walker whose start was not given, which is the case).
+#: The smoothed keys of a run that the second pass replaces, both by its posterior mean (its
+#: covariances stay the first pass's: they are calibrated for a walker whose start was not given,
+#: which is the case).
 SECOND_PASS_KEYS = ("smoothed_m", "smoothed_median_m")
 
 
@@ -352,8 +356,8 @@ def run_default(tracker: GridTracker, steps: Steps, fixes, smooth: bool = True,
     r2 = run_second_pass(second_pass, r, steps, fixes, floor, median)
     first = dict(r)
     for key in SECOND_PASS_KEYS:
-        if key in r2 and key in r:
-            r[key] = np.asarray(r2[key])
+        if key in r:
+            r[key] = np.asarray(r2["smoothed_m"])
     r["first_pass"] = first
     return r
 
