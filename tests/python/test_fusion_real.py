@@ -103,6 +103,9 @@ def test_cli_writes_the_json_contract_and_plots(two_floor_site, tmp_path, monkey
         assert set(stats["by_coverage"]) == {"within_5m", "5_to_10m", "beyond_10m"}
     smoother = data["methods"]["fusion_smoother"]
     assert 0.0 <= smoother["region95_coverage"] <= 1.0
+    # Per floor too (one floor here: the pooled figure); "| fusion_smoother |" row in the coverage table.
+    assert data["per_floor"]["F1"]["fusion_smoother"]["region95_coverage"] == smoother["region95_coverage"]
+    assert "inside the estimate's 95 % region" in fr.markdown(data)
     # The live tracker: scored from its first located estimate, which comes after the first waypoint.
     first = data["methods"]["fusion_live"]["first_position"]
     assert set(first) == {"median_s", "p90_s", "max_s", "waypoints_before", "walks_never_located"}

@@ -71,6 +71,9 @@ def summarize(scores: Sequence[WalkScore], settings: RealSettings, seconds: floa
             ef = [s.errors_m[name] for s in scores if s.floor == fl and name in s.errors_m]
             if ef:
                 per_floor.setdefault(fl, {})[name] = _stats(np.concatenate(ef))
+                inside = [s.in_region95[name] for s in scores if s.floor == fl and name in s.in_region95]
+                if inside:  # the 85-97 % goal holds per floor too
+                    per_floor[fl][name]["region95_coverage"] = float(np.concatenate(inside).mean())
         t = np.concatenate([s.t_s for s in scores if name in s.errors_m])
         ev = np.concatenate(e)
         bins = []
@@ -151,6 +154,17 @@ def markdown(result: dict) -> str:
                   "| method | " + " | ".join(heads) + " |", "|---|" + "---|" * len(heads)]
         for name, bs in result["error_vs_time"].items():
             lines.append(f"| {name} | " + " | ".join("-" if b["mean_m"] is None else f"{b['mean_m']:.1f}" for b in bs) + " |")
+    covered = [name for name in ("fusion_unknown_start", "fusion_live", "fusion_smoother", "fusion_known_start")
+               if any("region95_coverage" in m.get(name, {}) for m in result["per_floor"].values())]
+    if covered:
+        lines += ["", "Share of waypoints inside the estimate's 95 % region (goal 85-97 %), pooled and per floor:", "",
+                  "| method | pooled | " + " | ".join(result["per_floor"]) + " |",
+                  "|---|---|" + "---|" * len(result["per_floor"])]
+        for name in covered:
+            cells = [f"{100 * m[name]['region95_coverage']:.1f}" if "region95_coverage" in m.get(name, {}) else "-"
+                     for m in result["per_floor"].values()]
+            pooled = result["methods"][name].get("region95_coverage")
+            lines.append(f"| {name} | {'-' if pooled is None else f'{100 * pooled:.1f}'} | " + " | ".join(cells) + " |")
     fp = result["methods"].get("fusion_live", {}).get("first_position")
     if fp:
         lines += ["", f"Live tracker (fusion_live: causal steps, each WiFi fix applied when its scan exists): first "
