@@ -419,7 +419,7 @@ def test_cli_track_says_when_no_wifi_fix_was_available(tmp_path, floor_dir, caps
     assert "no WiFi fix available" in printed and "not located" in printed
     w = json.loads(out.read_text())["walks"][0]
     assert w["wifi_fixes"] == 0 and len(w["t_s"]) > 0
-    assert np.median(w["sd_x_m"]) > 20.0
+    assert np.median(w["sd_x_m"]) > 10.0   # the floor-wide prior's (F8: about 17 m)
     # A walk with WiFi: its fixes counted, and no such note.
     assert main(["--quiet", "track", str(paths[5]), "--site", str(db), "--floor", FLOOR, "-o", str(out)]) == 0
     assert "no WiFi fix" not in capsys.readouterr().out

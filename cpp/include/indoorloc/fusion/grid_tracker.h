@@ -144,16 +144,18 @@ struct GridTrackerOptions {
   /// same way, coverage was 0.945 (filter) and 0.936 (smoother) pooled, 0.89-0.97 (filter) and
   /// 0.83-0.99 (smoother) per floor; with h = 0 (d only) 0.82-0.99 and 0.83-1.00, F4 the low one
   /// (experiments/fusion_uncertainty.py, docs/fusion_real.md, "Honest uncertainty"). g = 0 was
-  /// chosen for both: with the fix-sd term the distance adds nothing. Other fixes (BLE, UWB) or
-  /// a known start want their own.
+  /// chosen for both: with the fix-sd term the distance adds nothing. The smoother's (a 1, b 4 m,
+  /// h 6) were re-chosen the same way with the site model's second smoother pass ("Locate, then
+  /// track"), whose estimate they describe: held out per floor 0.86-0.99. Other fixes (BLE, UWB)
+  /// or a known start want their own.
   double filtered_covariance_scale = 3.0;
   double filtered_covariance_floor_m = 4.0;
   double filtered_covariance_fix_gain = 0.0;
   double filtered_covariance_fix_sd_gain = 12.0;
-  double smoothed_covariance_scale = 1.5;
+  double smoothed_covariance_scale = 1.0;
   double smoothed_covariance_floor_m = 4.0;
   double smoothed_covariance_fix_gain = 0.0;
-  double smoothed_covariance_fix_sd_gain = 8.0;
+  double smoothed_covariance_fix_sd_gain = 6.0;
   double covariance_fix_sd_knee_m = 8.0;
   /// Refuse (std::invalid_argument quoting the bytes) a run whose grids would exceed this.
   double max_memory_bytes = 4e9;
