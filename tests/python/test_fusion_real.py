@@ -249,7 +249,7 @@ def test_floor_without_plan_is_skipped_unless_named(two_floor_site, tmp_path, mo
     assert "error: indoorloc: argument 'data_root': floor F2: no floor plan" in capsys.readouterr().err
     # No floor with a plan at all: the error says which floors lack one.
     bare = _kaggle_layout(two_floor_site, tmp_path / "bare", ["F1"], plans=[])
-    with pytest.warns(RecordingWarning), pytest.raises(ValueError, match=r"no floor folder .*floors without a plan"):
+    with pytest.warns(RecordingWarning), pytest.raises(ValueError, match=r"no floor folder .*folders with walk files but no plan"):
         fr.site_floors(bare, ())
 
 

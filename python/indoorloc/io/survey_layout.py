@@ -133,7 +133,8 @@ def survey_floors(survey_dir: Path, floors: Optional[Sequence[str]] = None, *,
         out.append(SurveyFloor(name, floor_number(name), walks, geojson, info if info.is_file() else None,
                                fdir, pdir))
     if not out:
-        why = f"; floors without a plan (geojson_map.json under {plan_root}): {no_plan}" if no_plan else ""
+        shown = no_plan if len(no_plan) <= 8 else no_plan[:8] + [f"... {len(no_plan)} in all"]
+        why = f"; folders with walk files but no plan (geojson_map.json under {plan_root}): {shown}" if no_plan else ""
         raise _err(argument, f"no floor folder with walk files (path_data_files/*.txt or *.txt) and a "
                              f"floor plan under {walk_root}{why}")
     numbers = [f.number for f in out]
