@@ -22,6 +22,24 @@ namespace {
 
 std::string Seconds(double t) { return FormatValue(t) + " s"; }
 
+// The estimate at a step before a known start: the walker stands at the start (the batch's
+// estimate there), located, with `fixes` applied so far.
+void AtKnownStart(const TrackStart& start, int floor_index, int n_floors, double start_sd_m, int fixes,
+                  GridFilterEstimate* e) {
+  const double var = start_sd_m * start_sd_m;
+  e->mean_m = start.position_m;
+  e->covariance_m2 << var, 0.0, var;
+  e->posterior_covariance_m2 = e->covariance_m2;
+  e->fix_distance_m = 0.0;
+  e->fix_sd_m = 0.0;
+  e->floor_probabilities = Eigen::VectorXd::Zero(n_floors);
+  e->floor_probabilities[floor_index] = 1.0;
+  e->heading_offset_rad = start.heading_offset_rad;
+  e->log_evidence = 0.0;
+  e->fixes = fixes;
+  e->located = true;
+}
+
 }  // namespace
 
 struct GridFilterSession::State {
@@ -157,19 +175,7 @@ GridFilterEstimate GridFilterSession::AddStep(const StepInput& step) {
   e.time_s = step.time_s;
   e.steps = s.steps;
   if (s.start.known && !s.started && step.time_s <= s.start.time_s) {
-    // Before the known start: the walker stands at the start (the batch's estimate there).
-    const double var = o.start_position_sd_m * o.start_position_sd_m;
-    e.mean_m = s.start.position_m;
-    e.covariance_m2 << var, 0.0, var;
-    e.posterior_covariance_m2 = e.covariance_m2;
-    e.fix_distance_m = 0.0;
-    e.fix_sd_m = 0.0;
-    e.floor_probabilities = Eigen::VectorXd::Zero(n_floors);
-    e.floor_probabilities[s.start_floor_index] = 1.0;
-    e.heading_offset_rad = s.start.heading_offset_rad;
-    e.log_evidence = 0.0;
-    e.fixes = s.summary.fixes;
-    e.located = true;
+    AtKnownStart(s.start, s.start_floor_index, n_floors, o.start_position_sd_m, s.summary.fixes, &e);
     s.summary.seconds += timer.ElapsedSeconds();
     return e;
   }
