@@ -148,3 +148,23 @@ def test_an_old_site_file_tracks_as_the_settings_it_was_saved_with(two_floor_sur
         assert a.floor == b.floor == floor
         assert a.floor_probabilities == pytest.approx(b.floor_probabilities, abs=0)
         np.testing.assert_array_equal(a.xy_m, b.xy_m)
+
+
+def test_a_site_file_with_a_damaged_setting_is_refused_naming_file_and_setting(two_floor_survey, tmp_path):
+    """A stored value out of range (here a negative second-pass start sd) is not silently read as
+    another tracker: opening the file raises SiteFileError naming the file and the setting."""
+    from indoorloc.fusion.site import Site
+    from indoorloc.fusion.site_store import SiteFileError
+
+    survey, _ = two_floor_survey
+    site = Site.build(survey, tmp_path / "site.db")
+    bad = tmp_path / "bad.db"
+    bad.write_bytes(site.path.read_bytes())
+    con = sqlite3.connect(bad)
+    stored = json.loads(con.execute("SELECT settings FROM tracker_settings WHERE name = 'default'").fetchone()[0])
+    con.execute("UPDATE tracker_settings SET settings = ? WHERE name = 'default'",
+                (json.dumps(dict(stored, second_pass_start_sd_m=-1.0)),))
+    con.commit()
+    con.close()
+    with pytest.raises(SiteFileError, match=r"bad\.db: its tracker settings are not usable: .*second_pass_start_sd_m"):
+        Site.open(bad)

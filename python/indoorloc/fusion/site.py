@@ -137,7 +137,12 @@ class Site:
                 raise store.SiteFileError(f"indoorloc: site file {self.path}: no tracker settings")
             # A file written before part of floor identification keeps the evidence it was saved
             # with (and warns): site_settings.
-            self.settings = site_settings.stored_track_settings(json.loads(row[0]), str(self.path))
+            try:
+                self.settings = site_settings.stored_track_settings(json.loads(row[0]), str(self.path))
+                self.settings.validate()
+            except (ValueError, TypeError) as exc:  # a damaged value: say which file and which setting
+                raise store.SiteFileError(f"indoorloc: site file {self.path}: its tracker settings are not "
+                                          f"usable: {exc}") from None
             self._floors = {name: (int(num), (lon, lat)) for name, num, lon, lat in con.execute(
                 "SELECT name, number, origin_lon, origin_lat FROM floors ORDER BY number")}
         finally:
