@@ -44,6 +44,11 @@ COVARIANCE_METHODS = ("fusion_unknown_start", "fusion_live", "fusion_smoother", 
 SELECT_OBJECTIVE = "fusion_smoother"
 
 
+def _site_default(name: str):
+    """A field whose default is the site model's ``TrackSettings.<name>`` (defined there, once)."""
+    return field(default_factory=lambda: getattr(site_model.TrackSettings(), name))
+
+
 @dataclass
 class RealSettings:
     """Settings of ``indoorloc fusion evaluate``; each is fixed in advance (why in the comment),
@@ -63,8 +68,8 @@ class RealSettings:
     #: Per-step white noise of the handheld PDR given to the filter: length sd as a fraction of the
     #: stride and heading sd [rad] (LOFO: 20 deg); the systematic parts are the filter's scale and
     #: offset states. Defaults: the site model's (read from the C++ live session's options).
-    step_length_sd_fraction: float = field(default_factory=lambda: site_model.TrackSettings().step_length_sd_fraction)
-    step_heading_sd_rad: float = field(default_factory=lambda: site_model.TrackSettings().step_heading_sd_rad)
+    step_length_sd_fraction: float = _site_default("step_length_sd_fraction")
+    step_heading_sd_rad: float = _site_default("step_heading_sd_rad")
     #: LOFO: log-weight of a step through a shop wall (-inf: the particle is dropped; log 0.02 in
     #: the grid: shops are polygons without doors and 12 of 866 waypoints lie inside one). A known
     #: start inside a shop is moved to the nearest walkable point.
@@ -97,18 +102,15 @@ class RealSettings:
     known_start_fix_metric: str = "shared"
     #: (LOFO on fusion_known_start over the grid of SELECT_GRID, the same point for every held-out
     #: floor: τ 0.2 at the grid's lower edge, 0.4 within 0.02 m of it.) Defaults: the site model's.
-    known_start_fix_tempering: float = field(default_factory=lambda: site_model.TrackSettings().known_start_fix_tempering)
-    known_start_fix_outlier_probability: float = field(
-        default_factory=lambda: site_model.TrackSettings().known_start_fix_outlier_probability)
+    known_start_fix_tempering: float = _site_default("known_start_fix_tempering")
+    known_start_fix_outlier_probability: float = _site_default("known_start_fix_outlier_probability")
     #: The grid engine's known start: its own wall penalty and tempering mode (LOFO on
     #: fusion_known_start, like its τ and ε).
-    known_start_wall_log_penalty: float = field(
-        default_factory=lambda: site_model.TrackSettings().known_start_wall_log_penalty)
-    known_start_fix_tempering_by_variance: bool = field(
-        default_factory=lambda: site_model.TrackSettings().known_start_fix_tempering_by_variance)
+    known_start_wall_log_penalty: float = _site_default("known_start_wall_log_penalty")
+    known_start_fix_tempering_by_variance: bool = _site_default("known_start_fix_tempering_by_variance")
     #: The smoother's second pass from the located start (site model's ``second_pass_start_sd_m``;
     #: 0: one pass).
-    second_pass_start_sd_m: float = field(default_factory=lambda: site_model.TrackSettings().second_pass_start_sd_m)
+    second_pass_start_sd_m: float = _site_default("second_pass_start_sd_m")
     #: The known start's calibration of its returned covariance (a, b [m], g of
     #: GridTrackerOptions.filtered_covariance_*): the all-floor choice of
     #: ``experiments/fusion_uncertainty`` (LOFO coverage 0.951, 0.93-0.98 per floor; re-chosen
@@ -128,7 +130,7 @@ class RealSettings:
     grid_options: Any = field(default_factory=lambda: fusion.GridTrackerOptions())
     #: Point estimate of the grid engine's unknown-start methods: "mean" or "median" (spatial
     #: median) of the posterior (LOFO; the site model's default).
-    point_estimate: str = field(default_factory=lambda: site_model.TrackSettings().point_estimate)
+    point_estimate: str = _site_default("point_estimate")
     #: Also score the other point estimate (hidden keys): set by --select, which chooses it.
     score_both_point_estimates: bool = False
     #: Cells [m] and offset bins of the floor-identification pass (all floors, filter only).
@@ -136,14 +138,10 @@ class RealSettings:
     floor_identification_offset_bins: int = 3
     #: The AP evidence of floor identification (``fusion.floor_evidence``): weight λ, strongest
     #: APs m, rate floor α, outlier probability ε; defaults: TrackSettings' (LOFO, docs/fusion_real.md).
-    floor_identification_ap_weight: float = field(
-        default_factory=lambda: site_model.TrackSettings().identification_ap_weight)
-    floor_identification_ap_count: int = field(
-        default_factory=lambda: site_model.TrackSettings().identification_ap_count)
-    floor_identification_ap_rate_floor: float = field(
-        default_factory=lambda: site_model.TrackSettings().identification_ap_rate_floor)
-    floor_identification_ap_outlier_probability: float = field(
-        default_factory=lambda: site_model.TrackSettings().identification_ap_outlier_probability)
+    floor_identification_ap_weight: float = _site_default("identification_ap_weight")
+    floor_identification_ap_count: int = _site_default("identification_ap_count")
+    floor_identification_ap_rate_floor: float = _site_default("identification_ap_rate_floor")
+    floor_identification_ap_outlier_probability: float = _site_default("identification_ap_outlier_probability")
 
     def tracker_options(self, **overrides) -> fusion.TrackerOptions:
         settings = dict(num_particles=self.num_particles, wall_log_penalty=self.wall_log_penalty,
