@@ -28,7 +28,7 @@ namespace {
 
 py::tuple StepTuple(const StreamingStep& s) {
   return py::make_tuple(s.time_s, s.index, s.feature, s.heading_rotation_vector_rad, s.heading_gyro_rad,
-                        s.heading_complementary_rad, s.start_time_s);
+                        s.heading_complementary_rad, s.start_time_s, s.confirmed_time_s);
 }
 
 Eigen::Vector3d Vector3(const py::handle& obj, const char* name) {
@@ -105,7 +105,7 @@ Options of the streaming (causal) step detector. The defaults equal python
 Causal hand-held step detector fed one IMU sample at a time (docs/pdr_handheld.md; python
 ``indoorloc.pdr.streaming`` wraps it). ``add_sample(t_s, acc_mps2, gyro_radps, quat_xyzw)`` returns
 the steps the sample confirms: tuples ``(t_s, index, feature, heading_rv_rad, heading_gyro_rad,
-heading_complementary_rad, start_t_s)``.)doc")
+heading_complementary_rad, start_t_s, confirmed_t_s)``.)doc")
       .def(py::init<const StreamingStepOptions&>(), py::arg("options") = StreamingStepOptions())
       .def(
           "add_sample",
@@ -140,19 +140,20 @@ heading_complementary_rad, start_t_s)``.)doc")
           py::gil_scoped_release release;
           steps = pdr::CausalSteps(t.map, a.map, g.map, q.map, options);
         }
-        RowMatrixXd out(static_cast<Eigen::Index>(steps.size()), 7);
+        RowMatrixXd out(static_cast<Eigen::Index>(steps.size()), 8);
         for (std::size_t k = 0; k < steps.size(); ++k) {
           const StreamingStep& s = steps[k];
           out.row(static_cast<Eigen::Index>(k)) << s.time_s, static_cast<double>(s.index), s.feature,
-              s.heading_rotation_vector_rad, s.heading_gyro_rad, s.heading_complementary_rad, s.start_time_s;
+              s.heading_rotation_vector_rad, s.heading_gyro_rad, s.heading_complementary_rad, s.start_time_s,
+              s.confirmed_time_s;
         }
         return out;
       },
       py::arg("t_s"), py::arg("acc_mps2"), py::arg("gyro_radps"), py::arg("quat_xyzw"),
       py::arg("options") = StreamingStepOptions(), R"doc(
 The causal steps of a recorded walk (N samples on one time base): every sample through one
-StreamingStepDetector. Returns (M, 7): t_s, index, feature, heading_rv_rad, heading_gyro_rad,
-heading_complementary_rad, start_t_s per step.)doc");
+StreamingStepDetector. Returns (M, 8): t_s, index, feature, heading_rv_rad, heading_gyro_rad,
+heading_complementary_rad, start_t_s, confirmed_t_s (the sample that confirmed it) per step.)doc");
   m.def(
       "quaternion_from_rotation_vector",
       [](const py::object& values) {
@@ -192,7 +193,10 @@ the per-step noise (defaults: ``indoorloc fusion evaluate``'s).)doc");
       .def_readwrite("step_length_sd_fraction", &LiveSessionOptions::step_length_sd_fraction, "Length sd / length.")
       .def_readwrite("step_heading_sd_rad", &LiveSessionOptions::step_heading_sd_rad, "Per-step heading sd [rad].")
       .def_readwrite("delay_compensation", &LiveSessionOptions::delay_compensation,
-                     "Move fixes by the PDR since the time they describe (off: it did not help).");
+                     "Move fixes by the PDR since the time they describe (off: it did not help).")
+      .def_readwrite("standing_after_s", &LiveSessionOptions::standing_after_s,
+                     "A fix still waiting for a step this long after its time [s] is applied at a standing "
+                     "step (no displacement) at its time; 0: fixes wait for a step.");
   BindOptionsProtocol(lo, "LiveSessionOptions");
 
   py::class_<PyLiveSession>(m, "LiveSession", R"doc(
@@ -283,14 +287,17 @@ naming the event's index, kind and time and the previous event's; the session is
             d["events"] = u.events;
             d["imu_samples"] = u.imu_samples;
             d["steps"] = u.steps;
+            d["standing_steps"] = u.standing_steps;
+            d["late_steps"] = u.late_steps;
             d["scans"] = u.scans;
             d["fixes"] = u.fixes;
             d["pending_fixes"] = u.pending_fixes;
             d["unknown_wifi_readings"] = u.unknown_wifi_readings;
             return d;
           },
-          "Events, IMU samples, steps, scans, fixes applied and pending, WiFi readings of BSSIDs "
-          "not in the map (dropped).")
+          "Events, IMU samples, steps detected, standing steps, detected steps moved to a standing "
+          "step's later time, scans, fixes applied and pending, WiFi readings of BSSIDs not in the map "
+          "(dropped).")
       .def_property_readonly(
           "filter", [](const PyLiveSession& s) -> const GridFilterSession& { return s.session->filter(); },
           py::return_value_policy::reference_internal, "The GridFilterSession inside (steps, summary).")

@@ -252,6 +252,52 @@ def test_live_queries_are_walk_queries_and_weighted_maps_replay_equal(synthetic_
             live.LiveTracker(tracker, cal, db.with_settings(replace(db.settings, beacons=True)))
 
 
+def test_a_user_standing_still_is_located_from_wifi_alone(synthetic_floor):
+    """No step (the phone lies flat): each fix no step has applied standing_after_s after its scan
+    is applied at a standing step at the scan's time, so the estimate exists, is located and sits
+    where the scans were made; with the option off there is no estimate at all. A recorded walk
+    with standing steps (the F8 test above has them on most walks) replays equal to the batch."""
+    floor = synthetic_floor
+    walks = list(floor.walks())
+    plan = load_floor_plan(floor.geojson_path, floors=[1], origin_lon_lat="outline_sw")
+    cal, db = _models(walks[:6], 1)
+    tracker = fusion.GridTracker(plan, fusion.GridTrackerOptions(heading_offset_sd_rad=max(cal.yaw_offset_spread_rad, 1e-3)))
+    walk = walks[7]
+    wf = walk.wifi
+    t0 = float(wf.scan_time_s[wf.scan_slice(0).start])
+    # The walk's first scan, sent again every 2 s by a phone that does not move.
+    sl = wf.scan_slice(0)
+    names = [wf.bssids[i] for i in wf.bssid_index[sl]]
+    age = t0 - wf.last_seen_s[sl]
+
+    def stand(tracker_kw, seconds=8.0):
+        lt = live.LiveTracker(tracker, cal, db, **tracker_kw)
+        first = None
+        for i in range(int(seconds * 50)):
+            t = t0 + i / 50
+            lt.add_gyroscope(t, [0.0, 0.0, 0.0])
+            lt.add_rotation_vector(t, [0.0, 0.0, 0.0, 1.0])
+            e = lt.add_accelerometer(t, [0.0, 0.0, 9.80665])
+            if i % 100 == 0:
+                lt.add_wifi_scan(t, names, wf.rssi_dbm[sl], t - age)
+            if e is not None and first is None:
+                first = t - t0
+        return lt, first
+
+    lt, first = stand({})
+    summary = lt.live_session.summary
+    assert summary["steps"] == 0 and summary["standing_steps"] == 4 and summary["late_steps"] == 0
+    assert first == pytest.approx(live.STANDING_AFTER_S) == 1.0
+    e = lt.estimate()
+    assert e.located and e.fixes == 4
+    truth = walk.waypoint_xy_m[0]
+    assert np.hypot(*(np.asarray(e.mean_m) - truth)) < 10.0, (e.mean_m, truth)
+    off, first_off = stand({"standing_after_s": 0.0})
+    assert off.estimate() is None and first_off is None and off.live_session.summary["pending_fixes"] == 4
+    with pytest.raises(ValueError, match=r"standing_after_s"):
+        live.LiveTracker(tracker, cal, db, standing_after_s=0.2)
+
+
 # ------------------------------------------------------------------ one model: the C++ session
 def test_cpp_defaults_equal_the_python_settings_they_mirror():
     """The C++ detector, fix and session options restate no default of their own: each equals the

@@ -57,7 +57,11 @@ bool LiveSessionOptions::IsValid(std::string* error) const {
       .Check(step_length_sd_fraction > 0 && step_length_sd_fraction <= 10, "step_length_sd_fraction",
              "must be finite and in (0, 10], got " + FormatValue(step_length_sd_fraction))
       .Check(step_heading_sd_rad > 0 && step_heading_sd_rad <= 1e3, "step_heading_sd_rad",
-             "must be finite and in (0, 1000], got " + FormatValue(step_heading_sd_rad));
+             "must be finite and in (0, 1000], got " + FormatValue(step_heading_sd_rad))
+      .Check(standing_after_s == 0.0 || (standing_after_s > detector.min_step_interval_s && standing_after_s <= 3600.0),
+             "standing_after_s",
+             "must be 0 (off) or above detector.min_step_interval_s = " + FormatValue(detector.min_step_interval_s) +
+                 " s (the detector's latency) and at most 3600 s, got " + FormatValue(standing_after_s));
 }
 
 struct LiveSession::State {
@@ -72,6 +76,7 @@ struct LiveSession::State {
   std::deque<Eigen::Vector2d> step_d;    // ... and displacements [m]
   GridFilterEstimate estimate;
   bool has_estimate = false;
+  double last_step_t = -std::numeric_limits<double>::infinity();  // the filter's latest step
   LiveSessionSummary summary;
   double last_t = -std::numeric_limits<double>::infinity();
   int last_kind = -1;
@@ -110,7 +115,37 @@ struct LiveSession::State {
     return fixer->Fix(p.query, p.time_s, shift);
   }
   void AddStep(const pdr::StreamingStep& s);
+  void ApplyFixesUpTo(double time_s);
+  void ApplyStanding(double now_s);
 };
+
+// The pending fixes with time <= time_s, in order, before the filter's step at time_s.
+void LiveSession::State::ApplyFixesUpTo(double time_s) {
+  while (!fixes.empty() && fixes.front().time_s <= time_s) {
+    const PendingFix p = std::move(fixes.front());
+    fixes.pop_front();
+    filter.AddFix(p.fix ? *p.fix : MakeFix(p));
+    ++summary.fixes;
+  }
+}
+
+// Called at each event before it is processed (an accelerometer sample confirming a step at
+// now_s comes after the standing steps due by now_s; python live.causal_inputs does the same).
+void LiveSession::State::ApplyStanding(double now_s) {
+  const double wait = options.standing_after_s;
+  if (!(wait > 0)) return;
+  while (!fixes.empty() && fixes.front().time_s + wait <= now_s) {
+    StepInput standing;
+    standing.time_s = std::max(fixes.front().time_s, last_step_t);
+    standing.displacement_m.setZero();
+    standing.covariance_m2.setZero();
+    ApplyFixesUpTo(standing.time_s);
+    estimate = filter.AddStep(standing);
+    last_step_t = standing.time_s;
+    has_estimate = true;
+    ++summary.standing_steps;
+  }
+}
 
 void LiveSession::State::AddStep(const pdr::StreamingStep& s) {
   const LiveSessionOptions& o = options;
@@ -121,14 +156,13 @@ void LiveSession::State::AddStep(const pdr::StreamingStep& s) {
   StepInput step = StepFromPolar(s.time_s, length, heading + o.yaw_offset_rad, o.step_length_sd_fraction * length,
                                  o.step_heading_sd_rad);
   step.covariance_m2(1, 0) = step.covariance_m2(0, 1);  // as the (xx, xy, yy) rows of the batch
+  if (step.time_s < last_step_t) {  // confirmed after a standing step later than its peak
+    step.time_s = last_step_t;
+    ++summary.late_steps;
+  }
   step_t.push_back(step.time_s);
   step_d.push_back(step.displacement_m);
-  while (!fixes.empty() && fixes.front().time_s <= step.time_s) {
-    const PendingFix p = std::move(fixes.front());
-    fixes.pop_front();
-    filter.AddFix(p.fix ? *p.fix : MakeFix(p));
-    ++summary.fixes;
-  }
+  ApplyFixesUpTo(step.time_s);
   // Keep the steps a later fix can still reach back to (a scan describes at most its window).
   double cutoff = step.time_s;
   if (fixer) {
@@ -140,6 +174,7 @@ void LiveSession::State::AddStep(const pdr::StreamingStep& s) {
     step_d.pop_front();
   }
   estimate = filter.AddStep(step);
+  last_step_t = step.time_s;
   has_estimate = true;
   ++summary.steps;
 }
@@ -169,6 +204,7 @@ bool LiveSession::AddAccelerometer(double time_s, const Eigen::Vector3d& acc_mps
                                 FormatTime(s.detector.latest_time_s()) + " s)");
   }
   s.Accept(kAccelerometer, time_s);
+  s.ApplyStanding(time_s);
   if (to_detector) {
     s.confirmed.clear();
     s.detector.AddSample(time_s, acc_mps2, *s.gyro, *s.quat, &s.confirmed);
@@ -183,6 +219,7 @@ bool LiveSession::AddGyroscope(double time_s, const Eigen::Vector3d& gyro_radps)
   CheckArgument(gyro_radps.allFinite(), "gyro_radps", "expected 3 finite values");
   s.CheckTime(kGyroscope, time_s);
   s.Accept(kGyroscope, time_s);
+  s.ApplyStanding(time_s);
   s.gyro = gyro_radps;
   return s.has_estimate;
 }
@@ -194,6 +231,7 @@ bool LiveSession::AddRotationVector(double time_s, const Eigen::Ref<const Eigen:
   const Eigen::Vector4d q = pdr::QuaternionFromRotationVector(values.head(std::min<Eigen::Index>(values.size(), 4)));
   s.CheckTime(kRotationVector, time_s);
   s.Accept(kRotationVector, time_s);
+  s.ApplyStanding(time_s);
   s.quat = q;
   return s.has_estimate;
 }
@@ -205,6 +243,7 @@ bool LiveSession::AddWifiScan(double time_s, const std::vector<std::string>& bss
   s.CheckTime(kWifi, time_s);
   FingerprintFixer::CheckScan(time_s, bssids, rssi_dbm, last_seen_s);  // before the scan is accepted
   s.Accept(kWifi, time_s);
+  s.ApplyStanding(time_s);
   ++s.summary.scans;
   if (!s.fixer) return s.has_estimate;
   PendingFix p{time_s, 0.0, ScanQuery(), std::nullopt};
@@ -226,13 +265,14 @@ bool LiveSession::AddBeacon(double time_s) {
   State& s = *state_;
   s.CheckTime(kBeacon, time_s);
   s.Accept(kBeacon, time_s);
+  s.ApplyStanding(time_s);
   return s.has_estimate;
 }
 
 bool LiveSession::HasEstimate() const { return state_->has_estimate; }
 
 const GridFilterEstimate& LiveSession::Estimate() const {
-  if (!state_->has_estimate) throw std::logic_error("indoorloc: LiveSession::Estimate: no step yet");
+  if (!state_->has_estimate) throw std::logic_error("indoorloc: LiveSession::Estimate: no step (detected or standing) yet");
   return state_->estimate;
 }
 

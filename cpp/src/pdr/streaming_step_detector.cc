@@ -215,6 +215,7 @@ void StreamingStepDetector::State::Process(const Sample& smp, std::vector<Stream
   }
   if (has_candidate && t - cand_t >= o.min_step_interval_s) {
     out->push_back(Confirm());
+    out->back().confirmed_time_s = t;
     has_candidate = false;
   }
   s_prev2 = s_prev;

@@ -18,7 +18,9 @@ What happens to each event (docs/fusion.md, "Live tracking"):
   seen in [t - query_window_s, t] (exactly ``wifi_fixes.walk_queries``, incrementally); its ``k``
   best fingerprints make a fix **timed at the scan** (when it exists, not at the mean last-seen time
   that ``walk_queries`` stamps it with: a live filter cannot apply a fix before it is made). The
-  fix is applied at the first step at or after its time. ``delay_compensation`` (off by
+  fix is applied at the first step at or after its time; one that no step has applied
+  ``standing_after_s`` (1 s) after its time is applied at a **standing step** (no displacement)
+  at its time, so a user standing still is located and followed by WiFi alone. ``delay_compensation`` (off by
   default) moves each component of the fix by the PDR displacement (calibrated, nominal heading
   offset) of the steps between its measurements' mean last-seen time and the step that applies
   it. Measured on the six shared floors it does not help (10.93 m pooled without, 11.01 m with:
@@ -30,7 +32,7 @@ Every method returns the current estimate (a ``fusion.LiveEstimate``, read-only 
 ``time_s``, ``steps``, ``mean_m`` (2,), ``covariance_m2`` (3,) = (xx, xy, yy),
 ``floor_probabilities`` (F,), ``floors`` (F,) floor numbers, ``floor``, ``heading_offset_rad``,
 ``fixes`` (applied so far), ``located``, ...; ``to_dict()`` gives them as a dict), or None before the
-first step. **``located`` is False until the first fix is applied** (unknown start): the estimate is
+first step (detected or standing). **``located`` is False until the first fix is applied** (unknown start): the estimate is
 then the prior's, the mean of the floor's walkable area with a covariance the size of the floor, not
 a position; an app shows "locating" rather than that point. On the shared site the first fix comes
 2.3 s (median; p90 3.5 s) after a walk's first waypoint (`indoorloc fusion evaluate`, ``fusion_live``). Events must come in
@@ -38,8 +40,9 @@ non-decreasing time: otherwise ValueError naming the event's index, type and bot
 tracker is unchanged.
 
 Exactness: :func:`causal_track` is the same filter in one batch call (causal steps of the whole
-walk, fixes at their scan times, ``GridTracker.run`` without smoothing). A walk replayed event by
-event (:func:`walk_events`) gives its track bit for bit (tests/python/test_fusion_live.py).
+walk with the session's standing steps, fixes at their scan times, ``GridTracker.run`` without
+smoothing). A walk replayed event by
+event (:func:`walk_events` with ``beacons=True``) gives its track bit for bit (tests/python/test_fusion_live.py).
 """
 
 from __future__ import annotations
@@ -62,6 +65,9 @@ from indoorloc.wifi import matcher as wifi_matcher
 #: stride, heading sd [rad]; the systematic parts are the filter's offset and scale layers.
 STEP_LENGTH_SD_FRACTION = LiveSessionOptions().step_length_sd_fraction
 STEP_HEADING_SD_RAD = LiveSessionOptions().step_heading_sd_rad
+#: A fix still waiting for a step this long after its time [s] is applied at a standing step (the
+#: C++ LiveSessionOptions.standing_after_s; 0: fixes wait for a detected step).
+STANDING_AFTER_S = LiveSessionOptions().standing_after_s
 
 #: Event kinds of :meth:`LiveTracker.add_event` and :func:`walk_events`, in their order at equal
 #: times (the held IMU streams before the accelerometer sample that uses them).
@@ -75,6 +81,58 @@ def _step_arrays(steps: ph.HandheldSteps, yaw_offset_rad: float, length_sd_fract
 
     return Steps.from_polar(steps.t_s, steps.length_m, steps.heading_rad + yaw_offset_rad,
                             length_sd_fraction * steps.length_m, heading_sd_rad)
+
+
+def _with_standing_steps(steps, confirmed_s: np.ndarray, fix_times_s: np.ndarray, wait_s: float,
+                         last_event_s: float):
+    """The filter's steps of a live session: the detected ``steps`` (fusion.Steps, confirmed at
+    ``confirmed_s`` (M,) [s]) with a standing step (zero displacement and covariance) at the time of
+    every fix (times ``fix_times_s``, sorted) that no step has applied ``wait_s`` after its time,
+    when some event comes that late (``last_event_s``). Replays LiveSession's rule (live_session.cc,
+    ApplyStanding: due standing steps go first at an event, then the step it confirms; a step
+    earlier than the filter's latest step is moved to that time)."""
+    from indoorloc.fusion.steps import Steps
+
+    fix_t = np.asarray(fix_times_s, float)
+    times: List[float] = []
+    source: List[int] = []      # index of the detected step, -1 for a standing step
+    state = {"fix": 0, "last": -math.inf}
+
+    def add(t: float, src: int) -> None:
+        t = max(t, state["last"])
+        times.append(t)
+        source.append(src)
+        state["last"] = t
+        while state["fix"] < fix_t.size and fix_t[state["fix"]] <= t:  # the fixes this step applies
+            state["fix"] += 1
+
+    def standing_until(now_s: float) -> None:
+        while wait_s > 0 and state["fix"] < fix_t.size and fix_t[state["fix"]] + wait_s <= now_s:
+            add(float(fix_t[state["fix"]]), -1)
+
+    for i in range(len(steps)):
+        standing_until(float(confirmed_s[i]))
+        add(float(steps.times_s[i]), i)
+    standing_until(last_event_s)
+    if not times or min(source) >= 0:
+        return steps
+    src = np.asarray(source)
+    real = src >= 0
+    disp = np.zeros((src.size, 2))
+    cov = np.zeros((src.size, 3))
+    disp[real] = steps.displacements_m[src[real]]
+    cov[real] = steps.covariances_m2[src[real]]
+    return Steps(np.asarray(times, float), disp, cov)
+
+
+def _last_event_s(walk: Any) -> float:
+    """The time of a recorded walk's last live event [s] (:func:`walk_events` with its beacons:
+    a phone sends every event it has)."""
+    streams = [walk.gyroscope.t_s, walk.rotation_vector.t_s, walk.accelerometer.t_s, walk.wifi.scan_times_s]
+    if getattr(walk, "beacons", None) is not None:
+        streams.append(walk.beacons.t_s)
+    ends = [float(np.max(np.asarray(x, float))) for x in streams if np.asarray(x).size]
+    return max(ends) if ends else -math.inf
 
 
 def _fixes_of_queries(times_s: np.ndarray, rss_dbm: np.ndarray, database: wfx.FingerprintDatabase,
@@ -137,19 +195,23 @@ def causal_inputs(walk: Any, calibration: Optional[ph.HandheldCalibration] = Non
                   database: Optional[wfx.FingerprintDatabase] = None, *,
                   step_length_sd_fraction: float = STEP_LENGTH_SD_FRACTION,
                   step_heading_sd_rad: float = STEP_HEADING_SD_RAD, with_floors: bool = True,
-                  delay_compensation: bool = False):
+                  delay_compensation: bool = False, standing_after_s: float = STANDING_AFTER_S):
     """The steps (fusion.Steps) and fixes (fusion.Fixes or None) a live tracker derives from a
     recorded walk: causal steps (``pdr.streaming.causal_handheld_steps`` with the calibration's
-    options), fixes of the scans timed at the scans, those after the last step dropped (a live
-    filter has not applied them yet). ``delay_compensation``: each fix's components moved by the
-    PDR displacement from the time the fix describes (its measurements' mean last-seen time) to
-    the step that applies it (module docstring)."""
+    options) and the live session's standing steps (a fix no step has applied ``standing_after_s``
+    [s] after its time is applied at a standing step at its time; 0: none), fixes of the scans
+    timed at the scans, those after the last step dropped (a live filter has not applied them
+    yet). ``delay_compensation``: each fix's components moved by the PDR displacement from the
+    time the fix describes (its measurements' mean last-seen time) to the step that applies it
+    (module docstring)."""
     options = calibration.options if calibration is not None else ph.HandheldOptions()
     yaw = calibration.yaw_offset_rad if calibration is not None else 0.0
-    steps = _step_arrays(ps.causal_handheld_steps(walk, options), yaw, step_length_sd_fraction, step_heading_sd_rad)
+    detected = ps.causal_handheld_steps(walk, options)
+    steps = _step_arrays(detected, yaw, step_length_sd_fraction, step_heading_sd_rad)
     fixes = None
     if database is not None:
         t, described, rss = causal_queries(walk, database)
+        steps = _with_standing_steps(steps, detected.confirmed_t_s, t, float(standing_after_s), _last_event_s(walk))
         last = steps.times_s[-1] if len(steps) else -math.inf
         keep = t <= last
         t, described, rss = t[keep], described[keep], rss[keep]
@@ -166,14 +228,14 @@ def causal_track(tracker: GridTracker, walk: Any, calibration: Optional[ph.Handh
                  database: Optional[wfx.FingerprintDatabase] = None, *, start: Optional[dict] = None,
                  step_length_sd_fraction: float = STEP_LENGTH_SD_FRACTION,
                  step_heading_sd_rad: float = STEP_HEADING_SD_RAD, with_floors: bool = True,
-                 delay_compensation: bool = False) -> dict:
+                 delay_compensation: bool = False, standing_after_s: float = STANDING_AFTER_S) -> dict:
     """The live tracker's track of a recorded walk in one batch call: ``GridTracker.run`` (no
     smoothing) on :func:`causal_inputs`. Returns run's dict (``times_s``, ``mean_m``,
-    ``covariance_m2``, ``floor_probabilities``, ``heading_offset_rad`` per step; empty arrays for a
-    walk without steps)."""
+    ``covariance_m2``, ``floor_probabilities``, ``heading_offset_rad`` per filter step, detected or
+    standing; empty arrays for a walk without either)."""
     steps, fixes = causal_inputs(walk, calibration, database, step_length_sd_fraction=step_length_sd_fraction,
                                  step_heading_sd_rad=step_heading_sd_rad, with_floors=with_floors,
-                                 delay_compensation=delay_compensation)
+                                 delay_compensation=delay_compensation, standing_after_s=standing_after_s)
     if len(steps) == 0:
         return {"times_s": np.zeros(0), "mean_m": np.zeros((0, 2)), "covariance_m2": np.zeros((0, 3)),
                 "located": np.zeros(0, bool)}
@@ -192,15 +254,17 @@ def causal_track(tracker: GridTracker, walk: Any, calibration: Optional[ph.Handh
 
 def session_options(calibration: Optional[ph.HandheldCalibration] = None, *,
                     step_length_sd_fraction: float = STEP_LENGTH_SD_FRACTION,
-                    step_heading_sd_rad: float = STEP_HEADING_SD_RAD, delay_compensation: bool = False):
+                    step_heading_sd_rad: float = STEP_HEADING_SD_RAD, delay_compensation: bool = False,
+                    standing_after_s: float = STANDING_AFTER_S):
     """The C++ live session's options (``_core.fusion.LiveSessionOptions``) of a calibration (None:
-    ``HandheldOptions()`` defaults, yaw offset 0) and the per-step noise."""
+    ``HandheldOptions()`` defaults, yaw offset 0), the per-step noise and the standing wait [s]."""
     options = calibration.options if calibration is not None else ph.HandheldOptions()
     return LiveSessionOptions(detector=ps.detector_options(options), step_length_k=options.k,
                               heading_source=options.heading_source,
                               yaw_offset_rad=calibration.yaw_offset_rad if calibration is not None else 0.0,
                               step_length_sd_fraction=float(step_length_sd_fraction),
-                              step_heading_sd_rad=float(step_heading_sd_rad), delay_compensation=bool(delay_compensation))
+                              step_heading_sd_rad=float(step_heading_sd_rad), delay_compensation=bool(delay_compensation),
+                              standing_after_s=float(standing_after_s))
 
 
 def fingerprint_map(database: wfx.FingerprintDatabase) -> Tuple:
@@ -234,17 +298,22 @@ class LiveTracker:
     delay_compensation : bool
         Move each fix by the PDR displacement from the time it describes to the step that
         applies it (module docstring; off: it did not help on the shared floors).
+    standing_after_s : float
+        A fix no step has applied this long after its time [s] is applied at a standing step
+        (zero displacement) at its time, so that a user standing still is located and updated
+        (module docstring); 0: fixes wait for a detected step.
     """
 
     def __init__(self, tracker: GridTracker, calibration: Optional[ph.HandheldCalibration] = None,
                  database: Optional[wfx.FingerprintDatabase] = None, *, start: Optional[dict] = None,
                  step_length_sd_fraction: float = STEP_LENGTH_SD_FRACTION,
                  step_heading_sd_rad: float = STEP_HEADING_SD_RAD, with_floors: bool = True,
-                 delay_compensation: bool = False):
+                 delay_compensation: bool = False, standing_after_s: float = STANDING_AFTER_S):
         if not isinstance(tracker, GridTracker):
             raise TypeError(f"indoorloc: argument 'tracker': expected a fusion.GridTracker, got {type(tracker).__name__}")
         options = session_options(calibration, step_length_sd_fraction=step_length_sd_fraction,
-                                  step_heading_sd_rad=step_heading_sd_rad, delay_compensation=delay_compensation)
+                                  step_heading_sd_rad=step_heading_sd_rad, delay_compensation=delay_compensation,
+                                  standing_after_s=standing_after_s)
         arrays, fix = None, None
         if database is not None:
             _check_live_settings(database)
@@ -311,7 +380,8 @@ class LiveTracker:
 
     @property
     def live_session(self) -> LiveSession:
-        """The C++ live session (summary: events, IMU samples, steps, scans, fixes)."""
+        """The C++ live session (summary: events, IMU samples, steps detected and standing, scans,
+        fixes applied and pending)."""
         return self._live
 
 
@@ -348,6 +418,6 @@ def walk_events(walk: Any, beacons: bool = False) -> Iterator[Tuple]:
         yield row[3]
 
 
-__all__ = ["EVENT_KINDS", "LiveEstimate", "LiveTracker", "STEP_HEADING_SD_RAD", "STEP_LENGTH_SD_FRACTION", "causal_inputs",
+__all__ = ["EVENT_KINDS", "LiveEstimate", "LiveTracker", "STANDING_AFTER_S", "STEP_HEADING_SD_RAD", "STEP_LENGTH_SD_FRACTION", "causal_inputs",
            "causal_queries", "causal_track", "fingerprint_map", "quaternion_from_rotation_vector", "session_options",
            "walk_events"]

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Optional
 
 import numpy as np
 
@@ -171,6 +171,9 @@ class HandheldSteps:
     heading_complementary_rad: np.ndarray  #: (M,) complementary heading (options.complementary_tau_s)
     start_t_s: float                #: time at which the first step's motion starts [s]
     options: HandheldOptions = field(repr=False, default_factory=HandheldOptions)
+    #: (M,) time of the sample that confirmed each step [s]: the causal (streaming) detector's
+    #: steps only (``pdr.streaming``); None for the whole-walk detector's.
+    confirmed_t_s: Optional[np.ndarray] = field(default=None, repr=False)
 
     @property
     def n_steps(self) -> int:

@@ -69,7 +69,7 @@ class StreamingStepDetector:
 
     ``add_sample(t_s, acc_mps2, gyro_radps, quat_xyzw)`` returns the steps confirmed by this sample
     (usually none, at most a few): tuples ``(t_s, index, feature, heading_rv_rad, heading_gyro_rad,
-    heading_complementary_rad, start_t_s)``; :meth:`steps` assembles everything confirmed so far
+    heading_complementary_rad, start_t_s, confirmed_t_s)`` (the last: this sample's time); :meth:`steps` assembles everything confirmed so far
     into a :class:`HandheldSteps`. Samples must come with increasing times (ValueError otherwise).
     """
 
@@ -109,7 +109,8 @@ def _assemble(rows: Sequence[Tuple], options: HandheldOptions, first_t: float) -
     m = len(rows)
     if m == 0:
         e = np.zeros(0)
-        return HandheldSteps(e, np.zeros(0, np.int64), e, e, e, e, e, e, e, e, float(first_t), options)
+        return HandheldSteps(e, np.zeros(0, np.int64), e, e, e, e, e, e, e, e, float(first_t), options,
+                             confirmed_t_s=np.zeros(0))
     a = np.array([r[:6] for r in rows], dtype=np.float64)
     feature = a[:, 2]
     length = options.k * feature
@@ -119,7 +120,8 @@ def _assemble(rows: Sequence[Tuple], options: HandheldOptions, first_t: float) -
         t_s=a[:, 0].copy(), index=a[:, 1].astype(np.int64), length_m=length, heading_rad=heading.copy(),
         length_sd_m=options.length_sd_fraction * length, heading_sd_rad=np.full(m, options.heading_sd_rad),
         feature=feature.copy(), heading_rotation_vector_rad=hr.copy(), heading_gyro_rad=hg.copy(),
-        heading_complementary_rad=hc.copy(), start_t_s=float(rows[0][6]), options=options)
+        heading_complementary_rad=hc.copy(), start_t_s=float(rows[0][6]), options=options,
+        confirmed_t_s=np.array([r[7] for r in rows], dtype=np.float64))
 
 
 def imu_samples(walk: Any) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -148,7 +150,7 @@ def causal_handheld_steps(walk_or_arrays: Any, options: Optional[HandheldOptions
         arr = as_arrays(walk_or_arrays)
         t, acc, gyro, quat = arr.t_s, arr.acc_mps2, arr.gyro_radps, arr.quat_xyzw
     rows = _pdr.causal_steps(t, acc, gyro, quat, detector_options(options))
-    steps = [(r[0], int(r[1]), r[2], r[3], r[4], r[5], r[6]) for r in rows]
+    steps = [(r[0], int(r[1]), r[2], r[3], r[4], r[5], r[6], r[7]) for r in rows]
     return _assemble(steps, options, float(t[0]) if t.shape[0] > _pdr.StreamingStepOptions().rate_samples else 0.0)
 
 

@@ -2,7 +2,8 @@
 // WiFi scans every 2 s from a fingerprint map of the hall) give steps and fixes, and the estimate
 // follows the walk; the session equals a GridFilterSession fed the causal steps and the scans'
 // fixes (the batch formulation) bit for bit; events out of time order and malformed events are
-// refused naming the event, the session unchanged.
+// refused naming the event, the session unchanged; a user standing still (no step) is located
+// from WiFi alone through standing steps.
 #include "indoorloc/fusion/live_session.h"
 
 #include <cmath>
@@ -154,6 +155,77 @@ TEST(LiveSession, RefusesEventsOutOfOrderNamingThemAndStaysUnchanged) {
   LiveSessionOptions bad = Options();
   bad.step_length_k = -1;
   EXPECT_THROW(LiveSession(&tracker, nullptr, bad), std::invalid_argument);
+}
+
+// A user standing still at `p` (flat accelerometer: no step) for `seconds`, a scan every 2 s.
+void Stand(LiveSession* session, double seconds, const Eigen::Vector2d& p, std::vector<bool>* had_estimate) {
+  const double rate = 50.0, t0 = 1000.0;
+  Eigen::VectorXd rv(4);
+  rv << 0, 0, 0, 1;
+  for (int i = 0; i < static_cast<int>(seconds * rate); ++i) {
+    const double t = t0 + i / rate;
+    session->AddGyroscope(t, Eigen::Vector3d::Zero());
+    session->AddRotationVector(t, rv);
+    session->AddAccelerometer(t, Eigen::Vector3d(0, 0, 9.80665));
+    if (i % 100 == 50) {
+      std::vector<std::string> names;
+      std::vector<double> rss;
+      for (int j = 0; j < 6; ++j) {
+        if (std::isnan(Rss(p, j))) continue;
+        names.push_back("ap" + std::to_string(j));
+        rss.push_back(Rss(p, j));
+      }
+      const Eigen::VectorXd r = Eigen::Map<Eigen::VectorXd>(rss.data(), static_cast<Eigen::Index>(rss.size()));
+      session->AddWifiScan(t, names, r, Eigen::VectorXd::Constant(r.size(), t - 0.5));
+    }
+    had_estimate->push_back(session->HasEstimate());
+  }
+}
+
+TEST(LiveSession, LocatesAUserStandingStillFromWifiAlone) {
+  const Hall h = MakeHall();
+  const GridTracker tracker(&h.plan, GridTrackerOptions());
+  FingerprintFixOptions fo;
+  fo.query_window_s = 3.0;
+  const Eigen::Vector2d where(40.0, 20.0);
+  // Default: a fix no step has applied standing_after_s (1 s) after its scan is applied at a
+  // standing step at the scan's time.
+  LiveSession s(&tracker, &h.map, Options(), fo);
+  std::vector<bool> had;
+  Stand(&s, 10.0, where, &had);
+  const LiveSessionSummary u = s.Summary();
+  EXPECT_EQ(u.steps, 0);
+  EXPECT_EQ(u.scans, 5);
+  EXPECT_EQ(u.standing_steps, 4);  // the last scan (t0 + 9 s) is not 1 s old at t0 + 9.98 s
+  EXPECT_EQ(u.fixes, 4);
+  EXPECT_EQ(u.pending_fixes, 1);
+  EXPECT_EQ(u.late_steps, 0);
+  // First estimate at the first event 1 s after the first scan (sample 100 at t0 + 2 s).
+  ASSERT_EQ(had.size(), 500u);
+  EXPECT_FALSE(had[99]);
+  EXPECT_TRUE(had[100]);
+  ASSERT_TRUE(s.HasEstimate());
+  EXPECT_TRUE(s.Estimate().located);
+  EXPECT_EQ(s.Estimate().time_s, 1007.0);  // the latest standing step is at its scan's time
+  EXPECT_LT((s.Estimate().mean_m - where).norm(), 3.0) << s.Estimate().mean_m.transpose();
+  // Off: fixes wait for a step that never comes; no estimate at all.
+  LiveSessionOptions wait = Options();
+  wait.standing_after_s = 0.0;
+  LiveSession off(&tracker, &h.map, wait, fo);
+  had.clear();
+  Stand(&off, 10.0, where, &had);
+  EXPECT_FALSE(off.HasEstimate());
+  EXPECT_EQ(off.Summary().pending_fixes, 5);
+  // A standing wait at or below the detector's latency could order a standing step after a later
+  // detected step: refused, naming the option.
+  LiveSessionOptions bad = Options();
+  bad.standing_after_s = bad.detector.min_step_interval_s;
+  try {
+    LiveSession refused(&tracker, &h.map, bad, fo);
+    FAIL() << "accepted standing_after_s at the detector's latency";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("standing_after_s"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

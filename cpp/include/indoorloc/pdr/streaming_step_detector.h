@@ -64,6 +64,7 @@ struct StreamingStep {
   double heading_gyro_rad = 0;
   double heading_complementary_rad = 0;
   double start_time_s = 0;             ///< start of the interval the headings average [s]
+  double confirmed_time_s = 0;         ///< time of the sample that confirmed it [s] (>= time_s)
 };
 
 /// Android rotation-vector values (x, y, z[, w]) -> unit quaternion (x, y, z, w): w completed as
