@@ -35,7 +35,7 @@ Every method returns the current estimate (a ``fusion.LiveEstimate``, read-only 
 first step (detected or standing). **``located`` is False until the first fix is applied** (unknown start): the estimate is
 then the prior's, the mean of the floor's walkable area with a covariance the size of the floor, not
 a position; an app shows "locating" rather than that point. On the shared site the first fix comes
-2.3 s (median; p90 3.5 s) after a walk's first waypoint (`indoorloc fusion evaluate`, ``fusion_live``). Events must come in
+2.2 s (median; p90 2.7 s) after a walk's first waypoint (`indoorloc fusion evaluate`, ``fusion_live``). Events must come in
 non-decreasing time: otherwise ValueError naming the event's index, type and both times, and the
 tracker is unchanged.
 
