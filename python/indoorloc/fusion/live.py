@@ -23,7 +23,7 @@ What happens to each event (docs/fusion.md, "Live tracking"):
   at its time, so a user standing still is located and followed by WiFi alone. ``delay_compensation`` (off by
   default) moves each component of the fix by the PDR displacement (calibrated, nominal heading
   offset) of the steps between its measurements' mean last-seen time and the step that applies
-  it. Measured on the six shared floors it does not help (10.93 m pooled without, 11.01 m with:
+  it. Measured on the six shared floors it does not help (10.90 m pooled without, 10.98 m with:
   benchmarks/results/fusion_live_accuracy.md): a max-pooled 16 s query describes the whole stretch
   walked, not one point of it.
 - **Beacons**: accepted and ignored (the site has no beacon map yet).
