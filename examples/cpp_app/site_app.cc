@@ -117,10 +117,10 @@ int main(int argc, char** argv) {
     // Before its first fix an unknown start's estimate is the prior's mean, not a position.
     std::size_t first_located = 0;
     while (first_located < track.size() && !track[first_located].located) ++first_located;
-    std::printf("tracked %ld raw events live (%lld IMU samples, %d scans): %d steps, %d WiFi fixes; located from "
-                "step %zu; last position (%.2f, %.2f) m; largest difference to Python's causal track %.3g m (step "
+    std::printf("tracked %ld raw events live (%lld IMU samples, %d scans): %d steps (and %d standing), %d WiFi "
+                "fixes; located from step %zu; last position (%.2f, %.2f) m; largest difference to Python's causal track %.3g m (step "
                 "times %.3g s) over %d steps; slowest event %.3f ms\n",
-                events, u.imu_samples, u.scans, u.steps, u.fixes, first_located + 1,
+                events, u.imu_samples, u.scans, u.steps, u.standing_steps, u.fixes, first_located + 1,
                 track.empty() ? 0.0 : track.back().mean_m.x(), track.empty() ? 0.0 : track.back().mean_m.y(), worst,
                 worst_t, e, 1e3 * worst_event_s);
     return (static_cast<int>(track.size()) == e && e > 0 && worst == 0.0 && worst_t == 0.0) ? 0 : 1;
