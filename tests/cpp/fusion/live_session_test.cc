@@ -58,6 +58,24 @@ Hall MakeHall() {
   return h;
 }
 
+// A WiFi scan at time t of the APs heard at p, each last seen 0.5 s before; `with_unknown`: one
+// reading of a BSSID the map does not know.
+void Scan(LiveSession* session, double t, const Eigen::Vector2d& p, bool with_unknown) {
+  std::vector<std::string> names;
+  std::vector<double> rss;
+  for (int j = 0; j < 6; ++j) {
+    if (std::isnan(Rss(p, j))) continue;
+    names.push_back("ap" + std::to_string(j));
+    rss.push_back(Rss(p, j));
+  }
+  if (with_unknown) {
+    names.push_back("unknown");
+    rss.push_back(-70.0);
+  }
+  const Eigen::VectorXd r = Eigen::Map<Eigen::VectorXd>(rss.data(), static_cast<Eigen::Index>(rss.size()));
+  session->AddWifiScan(t, names, r, Eigen::VectorXd::Constant(r.size(), t - 0.5));
+}
+
 // Feeds a walk east along y = 10 from x = 5 at 2 steps/s (0.7 m steps with K chosen so) to
 // `session`, up to `seconds`; returns the true position at the end.
 void Walk(LiveSession* session, double seconds, std::vector<double>* step_times = nullptr) {
@@ -71,18 +89,7 @@ void Walk(LiveSession* session, double seconds, std::vector<double>* step_times 
     session->AddRotationVector(t, rv);
     session->AddAccelerometer(t, Eigen::Vector3d(0, 0, 9.80665 + 2.0 * std::sin(2 * kPi * 2.0 * (i / rate))));
     if (i % 100 == 50) {  // a scan every 2 s: readings last seen now, at the true position
-      const Eigen::Vector2d p(5.0 + 1.4 * (i / rate), 10.0);
-      std::vector<std::string> names;
-      std::vector<double> rss;
-      for (int j = 0; j < 6; ++j) {
-        if (std::isnan(Rss(p, j))) continue;
-        names.push_back("ap" + std::to_string(j));
-        rss.push_back(Rss(p, j));
-      }
-      names.push_back("unknown");
-      rss.push_back(-70.0);
-      const Eigen::VectorXd r = Eigen::Map<Eigen::VectorXd>(rss.data(), static_cast<Eigen::Index>(rss.size()));
-      session->AddWifiScan(t, names, r, Eigen::VectorXd::Constant(r.size(), t - 0.5));
+      Scan(session, t, Eigen::Vector2d(5.0 + 1.4 * (i / rate), 10.0), true);
     }
     if (step_times && session->HasEstimate() &&
         (step_times->empty() || step_times->back() != session->Estimate().time_s)) {
@@ -167,17 +174,7 @@ void Stand(LiveSession* session, double seconds, const Eigen::Vector2d& p, std::
     session->AddGyroscope(t, Eigen::Vector3d::Zero());
     session->AddRotationVector(t, rv);
     session->AddAccelerometer(t, Eigen::Vector3d(0, 0, 9.80665));
-    if (i % 100 == 50) {
-      std::vector<std::string> names;
-      std::vector<double> rss;
-      for (int j = 0; j < 6; ++j) {
-        if (std::isnan(Rss(p, j))) continue;
-        names.push_back("ap" + std::to_string(j));
-        rss.push_back(Rss(p, j));
-      }
-      const Eigen::VectorXd r = Eigen::Map<Eigen::VectorXd>(rss.data(), static_cast<Eigen::Index>(rss.size()));
-      session->AddWifiScan(t, names, r, Eigen::VectorXd::Constant(r.size(), t - 0.5));
-    }
+    if (i % 100 == 50) Scan(session, t, p, false);
     had_estimate->push_back(session->HasEstimate());
   }
 }
