@@ -440,7 +440,7 @@ def test_site_live_replays_the_causal_track(built):
                               step_heading_sd_rad=site.settings.step_heading_sd_rad)
     tracker = site.live(FLOOR)
     out = []
-    for ev in live.walk_events(walk):
+    for ev in live.walk_events(walk, beacons=True):
         e = tracker.add_event(*ev)
         if e is not None and (not out or out[-1].steps != e.steps):
             out.append(e)
@@ -449,3 +449,56 @@ def test_site_live_replays_the_causal_track(built):
     np.testing.assert_array_equal(np.array([e.covariance_m2 for e in out]), batch["covariance_m2"])
     with pytest.raises(ValueError, match="floor"):
         site.live("F99")
+
+
+def test_cli_live_streams_the_live_track_from_events_or_a_walk(built, tmp_path, capsys):
+    """``indoorloc live``: a recorded walk (--walk) and the same walk's events as NDJSON lines
+    (--events) give the same estimates, those of the live tracker (the causal track, one line per
+    filter step, bit for bit through JSON); a line that is not an event, or an event out of time
+    order, is named with its line number and skipped, the estimates unchanged, exit status 1."""
+    from indoorloc.cli import main
+    from indoorloc.fusion import live, live_stream
+    from indoorloc.io import read_ilc_walk
+
+    site, paths = built
+    db = str(site.path)
+    walk = read_ilc_walk(paths[-1])
+    m = site.floor_models(FLOOR)
+    batch = live.causal_track(m.tracker, walk, m.calibration, m.database,
+                              step_length_sd_fraction=site.settings.step_length_sd_fraction,
+                              step_heading_sd_rad=site.settings.step_heading_sd_rad)
+    out_walk = tmp_path / "walk.ndjson"
+    assert main(["--quiet", "live", "--site", db, "--walk", str(paths[-1]), "-o", str(out_walk)]) == 0
+    rows = [json.loads(line) for line in out_walk.read_text().splitlines()]
+    assert rows[0] == {"format": "indoorloc-live", "version": 1, "floor": FLOOR,
+                       "origin_lon_lat": list(m.origin_lon_lat)}
+    est = rows[1:]
+    assert len(est) == len(batch["times_s"]) > 10
+    np.testing.assert_array_equal([r["position_m"] for r in est], batch["mean_m"])
+    np.testing.assert_array_equal([r["t_s"] for r in est], batch["times_s"])
+    np.testing.assert_array_equal([r["located"] for r in est], batch["located"])
+    assert set(est[-1]) == {"t_s", "steps", "fixes", "located", "position_m", "covariance_m2", "lon_lat",
+                            "heading_offset_rad"}
+    # The same events as lines, with a broken line and an event out of time order among them.
+    events = [json.dumps(live_stream.event_record(*ev)) for ev in live.walk_events(walk, beacons=True)]
+    k = len(events) // 2
+    late = json.dumps({"kind": "gyroscope", "t_s": -1.0, "values": [0, 0, 0]})
+    lines = events[:k] + ["{not json", late, "", "# a comment"] + events[k:]
+    src = tmp_path / "events.ndjson"
+    src.write_text("\n".join(lines) + "\n")
+    out_events = tmp_path / "events_out.ndjson"
+    assert main(["live", "--site", db, "--events", str(src), "-o", str(out_events)]) == 1
+    err = capsys.readouterr().err
+    assert f"line {k + 1}: skipped: not JSON" in err and f"line {k + 2}: skipped:" in err
+    assert "out of time order" in err and "2 lines skipped" in err
+    assert out_events.read_text() == out_walk.read_text()
+    # Malformed fields are named.
+    for bad, why in [({"kind": "wifi", "t_s": 1.0, "bssids": ["a"], "rssi_dbm": [], "last_seen_s": [1.0]}, "'rssi_dbm'"),
+                     ({"kind": "magnetometer", "t_s": 1.0}, "'kind'"),
+                     ({"kind": "accelerometer", "t_s": float("nan"), "values": [0, 0, 9.8]}, "'t_s'"),
+                     ({"kind": "accelerometer", "t_s": 1.0, "values": [0, 9.8]}, "'values'")]:
+        with pytest.raises(ValueError, match=why):
+            live_stream.parse_event(json.dumps(bad))
+    assert main(["--quiet", "live", "--site", db, "--floor", "F99", "--walk", str(paths[-1])]) != 0
+    assert "F99" in capsys.readouterr().err
+

@@ -11,6 +11,7 @@
     indoorloc reproduce [--papers 000 ...] [--out DIR] [--runs N] [--quick]
     indoorloc site build SURVEY_DIR -o SITE.db [--floors ...] | site add SITE.db WALK... | site info SITE.db
     indoorloc track WALK... --site SITE.db [--floor NAME|auto] [--no-smooth] -o OUT.{geojson,csv,json}
+    indoorloc live --site SITE.db [--floor NAME] [--events FILE|- | --walk WALK.txt] [-o OUT.ndjson]
     indoorloc sweep FILE.toml [--scheduler tcp://host:8786] [--out results.jsonl]
 
 Each subsystem's subcommands live in ``indoorloc/cli/<subsystem>.py`` with an
@@ -110,6 +111,7 @@ def _add_site(sub: argparse._SubParsersAction) -> None:
 
     site.add_parser(sub, quiet_parent)
     site.add_track_parser(sub, quiet_parent)
+    site.add_live_parser(sub, quiet_parent)
 
 
 def _add_sweep(sub: argparse._SubParsersAction) -> None:

@@ -7,6 +7,7 @@ tracked with it (docs/your_building.md). Parse and print only; the work is
     indoorloc site grow SITE.db WALK.txt ... [--floor NAME|auto] [--max-sd-m M] [--weight W]
     indoorloc site info SITE.db [--json]
     indoorloc track WALK.txt ... --site SITE.db [--floor NAME|auto] [--smooth|--no-smooth] -o OUT.{geojson,csv,json} [--html VIEW.html]
+    indoorloc live --site SITE.db [--floor NAME] [--events FILE|- | --walk WALK.txt] [-o OUT.ndjson]
 """
 
 from __future__ import annotations
@@ -169,6 +170,62 @@ def cmd_track(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_live(args: argparse.Namespace) -> int:
+    from indoorloc.fusion import live, live_stream
+    from indoorloc.fusion.site import Site
+    from indoorloc.io.atomic_file import write_text_atomic
+
+    site = Site.open(args.site)
+    floor = args.floor
+    if floor is None:
+        if len(site.floors) != 1:
+            raise ValueError(f"indoorloc: argument '--floor': the site has {len(site.floors)} floors "
+                             f"({', '.join(site.floors)}): name the one to track on")
+        floor = site.floors[0]
+    if floor not in site.floors:
+        raise ValueError(f"indoorloc: argument '--floor': {floor!r} is not a floor of {args.site} "
+                         f"({', '.join(site.floors)})")
+    tracker = site.live(floor)
+    origin = site.floor_models(floor).origin_lon_lat
+    lines: list = []
+    to_stdout = args.output in (None, "-")
+
+    def write(record: dict) -> None:
+        text = json.dumps(record)
+        if to_stdout:
+            print(text, flush=True)   # a live consumer reads each estimate as it comes
+        else:
+            lines.append(text)        # a file is written whole at the end (never half-written)
+
+    def warn(message: str) -> None:
+        print(f"warning: {message}", file=sys.stderr)
+
+    write(live_stream.header_record(floor, origin))
+    if args.walk is not None:
+        from indoorloc.io.ilc2020 import read_ilc_walk
+
+        walk = read_ilc_walk(args.walk)
+        events = ((f"event {k}", ev, None) for k, ev in enumerate(live.walk_events(walk, beacons=True)))
+        summary = live_stream.run(tracker, events, write, origin, warn)
+    elif args.events in (None, "-"):
+        summary = live_stream.run(tracker, live_stream.numbered_lines(sys.stdin), write, origin, warn)
+    else:
+        with open(args.events, encoding="utf-8") as fh:
+            summary = live_stream.run(tracker, live_stream.numbered_lines(fh), write, origin, warn)
+    if not to_stdout:
+        write_text_atomic(args.output, "".join(t + "\n" for t in lines))
+    u = tracker.live_session.summary
+    if not args.quiet:
+        print(f"live: {summary.events} events, {u['steps']} steps detected and {u['standing_steps']} standing, "
+              f"{u['fixes']} WiFi fixes applied ({u['pending_fixes']} pending), {summary.estimates} estimates"
+              + ("" if to_stdout else f" written to {args.output}")
+              + (f"; {summary.skipped} lines skipped (named above)" if summary.skipped else ""), file=sys.stderr)
+    if summary.events == 0:
+        print("error: no event could be used", file=sys.stderr)
+        return 2
+    return 1 if summary.skipped else 0
+
+
 def add_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
     p = sub.add_parser("site", help="a site model (one SQLite file) built from survey walks")
     ssub = p.add_subparsers(dest="site_command", required=True)
@@ -220,3 +277,20 @@ def add_track_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
     t.add_argument("--html", default=None, metavar="VIEW.html",
                    help="also write the browser viewer: one offline HTML page with the tracks on the floor plan")
     t.set_defaults(func=cmd_track)
+
+
+def add_live_parser(sub: argparse._SubParsersAction, quiet_parent) -> None:
+    v = sub.add_parser("live", parents=[quiet_parent()],
+                       help="the live tracker on a stream of phone events (NDJSON in, one estimate per step out)")
+    v.add_argument("--site", required=True, help="the site file (indoorloc site build)")
+    v.add_argument("--floor", default=None, help="floor name (default: the site's only floor)")
+    src = v.add_mutually_exclusive_group()
+    src.add_argument("--events", default=None, metavar="FILE",
+                     help="events, one JSON object per line, format indoorloc-live-events 1 (docs/your_building.md); "
+                          "'-' or absent: standard input")
+    src.add_argument("--walk", default=None, metavar="WALK.txt",
+                     help="replay a recorded walk's events (ILC 2020 text file) instead")
+    v.add_argument("-o", "--output", default=None, metavar="OUT.ndjson",
+                   help="write the estimates here, whole at the end (default: standard output, one line per step "
+                        "as it comes)")
+    v.set_defaults(func=cmd_live)
