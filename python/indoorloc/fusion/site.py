@@ -425,18 +425,21 @@ class Site:
                          np.asarray(r[key], float), cov, m.origin_lon_lat, wt, wxy, errors, header_floor, posterior,
                          np.asarray(fixes.times_s, float), wifi_fixes.fix_centres(fixes) if len(fixes) else np.zeros((0, 2)))
 
-    def live(self, floor: str, start: Optional[dict] = None):
+    def live(self, floor: str, start: Optional[dict] = None, standing_after_s: Optional[float] = None):
         """A live tracker on one floor of the site (:class:`indoorloc.fusion.live.LiveTracker`):
         raw sensor events in time order (accelerometer, gyroscope, rotation vector, WiFi scans) in,
         the causal filter's estimate after each out; a recorded walk replayed event by event gives
         the track of :func:`indoorloc.fusion.live.causal_track` on the same models. ``start``: None
-        (unknown start) or a known start as in :func:`indoorloc.fusion.track_grid`."""
-        from indoorloc.fusion.live import LiveTracker
+        (unknown start) or a known start as in :func:`indoorloc.fusion.track_grid`.
+        ``standing_after_s`` [s]: a fix no step has applied this long after its scan is applied at
+        a standing step (None: ``live.STANDING_AFTER_S``, 1 s; 0: fixes wait for a step)."""
+        from indoorloc.fusion.live import STANDING_AFTER_S, LiveTracker
 
         m = self.floor_models(floor)
         return LiveTracker(m.tracker, m.calibration, m.database, start=start,
                            step_length_sd_fraction=self.settings.step_length_sd_fraction,
-                           step_heading_sd_rad=self.settings.step_heading_sd_rad)
+                           step_heading_sd_rad=self.settings.step_heading_sd_rad,
+                           standing_after_s=STANDING_AFTER_S if standing_after_s is None else float(standing_after_s))
 
     def write_viewer_html(self, path: Union[str, os.PathLike], tracks: Sequence[WalkTrack],
                           title: str = "indoorloc track") -> Path:
