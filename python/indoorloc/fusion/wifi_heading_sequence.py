@@ -220,7 +220,7 @@ def _stencil(shift_cells: np.ndarray, sd_cells: float):
             continue
         for (bx, by), wb in blur.items():
             out[(sx + bx, sy + by)] = out.get((sx + bx, sy + by), 0.0) + ws * wb
-    keys = [k for k, v in out.items() if v > 1e-7]
+    keys = [k for k, v in out.items() if v > 1e-4]  # below: < 0.3 % of the mass in all
     w = np.array([out[k] for k in keys])
     return np.array(keys, dtype=np.int64).reshape(-1, 2), w / w.sum()
 
@@ -239,7 +239,7 @@ def _kernel_matrix(grid: HeadingGrid, offsets: np.ndarray, weights: np.ndarray) 
         ok = dst >= 0
         ii.append(dst[ok])
         jj.append(src[ok])
-        vv.append(np.full(int(ok.sum()), w, dtype=np.float32))
+        vv.append(np.full(int(ok.sum()), w))
     n = grid.cells_m.shape[0]
     return sp.csr_matrix((np.concatenate(vv), (np.concatenate(ii), np.concatenate(jj))), shape=(n, n))
 
@@ -287,33 +287,41 @@ def fix_factors(grid: HeadingGrid, fixes: Any, tick_times_s: np.ndarray, setting
 
 def _smooth(kernels: List[sp.csr_matrix], trans: np.ndarray, emit: List[np.ndarray]) -> np.ndarray:
     """Posterior state probabilities summed over modes, (M ticks, N): forward-backward with
-    per-tick normalisation. emit[k] (N,) the tick's wall and fix factor."""
+    per-tick normalisation. emit[k] (N,) the tick's wall and fix factor. Computed in float64,
+    the forward pass kept in float32; the small mode products on one BLAS thread (they are
+    slower threaded, and the machine is shared)."""
+    from threadpoolctl import threadpool_limits
+
     n_modes, m = trans.shape[0], len(emit)
     n = emit[0].size
+    back = [k.T.tocsr() for k in kernels]
     alpha = np.empty((m, n_modes, n), dtype=np.float32)
-    a = np.full((n_modes, n), 1.0 / (n_modes * n), dtype=np.float64) * emit[0]
-    alpha[0] = a / a.sum()
-    tT = trans.T
-    for k in range(1, m):
-        mixed = tT @ alpha[k - 1]
-        a = np.stack([kernels[i] @ mixed[i] for i in range(n_modes)]) * emit[k]
-        s = a.sum()
-        if not s > 0:  # everything walled off or an impossible fix: restart from the tick's evidence
-            a = np.ones((n_modes, n)) * emit[k]
-            s = a.sum()
-        alpha[k] = a / s
     post = np.empty((m, n))
-    b = np.ones((n_modes, n))
-    g = alpha[m - 1] * b
-    post[m - 1] = g.sum(0) / g.sum()
-    for k in range(m - 2, -1, -1):
-        be = b * emit[k + 1]
-        t = np.stack([kernels[i].T @ be[i] for i in range(n_modes)])
-        b = trans @ t
-        b /= b.max() if b.max() > 0 else 1.0
-        g = alpha[k] * b
-        s = g.sum()
-        post[k] = g.sum(0) / s if s > 0 else alpha[k].sum(0)
+    with threadpool_limits(limits=1):
+        a = np.full((n_modes, n), 1.0 / (n_modes * n)) * emit[0]
+        prev = a / a.sum()
+        alpha[0] = prev
+        tT = trans.T.copy()
+        for k in range(1, m):
+            mixed = tT @ prev
+            a = np.stack([kernels[i] @ mixed[i] for i in range(n_modes)]) * emit[k]
+            s = a.sum()
+            if not s > 0:  # everything walled off or an impossible fix: restart from the tick's evidence
+                a = np.ones((n_modes, n)) * emit[k]
+                s = a.sum()
+            prev = a / s
+            alpha[k] = prev
+        b = np.ones((n_modes, n))
+        g = prev
+        post[m - 1] = g.sum(0) / g.sum()
+        for k in range(m - 2, -1, -1):
+            be = b * emit[k + 1]
+            b = trans @ np.stack([back[i] @ be[i] for i in range(n_modes)])
+            mx = b.max()
+            b /= mx if mx > 0 else 1.0
+            g = alpha[k] * b
+            s = g.sum()
+            post[k] = g.sum(0) / s if s > 0 else alpha[k].sum(0)
     return post
 
 
