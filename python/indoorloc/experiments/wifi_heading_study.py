@@ -45,35 +45,52 @@ MOTION_KEYS = ("tick_s", "cell_size_m", "headings", "speed_m_per_s", "heading_bl
                "margin_cells")
 
 
+#: Fields that do not matter without headings (points with headings=0 differing only there are one).
+HEADING_ONLY = ("speed_m_per_s", "heading_blur_sd_m", "keep_heading_probability", "neighbour_turn_share",
+                "to_wander_probability", "from_wander_probability")
+
+
 def _points(grid: Dict[str, Sequence[Any]]) -> List[Dict[str, Any]]:
-    names = list(grid)
-    return [dict(zip(names, v)) for v in itertools.product(*(grid[k] for k in names))]
+    """The grid's points (a JSON list of grids: their union), headings=0 once per other setting."""
+    grids = grid if isinstance(grid, list) else [grid]
+    out: List[Dict[str, Any]] = []
+    for g in grids:
+        names = list(g)
+        for v in itertools.product(*(g[k] for k in names)):
+            p = dict(zip(names, v))
+            if p.get("headings", 1) == 0:
+                p = {k: x for k, x in p.items() if k not in HEADING_ONLY}
+            if p not in out:
+                out.append(p)
+    return out
 
 
 def _key(p: Dict[str, Any]) -> str:
     return ",".join(f"{k}={v}" for k, v in p.items())
 
 
-def floor_errors(job) -> Dict[str, np.ndarray]:
-    """One floor: errors[point key] at its test waypoints (case order), plus "wifi_knn"."""
-    floor, case, points = job
+def fold_errors(job) -> Dict[str, np.ndarray]:
+    """One fold of one floor: errors[point key] at its test waypoints (case order), plus "wifi_knn"."""
+    case, fold, points = job
     from indoorloc.io import load_floor_plan
 
     plan = load_floor_plan(case["geojson_path"], floors=[case["number"]], origin_lon_lat="outline_sw")
-    walks = [[w if isinstance(w, wss.TestWalk) else wss.TestWalk(**w) for w in f["walks"]] for f in case["folds"]]
-    out = {"wifi_knn": np.concatenate([wss.knn_errors(w, "") for ws_ in walks for w in ws_])}
+    f = case["folds"][fold]
+    walks = [w if isinstance(w, wss.TestWalk) else wss.TestWalk(**w) for w in f["walks"]]
+    if not walks:
+        return {"wifi_knn": np.zeros(0), **{_key(p): np.zeros(0) for p in points}}
+    out = {"wifi_knn": np.concatenate([wss.knn_errors(w, "") for w in walks])}
     kernel_cache: Dict[str, Any] = {}
     for p in points:
         s = replace(whs.HeadingSequenceSettings(), **p)
+        grid = whs.heading_grid(plan, s, np.asarray(f["database"].positions_m))
+        mk = _key({k: getattr(s, k) for k in MOTION_KEYS})
+        if mk not in kernel_cache:
+            kernel_cache[mk] = whs.motion_kernels(grid, s)
         errs = []
-        for f, fold_walks in zip(case["folds"], walks):
-            grid = whs.heading_grid(plan, s, np.asarray(f["database"].positions_m))
-            mk = _key({k: getattr(s, k) for k in MOTION_KEYS})
-            if mk not in kernel_cache:
-                kernel_cache[mk] = whs.motion_kernels(grid, s)
-            for w in fold_walks:
-                tr = whs.track_fixes(grid, w.fixes[""], 0.0, w.duration_s, s, kernel_cache[mk])
-                errs.append(np.hypot(*(ws.at_times(tr, w.waypoint_t_s) - w.waypoint_xy_m).T))
+        for w in walks:
+            tr = whs.track_fixes(grid, w.fixes[""], 0.0, w.duration_s, s, kernel_cache[mk])
+            errs.append(np.hypot(*(ws.at_times(tr, w.waypoint_t_s) - w.waypoint_xy_m).T))
         out[_key(p)] = np.concatenate(errs)
     return out
 
@@ -102,9 +119,14 @@ def load_cases(cache: Path, seed: int, data_root: Optional[Path], log=print):
 def run(cases, grid: Dict[str, Sequence[Any]], workers: int = 2, log=print) -> Dict[str, Any]:
     points = _points(grid)
     tic = time.perf_counter()
-    jobs = [(f, c, points) for f, c in cases.items()]
+    # Jobs by (floor, fold), largest first, so that two workers finish together.
+    jobs = [(f, i) for f, c in cases.items() for i in range(len(c["folds"]))]
+    jobs.sort(key=lambda j: -sum(w["duration_s"] if isinstance(w, dict) else w.duration_s
+                                 for w in cases[j[0]]["folds"][j[1]]["walks"]))
     with ProcessPoolExecutor(max_workers=workers) as pool:
-        errors = dict(zip(cases, pool.map(floor_errors, jobs)))
+        done = dict(zip(jobs, pool.map(fold_errors, [(cases[f], i, points) for f, i in jobs])))
+    errors = {f: {k: np.concatenate([done[(f, i)][k] for i in range(len(c["folds"]))]) for k in done[(f, 0)]}
+              for f, c in cases.items()}
     log(f"{len(points)} points, {time.perf_counter() - tic:.0f} s")
     choice = wss.lofo(errors)
     best = choice["all_floor_choice"]
@@ -118,7 +140,7 @@ def run(cases, grid: Dict[str, Sequence[Any]], workers: int = 2, log=print) -> D
                                         "all_floor_choice": wss.coverage_split(errors[f][best], cov),
                                         "held_out": wss.coverage_split(errors[f][choice["held_out"][f]["chosen"]], cov)},
                         "points": {k: wss._stats(v) for k, v in errors[f].items()}}
-    return {"grid": {k: list(v) for k, v in grid.items()}, "lofo": choice, "per_floor": per_floor}
+    return {"grid": grid, "lofo": choice, "per_floor": per_floor}
 
 
 def markdown(r: Dict[str, Any], seed: int) -> str:
@@ -141,13 +163,14 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     ap.add_argument("--data-root", type=Path, default=None)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--floors", nargs="*", default=None)
-    ap.add_argument("--grid", default=None, help="JSON object overriding entries of GRID")
+    ap.add_argument("--grid", default=None, help="JSON object overriding entries of GRID, or a list of them (the union)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--json", type=Path, default=None)
     a = ap.parse_args(argv)
-    grid = dict(GRID)
+    grid: Any = dict(GRID)
     if a.grid:
-        grid.update({k: tuple(v) for k, v in json.loads(a.grid).items()})
+        given = json.loads(a.grid)
+        grid = [{**GRID, **g} for g in given] if isinstance(given, list) else {**GRID, **given}
     log = lambda m: print(m, file=sys.stderr)  # noqa: E731
     cases = load_cases(a.cache, a.seed, a.data_root, log)
     if a.floors:
