@@ -32,12 +32,18 @@ from indoorloc.fusion import wifi_heading_sequence as whs
 from indoorloc.fusion import wifi_sequence as ws
 from indoorloc.io.atomic_file import write_text_atomic
 
-#: The grid of the final run (docs/fusion_real.md lists how it was reached).
+#: The final grid (docs/fusion_real.md lists the three grids before it): the LOFO choice is read
+#: from it; headings 0 is wifi_sequence's random walk.
 GRID: Dict[str, Sequence[Any]] = {
-    "headings": (0, 8),
-    "speed_m_per_s": (1.2,),
-    "heading_blur_sd_m": (1.0,),
-    "keep_heading_probability": (0.9,),
+    "headings": (0, 8, 16),
+    "speed_m_per_s": (1.0, 1.2),
+    "heading_blur_sd_m": (0.5, 1.0),
+    "keep_heading_probability": (0.9, 0.97),
+    "fix_sd_scale": (0.25, 0.35),
+    "fix_survey_distance_factor": (0.15, 0.25),
+    "fix_outlier_probability": (0.001,),
+    "to_wander_probability": (0.02,),
+    "wall_log_penalty": (-1.0,),
 }
 
 #: Fields whose change needs new motion kernels (the rest reuse them).
