@@ -58,7 +58,7 @@ class HeadingSequenceSettings:
     #: Walking speed of a heading mode [m/s] (LOFO over {1.0, 1.2}, first {1.0, 1.2, 1.4}: 1.2;
     #: within 0.02 m pooled: the error hardly depends on it).
     speed_m_per_s: float = 1.2
-    #: Blur of a heading mode's move per tick [m] (LOFO over {0.5, 1.0}: 0.5, 0.03 m ahead).
+    #: Blur of a heading mode's move per tick [m] (LOFO over {0.5, 1.0}: 0.5, 0.05 m ahead).
     heading_blur_sd_m: float = 0.5
     #: p_keep per tick (LOFO over {0.9, 0.97}, first {0.85, 0.9, 0.95}: 0.9, within 0.04 m).
     keep_heading_probability: float = 0.9
@@ -80,7 +80,7 @@ class HeadingSequenceSettings:
     #: λ per tick in obstacle cells (LOFO over {-1, -3}: -1 on all six floors, wifi_sequence's).
     wall_log_penalty: float = -1.0
     #: Rings of obstacle cells kept around the walkable ones (fixed: enough for D = 0 to match
-    #: the C++ grid tracker, whose grid is the whole bounding box, within 0.05 m on five floors).
+    #: the C++ grid tracker, whose grid is the whole bounding box, within 0.07 m on five floors).
     margin_cells: int = 2
 
     def validate(self) -> None:
