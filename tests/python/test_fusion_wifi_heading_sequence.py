@@ -1,7 +1,8 @@
 """The direction-persistent WiFi-only tracker (fusion.wifi_heading_sequence, docs/fusion_real.md
 "WiFi only: a direction-persistent motion prior"): a walker seen only at the start of a corridor
 is carried along it where the random walk stays put; zero headings is wifi_sequence's random walk;
-the smoother equals a dense forward-backward on a small grid; errors name the argument."""
+the smoother equals a dense forward-backward on a small grid; fix components on other floors
+are ignored; errors name the argument."""
 
 import dataclasses
 
@@ -107,3 +108,18 @@ def test_errors_name_the_argument():
     # No fix: NaN, not a guess.
     empty = fusion.Fixes.from_arrays(np.zeros(0), np.zeros((0, 2)), np.zeros(0))
     assert np.isnan(whs.track_fixes(grid, empty, 0.0, 10.0, s)["position_m"]).all()
+
+
+def test_fix_components_on_other_floors_are_ignored():
+    s = whs.HeadingSequenceSettings(fix_survey_distance_factor=1.0, fix_sd_scale=1.0)
+    grid = whs.grid_from_fraction(_corridor_fraction(), (0.0, 0.0), s, floor_number=3)
+    t = np.arange(0.0, 10.0, 2.0)
+    means = np.stack([np.c_[np.full(t.size, 20.0), np.full(t.size, 5.0)],    # on floor 3
+                      np.c_[np.full(t.size, 80.0), np.full(t.size, 5.0)]], 1)  # on floor 7
+    fixes = fusion.Fixes.from_arrays(t, means, 2.0, floors=np.tile([3, 7], (t.size, 1)))
+    x = whs.track_fixes(grid, fixes, 0.0, 8.0, s)["position_m"][:, 0]
+    assert np.all(np.abs(x - 20.0) < 3.0), x
+    # Without a floor number both components count and the mean lies between them.
+    everywhere = whs.grid_from_fraction(_corridor_fraction(), (0.0, 0.0), s)
+    x_all = whs.track_fixes(everywhere, fixes, 0.0, 8.0, s)["position_m"][:, 0]
+    assert np.all(x_all > 35.0), x_all

@@ -42,6 +42,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
+from indoorloc.fusion.fixes import ANY_FLOOR
+
 
 @dataclass(frozen=True)
 class HeadingSequenceSettings:
@@ -114,7 +116,8 @@ class HeadingGrid:
     (x0, y0) [m]; ``index`` (ny, nx) the state index of each lattice cell or -1; ``cells_m`` (N, 2)
     the states' centres [m]; ``wall_factor`` (N,); ``area_m2`` the walkable area A; ``corner``
     (N, 4) lattice indices (row-major) and ``corner_w`` (N, 4) bilinear weights at which a fix's
-    density is read for each state (the survey-anchored points)."""
+    density is read for each state (the survey-anchored points); ``floor_number`` the floor's
+    number (None: fix components of every floor count)."""
 
     x0: float
     y0: float
@@ -127,14 +130,17 @@ class HeadingGrid:
     area_m2: float
     corner: np.ndarray
     corner_w: np.ndarray
+    floor_number: Optional[int] = None
 
 
 def grid_from_fraction(walkable_fraction: np.ndarray, origin_m, settings: HeadingSequenceSettings,
-                       survey_positions_m: Optional[np.ndarray] = None, area_m2: Optional[float] = None) -> HeadingGrid:
+                       survey_positions_m: Optional[np.ndarray] = None, area_m2: Optional[float] = None,
+                       floor_number: Optional[int] = None) -> HeadingGrid:
     """The tracker's grid from a lattice of walkable fractions (ny, nx) in [0, 1] whose cell (0, 0)
     has its lower-left corner at origin_m (x0, y0) [m]; survey_positions_m (P, 2) [m] anchor the
     fixes (None or empty: fixes read at the cell centres); area_m2 the walkable area [m²] (None:
-    the fractions' sum times the cell area)."""
+    the fractions' sum times the cell area); floor_number: the floor's number (fix components on
+    other floors are then ignored; None: every component counts)."""
     settings.validate()
     a = np.asarray(walkable_fraction, dtype=float)
     if a.ndim != 2 or a.size == 0 or not np.all(np.isfinite(a)) or a.min() < 0 or a.max() > 1:
@@ -163,23 +169,29 @@ def grid_from_fraction(walkable_fraction: np.ndarray, origin_m, settings: Headin
         _, near = cKDTree(pts).query(cells)
         s = pts[near]
         q = s + settings.fix_survey_distance_factor * (cells - s)
-    # Bilinear lattice coordinates of q between the cell centres (grid_survey_anchors.cc, Lattice).
-    corners, weights = [], []
-    lo_w = []
+    corner, corner_w = _bilinear_corners(q, x0, y0, c, nx, ny)
+    area = float(a.sum() * c * c) if area_m2 is None else float(area_m2)
+    if not (math.isfinite(area) and area > 0):
+        raise ValueError(f"indoorloc: argument 'area_m2': must be finite and > 0, got {area_m2!r}")
+    return HeadingGrid(x0, y0, nx, ny, c, index, cells, wall, area, corner, corner_w, floor_number)
+
+
+def _bilinear_corners(q: np.ndarray, x0: float, y0: float, c: float, nx: int, ny: int):
+    """Per point of q (N, 2) [m] the four lattice cells (row-major indices, (N, 4)) whose centres
+    surround it and their bilinear weights (N, 4), clamped to the lattice as the C++ tracker does
+    (grid_survey_anchors.cc, Lattice)."""
+    axes = []
     for u, n in (((q[:, 0] - x0) / c - 0.5, nx), ((q[:, 1] - y0) / c - 0.5, ny)):
         u = np.clip(u, 0.0, n - 1.0)
         lo = np.minimum(np.floor(u).astype(np.int64), max(0, n - 2))
-        step = 1 if n > 1 else 0
-        lo_w.append((lo, step, u - lo if n > 1 else np.zeros_like(u)))
-    (ix, sx, wx), (iy, sy, wy) = lo_w
+        axes.append((lo, 1 if n > 1 else 0, u - lo if n > 1 else np.zeros_like(u)))
+    (ix, sx, wx), (iy, sy, wy) = axes
+    corners, weights = [], []
     for dy, fy in ((0, 1 - wy), (sy, wy)):
         for dx, fx in ((0, 1 - wx), (sx, wx)):
             corners.append((iy + dy) * nx + ix + dx)
             weights.append(fy * fx)
-    area = float(a.sum() * c * c) if area_m2 is None else float(area_m2)
-    if not (math.isfinite(area) and area > 0):
-        raise ValueError(f"indoorloc: argument 'area_m2': must be finite and > 0, got {area_m2!r}")
-    return HeadingGrid(x0, y0, nx, ny, c, index, cells, wall, area, np.stack(corners, 1), np.stack(weights, 1))
+    return np.stack(corners, 1), np.stack(weights, 1)
 
 
 def heading_grid(plan: Any, settings: HeadingSequenceSettings, survey_positions_m: Optional[np.ndarray] = None,
@@ -193,7 +205,7 @@ def heading_grid(plan: Any, settings: HeadingSequenceSettings, survey_positions_
     x0, y0, _, _ = tracker.grid_geometry(floor_index)
     frac = np.asarray(tracker.walkable_fraction(floor_index), dtype=float)
     area = float(plan.walkable_area(floor_index)) if hasattr(plan, "walkable_area") else None
-    return grid_from_fraction(frac, (x0, y0), settings, survey_positions_m, area)
+    return grid_from_fraction(frac, (x0, y0), settings, survey_positions_m, area, int(plan.floors[floor_index]))
 
 
 def mode_transition(settings: HeadingSequenceSettings) -> np.ndarray:
@@ -287,9 +299,14 @@ def fix_factors(grid: HeadingGrid, fixes: Any, tick_times_s: np.ndarray, setting
     for j in range(len(fixes)):
         w = np.asarray(fixes.weights[j], float)
         use = w > 0
+        # Normalised over all components: the weight on other floors is missing here, as in C++.
+        w = w / w[use].sum() if use.any() else w
+        if grid.floor_number is not None:  # components on this floor or on any floor (grid_fix_factor.cc)
+            fl = np.asarray(fixes.floors[j])
+            use &= (fl == ANY_FLOOR) | (fl == grid.floor_number)
         if not use.any():
             continue
-        w = w[use] / w[use].sum()
+        w = w[use]
         mu = np.asarray(fixes.means_m[j], float)[use]
         sd = np.asarray(fixes.sds_m[j], float)[use] * settings.fix_sd_scale
         d2 = ((pts[:, None, :] - mu[None, :, :]) ** 2).sum(-1)
