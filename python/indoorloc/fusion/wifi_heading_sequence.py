@@ -1,0 +1,388 @@
+"""WiFi-only sequence tracking with a direction-persistent motion prior: the forward-backward
+(hidden Markov) smoother of a walk's WiFi fixes on the floor's walkable grid whose state is
+(cell, motion mode), the modes "wander" (the random walk of :mod:`indoorloc.fusion.wifi_sequence`)
+and D walking directions (docs/fusion_real.md, "WiFi only: a direction-persistent motion prior").
+
+Why: surveyors walk steadily (about 1.1-1.2 m/s) along corridors, turning now and then. A random
+walk gives the smoother no reason to carry a walker beyond the surveyed corridor where the fixes
+only say "near the survey"; a walker that keeps its direction does. Like ``wifi_sequence`` this
+uses the scans, their timestamps, the fingerprint database and the floor plan, and nothing from
+the phone's motion sensors.
+
+Model, per tick of ``tick_s`` seconds (state (c, m): cell c, mode m in {wander, heading 1..D}):
+  mode:     P(m' | m) (:func:`mode_transition`): a heading is kept with probability p_keep, turns
+            to a neighbouring bin, to any bin, or starts wandering; wandering ends into any heading
+  move:     p(c' | c, m') = K_m'(c, c'): heading θ_m': the displacement v·tick (cos θ, sin θ)
+            (bilinear on the lattice, so its mean is exact) blurred by N(0, σ_b² I); wander: the
+            random walk N(0, σ_w² tick I). Mass moved off the grid's cells is lost (a wall).
+  walls:    m(c) = a(c) + (1 - a(c)) e^λ, a(c) the cell's walkable fraction (as the grid tracker)
+  fixes:    L_j(c) = ε / A + (1 - ε) Σ_k w_k N(q(c); μ_k, (κ σ_k)² I), read at the survey-anchored
+            point q(c) = s(c) + β (c - s(c)) by bilinear interpolation between cell centres, as the
+            C++ grid tracker does (grid_fix_factor.cc, grid_survey_anchors.cc)
+The grid's cells are those with a walkable fraction > 0 and ``margin_cells`` rings around them
+(the rest of the floor's bounding box, which the grid tracker also holds, pays λ every tick and
+carries almost no mass). With ``headings`` = 0 the model is ``wifi_sequence``'s.
+
+Example::
+
+    from indoorloc.fusion import wifi_heading_sequence as whs, wifi_sequence as ws
+    s = whs.HeadingSequenceSettings()
+    grid = whs.heading_grid(plan, s, database.positions_m)
+    track = whs.track_fixes(grid, fixes, 0.0, walk.duration_s, s)
+    xy = ws.at_times(track, waypoint_times_s)
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Dict, List, Optional
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.spatial import cKDTree
+
+from indoorloc.fusion.fixes import ANY_FLOOR
+
+
+@dataclass(frozen=True)
+class HeadingSequenceSettings:
+    """Settings of the direction-persistent WiFi-only tracker (units in the names). Defaults: the
+    leave-one-floor-out choice over the six floors of the competition mall (seed 0, the folds of
+    ``fusion evaluate``; ``experiments/wifi_heading_study``; docs/fusion_real.md, "WiFi only: a
+    direction-persistent motion prior"), the all-floor choice of the final grid."""
+
+    tick_s: float = 1.0                  #: time between motion steps [s] (wifi_sequence's; fixed)
+    cell_size_m: float = 2.0             #: grid cell [m] (wifi_sequence's; fixed)
+    #: D walking directions (0: the wander mode alone, wifi_sequence's random walk). LOFO over
+    #: {0, 8, 16}: 8 on all six floors (16 within 0.01 m pooled, chosen for four held-out floors).
+    headings: int = 8
+    #: Walking speed of a heading mode [m/s] (LOFO over {1.0, 1.2}, first {1.0, 1.2, 1.4}: 1.2;
+    #: within 0.02 m pooled: the error hardly depends on it).
+    speed_m_per_s: float = 1.2
+    #: Blur of a heading mode's move per tick [m] (LOFO over {0.5, 1.0}: 0.5, 0.05 m ahead).
+    heading_blur_sd_m: float = 0.5
+    #: p_keep per tick (LOFO over {0.9, 0.97}, first {0.85, 0.9, 0.95}: 0.9, within 0.04 m).
+    keep_heading_probability: float = 0.9
+    #: Of the turns (probability 1 - p_keep - to_wander), the share to a neighbouring bin (the
+    #: rest uniform over all bins). Fixed in advance, not tuned.
+    neighbour_turn_share: float = 0.5
+    #: Per tick, from a heading to the wander mode (LOFO over {0.005, 0.02}: 0.02, within 0.01 m).
+    to_wander_probability: float = 0.02
+    from_wander_probability: float = 0.1  #: per tick, from the wander mode to a heading (fixed, not tuned)
+    wander_sd_m_per_sqrt_s: float = 2.0  #: the wander mode's random walk [m/√s] (wifi_sequence's; fixed)
+    #: κ, each fix component's sd multiplied by this (LOFO over {0.25, 0.35}, first {0.35, 0.5,
+    #: 0.75}: 0.35 on all six floors and every held-out floor, as wifi_sequence).
+    fix_sd_scale: float = 0.35
+    #: ε (LOFO over {0.001, 0.01}: level within 0.01 m; 0.001, wifi_sequence's).
+    fix_outlier_probability: float = 0.001
+    #: β of the survey-anchored fixes (1: off). LOFO over {0.15, 0.25}, first {0, 0.15, 0.25} and
+    #: {0.15, 0.5}: 0.15 on all six floors and five held-out floors (0.25 with F4 held out).
+    fix_survey_distance_factor: float = 0.15
+    #: λ per tick in obstacle cells (LOFO over {-1, -3}: -1 on all six floors, wifi_sequence's).
+    wall_log_penalty: float = -1.0
+    #: Rings of obstacle cells kept around the walkable ones (fixed: enough for D = 0 to match
+    #: the C++ grid tracker, whose grid is the whole bounding box, within 0.07 m on five floors).
+    margin_cells: int = 2
+
+    def validate(self) -> None:
+        """ValueError naming the field for a setting out of range."""
+        finite_pos = lambda v: math.isfinite(v) and v > 0  # noqa: E731
+        checks = {
+            "tick_s": finite_pos(self.tick_s),
+            "cell_size_m": finite_pos(self.cell_size_m),
+            "headings": isinstance(self.headings, (int, np.integer)) and 0 <= self.headings <= 64,
+            "speed_m_per_s": math.isfinite(self.speed_m_per_s) and self.speed_m_per_s >= 0,
+            "heading_blur_sd_m": math.isfinite(self.heading_blur_sd_m) and self.heading_blur_sd_m >= 0,
+            "keep_heading_probability": 0 <= self.keep_heading_probability <= 1,
+            "neighbour_turn_share": 0 <= self.neighbour_turn_share <= 1,
+            "to_wander_probability": 0 <= self.to_wander_probability <= 1 - self.keep_heading_probability,
+            "from_wander_probability": 0 <= self.from_wander_probability <= 1,
+            "wander_sd_m_per_sqrt_s": finite_pos(self.wander_sd_m_per_sqrt_s),
+            "fix_sd_scale": finite_pos(self.fix_sd_scale),
+            "fix_outlier_probability": 0 < self.fix_outlier_probability < 1,
+            "fix_survey_distance_factor": 0 <= self.fix_survey_distance_factor <= 1,
+            "wall_log_penalty": self.wall_log_penalty <= 0 and not math.isnan(self.wall_log_penalty),
+            "margin_cells": isinstance(self.margin_cells, (int, np.integer)) and 0 <= self.margin_cells <= 20,
+        }
+        for name, ok in checks.items():
+            if not ok:
+                raise ValueError(f"indoorloc: HeadingSequenceSettings.{name}: invalid value {getattr(self, name)!r}")
+
+
+@dataclass
+class HeadingGrid:
+    """A floor's cells for the tracker: lattice (nx, ny) of ``cell_size_m`` cells from origin
+    (x0, y0) [m]; ``index`` (ny, nx) the state index of each lattice cell or -1; ``cells_m`` (N, 2)
+    the states' centres [m]; ``wall_factor`` (N,); ``area_m2`` the walkable area A; ``corner``
+    (N, 4) lattice indices (row-major) and ``corner_w`` (N, 4) bilinear weights at which a fix's
+    density is read for each state (the survey-anchored points); ``floor_number`` the floor's
+    number (None: fix components of every floor count)."""
+
+    x0: float
+    y0: float
+    nx: int
+    ny: int
+    cell_size_m: float
+    index: np.ndarray
+    cells_m: np.ndarray
+    wall_factor: np.ndarray
+    area_m2: float
+    corner: np.ndarray
+    corner_w: np.ndarray
+    floor_number: Optional[int] = None
+
+
+def grid_from_fraction(walkable_fraction: np.ndarray, origin_m, settings: HeadingSequenceSettings,
+                       survey_positions_m: Optional[np.ndarray] = None, area_m2: Optional[float] = None,
+                       floor_number: Optional[int] = None) -> HeadingGrid:
+    """The tracker's grid from a lattice of walkable fractions (ny, nx) in [0, 1] whose cell (0, 0)
+    has its lower-left corner at origin_m (x0, y0) [m]; survey_positions_m (P, 2) [m] anchor the
+    fixes (None or empty: fixes read at the cell centres); area_m2 the walkable area [m²] (None:
+    the fractions' sum times the cell area); floor_number: the floor's number (fix components on
+    other floors are then ignored; None: every component counts)."""
+    settings.validate()
+    a = np.asarray(walkable_fraction, dtype=float)
+    if a.ndim != 2 or a.size == 0 or not np.all(np.isfinite(a)) or a.min() < 0 or a.max() > 1:
+        raise ValueError("indoorloc: argument 'walkable_fraction': need a non-empty 2-D array of values in [0, 1]")
+    if not np.any(a > 0):
+        raise ValueError("indoorloc: argument 'walkable_fraction': no walkable cell")
+    from scipy.ndimage import binary_dilation
+
+    c = settings.cell_size_m
+    ny, nx = a.shape
+    keep = a > 0
+    if settings.margin_cells > 0:
+        keep = binary_dilation(keep, np.ones((3, 3), bool), iterations=settings.margin_cells)
+    index = np.full((ny, nx), -1, dtype=np.int64)
+    rows, cols = np.nonzero(keep)
+    index[rows, cols] = np.arange(rows.size)
+    x0, y0 = float(origin_m[0]), float(origin_m[1])
+    cells = np.stack([x0 + (cols + 0.5) * c, y0 + (rows + 0.5) * c], axis=1)
+    frac = a[rows, cols]
+    wall = frac + (1.0 - frac) * math.exp(settings.wall_log_penalty)
+    q = cells
+    if survey_positions_m is not None and len(survey_positions_m) and settings.fix_survey_distance_factor < 1:
+        pts = np.asarray(survey_positions_m, dtype=float).reshape(-1, 2)
+        if not np.all(np.isfinite(pts)):
+            raise ValueError("indoorloc: argument 'survey_positions_m': must be finite")
+        _, near = cKDTree(pts).query(cells)
+        s = pts[near]
+        q = s + settings.fix_survey_distance_factor * (cells - s)
+    corner, corner_w = _bilinear_corners(q, x0, y0, c, nx, ny)
+    area = float(a.sum() * c * c) if area_m2 is None else float(area_m2)
+    if not (math.isfinite(area) and area > 0):
+        raise ValueError(f"indoorloc: argument 'area_m2': must be finite and > 0, got {area_m2!r}")
+    return HeadingGrid(x0, y0, nx, ny, c, index, cells, wall, area, corner, corner_w, floor_number)
+
+
+def _bilinear_corners(q: np.ndarray, x0: float, y0: float, c: float, nx: int, ny: int):
+    """Per point of q (N, 2) [m] the four lattice cells (row-major indices, (N, 4)) whose centres
+    surround it and their bilinear weights (N, 4), clamped to the lattice as the C++ tracker does
+    (grid_survey_anchors.cc, Lattice)."""
+    axes = []
+    for u, n in (((q[:, 0] - x0) / c - 0.5, nx), ((q[:, 1] - y0) / c - 0.5, ny)):
+        u = np.clip(u, 0.0, n - 1.0)
+        lo = np.minimum(np.floor(u).astype(np.int64), max(0, n - 2))
+        axes.append((lo, 1 if n > 1 else 0, u - lo if n > 1 else np.zeros_like(u)))
+    (ix, sx, wx), (iy, sy, wy) = axes
+    corners, weights = [], []
+    for dy, fy in ((0, 1 - wy), (sy, wy)):
+        for dx, fx in ((0, 1 - wx), (sx, wx)):
+            corners.append((iy + dy) * nx + ix + dx)
+            weights.append(fy * fx)
+    return np.stack(corners, 1), np.stack(weights, 1)
+
+
+def heading_grid(plan: Any, settings: HeadingSequenceSettings, survey_positions_m: Optional[np.ndarray] = None,
+                 floor_index: int = 0) -> HeadingGrid:
+    """The tracker's grid on floor ``floor_index`` of ``plan`` (an ``indoorloc.fusion`` floor
+    plan): the walkable fractions of the grid tracker's ``cell_size_m`` cells."""
+    from indoorloc.fusion.grid import GridTracker, GridTrackerOptions
+
+    settings.validate()
+    tracker = GridTracker(plan, GridTrackerOptions().replace(cell_size_m=settings.cell_size_m))
+    x0, y0, _, _ = tracker.grid_geometry(floor_index)
+    frac = np.asarray(tracker.walkable_fraction(floor_index), dtype=float)
+    area = float(plan.walkable_area(floor_index)) if hasattr(plan, "walkable_area") else None
+    return grid_from_fraction(frac, (x0, y0), settings, survey_positions_m, area, int(plan.floors[floor_index]))
+
+
+def mode_transition(settings: HeadingSequenceSettings) -> np.ndarray:
+    """P(m' | m) per tick, (D + 1, D + 1), mode 0 the wander mode, 1..D the headings θ = 2π(m-1)/D."""
+    d = settings.headings
+    t = np.zeros((d + 1, d + 1))
+    if d == 0:
+        t[0, 0] = 1.0
+        return t
+    t[0, 0] = 1.0 - settings.from_wander_probability
+    t[0, 1:] = settings.from_wander_probability / d
+    turn = 1.0 - settings.keep_heading_probability - settings.to_wander_probability
+    for h in range(d):
+        row = t[h + 1]
+        row[0] = settings.to_wander_probability
+        row[1 + h] += settings.keep_heading_probability
+        row[1:] += turn * (1.0 - settings.neighbour_turn_share) / d
+        for nb in ((h - 1) % d, (h + 1) % d):
+            row[1 + nb] += turn * settings.neighbour_turn_share / 2
+    return t
+
+
+def _stencil(shift_cells: np.ndarray, sd_cells: float):
+    """Lattice offsets (K, 2) (dx, dy) and weights (K,) summing to 1: the bilinear splat of the
+    shift convolved with a sampled Gaussian of sd_cells (mean exactly the shift)."""
+    fx, fy = math.floor(shift_cells[0]), math.floor(shift_cells[1])
+    rx, ry = shift_cells[0] - fx, shift_cells[1] - fy
+    splat = {(fx, fy): (1 - rx) * (1 - ry), (fx + 1, fy): rx * (1 - ry), (fx, fy + 1): (1 - rx) * ry, (fx + 1, fy + 1): rx * ry}
+    if sd_cells > 1e-6:
+        r = int(math.ceil(3.0 * sd_cells))
+        o = np.arange(-r, r + 1)
+        g1 = np.exp(-0.5 * (o / sd_cells) ** 2)
+        g1 /= g1.sum()
+        blur = {(int(i), int(j)): g1[a] * g1[b] for a, i in enumerate(o) for b, j in enumerate(o)}
+    else:
+        blur = {(0, 0): 1.0}
+    out: Dict[tuple, float] = {}
+    for (sx, sy), ws in splat.items():
+        if ws <= 0:
+            continue
+        for (bx, by), wb in blur.items():
+            out[(sx + bx, sy + by)] = out.get((sx + bx, sy + by), 0.0) + ws * wb
+    keys = [k for k, v in out.items() if v > 1e-4]  # below: < 0.3 % of the mass in all
+    w = np.array([out[k] for k in keys])
+    return np.array(keys, dtype=np.int64).reshape(-1, 2), w / w.sum()
+
+
+def _kernel_matrix(grid: HeadingGrid, offsets: np.ndarray, weights: np.ndarray) -> sp.csr_matrix:
+    """K^T (N, N) with K[i, j] the probability of moving from state i to state j; moves to lattice
+    cells outside the grid's states are dropped (lost mass)."""
+    rows, cols = np.nonzero(grid.index >= 0)
+    src = grid.index[rows, cols]
+    ii, jj, vv = [], [], []
+    for (dx, dy), w in zip(offsets, weights):
+        r2, c2 = rows + dy, cols + dx
+        ok = (r2 >= 0) & (r2 < grid.ny) & (c2 >= 0) & (c2 < grid.nx)
+        dst = np.full(src.size, -1, dtype=np.int64)
+        dst[ok] = grid.index[r2[ok], c2[ok]]
+        ok = dst >= 0
+        ii.append(dst[ok])
+        jj.append(src[ok])
+        vv.append(np.full(int(ok.sum()), w))
+    n = grid.cells_m.shape[0]
+    return sp.csr_matrix((np.concatenate(vv), (np.concatenate(ii), np.concatenate(jj))), shape=(n, n))
+
+
+def motion_kernels(grid: HeadingGrid, settings: HeadingSequenceSettings) -> List[sp.csr_matrix]:
+    """Per mode m the transposed move kernel K_m^T (N, N): mode 0 the random walk, 1..D the
+    headings (:func:`mode_transition`)."""
+    c = grid.cell_size_m
+    out = [_kernel_matrix(grid, *_stencil(np.zeros(2), settings.wander_sd_m_per_sqrt_s * math.sqrt(settings.tick_s) / c))]
+    step = settings.speed_m_per_s * settings.tick_s / c
+    for h in range(settings.headings):
+        th = 2 * math.pi * h / settings.headings
+        out.append(_kernel_matrix(grid, *_stencil(step * np.array([math.cos(th), math.sin(th)]),
+                                                  settings.heading_blur_sd_m / c)))
+    return out
+
+
+def fix_factors(grid: HeadingGrid, fixes: Any, tick_times_s: np.ndarray, settings: HeadingSequenceSettings
+                ) -> Dict[int, np.ndarray]:
+    """tick index -> Π_j L_j (N,) over the fixes applied at that tick (the first tick at or after
+    a fix's time; before the first tick: the first; after the last: the last), scaled to max 1."""
+    eps = settings.fix_outlier_probability
+    floor_density = eps / grid.area_m2
+    pts_idx, inverse = np.unique(grid.corner.reshape(-1), return_inverse=True)
+    pr, pc = np.divmod(pts_idx, grid.nx)
+    pts = np.stack([grid.x0 + (pc + 0.5) * grid.cell_size_m, grid.y0 + (pr + 0.5) * grid.cell_size_m], 1)
+    ticks = np.clip(np.searchsorted(tick_times_s, np.asarray(fixes.times_s) - 1e-9), 0, len(tick_times_s) - 1)
+    out: Dict[int, np.ndarray] = {}
+    for j in range(len(fixes)):
+        w = np.asarray(fixes.weights[j], float)
+        use = w > 0
+        # Normalised over all components: the weight on other floors is missing here, as in C++.
+        w = w / w[use].sum() if use.any() else w
+        if grid.floor_number is not None:  # components on this floor or on any floor (grid_fix_factor.cc)
+            fl = np.asarray(fixes.floors[j])
+            use &= (fl == ANY_FLOOR) | (fl == grid.floor_number)
+        if not use.any():
+            continue
+        w = w[use]
+        mu = np.asarray(fixes.means_m[j], float)[use]
+        sd = np.asarray(fixes.sds_m[j], float)[use] * settings.fix_sd_scale
+        d2 = ((pts[:, None, :] - mu[None, :, :]) ** 2).sum(-1)
+        dens = (np.exp(-0.5 * d2 / sd ** 2) * ((1 - eps) * w / (2 * math.pi * sd ** 2))).sum(1)
+        at = (dens[inverse].reshape(grid.corner.shape) * grid.corner_w).sum(1)
+        log_l = np.log(floor_density + at)
+        k = int(ticks[j])
+        out[k] = out.get(k, 0.0) + log_l
+    return {k: np.exp(v - v.max()) for k, v in out.items()}
+
+
+def _smooth(kernels: List[sp.csr_matrix], trans: np.ndarray, emit: List[np.ndarray]) -> np.ndarray:
+    """Posterior state probabilities summed over modes, (M ticks, N): forward-backward with
+    per-tick normalisation. emit[k] (N,) the tick's wall and fix factor. Computed in float64,
+    the forward pass kept in float32; the small mode products on one BLAS thread (they are
+    slower threaded, and the machine is shared)."""
+    from threadpoolctl import threadpool_limits
+
+    n_modes, m = trans.shape[0], len(emit)
+    n = emit[0].size
+    back = [k.T.tocsr() for k in kernels]
+    alpha = np.empty((m, n_modes, n), dtype=np.float32)
+    post = np.empty((m, n))
+    with threadpool_limits(limits=1):
+        a = np.full((n_modes, n), 1.0 / (n_modes * n)) * emit[0]
+        prev = a / a.sum()
+        alpha[0] = prev
+        tT = trans.T.copy()
+        for k in range(1, m):
+            mixed = tT @ prev
+            a = np.stack([kernels[i] @ mixed[i] for i in range(n_modes)]) * emit[k]
+            s = a.sum()
+            if not s > 0:  # everything walled off or an impossible fix: restart from the tick's evidence
+                a = np.ones((n_modes, n)) * emit[k]
+                s = a.sum()
+            prev = a / s
+            alpha[k] = prev
+        b = np.ones((n_modes, n))
+        g = prev
+        post[m - 1] = g.sum(0) / g.sum()
+        for k in range(m - 2, -1, -1):
+            be = b * emit[k + 1]
+            b = trans @ np.stack([back[i] @ be[i] for i in range(n_modes)])
+            mx = b.max()
+            b /= mx if mx > 0 else 1.0
+            g = alpha[k] * b
+            s = g.sum()
+            post[k] = g.sum(0) / s if s > 0 else alpha[k].sum(0)
+    return post
+
+
+def track_fixes(grid: HeadingGrid, fixes: Any, t_start_s: float, t_end_s: float,
+                settings: HeadingSequenceSettings, kernels: Optional[List[sp.csr_matrix]] = None
+                ) -> Dict[str, np.ndarray]:
+    """The walk's smoothed position [m] every ``tick_s`` from t_start_s to t_end_s [s] from its
+    WiFi fixes alone: ``{"times_s" (M,), "position_m" (M, 2), "mean_m" (M, 2)}``, the posterior
+    mean (NaN when there is no fix). ``kernels``: :func:`motion_kernels` of (grid, settings),
+    to reuse them over walks. Read at other times with ``wifi_sequence.at_times``."""
+    settings.validate()
+    if not (math.isfinite(t_start_s) and math.isfinite(t_end_s)) or t_end_s < t_start_s:
+        raise ValueError(f"indoorloc: arguments 't_start_s', 't_end_s': need finite t_start_s <= t_end_s, "
+                         f"got {t_start_s}, {t_end_s}")
+    m = max(2, int(math.ceil((t_end_s - t_start_s) / settings.tick_s)) + 1)
+    times = t_start_s + settings.tick_s * np.arange(m)
+    if fixes is None or len(fixes) == 0:
+        nan = np.full((m, 2), np.nan)
+        return {"times_s": times, "position_m": nan, "mean_m": nan}
+    kernels = kernels if kernels is not None else motion_kernels(grid, settings)
+    if len(kernels) != settings.headings + 1:
+        raise ValueError(f"indoorloc: argument 'kernels': expected {settings.headings + 1} (headings + 1), got {len(kernels)}")
+    factors = fix_factors(grid, fixes, times, settings)
+    emit = [grid.wall_factor * factors[k] if k in factors else grid.wall_factor for k in range(m)]
+    post = _smooth(kernels, mode_transition(settings), emit)
+    mean = post @ grid.cells_m
+    return {"times_s": times, "position_m": mean, "mean_m": mean}
+
+
+__all__ = ["HeadingGrid", "HeadingSequenceSettings", "fix_factors", "grid_from_fraction", "heading_grid",
+           "mode_transition", "motion_kernels", "track_fixes"]
