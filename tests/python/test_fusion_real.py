@@ -42,6 +42,9 @@ def test_floor_identification_and_error_against_time(two_floor_site):
     # The WiFi-only sequence tracker is scored beside wifi_knn, at the same waypoints.
     assert result["methods"]["wifi_sequence"]["n_waypoints"] == result["methods"]["wifi_knn"]["n_waypoints"]
     assert math.isfinite(result["methods"]["wifi_sequence"]["mean_m"])
+    # And the direction-persistent one, on the same fixes and waypoints.
+    assert result["methods"]["wifi_heading_sequence"]["n_waypoints"] == result["methods"]["wifi_knn"]["n_waypoints"]
+    assert math.isfinite(result["methods"]["wifi_heading_sequence"]["mean_m"])
 
 
 def test_leave_one_floor_out_choice_never_looks_at_the_held_out_floor(two_floor_site):

@@ -16,6 +16,9 @@ same folds:
 ``wifi_sequence``
     WiFi only, as a sequence: the walk's fixes and their times on the walkable grid with a
     random-walk motion, smoothed over the whole walk (:mod:`indoorloc.fusion.wifi_sequence`; no PDR).
+``wifi_heading_sequence``
+    WiFi only, the same fixes with a direction-persistent motion prior: the walker wanders or walks
+    on in one of 8 directions (:mod:`indoorloc.fusion.wifi_heading_sequence`; no PDR).
 ``pdr_only``
     handheld PDR from the first waypoint, headings rotated by the training yaw offset.
 ``peer_costmin``

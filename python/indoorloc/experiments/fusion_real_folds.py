@@ -76,6 +76,7 @@ class WalkTrainingCache:
     def __init__(self) -> None:
         self._fingerprints: Dict[Tuple, object] = {}
         self._placed: Dict[Tuple, object] = {}
+        self._heading_kernels: Dict[Tuple, object] = {}
 
     def fingerprints(self, fl: FloorData, i: int, settings: wfx.FixSettings):
         """``wifi_fixes.walk_fingerprints`` of walk i of the floor (None when none can be placed)."""
@@ -90,6 +91,18 @@ class WalkTrainingCache:
         if key not in self._placed:
             self._placed[key] = wc.reading_positions(fl.walks[i], settings)
         return self._placed[key]
+
+    def heading(self, fl: FloorData, database: wfx.FingerprintDatabase, settings):
+        """(grid, motion kernels) of ``wifi_heading_sequence`` on the floor: the grid anchored to the
+        fold's survey positions, the kernels (which depend on the plan and settings only) once per
+        floor."""
+        from indoorloc.fusion import wifi_heading_sequence as whs
+
+        grid = whs.heading_grid(fl.plan, settings, database.positions_m[database.floors == fl.number])
+        key = (fl.name, repr(settings))
+        if key not in self._heading_kernels:
+            self._heading_kernels[key] = whs.motion_kernels(grid, settings)
+        return grid, self._heading_kernels[key]
 
     def database(self, walks: Sequence[Tuple[FloorData, int]], settings: wfx.FixSettings) -> wfx.FingerprintDatabase:
         """``wifi_fixes.build_database`` of the walks (floor, index), each on its floor's number."""
@@ -121,9 +134,10 @@ def _propagation(fl: FloorData, database: wfx.FingerprintDatabase, settings: Rea
 
 def _fold_models(floors: Sequence[FloorData], fold_of: Dict[str, List[np.ndarray]], j: int,
                  settings: RealSettings, all_plan, with_crowd_map: bool = True,
-                 cache: Optional[WalkTrainingCache] = None) -> Dict[str, FoldModels]:
+                 cache: Optional[WalkTrainingCache] = None, with_heading: bool = False) -> Dict[str, FoldModels]:
     """Fold j's training models of every floor (and the all-floor database when identifying
-    floors); the crowdsourced cell map only ``with_crowd_map`` (the ``wifi_model`` method).
+    floors); the crowdsourced cell map only ``with_crowd_map`` (the ``wifi_model`` method), the
+    direction-persistent WiFi-only grid only ``with_heading`` (``wifi_heading_sequence``).
     ``cache``: the per-walk parts kept across folds (same models, computed once per walk)."""
     cache = cache or WalkTrainingCache()
     out: Dict[str, FoldModels] = {}
@@ -145,7 +159,8 @@ def _fold_models(floors: Sequence[FloorData], fold_of: Dict[str, List[np.ndarray
         database = cache.database([(fl, i) for i in train_idx], settings.fixes)
         crowd_grid = wifi.GridPosterior(crowd.model, settings.grid_spacing_m) if crowd is not None else None
         out[fl.name] = FoldModels(fl, cal, crowd, database, coverage_tree=_coverage_tree(database, fl.number),
-                                  crowd_grid=crowd_grid, propagation=_propagation(fl, database, settings))
+                                  crowd_grid=crowd_grid, propagation=_propagation(fl, database, settings),
+                                  heading=cache.heading(fl, database, settings.wifi_heading_sequence) if with_heading else None)
         all_walks += [(fl, i) for i in train_idx]
     if all_plan is not None:
         all_database = cache.database(all_walks, settings.fixes)
@@ -181,10 +196,13 @@ def evaluate_floors(floors: Sequence[FloorData], settings: RealSettings, peer=No
                 continue
             # --select passes one cache for all its grid points (the models do not depend on the
             # tracker's settings); it lives as long as that call, keyed by fold, fixes and map use.
-            key = (j, repr(settings.fixes), all_plan is None, "wifi_model" in methods)
+            with_heading = "wifi_heading_sequence" in methods
+            key = (j, repr(settings.fixes), all_plan is None, "wifi_model" in methods,
+                   repr(settings.wifi_heading_sequence) if with_heading else None)
             models = None if models_cache is None else models_cache.get(key)
             if models is None:
-                models = _fold_models(floors, fold_of, j, settings, all_plan, "wifi_model" in methods, cache)
+                models = _fold_models(floors, fold_of, j, settings, all_plan, "wifi_model" in methods, cache,
+                                      with_heading)
                 if models_cache is not None:
                     models_cache[key] = models
             # Fold j's walks queue behind fold j - 1's (the pool runs them in submission order), so

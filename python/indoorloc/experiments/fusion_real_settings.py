@@ -14,7 +14,7 @@ import numpy as np
 
 from indoorloc import fusion
 from indoorloc.fusion import crowdsourced_map as wc, wifi_fixes as wfx
-from indoorloc.fusion import site_model, wifi_sequence
+from indoorloc.fusion import site_model, wifi_heading_sequence, wifi_sequence
 from indoorloc.pdr import handheld as ph
 
 FLOORS: Tuple[str, ...] = ()  #: none named: every floor folder under the data root, in building order
@@ -22,6 +22,7 @@ METHODS = (
     "wifi_knn",
     "wifi_model",
     "wifi_sequence",
+    "wifi_heading_sequence",
     "pdr_only",
     "peer_costmin",
     "fusion_unknown_start",
@@ -80,6 +81,10 @@ class RealSettings:
     #: The WiFi-only sequence tracker (``wifi_sequence``: the fixes above on the walkable grid with
     #: a random-walk motion, no PDR; its settings chosen by LOFO, ``experiments/wifi_sequence_study``).
     wifi_sequence: wifi_sequence.SequenceSettings = field(default_factory=wifi_sequence.SequenceSettings)
+    #: The WiFi-only tracker with a direction-persistent motion prior (``wifi_heading_sequence``:
+    #: the same fixes, modes "wander" and 8 walking directions; LOFO, ``experiments/wifi_heading_study``).
+    wifi_heading_sequence: wifi_heading_sequence.HeadingSequenceSettings = field(
+        default_factory=wifi_heading_sequence.HeadingSequenceSettings)
     #: Propagation-model fixes (``fusion.propagation_fixes``, a per-AP path-loss model fitted per
     #: fold) added to the fixes of ``wifi_sequence`` and of the grid engine's methods: "off" (the
     #: kNN fixes alone), "product" (both as separate fixes at the same times) or "mixture" (one
@@ -241,6 +246,9 @@ class FoldModels:
     #: (path-loss model, cells (M, 2) [m], its predictions (M, K) [dBm]) when
     #: ``RealSettings.propagation_weight`` > 0, else None.
     propagation: Any = None
+    #: (``wifi_heading_sequence.HeadingGrid`` of the floor with the fold's survey positions, its
+    #: motion kernels) when the ``wifi_heading_sequence`` method runs, else None.
+    heading: Any = None
 
 
 def default_site_root() -> Path:

@@ -14,7 +14,7 @@ import numpy as np
 
 from indoorloc import fusion, wifi
 from indoorloc.fusion import crowdsourced_map as wc, wifi_fixes as wfx
-from indoorloc.fusion import live, site_model, wifi_sequence
+from indoorloc.fusion import live, site_model, wifi_heading_sequence, wifi_sequence
 from indoorloc.pdr import handheld as ph
 from indoorloc.experiments.fusion_real_settings import COVARIANCE_METHODS, FoldModels, RealSettings, WalkScore
 
@@ -119,6 +119,15 @@ def _score_walk(walk, steps_raw: ph.HandheldSteps, models: FoldModels, settings:
         track = wifi_sequence.track_fixes(tracker, fixes, 0.0, float(walk.duration_s), seq)
         put("wifi_sequence", wifi_sequence.at_times(track, wt))
         score.seconds["wifi_sequence"] = time.perf_counter() - tic
+    if len(fixes) and "wifi_heading_sequence" in want and models.heading is not None:
+        # WiFi only, the same fixes with a direction-persistent motion prior (wander or walk on in
+        # one of 8 directions); no PDR, no IMU.
+        tic = time.perf_counter()
+        grid, kernels = models.heading
+        track = wifi_heading_sequence.track_fixes(grid, fixes, 0.0, float(walk.duration_s),
+                                                  settings.wifi_heading_sequence, kernels)
+        put("wifi_heading_sequence", wifi_sequence.at_times(track, wt))
+        score.seconds["wifi_heading_sequence"] = time.perf_counter() - tic
     if "wifi_model" in want:
         scan_t, rss_fresh, _ = wc.scan_matrix(walk, models.crowd.bssids, dedup=False, max_age_s=settings.wifi_max_age_s)
         if scan_t.size:
