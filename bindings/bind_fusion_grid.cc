@@ -153,6 +153,25 @@ Build once per plan and options (keeps a reference to the plan); ``run`` is thre
            "(x0, y0, columns, rows): corner of the first cell [m] and the grid's size on a floor.")
       .def("walkable_fraction", &GridTracker::WalkableFraction, py::arg("floor_index"),
            "Walkable fraction of every cell (rows, columns), row 0 at the lowest y.")
+      .def("wall_factors", &GridTracker::WallFactors, py::arg("floor_index"),
+           "The per-step wall factor of every cell (rows, columns): a + (1 - a) e^λ, 1 where the survey "
+           "walked through the cell.")
+      .def(
+          "fix_log_likelihood",
+          [](const GridTracker& t, int floor_index, const py::object& fixes) {
+            if (!py::isinstance<py::tuple>(fixes)) {
+              ThrowInvalidArgument("fixes", "expected (times_s, means_m, sds_m, weights, floors) "
+                                            "(indoorloc.fusion.Fixes.as_arrays()), got " +
+                                                std::string(Py_TYPE(fixes.ptr())->tp_name));
+            }
+            const std::vector<PositionFix> fx = FixesFromArrays(fixes.cast<py::tuple>());
+            py::gil_scoped_release release;
+            return t.FixLogLikelihood(floor_index, fx);
+          },
+          py::arg("floor_index"), py::arg("fixes"),
+          "log Π_j L_j(c)^τ [nats] of the fixes (Fixes.as_arrays(), all applied together) on every cell "
+          "(rows, columns): the factor the tracker applies at a step with them (survey-anchored, the "
+          "options' ε and τ, other floors' components ignored).")
       .def(
           "with_survey_positions",
           [](const GridTracker& t, const py::object& positions_m, const py::object& floor_numbers,

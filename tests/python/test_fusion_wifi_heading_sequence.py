@@ -1,8 +1,8 @@
 """The direction-persistent WiFi-only tracker (fusion.wifi_heading_sequence, docs/fusion_real.md
 "WiFi only: a direction-persistent motion prior"): a walker seen only at the start of a corridor
 is carried along it where the random walk stays put; zero headings is wifi_sequence's random walk;
-the smoother equals a dense forward-backward on a small grid; fix components on other floors
-are ignored; errors name the argument."""
+the smoother equals a dense forward-backward on a small grid; its walls and fixes are the C++
+grid tracker's (components on other floors ignored); errors name the argument."""
 
 import dataclasses
 
@@ -14,11 +14,11 @@ from indoorloc.fusion import wifi_heading_sequence as whs
 from indoorloc.fusion import wifi_sequence as ws
 
 
-def _corridor_fraction(nx=50, ny=3):
-    """A corridor of 2 m cells, nx long and ny wide, inside a ring of obstacle cells."""
-    a = np.zeros((ny + 2, nx + 2))
-    a[1:-1, 1:-1] = 1.0
-    return a
+def _corridor(s, floor=0):
+    """The states of a corridor 100 m long and 6 m wide (x 2-102 m, y 2-8 m) on floor ``floor``."""
+    outline = np.array([[2, 2], [102, 2], [102, 8], [2, 8]], float)
+    plan = fusion.floor_plan_from_polygons(outline, [], floor=floor)
+    return whs.heading_grid(plan, s)
 
 
 def _fixes_at_start():
@@ -35,7 +35,7 @@ def test_a_walker_seen_only_at_the_start_is_carried_along_the_corridor():
     still = dataclasses.replace(moving, headings=0)
     x_at_30 = {}
     for name, s in (("moving", moving), ("still", still)):
-        grid = whs.grid_from_fraction(_corridor_fraction(), (0.0, 0.0), s)
+        grid = _corridor(s)
         track = whs.track_fixes(grid, fixes, 0.0, 30.0, s)
         assert np.isfinite(track["position_m"]).all()
         x_at_30[name] = float(ws.at_times(track, [30.0])[0, 0])
@@ -64,7 +64,10 @@ def test_zero_headings_is_the_random_walk_of_wifi_sequence():
 
 def test_the_smoother_is_the_dense_forward_backward():
     s = whs.HeadingSequenceSettings(headings=4, speed_m_per_s=1.5, heading_blur_sd_m=0.8, margin_cells=0)
-    grid = whs.grid_from_fraction(np.array([[1, 1, 1, 0.5], [1, 0, 1, 1], [1, 1, 1, 1]]), (0.0, 0.0), s)
+    outline = np.array([[0, 0], [8, 0], [8, 6], [0, 6]], float)
+    shop = np.array([[3, 2], [5, 2], [5, 4], [3, 4]], float)   # half of four cells: partial walls
+    grid = whs.heading_grid(fusion.floor_plan_from_polygons(outline, [shop]), s)
+    assert 4 <= grid.cells_m.shape[0] <= 30 and grid.wall_factor.min() < 1.0
     kernels = whs.motion_kernels(grid, s)
     trans = whs.mode_transition(s)
     np.testing.assert_allclose(trans.sum(1), 1.0)
@@ -94,13 +97,13 @@ def test_errors_name_the_argument():
     with pytest.raises(ValueError, match="speed_m_per_s"):
         whs.HeadingSequenceSettings(speed_m_per_s=float("nan")).validate()
     s = whs.HeadingSequenceSettings()
-    with pytest.raises(ValueError, match="walkable_fraction"):
-        whs.grid_from_fraction(np.full((3, 3), np.nan), (0.0, 0.0), s)
-    with pytest.raises(ValueError, match="walkable_fraction"):
-        whs.grid_from_fraction(np.zeros((3, 3)), (0.0, 0.0), s)
+    outline = np.array([[0, 0], [20, 0], [20, 6], [0, 6]], float)
+    plan = fusion.floor_plan_from_polygons(outline, [])
     with pytest.raises(ValueError, match="survey_positions_m"):
-        whs.grid_from_fraction(np.ones((3, 3)), (0.0, 0.0), s, np.array([[np.inf, 0.0]]))
-    grid = whs.grid_from_fraction(_corridor_fraction(), (0.0, 0.0), s)
+        whs.heading_grid(plan, s, np.array([[np.inf, 0.0]]))
+    with pytest.raises(ValueError, match="tracker"):   # a tracker of another cell size
+        whs.grid_from_tracker(fusion.GridTracker(plan, s.grid_options().replace(cell_size_m=1.0)), s)
+    grid = _corridor(s)
     with pytest.raises(ValueError, match="t_start_s"):
         whs.track_fixes(grid, _fixes_at_start(), 5.0, 1.0, s)
     with pytest.raises(ValueError, match="kernels"):
@@ -112,14 +115,14 @@ def test_errors_name_the_argument():
 
 def test_fix_components_on_other_floors_are_ignored():
     s = whs.HeadingSequenceSettings(fix_survey_distance_factor=1.0, fix_sd_scale=1.0)
-    grid = whs.grid_from_fraction(_corridor_fraction(), (0.0, 0.0), s, floor_number=3)
+    grid = _corridor(s, floor=3)
     t = np.arange(0.0, 10.0, 2.0)
     means = np.stack([np.c_[np.full(t.size, 20.0), np.full(t.size, 5.0)],    # on floor 3
                       np.c_[np.full(t.size, 80.0), np.full(t.size, 5.0)]], 1)  # on floor 7
     fixes = fusion.Fixes.from_arrays(t, means, 2.0, floors=np.tile([3, 7], (t.size, 1)))
     x = whs.track_fixes(grid, fixes, 0.0, 8.0, s)["position_m"][:, 0]
     assert np.all(np.abs(x - 20.0) < 3.0), x
-    # Without a floor number both components count and the mean lies between them.
-    everywhere = whs.grid_from_fraction(_corridor_fraction(), (0.0, 0.0), s)
-    x_all = whs.track_fixes(everywhere, fixes, 0.0, 8.0, s)["position_m"][:, 0]
+    # Components without a floor count on every floor: the mean then lies between them.
+    anywhere = fusion.Fixes.from_arrays(t, means, 2.0)
+    x_all = whs.track_fixes(grid, anywhere, 0.0, 8.0, s)["position_m"][:, 0]
     assert np.all(x_all > 35.0), x_all

@@ -8,10 +8,12 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <sstream>
 #include <stdexcept>
+#include <string>
 
 #include "indoorloc/core/options.h"
 #include "indoorloc/core/parallel.h"
@@ -189,6 +191,35 @@ RowMatrixXd GridTracker::WalkableFraction(int floor_index) const {
   RowMatrixXd out(g.ny, g.nx);
   for (int y = 0; y < g.ny; ++y)
     for (int x = 0; x < g.nx; ++x) out(y, x) = g.walkable_fraction[static_cast<std::size_t>(y) * g.nx + x];
+  return out;
+}
+
+RowMatrixXd GridTracker::WallFactors(int floor_index) const {
+  RequireIntInRange(floor_index, 0, static_cast<int>(impl_->grids.size()) - 1, "floor_index");
+  const FloorGrid& g = impl_->grids[floor_index];
+  RowMatrixXd out(g.ny, g.nx);
+  for (int y = 0; y < g.ny; ++y)
+    for (int x = 0; x < g.nx; ++x) out(y, x) = g.wall_factor[static_cast<std::size_t>(y) * g.nx + x];
+  return out;
+}
+
+RowMatrixXd GridTracker::FixLogLikelihood(int floor_index, const std::vector<PositionFix>& fixes) const {
+  RequireIntInRange(floor_index, 0, static_cast<int>(impl_->grids.size()) - 1, "floor_index");
+  std::vector<const PositionFix*> ptrs;
+  for (std::size_t j = 0; j < fixes.size(); ++j) {
+    const std::string name = "fixes[" + std::to_string(j) + "]";
+    CheckPositionFix(fixes[j], name.c_str());
+    ptrs.push_back(&fixes[j]);
+  }
+  const FloorGrid& g = impl_->grids[floor_index];
+  RowMatrixXd out = RowMatrixXd::Zero(g.ny, g.nx);
+  if (ptrs.empty()) return out;
+  const grid_ops::TrackerGrids::FixFactor f = impl_->ComputeFixFactor(ptrs, g);
+  for (int y = 0; y < g.ny; ++y)
+    for (int x = 0; x < g.nx; ++x) {
+      const float v = f.factor[static_cast<std::size_t>(y) * g.nx + x];
+      out(y, x) = v > 0 ? std::log(static_cast<double>(v)) + f.log_scale : -std::numeric_limits<double>::infinity();
+    }
   return out;
 }
 

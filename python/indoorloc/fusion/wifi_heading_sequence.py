@@ -15,11 +15,13 @@ Model, per tick of ``tick_s`` seconds (state (c, m): cell c, mode m in {wander, 
   move:     p(c' | c, m') = K_m'(c, c'): heading θ_m': the displacement v·tick (cos θ, sin θ)
             (bilinear on the lattice, so its mean is exact) blurred by N(0, σ_b² I); wander: the
             random walk N(0, σ_w² tick I). Mass moved off the grid's cells is lost (a wall).
-  walls:    m(c) = a(c) + (1 - a(c)) e^λ, a(c) the cell's walkable fraction (as the grid tracker)
-  fixes:    L_j(c) = ε / A + (1 - ε) Σ_k w_k N(q(c); μ_k, (κ σ_k)² I), read at the survey-anchored
-            point q(c) = s(c) + β (c - s(c)) by bilinear interpolation between cell centres, as the
-            C++ grid tracker does (grid_fix_factor.cc, grid_survey_anchors.cc)
-The grid's cells are those with a walkable fraction > 0 and ``margin_cells`` rings around them
+  walls:    m(c) = a(c) + (1 - a(c)) e^λ, a(c) the cell's walkable fraction
+  fixes:    L_j(c) = ε / A + (1 - ε) Σ_k w_k N(q(c); μ_k, (κ σ_k)² I) at the survey-anchored
+            point q(c) = s(c) + β (c - s(c))
+The cells, the walls and the fixes are the C++ grid tracker's, read from a ``GridTracker`` with
+these settings (``wall_factors``, ``fix_log_likelihood``: the one implementation of that model,
+grid_fix_factor.cc, grid_survey_anchors.cc); only the motion and the forward-backward are here.
+The states are the cells with a walkable fraction > 0 and ``margin_cells`` rings around them
 (the rest of the floor's bounding box, which the grid tracker also holds, pays λ every tick and
 carries almost no mass). With ``headings`` = 0 the model is ``wifi_sequence``'s.
 
@@ -40,9 +42,6 @@ from typing import Any, Dict, List, Optional
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.spatial import cKDTree
-
-from indoorloc.fusion.fixes import ANY_FLOOR
 
 
 @dataclass(frozen=True)
@@ -85,6 +84,18 @@ class HeadingSequenceSettings:
     #: the C++ grid tracker, whose grid is the whole bounding box, within 0.07 m on five floors).
     margin_cells: int = 2
 
+    def grid_options(self):
+        """The C++ grid tracker's options whose grid, walls and fixes these settings use (ε, β, λ,
+        the cell size; τ 1, no survey-open cells: wifi_sequence's)."""
+        from indoorloc.fusion.grid import GridTrackerOptions
+
+        self.validate()
+        return GridTrackerOptions().replace(cell_size_m=self.cell_size_m, wall_log_penalty=self.wall_log_penalty,
+                                            fix_outlier_probability=self.fix_outlier_probability, fix_tempering=1.0,
+                                            fix_tempering_by_variance=False,
+                                            fix_survey_distance_factor=self.fix_survey_distance_factor,
+                                            survey_walkable_radius_m=0.0)
+
     def validate(self) -> None:
         """ValueError naming the field for a setting out of range."""
         finite_pos = lambda v: math.isfinite(v) and v > 0  # noqa: E731
@@ -112,100 +123,64 @@ class HeadingSequenceSettings:
 
 @dataclass
 class HeadingGrid:
-    """A floor's cells for the tracker: lattice (nx, ny) of ``cell_size_m`` cells from origin
-    (x0, y0) [m]; ``index`` (ny, nx) the state index of each lattice cell or -1; ``cells_m`` (N, 2)
-    the states' centres [m]; ``wall_factor`` (N,); ``area_m2`` the walkable area A; ``corner``
-    (N, 4) lattice indices (row-major) and ``corner_w`` (N, 4) bilinear weights at which a fix's
-    density is read for each state (the survey-anchored points); ``floor_number`` the floor's
-    number (None: fix components of every floor count)."""
+    """A floor's states for the tracker: ``tracker`` the C++ ``GridTracker`` (floor
+    ``floor_index``) whose lattice (nx, ny) of ``cell_size_m`` cells from origin (x0, y0) [m], wall
+    factors and fix model the states use; ``index`` (ny, nx) the state index of each lattice cell
+    or -1; ``lattice_cell`` (N,) each state's row-major lattice index; ``cells_m`` (N, 2) the
+    states' centres [m]; ``wall_factor`` (N,) the tracker's."""
 
+    tracker: Any
+    floor_index: int
     x0: float
     y0: float
     nx: int
     ny: int
     cell_size_m: float
     index: np.ndarray
+    lattice_cell: np.ndarray
     cells_m: np.ndarray
     wall_factor: np.ndarray
-    area_m2: float
-    corner: np.ndarray
-    corner_w: np.ndarray
-    floor_number: Optional[int] = None
 
 
-def grid_from_fraction(walkable_fraction: np.ndarray, origin_m, settings: HeadingSequenceSettings,
-                       survey_positions_m: Optional[np.ndarray] = None, area_m2: Optional[float] = None,
-                       floor_number: Optional[int] = None) -> HeadingGrid:
-    """The tracker's grid from a lattice of walkable fractions (ny, nx) in [0, 1] whose cell (0, 0)
-    has its lower-left corner at origin_m (x0, y0) [m]; survey_positions_m (P, 2) [m] anchor the
-    fixes (None or empty: fixes read at the cell centres); area_m2 the walkable area [m²] (None:
-    the fractions' sum times the cell area); floor_number: the floor's number (fix components on
-    other floors are then ignored; None: every component counts)."""
-    settings.validate()
-    a = np.asarray(walkable_fraction, dtype=float)
-    if a.ndim != 2 or a.size == 0 or not np.all(np.isfinite(a)) or a.min() < 0 or a.max() > 1:
-        raise ValueError("indoorloc: argument 'walkable_fraction': need a non-empty 2-D array of values in [0, 1]")
-    if not np.any(a > 0):
-        raise ValueError("indoorloc: argument 'walkable_fraction': no walkable cell")
+def grid_from_tracker(tracker: Any, settings: HeadingSequenceSettings, floor_index: int = 0) -> HeadingGrid:
+    """The states on floor ``floor_index`` of a ``GridTracker`` built with ``settings.grid_options()``
+    (and, for anchored fixes, ``with_survey_positions``): its cells with a walkable fraction > 0
+    and ``settings.margin_cells`` rings around them."""
     from scipy.ndimage import binary_dilation
 
-    c = settings.cell_size_m
-    ny, nx = a.shape
+    settings.validate()
+    if abs(float(tracker.options.cell_size_m) - settings.cell_size_m) > 1e-12:
+        raise ValueError(f"indoorloc: argument 'tracker': its cell size {tracker.options.cell_size_m} m is not "
+                         f"settings.cell_size_m = {settings.cell_size_m} m (build it with settings.grid_options())")
+    x0, y0, nx, ny = (float(v) for v in tracker.grid_geometry(floor_index))
+    nx, ny = int(nx), int(ny)
+    a = np.asarray(tracker.walkable_fraction(floor_index), dtype=float)
     keep = a > 0
     if settings.margin_cells > 0:
         keep = binary_dilation(keep, np.ones((3, 3), bool), iterations=settings.margin_cells)
     index = np.full((ny, nx), -1, dtype=np.int64)
     rows, cols = np.nonzero(keep)
     index[rows, cols] = np.arange(rows.size)
-    x0, y0 = float(origin_m[0]), float(origin_m[1])
+    c = settings.cell_size_m
     cells = np.stack([x0 + (cols + 0.5) * c, y0 + (rows + 0.5) * c], axis=1)
-    frac = a[rows, cols]
-    wall = frac + (1.0 - frac) * math.exp(settings.wall_log_penalty)
-    q = cells
-    if survey_positions_m is not None and len(survey_positions_m) and settings.fix_survey_distance_factor < 1:
-        pts = np.asarray(survey_positions_m, dtype=float).reshape(-1, 2)
-        if not np.all(np.isfinite(pts)):
-            raise ValueError("indoorloc: argument 'survey_positions_m': must be finite")
-        _, near = cKDTree(pts).query(cells)
-        s = pts[near]
-        q = s + settings.fix_survey_distance_factor * (cells - s)
-    corner, corner_w = _bilinear_corners(q, x0, y0, c, nx, ny)
-    area = float(a.sum() * c * c) if area_m2 is None else float(area_m2)
-    if not (math.isfinite(area) and area > 0):
-        raise ValueError(f"indoorloc: argument 'area_m2': must be finite and > 0, got {area_m2!r}")
-    return HeadingGrid(x0, y0, nx, ny, c, index, cells, wall, area, corner, corner_w, floor_number)
-
-
-def _bilinear_corners(q: np.ndarray, x0: float, y0: float, c: float, nx: int, ny: int):
-    """Per point of q (N, 2) [m] the four lattice cells (row-major indices, (N, 4)) whose centres
-    surround it and their bilinear weights (N, 4), clamped to the lattice as the C++ tracker does
-    (grid_survey_anchors.cc, Lattice)."""
-    axes = []
-    for u, n in (((q[:, 0] - x0) / c - 0.5, nx), ((q[:, 1] - y0) / c - 0.5, ny)):
-        u = np.clip(u, 0.0, n - 1.0)
-        lo = np.minimum(np.floor(u).astype(np.int64), max(0, n - 2))
-        axes.append((lo, 1 if n > 1 else 0, u - lo if n > 1 else np.zeros_like(u)))
-    (ix, sx, wx), (iy, sy, wy) = axes
-    corners, weights = [], []
-    for dy, fy in ((0, 1 - wy), (sy, wy)):
-        for dx, fx in ((0, 1 - wx), (sx, wx)):
-            corners.append((iy + dy) * nx + ix + dx)
-            weights.append(fy * fx)
-    return np.stack(corners, 1), np.stack(weights, 1)
+    wall = np.asarray(tracker.wall_factors(floor_index), dtype=float)[rows, cols]
+    return HeadingGrid(tracker, int(floor_index), x0, y0, nx, ny, c, index, rows * nx + cols, cells, wall)
 
 
 def heading_grid(plan: Any, settings: HeadingSequenceSettings, survey_positions_m: Optional[np.ndarray] = None,
                  floor_index: int = 0) -> HeadingGrid:
-    """The tracker's grid on floor ``floor_index`` of ``plan`` (an ``indoorloc.fusion`` floor
-    plan): the walkable fractions of the grid tracker's ``cell_size_m`` cells."""
-    from indoorloc.fusion.grid import GridTracker, GridTrackerOptions
+    """The tracker's states on floor ``floor_index`` of ``plan`` (an ``indoorloc.fusion`` floor
+    plan), the fixes anchored to ``survey_positions_m`` (P, 2) [m] (None or empty: read at the
+    cells)."""
+    from indoorloc.fusion.grid import GridTracker
 
-    settings.validate()
-    tracker = GridTracker(plan, GridTrackerOptions().replace(cell_size_m=settings.cell_size_m))
-    x0, y0, _, _ = tracker.grid_geometry(floor_index)
-    frac = np.asarray(tracker.walkable_fraction(floor_index), dtype=float)
-    area = float(plan.walkable_area(floor_index)) if hasattr(plan, "walkable_area") else None
-    return grid_from_fraction(frac, (x0, y0), settings, survey_positions_m, area, int(plan.floors[floor_index]))
+    tracker = GridTracker(plan, settings.grid_options())
+    if survey_positions_m is not None and len(survey_positions_m) and settings.fix_survey_distance_factor < 1:
+        pts = np.asarray(survey_positions_m, dtype=float).reshape(-1, 2)
+        if not np.all(np.isfinite(pts)):
+            raise ValueError("indoorloc: argument 'survey_positions_m': must be finite")
+        tracker = tracker.with_survey_positions(pts, np.full(pts.shape[0], int(plan.floors[floor_index]), np.int64))
+    return grid_from_tracker(tracker, settings, floor_index)
 
 
 def mode_transition(settings: HeadingSequenceSettings) -> np.ndarray:
@@ -288,34 +263,18 @@ def motion_kernels(grid: HeadingGrid, settings: HeadingSequenceSettings) -> List
 def fix_factors(grid: HeadingGrid, fixes: Any, tick_times_s: np.ndarray, settings: HeadingSequenceSettings
                 ) -> Dict[int, np.ndarray]:
     """tick index -> Π_j L_j (N,) over the fixes applied at that tick (the first tick at or after
-    a fix's time; before the first tick: the first; after the last: the last), scaled to max 1."""
-    eps = settings.fix_outlier_probability
-    floor_density = eps / grid.area_m2
-    pts_idx, inverse = np.unique(grid.corner.reshape(-1), return_inverse=True)
-    pr, pc = np.divmod(pts_idx, grid.nx)
-    pts = np.stack([grid.x0 + (pc + 0.5) * grid.cell_size_m, grid.y0 + (pr + 0.5) * grid.cell_size_m], 1)
-    ticks = np.clip(np.searchsorted(tick_times_s, np.asarray(fixes.times_s) - 1e-9), 0, len(tick_times_s) - 1)
+    a fix's time; before the first tick: the first; after the last: the last), scaled to max 1:
+    the grid tracker's fix model (``GridTracker.fix_log_likelihood``) with each component's sd x κ."""
+    times, means, sds, weights, floors = fixes.as_arrays()
+    sds = np.asarray(sds, float) * settings.fix_sd_scale
+    ticks = np.clip(np.searchsorted(tick_times_s, np.asarray(times) - 1e-9), 0, len(tick_times_s) - 1)
     out: Dict[int, np.ndarray] = {}
-    for j in range(len(fixes)):
-        w = np.asarray(fixes.weights[j], float)
-        use = w > 0
-        # Normalised over all components: the weight on other floors is missing here, as in C++.
-        w = w / w[use].sum() if use.any() else w
-        if grid.floor_number is not None:  # components on this floor or on any floor (grid_fix_factor.cc)
-            fl = np.asarray(fixes.floors[j])
-            use &= (fl == ANY_FLOOR) | (fl == grid.floor_number)
-        if not use.any():
-            continue
-        w = w[use]
-        mu = np.asarray(fixes.means_m[j], float)[use]
-        sd = np.asarray(fixes.sds_m[j], float)[use] * settings.fix_sd_scale
-        d2 = ((pts[:, None, :] - mu[None, :, :]) ** 2).sum(-1)
-        dens = (np.exp(-0.5 * d2 / sd ** 2) * ((1 - eps) * w / (2 * math.pi * sd ** 2))).sum(1)
-        at = (dens[inverse].reshape(grid.corner.shape) * grid.corner_w).sum(1)
-        log_l = np.log(floor_density + at)
-        k = int(ticks[j])
-        out[k] = out.get(k, 0.0) + log_l
-    return {k: np.exp(v - v.max()) for k, v in out.items()}
+    for k in np.unique(ticks):
+        at = np.nonzero(ticks == k)[0]
+        sub = (times[at], means[at], sds[at], weights[at], None if floors is None else floors[at])
+        log_l = np.asarray(grid.tracker.fix_log_likelihood(grid.floor_index, sub), float).reshape(-1)[grid.lattice_cell]
+        out[int(k)] = np.exp(log_l - log_l.max())
+    return out
 
 
 def _smooth(kernels: List[sp.csr_matrix], trans: np.ndarray, emit: List[np.ndarray]) -> np.ndarray:
@@ -384,5 +343,5 @@ def track_fixes(grid: HeadingGrid, fixes: Any, t_start_s: float, t_end_s: float,
     return {"times_s": times, "position_m": mean, "mean_m": mean}
 
 
-__all__ = ["HeadingGrid", "HeadingSequenceSettings", "fix_factors", "grid_from_fraction", "heading_grid",
+__all__ = ["HeadingGrid", "HeadingSequenceSettings", "fix_factors", "grid_from_tracker", "heading_grid",
            "mode_transition", "motion_kernels", "track_fixes"]

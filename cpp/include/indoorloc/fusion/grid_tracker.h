@@ -269,6 +269,15 @@ class GridTracker {
   Eigen::Vector4d GridGeometry(int floor_index) const;
   /// Walkable fraction of every cell of a floor, rows x columns (row 0 at the lowest y).
   RowMatrixXd WalkableFraction(int floor_index) const;
+  /// The per-step wall factor m(c) of every cell of a floor (rows x columns, as WalkableFraction):
+  /// a + (1 - a) e^λ, 1 where the survey walked through the cell (survey_walkable_radius_m).
+  RowMatrixXd WallFactors(int floor_index) const;
+  /// log Π_j L_j(c)^τ of the fixes on every cell of a floor (rows x columns) [nats]: the fix
+  /// factor the tracker applies at a step with these fixes (grid_fix_factor.cc; survey-anchored
+  /// positions, components of other floors ignored, the options' ε, τ). For other trackers on the
+  /// same grid (fusion.wifi_heading_sequence), so that the fix model exists once. Throws
+  /// std::invalid_argument naming the argument for a bad floor index or fix.
+  RowMatrixXd FixLogLikelihood(int floor_index, const std::vector<PositionFix>& fixes) const;
 
  private:
   friend class GridFilterSession;  // the streaming forward filter (grid_filter_session.h) runs on these grids
