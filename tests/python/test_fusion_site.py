@@ -501,4 +501,16 @@ def test_cli_live_streams_the_live_track_from_events_or_a_walk(built, tmp_path, 
             live_stream.parse_event(json.dumps(bad))
     assert main(["--quiet", "live", "--site", db, "--floor", "F99", "--walk", str(paths[-1])]) != 0
     assert "F99" in capsys.readouterr().err
+    # Events that cannot place the phone (IMU lying still, no scan): exit 2, no file that looks
+    # like a track; a missing events file names the argument.
+    still = tmp_path / "still.ndjson"
+    still.write_text("".join(json.dumps(live_stream.event_record(kind, 1.0 + i / 50, np.array(v))) + "\n"
+                             for i in range(200) for kind, v in (("gyroscope", [0, 0, 0]),
+                                                                 ("rotation_vector", [0, 0, 0, 1]),
+                                                                 ("accelerometer", [0, 0, 9.81]))))
+    none = tmp_path / "none.ndjson"
+    assert main(["--quiet", "live", "--site", db, "--events", str(still), "-o", str(none)]) == 2
+    assert not none.exists() and "no estimate" in capsys.readouterr().err
+    assert main(["--quiet", "live", "--site", db, "--events", str(tmp_path / "absent.ndjson")]) == 2
+    assert "argument '--events'" in capsys.readouterr().err
 

@@ -200,29 +200,45 @@ def cmd_live(args: argparse.Namespace) -> int:
     def warn(message: str) -> None:
         print(f"warning: {message}", file=sys.stderr)
 
-    write(live_stream.header_record(floor, origin))
+    # The input is opened (a walk read) before anything is written: a missing or unreadable one is
+    # an error naming the argument, with no output at all.
     if args.walk is not None:
         from indoorloc.io.ilc2020 import read_ilc_walk
 
         walk = read_ilc_walk(args.walk)
-        events = ((f"event {k}", ev, None) for k, ev in enumerate(live.walk_events(walk, beacons=True)))
-        summary = live_stream.run(tracker, events, write, origin, warn)
+        source = ((f"event {k}", ev, None) for k, ev in enumerate(live.walk_events(walk, beacons=True)))
+        handle = None
     elif args.events in (None, "-"):
-        summary = live_stream.run(tracker, live_stream.numbered_lines(sys.stdin), write, origin, warn)
+        handle = None
+        source = live_stream.numbered_lines(sys.stdin)
     else:
-        with open(args.events, encoding="utf-8") as fh:
-            summary = live_stream.run(tracker, live_stream.numbered_lines(fh), write, origin, warn)
+        try:
+            handle = open(args.events, encoding="utf-8")
+        except OSError as exc:
+            raise ValueError(f"indoorloc: argument '--events': {args.events}: {exc.strerror or exc}") from None
+        source = live_stream.numbered_lines(handle)
+    write(live_stream.header_record(floor, origin))
+    try:
+        summary = live_stream.run(tracker, source, write, origin, warn)
+    finally:
+        if handle is not None:
+            handle.close()
+    u = tracker.live_session.summary
+    if summary.estimates == 0:
+        # Nothing located the phone: no estimate is written rather than a file that looks like a track.
+        why = ("no event could be used" if summary.events == 0 else
+               f"{summary.events} events but no step detected and no WiFi fix applied (a phone that does not move "
+               "needs WiFi scans that match the site's fingerprints)")
+        print(f"error: no estimate: {why}" + ("" if to_stdout else f"; nothing written to {args.output}"),
+              file=sys.stderr)
+        return 2
     if not to_stdout:
         write_text_atomic(args.output, "".join(t + "\n" for t in lines))
-    u = tracker.live_session.summary
     if not args.quiet:
         print(f"live: {summary.events} events, {u['steps']} steps detected and {u['standing_steps']} standing, "
               f"{u['fixes']} WiFi fixes applied ({u['pending_fixes']} pending), {summary.estimates} estimates"
               + ("" if to_stdout else f" written to {args.output}")
               + (f"; {summary.skipped} lines skipped (named above)" if summary.skipped else ""), file=sys.stderr)
-    if summary.events == 0:
-        print("error: no event could be used", file=sys.stderr)
-        return 2
     return 1 if summary.skipped else 0
 
 
