@@ -185,22 +185,24 @@ Eigen::Vector4d GridTracker::GridGeometry(int floor_index) const {
   return Eigen::Vector4d(g.x0, g.y0, g.nx, g.ny);
 }
 
-RowMatrixXd GridTracker::WalkableFraction(int floor_index) const {
-  RequireIntInRange(floor_index, 0, static_cast<int>(impl_->grids.size()) - 1, "floor_index");
-  const FloorGrid& g = impl_->grids[floor_index];
+namespace {
+// A per-cell vector of a floor's grid (row-major, row 0 at the lowest y) as rows x columns.
+RowMatrixXd AsLattice(const grid_ops::FloorGrid& g, const std::vector<float>& v) {
   RowMatrixXd out(g.ny, g.nx);
   for (int y = 0; y < g.ny; ++y)
-    for (int x = 0; x < g.nx; ++x) out(y, x) = g.walkable_fraction[static_cast<std::size_t>(y) * g.nx + x];
+    for (int x = 0; x < g.nx; ++x) out(y, x) = v[static_cast<std::size_t>(y) * g.nx + x];
   return out;
+}
+}  // namespace
+
+RowMatrixXd GridTracker::WalkableFraction(int floor_index) const {
+  RequireIntInRange(floor_index, 0, static_cast<int>(impl_->grids.size()) - 1, "floor_index");
+  return AsLattice(impl_->grids[floor_index], impl_->grids[floor_index].walkable_fraction);
 }
 
 RowMatrixXd GridTracker::WallFactors(int floor_index) const {
   RequireIntInRange(floor_index, 0, static_cast<int>(impl_->grids.size()) - 1, "floor_index");
-  const FloorGrid& g = impl_->grids[floor_index];
-  RowMatrixXd out(g.ny, g.nx);
-  for (int y = 0; y < g.ny; ++y)
-    for (int x = 0; x < g.nx; ++x) out(y, x) = g.wall_factor[static_cast<std::size_t>(y) * g.nx + x];
-  return out;
+  return AsLattice(impl_->grids[floor_index], impl_->grids[floor_index].wall_factor);
 }
 
 RowMatrixXd GridTracker::FixLogLikelihood(int floor_index, const std::vector<PositionFix>& fixes) const {
