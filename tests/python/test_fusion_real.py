@@ -108,7 +108,13 @@ def test_cli_writes_the_json_contract_and_plots(two_floor_site, tmp_path, monkey
     assert 0.0 <= smoother["region95_coverage"] <= 1.0
     # Per floor too (one floor here: the pooled figure); "| fusion_smoother |" row in the coverage table.
     assert data["per_floor"]["F1"]["fusion_smoother"]["region95_coverage"] == smoother["region95_coverage"]
-    assert "inside the estimate's 95 % region" in fr.markdown(data)
+    text = fr.markdown(data)
+    assert "inside the estimate's 95 % region" in text
+    # The Markdown carries the coverage split, the offset error and the loader's report too.
+    within = smoother["by_coverage"]["within_5m"]
+    assert f"| fusion_smoother | {within['mean_m']:.2f} |" in text and "by survey coverage" in text
+    assert f"| fusion_smoother | {smoother['offset_error_deg']['n_walks']} | {smoother['offset_error_deg']['mean_abs']:.1f} |" in text
+    assert "Loader: F1 " in text and " of " in text
     # The live tracker: scored from its first located estimate, which comes after the first waypoint.
     first = data["methods"]["fusion_live"]["first_position"]
     assert set(first) == {"median_s", "p90_s", "max_s", "waypoints_before", "walks_never_located"}

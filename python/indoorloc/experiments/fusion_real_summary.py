@@ -5,7 +5,7 @@ tables (:func:`markdown`)."""
 from __future__ import annotations
 
 import math
-from typing import Any, Dict, Sequence
+from typing import Any, Dict, List, Sequence
 
 import numpy as np
 
@@ -135,6 +135,57 @@ def summarize(scores: Sequence[WalkScore], settings: RealSettings, seconds: floa
                 "bins": floor_evidence.reliability_table(p, right)}
     return out
 
+def _coverage_lines(result: dict) -> List[str]:
+    """The mean error per survey-coverage class (``by_coverage``), every method, pooled."""
+    names = [n for n, m in result["methods"].items() if m.get("by_coverage")]
+    if not names:
+        return []
+    first = result["methods"][names[0]]["by_coverage"]
+    heads = [f"{label} ({(first.get(key) or {}).get('n_waypoints', 0)})"
+             for key, label in (("within_5m", "<= 5 m"), ("5_to_10m", "5-10 m"), ("beyond_10m", "> 10 m"))]
+    out = ["", "Mean error [m] by survey coverage (distance from the test waypoint to the nearest training scan; "
+               "waypoints in brackets):", "", "| method | " + " | ".join(heads) + " |", "|---|---|---|---|"]
+    for name in names:
+        b = result["methods"][name]["by_coverage"]
+        out.append(f"| {name} | " + " | ".join("-" if not b.get(k) else f"{b[k]['mean_m']:.2f}"
+                                               for k in ("within_5m", "5_to_10m", "beyond_10m")) + " |")
+    return out
+
+
+def _offset_lines(rows: Sequence[dict]) -> List[str]:
+    """The final heading offset against the walk's residual (``heading_offsets``): per method the
+    mean and p90 of |final - residual| [deg] beside |residual| (the error of keeping the prior's 0)."""
+    if not rows:
+        return []
+    residual = np.abs([r["residual_deg"] for r in rows])
+    names = sorted({n for r in rows for n in r["final_deg"]})
+    out = ["", "Final heading offset against the residual measured from the waypoints (per walk, relative to the "
+               "training yaw offset) [deg]:", "", "| | walks | mean abs error | p90 abs error |", "|---|---|---|---|",
+           f"| prior (offset 0) | {residual.size} | {residual.mean():.1f} | {np.percentile(residual, 90):.1f} |"]
+    for name in names:
+        e = np.abs([_wrap_deg(r["final_deg"][name] - r["residual_deg"]) for r in rows if name in r["final_deg"]])
+        out.append(f"| {name} | {e.size} | {e.mean():.1f} | {np.percentile(e, 90):.1f} |")
+    return out
+
+
+def _wrap_deg(a: float) -> float:
+    return (a + 180.0) % 360.0 - 180.0
+
+
+def _loader_lines(loader: Dict[str, dict]) -> List[str]:
+    """What the loader skipped or dropped (``loader``), one line."""
+    if not loader:
+        return []
+    parts = []
+    for fl, rep in loader.items():
+        dropped = ", ".join(f"{k} x{v}" for k, v in (rep.get("dropped_fields") or {}).items())
+        parts.append(f"{fl} {rep.get('n_loaded', 0)} of {rep.get('n_walks', 0)} loaded"
+                     + (f", {rep['n_walks_with_dropped_fields']} with fields dropped ({dropped})"
+                        if rep.get("n_walks_with_dropped_fields") else ""))
+    warnings = sum(int(rep.get("n_warnings", 0)) for rep in loader.values())
+    return ["", f"Loader: {'; '.join(parts)}; {warnings} warning(s)."]
+
+
 def markdown(result: dict) -> str:
     lines = ["| method | mean [m] | median [m] | p90 [m] | waypoints |", "|---|---|---|---|---|"]
     for name, m in result["methods"].items():
@@ -154,6 +205,7 @@ def markdown(result: dict) -> str:
                   "| method | " + " | ".join(heads) + " |", "|---|" + "---|" * len(heads)]
         for name, bs in result["error_vs_time"].items():
             lines.append(f"| {name} | " + " | ".join("-" if b["mean_m"] is None else f"{b['mean_m']:.1f}" for b in bs) + " |")
+    lines += _coverage_lines(result)
     covered = [name for name in ("fusion_unknown_start", "fusion_live", "fusion_smoother", "fusion_known_start")
                if any("region95_coverage" in m.get(name, {}) for m in result["per_floor"].values())]
     if covered:
@@ -181,6 +233,8 @@ def markdown(result: dict) -> str:
         if rel:
             lines[-1] += (f" Calibrated floor probability reported: {rel['mean_reported']:.3f} on average over walks, "
                           f"right {100 * rel['fraction_right']:.1f} % of the time.")
+    lines += _offset_lines(result.get("heading_offsets") or [])
+    lines += _loader_lines(result.get("loader") or {})
     lines.append("")
     lines.append(f"{len({(w['floor'], w['walk']) for w in result['waypoints']})} walks in {result['seconds']:.0f} s.")
     return "\n".join(lines)
