@@ -325,7 +325,7 @@ def _second_pass(score: WalkScore, put, first: dict, pdr_steps, fixes, models: F
                  base) -> None:
     """fusion_smoother as the site model tracks: the second smoother pass from the first pass's
     located start (``site_model.run_second_pass``). Its mean replaces the first pass's estimates
-    (both point estimates, for --select); the 95 % region keeps the first pass's calibrated
+    (for --select, one second pass from each of the first pass's point estimates); the 95 % region keeps the first pass's calibrated
     covariance (``site_model.SECOND_PASS_KEYS``)."""
     fl = models.floor
     wt = score.t_s + score.waypoint_t0
@@ -333,11 +333,17 @@ def _second_pass(score: WalkScore, put, first: dict, pdr_steps, fixes, models: F
     tic = time.perf_counter()
     tracker = _grid_tracker(fl.plan, site_model.second_pass_options(base, settings.track_settings()), fl.name,
                             models.database)
-    r2 = site_model.run_second_pass(tracker, first, pdr_steps, fixes, fl.number, settings.point_estimate == "median")
-    # Its point estimate is its mean whatever the first pass's (site_model.SECOND_PASS_KEYS).
-    est = _interp_track(wt, pdr_steps.times_s, r2["smoothed_m"])
-    for pe in ("mean", "median"):
-        put(f"_alt/fusion_smoother/{pe}", est)
+    # The point estimate says where the second pass starts: the first pass's mean or spatial median
+    # at the first step (site_model.located_start); the second pass's own estimate is its mean
+    # (site_model.SECOND_PASS_KEYS). --select scores both starts, each with its own second pass.
+    starts = ("mean", "median") if settings.score_both_point_estimates else (settings.point_estimate,)
+    for pe in starts:
+        r2 = site_model.run_second_pass(tracker, first, pdr_steps, fixes, fl.number, pe == "median")
+        est_pe = _interp_track(wt, pdr_steps.times_s, r2["smoothed_m"])
+        if settings.score_both_point_estimates:
+            put(f"_alt/fusion_smoother/{pe}", est_pe)
+        if pe == settings.point_estimate:
+            est = est_pe
     put("fusion_smoother", est)
     score.seconds["fusion_smoother"] = score.seconds.get("fusion_smoother", 0.0) + time.perf_counter() - tic
     idx = np.clip(np.searchsorted(pdr_steps.times_s, wt), 0, len(pdr_steps) - 1)
