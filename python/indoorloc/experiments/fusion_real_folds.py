@@ -93,15 +93,14 @@ class WalkTrainingCache:
         return self._placed[key]
 
     def heading(self, fl: FloorData, database: wfx.FingerprintDatabase, settings):
-        """(grid, motion kernels) of ``wifi_heading_sequence`` on the floor: the grid anchored to the
-        fold's survey positions, the kernels (which depend on the plan and settings only) once per
-        floor."""
+        """(grid, motion stencils) of ``wifi_heading_sequence`` on the floor: the grid anchored to the
+        fold's survey positions, the stencils (which depend on the settings only) once per floor."""
         from indoorloc.fusion import wifi_heading_sequence as whs
 
         grid = whs.heading_grid(fl.plan, settings, database.positions_m[database.floors == fl.number])
         key = (fl.name, repr(settings))
         if key not in self._heading_kernels:
-            self._heading_kernels[key] = whs.motion_kernels(grid, settings)
+            self._heading_kernels[key] = whs.motion_stencils(settings)
         return grid, self._heading_kernels[key]
 
     def database(self, walks: Sequence[Tuple[FloorData, int]], settings: wfx.FixSettings) -> wfx.FingerprintDatabase:

@@ -92,7 +92,7 @@ def fold_errors(job) -> Dict[str, np.ndarray]:
         grid = whs.heading_grid(plan, s, np.asarray(f["database"].positions_m))
         mk = _key({k: getattr(s, k) for k in MOTION_KEYS})
         if mk not in kernel_cache:
-            kernel_cache[mk] = whs.motion_kernels(grid, s)
+            kernel_cache[mk] = whs.motion_stencils(s)
         errs = []
         for w in walks:
             tr = whs.track_fixes(grid, w.fixes[""], 0.0, w.duration_s, s, kernel_cache[mk])
