@@ -6,11 +6,19 @@
 #include <cstddef>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
+#include <new>
 #include <string>
 #include <vector>
 
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
+
 #include "indoorloc/core/check.h"
+#include "indoorloc/core/simd_dispatch.h"
 #include "indoorloc/core/validate.h"
+#include "mode_sequence_ops.h"
 
 namespace indoorloc::fusion {
 
@@ -124,91 +132,93 @@ void CheckEvidence(const ModeSequenceEvidence& ev, Eigen::Index n, Eigen::Index 
 }
 
 // ---------------------------------------------------------------------------------------------
-// The moves: shift-and-add on a zero-padded lattice.
+// The lattice: the states' runs, each mode's taps, the zero-padded buffer the moves read.
 
-// A run of lattice cells in one row whose states are consecutive: cells pad .. pad+length-1 of the
-// padded lattice hold states state .. state+length-1.
-struct Run {
-  std::ptrdiff_t pad;
-  int state;
-  int length;
-};
+using mode_ops::MixRow;
+using mode_ops::MixTerm;
+using mode_ops::Run;
+using mode_ops::Tap;
 
-// One stencil entry: the padded-lattice shift (dy W + dx) and its weight.
-struct Tap {
-  std::ptrdiff_t delta;
-  double weight;
-};
-
-class LatticeMoves {
- public:
-  explicit LatticeMoves(const ModeSequenceModel& model) {
+struct Lattice {
+  explicit Lattice(const ModeSequenceModel& model) {
     const Eigen::Index ny = model.state_index.rows(), nx = model.state_index.cols();
     // Offsets that leave the lattice from every cell lose all their mass: drop them, so that the
     // padding (the largest kept shift) stays within the lattice's size.
-    int pad_x = 0, pad_y = 0;
+    auto kept = [&](long dx, long dy, double w) { return std::labs(dx) < nx && std::labs(dy) < ny && w != 0.0; };
+    long pad_x = 0, pad_y = 0;
     for (const LatticeStencil& st : model.stencils) {
       for (Eigen::Index i = 0; i < st.weights.size(); ++i) {
-        const long dx = std::labs(st.offsets_cells(i, 0)), dy = std::labs(st.offsets_cells(i, 1));
-        if (dx >= nx || dy >= ny || st.weights(i) == 0.0) continue;
-        pad_x = std::max(pad_x, static_cast<int>(dx));
-        pad_y = std::max(pad_y, static_cast<int>(dy));
+        if (!kept(st.offsets_cells(i, 0), st.offsets_cells(i, 1), st.weights(i))) continue;
+        pad_x = std::max(pad_x, std::labs(st.offsets_cells(i, 0)));
+        pad_y = std::max(pad_y, std::labs(st.offsets_cells(i, 1)));
       }
     }
-    width_ = nx + 2 * pad_x;
-    lattice_.assign(static_cast<std::size_t>((ny + 2 * pad_y) * width_), 0.0);
+    const std::ptrdiff_t width = nx + 2 * pad_x;
+    // Zero everywhere but at the states' cells, which each pass overwrites before its move reads.
+    buffer.assign(static_cast<std::size_t>((ny + 2 * pad_y) * width), 0.0);
     for (const LatticeStencil& st : model.stencils) {
-      std::vector<Tap> taps;
+      std::vector<Tap> mode_taps;
       for (Eigen::Index i = 0; i < st.weights.size(); ++i) {
         const long dx = st.offsets_cells(i, 0), dy = st.offsets_cells(i, 1);
-        if (std::labs(dx) >= nx || std::labs(dy) >= ny || st.weights(i) == 0.0) continue;
-        taps.push_back({static_cast<std::ptrdiff_t>(dy) * width_ + dx, st.weights(i)});
+        if (kept(dx, dy, st.weights(i))) mode_taps.push_back({static_cast<std::ptrdiff_t>(dy) * width + dx, st.weights(i)});
       }
-      taps_.push_back(std::move(taps));
+      taps.push_back(std::move(mode_taps));
     }
     for (Eigen::Index r = 0; r < ny; ++r) {
       for (Eigen::Index c = 0; c < nx; ++c) {
         const int s = model.state_index(r, c);
         if (s < 0) continue;
-        const std::ptrdiff_t pad = (r + pad_y) * width_ + (c + pad_x);
-        if (!runs_.empty() && runs_.back().pad + runs_.back().length == pad &&
-            runs_.back().state + runs_.back().length == s) {
-          ++runs_.back().length;
+        const std::ptrdiff_t pad = (r + pad_y) * width + (c + pad_x);
+        if (!runs.empty() && runs.back().pad + runs.back().length == pad && runs.back().state + runs.back().length == s) {
+          ++runs.back().length;
         } else {
-          runs_.push_back({pad, s, 1});
+          runs.push_back({pad, s, 1});
         }
       }
     }
   }
 
-  // out = K_m^T x (forward: the mass arriving at each state) when `forward`, else out = K_m x
-  // (backward: the expectation over each state's moves). x, out: N entries.
-  void Apply(std::size_t mode, const double* x, double* out, bool forward) {
-    Scatter(x);
-    const double* lat = lattice_.data();
-    for (const Run& run : runs_) {
-      double* __restrict o = out + run.state;
-      std::fill(o, o + run.length, 0.0);
-      for (const Tap& tap : taps_[mode]) {
-        // Forward: state j receives from the cell j - o; backward: it sends to the cell j + o.
-        const double* __restrict src = lat + run.pad + (forward ? -tap.delta : tap.delta);
-        const double w = tap.weight;
-        for (int t = 0; t < run.length; ++t) o[t] += w * src[t];
-      }
+  std::vector<Run> runs;
+  std::vector<std::vector<Tap>> taps;  // per mode
+  std::vector<double> buffer;
+};
+
+// The mode mixing as base · Σ x + a few non-negative terms per output mode: forward, mode m' from
+// T's column m' (Σ_m T(m, m') x_m); backward, mode m from T's row m (Σ_m' T(m, m') x_m').
+std::vector<MixRow> MixRows(const RowMatrixXd& trans, bool forward) {
+  std::vector<MixRow> rows;
+  for (Eigen::Index out = 0; out < trans.rows(); ++out) {
+    const Eigen::VectorXd coef = forward ? Eigen::VectorXd(trans.col(out)) : Eigen::VectorXd(trans.row(out).transpose());
+    MixRow row{coef.minCoeff(), {}};
+    for (Eigen::Index in = 0; in < coef.size(); ++in) {
+      if (coef(in) > row.base) row.terms.push_back({static_cast<int>(in), coef(in) - row.base});
     }
+    rows.push_back(std::move(row));
   }
+  return rows;
+}
+
+// The stored forward pass (up to T M N floats, hundreds of MB): asked for in huge pages where the
+// kernel grants them (madvise), which saves most of the page faults of touching it the first time
+// (they cost about a fifth of the run on 4 kB pages).
+class HugePageBuffer {
+ public:
+  void resize(std::size_t floats) {
+    constexpr std::size_t kHuge = std::size_t{2} << 20;
+    const std::size_t bytes = (floats * sizeof(float) + kHuge - 1) / kHuge * kHuge;
+    data_.reset(static_cast<float*>(std::aligned_alloc(kHuge, std::max(bytes, kHuge))));
+    if (!data_) throw std::bad_alloc();
+#if defined(MADV_HUGEPAGE)
+    madvise(data_.get(), std::max(bytes, kHuge), MADV_HUGEPAGE);  // a hint: ignored where not granted
+#endif
+  }
+  float* data() { return data_.get(); }
 
  private:
-  // Writes x into the states' cells; the other cells stay zero from construction.
-  void Scatter(const double* x) {
-    double* lat = lattice_.data();
-    for (const Run& run : runs_) std::copy(x + run.state, x + run.state + run.length, lat + run.pad);
-  }
-
-  std::ptrdiff_t width_ = 0;
-  std::vector<double> lattice_;
-  std::vector<std::vector<Tap>> taps_;
-  std::vector<Run> runs_;
+  struct Free {
+    void operator()(float* p) const { std::free(p); }
+  };
+  std::unique_ptr<float, Free> data_;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -217,7 +227,8 @@ class LatticeMoves {
 class Smoother {
  public:
   Smoother(const ModeSequenceModel& model, const ModeSequenceEvidence& ev)
-      : model_(model), ev_(ev), moves_(model), n_(model.cells_m.rows()), m_(model.mode_transition.rows()),
+      : model_(model), ev_(ev), lattice_(model), n_(model.cells_m.rows()), m_(model.mode_transition.rows()),
+        passes_(UseAvx2() ? mode_ops::Avx2Passes() : mode_ops::PortablePasses()),
         fix_row_(static_cast<std::size_t>(ev.num_ticks), -1) {
     for (Eigen::Index j = 0; j < ev.fix_ticks.size(); ++j) fix_row_[static_cast<std::size_t>(ev.fix_ticks(j))] = static_cast<int>(j);
   }
@@ -248,29 +259,29 @@ class Smoother {
     }
   }
 
-  void Store(int k, const RowMatrixXd& a) {
-    float* dst = alpha_.data() + static_cast<std::size_t>(k) * m_ * n_;
-    const double* src = a.data();
-    for (Eigen::Index i = 0; i < m_ * n_; ++i) dst[i] = static_cast<float>(src[i]);
-  }
+  float* Alpha(int k) { return alpha_.data() + static_cast<std::size_t>(k) * m_ * n_; }
 
-  // The normalised forward pass, stored as float32 per tick; returns the last tick's in double.
+
+  // The normalised forward pass α̂_k, stored as float32 per tick; returns the last tick's in double.
   RowMatrixXd Forward(ModeSequenceSummary* summary) {
     Eigen::VectorXd e;
     Emission(0, &e);
     RowMatrixXd a = (e.transpose() / static_cast<double>(m_ * n_)).replicate(m_, 1);
+    RowMatrixXd prev(m_, n_);
+    Eigen::VectorXd mode_sum(n_);  // Σ_m α̂_{k-1}(m, ·)
     double s = a.sum();
     summary->log_evidence = std::log(s);
-    RowMatrixXd prev = a / s;
-    Store(0, prev);
-    const RowMatrixXd trans_t = model_.mode_transition.transpose();
-    RowMatrixXd mixed(m_, n_);
+    passes_.normalise_store_and_sum(a.data(), m_, n_, s, Alpha(0), mode_sum.data());
+    const std::vector<MixRow> mixing = MixRows(model_.mode_transition, true);
     for (int k = 1; k < ev_.num_ticks; ++k) {
-      mixed.noalias() = trans_t * prev;  // Σ_m T(m, m') α̂_{k-1}(m, ·)
+      prev.swap(a);
       Emission(k, &e);
       for (Eigen::Index i = 0; i < m_; ++i) {
-        moves_.Apply(static_cast<std::size_t>(i), mixed.row(i).data(), a.row(i).data(), true);
-        a.row(i).array() *= e.transpose().array();
+        // Σ_m T(m, i) α̂_{k-1}(m, ·) into the lattice, then e_k ⊙ K_i^T of it.
+        passes_.mix_into_lattice(mixing[static_cast<std::size_t>(i)], prev.data(), mode_sum.data(), n_,
+                                 lattice_.runs, lattice_.buffer.data());
+        passes_.stencil(lattice_.runs, lattice_.taps[static_cast<std::size_t>(i)], lattice_.buffer.data(),
+                        a.row(i).data(), -1, e.data());
       }
       s = a.sum();
       if (!(s > 0.0)) {  // everything walled off: restart from the tick's evidence
@@ -279,58 +290,57 @@ class Smoother {
         ++summary->restarts;
       }
       summary->log_evidence += std::log(s);
-      prev = a / s;
-      Store(k, prev);
+      passes_.normalise_store_and_sum(a.data(), m_, n_, s, Alpha(k), mode_sum.data());
     }
-    return prev;
+    return a;
   }
 
-  // Posterior of tick k from g = α̂_k ⊙ β_k (or α̂_k alone when g vanishes): its mean, and its row.
-  void Posterior(int k, const RowMatrixXd& g, ModeSequenceResult* out) {
-    const double s = g.sum();
-    Eigen::RowVectorXd p;
+  // The posterior of tick k from p = Σ_m α̂_k ⊙ β_k (or Σ_m α̂_k alone when p vanishes): its mean
+  // and, when kept, its row.
+  void Posterior(int k, Eigen::VectorXd& p, ModeSequenceResult* out) {
+    const double s = p.sum();
     if (s > 0.0) {
-      p = g.colwise().sum() / s;
+      p /= s;
     } else {
-      const float* a = alpha_.data() + static_cast<std::size_t>(k) * m_ * n_;
-      p = Eigen::Map<const Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(a, m_, n_)
+      p = Eigen::Map<const Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(Alpha(k), m_, n_)
               .cast<double>()
               .colwise()
-              .sum();
+              .sum()
+              .transpose();
     }
-    out->mean_m.row(k) = p * model_.cells_m;
-    if (out->posterior.rows() > 0) out->posterior.row(k) = p;
+    out->mean_m.row(k) = p.transpose() * model_.cells_m;
+    if (out->posterior.rows() > 0) out->posterior.row(k) = p.transpose();
   }
 
-  void Backward(RowMatrixXd last, ModeSequenceResult* out) {
+  void Backward(const RowMatrixXd& last, ModeSequenceResult* out) {
     const int t_count = ev_.num_ticks;
-    Posterior(t_count - 1, last, out);
-    RowMatrixXd b = RowMatrixXd::Ones(m_, n_), moved(m_, n_), g(m_, n_);
-    Eigen::VectorXd e;
-    Eigen::RowVectorXd be(n_);
+    Eigen::VectorXd p = last.colwise().sum().transpose();
+    Posterior(t_count - 1, p, out);
+    RowMatrixXd b = RowMatrixXd::Ones(m_, n_), moved(m_, n_);
+    Eigen::VectorXd e, mode_sum(mode_ops::kMixBlock);
+    const std::vector<MixRow> mixing = MixRows(model_.mode_transition, false);
     for (int k = t_count - 2; k >= 0; --k) {
       Emission(k + 1, &e);
       for (Eigen::Index i = 0; i < m_; ++i) {
-        be = b.row(i).cwiseProduct(e.transpose());
-        moves_.Apply(static_cast<std::size_t>(i), be.data(), moved.row(i).data(), false);
+        // K_i (e_{k+1} ⊙ β_{k+1}(i, ·))
+        passes_.scatter_product(b.row(i).data(), e.data(), lattice_.runs, lattice_.buffer.data());
+        passes_.stencil(lattice_.runs, lattice_.taps[static_cast<std::size_t>(i)], lattice_.buffer.data(),
+                        moved.row(i).data(), 1, nullptr);
       }
-      b.noalias() = model_.mode_transition * moved;  // Σ_m' T(m, m') K_m'(e_{k+1} ⊙ β_{k+1}(m', ·))
+      passes_.mix(mixing, moved.data(), b.data(), n_, mode_sum.data());  // Σ_m' T(m, m') K_m'(...)
       const double mx = b.maxCoeff();
-      if (mx > 0.0) b /= mx;
-      const float* a = alpha_.data() + static_cast<std::size_t>(k) * m_ * n_;
-      g = Eigen::Map<const Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(a, m_, n_)
-              .cast<double>()
-              .cwiseProduct(b);
-      Posterior(k, g, out);
+      passes_.scale_and_posterior(b.data(), m_, n_, mx, Alpha(k), p.data());  // β_k /= max, p = Σ_m α̂_k β_k
+      Posterior(k, p, out);
     }
   }
 
   const ModeSequenceModel& model_;
   const ModeSequenceEvidence& ev_;
-  LatticeMoves moves_;
+  Lattice lattice_;
   Eigen::Index n_, m_;
+  const mode_ops::Passes& passes_;
   std::vector<int> fix_row_;
-  std::vector<float> alpha_;
+  HugePageBuffer alpha_;
 };
 
 }  // namespace
