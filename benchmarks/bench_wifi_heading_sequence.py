@@ -12,7 +12,8 @@ the numpy path with its kernels built beforehand, as ``fusion evaluate`` cached 
 Reported: best-of wall and CPU seconds, the ratio numpy / C++, and the largest difference of the
 two tracks' means.
 
-    PYTHONPATH=python python benchmarks/bench_wifi_heading_sequence.py [--quick] [--data-root DIR]
+    PYTHONPATH=python python benchmarks/bench_wifi_heading_sequence.py [--quick] [--data-root DIR] [--json OUT]
+(also run by benchmarks/run.py).
 """
 
 from __future__ import annotations
@@ -139,8 +140,7 @@ def run(quick: bool = False, data_root: Path | None = None) -> dict:
 def markdown(result: dict) -> str:
     r = result
     load = r["load_average_1min"]
-    lines = [f"# {r['title']}", "",
-             f"A {r['walk_s']:.0f} s walk (1 s ticks, a fix every 3 s), defaults (9 modes); one thread, best of the "
+    lines = [f"A {r['walk_s']:.0f} s walk (1 s ticks, a fix every 3 s), defaults (9 modes); one thread, best of the "
              f"repetitions; load average {load['before']:.1f} -> {load['after']:.1f} on {load['cpus']} CPUs.", "",
              "| floor | states (lattice) | smoother numpy [s] | smoother C++ [s] | numpy / C++ (wall, CPU) | "
              "track_fixes numpy [s] | track_fixes C++ [s] | numpy / C++ | max mean difference [m] |",
@@ -162,7 +162,7 @@ if __name__ == "__main__":
     ap.add_argument("--json", type=Path, default=None, help="also write the result here (atomically)")
     a = ap.parse_args()
     res = run(a.quick, a.data_root)
-    print(markdown(res))
+    print(f"# {res['title']}\n\n{markdown(res)}")
     if a.json:
         import json
 

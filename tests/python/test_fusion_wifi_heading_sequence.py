@@ -287,3 +287,39 @@ def test_motion_kernels_are_deprecated_and_ignored():
     with pytest.warns(DeprecationWarning, match="ignored"):
         old = whs.track_fixes(grid, fixes, 0.0, 12.0, s, kernels)
     np.testing.assert_array_equal(old["position_m"], whs.track_fixes(grid, fixes, 0.0, 12.0, s)["position_m"])
+
+
+_SIMD_SCRIPT = """
+import sys
+import numpy as np
+sys.path.insert(0, sys.argv[2])
+import test_fusion_wifi_heading_sequence as t
+from indoorloc import fusion
+from indoorloc._core.fusion import smooth_mode_sequence
+from indoorloc.fusion import wifi_heading_sequence as whs
+s = whs.HeadingSequenceSettings()
+outline = np.array([[0, 0], [61, 0], [61, 41], [0, 41]], float)
+shops = [np.array([[x, y], [x + 9, y], [x + 9, y + 7], [x, y + 7]], float) + 0.5 for x in (6, 24, 42) for y in (6, 24)]
+grid = whs.heading_grid(fusion.floor_plan_from_polygons(outline, shops), s)
+rng = np.random.default_rng(5)
+m = 40
+ticks = np.sort(rng.choice(m, 15, replace=False))
+_, fix = t._emissions(grid, rng, m, ticks)
+r = smooth_mode_sequence(grid.index, grid.cells_m, whs.motion_stencils(s), whs.mode_transition(s), grid.wall_factor,
+                         ticks, fix, m, keep_posterior=True)
+np.save(sys.argv[1], np.concatenate([r.posterior.ravel(), r.mean_m.ravel(), [r.log_evidence]]))
+"""
+
+
+def test_the_smoother_gives_the_same_bits_with_and_without_avx2(tmp_path):
+    """The AVX2 and portable builds of the smoother's passes (mode_sequence_ops.h) do the same
+    operations per entry in the same order: bit-identical posteriors (runs of states of every
+    length, not multiples of the vector width)."""
+    from pathlib import Path
+
+    from simd_check import outputs_with_and_without_avx2
+
+    results = outputs_with_and_without_avx2(_SIMD_SCRIPT, tmp_path, fusion.__file__,
+                                            [str(Path(__file__).resolve().parent)])
+    assert results[0].size > 10000 and np.all(np.isfinite(results[0]))
+    np.testing.assert_array_equal(results[0], results[1])
