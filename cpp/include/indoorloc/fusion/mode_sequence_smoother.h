@@ -18,9 +18,13 @@
 // with per-step scaling) and its mean Σ_c p_k(c) centre(c).
 //
 // The moves are shift-and-add on the lattice (a gather over runs of consecutive states from a
-// zero-padded copy of the lattice), O(K N) per mode and tick; the forward pass is kept in float32
-// (T M N · 4 bytes: 600 ticks x 9 modes x 30 k cells = 0.65 GB), everything else in double.
-// Single-threaded: the same bits whatever the machine's thread count.
+// zero-padded copy of the lattice), O(K N) per mode and tick; the mode mixing is each output
+// mode's smallest transition entry times the sum over modes plus its larger entries' excess
+// (non-negative terms: a transition with a uniform part costs a few terms per mode, not M). The
+// forward pass is kept in float32 (T M N · 4 bytes: 600 ticks x 9 modes x 30 k cells = 0.65 GB),
+// everything else in double. Single-threaded; the element-wise passes have AVX2 and portable
+// builds with the same operations per entry (mode_sequence_ops.h): the same bits whatever the
+// machine and its thread count. No Options struct: the whole model is in the arguments.
 #pragma once
 
 #include <string>
