@@ -133,18 +133,33 @@ INDOORLOC_MODE_PASS void MixBody(const std::vector<MixRow>& rows, const double* 
 
 // The forward pass's mixing of one mode m', written straight into the states' cells of the
 // padded lattice: lat[pad(j)] = row.base · sum[j] + Σ_terms weight · in[from][j] (in: M x n
-// row-major, sum[j] = Σ_m in[m][j]).
+// row-major, sum[j] = Σ_m in[m][j]); eight entries at a time kept in registers, as the stencil.
+template <typename V>
 INDOORLOC_MODE_PASS void MixIntoLatticeBody(const MixRow& row, const double* in, const double* sum, std::ptrdiff_t n,
                                             const std::vector<Run>& runs, double* lat) {
+  constexpr int kLanes = static_cast<int>(sizeof(V) / sizeof(double));
+  constexpr int kVectors = 8 / kLanes;
+  V b;
+  for (int l = 0; l < kLanes; ++l) b[l] = row.base;
   for (const Run& run : runs) {
     double* o = lat + run.pad;
     const double* sm = sum + run.state;
-    const double b = row.base;
-    for (int t = 0; t < run.length; ++t) o[t] = b * sm[t];
-    for (const MixTerm& term : row.terms) {
-      const double* x = in + term.from * n + run.state;
-      const double w = term.weight;
-      for (int t = 0; t < run.length; ++t) o[t] += w * x[t];
+    int t0 = 0;
+    for (; t0 + 8 <= run.length; t0 += 8) {
+      V acc[kVectors];
+      for (int v = 0; v < kVectors; ++v) acc[v] = b * LoadV<V>(sm + t0 + v * kLanes);
+      for (const MixTerm& term : row.terms) {
+        const double* x = in + term.from * n + run.state + t0;
+        V w;
+        for (int l = 0; l < kLanes; ++l) w[l] = term.weight;
+        for (int v = 0; v < kVectors; ++v) acc[v] += w * LoadV<V>(x + v * kLanes);
+      }
+      for (int v = 0; v < kVectors; ++v) StoreV<V>(o + t0 + v * kLanes, acc[v]);
+    }
+    for (int t = t0; t < run.length; ++t) {
+      double acc = row.base * sm[t];
+      for (const MixTerm& term : row.terms) acc += term.weight * in[term.from * n + run.state + t];
+      o[t] = acc;
     }
   }
 }

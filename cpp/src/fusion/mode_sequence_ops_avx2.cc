@@ -23,7 +23,7 @@ namespace indoorloc::fusion::mode_ops {
   }                                                                                                               \
   PREFIX void MixIntoLattice(const MixRow& row, const double* in, const double* sum, std::ptrdiff_t n,             \
                              const std::vector<Run>& runs, double* lat) {                                         \
-    MixIntoLatticeBody(row, in, sum, n, runs, lat);                                                               \
+    MixIntoLatticeBody<V>(row, in, sum, n, runs, lat);                                                               \
   }                                                                                                               \
   PREFIX void ScatterProduct(const double* x, const double* factor, const std::vector<Run>& runs, double* lat) {  \
     ScatterProductBody(x, factor, runs, lat);                                                                     \

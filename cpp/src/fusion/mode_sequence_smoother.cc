@@ -243,8 +243,8 @@ class Smoother {
     out.summary.states = static_cast<int>(n_);
     out.summary.modes = static_cast<int>(m_);
     out.summary.fix_ticks = static_cast<int>(ev_.fix_ticks.size());
-    RowMatrixXd last = Forward(&out.summary);
-    Backward(std::move(last), &out);
+    const RowMatrixXd last = Forward(&out.summary);
+    Backward(last, &out);
     return out;
   }
 
@@ -260,7 +260,6 @@ class Smoother {
   }
 
   float* Alpha(int k) { return alpha_.data() + static_cast<std::size_t>(k) * m_ * n_; }
-
 
   // The normalised forward pass α̂_k, stored as float32 per tick; returns the last tick's in double.
   RowMatrixXd Forward(ModeSequenceSummary* summary) {
