@@ -312,7 +312,7 @@ np.save(sys.argv[1], np.concatenate([r.posterior.ravel(), r.mean_m.ravel(), [r.l
 
 
 def test_the_smoother_gives_the_same_bits_with_and_without_avx2(tmp_path):
-    """The AVX2 and portable builds of the smoother's passes (mode_sequence_ops.h) do the same
+    """The AVX2 and portable builds of the smoother's passes (mode_sequence_smoother_passes.h) do the same
     operations per entry in the same order: bit-identical posteriors (runs of states of every
     length, not multiples of the vector width)."""
     from pathlib import Path

@@ -18,7 +18,7 @@
 #include "indoorloc/core/check.h"
 #include "indoorloc/core/simd_dispatch.h"
 #include "indoorloc/core/validate.h"
-#include "mode_sequence_ops.h"
+#include "mode_sequence_smoother_passes.h"
 
 namespace indoorloc::fusion {
 

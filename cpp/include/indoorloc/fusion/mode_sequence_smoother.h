@@ -23,7 +23,7 @@
 // (non-negative terms: a transition with a uniform part costs a few terms per mode, not M). The
 // forward pass is kept in float32 (T M N · 4 bytes: 600 ticks x 9 modes x 30 k cells = 0.65 GB),
 // everything else in double. Single-threaded; the element-wise passes have AVX2 and portable
-// builds with the same operations per entry (mode_sequence_ops.h): the same bits whatever the
+// builds with the same operations per entry (mode_sequence_smoother_passes.h): the same bits whatever the
 // machine and its thread count. No Options struct: the whole model is in the arguments.
 #pragma once
 

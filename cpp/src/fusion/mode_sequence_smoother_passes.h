@@ -1,6 +1,6 @@
 // Internal to the (cell, mode) smoother (mode_sequence_smoother.cc; not installed): its two
 // element-wise passes, the lattice moves and the mode mixing, written once and compiled twice
-// (portable x86-64 baseline here, AVX2 in mode_sequence_ops_avx2.cc, chosen at run time by
+// (portable x86-64 baseline here, AVX2 in mode_sequence_smoother_passes.cc, chosen at run time by
 // core/simd_dispatch.h). Each output entry is computed by the same IEEE operations in the same
 // order in both builds (no FMA: both files are compiled with -ffp-contract=off and the avx2 target
 // has none), so the bits do not depend on the machine.

@@ -1,7 +1,7 @@
-// The (cell, mode) smoother's element-wise passes (mode_sequence_ops.h) compiled for the x86-64
+// The (cell, mode) smoother's element-wise passes (mode_sequence_smoother_passes.h) compiled for the x86-64
 // baseline and, again, for AVX2 (chosen at run time, core/simd_dispatch.h): the same bodies, so the
 // same operations in the same order per entry and the same bits (-ffp-contract=off, no FMA).
-#include "mode_sequence_ops.h"
+#include "mode_sequence_smoother_passes.h"
 
 namespace indoorloc::fusion::mode_ops {
 
