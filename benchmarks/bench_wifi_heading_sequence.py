@@ -102,7 +102,8 @@ def floor_case(plan, s: whs.HeadingSequenceSettings, repeat: int) -> dict:
             return _numpy_smooth(kernels, trans, e) @ grid.cells_m
 
     def cpp_smooth():
-        return smooth_mode_sequence(grid.index, grid.cells_m, stencils, trans, grid.wall_factor, ticks, rows, times.size)
+        return smooth_mode_sequence(grid.index, grid.cells_m, stencils, trans, grid.wall_factor, ticks, rows,
+                                    times.size)
 
     seconds = {
         "smoother, numpy + scipy": _best(numpy_smooth, max(1, repeat // 2)),

@@ -100,7 +100,9 @@ void CheckEvidence(const ModeSequenceEvidence& ev, Eigen::Index n, Eigen::Index 
   const double t = ev.num_ticks;
   RequireSizeLimit(t * static_cast<double>(m) * static_cast<double>(n), 4.0, "num_ticks",
                    "forward-pass floats (ticks x modes x states)");
-  if (keep_posterior) RequireSizeLimit(t * static_cast<double>(n), 8.0, "num_ticks", "posterior doubles (ticks x states)");
+  if (keep_posterior) {
+    RequireSizeLimit(t * static_cast<double>(n), 8.0, "num_ticks", "posterior doubles (ticks x states)");
+  }
   if (ev.wall_factor.size() != n) {
     ThrowInvalidArgument("wall_factor", "expected " + std::to_string(n) + " entries (one per state), got " +
                                             std::to_string(ev.wall_factor.size()));
@@ -160,7 +162,9 @@ struct Lattice {
       std::vector<Tap> mode_taps;
       for (Eigen::Index i = 0; i < st.weights.size(); ++i) {
         const long dx = st.offsets_cells(i, 0), dy = st.offsets_cells(i, 1);
-        if (kept(dx, dy, st.weights(i))) mode_taps.push_back({static_cast<std::ptrdiff_t>(dy) * width + dx, st.weights(i)});
+        if (kept(dx, dy, st.weights(i))) {
+          mode_taps.push_back({static_cast<std::ptrdiff_t>(dy) * width + dx, st.weights(i)});
+        }
       }
       taps.push_back(std::move(mode_taps));
     }
@@ -169,7 +173,9 @@ struct Lattice {
         const int s = model.state_index(r, c);
         if (s < 0) continue;
         const std::ptrdiff_t pad = (r + pad_y) * width + (c + pad_x);
-        if (!runs.empty() && runs.back().pad + runs.back().length == pad && runs.back().state + runs.back().length == s) {
+        const bool extends = !runs.empty() && runs.back().pad + runs.back().length == pad &&
+                             runs.back().state + runs.back().length == s;
+        if (extends) {
           ++runs.back().length;
         } else {
           runs.push_back({pad, s, 1});
@@ -188,7 +194,8 @@ struct Lattice {
 std::vector<MixRow> MixRows(const RowMatrixXd& trans, bool forward) {
   std::vector<MixRow> rows;
   for (Eigen::Index out = 0; out < trans.rows(); ++out) {
-    const Eigen::VectorXd coef = forward ? Eigen::VectorXd(trans.col(out)) : Eigen::VectorXd(trans.row(out).transpose());
+    const Eigen::VectorXd coef =
+        forward ? Eigen::VectorXd(trans.col(out)) : Eigen::VectorXd(trans.row(out).transpose());
     MixRow row{coef.minCoeff(), {}};
     for (Eigen::Index in = 0; in < coef.size(); ++in) {
       if (coef(in) > row.base) row.terms.push_back({static_cast<int>(in), coef(in) - row.base});
@@ -230,7 +237,9 @@ class Smoother {
       : model_(model), ev_(ev), lattice_(model), n_(model.cells_m.rows()), m_(model.mode_transition.rows()),
         passes_(UseAvx2() ? mode_ops::Avx2Passes() : mode_ops::PortablePasses()),
         fix_row_(static_cast<std::size_t>(ev.num_ticks), -1) {
-    for (Eigen::Index j = 0; j < ev.fix_ticks.size(); ++j) fix_row_[static_cast<std::size_t>(ev.fix_ticks(j))] = static_cast<int>(j);
+    for (Eigen::Index j = 0; j < ev.fix_ticks.size(); ++j) {
+      fix_row_[static_cast<std::size_t>(ev.fix_ticks(j))] = static_cast<int>(j);
+    }
   }
 
   ModeSequenceResult Smooth(bool keep_posterior) {
