@@ -106,9 +106,9 @@ def floor_case(plan, s: whs.HeadingSequenceSettings, repeat: int) -> dict:
                                     times.size)
 
     seconds = {
-        "smoother, numpy + scipy": _best(numpy_smooth, max(1, repeat // 2)),
+        "smoother, numpy + scipy": _best(numpy_smooth, repeat),
         "smoother, C++": _best(cpp_smooth, repeat),
-        "track_fixes, numpy + scipy": _best(numpy_track, max(1, repeat // 2)),
+        "track_fixes, numpy + scipy": _best(numpy_track, repeat),
         "track_fixes, C++": _best(lambda: whs.track_fixes(grid, fixes, 0.0, WALK_S, s), repeat),
     }
     want = numpy_smooth() @ grid.cells_m
