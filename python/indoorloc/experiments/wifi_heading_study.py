@@ -46,7 +46,7 @@ GRID: Dict[str, Sequence[Any]] = {
     "wall_log_penalty": (-1.0,),
 }
 
-#: Fields whose change needs new motion kernels (the rest reuse them).
+#: Fields whose change needs new motion stencils (the rest reuse them).
 MOTION_KEYS = ("tick_s", "cell_size_m", "headings", "speed_m_per_s", "heading_blur_sd_m", "wander_sd_m_per_sqrt_s",
                "margin_cells")
 
