@@ -17,7 +17,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 BENCHMARKS = ["bench_resampling", "bench_wifi", "bench_wifi_fix", "bench_mapmatch", "bench_analog", "bench_pdr", "bench_network",
               "bench_network_scale", "bench_fusion", "bench_fusion_grid", "bench_fusion_live",
-              "bench_wifi_matcher"]
+              "bench_wifi_matcher", "bench_wifi_heading_sequence"]
 
 
 def main() -> int:

@@ -40,6 +40,7 @@ void BindFusionFloorPlan(py::module_& m);
 void BindFusionGrid(py::module_& m);
 void BindFusionGridSession(py::module_& m);
 void BindFusionLive(py::module_& m);
+void BindFusionModeSequence(py::module_& m);
 void BindPdrStreaming(py::module_& m);
 void BindFusionTracker(py::module_& m);
 void BindMapmatch(py::module_& m);
@@ -107,4 +108,5 @@ PYBIND11_MODULE(_core, m) {
   indoorloc::bindings::BindFusionGrid(fusion);
   indoorloc::bindings::BindFusionGridSession(fusion);
   indoorloc::bindings::BindFusionLive(fusion);
+  indoorloc::bindings::BindFusionModeSequence(fusion);
 }

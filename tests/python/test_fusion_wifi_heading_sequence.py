@@ -1,15 +1,18 @@
 """The direction-persistent WiFi-only tracker (fusion.wifi_heading_sequence, docs/fusion_real.md
 "WiFi only: a direction-persistent motion prior"): a walker seen only at the start of a corridor
 is carried along it where the random walk stays put; zero headings is wifi_sequence's random walk;
-the smoother equals a dense forward-backward on a small grid; its walls and fixes are the C++
-grid tracker's (components on other floors ignored); errors name the argument."""
+the C++ smoother equals the numpy forward-backward it replaced (kept here as the oracle), which
+equals a dense forward-backward on a small grid; its walls and fixes are the C++ grid tracker's
+(components on other floors ignored); errors name the argument."""
 
 import dataclasses
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
 
 from indoorloc import fusion
+from indoorloc._core.fusion import smooth_mode_sequence
 from indoorloc.fusion import wifi_heading_sequence as whs
 from indoorloc.fusion import wifi_sequence as ws
 
@@ -62,13 +65,78 @@ def test_zero_headings_is_the_random_walk_of_wifi_sequence():
     assert gap.mean() < 0.1 and gap.max() < 0.5, (gap.mean(), gap.max())
 
 
-def test_the_smoother_is_the_dense_forward_backward():
+def _kernel_matrix(grid, offsets, weights):
+    """K^T (N, N) of one stencil, K[i, j] the probability of moving from state i to state j;
+    moves onto a lattice cell that is not a state are dropped (the oracle's walls)."""
+    rows, cols = np.nonzero(grid.index >= 0)
+    src = grid.index[rows, cols]
+    ii, jj, vv = [], [], []
+    for (dx, dy), w in zip(offsets, weights):
+        r2, c2 = rows + dy, cols + dx
+        ok = (r2 >= 0) & (r2 < grid.ny) & (c2 >= 0) & (c2 < grid.nx)
+        dst = np.full(src.size, -1, dtype=np.int64)
+        dst[ok] = grid.index[r2[ok], c2[ok]]
+        ok = dst >= 0
+        ii.append(dst[ok])
+        jj.append(src[ok])
+        vv.append(np.full(int(ok.sum()), w))
+    n = grid.cells_m.shape[0]
+    return sp.csr_matrix((np.concatenate(vv), (np.concatenate(ii), np.concatenate(jj))), shape=(n, n))
+
+
+def _numpy_smooth(kernels, trans, emit):
+    """The oracle: the numpy forward-backward the C++ smoother replaced (posterior summed over
+    modes, (M ticks, N)): per-tick normalisation, the restart from the tick's evidence when
+    everything is walled off, the backward pass normalised by its max, the forward pass kept in
+    float32."""
+    n_modes, m = trans.shape[0], len(emit)
+    n = emit[0].size
+    back = [k.T.tocsr() for k in kernels]
+    alpha = np.empty((m, n_modes, n), dtype=np.float32)
+    post = np.empty((m, n))
+    a = np.full((n_modes, n), 1.0 / (n_modes * n)) * emit[0]
+    prev = a / a.sum()
+    alpha[0] = prev
+    for k in range(1, m):
+        mixed = trans.T @ prev
+        a = np.stack([kernels[i] @ mixed[i] for i in range(n_modes)]) * emit[k]
+        s = a.sum()
+        if not s > 0:
+            a = np.ones((n_modes, n)) * emit[k]
+            s = a.sum()
+        prev = a / s
+        alpha[k] = prev
+    b = np.ones((n_modes, n))
+    post[m - 1] = prev.sum(0) / prev.sum()
+    for k in range(m - 2, -1, -1):
+        be = b * emit[k + 1]
+        b = trans @ np.stack([back[i] @ be[i] for i in range(n_modes)])
+        mx = b.max()
+        b /= mx if mx > 0 else 1.0
+        g = alpha[k] * b
+        s = g.sum()
+        post[k] = g.sum(0) / s if s > 0 else alpha[k].sum(0)
+    return post
+
+
+def _emissions(grid, rng, m, fix_ticks):
+    """Per tick the wall factor, times a random fix factor on ``fix_ticks``: (list of (N,), the
+    fix factors (F, N))."""
+    n = grid.cells_m.shape[0]
+    fix = rng.uniform(0.01, 1.0, (len(fix_ticks), n)) ** 4
+    emit = [grid.wall_factor.copy() for _ in range(m)]
+    for j, k in enumerate(fix_ticks):
+        emit[k] = grid.wall_factor * fix[j]
+    return emit, fix
+
+
+def test_the_numpy_oracle_is_the_dense_forward_backward():
     s = whs.HeadingSequenceSettings(headings=4, speed_m_per_s=1.5, heading_blur_sd_m=0.8, margin_cells=0)
     outline = np.array([[0, 0], [8, 0], [8, 6], [0, 6]], float)
     shop = np.array([[3, 2], [5, 2], [5, 4], [3, 4]], float)   # half of four cells: partial walls
     grid = whs.heading_grid(fusion.floor_plan_from_polygons(outline, [shop]), s)
     assert 4 <= grid.cells_m.shape[0] <= 30 and grid.wall_factor.min() < 1.0
-    kernels = whs.motion_kernels(grid, s)
+    kernels = [_kernel_matrix(grid, *st) for st in whs.motion_stencils(s)]
     trans = whs.mode_transition(s)
     np.testing.assert_allclose(trans.sum(1), 1.0)
     rng = np.random.default_rng(0)
@@ -86,7 +154,88 @@ def test_the_smoother_is_the_dense_forward_backward():
         g = alphas[k] * beta
         post[k] = (g / g.sum()).reshape(n_modes, n).sum(0)
         beta = joint @ (np.tile(emit[k], n_modes) * beta) if k > 0 else beta
-    np.testing.assert_allclose(whs._smooth(kernels, trans, emit), np.array(post), rtol=1e-4, atol=1e-6)
+    np.testing.assert_allclose(_numpy_smooth(kernels, trans, emit), np.array(post), rtol=1e-4, atol=1e-6)
+    # The C++ smoother on the same chain (every tick with its own factor).
+    got = smooth_mode_sequence(grid.index, grid.cells_m, whs.motion_stencils(s), trans, np.ones(n), np.arange(m),
+                               np.array(emit), m, keep_posterior=True)
+    np.testing.assert_allclose(got.posterior, np.array(post), rtol=1e-4, atol=1e-6)
+
+
+@pytest.mark.parametrize("headings", [0, 8])
+def test_the_cpp_smoother_is_the_numpy_oracle(headings):
+    # A hall with shops (walls: lost mass, partial cells) and two margin rings; fixes on a third
+    # of the ticks, random factors; the default motion model.
+    s = whs.HeadingSequenceSettings(headings=headings)
+    outline = np.array([[0, 0], [60, 0], [60, 40], [0, 40]], float)
+    shops = [np.array([[x, y], [x + 9, y], [x + 9, y + 7], [x, y + 7]], float) + 0.5
+             for x in (6, 24, 42) for y in (6, 24)]
+    grid = whs.heading_grid(fusion.floor_plan_from_polygons(outline, shops), s)
+    rng = np.random.default_rng(3)
+    m = 80
+    fix_ticks = np.sort(rng.choice(m, m // 3, replace=False))
+    emit, fix = _emissions(grid, rng, m, fix_ticks)
+    stencils = whs.motion_stencils(s)
+    trans = whs.mode_transition(s)
+    want = _numpy_smooth([_kernel_matrix(grid, *st) for st in stencils], trans, emit)
+    got = smooth_mode_sequence(grid.index, grid.cells_m, stencils, trans, grid.wall_factor, fix_ticks, fix, m,
+                               keep_posterior=True)
+    assert got.restarts == 0 and np.isfinite(got.log_evidence)
+    np.testing.assert_allclose(got.posterior, want, rtol=1e-6, atol=1e-6 * want.max())
+    np.testing.assert_allclose(got.mean_m, want @ grid.cells_m, rtol=0, atol=1e-6)
+    # Without the posterior: the same means.
+    again = smooth_mode_sequence(grid.index, grid.cells_m, stencils, trans, grid.wall_factor, fix_ticks, fix, m)
+    assert again.posterior.shape == (0, grid.cells_m.shape[0])
+    np.testing.assert_array_equal(again.mean_m, got.mean_m)
+
+
+def test_track_fixes_is_the_numpy_oracle_on_a_walk():
+    # track_fixes (fixes through the grid tracker's fix model) against the oracle fed the same
+    # factors: the C++ path changes no figure.
+    s = whs.HeadingSequenceSettings()
+    grid = _corridor(s)
+    fixes = _fixes_at_start()
+    track = whs.track_fixes(grid, fixes, 0.0, 30.0, s)
+    times = track["times_s"]
+    factors = whs.fix_factors(grid, fixes, times, s)
+    emit = [grid.wall_factor * factors[k] if k in factors else grid.wall_factor for k in range(times.size)]
+    kernels = [_kernel_matrix(grid, *st) for st in whs.motion_stencils(s)]
+    want = _numpy_smooth(kernels, whs.mode_transition(s), emit) @ grid.cells_m
+    np.testing.assert_allclose(track["position_m"], want, rtol=0, atol=1e-6)
+
+
+def test_the_cpp_smoother_names_bad_arguments():
+    s = whs.HeadingSequenceSettings(headings=2)
+    grid = _corridor(s)
+    n = grid.cells_m.shape[0]
+    stencils = whs.motion_stencils(s)
+    trans = whs.mode_transition(s)
+    args = dict(state_index=grid.index, cells_m=grid.cells_m, stencils=stencils, mode_transition=trans,
+                wall_factor=grid.wall_factor, fix_ticks=np.array([0]), fix_factors=np.ones((1, n)), num_ticks=5)
+    smooth_mode_sequence(**args)
+    bad_weights = [stencils[0], (stencils[1][0], -stencils[1][1]), stencils[2]]
+    nan_weights = [stencils[0], stencils[1], (stencils[2][0], np.full(len(stencils[2][1]), np.nan))]
+    for key, value, match in [
+        ("stencils", bad_weights, r"stencils\[1\]"),
+        ("stencils", nan_weights, r"stencils\[2\] weights"),
+        ("stencils", stencils[:2], "mode_transition"),
+        ("stencils", [(stencils[0][0][:, :1], stencils[0][1])] + stencils[1:], r"stencils\[0\] offsets"),
+        ("stencils", [(stencils[0][0] + 0.5, stencils[0][1])] + stencils[1:], "32-bit integer"),
+        ("mode_transition", np.full((3, 3), np.nan), "mode_transition"),
+        ("wall_factor", grid.wall_factor[:-1], "wall_factor"),
+        ("cells_m", grid.cells_m[:, :1], "cells_m"),
+        ("state_index", np.zeros_like(grid.index), "state_index"),
+        ("fix_ticks", np.array([7]), "fix_ticks"),
+        ("fix_factors", np.ones((2, n)), "fix_factors"),
+        ("fix_factors", np.zeros((1, n)), "zero on every state"),
+        ("num_ticks", 0, "num_ticks"),
+    ]:
+        with pytest.raises(ValueError, match=match):
+            smooth_mode_sequence(**{**args, key: value})
+    before = [(o.copy(), w.copy()) for o, w in stencils]
+    smooth_mode_sequence(**args)
+    for (o, w), (o0, w0) in zip(stencils, before):   # inputs not modified
+        np.testing.assert_array_equal(o, o0)
+        np.testing.assert_array_equal(w, w0)
 
 
 def test_errors_name_the_argument():
@@ -106,8 +255,8 @@ def test_errors_name_the_argument():
     grid = _corridor(s)
     with pytest.raises(ValueError, match="t_start_s"):
         whs.track_fixes(grid, _fixes_at_start(), 5.0, 1.0, s)
-    with pytest.raises(ValueError, match="kernels"):
-        whs.track_fixes(grid, _fixes_at_start(), 0.0, 10.0, s, kernels=[])
+    with pytest.raises(ValueError, match="stencils"):
+        whs.track_fixes(grid, _fixes_at_start(), 0.0, 10.0, s, stencils=[])
     # No fix: NaN, not a guess.
     empty = fusion.Fixes.from_arrays(np.zeros(0), np.zeros((0, 2)), np.zeros(0))
     assert np.isnan(whs.track_fixes(grid, empty, 0.0, 10.0, s)["position_m"]).all()
@@ -126,3 +275,51 @@ def test_fix_components_on_other_floors_are_ignored():
     anywhere = fusion.Fixes.from_arrays(t, means, 2.0)
     x_all = whs.track_fixes(grid, anywhere, 0.0, 8.0, s)["position_m"][:, 0]
     assert np.all(x_all > 35.0), x_all
+
+
+def test_motion_kernels_are_deprecated_and_ignored():
+    s = whs.HeadingSequenceSettings(headings=4)
+    grid = _corridor(s)
+    with pytest.warns(DeprecationWarning, match="motion_stencils"):
+        kernels = whs.motion_kernels(grid, s)
+    assert len(kernels) == 5 and kernels[0].shape == (grid.cells_m.shape[0],) * 2
+    fixes = _fixes_at_start()
+    with pytest.warns(DeprecationWarning, match="ignored"):
+        old = whs.track_fixes(grid, fixes, 0.0, 12.0, s, kernels)
+    np.testing.assert_array_equal(old["position_m"], whs.track_fixes(grid, fixes, 0.0, 12.0, s)["position_m"])
+
+
+_SIMD_SCRIPT = """
+import sys
+import numpy as np
+sys.path.insert(0, sys.argv[2])
+import test_fusion_wifi_heading_sequence as t
+from indoorloc import fusion
+from indoorloc._core.fusion import smooth_mode_sequence
+from indoorloc.fusion import wifi_heading_sequence as whs
+s = whs.HeadingSequenceSettings()
+outline = np.array([[0, 0], [61, 0], [61, 41], [0, 41]], float)
+shops = [np.array([[x, y], [x + 9, y], [x + 9, y + 7], [x, y + 7]], float) + 0.5 for x in (6, 24, 42) for y in (6, 24)]
+grid = whs.heading_grid(fusion.floor_plan_from_polygons(outline, shops), s)
+rng = np.random.default_rng(5)
+m = 40
+ticks = np.sort(rng.choice(m, 15, replace=False))
+_, fix = t._emissions(grid, rng, m, ticks)
+r = smooth_mode_sequence(grid.index, grid.cells_m, whs.motion_stencils(s), whs.mode_transition(s), grid.wall_factor,
+                         ticks, fix, m, keep_posterior=True)
+np.save(sys.argv[1], np.concatenate([r.posterior.ravel(), r.mean_m.ravel(), [r.log_evidence]]))
+"""
+
+
+def test_the_smoother_gives_the_same_bits_with_and_without_avx2(tmp_path):
+    """The AVX2 and portable builds of the smoother's passes (mode_sequence_smoother_passes.h) do the same
+    operations per entry in the same order: bit-identical posteriors (runs of states of every
+    length, not multiples of the vector width)."""
+    from pathlib import Path
+
+    from simd_check import outputs_with_and_without_avx2
+
+    results = outputs_with_and_without_avx2(_SIMD_SCRIPT, tmp_path, fusion.__file__,
+                                            [str(Path(__file__).resolve().parent)])
+    assert results[0].size > 10000 and np.all(np.isfinite(results[0]))
+    np.testing.assert_array_equal(results[0], results[1])

@@ -386,3 +386,17 @@ class LiveSession:
     def floors(self) -> List[int]: ...
     @property
     def options(self) -> LiveSessionOptions: ...
+
+class ModeSequenceResult(_Result):
+    """The (cell, mode) forward-backward smoother's track (smooth_mode_sequence)."""
+    mean_m: _F64
+    posterior: _F64
+    restarts: int
+    log_evidence: float
+    seconds: float
+    report: str
+
+def smooth_mode_sequence(state_index: _ArrayLike, cells_m: _ArrayLike,
+                         stencils: Sequence[Tuple[_ArrayLike, _ArrayLike]], mode_transition: _ArrayLike,
+                         wall_factor: _ArrayLike, fix_ticks: _ArrayLike, fix_factors: _ArrayLike, num_ticks: int,
+                         keep_posterior: bool = False) -> ModeSequenceResult: ...

@@ -76,7 +76,7 @@ class WalkTrainingCache:
     def __init__(self) -> None:
         self._fingerprints: Dict[Tuple, object] = {}
         self._placed: Dict[Tuple, object] = {}
-        self._heading_kernels: Dict[Tuple, object] = {}
+        self._heading_stencils: Dict[Tuple, object] = {}
 
     def fingerprints(self, fl: FloorData, i: int, settings: wfx.FixSettings):
         """``wifi_fixes.walk_fingerprints`` of walk i of the floor (None when none can be placed)."""
@@ -93,16 +93,15 @@ class WalkTrainingCache:
         return self._placed[key]
 
     def heading(self, fl: FloorData, database: wfx.FingerprintDatabase, settings):
-        """(grid, motion kernels) of ``wifi_heading_sequence`` on the floor: the grid anchored to the
-        fold's survey positions, the kernels (which depend on the plan and settings only) once per
-        floor."""
+        """(grid, motion stencils) of ``wifi_heading_sequence`` on the floor: the grid anchored to the
+        fold's survey positions, the stencils (which depend on the settings only) once per floor."""
         from indoorloc.fusion import wifi_heading_sequence as whs
 
         grid = whs.heading_grid(fl.plan, settings, database.positions_m[database.floors == fl.number])
         key = (fl.name, repr(settings))
-        if key not in self._heading_kernels:
-            self._heading_kernels[key] = whs.motion_kernels(grid, settings)
-        return grid, self._heading_kernels[key]
+        if key not in self._heading_stencils:
+            self._heading_stencils[key] = whs.motion_stencils(settings)
+        return grid, self._heading_stencils[key]
 
     def database(self, walks: Sequence[Tuple[FloorData, int]], settings: wfx.FixSettings) -> wfx.FingerprintDatabase:
         """``wifi_fixes.build_database`` of the walks (floor, index), each on its floor's number."""

@@ -247,7 +247,7 @@ class FoldModels:
     #: ``RealSettings.propagation_weight`` > 0, else None.
     propagation: Any = None
     #: (``wifi_heading_sequence.HeadingGrid`` of the floor with the fold's survey positions, its
-    #: motion kernels) when the ``wifi_heading_sequence`` method runs, else None.
+    #: motion stencils) when the ``wifi_heading_sequence`` method runs, else None.
     heading: Any = None
 
 

@@ -123,9 +123,9 @@ def _score_walk(walk, steps_raw: ph.HandheldSteps, models: FoldModels, settings:
         # WiFi only, the same fixes with a direction-persistent motion prior (wander or walk on in
         # one of 8 directions); no PDR, no IMU.
         tic = time.perf_counter()
-        grid, kernels = models.heading
+        grid, stencils = models.heading
         track = wifi_heading_sequence.track_fixes(grid, fixes, 0.0, float(walk.duration_s),
-                                                  settings.wifi_heading_sequence, kernels)
+                                                  settings.wifi_heading_sequence, stencils)
         put("wifi_heading_sequence", wifi_sequence.at_times(track, wt))
         score.seconds["wifi_heading_sequence"] = time.perf_counter() - tic
     if "wifi_model" in want:

@@ -46,7 +46,7 @@ GRID: Dict[str, Sequence[Any]] = {
     "wall_log_penalty": (-1.0,),
 }
 
-#: Fields whose change needs new motion kernels (the rest reuse them).
+#: Fields whose change needs new motion stencils (the rest reuse them).
 MOTION_KEYS = ("tick_s", "cell_size_m", "headings", "speed_m_per_s", "heading_blur_sd_m", "wander_sd_m_per_sqrt_s",
                "margin_cells")
 
@@ -86,16 +86,16 @@ def fold_errors(job) -> Dict[str, np.ndarray]:
     if not walks:
         return {"wifi_knn": np.zeros(0), **{_key(p): np.zeros(0) for p in points}}
     out = {"wifi_knn": np.concatenate([wss.knn_errors(w, "") for w in walks])}
-    kernel_cache: Dict[str, Any] = {}
+    stencil_cache: Dict[str, Any] = {}
     for p in points:
         s = replace(whs.HeadingSequenceSettings(), **p)
         grid = whs.heading_grid(plan, s, np.asarray(f["database"].positions_m))
         mk = _key({k: getattr(s, k) for k in MOTION_KEYS})
-        if mk not in kernel_cache:
-            kernel_cache[mk] = whs.motion_kernels(grid, s)
+        if mk not in stencil_cache:
+            stencil_cache[mk] = whs.motion_stencils(s)
         errs = []
         for w in walks:
-            tr = whs.track_fixes(grid, w.fixes[""], 0.0, w.duration_s, s, kernel_cache[mk])
+            tr = whs.track_fixes(grid, w.fixes[""], 0.0, w.duration_s, s, stencil_cache[mk])
             errs.append(np.hypot(*(ws.at_times(tr, w.waypoint_t_s) - w.waypoint_xy_m).T))
         out[_key(p)] = np.concatenate(errs)
     return out

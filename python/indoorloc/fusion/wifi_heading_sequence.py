@@ -20,7 +20,9 @@ Model, per tick of ``tick_s`` seconds (state (c, m): cell c, mode m in {wander, 
             point q(c) = s(c) + β (c - s(c))
 The cells, the walls and the fixes are the C++ grid tracker's, read from a ``GridTracker`` with
 these settings (``wall_factors``, ``fix_log_likelihood``: the one implementation of that model,
-grid_fix_factor.cc, grid_survey_anchors.cc); only the motion and the forward-backward are here.
+grid_fix_factor.cc, grid_survey_anchors.cc). The model of the motion is defined here
+(:func:`motion_stencils`, :func:`mode_transition`); its forward-backward runs in C++
+(``indoorloc._core.fusion.smooth_mode_sequence``, mode_sequence_smoother.cc).
 The states are the cells with a walkable fraction > 0 and ``margin_cells`` rings around them
 (the rest of the floor's bounding box, which the grid tracker also holds, pays λ every tick and
 carries almost no mass). With ``headings`` = 0 the model is ``wifi_sequence``'s.
@@ -37,11 +39,11 @@ Example::
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
-from typing import Any, Dict, List, Optional
+from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
-import scipy.sparse as sp
 
 
 @dataclass(frozen=True)
@@ -228,35 +230,46 @@ def _stencil(shift_cells: np.ndarray, sd_cells: float):
     return np.array(keys, dtype=np.int64).reshape(-1, 2), w / w.sum()
 
 
-def _kernel_matrix(grid: HeadingGrid, offsets: np.ndarray, weights: np.ndarray) -> sp.csr_matrix:
-    """K^T (N, N) with K[i, j] the probability of moving from state i to state j; moves to lattice
-    cells outside the grid's states are dropped (lost mass)."""
-    rows, cols = np.nonzero(grid.index >= 0)
-    src = grid.index[rows, cols]
-    ii, jj, vv = [], [], []
-    for (dx, dy), w in zip(offsets, weights):
-        r2, c2 = rows + dy, cols + dx
-        ok = (r2 >= 0) & (r2 < grid.ny) & (c2 >= 0) & (c2 < grid.nx)
-        dst = np.full(src.size, -1, dtype=np.int64)
-        dst[ok] = grid.index[r2[ok], c2[ok]]
-        ok = dst >= 0
-        ii.append(dst[ok])
-        jj.append(src[ok])
-        vv.append(np.full(int(ok.sum()), w))
-    n = grid.cells_m.shape[0]
-    return sp.csr_matrix((np.concatenate(vv), (np.concatenate(ii), np.concatenate(jj))), shape=(n, n))
-
-
-def motion_kernels(grid: HeadingGrid, settings: HeadingSequenceSettings) -> List[sp.csr_matrix]:
-    """Per mode m the transposed move kernel K_m^T (N, N): mode 0 the random walk, 1..D the
-    headings (:func:`mode_transition`)."""
-    c = grid.cell_size_m
-    out = [_kernel_matrix(grid, *_stencil(np.zeros(2), settings.wander_sd_m_per_sqrt_s * math.sqrt(settings.tick_s) / c))]
+def motion_stencils(settings: HeadingSequenceSettings) -> List[Tuple[np.ndarray, np.ndarray]]:
+    """Per mode m the move per tick on the lattice, (offsets (K, 2) int (dx, dy) [cells], weights
+    (K,) summing to 1): mode 0 the random walk, 1..D the headings (:func:`mode_transition`). The
+    smoother moves a state by offset i with weight i; a move onto a cell that is not a state is
+    lost (a wall)."""
+    settings.validate()
+    c = settings.cell_size_m
+    out = [_stencil(np.zeros(2), settings.wander_sd_m_per_sqrt_s * math.sqrt(settings.tick_s) / c)]
     step = settings.speed_m_per_s * settings.tick_s / c
     for h in range(settings.headings):
         th = 2 * math.pi * h / settings.headings
-        out.append(_kernel_matrix(grid, *_stencil(step * np.array([math.cos(th), math.sin(th)]),
-                                                  settings.heading_blur_sd_m / c)))
+        out.append(_stencil(step * np.array([math.cos(th), math.sin(th)]), settings.heading_blur_sd_m / c))
+    return out
+
+
+def motion_kernels(grid: HeadingGrid, settings: HeadingSequenceSettings) -> List[Any]:
+    """Deprecated (docs/api_changes.md): the smoother runs :func:`motion_stencils` on the lattice
+    in C++ and needs no matrix. Per mode the transposed move kernel K_m^T (N, N) as a
+    ``scipy.sparse.csr_matrix`` (K[i, j] the probability of moving from state i to state j)."""
+    import scipy.sparse as sp
+
+    warnings.warn("indoorloc: wifi_heading_sequence.motion_kernels is deprecated since house (C++ smoother): "
+                  "track_fixes needs no kernels; use motion_stencils(settings) for the motion model",
+                  DeprecationWarning, stacklevel=2)
+    rows, cols = np.nonzero(grid.index >= 0)
+    src = grid.index[rows, cols]
+    n = grid.cells_m.shape[0]
+    out = []
+    for offsets, weights in motion_stencils(settings):
+        ii, jj, vv = [], [], []
+        for (dx, dy), w in zip(offsets, weights):
+            r2, c2 = rows + dy, cols + dx
+            ok = (r2 >= 0) & (r2 < grid.ny) & (c2 >= 0) & (c2 < grid.nx)
+            dst = np.full(src.size, -1, dtype=np.int64)
+            dst[ok] = grid.index[r2[ok], c2[ok]]
+            ok = dst >= 0
+            ii.append(dst[ok])
+            jj.append(src[ok])
+            vv.append(np.full(int(ok.sum()), w))
+        out.append(sp.csr_matrix((np.concatenate(vv), (np.concatenate(ii), np.concatenate(jj))), shape=(n, n)))
     return out
 
 
@@ -277,71 +290,44 @@ def fix_factors(grid: HeadingGrid, fixes: Any, tick_times_s: np.ndarray, setting
     return out
 
 
-def _smooth(kernels: List[sp.csr_matrix], trans: np.ndarray, emit: List[np.ndarray]) -> np.ndarray:
-    """Posterior state probabilities summed over modes, (M ticks, N): forward-backward with
-    per-tick normalisation. emit[k] (N,) the tick's wall and fix factor. Computed in float64,
-    the forward pass kept in float32; the small mode products on one BLAS thread (they are
-    slower threaded, and the machine is shared)."""
-    from threadpoolctl import threadpool_limits
-
-    n_modes, m = trans.shape[0], len(emit)
-    n = emit[0].size
-    back = [k.T.tocsr() for k in kernels]
-    alpha = np.empty((m, n_modes, n), dtype=np.float32)
-    post = np.empty((m, n))
-    with threadpool_limits(limits=1):
-        a = np.full((n_modes, n), 1.0 / (n_modes * n)) * emit[0]
-        prev = a / a.sum()
-        alpha[0] = prev
-        tT = trans.T.copy()
-        for k in range(1, m):
-            mixed = tT @ prev
-            a = np.stack([kernels[i] @ mixed[i] for i in range(n_modes)]) * emit[k]
-            s = a.sum()
-            if not s > 0:  # everything walled off or an impossible fix: restart from the tick's evidence
-                a = np.ones((n_modes, n)) * emit[k]
-                s = a.sum()
-            prev = a / s
-            alpha[k] = prev
-        b = np.ones((n_modes, n))
-        g = prev
-        post[m - 1] = g.sum(0) / g.sum()
-        for k in range(m - 2, -1, -1):
-            be = b * emit[k + 1]
-            b = trans @ np.stack([back[i] @ be[i] for i in range(n_modes)])
-            mx = b.max()
-            b /= mx if mx > 0 else 1.0
-            g = alpha[k] * b
-            s = g.sum()
-            post[k] = g.sum(0) / s if s > 0 else alpha[k].sum(0)
-    return post
-
-
 def track_fixes(grid: HeadingGrid, fixes: Any, t_start_s: float, t_end_s: float,
-                settings: HeadingSequenceSettings, kernels: Optional[List[sp.csr_matrix]] = None
+                settings: HeadingSequenceSettings, stencils: Optional[Sequence[Any]] = None
                 ) -> Dict[str, np.ndarray]:
     """The walk's smoothed position [m] every ``tick_s`` from t_start_s to t_end_s [s] from its
     WiFi fixes alone: ``{"times_s" (M,), "position_m" (M, 2), "mean_m" (M, 2)}``, the posterior
-    mean (NaN when there is no fix). ``kernels``: :func:`motion_kernels` of (grid, settings),
-    to reuse them over walks. Read at other times with ``wifi_sequence.at_times``."""
+    mean (NaN when there is no fix). ``stencils``: the motion model, :func:`motion_stencils` of
+    ``settings`` (None: built here; a list of the former ``motion_kernels`` matrices is deprecated
+    and ignored). The forward-backward runs in C++ (``indoorloc._core.fusion.smooth_mode_sequence``:
+    per-tick normalisation, the forward pass in float32). Read at other times with
+    ``wifi_sequence.at_times``."""
+    from indoorloc._core.fusion import smooth_mode_sequence
+
     settings.validate()
     if not (math.isfinite(t_start_s) and math.isfinite(t_end_s)) or t_end_s < t_start_s:
         raise ValueError(f"indoorloc: arguments 't_start_s', 't_end_s': need finite t_start_s <= t_end_s, "
                          f"got {t_start_s}, {t_end_s}")
     m = max(2, int(math.ceil((t_end_s - t_start_s) / settings.tick_s)) + 1)
     times = t_start_s + settings.tick_s * np.arange(m)
+    if stencils is not None and len(stencils) and not isinstance(stencils[0], (tuple, list)):
+        warnings.warn("indoorloc: passing motion_kernels to wifi_heading_sequence.track_fixes is deprecated since "
+                      "house (C++ smoother): they are ignored; pass motion_stencils(settings) or nothing",
+                      DeprecationWarning, stacklevel=2)
+        stencils = None
+    stencils = list(stencils) if stencils is not None else motion_stencils(settings)
+    if len(stencils) != settings.headings + 1:
+        raise ValueError(f"indoorloc: argument 'stencils': expected {settings.headings + 1} (headings + 1), "
+                         f"got {len(stencils)}")
     if fixes is None or len(fixes) == 0:
         nan = np.full((m, 2), np.nan)
         return {"times_s": times, "position_m": nan, "mean_m": nan}
-    kernels = kernels if kernels is not None else motion_kernels(grid, settings)
-    if len(kernels) != settings.headings + 1:
-        raise ValueError(f"indoorloc: argument 'kernels': expected {settings.headings + 1} (headings + 1), got {len(kernels)}")
     factors = fix_factors(grid, fixes, times, settings)
-    emit = [grid.wall_factor * factors[k] if k in factors else grid.wall_factor for k in range(m)]
-    post = _smooth(kernels, mode_transition(settings), emit)
-    mean = post @ grid.cells_m
+    ticks = np.array(sorted(factors), dtype=np.int64)
+    rows = np.stack([factors[k] for k in ticks]) if ticks.size else np.zeros((0, grid.cells_m.shape[0]))
+    result = smooth_mode_sequence(grid.index, grid.cells_m, stencils, mode_transition(settings), grid.wall_factor,
+                                  ticks, rows, m)
+    mean = result.mean_m
     return {"times_s": times, "position_m": mean, "mean_m": mean}
 
 
 __all__ = ["HeadingGrid", "HeadingSequenceSettings", "fix_factors", "grid_from_tracker", "heading_grid",
-           "mode_transition", "motion_kernels", "track_fixes"]
+           "mode_transition", "motion_kernels", "motion_stencils", "track_fixes"]
