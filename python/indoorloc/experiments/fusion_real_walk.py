@@ -344,9 +344,6 @@ def _second_pass(score: WalkScore, put, first: dict, pdr_steps, fixes, models: F
             put(f"_alt/fusion_smoother/{pe}", est_pe)
         if pe == settings.point_estimate:
             est = est_pe
-            # The offset of the track scored (site_model.SECOND_PASS_WALK_KEYS).
-            score.offset_error_rad["fusion_smoother"] = _wrap(float(r2["walk_heading_offset_rad"])
-                                                              - score.heading_residual_rad)
     put("fusion_smoother", est)
     score.seconds["fusion_smoother"] = score.seconds.get("fusion_smoother", 0.0) + time.perf_counter() - tic
     idx = np.clip(np.searchsorted(pdr_steps.times_s, wt), 0, len(pdr_steps) - 1)

@@ -341,10 +341,6 @@ def located_start(first_pass: dict, steps: Steps, floor: int, median: bool) -> d
 #: covariances stay the first pass's: they are calibrated for a walker whose start was not given,
 #: which is the case).
 SECOND_PASS_KEYS = ("smoothed_m", "smoothed_median_m")
-#: The walk's own estimates that the second pass replaces too, so that they describe the track
-#: returned: its heading offset re-estimated around the first pass's (on the six shared floors its
-#: mean error against the waypoints' residual is lower: docs/fusion_real.md) and its stride scale.
-SECOND_PASS_WALK_KEYS = ("walk_heading_offset_rad", "walk_heading_offset_sd_rad", "walk_scale")
 
 
 def run_default(tracker: GridTracker, steps: Steps, fixes, smooth: bool = True,
@@ -352,9 +348,8 @@ def run_default(tracker: GridTracker, steps: Steps, fixes, smooth: bool = True,
     """The default tracker on one walk: unknown start, filter and (``smooth``) smoother
     (:func:`indoorloc.fusion.track_grid`'s dict). With ``second_pass`` (a tracker of the same plan
     with :func:`second_pass_options`) and ``smooth``: the smoothed track (``SECOND_PASS_KEYS``) is
-    that tracker's smoother from the first pass's :func:`located_start` on ``floor``, and so are the
-    walk's heading offset and stride scale (``SECOND_PASS_WALK_KEYS``); the first pass's run is kept
-    under ``"first_pass"``."""
+    that tracker's smoother from the first pass's :func:`located_start` on ``floor``; the first
+    pass's run is kept under ``"first_pass"``."""
     r = dict(track_grid(tracker, steps, fixes=fixes, start=None, smooth=smooth))
     if not (smooth and second_pass is not None and len(steps)):
         return r
@@ -363,9 +358,6 @@ def run_default(tracker: GridTracker, steps: Steps, fixes, smooth: bool = True,
     for key in SECOND_PASS_KEYS:
         if key in r:
             r[key] = np.asarray(r2["smoothed_m"])
-    for key in SECOND_PASS_WALK_KEYS:
-        if key in r2:
-            r[key] = r2[key]
     r["first_pass"] = first
     return r
 
