@@ -173,6 +173,25 @@ Build once per plan and options (keeps a reference to the plan); ``run`` is thre
           "(rows, columns): the factor the tracker applies at a step with them (survey-anchored, the "
           "options' ε and τ, other floors' components ignored).")
       .def(
+          "fix_log_likelihoods",
+          [](const GridTracker& t, int floor_index, const py::object& fixes, const py::object& group_starts,
+             const py::object& cells) {
+            if (!py::isinstance<py::tuple>(fixes)) {
+              ThrowInvalidArgument("fixes", "expected (times_s, means_m, sds_m, weights, floors) "
+                                            "(indoorloc.fusion.Fixes.as_arrays()), got " +
+                                                std::string(Py_TYPE(fixes.ptr())->tp_name));
+            }
+            const std::vector<PositionFix> fx = FixesFromArrays(fixes.cast<py::tuple>());
+            const Eigen::VectorXi starts = ToIntVector(group_starts, "group_starts");
+            const Eigen::VectorXi at = ToIntVector(cells, "cells");
+            py::gil_scoped_release release;
+            return t.FixLogLikelihoodGroups(floor_index, fx, starts, at);
+          },
+          py::arg("floor_index"), py::arg("fixes"), py::arg("group_starts"), py::arg("cells"),
+          "fix_log_likelihood of several groups of fixes in one call, read at some cells: group g is fixes "
+          "group_starts[g]:group_starts[g + 1] (G + 1 indices from 0 to the number of fixes), cells the "
+          "row-major lattice indices (y * nx + x); returns (G, len(cells)) [nats], 0 for an empty group.")
+      .def(
           "with_survey_positions",
           [](const GridTracker& t, const py::object& positions_m, const py::object& floor_numbers,
              const py::object& walk_ids) {

@@ -6,10 +6,10 @@ equals a dense forward-backward on a small grid; its walls and fixes are the C++
 (components on other floors ignored); errors name the argument."""
 
 import dataclasses
+import warnings
 
 import numpy as np
 import pytest
-import scipy.sparse as sp
 
 from indoorloc import fusion
 from indoorloc._core.fusion import smooth_mode_sequence
@@ -65,23 +65,12 @@ def test_zero_headings_is_the_random_walk_of_wifi_sequence():
     assert gap.mean() < 0.1 and gap.max() < 0.5, (gap.mean(), gap.max())
 
 
-def _kernel_matrix(grid, offsets, weights):
-    """K^T (N, N) of one stencil, K[i, j] the probability of moving from state i to state j;
-    moves onto a lattice cell that is not a state are dropped (the oracle's walls)."""
-    rows, cols = np.nonzero(grid.index >= 0)
-    src = grid.index[rows, cols]
-    ii, jj, vv = [], [], []
-    for (dx, dy), w in zip(offsets, weights):
-        r2, c2 = rows + dy, cols + dx
-        ok = (r2 >= 0) & (r2 < grid.ny) & (c2 >= 0) & (c2 < grid.nx)
-        dst = np.full(src.size, -1, dtype=np.int64)
-        dst[ok] = grid.index[r2[ok], c2[ok]]
-        ok = dst >= 0
-        ii.append(dst[ok])
-        jj.append(src[ok])
-        vv.append(np.full(int(ok.sum()), w))
-    n = grid.cells_m.shape[0]
-    return sp.csr_matrix((np.concatenate(vv), (np.concatenate(ii), np.concatenate(jj))), shape=(n, n))
+def _kernels(grid, s):
+    """The oracle's per-mode K^T (N, N) of motion_stencils(s): the library's deprecated
+    motion_kernels, the matrix form of the same stencils (moves onto non-states dropped)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        return whs.motion_kernels(grid, s)
 
 
 def _numpy_smooth(kernels, trans, emit):
@@ -136,7 +125,7 @@ def test_the_numpy_oracle_is_the_dense_forward_backward():
     shop = np.array([[3, 2], [5, 2], [5, 4], [3, 4]], float)   # half of four cells: partial walls
     grid = whs.heading_grid(fusion.floor_plan_from_polygons(outline, [shop]), s)
     assert 4 <= grid.cells_m.shape[0] <= 30 and grid.wall_factor.min() < 1.0
-    kernels = [_kernel_matrix(grid, *st) for st in whs.motion_stencils(s)]
+    kernels = _kernels(grid, s)
     trans = whs.mode_transition(s)
     np.testing.assert_allclose(trans.sum(1), 1.0)
     rng = np.random.default_rng(0)
@@ -176,7 +165,7 @@ def test_the_cpp_smoother_is_the_numpy_oracle(headings):
     emit, fix = _emissions(grid, rng, m, fix_ticks)
     stencils = whs.motion_stencils(s)
     trans = whs.mode_transition(s)
-    want = _numpy_smooth([_kernel_matrix(grid, *st) for st in stencils], trans, emit)
+    want = _numpy_smooth(_kernels(grid, s), trans, emit)
     got = smooth_mode_sequence(grid.index, grid.cells_m, stencils, trans, grid.wall_factor, fix_ticks, fix, m,
                                keep_posterior=True)
     assert got.restarts == 0 and np.isfinite(got.log_evidence)
@@ -198,7 +187,7 @@ def test_track_fixes_is_the_numpy_oracle_on_a_walk():
     times = track["times_s"]
     factors = whs.fix_factors(grid, fixes, times, s)
     emit = [grid.wall_factor * factors[k] if k in factors else grid.wall_factor for k in range(times.size)]
-    kernels = [_kernel_matrix(grid, *st) for st in whs.motion_stencils(s)]
+    kernels = _kernels(grid, s)
     want = _numpy_smooth(kernels, whs.mode_transition(s), emit) @ grid.cells_m
     np.testing.assert_allclose(track["position_m"], want, rtol=0, atol=1e-6)
 
@@ -323,3 +312,34 @@ def test_the_smoother_gives_the_same_bits_with_and_without_avx2(tmp_path):
                                             [str(Path(__file__).resolve().parent)])
     assert results[0].size > 10000 and np.all(np.isfinite(results[0]))
     np.testing.assert_array_equal(results[0], results[1])
+
+
+def test_fix_factors_in_one_call_equal_the_tracker_factor_per_tick():
+    """GridTracker.fix_log_likelihoods (one call for every tick, read at the states' cells) equals
+    fix_log_likelihood called per group of fixes; bad groups and cells are named."""
+    s = whs.HeadingSequenceSettings(headings=2)
+    grid = _corridor(s)
+    rng = np.random.default_rng(4)
+    t = np.sort(rng.uniform(0.0, 20.0, 12))
+    means = np.stack([np.c_[rng.uniform(5, 95, t.size), rng.uniform(3, 7, t.size)] for _ in range(3)], 1)
+    fixes = fusion.Fixes.from_arrays(t, means, 3.0, np.tile([0.5, 0.3, 0.2], (t.size, 1)))
+    ticks = np.arange(0.0, 21.0, 4.0)     # several fixes per tick, and ticks without a fix
+    got = whs.fix_factors(grid, fixes, ticks, s)
+    times, m, sd, w, fl = fixes.as_arrays()
+    sd = sd * s.fix_sd_scale
+    at = np.clip(np.searchsorted(ticks, times - 1e-9), 0, ticks.size - 1)
+    assert sorted(got) == sorted(set(at.tolist())) and len(got) < ticks.size
+    for k, factor in got.items():
+        j = np.nonzero(at == k)[0]
+        log_l = grid.tracker.fix_log_likelihood(grid.floor_index, (times[j], m[j], sd[j], w[j], fl[j]))
+        one = np.asarray(log_l).reshape(-1)[grid.lattice_cell]
+        np.testing.assert_array_equal(factor, np.exp(one - one.max()))
+    arrays = (times, m, sd, w, fl)
+    empty = grid.tracker.fix_log_likelihoods(grid.floor_index, arrays, [0, 0, t.size], grid.lattice_cell[:3])
+    assert empty.shape == (2, 3) and np.all(empty[0] == 0.0)
+    with pytest.raises(ValueError, match="group_starts"):
+        grid.tracker.fix_log_likelihoods(grid.floor_index, arrays, [0, 5, 3, t.size], grid.lattice_cell)
+    with pytest.raises(ValueError, match="group_starts"):
+        grid.tracker.fix_log_likelihoods(grid.floor_index, arrays, [0, 5], grid.lattice_cell)
+    with pytest.raises(ValueError, match="cells"):
+        grid.tracker.fix_log_likelihoods(grid.floor_index, arrays, [0, t.size], [grid.nx * grid.ny])

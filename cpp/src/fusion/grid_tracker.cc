@@ -225,6 +225,51 @@ RowMatrixXd GridTracker::FixLogLikelihood(int floor_index, const std::vector<Pos
   return out;
 }
 
+RowMatrixXd GridTracker::FixLogLikelihoodGroups(int floor_index, const std::vector<PositionFix>& fixes,
+                                                const Eigen::VectorXi& group_starts,
+                                                const Eigen::VectorXi& cells) const {
+  RequireIntInRange(floor_index, 0, static_cast<int>(impl_->grids.size()) - 1, "floor_index");
+  const FloorGrid& g = impl_->grids[floor_index];
+  const int n_fixes = static_cast<int>(fixes.size());
+  if (group_starts.size() < 1 || group_starts(0) != 0 || group_starts(group_starts.size() - 1) != n_fixes) {
+    ThrowInvalidArgument("group_starts", "must run from 0 to the number of fixes (" + std::to_string(n_fixes) +
+                                             ") with one more entry than groups");
+  }
+  for (Eigen::Index k = 1; k < group_starts.size(); ++k) {
+    if (group_starts(k) < group_starts(k - 1)) {
+      ThrowInvalidArgument("group_starts", "must be non-decreasing (entry " + std::to_string(k) + ")");
+    }
+  }
+  const long long n_cells = static_cast<long long>(g.ny) * g.nx;
+  for (Eigen::Index i = 0; i < cells.size(); ++i) {
+    if (cells(i) < 0 || cells(i) >= n_cells) {
+      ThrowInvalidArgument("cells", "entry " + std::to_string(i) + " = " + std::to_string(cells(i)) +
+                                        " is not a lattice cell of floor " + std::to_string(floor_index) + " (0 .. " +
+                                        std::to_string(n_cells - 1) + ")");
+    }
+  }
+  for (int j = 0; j < n_fixes; ++j) {
+    const std::string name = "fixes[" + std::to_string(j) + "]";
+    CheckPositionFix(fixes[j], name.c_str());
+  }
+  const Eigen::Index n_groups = group_starts.size() - 1;
+  RequireSizeLimit(static_cast<double>(n_groups) * static_cast<double>(cells.size()), 8.0, "cells",
+                   "log-likelihoods (groups x cells)");
+  RowMatrixXd out = RowMatrixXd::Zero(n_groups, cells.size());
+  std::vector<const PositionFix*> ptrs;
+  for (Eigen::Index k = 0; k < n_groups; ++k) {
+    if (group_starts(k + 1) == group_starts(k)) continue;
+    ptrs.clear();
+    for (int j = group_starts(k); j < group_starts(k + 1); ++j) ptrs.push_back(&fixes[j]);
+    const grid_ops::TrackerGrids::FixFactor f = impl_->ComputeFixFactor(ptrs, g);
+    for (Eigen::Index i = 0; i < cells.size(); ++i) {  // as FixLogLikelihood, at the cells asked for
+      const float v = f.factor[static_cast<std::size_t>(cells(i))];
+      out(k, i) = v > 0 ? std::log(static_cast<double>(v)) + f.log_scale : -std::numeric_limits<double>::infinity();
+    }
+  }
+  return out;
+}
+
 namespace {
 
 // Buffers kept between runs (GridTracker::Run): a run takes its layers' output slots and, per

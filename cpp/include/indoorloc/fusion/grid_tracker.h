@@ -278,6 +278,14 @@ class GridTracker {
   /// same grid (fusion.wifi_heading_sequence), so that the fix model exists once. Throws
   /// std::invalid_argument naming the argument for a bad floor index or fix.
   RowMatrixXd FixLogLikelihood(int floor_index, const std::vector<PositionFix>& fixes) const;
+  /// FixLogLikelihood of several groups of fixes at once, read at some cells: group g is
+  /// fixes[group_starts(g) .. group_starts(g + 1)) (group_starts: G + 1 non-decreasing indices
+  /// from 0 to fixes.size()), cell i the lattice cell cells(i) (row-major, y * nx + x). Returns
+  /// (G, cells.size()) [nats]; an empty group gives 0. One call for a walk's fix ticks instead of
+  /// one per tick. Throws std::invalid_argument naming "floor_index", "fixes[j]", "group_starts"
+  /// or "cells".
+  RowMatrixXd FixLogLikelihoodGroups(int floor_index, const std::vector<PositionFix>& fixes,
+                                     const Eigen::VectorXi& group_starts, const Eigen::VectorXi& cells) const;
 
  private:
   friend class GridFilterSession;  // the streaming forward filter (grid_filter_session.h) runs on these grids
