@@ -207,22 +207,11 @@ RowMatrixXd GridTracker::WallFactors(int floor_index) const {
 
 RowMatrixXd GridTracker::FixLogLikelihood(int floor_index, const std::vector<PositionFix>& fixes) const {
   RequireIntInRange(floor_index, 0, static_cast<int>(impl_->grids.size()) - 1, "floor_index");
-  std::vector<const PositionFix*> ptrs;
-  for (std::size_t j = 0; j < fixes.size(); ++j) {
-    const std::string name = "fixes[" + std::to_string(j) + "]";
-    CheckPositionFix(fixes[j], name.c_str());
-    ptrs.push_back(&fixes[j]);
-  }
   const FloorGrid& g = impl_->grids[floor_index];
-  RowMatrixXd out = RowMatrixXd::Zero(g.ny, g.nx);
-  if (ptrs.empty()) return out;
-  const grid_ops::TrackerGrids::FixFactor f = impl_->ComputeFixFactor(ptrs, g);
-  for (int y = 0; y < g.ny; ++y)
-    for (int x = 0; x < g.nx; ++x) {
-      const float v = f.factor[static_cast<std::size_t>(y) * g.nx + x];
-      out(y, x) = v > 0 ? std::log(static_cast<double>(v)) + f.log_scale : -std::numeric_limits<double>::infinity();
-    }
-  return out;
+  const Eigen::VectorXi all_cells = Eigen::VectorXi::LinSpaced(g.ny * g.nx, 0, g.ny * g.nx - 1);
+  const Eigen::VectorXi one_group = (Eigen::VectorXi(2) << 0, static_cast<int>(fixes.size())).finished();
+  const RowMatrixXd row = FixLogLikelihoodGroups(floor_index, fixes, one_group, all_cells);
+  return Eigen::Map<const RowMatrixXd>(row.data(), g.ny, g.nx);  // row-major: cell y * nx + x
 }
 
 RowMatrixXd GridTracker::FixLogLikelihoodGroups(int floor_index, const std::vector<PositionFix>& fixes,
