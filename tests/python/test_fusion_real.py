@@ -51,7 +51,7 @@ def test_leave_one_floor_out_choice_never_looks_at_the_held_out_floor(two_floor_
     grid = {"grid.fix_tempering": (0.3, 1.0), "fixes.sd_m": (3.0,)}
     result = fr.select_settings(two_floor_site, ["F1", "F2"], fr.RealSettings(**FAST), grid)
     # Two runs, each scored with both point estimates (mean and spatial median).
-    assert len(result["points"]) == 4
+    assert len(result["points"]) == 4 and result["held_out"] is True
     assert {p["values"]["point_estimate"] for p in result["points"]} == {"mean", "median"}
     for held_out, chosen in result["lofo"].items():
         other = "F2" if held_out == "F1" else "F1"
@@ -391,3 +391,14 @@ def test_select_scores_each_point_estimate_with_its_own_second_pass(two_floor_si
     main = [s.errors_m["fusion_smoother"] for s in both]
     chosen = [s.errors_m[f"_alt/fusion_smoother/{base.point_estimate}"] for s in both]
     assert all(np.array_equal(a, b) for a, b in zip(main, chosen))
+
+
+def test_select_on_one_floor_says_its_figures_are_in_sample(two_floor_site):
+    """With one floor nothing can be held out: the result says so ("held_out": false, a warning,
+    the Markdown's titles) instead of printing an in-sample figure as a held-out one."""
+    with pytest.warns(UserWarning, match="in-sample"):
+        result = fr.select_settings(two_floor_site, ["F1"], fr.RealSettings(**FAST),
+                                    grid={"grid.wall_log_penalty": [-1.0]})
+    assert result["held_out"] is False
+    text = fr.select_markdown(result)
+    assert "IN SAMPLE" in text and "Held-out floors pooled" not in text

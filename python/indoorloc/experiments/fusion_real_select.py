@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import warnings
 from dataclasses import replace
 from pathlib import Path
 from typing import Any, Callable, Dict, Optional, Sequence, Tuple
@@ -127,6 +128,11 @@ def select_settings(data_root: Optional[Path] = None, floors: Sequence[str] = FL
 
     lofo, held_out = {}, []
     names = [fl.name for fl in data]
+    if len(names) < 2:
+        # Nothing to hold out: the choice is made and scored on the same floor. Said in the result
+        # ("held_out": false) and its Markdown, so the figure is not read as a held-out one.
+        warnings.warn(f"indoorloc: --select on one floor ({names[0]}): no floor can be held out, the figures are "
+                      "in-sample (choose settings over two floors or more)", UserWarning, stacklevel=2)
     for name in names:
         others = [n for n in names if n != name] or [name]
         best = min(points, key=lambda p: pooled_mean(p, others))
@@ -138,7 +144,7 @@ def select_settings(data_root: Optional[Path] = None, floors: Sequence[str] = FL
     grid_out = {k: [None if isinstance(v, float) and math.isinf(v) else v for v in vs] for k, vs in grid.items()}
     if base.engine == "grid":
         grid_out["point_estimate"] = list(SELECT_POINT_ESTIMATES)
-    return {"grid": grid_out,
+    return {"grid": grid_out, "held_out": len(names) > 1,
             "objective": SELECT_OBJECTIVE, "points": points, "lofo": lofo,
             "lofo_overall": _stats(np.concatenate(held_out)), "best_all": best_all["values"],
             "known_start": lofo_from_stats(points, names, "fusion_known_start")}
@@ -153,21 +159,28 @@ def select_markdown(result: dict) -> str:
         cells = [str(p["values"][k]) for k in keys]
         cells += [f"{p['per_floor'][f][result['objective']]['mean_m']:.2f}" for f in floors]
         lines.append("| " + " | ".join(cells) + " |")
-    lines += ["", f"Leave-one-floor-out ({result['objective']}, settings chosen on the other floors):", "",
+    if result.get("held_out", True):
+        title, pooled = f"Leave-one-floor-out ({result['objective']}, settings chosen on the other floors):", "Held-out floors pooled"
+    else:
+        title = (f"IN SAMPLE, not held out ({result['objective']}; one floor: the settings are chosen and scored on "
+                 "the same walks, a training figure):")
+        pooled = "In sample (not held out)"
+    lines += ["", title, "",
               "| held-out floor | chosen | mean [m] | median [m] | p90 [m] |", "|---|---|---|---|---|"]
     for f, r in result["lofo"].items():
         st = r["stats"]
         lines.append(f"| {f} | {r['chosen']} | {st['mean_m']:.2f} | {st['median_m']:.2f} | {st['p90_m']:.2f} |")
     o = result["lofo_overall"]
-    lines += ["", f"Held-out floors pooled: mean {o['mean_m']:.2f} m, median {o['median_m']:.2f} m, p90 {o['p90_m']:.2f} m "
+    lines += ["", f"{pooled}: mean {o['mean_m']:.2f} m, median {o['median_m']:.2f} m, p90 {o['p90_m']:.2f} m "
               f"({o['n_waypoints']} waypoints). Chosen on all floors: {result['best_all']}."]
     ks = result.get("known_start")
     if ks:
-        lines += ["", "Leave-one-floor-out for the known-start filter (fusion_known_start):", "",
+        lines += ["", ("Leave-one-floor-out" if result.get("held_out", True) else "IN SAMPLE, not held out,")
+                  + " for the known-start filter (fusion_known_start):", "",
                   "| held-out floor | chosen | mean [m] | median [m] | p90 [m] |", "|---|---|---|---|---|"]
         for f, r in ks["lofo"].items():
             st = r["stats"]
             lines.append(f"| {f} | {r['chosen']} | {st['mean_m']:.2f} | {st['median_m']:.2f} | {st['p90_m']:.2f} |")
-        lines += ["", f"Held-out floors pooled: mean {ks['lofo_pooled_mean_m']:.2f} m. Chosen on all floors: "
+        lines += ["", f"{pooled}: mean {ks['lofo_pooled_mean_m']:.2f} m. Chosen on all floors: "
                   f"{ks['best_all']}."]
     return "\n".join(lines)
